@@ -1,0 +1,327 @@
+//! Degrees of freedom, the global sparsity pattern (built once) and the parallel assembler.
+//!
+//! * [`DofMap`]: the *full* unknown vector holds two displacement components per node
+//!   (`2·node + i`) followed by optional cell-owned unknowns (e.g. the three discontinuous P1
+//!   pressures of a Q2/P1 cell, `2·n_nodes + 3·cell + m`). Each full dof maps to an equation
+//!   number or to [`FIXED`] (Dirichlet: its value lives in the full vector and never changes
+//!   during a Newton solve). Future linear constraints (hanging nodes) extend this map with an
+//!   expansion table consulted by the scatter; cells carry their own dof lists, so cells of
+//!   different degree coexist.
+//! * [`Assembler`]: CSC pattern of the free equations (both triangles), a per-cell table of
+//!   value slots for every local (row, col) pair, and a cell colouring. Assembly zero-fills the
+//!   values and scatters cell contributions; cells of one colour share no node, so each colour is
+//!   processed in parallel with rayon without locks and the result is independent of the
+//!   thread count up to summation order.
+
+pub mod qp;
+
+use crate::mesh::Mesh;
+use rayon::prelude::*;
+
+pub use qp::QpData;
+
+/// Marker of a fixed (Dirichlet) dof in [`DofMap::eq`].
+pub const FIXED: u32 = u32::MAX;
+/// Largest local system: Q2 displacements (18) + P1 pressures (3).
+pub const MAX_LOCAL: usize = 21;
+
+#[derive(Clone, Debug)]
+pub struct DofMap {
+    /// Number of displacement dofs (2 per node).
+    pub n_u: usize,
+    /// Cell-owned dofs per cell (0 or 3).
+    pub per_cell: usize,
+    /// Equation number of each full dof, or [`FIXED`].
+    pub eq: Vec<u32>,
+    /// Number of equations (free dofs).
+    pub n_eq: usize,
+    /// Field of each equation: 0 displacement, 1 pressure.
+    pub field: Vec<u8>,
+    /// Full-dof list of each cell (CSR): displacement dofs in local node order (2a + i), then the
+    /// cell-owned dofs.
+    pub cell_dofs: Vec<u32>,
+    pub cell_offsets: Vec<usize>,
+}
+
+impl DofMap {
+    /// Two displacement dofs per node plus `per_cell` dofs per cell; `fixed_nodes` have both
+    /// displacement components fixed.
+    pub fn new(mesh: &Mesh, per_cell: usize, fixed_nodes: &[u32]) -> Self {
+        let n_u = 2 * mesh.n_nodes();
+        let n_full = n_u + per_cell * mesh.n_cells();
+        let mut fixed = vec![false; n_full];
+        for &n in fixed_nodes {
+            fixed[2 * n as usize] = true;
+            fixed[2 * n as usize + 1] = true;
+        }
+        let mut eq = vec![FIXED; n_full];
+        let mut field = Vec::with_capacity(n_full);
+        let mut n_eq = 0u32;
+        for (d, e) in eq.iter_mut().enumerate() {
+            if !fixed[d] {
+                *e = n_eq;
+                field.push(u8::from(d >= n_u));
+                n_eq += 1;
+            }
+        }
+        let mut cell_dofs = Vec::new();
+        let mut cell_offsets = vec![0];
+        for c in 0..mesh.n_cells() {
+            for &n in mesh.cell_nodes(c) {
+                cell_dofs.push(2 * n);
+                cell_dofs.push(2 * n + 1);
+            }
+            for m in 0..per_cell {
+                cell_dofs.push((n_u + per_cell * c + m) as u32);
+            }
+            cell_offsets.push(cell_dofs.len());
+        }
+        Self {
+            n_u,
+            per_cell,
+            eq,
+            n_eq: n_eq as usize,
+            field,
+            cell_dofs,
+            cell_offsets,
+        }
+    }
+    pub fn n_full(&self) -> usize {
+        self.eq.len()
+    }
+    #[inline]
+    pub fn cell(&self, c: usize) -> &[u32] {
+        &self.cell_dofs[self.cell_offsets[c]..self.cell_offsets[c + 1]]
+    }
+    /// Copy the equation values `x` into the full vector (fixed entries untouched).
+    pub fn scatter_free(&self, x: &[f64], full: &mut [f64]) {
+        for (d, &e) in self.eq.iter().enumerate() {
+            if e != FIXED {
+                full[d] = x[e as usize];
+            }
+        }
+    }
+    /// Add `alpha · dx` (equation values) to the full vector.
+    pub fn add_free(&self, alpha: f64, dx: &[f64], full: &mut [f64]) {
+        for (d, &e) in self.eq.iter().enumerate() {
+            if e != FIXED {
+                full[d] += alpha * dx[e as usize];
+            }
+        }
+    }
+}
+
+/// A local element system with room for the largest element (no heap allocation).
+pub struct LocalSystem {
+    pub nd: usize,
+    /// Row-major `nd × nd` matrix.
+    pub k: [f64; MAX_LOCAL * MAX_LOCAL],
+    pub r: [f64; MAX_LOCAL],
+}
+
+impl LocalSystem {
+    pub fn new(nd: usize) -> Self {
+        Self {
+            nd,
+            k: [0.0; MAX_LOCAL * MAX_LOCAL],
+            r: [0.0; MAX_LOCAL],
+        }
+    }
+    pub fn clear(&mut self, nd: usize) {
+        self.nd = nd;
+        self.k[..nd * nd].fill(0.0);
+        self.r[..nd].fill(0.0);
+    }
+}
+
+/// A slice that several threads may write to at provably disjoint indices.
+pub struct SharedMut<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _marker: std::marker::PhantomData<&'a mut [T]>,
+}
+unsafe impl<T: Send> Send for SharedMut<'_, T> {}
+unsafe impl<T: Send> Sync for SharedMut<'_, T> {}
+
+impl<'a, T> SharedMut<'a, T> {
+    pub fn new(s: &'a mut [T]) -> Self {
+        Self {
+            ptr: s.as_mut_ptr(),
+            len: s.len(),
+            _marker: std::marker::PhantomData,
+        }
+    }
+    /// # Safety
+    /// No two threads may access the same index concurrently.
+    #[inline(always)]
+    pub unsafe fn get_mut(&self, i: usize) -> &mut T {
+        debug_assert!(i < self.len);
+        &mut *self.ptr.add(i)
+    }
+}
+
+/// Global sparse pattern, slot tables and colouring; values and residual buffers.
+pub struct Assembler {
+    pub n: usize,
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<usize>,
+    /// Per cell, `nd²` slots (row-major local pairs); `u32::MAX` where a row or column is fixed.
+    slots: Vec<u32>,
+    slot_offsets: Vec<usize>,
+    colors: Vec<Vec<u32>>,
+    pub values: Vec<f64>,
+    pub residual: Vec<f64>,
+    pub parallel: bool,
+}
+
+impl Assembler {
+    pub fn new(mesh: &Mesh, dofs: &DofMap) -> Self {
+        let n = dofs.n_eq;
+        // Column lists: every pair of equations that share a cell.
+        let mut cols: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for c in 0..mesh.n_cells() {
+            let cd = dofs.cell(c);
+            for &dj in cd {
+                let ej = dofs.eq[dj as usize];
+                if ej == FIXED {
+                    continue;
+                }
+                let col = &mut cols[ej as usize];
+                for &di in cd {
+                    let ei = dofs.eq[di as usize];
+                    if ei != FIXED {
+                        col.push(ei);
+                    }
+                }
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        col_ptr.push(0usize);
+        let mut row_idx = Vec::new();
+        for col in &mut cols {
+            col.sort_unstable();
+            col.dedup();
+            row_idx.extend(col.iter().map(|&r| r as usize));
+            col_ptr.push(row_idx.len());
+            *col = Vec::new();
+        }
+        let mut slots = Vec::new();
+        let mut slot_offsets = vec![0];
+        for c in 0..mesh.n_cells() {
+            let cd = dofs.cell(c);
+            for &di in cd {
+                let ei = dofs.eq[di as usize];
+                for &dj in cd {
+                    let ej = dofs.eq[dj as usize];
+                    if ei == FIXED || ej == FIXED {
+                        slots.push(u32::MAX);
+                    } else {
+                        let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
+                        let pos = row_idx[s..e]
+                            .binary_search(&(ei as usize))
+                            .map(|p| s + p)
+                            .unwrap_or(usize::MAX);
+                        slots.push(pos as u32);
+                    }
+                }
+            }
+            slot_offsets.push(slots.len());
+        }
+        let nnz = row_idx.len();
+        Self {
+            n,
+            col_ptr,
+            row_idx,
+            slots,
+            slot_offsets,
+            colors: mesh.color_cells(),
+            values: vec![0.0; nnz],
+            residual: vec![0.0; n],
+            parallel: true,
+        }
+    }
+
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    pub fn n_colors(&self) -> usize {
+        self.colors.len()
+    }
+
+    /// Assemble the residual (and the matrix when `with_matrix`). `kernel(cell, local)` fills
+    /// the local system of `cell` (already cleared to the cell's size) with the cell's
+    /// residual and tangent in the cell's dof order.
+    pub fn assemble<K>(&mut self, dofs: &DofMap, with_matrix: bool, kernel: K)
+    where
+        K: Fn(usize, &mut LocalSystem) + Sync,
+    {
+        self.residual.fill(0.0);
+        if with_matrix {
+            self.values.fill(0.0);
+        }
+        let res = SharedMut::new(&mut self.residual);
+        let val = SharedMut::new(&mut self.values);
+        let slots = &self.slots;
+        let slot_offsets = &self.slot_offsets;
+        let work = |c: usize, loc: &mut LocalSystem| {
+            let cd = dofs.cell(c);
+            let nd = cd.len();
+            loc.clear(nd);
+            kernel(c, loc);
+            // SAFETY: cells processed concurrently belong to one colour and share no node, so
+            // they touch disjoint equations and disjoint (row, col) slots.
+            unsafe {
+                for (a, &d) in cd.iter().enumerate() {
+                    let e = dofs.eq[d as usize];
+                    if e != FIXED {
+                        *res.get_mut(e as usize) += loc.r[a];
+                    }
+                }
+                if with_matrix {
+                    let s = &slots[slot_offsets[c]..slot_offsets[c + 1]];
+                    for (slot, &kv) in s.iter().zip(&loc.k[..nd * nd]) {
+                        if *slot != u32::MAX {
+                            *val.get_mut(*slot as usize) += kv;
+                        }
+                    }
+                }
+            }
+        };
+        if self.parallel {
+            for color in &self.colors {
+                color.par_iter().with_min_len(64).for_each_init(
+                    || Box::new(LocalSystem::new(0)),
+                    |loc, &c| work(c as usize, loc),
+                );
+            }
+        } else {
+            let mut loc = Box::new(LocalSystem::new(0));
+            for color in &self.colors {
+                for &c in color {
+                    work(c as usize, &mut loc);
+                }
+            }
+        }
+    }
+
+    /// y = A x with the assembled values (used by checks and tests).
+    pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
+        y.fill(0.0);
+        for j in 0..self.n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                y[self.row_idx[p]] += self.values[p] * x[j];
+            }
+        }
+    }
+
+    /// Dense copy of the assembled matrix (tiny meshes only: tests and FD checks).
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; self.n]; self.n];
+        for j in 0..self.n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                a[self.row_idx[p]][j] += self.values[p];
+            }
+        }
+        a
+    }
+}

@@ -1,0 +1,164 @@
+//! Steady spinning of the hollow cylinder (paper Fig. 2): A(χ, η) = ω² B(χ, η), hub rim bonded,
+//! outer surface free, ω reached by load stepping in ω².
+//!
+//! Reported quantities (summary.json `results`):
+//! * `u_r_outer`: mean radial displacement of the outer surface, (1/L) ∫ u · e_R ds over the
+//!   outer boundary in the reference configuration (e_R = X/|X|);
+//! * `sigma_r_inner`, `sigma_theta_inner`, `sigma_r_outer`, `sigma_theta_outer`: ring averages
+//!   of the Cauchy stress components e_R·σ e_R and e_Θ·σ e_Θ (reference polar basis; for an
+//!   axisymmetric deformation it coincides with the current one) on the hub and outer surfaces,
+//!   evaluated on the boundary facets of the cells and averaged with facet Gauss weights.
+
+use super::system::SolidSystem;
+use crate::element::gauss_1d;
+use crate::math::{Mat2, Vec2};
+use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
+use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
+
+/// Ring-averaged results of a spinning solution.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct SpinningResults {
+    pub omega: f64,
+    pub u_r_outer: f64,
+    pub sigma_r_inner: f64,
+    pub sigma_theta_inner: f64,
+    pub sigma_r_outer: f64,
+    pub sigma_theta_outer: f64,
+    pub max_displacement: f64,
+}
+
+/// One row of the radial profile: averages over a ring of quadrature points.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ProfileRow {
+    pub r: f64,
+    pub u_r: f64,
+    pub sigma_r: f64,
+    pub sigma_theta: f64,
+    pub sigma_r_theta: f64,
+}
+
+fn polar_components(x: &Vec2, s: &Mat2) -> (f64, f64, f64) {
+    let er = x / x.norm();
+    let et = Vec2::new(-er[1], er[0]);
+    (
+        (er.transpose() * s * er)[0],
+        (et.transpose() * s * et)[0],
+        (er.transpose() * s * et)[0],
+    )
+}
+
+/// Average of (u_r, σ_r, σ_θ) along the cell side ξ = `xi` of the cells `cells`.
+fn side_average(
+    sys: &SolidSystem,
+    cells: impl Iterator<Item = usize>,
+    xi: f64,
+    nq: usize,
+) -> (f64, f64, f64, f64) {
+    let (pts, ws) = gauss_1d(nq);
+    let (mut len, mut ur, mut sr, mut st) = (0.0, 0.0, 0.0, 0.0);
+    for c in cells {
+        for (eta, w) in pts.iter().zip(&ws) {
+            if let Some(pv) = sys.model.point_values(c, &sys.dofs, &sys.x, xi, *eta) {
+                let ds = Vec2::new(pv.jac[(0, 1)], pv.jac[(1, 1)]).norm() * w;
+                let (a, b, _) = polar_components(&pv.x, &pv.sigma);
+                len += ds;
+                ur += pv.u.dot(&(pv.x / pv.x.norm())) * ds;
+                sr += a * ds;
+                st += b * ds;
+            }
+        }
+    }
+    (len, ur / len, sr / len, st / len)
+}
+
+pub fn results(sys: &SolidSystem) -> SpinningResults {
+    let Some(rl) = sys.model.mesh.rings else {
+        return SpinningResults::default();
+    };
+    let nt = rl.n_theta;
+    let inner = 0..nt;
+    let outer = (rl.n_r - 1) * nt..rl.n_r * nt;
+    let (_, _, sri, sti) = side_average(sys, inner, -1.0, 4);
+    let (_, uro, sro, sto) = side_average(sys, outer, 1.0, 4);
+    let max_u = (0..sys.model.mesh.n_nodes())
+        .map(|n| Vec2::new(sys.x[2 * n], sys.x[2 * n + 1]).norm())
+        .fold(0.0, f64::max);
+    SpinningResults {
+        omega: sys.model.omega2.max(0.0).sqrt(),
+        u_r_outer: uro,
+        sigma_r_inner: sri,
+        sigma_theta_inner: sti,
+        sigma_r_outer: sro,
+        sigma_theta_outer: sto,
+        max_displacement: max_u,
+    }
+}
+
+/// Radial profile: ring averages at the radial Gauss points of every layer of cells.
+pub fn profile(sys: &SolidSystem) -> Vec<ProfileRow> {
+    let Some(rl) = sys.model.mesh.rings else {
+        return Vec::new();
+    };
+    let nq = 3;
+    let (pts, ws) = gauss_1d(nq);
+    let mut rows = Vec::new();
+    for j in 0..rl.n_r {
+        for &xi in &pts {
+            let (mut len, mut ur, mut sr, mut st, mut srt, mut r) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+            for k in 0..rl.n_theta {
+                let c = j * rl.n_theta + k;
+                for (eta, w) in pts.iter().zip(&ws) {
+                    if let Some(pv) = sys.model.point_values(c, &sys.dofs, &sys.x, xi, *eta) {
+                        let ds = Vec2::new(pv.jac[(0, 1)], pv.jac[(1, 1)]).norm() * w;
+                        let (a, b, cc) = polar_components(&pv.x, &pv.sigma);
+                        len += ds;
+                        r += pv.x.norm() * ds;
+                        ur += pv.u.dot(&(pv.x / pv.x.norm())) * ds;
+                        sr += a * ds;
+                        st += b * ds;
+                        srt += cc * ds;
+                    }
+                }
+            }
+            if len > 0.0 {
+                rows.push(ProfileRow {
+                    r: r / len,
+                    u_r: ur / len,
+                    sigma_r: sr / len,
+                    sigma_theta: st / len,
+                    sigma_r_theta: srt / len,
+                });
+            }
+        }
+    }
+    rows
+}
+
+/// Solve steady spinning at `omega` (rad/s) by load stepping in ω² from rest.
+pub fn solve_spinning(
+    sys: &mut SolidSystem,
+    omega: f64,
+    kind: LinearKind,
+    newton_opts: NewtonOptions,
+    step_opts: &StepOptions,
+    report: &mut StepReport,
+) -> Result<(), SolveError> {
+    sys.omega2_target = omega * omega;
+    // Reference force: the centrifugal load at the target speed on the undeformed body.
+    let saved = sys.model.omega2;
+    sys.model.omega2 = sys.omega2_target;
+    let x0 = sys.x.clone();
+    let mut zero = x0.clone();
+    for v in zero[..sys.dofs.n_u].iter_mut() {
+        *v = 0.0;
+    }
+    sys.x.copy_from_slice(&zero);
+    let f_spin = sys.residual_norm();
+    sys.model.omega2 = 0.0;
+    let f_rest = sys.residual_norm();
+    sys.x.copy_from_slice(&x0);
+    sys.model.omega2 = saved;
+    sys.set_reference_force((f_spin - f_rest).abs().max(f_rest).max(f64::MIN_POSITIVE));
+    let mut newton = Newton::new(sys, kind, newton_opts)?;
+    solve_load_steps(sys, &mut newton, step_opts, report)
+}

@@ -1,0 +1,2419 @@
+//! Scene files: the TOML description of one run.
+//!
+//! A scene describes a plane-strain hollow cylinder `ri <= |X| <= ro` bonded to a rigid hub at
+//! `|X| = ri`, its mesh, its material, what to compute and how to solve it. Units are whatever the
+//! scene uses consistently (the paper's case: inch, psi, lbf·s²/in⁴, rad/s); `[scene] units` only
+//! records which. Forces are per unit thickness.
+//!
+//! The schema, key by key, is documented in `scenarios/README.md`. In short:
+//!
+//! ```toml
+//! [scene]     name, description = "", units = "in-lbf-s"
+//! [geometry]  ri, ro
+//! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
+//! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
+//!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
+//! [analysis]  mode = "spinning"
+//! [motion]    omega
+//! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
+//!             linear = "auto", threads = 0, line_search = true
+//! [output]    csv = true
+//! ```
+//!
+//! # Loading
+//!
+//! [`Scene::from_toml_str`] parses the text, applies `--set section.key=value` overrides, fills the
+//! defaults, resolves model-dependent defaults (the incompressible formulation and, for the
+//! perturbed Lagrangian, `kappa = 1e4 (c1 + c2)`) and validates. It collects **all** problems it can
+//! find (unknown sections and keys, wrong types, missing required keys, out-of-range values, keys
+//! that do not belong to the chosen material model) and returns them together as [`SceneErrors`],
+//! each naming the dotted key (`geometry.ri`) and the line of the original file where the key (or,
+//! for a missing key, its section header) is written. A value that came from an override is reported
+//! as `(--set)` instead of a line. Only a TOML syntax error stops early (nothing else can be checked
+//! then); it carries toml's own line.
+//!
+//! Pipeline: (1) `toml` parses the original text into a table (syntax errors, with toml's span);
+//! (2) overrides are applied to that table; (3) a schema pass checks every section and key
+//! (known? right type? required ones present?), collecting every problem and dropping the
+//! offending entries; (4) each section is deserialized with serde (`deny_unknown_fields`
+//! everywhere, so the typed structs are strict on their own too, e.g. for
+//! `toml::from_str::<Scene>`); (5) the typed sections are validated (ranges and cross-key rules).
+//! Line numbers come from a small locator that walks the original text tracking `[table]` headers
+//! (comments, quoted keys, dotted keys and multi-line strings/arrays are handled), so a key that was
+//! *not* overridden always reports its line in the file.
+//!
+//! [`Scene::to_toml_string`] writes the resolved scene (every default filled), which parses back
+//! to the same [`Scene`]; `tread check` prints it.
+
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+/// Default of `[scene] units` (informational only).
+pub const DEFAULT_UNITS: &str = "in-lbf-s";
+/// `kappa = PERTURBED_KAPPA_FACTOR * (c1 + c2)` when the perturbed incompressible formulation is
+/// chosen without an explicit `kappa`.
+pub const PERTURBED_KAPPA_FACTOR: f64 = 1.0e4;
+/// Smallest allowed `mesh.n_theta`.
+pub const MIN_N_THETA: usize = 8;
+
+// ---------------------------------------------------------------------------------------------
+// Keyword enums
+// ---------------------------------------------------------------------------------------------
+
+macro_rules! keyword_enum {
+    (
+        $(#[$meta:meta])*
+        $name:ident, $what:literal {
+            $( $(#[$vmeta:meta])* $variant:ident => $text:literal ),+ $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+        #[serde(rename_all = "snake_case")]
+        pub enum $name {
+            $( $(#[$vmeta])* $variant ),+
+        }
+
+        impl $name {
+            /// Every variant, in declaration order.
+            pub const ALL: &'static [$name] = &[$($name::$variant),+];
+            /// The spelling of every variant in a scene file, in declaration order.
+            pub const NAMES: &'static [&'static str] = &[$($text),+];
+
+            /// The spelling of this variant in a scene file.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $($name::$variant => $text),+
+                }
+            }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl FromStr for $name {
+            type Err = String;
+
+            fn from_str(s: &str) -> Result<Self, String> {
+                match s.trim() {
+                    $($text => Ok($name::$variant),)+
+                    other => Err(format!(
+                        "unknown {} \"{}\"; expected one of {}",
+                        $what,
+                        other,
+                        quoted_list(Self::NAMES)
+                    )),
+                }
+            }
+        }
+    };
+}
+
+keyword_enum! {
+    /// What to compute (`[analysis] mode`). Only `spinning` exists for now; `static`, `transient`
+    /// and `steady` will be added as further variants.
+    Mode, "analysis mode" {
+        /// Steady spinning about the hub at `[motion] omega`, no contact: the centrifugal load
+        /// `ρ ω² X` is ramped in `load_steps` steps of ω².
+        Spinning => "spinning",
+    }
+}
+
+keyword_enum! {
+    /// Hyperelastic model (`[material] model`).
+    MaterialModel, "material model" {
+        /// Compressible neo-Hookean with Lamé constants `mu`, `lambda`.
+        NeoHookean => "neo_hookean",
+        /// Compressible Mooney–Rivlin `c1 (Ī1 − 3) + c2 (Ī2 − 3) + U(J)` with bulk modulus `kappa`.
+        MooneyRivlin => "mooney_rivlin",
+        /// Incompressible Mooney–Rivlin `c1 (I1 − 3) + c2 (I2 − 3)`, J = 1 by a Q2/P1 pressure.
+        MooneyRivlinIncompressible => "mooney_rivlin_incompressible",
+    }
+}
+
+keyword_enum! {
+    /// How the incompressibility constraint is imposed (`[material] formulation`).
+    #[derive(Default)]
+    Formulation, "formulation" {
+        #[default]
+        /// Exact saddle point (displacement + discontinuous P1 pressure, LU).
+        Exact => "exact",
+        /// Perturbed Lagrangian with bulk modulus `kappa`, pressure condensed per element.
+        Perturbed => "perturbed",
+    }
+}
+
+keyword_enum! {
+    /// Sparse linear solver (`[solver] linear`).
+    #[derive(Default)]
+    LinearChoice, "linear solver" {
+        #[default]
+        /// Cholesky when the tangent is symmetric positive definite, LU otherwise.
+        Auto => "auto",
+        /// Sparse Cholesky (symmetric positive definite tangents only).
+        Cholesky => "cholesky",
+        /// Sparse LU.
+        Lu => "lu",
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene structs
+// ---------------------------------------------------------------------------------------------
+
+/// One scene file, resolved: every default filled.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub scene: SceneInfo,
+    pub geometry: Geometry,
+    #[serde(default)]
+    pub mesh: MeshSpec,
+    pub material: MaterialSpec,
+    pub analysis: Analysis,
+    #[serde(default)]
+    pub motion: Motion,
+    #[serde(default)]
+    pub solver: SolverSpec,
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// `[scene]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneInfo {
+    /// Names the output directory: `[A-Za-z0-9_-]+`.
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Informational: the consistent unit system of the scene.
+    #[serde(default = "default_units")]
+    pub units: String,
+}
+
+fn default_units() -> String {
+    DEFAULT_UNITS.to_string()
+}
+
+/// `[geometry]`: the reference annulus `ri <= |X| <= ro`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    /// Inner (hub) radius.
+    pub ri: f64,
+    /// Outer radius.
+    pub ro: f64,
+}
+
+/// `[mesh]`: structured annular mesh.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeshSpec {
+    /// Radial cells (>= 1).
+    pub n_r: usize,
+    /// Circumferential cells (>= 8, even).
+    pub n_theta: usize,
+    /// Element order: 1 (Q1) or 2 (Q2).
+    pub order: usize,
+    /// Ratio of the outermost to the innermost radial cell size (> 0; 1 = uniform).
+    pub grading_r: f64,
+    /// Fraction in [0, 1) of circumferential refinement toward θ = −π/2 (the road); 0 = uniform.
+    pub grading_theta: f64,
+}
+
+impl Default for MeshSpec {
+    fn default() -> Self {
+        MeshSpec {
+            n_r: 4,
+            n_theta: 32,
+            order: 2,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+        }
+    }
+}
+
+/// `[material]`. Which of the optional parameters are required depends on `model`; after
+/// [`Scene::from_toml_str`] the model-dependent defaults are filled in (`formulation` for the
+/// incompressible model, `kappa` for the perturbed formulation), and [`MaterialSpec::params`]
+/// gives the resolved parameters as one enum.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub model: MaterialModel,
+    /// Density per unit reference volume.
+    pub rho: f64,
+    /// Lamé shear modulus (neo_hookean).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// Lamé first parameter (neo_hookean).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f64>,
+    /// Mooney–Rivlin C1 (mooney_rivlin, mooney_rivlin_incompressible).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c1: Option<f64>,
+    /// Mooney–Rivlin C2 (mooney_rivlin, mooney_rivlin_incompressible).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c2: Option<f64>,
+    /// Bulk modulus (mooney_rivlin; mooney_rivlin_incompressible with the perturbed formulation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
+    /// Incompressibility formulation (mooney_rivlin_incompressible only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub formulation: Option<Formulation>,
+}
+
+/// Resolved material parameters, one variant per model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaterialParams {
+    NeoHookean {
+        mu: f64,
+        lambda: f64,
+    },
+    MooneyRivlin {
+        c1: f64,
+        c2: f64,
+        kappa: f64,
+    },
+    MooneyRivlinIncompressible {
+        c1: f64,
+        c2: f64,
+        formulation: Formulation,
+        /// `Some` for the perturbed formulation, `None` for the exact one.
+        kappa: Option<f64>,
+    },
+}
+
+impl MaterialSpec {
+    /// The resolved parameters of the chosen model, with model-dependent defaults applied
+    /// (formulation `exact`; `kappa = 1e4 (c1 + c2)` for `perturbed`). `None` only if a
+    /// parameter the model requires is missing, which cannot happen after validation.
+    pub fn params(&self) -> Option<MaterialParams> {
+        match self.model {
+            MaterialModel::NeoHookean => Some(MaterialParams::NeoHookean {
+                mu: self.mu?,
+                lambda: self.lambda?,
+            }),
+            MaterialModel::MooneyRivlin => Some(MaterialParams::MooneyRivlin {
+                c1: self.c1?,
+                c2: self.c2?,
+                kappa: self.kappa?,
+            }),
+            MaterialModel::MooneyRivlinIncompressible => {
+                let c1 = self.c1?;
+                let c2 = self.c2?;
+                let formulation = self.formulation.unwrap_or_default();
+                let kappa = match formulation {
+                    Formulation::Exact => None,
+                    Formulation::Perturbed => {
+                        Some(self.kappa.unwrap_or(PERTURBED_KAPPA_FACTOR * (c1 + c2)))
+                    }
+                };
+                Some(MaterialParams::MooneyRivlinIncompressible {
+                    c1,
+                    c2,
+                    formulation,
+                    kappa,
+                })
+            }
+        }
+    }
+
+    /// Small-strain shear modulus G: `mu`, or `2 (c1 + c2)` for Mooney–Rivlin.
+    pub fn shear_modulus(&self) -> Option<f64> {
+        match self.params()? {
+            MaterialParams::NeoHookean { mu, .. } => Some(mu),
+            MaterialParams::MooneyRivlin { c1, c2, .. }
+            | MaterialParams::MooneyRivlinIncompressible { c1, c2, .. } => Some(2.0 * (c1 + c2)),
+        }
+    }
+
+    /// Small-strain bulk modulus K: `lambda + 2 mu / 3`, `kappa`; `None` for the exactly
+    /// incompressible formulation (K = ∞).
+    pub fn bulk_modulus(&self) -> Option<f64> {
+        match self.params()? {
+            MaterialParams::NeoHookean { mu, lambda } => Some(lambda + 2.0 * mu / 3.0),
+            MaterialParams::MooneyRivlin { kappa, .. } => Some(kappa),
+            MaterialParams::MooneyRivlinIncompressible { kappa, .. } => kappa,
+        }
+    }
+
+    /// Whether the model carries a pressure field (incompressible Mooney–Rivlin).
+    pub fn is_incompressible(&self) -> bool {
+        self.model == MaterialModel::MooneyRivlinIncompressible
+    }
+
+    /// The resolved formulation: `Some` only for the incompressible model.
+    pub fn resolved_formulation(&self) -> Option<Formulation> {
+        match self.params()? {
+            MaterialParams::MooneyRivlinIncompressible { formulation, .. } => Some(formulation),
+            _ => None,
+        }
+    }
+
+    /// The resolved bulk modulus used by the model, if it has one (`mooney_rivlin`, or the
+    /// perturbed incompressible formulation).
+    pub fn resolved_kappa(&self) -> Option<f64> {
+        match self.params()? {
+            MaterialParams::NeoHookean { .. } => None,
+            MaterialParams::MooneyRivlin { kappa, .. } => Some(kappa),
+            MaterialParams::MooneyRivlinIncompressible { kappa, .. } => kappa,
+        }
+    }
+
+    /// Fill the model-dependent defaults into the optional fields.
+    fn resolve(&mut self) {
+        if let Some(MaterialParams::MooneyRivlinIncompressible {
+            formulation, kappa, ..
+        }) = self.params()
+        {
+            self.formulation = Some(formulation);
+            self.kappa = kappa;
+        }
+    }
+
+    /// The keys of `[material]` that belong to `model` (besides `model` itself).
+    pub fn keys_of(model: MaterialModel) -> &'static [&'static str] {
+        match model {
+            MaterialModel::NeoHookean => &["rho", "mu", "lambda"],
+            MaterialModel::MooneyRivlin => &["rho", "c1", "c2", "kappa"],
+            MaterialModel::MooneyRivlinIncompressible => {
+                &["rho", "c1", "c2", "formulation", "kappa"]
+            }
+        }
+    }
+}
+
+/// `[analysis]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Analysis {
+    pub mode: Mode,
+}
+
+/// `[motion]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Motion {
+    /// Target angular speed (rad/s, counter-clockwise), >= 0. Required for `spinning`.
+    pub omega: f64,
+}
+
+impl Default for Motion {
+    fn default() -> Self {
+        Motion { omega: 0.0 }
+    }
+}
+
+/// `[solver]`: Newton with load stepping in ω² and cutbacks.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    /// Relative residual tolerance, in (0, 1).
+    pub tolerance: f64,
+    /// Newton iterations per load step (>= 1).
+    pub max_iterations: usize,
+    /// Initial number of load steps in ω² (>= 1).
+    pub load_steps: usize,
+    /// How many times a failed step may be halved.
+    pub max_cutbacks: usize,
+    pub linear: LinearChoice,
+    /// Worker threads; 0 = all cores.
+    pub threads: usize,
+    /// Backtracking line search on the residual norm.
+    pub line_search: bool,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec {
+            tolerance: 1e-10,
+            max_iterations: 25,
+            load_steps: 4,
+            max_cutbacks: 10,
+            linear: LinearChoice::Auto,
+            threads: 0,
+            line_search: true,
+        }
+    }
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Write CSV profiles.
+    pub csv: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec { csv: true }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors
+// ---------------------------------------------------------------------------------------------
+
+/// One problem in a scene.
+///
+/// Displayed as `"{source_name}:{line}: key `{key}`: {message}"`, without `:{line}` when the line
+/// is unknown, and without the `key` part when no key applies (e.g. some syntax errors). For a
+/// value given by a `--set` override, `line` is `None` and `source_name` is
+/// `"{file}:(--set)"`, so the error reads `file.toml:(--set): key `mesh.n_r`: ...`; see
+/// [`SceneError::is_override`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", render_error(.source_name, *.line, .key, .message))]
+pub struct SceneError {
+    /// Dotted key, e.g. `geometry.ri`; a section name for section-level problems; may be empty.
+    pub key: String,
+    /// 1-based line in the scene file.
+    pub line: Option<usize>,
+    pub message: String,
+    pub source_name: String,
+}
+
+const OVERRIDE_TAG: &str = ":(--set)";
+
+fn render_error(source_name: &str, line: Option<usize>, key: &str, message: &str) -> String {
+    let mut s = String::from(source_name);
+    if let Some(l) = line {
+        s.push_str(&format!(":{l}"));
+    }
+    s.push_str(": ");
+    if !key.is_empty() {
+        s.push_str(&format!("key `{key}`: "));
+    }
+    s.push_str(message);
+    s
+}
+
+impl SceneError {
+    /// Whether the offending value came from a `--set` override.
+    pub fn is_override(&self) -> bool {
+        self.source_name.ends_with(OVERRIDE_TAG)
+    }
+}
+
+/// Every problem found in a scene; displayed one per line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneErrors(pub Vec<SceneError>);
+
+impl fmt::Display for SceneErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SceneErrors {}
+
+impl From<SceneError> for SceneErrors {
+    fn from(e: SceneError) -> Self {
+        SceneErrors(vec![e])
+    }
+}
+
+impl SceneErrors {
+    /// Whether some error names exactly this dotted key.
+    pub fn has_key(&self, key: &str) -> bool {
+        self.0.iter().any(|e| e.key == key)
+    }
+
+    /// The first error naming exactly this dotted key.
+    pub fn find(&self, key: &str) -> Option<&SceneError> {
+        self.0.iter().find(|e| e.key == key)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Public entry points
+// ---------------------------------------------------------------------------------------------
+
+impl Scene {
+    /// Parse, apply `--set key=value` overrides (dotted keys like `"mesh.n_r=8"`; the value is
+    /// parsed as a TOML value, falling back to a bare string; for string-valued keys the raw text
+    /// is taken as the string unless it is a quoted TOML string), fill defaults, validate.
+    /// Collects all errors, not just the first.
+    pub fn from_toml_str(
+        text: &str,
+        source_name: &str,
+        overrides: &[String],
+    ) -> Result<Scene, SceneErrors> {
+        let locator = Locator::new(text);
+        let mut ctx = Ctx {
+            source_name,
+            locator: &locator,
+            overridden: BTreeSet::new(),
+            issues: Vec::new(),
+        };
+
+        let mut doc: toml::Table = match text.parse::<toml::Table>() {
+            Ok(t) => t,
+            Err(e) => {
+                let line = e.span().map(|s| line_of_offset(text, s.start));
+                let key = line
+                    .and_then(|l| locator.key_at_line(l))
+                    .unwrap_or_default();
+                return Err(SceneErrors(vec![SceneError {
+                    key,
+                    line,
+                    message: format!("TOML syntax error: {}", e.message().trim_end()),
+                    source_name: source_name.to_string(),
+                }]));
+            }
+        };
+
+        ctx.apply_overrides(&mut doc, overrides);
+        let clean = ctx.check_schema(&doc);
+
+        let info: Option<SceneInfo> = ctx.required_section(&clean, "scene");
+        let geometry: Option<Geometry> = ctx.required_section(&clean, "geometry");
+        let mesh: Option<MeshSpec> = ctx.optional_section(&clean, "mesh");
+        let material: Option<MaterialSpec> = ctx.required_section(&clean, "material");
+        let analysis: Option<Analysis> = ctx.required_section(&clean, "analysis");
+        let motion: Option<Motion> = ctx.optional_section(&clean, "motion");
+        let solver: Option<SolverSpec> = ctx.optional_section(&clean, "solver");
+        let output: Option<OutputSpec> = ctx.optional_section(&clean, "output");
+
+        let mut out = Vec::new();
+        if let Some(s) = &info {
+            validate_info(s, &mut out);
+        }
+        if let Some(g) = &geometry {
+            validate_geometry(g, &mut out);
+        }
+        if let Some(m) = &mesh {
+            validate_mesh(m, &mut out);
+        }
+        if let Some(m) = &material {
+            validate_material(m, &mut out);
+        }
+        if let Some(m) = &motion {
+            let omega_given = table_has(&doc, "motion", "omega");
+            let omega_bad = !table_has(&clean, "motion", "omega") && omega_given;
+            if !omega_bad {
+                validate_motion(analysis.as_ref().map(|a| a.mode), m, omega_given, &mut out);
+            }
+        }
+        if let Some(s) = &solver {
+            validate_solver(s, &mut out);
+        }
+        // A key already reported by the schema pass (unknown or ill-typed) is not reported again
+        // (e.g. as "required" because its ill-typed value was dropped).
+        let reported: BTreeSet<String> = ctx.issues.iter().map(|i| i.key.clone()).collect();
+        ctx.issues
+            .extend(out.into_iter().filter(|i| !reported.contains(&i.key)));
+
+        if !ctx.issues.is_empty() {
+            return Err(ctx.into_errors());
+        }
+        match (
+            info, geometry, mesh, material, analysis, motion, solver, output,
+        ) {
+            (
+                Some(scene),
+                Some(geometry),
+                Some(mesh),
+                Some(mut material),
+                Some(analysis),
+                Some(motion),
+                Some(solver),
+                Some(output),
+            ) => {
+                material.resolve();
+                Ok(Scene {
+                    scene,
+                    geometry,
+                    mesh,
+                    material,
+                    analysis,
+                    motion,
+                    solver,
+                    output,
+                })
+            }
+            // Unreachable in practice: every `None` above records an issue.
+            _ => Err(SceneErrors(vec![SceneError {
+                key: String::new(),
+                line: None,
+                message: "scene is incomplete".to_string(),
+                source_name: source_name.to_string(),
+            }])),
+        }
+    }
+
+    /// Read a scene file and load it with [`Scene::from_toml_str`]; the path names the source.
+    pub fn from_path(path: &Path, overrides: &[String]) -> Result<Scene, SceneErrors> {
+        let name = path.display().to_string();
+        match std::fs::read_to_string(path) {
+            Ok(text) => Scene::from_toml_str(&text, &name, overrides),
+            Err(e) => Err(SceneErrors(vec![SceneError {
+                key: String::new(),
+                line: None,
+                message: format!("cannot read scene file: {e}"),
+                source_name: name,
+            }])),
+        }
+    }
+
+    /// Validate a scene built in code (ranges, model keys). Errors carry no line numbers; the
+    /// source is named `<scene>`.
+    pub fn validate(&self) -> Result<(), SceneErrors> {
+        let mut out = Vec::new();
+        validate_info(&self.scene, &mut out);
+        validate_geometry(&self.geometry, &mut out);
+        validate_mesh(&self.mesh, &mut out);
+        validate_material(&self.material, &mut out);
+        validate_motion(Some(self.analysis.mode), &self.motion, true, &mut out);
+        validate_solver(&self.solver, &mut out);
+        if out.is_empty() {
+            Ok(())
+        } else {
+            Err(SceneErrors(
+                out.into_iter()
+                    .map(|i| SceneError {
+                        key: i.key,
+                        line: None,
+                        message: i.message,
+                        source_name: "<scene>".to_string(),
+                    })
+                    .collect(),
+            ))
+        }
+    }
+
+    /// The resolved scene (defaults filled) as TOML, for `tread check`. Parses back to `self`.
+    pub fn to_toml_string(&self) -> String {
+        match toml::to_string_pretty(self) {
+            Ok(s) => s,
+            // Only possible for non-finite floats in a scene built in code.
+            Err(e) => format!("# cannot write scene as TOML: {e}\n"),
+        }
+    }
+
+    /// The shear wave speed `sqrt(G / rho)` of the material, if defined.
+    pub fn shear_wave_speed(&self) -> Option<f64> {
+        let g = self.material.shear_modulus()?;
+        let rho = self.material.rho;
+        (g > 0.0 && rho > 0.0).then(|| (g / rho).sqrt())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Schema (must match the serde structs; a test checks it)
+// ---------------------------------------------------------------------------------------------
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Float,
+    UInt,
+    Bool,
+    Str,
+    Keyword(&'static [&'static str]),
+}
+
+struct FieldSchema {
+    key: &'static str,
+    kind: Kind,
+    required: bool,
+}
+
+struct SectionSchema {
+    name: &'static str,
+    required: bool,
+    fields: &'static [FieldSchema],
+}
+
+const fn req(key: &'static str, kind: Kind) -> FieldSchema {
+    FieldSchema {
+        key,
+        kind,
+        required: true,
+    }
+}
+
+const fn opt(key: &'static str, kind: Kind) -> FieldSchema {
+    FieldSchema {
+        key,
+        kind,
+        required: false,
+    }
+}
+
+static SCHEMA: &[SectionSchema] = &[
+    SectionSchema {
+        name: "scene",
+        required: true,
+        fields: &[
+            req("name", Kind::Str),
+            opt("description", Kind::Str),
+            opt("units", Kind::Str),
+        ],
+    },
+    SectionSchema {
+        name: "geometry",
+        required: true,
+        fields: &[req("ri", Kind::Float), req("ro", Kind::Float)],
+    },
+    SectionSchema {
+        name: "mesh",
+        required: false,
+        fields: &[
+            opt("n_r", Kind::UInt),
+            opt("n_theta", Kind::UInt),
+            opt("order", Kind::UInt),
+            opt("grading_r", Kind::Float),
+            opt("grading_theta", Kind::Float),
+        ],
+    },
+    SectionSchema {
+        name: "material",
+        required: true,
+        fields: &[
+            req("model", Kind::Keyword(MaterialModel::NAMES)),
+            req("rho", Kind::Float),
+            opt("mu", Kind::Float),
+            opt("lambda", Kind::Float),
+            opt("c1", Kind::Float),
+            opt("c2", Kind::Float),
+            opt("kappa", Kind::Float),
+            opt("formulation", Kind::Keyword(Formulation::NAMES)),
+        ],
+    },
+    SectionSchema {
+        name: "analysis",
+        required: true,
+        fields: &[req("mode", Kind::Keyword(Mode::NAMES))],
+    },
+    SectionSchema {
+        name: "motion",
+        required: false,
+        fields: &[opt("omega", Kind::Float)],
+    },
+    SectionSchema {
+        name: "solver",
+        required: false,
+        fields: &[
+            opt("tolerance", Kind::Float),
+            opt("max_iterations", Kind::UInt),
+            opt("load_steps", Kind::UInt),
+            opt("max_cutbacks", Kind::UInt),
+            opt("linear", Kind::Keyword(LinearChoice::NAMES)),
+            opt("threads", Kind::UInt),
+            opt("line_search", Kind::Bool),
+        ],
+    },
+    SectionSchema {
+        name: "output",
+        required: false,
+        fields: &[opt("csv", Kind::Bool)],
+    },
+];
+
+fn section_schema(name: &str) -> Option<&'static SectionSchema> {
+    SCHEMA.iter().find(|s| s.name == name)
+}
+
+impl SectionSchema {
+    fn field(&self, key: &str) -> Option<&'static FieldSchema> {
+        self.fields.iter().find(|f| f.key == key)
+    }
+
+    fn key_list(&self) -> String {
+        self.fields
+            .iter()
+            .map(|f| f.key)
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+fn section_list() -> String {
+    SCHEMA
+        .iter()
+        .map(|s| format!("[{}]", s.name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn quoted_list(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("\"{n}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn describe_value(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => format!("string \"{s}\""),
+        toml::Value::Integer(i) => format!("integer {i}"),
+        toml::Value::Float(f) => format!("float {f}"),
+        toml::Value::Boolean(b) => format!("boolean {b}"),
+        toml::Value::Datetime(d) => format!("datetime {d}"),
+        toml::Value::Array(_) => "an array".to_string(),
+        toml::Value::Table(_) => "a table".to_string(),
+    }
+}
+
+fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
+    let ok = match (kind, v) {
+        (Kind::Float, toml::Value::Float(f)) => {
+            if f.is_finite() {
+                true
+            } else {
+                return Err(format!(
+                    "expected a finite number, found {}",
+                    describe_value(v)
+                ));
+            }
+        }
+        (Kind::Float, toml::Value::Integer(_)) => true,
+        (Kind::UInt, toml::Value::Integer(i)) => {
+            if *i >= 0 {
+                true
+            } else {
+                return Err(format!(
+                    "expected a non-negative integer, found {}",
+                    describe_value(v)
+                ));
+            }
+        }
+        (Kind::Bool, toml::Value::Boolean(_)) => true,
+        (Kind::Str, toml::Value::String(_)) => true,
+        (Kind::Keyword(names), toml::Value::String(s)) => {
+            if names.contains(&s.as_str()) {
+                true
+            } else {
+                return Err(format!(
+                    "unknown value \"{s}\"; expected one of {}",
+                    quoted_list(names)
+                ));
+            }
+        }
+        _ => false,
+    };
+    if ok {
+        Ok(())
+    } else {
+        let expected = match kind {
+            Kind::Float => "a number".to_string(),
+            Kind::UInt => "a non-negative integer".to_string(),
+            Kind::Bool => "a boolean (true or false)".to_string(),
+            Kind::Str => "a string".to_string(),
+            Kind::Keyword(names) => format!("a string, one of {}", quoted_list(names)),
+        };
+        Err(format!("expected {expected}, found {}", describe_value(v)))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Loading context
+// ---------------------------------------------------------------------------------------------
+
+/// Where an issue's location comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Origin {
+    /// `(--set)` if the key was overridden, else the line of the key in the original text.
+    Auto,
+    /// Always `(--set)`: a problem with the override itself.
+    Override,
+}
+
+#[derive(Clone, Debug)]
+struct Issue {
+    key: String,
+    message: String,
+    origin: Origin,
+}
+
+fn issue(key: impl Into<String>, message: impl Into<String>) -> Issue {
+    Issue {
+        key: key.into(),
+        message: message.into(),
+        origin: Origin::Auto,
+    }
+}
+
+struct Ctx<'a> {
+    source_name: &'a str,
+    locator: &'a Locator,
+    overridden: BTreeSet<String>,
+    issues: Vec<Issue>,
+}
+
+impl Ctx<'_> {
+    fn push(&mut self, key: impl Into<String>, message: impl Into<String>) {
+        self.issues.push(issue(key, message));
+    }
+
+    fn push_override(&mut self, key: impl Into<String>, message: impl Into<String>) {
+        self.issues.push(Issue {
+            key: key.into(),
+            message: message.into(),
+            origin: Origin::Override,
+        });
+    }
+
+    fn apply_overrides(&mut self, doc: &mut toml::Table, overrides: &[String]) {
+        for ov in overrides {
+            let Some((raw_key, raw_value)) = ov.split_once('=') else {
+                self.push_override(
+                    ov.trim(),
+                    format!("malformed override `{ov}`: expected `section.key=value`"),
+                );
+                continue;
+            };
+            let key = raw_key.trim();
+            let parts: Vec<&str> = key.split('.').map(str::trim).collect();
+            if parts.len() != 2 || parts.iter().any(|p| p.is_empty()) {
+                self.push_override(
+                    key,
+                    format!("malformed override `{ov}`: the key must be `section.key`"),
+                );
+                continue;
+            }
+            let (sec_name, field_name) = (parts[0], parts[1]);
+            let key = format!("{sec_name}.{field_name}");
+            let Some(sec) = section_schema(sec_name) else {
+                self.push_override(
+                    key,
+                    format!(
+                        "unknown section `[{sec_name}]` in override `{ov}`; sections are {}",
+                        section_list()
+                    ),
+                );
+                continue;
+            };
+            let Some(field) = sec.field(field_name) else {
+                self.push_override(
+                    key,
+                    format!(
+                        "unknown key in override `{ov}`; keys of [{sec_name}] are {}",
+                        sec.key_list()
+                    ),
+                );
+                continue;
+            };
+            let value = parse_override_value(raw_value.trim(), field.kind);
+            let entry = doc
+                .entry(sec_name.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            match entry {
+                toml::Value::Table(t) => {
+                    t.insert(field_name.to_string(), value);
+                    self.overridden.insert(key);
+                }
+                other => {
+                    let found = describe_value(other);
+                    self.push_override(
+                        key,
+                        format!(
+                            "cannot apply override `{ov}`: `{sec_name}` in the file is {found}, not a table"
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    /// Check sections and keys against [`SCHEMA`]; return a copy of the document without the
+    /// offending entries, so that the remaining sections can still be deserialized and validated.
+    fn check_schema(&mut self, doc: &toml::Table) -> toml::Table {
+        let mut clean = toml::Table::new();
+        for (sec_name, sec_value) in doc {
+            let Some(sec) = section_schema(sec_name) else {
+                self.push(
+                    sec_name.clone(),
+                    format!("unknown section; sections are {}", section_list()),
+                );
+                continue;
+            };
+            let toml::Value::Table(table) = sec_value else {
+                self.push(
+                    sec_name.clone(),
+                    format!(
+                        "expected a table [{sec_name}], found {}",
+                        describe_value(sec_value)
+                    ),
+                );
+                continue;
+            };
+            let mut clean_table = toml::Table::new();
+            for (key, value) in table {
+                let dotted = format!("{sec_name}.{key}");
+                match sec.field(key) {
+                    None => self.push(
+                        dotted,
+                        format!("unknown key; keys of [{sec_name}] are {}", sec.key_list()),
+                    ),
+                    Some(field) => match check_kind(field.kind, value) {
+                        Ok(()) => {
+                            clean_table.insert(key.clone(), value.clone());
+                        }
+                        Err(msg) => self.push(dotted, msg),
+                    },
+                }
+            }
+            for field in sec.fields.iter().filter(|f| f.required) {
+                if !table.contains_key(field.key) {
+                    self.push(
+                        format!("{sec_name}.{}", field.key),
+                        "required key is missing",
+                    );
+                }
+            }
+            clean.insert(sec_name.clone(), toml::Value::Table(clean_table));
+        }
+        for sec in SCHEMA.iter().filter(|s| s.required) {
+            if !doc.contains_key(sec.name) {
+                let needs: Vec<&str> = sec
+                    .fields
+                    .iter()
+                    .filter(|f| f.required)
+                    .map(|f| f.key)
+                    .collect();
+                self.push(
+                    sec.name,
+                    format!(
+                        "required section [{}] is missing (it needs {})",
+                        sec.name,
+                        needs.join(", ")
+                    ),
+                );
+            }
+        }
+        clean
+    }
+
+    /// Deserialize a required section; `None` if absent or incomplete (already reported).
+    fn required_section<T: DeserializeOwned>(
+        &mut self,
+        clean: &toml::Table,
+        name: &str,
+    ) -> Option<T> {
+        let value = clean.get(name)?;
+        let sec = section_schema(name)?;
+        if let toml::Value::Table(t) = value {
+            if sec
+                .fields
+                .iter()
+                .any(|f| f.required && !t.contains_key(f.key))
+            {
+                return None; // missing or ill-typed required key: already reported
+            }
+        }
+        self.deserialize_section(value, name)
+    }
+
+    /// Deserialize an optional section (defaults when absent).
+    fn optional_section<T: DeserializeOwned + Default>(
+        &mut self,
+        clean: &toml::Table,
+        name: &str,
+    ) -> Option<T> {
+        match clean.get(name) {
+            None => {
+                let present_but_bad = self
+                    .issues
+                    .iter()
+                    .any(|i| i.key == name && i.origin == Origin::Auto);
+                if present_but_bad {
+                    None
+                } else {
+                    Some(T::default())
+                }
+            }
+            Some(value) => self.deserialize_section(value, name),
+        }
+    }
+
+    fn deserialize_section<T: DeserializeOwned>(
+        &mut self,
+        value: &toml::Value,
+        name: &str,
+    ) -> Option<T> {
+        match value.clone().try_into::<T>() {
+            Ok(v) => Some(v),
+            Err(e) => {
+                // Backstop: the schema pass should have caught everything serde rejects.
+                let key = key_from_de_error(&e, name);
+                self.push(key, e.message().trim_end().to_string());
+                None
+            }
+        }
+    }
+
+    fn into_errors(self) -> SceneErrors {
+        let mut errors: Vec<SceneError> = self
+            .issues
+            .into_iter()
+            .map(|i| {
+                let is_override = match i.origin {
+                    Origin::Override => true,
+                    Origin::Auto => self.overridden.contains(&i.key),
+                };
+                if is_override {
+                    SceneError {
+                        key: i.key,
+                        line: None,
+                        message: i.message,
+                        source_name: format!("{}{OVERRIDE_TAG}", self.source_name),
+                    }
+                } else {
+                    SceneError {
+                        line: self.locator.locate(&i.key),
+                        key: i.key,
+                        message: i.message,
+                        source_name: self.source_name.to_string(),
+                    }
+                }
+            })
+            .collect();
+        // File errors in line order, then those without a line (overrides last).
+        errors.sort_by_key(|e| (e.line.is_none(), e.is_override(), e.line));
+        SceneErrors(errors)
+    }
+}
+
+fn table_has(doc: &toml::Table, section: &str, key: &str) -> bool {
+    matches!(doc.get(section), Some(toml::Value::Table(t)) if t.contains_key(key))
+}
+
+/// Parse an override value as a TOML value; fall back to the bare text as a string. For
+/// string-valued keys, unquoted text is always taken literally (so `scene.name=2024` works).
+fn parse_override_value(text: &str, kind: Kind) -> toml::Value {
+    let parsed = format!("v = {text}")
+        .parse::<toml::Table>()
+        .ok()
+        .filter(|t| t.len() == 1)
+        .and_then(|mut t| t.remove("v"));
+    match (parsed, kind) {
+        (Some(v @ toml::Value::String(_)), _) => v,
+        (_, Kind::Str | Kind::Keyword(_)) => toml::Value::String(text.to_string()),
+        (Some(v), _) => v,
+        (None, _) => toml::Value::String(text.to_string()),
+    }
+}
+
+fn key_from_de_error(e: &toml::de::Error, section: &str) -> String {
+    let msg = e.message();
+    for prefix in ["unknown field `", "missing field `"] {
+        if let Some(rest) = msg.strip_prefix(prefix) {
+            if let Some(end) = rest.find('`') {
+                return format!("{section}.{}", &rest[..end]);
+            }
+        }
+    }
+    // The Display of a value-deserialization error ends with "in `key`".
+    let shown = e.to_string();
+    if let Some(pos) = shown.rfind("in `") {
+        let rest = &shown[pos + 4..];
+        if let Some(end) = rest.find('`') {
+            return format!("{section}.{}", &rest[..end]);
+        }
+    }
+    section.to_string()
+}
+
+fn line_of_offset(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation of the typed sections
+// ---------------------------------------------------------------------------------------------
+
+fn positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+fn validate_info(s: &SceneInfo, out: &mut Vec<Issue>) {
+    let valid = !s.name.is_empty()
+        && s.name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if !valid {
+        out.push(issue(
+            "scene.name",
+            format!(
+                "\"{}\" is not a valid name: it names the output directory, so use only \
+                 letters, digits, '_' and '-' (at least one character)",
+                s.name
+            ),
+        ));
+    }
+}
+
+fn validate_geometry(g: &Geometry, out: &mut Vec<Issue>) {
+    let ri_ok = positive(g.ri);
+    if !ri_ok {
+        out.push(issue(
+            "geometry.ri",
+            format!("inner radius must be > 0, got {}", g.ri),
+        ));
+    }
+    if !g.ro.is_finite() {
+        out.push(issue(
+            "geometry.ro",
+            format!("outer radius must be finite, got {}", g.ro),
+        ));
+    } else if ri_ok && g.ro <= g.ri {
+        out.push(issue(
+            "geometry.ro",
+            format!(
+                "outer radius ro = {} must be greater than inner radius ri = {}",
+                g.ro, g.ri
+            ),
+        ));
+    } else if !ri_ok && g.ro <= 0.0 {
+        out.push(issue(
+            "geometry.ro",
+            format!("outer radius must be > 0, got {}", g.ro),
+        ));
+    }
+}
+
+fn validate_mesh(m: &MeshSpec, out: &mut Vec<Issue>) {
+    if m.n_r < 1 {
+        out.push(issue("mesh.n_r", "must be >= 1, got 0"));
+    }
+    if m.n_theta < MIN_N_THETA {
+        out.push(issue(
+            "mesh.n_theta",
+            format!("must be >= {MIN_N_THETA}, got {}", m.n_theta),
+        ));
+    } else if !m.n_theta.is_multiple_of(2) {
+        out.push(issue(
+            "mesh.n_theta",
+            format!("must be even, got {}", m.n_theta),
+        ));
+    }
+    if m.order != 1 && m.order != 2 {
+        out.push(issue(
+            "mesh.order",
+            format!("must be 1 (Q1) or 2 (Q2), got {}", m.order),
+        ));
+    }
+    if !positive(m.grading_r) {
+        out.push(issue(
+            "mesh.grading_r",
+            format!(
+                "must be > 0 (ratio of outermost to innermost radial cell size), got {}",
+                m.grading_r
+            ),
+        ));
+    }
+    if !(m.grading_theta.is_finite() && (0.0..1.0).contains(&m.grading_theta)) {
+        out.push(issue(
+            "mesh.grading_theta",
+            format!("must be in [0, 1), got {}", m.grading_theta),
+        ));
+    }
+}
+
+fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
+    let model = m.model;
+    if !positive(m.rho) {
+        out.push(issue(
+            "material.rho",
+            format!("density must be > 0, got {}", m.rho),
+        ));
+    }
+    let given: [(&str, bool); 6] = [
+        ("mu", m.mu.is_some()),
+        ("lambda", m.lambda.is_some()),
+        ("c1", m.c1.is_some()),
+        ("c2", m.c2.is_some()),
+        ("kappa", m.kappa.is_some()),
+        ("formulation", m.formulation.is_some()),
+    ];
+    let allowed = MaterialSpec::keys_of(model);
+    for (key, present) in given {
+        if present && !allowed.contains(&key) {
+            out.push(issue(
+                format!("material.{key}"),
+                format!(
+                    "`{key}` is not a parameter of model \"{model}\" (its keys are model, {})",
+                    allowed.join(", ")
+                ),
+            ));
+        }
+    }
+    let need_positive = |key: &str, v: Option<f64>, what: &str, out: &mut Vec<Issue>| match v {
+        None => out.push(issue(
+            format!("material.{key}"),
+            format!("required for model \"{model}\" ({what})"),
+        )),
+        Some(x) if !positive(x) => out.push(issue(
+            format!("material.{key}"),
+            format!("{what} must be > 0, got {x}"),
+        )),
+        Some(_) => {}
+    };
+    match model {
+        MaterialModel::NeoHookean => {
+            need_positive("mu", m.mu, "Lamé shear modulus", out);
+            need_positive("lambda", m.lambda, "Lamé first parameter", out);
+        }
+        MaterialModel::MooneyRivlin | MaterialModel::MooneyRivlinIncompressible => {
+            need_positive("c1", m.c1, "Mooney–Rivlin C1", out);
+            match m.c2 {
+                None => out.push(issue(
+                    "material.c2",
+                    format!("required for model \"{model}\" (Mooney–Rivlin C2; may be 0)"),
+                )),
+                Some(x) if !(x.is_finite() && x >= 0.0) => out.push(issue(
+                    "material.c2",
+                    format!("Mooney–Rivlin C2 must be >= 0, got {x}"),
+                )),
+                Some(_) => {}
+            }
+            if model == MaterialModel::MooneyRivlin {
+                need_positive("kappa", m.kappa, "bulk modulus", out);
+            } else {
+                match m.formulation.unwrap_or_default() {
+                    Formulation::Perturbed => {
+                        if let Some(k) = m.kappa {
+                            if !positive(k) {
+                                out.push(issue(
+                                    "material.kappa",
+                                    format!("bulk modulus must be > 0, got {k}"),
+                                ));
+                            }
+                        }
+                    }
+                    Formulation::Exact => {
+                        if m.kappa.is_some() {
+                            out.push(issue(
+                                "material.kappa",
+                                "`kappa` is only used with formulation = \"perturbed\" \
+                                 (the exact formulation has no bulk modulus)",
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+fn validate_motion(mode: Option<Mode>, m: &Motion, omega_given: bool, out: &mut Vec<Issue>) {
+    if mode == Some(Mode::Spinning) && !omega_given {
+        out.push(issue(
+            "motion.omega",
+            "required for analysis mode \"spinning\" (target angular speed, rad/s)",
+        ));
+        return;
+    }
+    if !(m.omega.is_finite() && m.omega >= 0.0) {
+        out.push(issue(
+            "motion.omega",
+            format!("angular speed must be >= 0, got {}", m.omega),
+        ));
+    }
+}
+
+fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
+    if !(s.tolerance.is_finite() && s.tolerance > 0.0 && s.tolerance < 1.0) {
+        out.push(issue(
+            "solver.tolerance",
+            format!("relative tolerance must be in (0, 1), got {}", s.tolerance),
+        ));
+    }
+    if s.max_iterations < 1 {
+        out.push(issue("solver.max_iterations", "must be >= 1, got 0"));
+    }
+    if s.load_steps < 1 {
+        out.push(issue("solver.load_steps", "must be >= 1, got 0"));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Line locator
+// ---------------------------------------------------------------------------------------------
+
+/// Where each table header and key is defined in the original text (1-based lines).
+#[derive(Debug, Default)]
+struct Locator {
+    entries: Vec<(Vec<String>, usize)>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum MultiLine {
+    Basic,
+    Literal,
+}
+
+#[derive(Debug, Default)]
+struct ScanState {
+    multiline: Option<MultiLine>,
+    depth: usize,
+}
+
+impl Locator {
+    fn new(text: &str) -> Locator {
+        let mut entries = Vec::new();
+        let mut table: Vec<String> = Vec::new();
+        let mut st = ScanState::default();
+        for (i, line) in text.lines().enumerate() {
+            let lineno = i + 1;
+            if st.multiline.is_some() || st.depth > 0 {
+                scan_value(line, &mut st);
+                continue;
+            }
+            let t = line.trim_start();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            if let Some(h) = t.strip_prefix('[') {
+                let (h, close) = match h.strip_prefix('[') {
+                    Some(h2) => (h2, "]]"),
+                    None => (h, "]"),
+                };
+                if let Some((path, after)) = parse_key_path(h) {
+                    if after.trim_start().starts_with(close) {
+                        entries.push((path.clone(), lineno));
+                        table = path;
+                    }
+                }
+                continue;
+            }
+            if let Some((path, after)) = parse_key_path(t) {
+                if let Some(value) = after.trim_start().strip_prefix('=') {
+                    let mut full = table.clone();
+                    for seg in path {
+                        full.push(seg);
+                        entries.push((full.clone(), lineno));
+                    }
+                    scan_value(value, &mut st);
+                }
+            }
+        }
+        Locator { entries }
+    }
+
+    /// Line of a dotted key; for a key not in the text, the line where its nearest ancestor
+    /// (e.g. the section header) is defined; `None` if none is.
+    fn locate(&self, dotted: &str) -> Option<usize> {
+        if dotted.is_empty() {
+            return None;
+        }
+        let target: Vec<&str> = dotted.split('.').collect();
+        let mut best: Option<(usize, usize)> = None; // (matched length, line)
+        for (path, line) in &self.entries {
+            if path.len() > target.len() || path.iter().zip(&target).any(|(a, b)| a != b) {
+                continue;
+            }
+            if best.is_none_or(|(len, _)| path.len() > len) {
+                best = Some((path.len(), *line));
+            }
+        }
+        best.map(|(_, line)| line)
+    }
+
+    /// The longest key path defined on a line, dotted.
+    fn key_at_line(&self, line: usize) -> Option<String> {
+        self.entries
+            .iter()
+            .filter(|(_, l)| *l == line)
+            .max_by_key(|(p, _)| p.len())
+            .map(|(p, _)| p.join("."))
+    }
+}
+
+/// Scan (the rest of) a value on one line, tracking strings, comments and bracket depth.
+fn scan_value(s: &str, st: &mut ScanState) {
+    let b = s.as_bytes();
+    let n = b.len();
+    let mut i = 0;
+    while i < n {
+        if let Some(ml) = st.multiline {
+            let delim: &[u8] = match ml {
+                MultiLine::Basic => b"\"\"\"",
+                MultiLine::Literal => b"'''",
+            };
+            let mut closed = false;
+            while i < n {
+                if ml == MultiLine::Basic && b[i] == b'\\' {
+                    i += 2;
+                    continue;
+                }
+                if b[i..].starts_with(delim) {
+                    i += 3;
+                    // Up to two extra quotes may belong to the content.
+                    while i < n && b[i] == delim[0] {
+                        i += 1;
+                    }
+                    closed = true;
+                    break;
+                }
+                i += 1;
+            }
+            if !closed {
+                return;
+            }
+            st.multiline = None;
+            continue;
+        }
+        match b[i] {
+            b'#' => return,
+            b'"' => {
+                if b[i..].starts_with(b"\"\"\"") {
+                    st.multiline = Some(MultiLine::Basic);
+                    i += 3;
+                    continue;
+                }
+                i += 1;
+                while i < n && b[i] != b'"' {
+                    if b[i] == b'\\' {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+            }
+            b'\'' => {
+                if b[i..].starts_with(b"'''") {
+                    st.multiline = Some(MultiLine::Literal);
+                    i += 3;
+                    continue;
+                }
+                i += 1;
+                while i < n && b[i] != b'\'' {
+                    i += 1;
+                }
+            }
+            b'[' | b'{' => st.depth += 1,
+            b']' | b'}' => st.depth = st.depth.saturating_sub(1),
+            _ => {}
+        }
+        i += 1;
+    }
+}
+
+/// Parse a (possibly dotted, possibly quoted) TOML key at the start of `s`.
+fn parse_key_path(s: &str) -> Option<(Vec<String>, &str)> {
+    let mut segs = Vec::new();
+    let mut rest = s;
+    loop {
+        rest = rest.trim_start_matches([' ', '\t']);
+        let (seg, r) = if let Some(r) = rest.strip_prefix('"') {
+            parse_basic_string(r)?
+        } else if let Some(r) = rest.strip_prefix('\'') {
+            let end = r.find('\'')?;
+            (r[..end].to_string(), &r[end + 1..])
+        } else {
+            let end = rest
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'))
+                .unwrap_or(rest.len());
+            if end == 0 {
+                return None;
+            }
+            (rest[..end].to_string(), &rest[end..])
+        };
+        segs.push(seg);
+        rest = r.trim_start_matches([' ', '\t']);
+        match rest.strip_prefix('.') {
+            Some(r) => rest = r,
+            None => return Some((segs, rest)),
+        }
+    }
+}
+
+/// Parse the body of a basic string (after the opening quote); returns it and the rest after the
+/// closing quote.
+fn parse_basic_string(s: &str) -> Option<(String, &str)> {
+    let mut out = String::new();
+    let mut chars = s.char_indices();
+    while let Some((i, c)) = chars.next() {
+        match c {
+            '"' => return Some((out, &s[i + 1..])),
+            '\\' => {
+                let (_, e) = chars.next()?;
+                out.push(match e {
+                    'n' => '\n',
+                    't' => '\t',
+                    'r' => '\r',
+                    other => other,
+                });
+            }
+            other => out.push(other),
+        }
+    }
+    None
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tests
+// ---------------------------------------------------------------------------------------------
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const INCOMPRESSIBLE: &str = include_str!("../../scenarios/spinning_incompressible.toml");
+    const NEO_HOOKEAN: &str = include_str!("../../scenarios/spinning_neo_hookean.toml");
+    const MOONEY_RIVLIN: &str = include_str!("../../scenarios/spinning_mooney_rivlin.toml");
+
+    const MINIMAL: &str = r#"
+[scene]
+name = "minimal"
+
+[geometry]
+ri = 1.0
+ro = 2.0
+
+[material]
+model = "neo_hookean"
+rho = 0.027
+mu = 200.0
+lambda = 1800.0
+
+[analysis]
+mode = "spinning"
+
+[motion]
+omega = 20.0
+"#;
+
+    fn load(text: &str) -> Result<Scene, SceneErrors> {
+        Scene::from_toml_str(text, "test.toml", &[])
+    }
+
+    fn load_with(text: &str, overrides: &[&str]) -> Result<Scene, SceneErrors> {
+        let ov: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        Scene::from_toml_str(text, "test.toml", &ov)
+    }
+
+    fn errors(text: &str) -> SceneErrors {
+        match load(text) {
+            Ok(s) => panic!("expected errors, got {s:?}"),
+            Err(e) => e,
+        }
+    }
+
+    fn errors_with(text: &str, overrides: &[&str]) -> SceneErrors {
+        match load_with(text, overrides) {
+            Ok(s) => panic!("expected errors, got {s:?}"),
+            Err(e) => e,
+        }
+    }
+
+    /// 1-based line of the first line of `text` that starts with `prefix` (after whitespace).
+    fn line_of(text: &str, prefix: &str) -> usize {
+        text.lines()
+            .position(|l| l.trim_start().starts_with(prefix))
+            .map(|i| i + 1)
+            .unwrap_or_else(|| panic!("no line starts with {prefix:?}"))
+    }
+
+    fn replace_line(text: &str, prefix: &str, new: &str) -> String {
+        let mut found = false;
+        let out: Vec<String> = text
+            .lines()
+            .map(|l| {
+                if !found && l.trim_start().starts_with(prefix) {
+                    found = true;
+                    new.to_string()
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect();
+        assert!(found, "no line starts with {prefix:?}");
+        out.join("\n") + "\n"
+    }
+
+    #[test]
+    fn incompressible_scene_parses() {
+        let s = load(INCOMPRESSIBLE).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_incompressible");
+        assert_eq!(s.scene.units, "in-lbf-s");
+        assert_eq!(s.geometry.ri, 1.0);
+        assert_eq!(s.geometry.ro, 2.0);
+        assert_eq!(s.mesh.n_r, 4);
+        assert_eq!(s.mesh.n_theta, 48);
+        assert_eq!(s.mesh.order, 2);
+        assert_eq!(s.material.model, MaterialModel::MooneyRivlinIncompressible);
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlinIncompressible {
+                c1: 80.0,
+                c2: 20.0,
+                formulation: Formulation::Exact,
+                kappa: None
+            })
+        );
+        assert_eq!(s.material.formulation, Some(Formulation::Exact));
+        assert_eq!(s.material.shear_modulus(), Some(200.0));
+        assert_eq!(s.material.bulk_modulus(), None);
+        assert!(s.material.is_incompressible());
+        assert_eq!(s.analysis.mode, Mode::Spinning);
+        assert_eq!(s.motion.omega, 20.0);
+        // The density is chosen so that c_R / Ro is about the paper's top speed, 395 rpm.
+        let c_r = 0.955 * s.shear_wave_speed().unwrap_or(0.0);
+        let rpm = c_r / s.geometry.ro * 60.0 / (2.0 * std::f64::consts::PI);
+        assert!((rpm - 395.0).abs() < 10.0, "critical spin {rpm} rpm");
+    }
+
+    #[test]
+    fn neo_hookean_scene_parses() {
+        let s = load(NEO_HOOKEAN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_neo_hookean");
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::NeoHookean {
+                mu: 200.0,
+                lambda: 1800.0
+            })
+        );
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(s.motion.omega, 20.0);
+        assert_eq!((s.geometry.ri, s.geometry.ro), (1.0, 2.0));
+        assert!(!s.material.is_incompressible());
+        let k = s.material.bulk_modulus().unwrap_or(0.0);
+        assert!((k - (1800.0 + 400.0 / 3.0)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn mooney_rivlin_scene_parses() {
+        let s = load(MOONEY_RIVLIN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_mooney_rivlin");
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlin {
+                c1: 80.0,
+                c2: 20.0,
+                kappa: 2000.0
+            })
+        );
+        assert_eq!(s.material.resolved_kappa(), Some(2000.0));
+        assert_eq!(s.material.resolved_formulation(), None);
+        assert_eq!(s.material.shear_modulus(), Some(200.0));
+    }
+
+    #[test]
+    fn defaults_are_filled() {
+        let s = load(MINIMAL).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.description, "");
+        assert_eq!(s.scene.units, DEFAULT_UNITS);
+        assert_eq!(s.mesh, MeshSpec::default());
+        assert_eq!(s.mesh.n_r, 4);
+        assert_eq!(s.mesh.n_theta, 32);
+        assert_eq!(s.mesh.order, 2);
+        assert_eq!(s.mesh.grading_r, 1.0);
+        assert_eq!(s.mesh.grading_theta, 0.0);
+        assert_eq!(s.solver.tolerance, 1e-10);
+        assert_eq!(s.solver.max_iterations, 25);
+        assert_eq!(s.solver.load_steps, 4);
+        assert_eq!(s.solver.max_cutbacks, 10);
+        assert_eq!(s.solver.linear, LinearChoice::Auto);
+        assert_eq!(s.solver.threads, 0);
+        assert!(s.solver.line_search);
+        assert!(s.output.csv);
+        assert_eq!(s.material.formulation, None);
+        assert_eq!(s.material.kappa, None);
+        assert!(s.validate().is_ok());
+    }
+
+    #[test]
+    fn partial_sections_fill_remaining_defaults() {
+        let text = format!("{MINIMAL}\n[mesh]\nn_r = 6\n\n[solver]\nlinear = \"lu\"\n");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.mesh.n_r, 6);
+        assert_eq!(s.mesh.n_theta, 32);
+        assert_eq!(s.solver.linear, LinearChoice::Lu);
+        assert_eq!(s.solver.max_iterations, 25);
+    }
+
+    #[test]
+    fn perturbed_kappa_default_is_resolved() {
+        let text = r#"
+[scene]
+name = "p"
+[geometry]
+ri = 1
+ro = 2
+[material]
+model = "mooney_rivlin_incompressible"
+rho = 0.027
+c1 = 80
+c2 = 20
+formulation = "perturbed"
+[analysis]
+mode = "spinning"
+[motion]
+omega = 0
+"#;
+        let s = load(text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.material.formulation, Some(Formulation::Perturbed));
+        assert_eq!(s.material.kappa, Some(1e4 * 100.0));
+        assert_eq!(s.material.resolved_kappa(), Some(1e6));
+        // Integers are accepted for floats.
+        assert_eq!(s.geometry.ri, 1.0);
+        assert_eq!(s.motion.omega, 0.0);
+        // Explicit kappa wins.
+        let s2 = load_with(text, &["material.kappa=5000"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s2.material.kappa, Some(5000.0));
+    }
+
+    #[test]
+    fn unknown_key_rejected_with_name_and_line() {
+        let text = replace_line(MINIMAL, "lambda", "lambda = 1800.0\nlamda = 3.0  # typo");
+        let e = errors(&text);
+        let err = e.find("material.lamda").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "lamda")));
+        assert!(err.message.contains("unknown key"), "{}", err.message);
+        let shown = err.to_string();
+        assert!(
+            shown.starts_with(&format!(
+                "test.toml:{}: key `material.lamda`",
+                err.line.unwrap_or(0)
+            )),
+            "{shown}"
+        );
+        assert_eq!(e.0.len(), 1, "{e}");
+    }
+
+    #[test]
+    fn unknown_section_rejected() {
+        let text = format!("{MINIMAL}\n[road]\ndisp = 0.1\n");
+        let e = errors(&text);
+        let err = e.find("road").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[road]")));
+        assert!(err.message.contains("unknown section"));
+    }
+
+    #[test]
+    fn wrong_type_rejected_naming_key() {
+        let text = replace_line(MINIMAL, "ro =", "ro = \"two\"  # oops");
+        let e = errors(&text);
+        let err = e.find("geometry.ro").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "ro =")));
+        assert!(err.message.contains("expected a number"), "{}", err.message);
+        assert!(err.message.contains("\"two\""), "{}", err.message);
+
+        let text = format!("{MINIMAL}\n[mesh]\nn_r = 2.5\norder = -1\n");
+        let e = errors(&text);
+        assert_eq!(
+            e.find("mesh.n_r").and_then(|x| x.line),
+            Some(line_of(&text, "n_r"))
+        );
+        assert_eq!(
+            e.find("mesh.order").and_then(|x| x.line),
+            Some(line_of(&text, "order"))
+        );
+
+        let text = replace_line(MINIMAL, "model", "model = \"ogden\"");
+        let e = errors(&text);
+        let err = e.find("material.model").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("neo_hookean"), "{}", err.message);
+        assert_eq!(err.line, Some(line_of(&text, "model")));
+    }
+
+    #[test]
+    fn non_finite_float_rejected() {
+        let text = replace_line(MINIMAL, "omega", "omega = nan");
+        let e = errors(&text);
+        assert!(e.has_key("motion.omega"), "{e}");
+    }
+
+    #[test]
+    fn ri_not_less_than_ro_rejected_with_line() {
+        let text = replace_line(MINIMAL, "ri =", "ri = 2.5   # larger than ro");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        let err = &e.0[0];
+        assert_eq!(err.key, "geometry.ro");
+        assert_eq!(err.line, Some(line_of(&text, "ro =")));
+        assert!(err.message.contains("greater than"), "{}", err.message);
+
+        let text = replace_line(MINIMAL, "ri =", "ri = -1.0");
+        let e = errors(&text);
+        let err = e.find("geometry.ri").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "ri =")));
+    }
+
+    #[test]
+    fn non_positive_moduli_and_density_rejected() {
+        let text = replace_line(MINIMAL, "mu =", "mu = 0.0");
+        let text = replace_line(&text, "rho =", "rho = -0.027");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("material.mu").and_then(|x| x.line),
+            Some(line_of(&text, "mu ="))
+        );
+        assert_eq!(
+            e.find("material.rho").and_then(|x| x.line),
+            Some(line_of(&text, "rho ="))
+        );
+        // Sorted by line.
+        assert!(e.0[0].line < e.0[1].line);
+
+        let e = errors(&replace_line(MOONEY_RIVLIN, "c2 ", "c2 = -1.0"));
+        assert!(e.has_key("material.c2"), "{e}");
+        let e = errors(&replace_line(MOONEY_RIVLIN, "kappa", "kappa = 0"));
+        assert!(e.has_key("material.kappa"), "{e}");
+        // c2 = 0 is fine.
+        assert!(load(&replace_line(MOONEY_RIVLIN, "c2 ", "c2 = 0.0")).is_ok());
+    }
+
+    #[test]
+    fn n_theta_too_small_or_odd_rejected() {
+        let e = errors(&format!("{MINIMAL}\n[mesh]\nn_theta = 6\n"));
+        let err = e.find("mesh.n_theta").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains(">= 8"), "{}", err.message);
+        let text = format!("{MINIMAL}\n[mesh]\nn_theta = 33\n");
+        let e = errors(&text);
+        let err = e.find("mesh.n_theta").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("even"), "{}", err.message);
+        assert_eq!(err.line, Some(line_of(&text, "n_theta")));
+    }
+
+    #[test]
+    fn other_mesh_and_solver_ranges_rejected() {
+        let text = format!(
+            "{MINIMAL}\n[mesh]\nn_r = 0\norder = 3\ngrading_r = 0\ngrading_theta = 1.0\n\
+             [solver]\ntolerance = 1.0\nmax_iterations = 0\nload_steps = 0\n"
+        );
+        let e = errors(&text);
+        for key in [
+            "mesh.n_r",
+            "mesh.order",
+            "mesh.grading_r",
+            "mesh.grading_theta",
+            "solver.tolerance",
+            "solver.max_iterations",
+            "solver.load_steps",
+        ] {
+            assert!(e.has_key(key), "missing {key} in\n{e}");
+        }
+        assert_eq!(e.0.len(), 7, "{e}");
+    }
+
+    #[test]
+    fn scene_name_must_be_a_directory_name() {
+        let e = errors(&replace_line(MINIMAL, "name", "name = \"my scene/1\""));
+        assert!(e.has_key("scene.name"), "{e}");
+        let e = errors(&replace_line(MINIMAL, "name", "name = \"\""));
+        assert!(e.has_key("scene.name"), "{e}");
+    }
+
+    #[test]
+    fn key_not_belonging_to_model_rejected() {
+        // lambda with mooney_rivlin
+        let text = replace_line(MOONEY_RIVLIN, "kappa", "kappa = 2000.0\nlambda = 1800.0");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        let err = &e.0[0];
+        assert_eq!(err.key, "material.lambda");
+        assert_eq!(err.line, Some(line_of(&text, "lambda")));
+        assert!(err.message.contains("not a parameter"), "{}", err.message);
+        // kappa with the exact incompressible formulation
+        let text = replace_line(INCOMPRESSIBLE, "c2 ", "c2 = 20.0\nkappa = 1e5");
+        let e = errors(&text);
+        assert!(e.has_key("material.kappa"), "{e}");
+        // formulation with neo_hookean
+        let e = errors(&replace_line(
+            MINIMAL,
+            "mu =",
+            "mu = 200\nformulation = \"exact\"",
+        ));
+        assert!(e.has_key("material.formulation"), "{e}");
+    }
+
+    #[test]
+    fn missing_required_keys_reported() {
+        // Missing model parameter: line of the [material] header.
+        let text = MINIMAL.replace("lambda = 1800.0\n", "");
+        let e = errors(&text);
+        let err = e.find("material.lambda").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[material]")));
+        assert!(err.message.contains("required"));
+        // Missing schema-required key.
+        let text = MINIMAL.replace("ro = 2.0\n", "");
+        let e = errors(&text);
+        let err = e.find("geometry.ro").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[geometry]")));
+        // Missing omega for spinning.
+        let text = MINIMAL.replace("omega = 20.0\n", "");
+        let e = errors(&text);
+        assert!(e.has_key("motion.omega"), "{e}");
+        // Missing section.
+        let text = MINIMAL.replace("[analysis]\nmode = \"spinning\"\n", "");
+        let e = errors(&text);
+        let err = e.find("analysis").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, None);
+        assert!(err.message.contains("missing"));
+    }
+
+    #[test]
+    fn multiple_errors_reported_together() {
+        let text = r#"
+[scene]
+name = "many"
+[geometry]
+ri = 3.0          # >= ro
+ro = 2.0
+[mesh]
+n_theta = 7
+bogus = 1
+[material]
+model = "mooney_rivlin"
+rho = 0.0
+c1 = 80
+c2 = 20
+kappa = 2000
+mu = 3
+[analysis]
+mode = "spinning"
+[motion]
+omega = -1.0
+[solver]
+linear = "qr"
+"#;
+        let e = errors(text);
+        for key in [
+            "geometry.ro",
+            "mesh.n_theta",
+            "mesh.bogus",
+            "material.rho",
+            "material.mu",
+            "motion.omega",
+            "solver.linear",
+        ] {
+            let err = e
+                .find(key)
+                .unwrap_or_else(|| panic!("missing {key} in\n{e}"));
+            assert!(err.line.is_some(), "{err}");
+        }
+        assert_eq!(e.0.len(), 7, "{e}");
+        let shown = e.to_string();
+        assert_eq!(shown.lines().count(), 7, "{shown}");
+        // Ordered by line.
+        let lines: Vec<usize> = e.0.iter().filter_map(|x| x.line).collect();
+        let mut sorted = lines.clone();
+        sorted.sort_unstable();
+        assert_eq!(lines, sorted);
+    }
+
+    #[test]
+    fn ill_typed_required_key_reported_once() {
+        let text = replace_line(MOONEY_RIVLIN, "c2 ", "c2 = \"20\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert_eq!(e.0[0].key, "material.c2");
+        assert!(e.0[0].message.contains("expected a number"), "{e}");
+    }
+
+    #[test]
+    fn type_and_range_errors_in_different_sections_together() {
+        let text = replace_line(MINIMAL, "ri =", "ri = \"one\"");
+        let text = replace_line(&text, "mu =", "mu = -5");
+        let e = errors(&text);
+        assert!(e.has_key("geometry.ri"), "{e}");
+        assert!(e.has_key("material.mu"), "{e}");
+    }
+
+    #[test]
+    fn overrides_apply() {
+        let s = load_with(
+            INCOMPRESSIBLE,
+            &[
+                "mesh.n_r=8",
+                " motion.omega = 30.5 ",
+                "solver.linear=lu",
+                "output.csv=false",
+                "scene.name=run2024",
+                "scene.description=\"quoted text\"",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.mesh.n_r, 8);
+        assert_eq!(s.motion.omega, 30.5);
+        assert_eq!(s.solver.linear, LinearChoice::Lu);
+        assert!(!s.output.csv);
+        assert_eq!(s.scene.name, "run2024");
+        assert_eq!(s.scene.description, "quoted text");
+        // A string-valued key takes an unquoted number literally.
+        let s = load_with(MINIMAL, &["scene.name=2024"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "2024");
+        // An override can create a section absent from the file.
+        let s = load_with(MINIMAL, &["solver.threads=3"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.solver.threads, 3);
+        // Switching the model by override.
+        let s = load_with(
+            MOONEY_RIVLIN,
+            &[
+                "material.model=mooney_rivlin_incompressible",
+                "material.formulation=perturbed",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.material.resolved_formulation(),
+            Some(Formulation::Perturbed)
+        );
+        assert_eq!(s.material.kappa, Some(2000.0));
+    }
+
+    #[test]
+    fn override_of_unknown_key_rejected() {
+        let e = errors_with(MINIMAL, &["mesh.nr=8"]);
+        assert_eq!(e.0.len(), 1, "{e}");
+        let err = &e.0[0];
+        assert_eq!(err.key, "mesh.nr");
+        assert_eq!(err.line, None);
+        assert!(err.is_override());
+        assert!(err.message.contains("mesh.nr=8"), "{}", err.message);
+        assert!(err.to_string().contains("(--set)"), "{err}");
+
+        let e = errors_with(MINIMAL, &["road.disp=0.1"]);
+        assert!(e.has_key("road.disp"), "{e}");
+        let e = errors_with(MINIMAL, &["n_r=8"]);
+        assert!(e.0[0].is_override(), "{e}");
+        let e = errors_with(MINIMAL, &["mesh.n_r"]);
+        assert_eq!(e.0[0].key, "mesh.n_r");
+        assert!(e.0[0].message.contains("malformed"), "{e}");
+    }
+
+    #[test]
+    fn override_errors_show_set_instead_of_line() {
+        let e = errors_with(INCOMPRESSIBLE, &["mesh.n_theta=7", "mesh.n_r=abc"]);
+        assert_eq!(e.0.len(), 2, "{e}");
+        for err in &e.0 {
+            assert_eq!(err.line, None);
+            assert!(err.is_override());
+            assert!(
+                err.to_string()
+                    .starts_with(&format!("test.toml:(--set): key `{}`", err.key)),
+                "{err}"
+            );
+        }
+        assert!(e
+            .find("mesh.n_r")
+            .is_some_and(|x| x.message.contains("\"abc\"")));
+        // A non-overridden key keeps its line from the file while another key is overridden.
+        let text = replace_line(INCOMPRESSIBLE, "rho", "rho = -1.0");
+        let e = errors_with(&text, &["geometry.ro=0.5"]);
+        let rho = e.find("material.rho").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(rho.line, Some(line_of(&text, "rho")));
+        assert!(!rho.is_override());
+        let ro = e.find("geometry.ro").unwrap_or_else(|| panic!("{e}"));
+        assert!(ro.is_override(), "{ro}");
+        assert!(ro.to_string().contains("(--set)"));
+    }
+
+    #[test]
+    fn syntax_error_has_line() {
+        let text = replace_line(MINIMAL, "ro =", "ro = ");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert_eq!(e.0[0].line, Some(line_of(&text, "ro =")));
+        let text = format!("{MINIMAL}[geometry]\nri = 1.0\n");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert!(e.0[0].line.is_some());
+        assert!(e.0[0].message.contains("duplicate"), "{e}");
+    }
+
+    #[test]
+    fn round_trip_through_to_toml_string() {
+        for text in [INCOMPRESSIBLE, NEO_HOOKEAN, MOONEY_RIVLIN, MINIMAL] {
+            let s = load(text).unwrap_or_else(|e| panic!("{e}"));
+            let out = s.to_toml_string();
+            let back = Scene::from_toml_str(&out, "roundtrip", &[])
+                .unwrap_or_else(|e| panic!("{e}\n{out}"));
+            assert_eq!(back, s, "{out}");
+            // Strict serde on its own, too.
+            let direct: Scene = toml::from_str(&out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(direct, s);
+            assert!(
+                out.contains("[solver]") && out.contains("tolerance"),
+                "{out}"
+            );
+        }
+        let s = load_with(
+            INCOMPRESSIBLE,
+            &[
+                "material.formulation=perturbed",
+                "scene.description=a \"quoted\" # thing",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let out = s.to_toml_string();
+        assert!(out.contains("kappa"), "{out}");
+        let back = load(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+        assert_eq!(back, s);
+    }
+
+    #[test]
+    fn serde_itself_rejects_unknown_fields() {
+        let text = format!("{MINIMAL}\n[output]\ncsv = true\npng = true\n");
+        let r: Result<Scene, _> = toml::from_str(&text);
+        let e = r.err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("png"), "{e}");
+    }
+
+    #[test]
+    fn keyword_enums_match_serde_names() {
+        fn check<T: Serialize + FromStr + fmt::Display + Copy + PartialEq + fmt::Debug>(
+            all: &[T],
+            names: &[&str],
+        ) {
+            assert_eq!(all.len(), names.len());
+            for (v, n) in all.iter().zip(names) {
+                assert_eq!(serde_json::to_string(v).ok(), Some(format!("\"{n}\"")));
+                assert_eq!(v.to_string(), *n);
+                assert_eq!(n.parse::<T>().ok(), Some(*v));
+            }
+        }
+        check(Mode::ALL, Mode::NAMES);
+        check(MaterialModel::ALL, MaterialModel::NAMES);
+        check(Formulation::ALL, Formulation::NAMES);
+        check(LinearChoice::ALL, LinearChoice::NAMES);
+        assert_eq!("spinning".parse::<Mode>(), Ok(Mode::Spinning));
+        let err = "static".parse::<Mode>().err().unwrap_or_default();
+        assert!(err.contains("\"spinning\""), "{err}");
+    }
+
+    #[test]
+    fn schema_matches_serde_structs() {
+        fn keys<T: Serialize>(v: &T) -> Vec<String> {
+            match serde_json::to_value(v) {
+                Ok(serde_json::Value::Object(m)) => m.keys().cloned().collect(),
+                _ => Vec::new(),
+            }
+        }
+        let full_material = MaterialSpec {
+            model: MaterialModel::NeoHookean,
+            rho: 1.0,
+            mu: Some(1.0),
+            lambda: Some(1.0),
+            c1: Some(1.0),
+            c2: Some(1.0),
+            kappa: Some(1.0),
+            formulation: Some(Formulation::Exact),
+        };
+        let info = SceneInfo {
+            name: "a".into(),
+            description: String::new(),
+            units: String::new(),
+        };
+        let cases: Vec<(&str, Vec<String>)> = vec![
+            ("scene", keys(&info)),
+            ("geometry", keys(&Geometry { ri: 1.0, ro: 2.0 })),
+            ("mesh", keys(&MeshSpec::default())),
+            ("material", keys(&full_material)),
+            (
+                "analysis",
+                keys(&Analysis {
+                    mode: Mode::Spinning,
+                }),
+            ),
+            ("motion", keys(&Motion::default())),
+            ("solver", keys(&SolverSpec::default())),
+            ("output", keys(&OutputSpec::default())),
+        ];
+        assert_eq!(cases.len(), SCHEMA.len());
+        for (name, mut serde_keys) in cases {
+            let sec = section_schema(name).unwrap_or_else(|| panic!("{name}"));
+            let mut schema_keys: Vec<String> =
+                sec.fields.iter().map(|f| f.key.to_string()).collect();
+            serde_keys.sort();
+            schema_keys.sort();
+            assert_eq!(serde_keys, schema_keys, "section {name}");
+        }
+    }
+
+    #[test]
+    fn locator_handles_comments_quotes_dotted_and_multiline() {
+        let text = r#"# header comment [geometry]
+title = """
+[geometry]
+ri = 99
+"""
+arr = [
+  [1, 2],
+  { ri = 3 },
+]
+[ "geometry" ]   # spaced, quoted header
+"ri" = 1.0 # comment with ro = 5
+ro = "a # not a comment" # real comment
+mesh.n_r = 4
+[material]
+'rho'=1
+"#;
+        let loc = Locator::new(text);
+        assert_eq!(loc.locate("geometry"), Some(10));
+        assert_eq!(loc.locate("geometry.ri"), Some(11));
+        assert_eq!(loc.locate("geometry.ro"), Some(12));
+        assert_eq!(loc.locate("geometry.mesh.n_r"), Some(13));
+        assert_eq!(loc.locate("material.rho"), Some(15));
+        assert_eq!(loc.locate("material.mu"), Some(14)); // missing: section header
+        assert_eq!(loc.locate("solver.tolerance"), None);
+        assert_eq!(loc.locate("arr"), Some(6));
+        assert_eq!(loc.key_at_line(12).as_deref(), Some("geometry.ro"));
+
+        // Top-level dotted keys define their section implicitly.
+        let loc = Locator::new("geometry.ri = 1\ngeometry.ro = 2\n");
+        assert_eq!(loc.locate("geometry.ro"), Some(2));
+        assert_eq!(loc.locate("geometry.x"), Some(1));
+    }
+
+    #[test]
+    fn dotted_keys_in_file_get_lines() {
+        let text = MINIMAL.replace("[motion]\nomega = 20.0\n", "motion.omega = -3.0\n");
+        // Dotted top-level key after [analysis] means analysis.motion.omega: unknown key.
+        let e = errors(&text);
+        let err = e.find("analysis.motion").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "motion.omega")));
+    }
+
+    #[test]
+    fn no_panic_on_garbage() {
+        let inputs = [
+            "",
+            "[",
+            "[[scene]]\nname = 1",
+            "scene = 3",
+            "[scene]\nname = []\n[geometry]\nri = {}\nro = 1979-05-27T07:32:00Z",
+            "\u{feff}[scene]\nname = \"é\"",
+            "[mesh]\nn_r = -9223372036854775808\nn_theta = 9223372036854775807",
+            "[material]\nmodel = 3\n[analysis]\nmode = \"static\"",
+            "a = \"\"\"\nunterminated",
+        ];
+        for text in inputs {
+            let r = Scene::from_toml_str(text, "x", &["=".into(), "..=".into(), "a.b.c=1".into()]);
+            let e = r.err().unwrap_or_else(|| panic!("accepted {text:?}"));
+            assert!(!e.0.is_empty());
+            let _ = e.to_string();
+        }
+        let e = errors("");
+        for sec in ["scene", "geometry", "material", "analysis"] {
+            assert!(e.has_key(sec), "{e}");
+        }
+    }
+}

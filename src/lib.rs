@@ -1,0 +1,23 @@
+//! # tread
+//!
+//! Finite-element simulation of rolling contact of a hyperelastic hollow cylinder in plane
+//! strain: a rigid hub, a rubber annulus, a rigid road. See `README.md` for the user's view and
+//! `../shared/DESIGN.md` for the formulation and conventions (spatial frame with the hub centre
+//! at the origin, x1 right, x2 up, counter-clockwise spin ω > 0; forces per unit thickness;
+//! units as the scene declares them).
+//!
+//! Layout: [`math`] aliases, [`mesh`] structured annulus and mesh data, [`element`] shape
+//! functions and quadrature, [`material`] hyperelastic laws, [`assembly`] dofs / pattern /
+//! parallel assembler, [`physics`] element kernels, [`solver`] Newton, load stepping and sparse
+//! direct solvers, [`driver`] analyses, [`io`] scenes and outputs, [`app`] the `tread` program.
+
+pub mod app;
+pub mod assembly;
+pub mod driver;
+pub mod element;
+pub mod io;
+pub mod material;
+pub mod math;
+pub mod mesh;
+pub mod physics;
+pub mod solver;

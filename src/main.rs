@@ -1,0 +1,155 @@
+//! `tread`: command-line front end. See `tread --help` and README.md.
+
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use tread::app::{self, AppError, RunOptions};
+use tread::io::Scene;
+
+/// The scene run by `tread` without arguments (also `cargo run --release`).
+const DEFAULT_SCENE: &str = include_str!("../scenarios/spinning_incompressible.toml");
+const DEFAULT_SCENE_NAME: &str = "scenarios/spinning_incompressible.toml (embedded)";
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "tread",
+    version,
+    about = "Rolling-contact finite elements for a hyperelastic hollow cylinder (plane strain)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// Threads for assembly (0 = all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a scene and write its results (summary.json, CSV) to the output directory.
+    Run {
+        /// Scene file (TOML), see scenarios/README.md.
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene key, e.g. --set mesh.n_r=8 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Override the analysis mode of the scene (analysis.mode).
+        #[arg(long)]
+        mode: Option<String>,
+        /// Print the Newton convergence table of every load step.
+        #[arg(short, long)]
+        verbose: bool,
+    },
+    /// Validate a scene and print it with every default filled in.
+    Check {
+        scene: PathBuf,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+}
+
+fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
+    Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
+}
+
+fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool) -> ExitCode {
+    let out_dir = out.unwrap_or_else(|| app::default_out_dir(&scene));
+    eprintln!(
+        "tread: running scene `{}` ({:?} mode)",
+        scene.scene.name, scene.analysis.mode
+    );
+    match app::run(&scene, &RunOptions { out_dir, verbose }) {
+        Ok(o) => {
+            let r = &o.results;
+            println!(
+                "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
+                o.summary["dofs"],
+                o.summary["newton_iterations"],
+                o.summary["wall_time_s"].as_f64().unwrap_or(0.0)
+            );
+            println!(
+                "omega = {:.6} rad/s: u_r(outer) = {:.6e}, sigma_r(inner) = {:.6e}, sigma_theta(inner) = {:.6e}, sigma_theta(outer) = {:.6e}",
+                r.omega, r.u_r_outer, r.sigma_r_inner, r.sigma_theta_inner, r.sigma_theta_outer
+            );
+            println!(
+                "results written to {}",
+                o.out_dir.join("summary.json").display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e @ AppError::Solve(..)) => {
+            eprintln!("tread: error: {e}");
+            ExitCode::from(1)
+        }
+        Err(e) => {
+            eprintln!("tread: error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let threads = cli.threads.unwrap_or(0);
+    if threads > 0 {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+        {
+            eprintln!("tread: warning: cannot set the thread count: {e}");
+        }
+    }
+    match cli.command {
+        None => match Scene::from_toml_str(DEFAULT_SCENE, DEFAULT_SCENE_NAME, &[]) {
+            Ok(scene) => run_scene(scene, None, false),
+            Err(e) => {
+                eprintln!("tread: error in the embedded default scene:\n{e}");
+                ExitCode::from(2)
+            }
+        },
+        Some(Command::Run {
+            scene,
+            out,
+            mut set,
+            mode,
+            verbose,
+        }) => {
+            if let Some(m) = mode {
+                set.push(format!("analysis.mode=\"{m}\""));
+            }
+            match load(&scene, &set) {
+                Ok(s) => {
+                    if threads == 0 && s.solver.threads > 0 {
+                        let _ = rayon::ThreadPoolBuilder::new()
+                            .num_threads(s.solver.threads)
+                            .build_global();
+                    }
+                    run_scene(s, out, verbose)
+                }
+                Err(e) => {
+                    eprintln!("tread: invalid scene:\n{e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Some(Command::Check { scene, set }) => match load(&scene, &set) {
+            Ok(s) => {
+                println!(
+                    "# {}: valid; resolved scene with defaults:",
+                    scene.display()
+                );
+                print!("{}", s.to_toml_string());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("tread: invalid scene:\n{e}");
+                ExitCode::from(2)
+            }
+        },
+    }
+}

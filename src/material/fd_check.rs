@@ -1,0 +1,206 @@
+//! The shared finite-difference check of a [`Hyperelastic`] law.
+//!
+//! Derivatives are taken with the fourth-order central stencil
+//!
+//! ```text
+//! g'(x) ≈ [−g(x + 2h) + 8 g(x + h) − 8 g(x − h) + g(x − 2h)] / (12 h)
+//! ```
+//!
+//! component by component in `∇u`: energy → stress and stress → tangent. Its truncation error is
+//! `O(h⁴)` and its rounding error `O(ε/h)`, so a step `h ≈ 1e-3` gives errors around `1e-11`.
+//! The step is scaled by `min(1, J/|F|)`, a lower bound of the smallest singular value of `F`,
+//! so that the stencil never reaches `J ≤ 0`.
+//!
+//! Errors are relative, in the Frobenius norm:
+//! - `stress_rel_err = max(|P − P_fd|, |P_st − P|) / s`, where `P` comes from `stress`, `P_st`
+//!   from `stress_tangent`, and the stress scale is `s = max(|P|, |A|·h)` (so that a stress-free
+//!   state is measured against the stress change the stencil probes, not against rounding noise);
+//! - `tangent_rel_err = |A − A_fd| / |A|`.
+//!
+//! An inadmissible state (`J ≤ 0`) or any non-finite value gives `+∞` errors (never `NaN`).
+
+use super::Hyperelastic;
+use crate::math::{det_identity_plus_minus_one, flatten, v, Mat2, Tangent};
+
+/// Relative errors of a material's stress and tangent against finite differences.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FdReport {
+    /// Relative error of `P` against the finite-difference derivative of the energy.
+    pub stress_rel_err: f64,
+    /// Relative error of `A = ∂P/∂F` against the finite-difference derivative of the stress.
+    pub tangent_rel_err: f64,
+}
+
+/// Base step of the stencil, before scaling by `min(1, J/|F|)`.
+const BASE_STEP: f64 = 1e-3;
+
+/// Fourth-order central difference of `g` in the direction `e` at `x`.
+#[inline]
+fn central4<T>(g: impl Fn(&Mat2) -> T, x: &Mat2, e: &Mat2, h: f64) -> T
+where
+    T: std::ops::Add<Output = T> + std::ops::Sub<Output = T> + std::ops::Mul<f64, Output = T>,
+{
+    let gp1 = g(&(x + e * h));
+    let gm1 = g(&(x - e * h));
+    let gp2 = g(&(x + e * (2.0 * h)));
+    let gm2 = g(&(x - e * (2.0 * h)));
+    ((gp1 - gm1) * 8.0 - (gp2 - gm2)) * (1.0 / (12.0 * h))
+}
+
+/// Unit tensor `e_kL` with a one in component `(k, l)`.
+#[inline]
+fn unit(k: usize, l: usize) -> Mat2 {
+    let mut e = Mat2::zeros();
+    e[(k, l)] = 1.0;
+    e
+}
+
+/// `num / den` mapped to `+∞` when it is not finite (or `NaN`).
+#[inline]
+fn finite_ratio(num: f64, den: f64) -> f64 {
+    let r = num / den;
+    if r.is_finite() {
+        r
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Checks `stress` against the energy and `stress_tangent` against the stress, by central
+/// differences at `grad_u`. See the module docs for the step and the error measures.
+pub fn check_material<M: Hyperelastic + ?Sized>(m: &M, grad_u: &Mat2) -> FdReport {
+    let inadmissible = FdReport {
+        stress_rel_err: f64::INFINITY,
+        tangent_rel_err: f64::INFINITY,
+    };
+    let j = 1.0 + det_identity_plus_minus_one(grad_u);
+    let f_norm = (Mat2::identity() + grad_u).norm();
+    if !(j > 0.0 && f_norm.is_finite()) {
+        return inadmissible;
+    }
+    let h = BASE_STEP * (j / f_norm).min(1.0);
+
+    let p = m.stress(grad_u);
+    let (p_st, a) = m.stress_tangent(grad_u);
+
+    let mut p_fd = Mat2::zeros();
+    let mut a_fd = Tangent::zeros();
+    for k in 0..2 {
+        for l in 0..2 {
+            let e = unit(k, l);
+            p_fd[(k, l)] = central4(|g| m.energy(g), grad_u, &e, h);
+            let dp = flatten(&central4(|g| m.stress(g), grad_u, &e, h));
+            a_fd.set_column(v(k, l), &dp);
+        }
+    }
+
+    let a_norm = a.norm();
+    let stress_scale = p.norm().max(a_norm * h);
+    let stress_err = (p - p_fd).norm().max((p_st - p).norm());
+    FdReport {
+        stress_rel_err: finite_ratio(stress_err, stress_scale),
+        tangent_rel_err: finite_ratio((a - a_fd).norm(), a_norm),
+    }
+}
+
+/// Relative deviation from major symmetry, `|A − Aᵀ| / |A|` (0 for `A = 0`, `+∞` if not finite).
+pub fn tangent_asymmetry(a: &Tangent) -> f64 {
+    let asym = (a - a.transpose()).norm();
+    if asym == 0.0 {
+        0.0
+    } else {
+        finite_ratio(asym, a.norm())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::NeoHookean;
+
+    /// A law with a deliberately wrong stress (and a consistent tangent of that wrong stress):
+    /// the checker must flag the stress error but not the tangent.
+    struct ScaledStress(NeoHookean, f64);
+
+    impl Hyperelastic for ScaledStress {
+        fn energy(&self, grad_u: &Mat2) -> f64 {
+            self.0.energy(grad_u)
+        }
+        fn stress(&self, grad_u: &Mat2) -> Mat2 {
+            self.0.stress(grad_u) * self.1
+        }
+        fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+            let (p, a) = self.0.stress_tangent(grad_u);
+            (p * self.1, a * self.1)
+        }
+    }
+
+    /// A law whose tangent misses one term: the checker must flag the tangent.
+    struct BrokenTangent(NeoHookean);
+
+    impl Hyperelastic for BrokenTangent {
+        fn energy(&self, grad_u: &Mat2) -> f64 {
+            self.0.energy(grad_u)
+        }
+        fn stress(&self, grad_u: &Mat2) -> Mat2 {
+            self.0.stress(grad_u)
+        }
+        fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+            let (p, mut a) = self.0.stress_tangent(grad_u);
+            a[(v(0, 1), v(1, 0))] += 1e-3 * a.norm();
+            (p, a)
+        }
+    }
+
+    const GRAD: Mat2 = Mat2::new(0.1, 0.2, -0.05, 0.15);
+
+    #[test]
+    fn detects_wrong_stress() {
+        let good = NeoHookean::new(1.0, 3.0);
+        let r = check_material(&good, &GRAD);
+        assert!(r.stress_rel_err < 1e-9 && r.tangent_rel_err < 1e-9, "{r:?}");
+        // Relative error of P' = 1.01 P against P is 0.01/1.01.
+        let bad = check_material(&ScaledStress(good, 1.01), &GRAD);
+        assert!((bad.stress_rel_err - 0.01 / 1.01).abs() < 1e-9, "{bad:?}");
+        assert!(bad.tangent_rel_err < 1e-9, "{bad:?}");
+    }
+
+    #[test]
+    fn detects_wrong_tangent() {
+        let r = check_material(&BrokenTangent(NeoHookean::new(1.0, 3.0)), &GRAD);
+        assert!(r.stress_rel_err < 1e-9, "{r:?}");
+        assert!(r.tangent_rel_err > 5e-4, "{r:?}");
+    }
+
+    #[test]
+    fn inadmissible_state_reports_infinity() {
+        let m = NeoHookean::new(1.0, 3.0);
+        for g in [
+            Mat2::new(-1.0, 0.0, 0.0, 0.0),
+            Mat2::new(-2.0, 0.0, 0.0, 0.0),
+            Mat2::repeat(f64::NAN),
+        ] {
+            let r = check_material(&m, &g);
+            assert_eq!(r.stress_rel_err, f64::INFINITY);
+            assert_eq!(r.tangent_rel_err, f64::INFINITY);
+        }
+    }
+
+    #[test]
+    fn step_stays_admissible_near_singular_f() {
+        // J = 1e-3: the scaled step keeps the whole stencil at J > 0.
+        let g = Mat2::new(-0.999, 0.0, 0.0, 0.0);
+        let r = check_material(&NeoHookean::new(1.0, 3.0), &g);
+        assert!(r.stress_rel_err < 1e-6 && r.tangent_rel_err < 1e-6, "{r:?}");
+    }
+
+    #[test]
+    fn asymmetry_measure() {
+        let mut a = Tangent::identity();
+        assert_eq!(tangent_asymmetry(&a), 0.0);
+        a[(0, 1)] = 1.0;
+        assert!(tangent_asymmetry(&a) > 0.5);
+        assert_eq!(tangent_asymmetry(&Tangent::zeros()), 0.0);
+        assert_eq!(tangent_asymmetry(&Tangent::repeat(f64::NAN)), f64::INFINITY);
+    }
+}

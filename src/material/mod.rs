@@ -1,0 +1,383 @@
+//! Hyperelastic materials for plane-strain finite strain.
+//!
+//! # Conventions
+//!
+//! - Plane strain: `F = I + ∇u` is 2×2 with `F33 = 1`; `J = det F`. The invariants `I1`, `I2` are
+//!   those of the 3D right Cauchy–Green tensor `C = FᵀF` (eigenvalues `λ1², λ2², 1`):
+//!   `I1 = F:F + 1`, `I2 = F:F + J²` (see [`invariants`]).
+//! - `W` is the strain energy per unit reference volume (per unit thickness in 2D); `P = ∂W/∂F` is
+//!   the first Piola–Kirchhoff stress and `A = ∂P/∂F` the tangent, flattened row-major as in
+//!   [`crate::math`]: `A[(v(i,J), v(k,L))] = ∂P_iJ/∂F_kL`. Every law here is hyperelastic, so
+//!   `A` has major symmetry (`A = Aᵀ` as a 4×4 matrix).
+//! - Materials take `∇u`, not `F`, and form `I1 − 3`, `I2 − 3`, `J − 1` and `ln J` from it
+//!   without cancellation; the stress is then written as `P = s0 I + a ∇u + b cof ∇u` with a
+//!   closed-form `s0` (see [`invariants`]), so it keeps full relative precision at tiny strain.
+//!   The energy itself is formed naively from these quantities; near `F = I` it is `O(|∇u|²)` and
+//!   carries a relative error of about `ε/|∇u|`, enough for line searches and FD checks.
+//! - **Inadmissible states.** When `J ≤ 0` (or `J` is `NaN`), `energy` returns `+∞`, and `stress`
+//!   and `stress_tangent` return matrices filled with `+∞` — never `NaN`, never a panic. A residual
+//!   assembled from such a point is non-finite, which is what the Newton line search tests.
+//!
+//! # Laws
+//!
+//! | type | `W` | small-strain shear `G` | bulk `K` (3D) |
+//! |---|---|---|---|
+//! | [`NeoHookean`] `{mu, lambda}` | `μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²` | `μ` | `λ + 2μ/3` |
+//! | [`MooneyRivlin`] `{c1, c2, kappa}` | `c1 (Ī1 − 3) + c2 (Ī2 − 3) + κ/2 (J − 1)²` | `2(c1 + c2)` | `κ` |
+//! | [`MooneyRivlinIncompressible`] `{c1, c2}` | `c1 (I1 − 3) + c2 (I2 − 3)`, with `J = 1` imposed by the element | `2(c1 + c2)` | — |
+//!
+//! with `Ī1 = J^(−2/3) I1`, `Ī2 = J^(−4/3) I2`. The plane-strain small-strain limit of a
+//! compressible law is `σ = λ tr(ε) I + 2G ε` with `λ = K − 2G/3`.
+//!
+//! [`Material`] is the closed set of laws used by the element kernels (static dispatch by
+//! `match`); [`fd_check`] holds the finite-difference checker every law passes.
+
+pub mod fd_check;
+pub mod incompressible;
+pub mod invariants;
+pub mod mooney_rivlin;
+pub mod neo_hookean;
+
+pub use fd_check::{check_material, tangent_asymmetry, FdReport};
+pub use incompressible::{pressure_stress_tangent, MooneyRivlinIncompressible};
+pub use invariants::{dcof_df, InvariantDerivs, Kinematics};
+pub use mooney_rivlin::MooneyRivlin;
+pub use neo_hookean::NeoHookean;
+
+use crate::math::{Mat2, Tangent};
+
+/// A hyperelastic law in plane strain, evaluated from the displacement gradient.
+pub trait Hyperelastic: Send + Sync {
+    /// Strain energy per unit reference volume W(F), F = I + grad_u (2x2, plane strain, F33 = 1). +inf if J <= 0.
+    fn energy(&self, grad_u: &Mat2) -> f64;
+    /// First Piola–Kirchhoff stress P = dW/dF.
+    fn stress(&self, grad_u: &Mat2) -> Mat2;
+    /// P and the tangent A = dP/dF (flattening of math.rs).
+    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent);
+}
+
+/// The closed set of hyperelastic laws, dispatched by `match` in hot loops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Compressible neo-Hookean.
+    NeoHookean(NeoHookean),
+    /// Compressible Mooney–Rivlin with isochoric invariants.
+    MooneyRivlin(MooneyRivlin),
+    /// Unconstrained part only; the element adds the pressure term `−p (J − 1)`.
+    MooneyRivlinIncompressible(MooneyRivlinIncompressible),
+}
+
+impl Material {
+    /// Whether the element must impose `J = 1` with a pressure field.
+    pub fn is_incompressible(&self) -> bool {
+        matches!(self, Material::MooneyRivlinIncompressible(_))
+    }
+
+    /// Shear modulus `G` of the small-strain limit.
+    pub fn small_strain_shear_modulus(&self) -> f64 {
+        match self {
+            Material::NeoHookean(m) => m.mu,
+            Material::MooneyRivlin(m) => 2.0 * (m.c1 + m.c2),
+            Material::MooneyRivlinIncompressible(m) => 2.0 * (m.c1 + m.c2),
+        }
+    }
+
+    /// 3D bulk modulus `K` of the small-strain limit (`None` for an incompressible law).
+    pub fn small_strain_bulk_modulus(&self) -> Option<f64> {
+        match self {
+            Material::NeoHookean(m) => Some(m.lambda + 2.0 / 3.0 * m.mu),
+            Material::MooneyRivlin(m) => Some(m.kappa),
+            Material::MooneyRivlinIncompressible(_) => None,
+        }
+    }
+}
+
+impl Hyperelastic for Material {
+    #[inline]
+    fn energy(&self, grad_u: &Mat2) -> f64 {
+        match self {
+            Material::NeoHookean(m) => m.energy(grad_u),
+            Material::MooneyRivlin(m) => m.energy(grad_u),
+            Material::MooneyRivlinIncompressible(m) => m.energy(grad_u),
+        }
+    }
+
+    #[inline]
+    fn stress(&self, grad_u: &Mat2) -> Mat2 {
+        match self {
+            Material::NeoHookean(m) => m.stress(grad_u),
+            Material::MooneyRivlin(m) => m.stress(grad_u),
+            Material::MooneyRivlinIncompressible(m) => m.stress(grad_u),
+        }
+    }
+
+    #[inline]
+    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+        match self {
+            Material::NeoHookean(m) => m.stress_tangent(grad_u),
+            Material::MooneyRivlin(m) => m.stress_tangent(grad_u),
+            Material::MooneyRivlinIncompressible(m) => m.stress_tangent(grad_u),
+        }
+    }
+}
+
+impl From<NeoHookean> for Material {
+    fn from(m: NeoHookean) -> Self {
+        Material::NeoHookean(m)
+    }
+}
+
+impl From<MooneyRivlin> for Material {
+    fn from(m: MooneyRivlin) -> Self {
+        Material::MooneyRivlin(m)
+    }
+}
+
+impl From<MooneyRivlinIncompressible> for Material {
+    fn from(m: MooneyRivlinIncompressible) -> Self {
+        Material::MooneyRivlinIncompressible(m)
+    }
+}
+
+/// Property checks shared by the tests of every law.
+#[cfg(test)]
+pub(crate) mod test_util {
+    use super::*;
+    use crate::math::{flatten, v};
+
+    /// Moderate strains: shear, compression, expansion, rotation, with `J ∈ [0.6, 1.6]`.
+    pub fn sample_grads() -> Vec<Mat2> {
+        let stretch_rot = rotation(0.7) * Mat2::new(1.2, 0.0, 0.0, 0.8) - Mat2::identity();
+        let shear_rot = rotation(-2.5) * Mat2::new(1.0, 0.6, 0.0, 1.0) - Mat2::identity();
+        vec![
+            Mat2::new(0.0, 0.3, 0.0, 0.0),    // simple shear, J = 1
+            Mat2::new(0.1, 0.2, -0.05, 0.15), // general, J = 1.275
+            Mat2::new(-0.3, 0.05, 0.1, -0.1), // biaxial compression, J = 0.625
+            Mat2::new(0.25, -0.1, 0.2, 0.2),  // expansion, J = 1.52
+            Mat2::new(-0.35, 0.0, 0.0, 0.0),  // uniaxial compression, J = 0.65
+            Mat2::new(-0.2, 0.5, 0.1, 0.05),  // shear + compression, J = 0.79
+            Mat2::new(0.4, 0.0, 0.0, -0.3),   // isochoric-ish stretch, J = 0.98
+            stretch_rot,                      // rotated stretch, J = 0.96
+            shear_rot,                        // large rotation + shear, J = 1
+            rotation(1.0) - Mat2::identity(), // pure rotation (stress-free if compressible)
+        ]
+    }
+
+    pub fn rotation(theta: f64) -> Mat2 {
+        let (s, c) = theta.sin_cos();
+        Mat2::new(c, -s, s, c)
+    }
+
+    #[test]
+    fn samples_cover_the_requested_range() {
+        let js: Vec<f64> = sample_grads()
+            .iter()
+            .map(|g| (Mat2::identity() + g).determinant())
+            .collect();
+        assert!(js.iter().all(|j| (0.6..=1.6).contains(j)), "{js:?}");
+        assert!(js.iter().any(|j| *j < 0.7) && js.iter().any(|j| *j > 1.5));
+    }
+
+    /// FD check at every sample; returns the worst (stress, tangent) errors.
+    pub fn assert_fd_consistent<M: Hyperelastic>(m: &M) -> (f64, f64) {
+        let mut worst = (0.0_f64, 0.0_f64);
+        for g in sample_grads() {
+            let r = check_material(m, &g);
+            assert!(r.stress_rel_err < 1e-6, "stress FD at {g}: {r:?}");
+            assert!(r.tangent_rel_err < 1e-6, "tangent FD at {g}: {r:?}");
+            worst = (
+                worst.0.max(r.stress_rel_err),
+                worst.1.max(r.tangent_rel_err),
+            );
+        }
+        worst
+    }
+
+    /// Major symmetry of the tangent at every sample and at the reference; returns the worst.
+    pub fn assert_tangent_symmetric<M: Hyperelastic>(m: &M) -> f64 {
+        let mut worst = 0.0_f64;
+        for g in sample_grads().into_iter().chain([Mat2::zeros()]) {
+            let asym = tangent_asymmetry(&m.stress_tangent(&g).1);
+            assert!(asym < 1e-12, "asymmetry {asym} at {g}");
+            worst = worst.max(asym);
+        }
+        worst
+    }
+
+    /// `W(QF) = W(F)`, `P(QF) = Q P(F)`, `A(QF)_iJkL = Q_ia Q_kb A(F)_aJbL`; returns the worst
+    /// relative error. Energy and stress are measured against `max(|W|, |A||∇u|²)` and
+    /// `max(|P|, |A||∇u|)`, so that a stress-free rotated state compares against its strain
+    /// scale rather than against rounding noise.
+    pub fn assert_objective<M: Hyperelastic>(m: &M) -> f64 {
+        let mut worst = 0.0_f64;
+        for g in sample_grads() {
+            let f = Mat2::identity() + g;
+            let (w, (p, a)) = (m.energy(&g), m.stress_tangent(&g));
+            let (a_norm, g_norm) = (a.norm(), g.norm());
+            // R[v(i,J), v(a,K)] = Q_ia δ_JK rotates the first index of each pair.
+            let rotate = |q: &Mat2| {
+                let mut r = Tangent::zeros();
+                for i in 0..2 {
+                    for k in 0..2 {
+                        for jj in 0..2 {
+                            r[(v(i, jj), v(k, jj))] = q[(i, k)];
+                        }
+                    }
+                }
+                r
+            };
+            for theta in [0.3, -1.2, 2.9] {
+                let q = rotation(theta);
+                let gq = q * f - Mat2::identity();
+                let (wq, (pq, aq)) = (m.energy(&gq), m.stress_tangent(&gq));
+                let r = rotate(&q);
+                let ew = (wq - w).abs() / w.abs().max(a_norm * g_norm * g_norm);
+                let ep = (pq - q * p).norm() / p.norm().max(a_norm * g_norm);
+                let ea = (aq - r * a * r.transpose()).norm() / a_norm;
+                assert!(ew < 1e-12, "energy objectivity {ew} at {g}, θ = {theta}");
+                assert!(ep < 1e-12, "stress objectivity {ep} at {g}, θ = {theta}");
+                assert!(ea < 1e-12, "tangent objectivity {ea} at {g}, θ = {theta}");
+                worst = worst.max(ew).max(ep).max(ea);
+            }
+        }
+        worst
+    }
+
+    /// `J ≤ 0`: energy `+∞`, stress and tangent without `NaN`, no panic.
+    pub fn assert_inadmissible_safe<M: Hyperelastic>(m: &M) {
+        for g in [
+            Mat2::new(-1.0, 0.0, 0.0, 0.0),         // J = 0
+            Mat2::new(-1.0, 0.3, 0.0, -1.0),        // F = [[0, .3], [0, 0]], J = 0
+            Mat2::new(-2.0, 0.0, 0.0, 0.0),         // reflection, J = −1
+            Mat2::new(-1.0, 1.0, 1.0, -1.0),        // F = [[0,1],[1,0]], J = −1
+            Mat2::new(-1.0 - 1e-12, 0.0, 0.0, 0.0), // J ≈ −1e-12
+            Mat2::new(-1.5, 0.2, -0.4, 3.0),        // J < 0, generic
+        ] {
+            assert_eq!(m.energy(&g), f64::INFINITY, "energy at {g}");
+            let p = m.stress(&g);
+            let (p2, a) = m.stress_tangent(&g);
+            assert!(!p.iter().any(|x| x.is_nan()), "NaN stress at {g}");
+            assert!(!p2.iter().any(|x| x.is_nan()), "NaN stress at {g}");
+            assert!(!a.iter().any(|x| x.is_nan()), "NaN tangent at {g}");
+        }
+    }
+
+    /// Plane-strain linear elasticity `σ = λ tr(ε) I + 2μ ε`.
+    pub fn linear_stress(h: &Mat2, lambda: f64, mu: f64) -> Mat2 {
+        let eps = (h + h.transpose()) * 0.5;
+        Mat2::identity() * (lambda * eps.trace()) + eps * (2.0 * mu)
+    }
+
+    /// `A_iJkL = λ δ_iJ δ_kL + μ (δ_ik δ_JL + δ_iL δ_Jk)`.
+    pub fn linear_tangent(lambda: f64, mu: f64) -> Tangent {
+        let i = flatten(&Mat2::identity());
+        let mut t = i * i.transpose() * lambda + Tangent::identity() * mu;
+        for a in 0..2 {
+            for b in 0..2 {
+                t[(v(a, b), v(b, a))] += mu;
+            }
+        }
+        t
+    }
+
+    /// Small-strain limit of a compressible law: `P(∇u) → σ_lin(∇u)` and `A(0) = A_lin`.
+    /// At `|∇u| ~ 1e-12` a cancelling implementation would be wrong by ~1e-4 relative.
+    /// Returns the relative errors at the scales 1e-8 and 1e-12.
+    pub fn assert_small_strain_linear<M: Hyperelastic>(m: &M, lambda: f64, mu: f64) -> [f64; 2] {
+        assert_eq!(m.stress(&Mat2::zeros()), Mat2::zeros());
+        assert_eq!(m.stress_tangent(&Mat2::zeros()).0, Mat2::zeros());
+        assert_eq!(m.energy(&Mat2::zeros()), 0.0);
+        let a0 = m.stress_tangent(&Mat2::zeros()).1;
+        let al = linear_tangent(lambda, mu);
+        assert!(
+            (a0 - al).norm() < 1e-12 * al.norm(),
+            "A(0) = {a0}, expected {al}"
+        );
+
+        let shapes = [
+            Mat2::new(0.3, -0.7, 0.4, 0.9),
+            Mat2::new(0.0, 1.0, 0.0, 0.0),
+            Mat2::new(-1.0, 0.2, 0.5, -0.6),
+        ];
+        let mut worst = [0.0_f64; 2];
+        for (w, (scale, tol)) in worst.iter_mut().zip([(1e-8, 1e-6), (1e-12, 1e-9)]) {
+            for s in shapes {
+                let g = s * scale;
+                let lin = linear_stress(&g, lambda, mu);
+                for p in [m.stress(&g), m.stress_tangent(&g).0] {
+                    let e = (p - lin).norm() / lin.norm();
+                    assert!(
+                        e < tol,
+                        "small strain {scale}: rel err {e}, P = {p}, σ = {lin}"
+                    );
+                    *w = w.max(e);
+                }
+            }
+        }
+        worst
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_util::*;
+    use super::*;
+
+    fn all() -> [Material; 3] {
+        [
+            NeoHookean::new(1.5, 4.0).into(),
+            MooneyRivlin::new(80.0, 20.0, 2000.0).into(),
+            MooneyRivlinIncompressible::new(80.0, 20.0).into(),
+        ]
+    }
+
+    #[test]
+    fn enum_dispatch_matches_direct_calls() {
+        let nh = NeoHookean::new(1.5, 4.0);
+        let mr = MooneyRivlin::new(80.0, 20.0, 2000.0);
+        let mri = MooneyRivlinIncompressible::new(80.0, 20.0);
+        for g in sample_grads() {
+            assert_eq!(Material::from(nh).energy(&g), nh.energy(&g));
+            assert_eq!(Material::from(mr).stress(&g), mr.stress(&g));
+            assert_eq!(
+                Material::from(mri).stress_tangent(&g),
+                mri.stress_tangent(&g)
+            );
+        }
+    }
+
+    #[test]
+    fn enum_passes_all_checks() {
+        for m in all() {
+            let (es, et) = assert_fd_consistent(&m);
+            let asym = assert_tangent_symmetric(&m);
+            let obj = assert_objective(&m);
+            assert_inadmissible_safe(&m);
+            println!(
+                "{m:?}: fd stress {es:.2e}, fd tangent {et:.2e}, asym {asym:.2e}, obj {obj:.2e}"
+            );
+        }
+    }
+
+    #[test]
+    fn moduli_match_tangent_at_reference() {
+        for m in all() {
+            let a = m.stress_tangent(&Mat2::zeros()).1;
+            let g = m.small_strain_shear_modulus();
+            // Shear entry ∂P12/∂F12 = G for every law, incompressible included (its pressure
+            // term −p ∂cof/∂F has no (12, 12) entry).
+            assert!((a[(1, 1)] - g).abs() < 1e-12 * g, "{m:?}");
+            match m.small_strain_bulk_modulus() {
+                Some(k) => {
+                    assert!(!m.is_incompressible());
+                    // Plane-strain λ = ∂P11/∂F22; K = λ + 2G/3.
+                    let k_tangent = a[(0, 3)] + 2.0 / 3.0 * g;
+                    assert!((k_tangent - k).abs() < 1e-12 * k, "{m:?}");
+                }
+                None => assert!(m.is_incompressible()),
+            }
+        }
+        assert_eq!(all().map(|m| m.is_incompressible()), [false, false, true]);
+        assert_eq!(all()[1].small_strain_shear_modulus(), 200.0);
+    }
+}

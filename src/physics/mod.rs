@@ -1,0 +1,6 @@
+//! Physical models: the finite-strain solid (internal work, θ-referential inertia, body
+//! force, Q2/P1 pressure terms) assembled on a mesh.
+
+pub mod solid;
+
+pub use solid::{PointValues, PressureMode, SolidModel};

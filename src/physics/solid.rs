@@ -1,0 +1,524 @@
+//! The finite-strain plane-strain solid on the reference (θ-referential) mesh.
+//!
+//! Residual, for every test function η vanishing on the hub (DESIGN §3, §5):
+//!
+//! ```text
+//! R(χ; η) = ∫Ω0 P(∇u) : ∇η dV − ω² ∫Ω0 ρ0 ∂θχ · ∂θη dV − ∫Ω0 b · η dV   (+ pressure terms)
+//! ```
+//!
+//! with χ = X + u, ∂θ(·) = t · ∇(·), t = (−X2, X1) the derivative along reference circles. The
+//! inertia term is the paper's −ω² B(χ, η): the centripetal acceleration ω² ∂²θχ integrated by
+//! parts along the closed circles. For steady spinning without contact, A(χ, η) = ω² B(χ, η).
+//! Its tangent −ω² ∫ ρ0 ∂θN_a ∂θN_b δ_ik is the (negative) "spin-softening" matrix.
+//!
+//! Incompressible materials use Q2 displacements and discontinuous P1 pressures
+//! q = [1, (X1 − Xc1)/h, (X2 − Xc2)/h] in reference coordinates (Xc: cell centre, h: cell size):
+//! the stress is P = ∂W/∂F − p cof F and
+//! * `Exact`: the constraint ∫ (J − 1) q dV = 0 per cell; p are global unknowns and the
+//!   tangent is a symmetric saddle point (solved by LU);
+//! * `Perturbed { kappa }`: p = p0 − κ Π(J − 1) per cell (Π: L2 projection onto P1, p0 the
+//!   reference pressure that makes the unconstrained W stress free at F = I), eliminated at the
+//!   cell level (static condensation): K* = Kuu + κ Kup M⁻¹ Kupᵀ with M = ∫ q qᵀ. As κ → ∞ this
+//!   tends to the exact constraint.
+//!
+//! Cauchy stress: σ = P Fᵀ / J. Forces are per unit thickness (plane strain).
+
+use crate::assembly::{Assembler, DofMap, LocalSystem};
+use crate::element::{Lagrange2D, ShapeTable, Q1, Q2};
+use crate::material::{Hyperelastic, Material};
+use crate::math::{cofactor, det_identity_plus_minus_one, v, Mat2, Tangent, Vec2};
+use crate::mesh::{CellGeometry, Mesh};
+use nalgebra::{Matrix3, Vector3};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// How the incompressibility constraint (if any) is imposed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PressureMode {
+    /// Compressible material: no pressure unknowns.
+    None,
+    /// Exact J = 1 (per cell, weakly) with global discontinuous P1 pressures.
+    Exact { p0: f64 },
+    /// Perturbed Lagrangian with bulk modulus κ, condensed per cell.
+    Perturbed { kappa: f64, p0: f64 },
+}
+
+/// Body force per unit reference volume as a function of X (manufactured solutions).
+pub type BodyForce = Box<dyn Fn(Vec2) -> Vec2 + Send + Sync>;
+
+pub struct SolidModel {
+    pub mesh: Mesh,
+    pub material: Material,
+    pub rho: f64,
+    /// ω² (rad²/s²).
+    pub omega2: f64,
+    pub pressure: PressureMode,
+    pub body_force: Option<BodyForce>,
+    q1: ShapeTable<4>,
+    q2: ShapeTable<9>,
+    /// Set by a kernel that met J ≤ 0 at a quadrature point.
+    inverted: AtomicBool,
+}
+
+/// Output values at a point of a cell.
+#[derive(Clone, Copy, Debug)]
+pub struct PointValues {
+    /// Reference position X.
+    pub x: Vec2,
+    /// Displacement u.
+    pub u: Vec2,
+    /// Cauchy stress σ = P Fᵀ / J.
+    pub sigma: Mat2,
+    pub grad_u: Mat2,
+    /// dX/d(ξ, η).
+    pub jac: Mat2,
+}
+
+/// Values at one quadrature point needed by the kernels.
+struct PointGeom {
+    x: Vec2,
+    w: f64,
+}
+
+impl SolidModel {
+    pub fn new(mesh: Mesh, material: Material, rho: f64, pressure: PressureMode) -> Self {
+        Self {
+            mesh,
+            material,
+            rho,
+            omega2: 0.0,
+            pressure,
+            body_force: None,
+            q1: ShapeTable::gauss::<Q1>(2),
+            q2: ShapeTable::gauss::<Q2>(3),
+            inverted: AtomicBool::new(false),
+        }
+    }
+
+    /// Cell-owned unknowns per cell.
+    pub fn dofs_per_cell(&self) -> usize {
+        match self.pressure {
+            PressureMode::Exact { .. } => 3,
+            _ => 0,
+        }
+    }
+
+    /// Reference pressure of an incompressible model (0 otherwise).
+    pub fn p0(&self) -> f64 {
+        match self.pressure {
+            PressureMode::Exact { p0 } | PressureMode::Perturbed { p0, .. } => p0,
+            PressureMode::None => 0.0,
+        }
+    }
+
+    /// Initial full vector: zero displacement, pressures at the reference pressure.
+    pub fn initial_state(&self, dofs: &DofMap) -> Vec<f64> {
+        let mut x = vec![0.0; dofs.n_full()];
+        if dofs.per_cell == 3 {
+            for c in 0..self.mesh.n_cells() {
+                x[dofs.n_u + 3 * c] = self.p0();
+            }
+        }
+        x
+    }
+
+    /// Assemble residual (and tangent) at the full state `x`. Returns `false` if some
+    /// quadrature point had J ≤ 0 (the state is inadmissible).
+    pub fn assemble(
+        &self,
+        asm: &mut Assembler,
+        dofs: &DofMap,
+        x: &[f64],
+        with_matrix: bool,
+    ) -> bool {
+        self.inverted.store(false, Ordering::Relaxed);
+        asm.assemble(dofs, with_matrix, |c, loc| {
+            self.cell_kernel(c, dofs, x, loc, with_matrix)
+        });
+        !self.inverted.load(Ordering::Relaxed)
+    }
+
+    fn cell_kernel(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem, with_k: bool) {
+        match self.mesh.degree[c] {
+            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k),
+            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k),
+        }
+    }
+
+    /// Reference position and Jacobian dX/dξ at a point of cell `c`.
+    #[inline]
+    fn map<const N: usize>(
+        &self,
+        c: usize,
+        xi: f64,
+        eta: f64,
+        n: &[f64; N],
+        dn: &[[f64; 2]; N],
+    ) -> (Vec2, Mat2) {
+        if let Some(m) = self.mesh.geometry[c].polar_map(xi, eta) {
+            return m;
+        }
+        let nodes = self.mesh.cell_nodes(c);
+        let mut x = Vec2::zeros();
+        let mut j = Mat2::zeros();
+        for a in 0..N {
+            let p = self.mesh.nodes[nodes[a] as usize];
+            x += p * n[a];
+            j[(0, 0)] += p[0] * dn[a][0];
+            j[(0, 1)] += p[0] * dn[a][1];
+            j[(1, 0)] += p[1] * dn[a][0];
+            j[(1, 1)] += p[1] * dn[a][1];
+        }
+        (x, j)
+    }
+
+    /// Centre and size of cell `c` for the P1 pressure basis.
+    fn pressure_frame(&self, c: usize) -> (Vec2, f64) {
+        let (xc, j) = match self.mesh.geometry[c] {
+            g @ CellGeometry::Polar { .. } => g
+                .polar_map(0.0, 0.0)
+                .unwrap_or((Vec2::zeros(), Mat2::identity())),
+            CellGeometry::Isoparametric => {
+                let nodes = self.mesh.cell_nodes(c);
+                let xc = nodes
+                    .iter()
+                    .map(|&n| self.mesh.nodes[n as usize])
+                    .sum::<Vec2>()
+                    / nodes.len() as f64;
+                (xc, Mat2::identity())
+            }
+        };
+        let h = if matches!(self.mesh.geometry[c], CellGeometry::Polar { .. }) {
+            2.0 * j.determinant().abs().sqrt()
+        } else {
+            let nodes = self.mesh.cell_nodes(c);
+            let (a, b) = (
+                self.mesh.nodes[nodes[0] as usize],
+                self.mesh.nodes[nodes[nodes.len() - 1] as usize],
+            );
+            (a - b).norm()
+        };
+        (xc, h.max(f64::MIN_POSITIVE))
+    }
+
+    #[inline]
+    fn pbasis(x: &Vec2, xc: &Vec2, h: f64) -> Vector3<f64> {
+        Vector3::new(1.0, (x[0] - xc[0]) / h, (x[1] - xc[1]) / h)
+    }
+
+    /// Shape gradients with respect to X, the point's position and its weight · det J.
+    #[inline]
+    fn point<const N: usize>(
+        &self,
+        c: usize,
+        tab: &ShapeTable<N>,
+        q: usize,
+        g: &mut [[f64; 2]; N],
+    ) -> Option<PointGeom> {
+        let (xi, eta) = tab.points[q];
+        let (x, jac) = self.map(c, xi, eta, &tab.n[q], &tab.dn[q]);
+        let det = jac.determinant();
+        let inv = jac.try_inverse()?;
+        for a in 0..N {
+            let d = tab.dn[q][a];
+            g[a] = [
+                d[0] * inv[(0, 0)] + d[1] * inv[(1, 0)],
+                d[0] * inv[(0, 1)] + d[1] * inv[(1, 1)],
+            ];
+        }
+        Some(PointGeom {
+            x,
+            w: tab.weights[q] * det,
+        })
+    }
+
+    #[inline]
+    fn grad_u<const N: usize>(u: &[f64], g: &[[f64; 2]; N]) -> Mat2 {
+        let mut h = Mat2::zeros();
+        for a in 0..N {
+            let (ux, uy) = (u[2 * a], u[2 * a + 1]);
+            h[(0, 0)] += ux * g[a][0];
+            h[(0, 1)] += ux * g[a][1];
+            h[(1, 0)] += uy * g[a][0];
+            h[(1, 1)] += uy * g[a][1];
+        }
+        h
+    }
+
+    /// Condensed pressure coefficients of a perturbed-Lagrangian cell: p = p0 e0 − κ M⁻¹ g.
+    fn perturbed_pressure<const N: usize>(
+        &self,
+        c: usize,
+        tab: &ShapeTable<N>,
+        u: &[f64],
+        kappa: f64,
+        p0: f64,
+    ) -> Option<(Vector3<f64>, Matrix3<f64>)> {
+        let (xc, h) = self.pressure_frame(c);
+        let mut m = Matrix3::zeros();
+        let mut gv = Vector3::zeros();
+        let mut g = [[0.0; 2]; N];
+        for q in 0..tab.len() {
+            let pg = self.point(c, tab, q, &mut g)?;
+            let qv = Self::pbasis(&pg.x, &xc, h);
+            let jm1 = det_identity_plus_minus_one(&Self::grad_u(u, &g));
+            m += qv * qv.transpose() * pg.w;
+            gv += qv * (jm1 * pg.w);
+        }
+        let minv = m.try_inverse()?;
+        let mut p = -kappa * (minv * gv);
+        p[0] += p0;
+        Some((p, minv))
+    }
+
+    fn cell_generic<E: Lagrange2D, const N: usize>(
+        &self,
+        tab: &ShapeTable<N>,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
+        let cd = dofs.cell(c);
+        let nd = cd.len();
+        let nu = 2 * N;
+        let mut u = [0.0; 18];
+        for a in 0..nu {
+            u[a] = x[cd[a] as usize];
+        }
+        let u = &u[..nu];
+        // Pressure coefficients of this cell.
+        let mut pc = Vector3::zeros();
+        let mut minv = Matrix3::zeros();
+        let (has_p, exact, kappa) = match self.pressure {
+            PressureMode::None => (false, false, 0.0),
+            PressureMode::Exact { .. } => {
+                pc = Vector3::new(
+                    x[cd[nu] as usize],
+                    x[cd[nu + 1] as usize],
+                    x[cd[nu + 2] as usize],
+                );
+                (true, true, 0.0)
+            }
+            PressureMode::Perturbed { kappa, p0 } => {
+                match self.perturbed_pressure::<N>(c, tab, u, kappa, p0) {
+                    Some((p, mi)) => {
+                        pc = p;
+                        minv = mi;
+                        (true, false, kappa)
+                    }
+                    None => {
+                        self.inverted.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                }
+            }
+        };
+        let (xc, hc) = if has_p {
+            self.pressure_frame(c)
+        } else {
+            (Vec2::zeros(), 1.0)
+        };
+        let dcof = crate::material::invariants::dcof_df();
+        let rw2 = self.rho * self.omega2;
+        // Kup for condensation (perturbed): 18 × 3.
+        let mut kup = [[0.0f64; 3]; 18];
+        let mut g = [[0.0; 2]; N];
+        for q in 0..tab.len() {
+            let Some(pg) = self.point(c, tab, q, &mut g) else {
+                self.inverted.store(true, Ordering::Relaxed);
+                return;
+            };
+            let h = Self::grad_u(u, &g);
+            let jm1 = det_identity_plus_minus_one(&h);
+            if jm1 <= -1.0 || !jm1.is_finite() {
+                self.inverted.store(true, Ordering::Relaxed);
+                return;
+            }
+            let w = pg.w;
+            let (mut p_st, mut a_t) = if with_k {
+                self.material.stress_tangent(&h)
+            } else {
+                (self.material.stress(&h), Tangent::zeros())
+            };
+            let mut qv = Vector3::zeros();
+            let mut cof = Mat2::zeros();
+            if has_p {
+                qv = Self::pbasis(&pg.x, &xc, hc);
+                let p = pc.dot(&qv);
+                cof = cofactor(&(Mat2::identity() + h));
+                p_st -= cof * p;
+                if with_k {
+                    a_t -= dcof * p;
+                }
+            }
+            // θ-referential inertia: ∂θχ = t + H t.
+            let t = Vec2::new(-pg.x[1], pg.x[0]);
+            let dth = t + h * t;
+            let bf = self.body_force.as_ref().map(|f| f(pg.x));
+            let nv = &tab.n[q];
+            for a in 0..N {
+                let ta = t[0] * g[a][0] + t[1] * g[a][1];
+                for i in 0..2 {
+                    let mut r = p_st[(i, 0)] * g[a][0] + p_st[(i, 1)] * g[a][1] - rw2 * dth[i] * ta;
+                    if let Some(b) = bf {
+                        r -= b[i] * nv[a];
+                    }
+                    loc.r[2 * a + i] += r * w;
+                }
+            }
+            if has_p {
+                // Constraint rows (exact only) and Kup.
+                for a in 0..N {
+                    for i in 0..2 {
+                        let cg = cof[(i, 0)] * g[a][0] + cof[(i, 1)] * g[a][1];
+                        for m in 0..3 {
+                            kup[2 * a + i][m] -= cg * qv[m] * w;
+                        }
+                    }
+                }
+                if exact {
+                    for m in 0..3 {
+                        loc.r[nu + m] -= jm1 * qv[m] * w;
+                    }
+                }
+            }
+            if !with_k {
+                continue;
+            }
+            // Kuu: Σ G_aJ A_{iJ,kL} G_bL − ρω² T_a T_b δ_ik.
+            for a in 0..N {
+                let ta = t[0] * g[a][0] + t[1] * g[a][1];
+                // ga_a[i][(k,L)] = Σ_J G_aJ A[v(i,J), v(k,L)]
+                let mut ga = [[0.0; 4]; 2];
+                for i in 0..2 {
+                    for kl in 0..4 {
+                        ga[i][kl] = g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)];
+                    }
+                }
+                for b in 0..N {
+                    let tb = t[0] * g[b][0] + t[1] * g[b][1];
+                    let inertia = rw2 * ta * tb * w;
+                    for i in 0..2 {
+                        let row = (2 * a + i) * nd;
+                        for k in 0..2 {
+                            let val = ga[i][v(k, 0)] * g[b][0] + ga[i][v(k, 1)] * g[b][1];
+                            let mut kv = val * w;
+                            if i == k {
+                                kv -= inertia;
+                            }
+                            loc.k[row + 2 * b + k] += kv;
+                        }
+                    }
+                }
+            }
+        }
+        if has_p && with_k {
+            if exact {
+                for r in 0..nu {
+                    for m in 0..3 {
+                        loc.k[r * nd + nu + m] += kup[r][m];
+                        loc.k[(nu + m) * nd + r] += kup[r][m];
+                    }
+                }
+            } else {
+                // Static condensation: K* = Kuu + κ Kup M⁻¹ Kupᵀ.
+                for r in 0..nu {
+                    let mut km = [0.0; 3];
+                    for n in 0..3 {
+                        km[n] = kappa * (0..3).map(|m| kup[r][m] * minv[(m, n)]).sum::<f64>();
+                    }
+                    for s in 0..nu {
+                        loc.k[r * nd + s] +=
+                            km[0] * kup[s][0] + km[1] * kup[s][1] + km[2] * kup[s][2];
+                    }
+                }
+            }
+        }
+    }
+
+    /// Geometry Jacobian dX/d(ξ, η) at a point of cell `c`.
+    pub fn point_values_geometry(&self, c: usize, xi: f64, eta: f64) -> Option<Mat2> {
+        match self.mesh.degree[c] {
+            1 => {
+                let t = ShapeTable::<4>::new::<Q1>(vec![(xi, eta)], vec![1.0]);
+                Some(self.map(c, xi, eta, &t.n[0], &t.dn[0]).1)
+            }
+            _ => {
+                let t = ShapeTable::<9>::new::<Q2>(vec![(xi, eta)], vec![1.0]);
+                Some(self.map(c, xi, eta, &t.n[0], &t.dn[0]).1)
+            }
+        }
+    }
+
+    /// Reference position, displacement, Cauchy stress and geometry Jacobian at reference point
+    /// (ξ, η) of cell `c`. `None` if the point is degenerate.
+    pub fn point_values(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        xi: f64,
+        eta: f64,
+    ) -> Option<PointValues> {
+        match self.mesh.degree[c] {
+            1 => self.point_values_generic::<Q1, 4>(c, dofs, x, xi, eta),
+            _ => self.point_values_generic::<Q2, 9>(c, dofs, x, xi, eta),
+        }
+    }
+
+    fn point_values_generic<E: Lagrange2D, const N: usize>(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        xi: f64,
+        eta: f64,
+    ) -> Option<PointValues> {
+        let tab = ShapeTable::<N>::new::<E>(vec![(xi, eta)], vec![1.0]);
+        let cd = dofs.cell(c);
+        let nu = 2 * N;
+        let u: Vec<f64> = (0..nu).map(|a| x[cd[a] as usize]).collect();
+        let mut g = [[0.0; 2]; N];
+        let pg = self.point(c, &tab, 0, &mut g)?;
+        let h = Self::grad_u(&u, &g);
+        let mut disp = Vec2::zeros();
+        for a in 0..N {
+            disp += Vec2::new(u[2 * a], u[2 * a + 1]) * tab.n[0][a];
+        }
+        let mut p_st = self.material.stress(&h);
+        let f = Mat2::identity() + h;
+        let pcoef = match self.pressure {
+            PressureMode::None => None,
+            PressureMode::Exact { .. } => Some(Vector3::new(
+                x[cd[nu] as usize],
+                x[cd[nu + 1] as usize],
+                x[cd[nu + 2] as usize],
+            )),
+            PressureMode::Perturbed { kappa, p0 } => {
+                let rule = if N == 9 {
+                    &self.q2 as &dyn std::any::Any
+                } else {
+                    &self.q1 as &dyn std::any::Any
+                };
+                let tab_c = rule.downcast_ref::<ShapeTable<N>>()?;
+                self.perturbed_pressure::<N>(c, tab_c, &u, kappa, p0)
+                    .map(|(p, _)| p)
+            }
+        };
+        if let Some(pc) = pcoef {
+            let (xc, hc) = self.pressure_frame(c);
+            p_st -= cofactor(&f) * pc.dot(&Self::pbasis(&pg.x, &xc, hc));
+        }
+        let j = 1.0 + det_identity_plus_minus_one(&h);
+        let sigma = p_st * f.transpose() / j;
+        let (_, jac) = self.map(c, xi, eta, &tab.n[0], &tab.dn[0]);
+        Some(PointValues {
+            x: pg.x,
+            u: disp,
+            sigma,
+            grad_u: h,
+            jac,
+        })
+    }
+}

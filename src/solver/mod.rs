@@ -1,0 +1,13 @@
+//! Nonlinear and linear solvers: the [`NonlinearSystem`] trait, sparse direct solvers with the
+//! symbolic analysis done once ([`linear`]), Newton with backtracking line search and a
+//! per-iteration convergence table ([`newton`]), and load stepping with cut-back ([`stepping`]).
+
+pub mod linear;
+pub mod newton;
+pub mod stepping;
+
+pub use linear::{LinearError, LinearKind, SparseSolver};
+pub use newton::{
+    IterationRecord, Newton, NewtonOptions, NewtonReport, NonlinearSystem, SolveError,
+};
+pub use stepping::{solve_load_steps, StepOptions, StepReport};

@@ -1,0 +1,291 @@
+//! Newton's method with backtracking line search on a [`NonlinearSystem`].
+//!
+//! Each iteration: evaluate R and K at the current state, factorize K (numeric only: the
+//! symbolic analysis is done once in [`SparseSolver::new`]), solve K Δ = −R, then try the full
+//! step; the residual *and* tangent are evaluated at the trial point so an accepted full step
+//! costs no extra assembly. If the trial residual is not finite (e.g. J ≤ 0 somewhere) or does
+//! not decrease enough (‖R(α)‖ > (1 − 10⁻⁴ α) ‖R(0)‖), the step is halved (residual-only
+//! evaluations) down to `min_alpha`.
+//!
+//! Convergence: for every field f (displacement, pressure), ‖R_f‖ ≤ tol · ref_f, where ref_f is
+//! the larger of the field's residual norm at the first iteration and the system's reference
+//! norm for that field ([`NonlinearSystem::reference_norms`]). The table printed (and returned)
+//! per iteration shows each field's residual normalised by its first-iteration value, the
+//! increment norm and the line-search factor.
+
+use super::linear::{LinearError, LinearKind, SparseSolver};
+
+/// A discretised nonlinear problem R(x) = 0 with a fixed sparse tangent pattern.
+pub trait NonlinearSystem {
+    fn n_eq(&self) -> usize;
+    /// Field index of each equation (0 = displacement, 1 = pressure, ...).
+    fn fields(&self) -> &[u8];
+    fn field_names(&self) -> &'static [&'static str];
+    /// Reference norms per field, used as floors when the first residual is tiny.
+    fn reference_norms(&self) -> Vec<f64>;
+    /// CSC pattern of the tangent (full, both triangles).
+    fn pattern(&self) -> (&[usize], &[usize]);
+    /// Evaluate the residual (and tangent values) at the current state. Returns `false` if the
+    /// state is inadmissible (e.g. J ≤ 0 at a quadrature point).
+    fn evaluate(&mut self, with_matrix: bool) -> bool;
+    fn residual(&self) -> &[f64];
+    fn matrix_values(&self) -> &[f64];
+    /// state ← state + alpha · dx (dx in equation numbering).
+    fn update(&mut self, alpha: f64, dx: &[f64]);
+    fn save_state(&self, buf: &mut Vec<f64>);
+    fn restore_state(&mut self, buf: &[f64]);
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error("linear solver: {0}")]
+    Linear(#[from] LinearError),
+    #[error(
+        "Newton did not converge in {iterations} iterations (relative residual {residual:.3e})"
+    )]
+    NotConverged { iterations: usize, residual: f64 },
+    #[error("line search failed: no step length ≥ {min_alpha} reduced the residual (relative residual {residual:.3e})")]
+    LineSearch { min_alpha: f64, residual: f64 },
+    #[error("initial state is inadmissible (J ≤ 0 or non-finite residual)")]
+    InadmissibleStart,
+    #[error("load stepping gave up at load factor {lambda:.6} after {cutbacks} cut-backs: {last}")]
+    TooManyCutbacks {
+        lambda: f64,
+        cutbacks: usize,
+        last: Box<SolveError>,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub struct NewtonOptions {
+    pub tol: f64,
+    pub max_iterations: usize,
+    pub line_search: bool,
+    pub min_alpha: f64,
+    /// Print the convergence table to stderr.
+    pub verbose: bool,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        Self {
+            tol: 1e-10,
+            max_iterations: 25,
+            line_search: true,
+            min_alpha: 1.0 / 64.0,
+            verbose: false,
+        }
+    }
+}
+
+/// One row of the convergence table.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct IterationRecord {
+    pub iteration: usize,
+    /// ‖R_f‖ / ‖R_f⁰‖ per field (first iteration of this solve).
+    pub residual_rel: Vec<f64>,
+    /// ‖R_f‖ per field.
+    pub residual_abs: Vec<f64>,
+    /// ‖Δx‖ of the step taken after this residual (0 for the last row).
+    pub increment_norm: f64,
+    pub alpha: f64,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct NewtonReport {
+    pub iterations: usize,
+    pub table: Vec<IterationRecord>,
+    pub assemblies: usize,
+    pub factorizations: usize,
+}
+
+/// Newton solver owning the sparse factorization (symbolic analysis done once).
+pub struct Newton {
+    pub opts: NewtonOptions,
+    solver: SparseSolver,
+    dx: Vec<f64>,
+    saved: Vec<f64>,
+}
+
+impl Newton {
+    pub fn new<S: NonlinearSystem>(
+        sys: &S,
+        kind: LinearKind,
+        opts: NewtonOptions,
+    ) -> Result<Self, SolveError> {
+        let (cp, ri) = sys.pattern();
+        let solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        Ok(Self {
+            opts,
+            solver,
+            dx: vec![0.0; sys.n_eq()],
+            saved: Vec::new(),
+        })
+    }
+
+    pub fn linear_kind(&self) -> LinearKind {
+        self.solver.kind()
+    }
+    pub fn linear_solver(&self) -> &SparseSolver {
+        &self.solver
+    }
+
+    /// Switch the linear solver (e.g. Cholesky → LU when the tangent loses definiteness).
+    pub fn switch_kind<S: NonlinearSystem>(
+        &mut self,
+        sys: &S,
+        kind: LinearKind,
+    ) -> Result<(), SolveError> {
+        let (cp, ri) = sys.pattern();
+        self.solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        Ok(())
+    }
+
+    fn field_norms<S: NonlinearSystem>(sys: &S) -> Vec<f64> {
+        let mut n = vec![0.0; sys.field_names().len()];
+        for (r, &f) in sys.residual().iter().zip(sys.fields()) {
+            n[f as usize] += r * r;
+        }
+        n.iter_mut().for_each(|v| *v = v.sqrt());
+        n
+    }
+
+    /// Solve from the system's current state. On error the state is left at the last iterate
+    /// (the caller restores a saved state if it wants to retry).
+    pub fn solve<S: NonlinearSystem>(&mut self, sys: &mut S) -> Result<NewtonReport, SolveError> {
+        let mut rep = NewtonReport::default();
+        let refs = sys.reference_norms();
+        if !sys.evaluate(true) {
+            return Err(SolveError::InadmissibleStart);
+        }
+        rep.assemblies += 1;
+        let mut norms = Self::field_norms(sys);
+        if norms.iter().any(|v| !v.is_finite()) {
+            return Err(SolveError::InadmissibleStart);
+        }
+        let first: Vec<f64> = norms
+            .iter()
+            .zip(&refs)
+            .map(|(n, r)| n.max(*r).max(f64::MIN_POSITIVE))
+            .collect();
+        let first_raw = norms.clone();
+        let names = sys.field_names();
+        if self.opts.verbose {
+            let cols: Vec<String> = names
+                .iter()
+                .map(|n| format!("{:>12}", format!("|R_{n}|/R0")))
+                .collect();
+            eprintln!("    iter {} {:>12} {:>6}", cols.join(" "), "|dx|", "alpha");
+        }
+        let total_norm = |n: &[f64]| n.iter().map(|v| v * v).sum::<f64>().sqrt();
+        for it in 0..=self.opts.max_iterations {
+            let rel: Vec<f64> = norms
+                .iter()
+                .zip(&first_raw)
+                .map(|(n, f)| if *f > 0.0 { n / f } else { 0.0 })
+                .collect();
+            let converged = norms
+                .iter()
+                .zip(&first)
+                .all(|(n, f)| *n <= self.opts.tol * f);
+            let mut rec = IterationRecord {
+                iteration: it,
+                residual_rel: rel,
+                residual_abs: norms.clone(),
+                increment_norm: 0.0,
+                alpha: 0.0,
+            };
+            if converged {
+                self.print_row(&rec);
+                rep.table.push(rec);
+                rep.iterations = it;
+                return Ok(rep);
+            }
+            if it == self.opts.max_iterations {
+                self.print_row(&rec);
+                rep.table.push(rec);
+                let worst = norms
+                    .iter()
+                    .zip(&first)
+                    .map(|(n, f)| n / f)
+                    .fold(0.0, f64::max);
+                return Err(SolveError::NotConverged {
+                    iterations: it,
+                    residual: worst,
+                });
+            }
+            // Newton direction.
+            self.solver.factorize(sys.matrix_values())?;
+            rep.factorizations += 1;
+            for (d, r) in self.dx.iter_mut().zip(sys.residual()) {
+                *d = -r;
+            }
+            self.solver.solve_in_place(&mut self.dx)?;
+            rec.increment_norm = self.dx.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let r0 = total_norm(&norms);
+            sys.save_state(&mut self.saved);
+            let mut alpha = 1.0;
+            loop {
+                sys.update(alpha, &self.dx);
+                let ok = sys.evaluate(alpha == 1.0);
+                rep.assemblies += 1;
+                let trial = Self::field_norms(sys);
+                let rt = total_norm(&trial);
+                let acceptable = ok && rt.is_finite();
+                if acceptable
+                    && (!self.opts.line_search || rt <= (1.0 - 1e-4 * alpha) * r0 || r0 == 0.0)
+                {
+                    if alpha != 1.0 {
+                        // Tangent at the accepted point for the next iteration.
+                        sys.evaluate(true);
+                        rep.assemblies += 1;
+                    }
+                    norms = trial;
+                    break;
+                }
+                // Accept a full step that is admissible when the line search is off.
+                sys.restore_state(&self.saved);
+                alpha *= 0.5;
+                if alpha < self.opts.min_alpha || (!self.opts.line_search && acceptable) {
+                    // Leave the state at the last iterate with a valid evaluation.
+                    sys.evaluate(true);
+                    rep.assemblies += 1;
+                    return Err(SolveError::LineSearch {
+                        min_alpha: self.opts.min_alpha,
+                        residual: rt / r0.max(f64::MIN_POSITIVE),
+                    });
+                }
+            }
+            rec.alpha = alpha;
+            self.print_row(&rec);
+            rep.table.push(rec);
+        }
+        unreachable_guard()
+    }
+
+    fn print_row(&self, rec: &IterationRecord) {
+        if self.opts.verbose {
+            let cols: Vec<String> = rec
+                .residual_rel
+                .iter()
+                .map(|v| format!("{v:>12.3e}"))
+                .collect();
+            eprintln!(
+                "    {:>4} {} {:>12.3e} {:>6.3}",
+                rec.iteration,
+                cols.join(" "),
+                rec.increment_norm,
+                rec.alpha
+            );
+        }
+    }
+}
+
+#[inline]
+fn unreachable_guard() -> Result<NewtonReport, SolveError> {
+    // The loop above returns on its last iteration; this keeps the function total without a panic.
+    Err(SolveError::NotConverged {
+        iterations: 0,
+        residual: f64::NAN,
+    })
+}

@@ -1,0 +1,149 @@
+//! Manufactured solution for the nonlinear (neo-Hookean) solid on the annulus: observed
+//! convergence rates in L2 and the H1 seminorm for Q2 (3, 2) and Q1 (2, 1).
+//!
+//! u = a (sin X1 cos(X2/2), cos(0.7 X1) sin X2), a = 0.1 (strains up to ~10 %, nonlinear
+//! regime). The body force is b = −Div P(∇u) = −A_iJkL u_k,JL, computed with the material's
+//! tangent (itself verified against finite differences of the energy). Dirichlet data on both
+//! the hub and the outer surface by nodal interpolation.
+
+use nalgebra::{Matrix2, Vector2};
+use tread::driver::SolidSystem;
+use tread::material::{Hyperelastic, Material, NeoHookean};
+use tread::math::v;
+use tread::mesh::{annulus, AnnulusSpec};
+use tread::physics::{PressureMode, SolidModel};
+use tread::solver::{LinearKind, Newton, NewtonOptions};
+
+const A: f64 = 0.1;
+
+fn exact_u(x: Vector2<f64>) -> Vector2<f64> {
+    let (x1, x2) = (x[0], x[1]);
+    Vector2::new(
+        A * x1.sin() * (0.5 * x2).cos(),
+        A * (0.7 * x1).cos() * x2.sin(),
+    )
+}
+
+fn exact_grad(x: Vector2<f64>) -> Matrix2<f64> {
+    let (x1, x2) = (x[0], x[1]);
+    Matrix2::new(
+        A * x1.cos() * (0.5 * x2).cos(),
+        -0.5 * A * x1.sin() * (0.5 * x2).sin(),
+        -0.7 * A * (0.7 * x1).sin() * x2.sin(),
+        A * (0.7 * x1).cos() * x2.cos(),
+    )
+}
+
+/// Second derivatives: hess[k][J][L] = ∂² u_k / ∂X_J ∂X_L.
+fn exact_hess(x: Vector2<f64>) -> [[[f64; 2]; 2]; 2] {
+    let (x1, x2) = (x[0], x[1]);
+    let u1_11 = -A * x1.sin() * (0.5 * x2).cos();
+    let u1_12 = -0.5 * A * x1.cos() * (0.5 * x2).sin();
+    let u1_22 = -0.25 * A * x1.sin() * (0.5 * x2).cos();
+    let u2_11 = -0.49 * A * (0.7 * x1).cos() * x2.sin();
+    let u2_12 = -0.7 * A * (0.7 * x1).sin() * x2.cos();
+    let u2_22 = -A * (0.7 * x1).cos() * x2.sin();
+    [
+        [[u1_11, u1_12], [u1_12, u1_22]],
+        [[u2_11, u2_12], [u2_12, u2_22]],
+    ]
+}
+
+fn errors(order: usize, n_r: usize) -> (f64, f64, usize) {
+    let mesh = annulus(&AnnulusSpec {
+        ri: 1.0,
+        ro: 2.0,
+        n_r,
+        n_theta: 8 * n_r,
+        degree: order,
+        grading_r: 1.0,
+        grading_theta: 0.0,
+    });
+    let mat = Material::NeoHookean(NeoHookean::new(1.0, 2.0));
+    let mut model = SolidModel::new(mesh, mat.clone(), 1.0, PressureMode::None);
+    let mb = mat.clone();
+    model.body_force = Some(Box::new(move |x| {
+        let (_, at) = mb.stress_tangent(&exact_grad(x));
+        let h = exact_hess(x);
+        let mut b = Vector2::zeros();
+        for i in 0..2 {
+            for jj in 0..2 {
+                for k in 0..2 {
+                    for l in 0..2 {
+                        b[i] -= at[(v(i, jj), v(k, l))] * h[k][jj][l];
+                    }
+                }
+            }
+        }
+        b
+    }));
+    let mut fixed: Vec<u32> = model.mesh.node_set("hub").to_vec();
+    fixed.extend_from_slice(model.mesh.node_set("outer"));
+    let mut sys = SolidSystem::with_fixed_nodes(model, &fixed);
+    for &n in &fixed {
+        let ue = exact_u(sys.model.mesh.nodes[n as usize]);
+        sys.x[2 * n as usize] = ue[0];
+        sys.x[2 * n as usize + 1] = ue[1];
+    }
+    sys.set_reference_force(1e-3);
+    let opts = NewtonOptions {
+        tol: 1e-12,
+        max_iterations: 30,
+        ..Default::default()
+    };
+    let mut newton = Newton::new(&sys, LinearKind::Cholesky, opts).expect("solver");
+    let rep = newton.solve(&mut sys).expect("Newton converges");
+    assert!(
+        rep.iterations <= 8,
+        "too many Newton iterations: {}",
+        rep.iterations
+    );
+    // Errors with a 5×5 Gauss rule per cell.
+    let (pts, ws) = tread::element::gauss_1d(5);
+    let (mut l2, mut h1) = (0.0, 0.0);
+    for c in 0..sys.model.mesh.n_cells() {
+        for (i, xi) in pts.iter().enumerate() {
+            for (j, eta) in pts.iter().enumerate() {
+                let pv = sys
+                    .model
+                    .point_values(c, &sys.dofs, &sys.x, *xi, *eta)
+                    .expect("point");
+                let w = ws[i] * ws[j] * pv.jac.determinant();
+                l2 += (pv.u - exact_u(pv.x)).norm_squared() * w;
+                h1 += (pv.grad_u - exact_grad(pv.x)).norm_squared() * w;
+            }
+        }
+    }
+    (l2.sqrt(), h1.sqrt(), sys.n_dofs())
+}
+
+fn rates(order: usize, levels: &[usize]) -> Vec<(f64, f64)> {
+    let errs: Vec<(f64, f64, usize)> = levels.iter().map(|&n| errors(order, n)).collect();
+    for (n, e) in levels.iter().zip(&errs) {
+        eprintln!(
+            "Q{order} n_r={n:3} dofs={:6} L2={:.4e} H1={:.4e}",
+            e.2, e.0, e.1
+        );
+    }
+    errs.windows(2)
+        .map(|w| ((w[0].0 / w[1].0).log2(), (w[0].1 / w[1].1).log2()))
+        .collect()
+}
+
+#[test]
+fn q2_rates_l2_3_h1_2() {
+    let r = rates(2, &[2, 4, 8, 16]);
+    eprintln!("Q2 observed rates (L2, H1): {r:?}");
+    let (l2, h1) = *r.last().unwrap();
+    assert!((l2 - 3.0).abs() <= 0.15, "Q2 L2 rate {l2}");
+    assert!((h1 - 2.0).abs() <= 0.15, "Q2 H1 rate {h1}");
+}
+
+#[test]
+fn q1_rates_l2_2_h1_1() {
+    let r = rates(1, &[4, 8, 16, 32]);
+    eprintln!("Q1 observed rates (L2, H1): {r:?}");
+    let (l2, h1) = *r.last().unwrap();
+    assert!((l2 - 2.0).abs() <= 0.15, "Q1 L2 rate {l2}");
+    assert!((h1 - 1.0).abs() <= 0.15, "Q1 H1 rate {h1}");
+}
