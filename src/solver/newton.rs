@@ -9,7 +9,8 @@
 //!
 //! Convergence: for every field f (displacement, pressure), ‖R_f‖ ≤ tol · ref_f, where ref_f is
 //! the larger of the field's residual norm at the first iteration and the system's reference
-//! norm for that field ([`NonlinearSystem::reference_norms`]). The table printed (and returned)
+//! norm for that field ([`NonlinearSystem::reference_norms`]); or, when the residual has hit
+//! its round-off floor, ‖Δx‖ ≤ `increment_tol` · ‖x‖. The table printed (and returned)
 //! per iteration shows each field's residual normalised by its first-iteration value, the
 //! increment norm and the line-search factor.
 
@@ -62,6 +63,8 @@ pub struct NewtonOptions {
     pub max_iterations: usize,
     pub line_search: bool,
     pub min_alpha: f64,
+    /// Converged when ‖Δx‖ ≤ increment_tol · ‖x‖ (round-off floor of the residual reached).
+    pub increment_tol: f64,
     /// Print the convergence table to stderr.
     pub verbose: bool,
 }
@@ -73,6 +76,7 @@ impl Default for NewtonOptions {
             max_iterations: 25,
             line_search: true,
             min_alpha: 1.0 / 64.0,
+            increment_tol: 1e-14,
             verbose: false,
         }
     }
@@ -224,6 +228,19 @@ impl Newton {
             rec.increment_norm = self.dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let r0 = total_norm(&norms);
             sys.save_state(&mut self.saved);
+            // Increment criterion: a step at the round-off level of the state means the residual
+            // has reached its floor (it can no longer decrease): accept and stop.
+            let xnorm = self.saved.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if rec.increment_norm <= self.opts.increment_tol * xnorm.max(f64::MIN_POSITIVE) {
+                sys.update(1.0, &self.dx);
+                sys.evaluate(true);
+                rep.assemblies += 1;
+                rec.alpha = 1.0;
+                self.print_row(&rec);
+                rep.table.push(rec);
+                rep.iterations = it + 1;
+                return Ok(rep);
+            }
             let mut alpha = 1.0;
             loop {
                 sys.update(alpha, &self.dx);
@@ -232,6 +249,9 @@ impl Newton {
                 let trial = Self::field_norms(sys);
                 let rt = total_norm(&trial);
                 let acceptable = ok && rt.is_finite();
+                if self.opts.verbose && alpha < 1.0 {
+                    eprintln!("         line search: alpha = {alpha:.4}, admissible = {ok}, |R|/|R0| = {:.4e}", rt / r0);
+                }
                 if acceptable
                     && (!self.opts.line_search || rt <= (1.0 - 1e-4 * alpha) * r0 || r0 == 0.0)
                 {
