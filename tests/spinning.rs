@@ -58,7 +58,8 @@ const NEO: &str = "model = \"neo_hookean\"\nmu = 200.0\nlambda = 1800.0";
 
 #[test]
 fn incompressible_spinning_is_rigid_with_exact_radial_stress() {
-    let omega = 60.0; // ρω²Ro² ≈ 2μ: a fast spin
+    // ρω²Ro² ≈ μ/2, below the Rayleigh-wave critical spin c_R/Ro ≈ 41 rad/s of this material.
+    let omega = 30.0;
     let smax = incompressible_sigma_r(RO, RHO, omega, RI);
     for (form, extra, kind) in [
         ("exact", "", LinearKind::Lu),
@@ -90,7 +91,7 @@ fn incompressible_spinning_is_rigid_with_exact_radial_stress() {
                 umax / RO,
                 r.sigma_r_inner
             );
-            assert!(umax / RO < 2e-4, "{form}: u not ≈ 0: {umax:.3e}");
+            assert!(umax / RO < 1e-4, "{form}: u not ≈ 0: {umax:.3e}");
             assert!(
                 serr < 2e-3 && terr < 2e-3,
                 "{form}: stress error {serr:.3e} {terr:.3e}"
@@ -109,7 +110,7 @@ fn incompressible_spinning_is_rigid_with_exact_radial_stress() {
 fn compressible_small_spin_matches_linear_closed_form() {
     let omega = 1.0;
     let lin = linear_annulus(RI, RO, 1800.0, 200.0, RHO, omega);
-    let sc = scene(NEO, 6, 48, 2);
+    let sc = scene(NEO, 16, 96, 2);
     let mut sys = build_system(&sc).unwrap();
     solve(&mut sys, omega, LinearKind::Cholesky, 1);
     let r = results(&sys);
