@@ -39,7 +39,15 @@ fn run_bad(name: &str, text: &str) -> (i32, String) {
     let d = tmpdir(name);
     let f = d.join("scene.toml");
     std::fs::write(&f, text).unwrap();
-    let out = tread().args(["run", f.to_str().unwrap(), "--out", d.join("out").to_str().unwrap()]).output().unwrap();
+    let out = tread()
+        .args([
+            "run",
+            f.to_str().unwrap(),
+            "--out",
+            d.join("out").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
     (out.status.code().unwrap_or(-1), stderr)
@@ -51,15 +59,47 @@ fn run_writes_summary_with_required_keys() {
     let f = d.join("scene.toml");
     std::fs::write(&f, GOOD).unwrap();
     let out_dir = d.join("out");
-    let out = tread().args(["run", f.to_str().unwrap(), "--out", out_dir.to_str().unwrap(), "--set", "mesh.n_r=3"]).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = tread()
+        .args([
+            "run",
+            f.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+            "--set",
+            "mesh.n_r=3",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("summary.json"));
-    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap()).unwrap();
-    for k in ["scene", "mode", "dofs", "newton_iterations", "wall_time_s", "converged"] {
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
+    for k in [
+        "scene",
+        "mode",
+        "dofs",
+        "newton_iterations",
+        "wall_time_s",
+        "converged",
+    ] {
         assert!(!s[k].is_null(), "summary.json lacks `{k}`");
     }
-    for k in ["u_r_outer", "sigma_r_inner", "sigma_theta_inner", "sigma_r_outer", "sigma_theta_outer"] {
-        assert!(s["results"][k].as_f64().is_some_and(f64::is_finite), "results.{k} missing");
+    for k in [
+        "u_r_outer",
+        "sigma_r_inner",
+        "sigma_theta_inner",
+        "sigma_r_outer",
+        "sigma_theta_outer",
+    ] {
+        assert!(
+            s["results"][k].as_f64().is_some_and(f64::is_finite),
+            "results.{k} missing"
+        );
     }
     assert_eq!(s["converged"], true);
     assert_eq!(s["mesh"]["n_r"], 3, "--set override not applied");
@@ -73,10 +113,16 @@ fn check_prints_resolved_scene() {
     let d = tmpdir("check");
     let f = d.join("scene.toml");
     std::fs::write(&f, GOOD).unwrap();
-    let out = tread().args(["check", f.to_str().unwrap()]).output().unwrap();
+    let out = tread()
+        .args(["check", f.to_str().unwrap()])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     let s = String::from_utf8_lossy(&out.stdout);
-    assert!(s.contains("tolerance") && s.contains("grading_r"), "defaults not printed: {s}");
+    assert!(
+        s.contains("tolerance") && s.contains("grading_r"),
+        "defaults not printed: {s}"
+    );
 }
 
 #[test]
@@ -90,7 +136,10 @@ fn malformed_scenes_exit_nonzero_naming_the_key() {
     let (code, err) = run_bad("ri_ge_ro", &GOOD.replace("ri = 1.0", "ri = 2.5"));
     assert_ne!(code, 0);
     assert!(err.contains("geometry.r"), "ri >= ro not named: {err}");
-    assert!(err.contains(":5") || err.contains(":6"), "line not given: {err}");
+    assert!(
+        err.contains(":5") || err.contains(":6"),
+        "line not given: {err}"
+    );
     let (code, err) = run_bad("rho", &GOOD.replace("rho = 0.027", "rho = -1.0"));
     assert_ne!(code, 0);
     assert!(err.contains("rho"), "{err}");
@@ -101,16 +150,25 @@ fn malformed_scenes_exit_nonzero_naming_the_key() {
 
 #[test]
 fn bad_cli_input_is_an_error_not_a_panic() {
-    let out = tread().args(["run", "/nonexistent/scene.toml"]).output().unwrap();
+    let out = tread()
+        .args(["run", "/nonexistent/scene.toml"])
+        .output()
+        .unwrap();
     assert_ne!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read"));
     let d = tmpdir("badset");
     let f = d.join("scene.toml");
     std::fs::write(&f, GOOD).unwrap();
-    let out = tread().args(["run", f.to_str().unwrap(), "--set", "mesh.bogus=1"]).output().unwrap();
+    let out = tread()
+        .args(["run", f.to_str().unwrap(), "--set", "mesh.bogus=1"])
+        .output()
+        .unwrap();
     assert_ne!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stderr).contains("bogus"));
-    let out = tread().args(["run", f.to_str().unwrap(), "--mode", "teleport"]).output().unwrap();
+    let out = tread()
+        .args(["run", f.to_str().unwrap(), "--mode", "teleport"])
+        .output()
+        .unwrap();
     assert_ne!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stderr).contains("mode"));
 }
@@ -121,9 +179,22 @@ fn failed_solve_writes_summary_and_exits_nonzero() {
     // with a typed error, keep its outputs and exit with code 1.
     let d = tmpdir("fail");
     let f = d.join("scene.toml");
-    std::fs::write(&f, GOOD.replace("omega = 20.0", "omega = 400.0") + "[solver]\nmax_cutbacks = 3\nmax_iterations = 8\n").unwrap();
+    std::fs::write(
+        &f,
+        GOOD.replace("omega = 20.0", "omega = 400.0")
+            + "[solver]\nmax_cutbacks = 3\nmax_iterations = 8\n",
+    )
+    .unwrap();
     let out_dir = d.join("out");
-    let out = tread().args(["run", f.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]).output().unwrap();
+    let out = tread()
+        .args([
+            "run",
+            f.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(!err.contains("panicked"));

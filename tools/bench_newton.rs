@@ -171,38 +171,41 @@ fn main() {
             }
         };
         let t_sym = t0.elapsed().as_secs_f64();
-        sys.evaluate(true);
-        let vals = sys.matrix_values().to_vec();
-        let t_fact = time(args.repeats, || {
-            if let Err(e) = solver.factorize(&vals) {
-                eprintln!("tread-bench: factorization failed: {e}");
-                std::process::exit(1);
-            }
-        });
-        let rhs: Vec<f64> = sys.residual().iter().map(|r| -r).collect();
-        let mut x = rhs.clone();
-        let t_solve = time(args.repeats, || {
-            x.copy_from_slice(&rhs);
-            if let Err(e) = solver.solve_in_place(&mut x) {
-                eprintln!("tread-bench: solve failed: {e}");
-                std::process::exit(1);
-            }
-        });
         // One full Newton iteration as the solver runs it (2 threads): assemble R and K,
-        // factorize, solve, update the state.
+        // factorize, solve, update the state. Each phase is timed inside the same iteration so
+        // the ratio iteration / (factor + solve) compares times from the same run.
         let mut dx = vec![0.0; n];
-        let t_iter = pool2.install(|| {
-            time(args.repeats, || {
+        let (mut fs, mut ss, mut its, mut ratios) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        pool2.install(|| {
+            for _ in 0..args.repeats {
+                let t = Instant::now();
                 sys.evaluate(true);
-                solver.factorize(sys.matrix_values()).ok();
+                let ta = t.elapsed().as_secs_f64();
+                let t = Instant::now();
+                if let Err(e) = solver.factorize(sys.matrix_values()) {
+                    eprintln!("tread-bench: factorization failed: {e}");
+                    std::process::exit(1);
+                }
+                let tf = t.elapsed().as_secs_f64();
+                let t = Instant::now();
                 for (d, r) in dx.iter_mut().zip(sys.residual()) {
                     *d = -r;
                 }
-                solver.solve_in_place(&mut dx).ok();
+                if let Err(e) = solver.solve_in_place(&mut dx) {
+                    eprintln!("tread-bench: solve failed: {e}");
+                    std::process::exit(1);
+                }
                 sys.update(0.0, &dx);
-            })
+                let ts = t.elapsed().as_secs_f64();
+                fs.push(tf);
+                ss.push(ts);
+                its.push(ta + tf + ts);
+                ratios.push((ta + tf + ts) / (tf + ts));
+            }
         });
-        let ratio = t_iter / (t_fact + t_solve);
+        let (t_fact, t_solve, t_iter) = (median(fs), median(ss), median(its));
+        let ratio = median(ratios);
         let rss = peak_rss_mb();
         println!(
             "| {n} | {} | {} | {t_serial:.4} | {t_p1:.4} | {t_p2:.4} | {:.2} | {t_sym:.3} | {t_fact:.3} | {t_solve:.4} | {t_iter:.3} | {ratio:.3} | {rss:.0} |",
