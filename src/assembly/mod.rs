@@ -31,11 +31,13 @@ pub struct DofMap {
     pub n_u: usize,
     /// Cell-owned dofs per cell (0 or 3).
     pub per_cell: usize,
+    /// Global unknowns at the end of the full vector.
+    pub n_global: usize,
     /// Equation number of each full dof, or [`FIXED`].
     pub eq: Vec<u32>,
     /// Number of equations (free dofs).
     pub n_eq: usize,
-    /// Field of each equation: 0 displacement, 1 pressure.
+    /// Field of each equation: 0 displacement, 1 pressure, 2 global unknowns.
     pub field: Vec<u8>,
     /// Full-dof list of each cell (CSR): displacement dofs in local node order (2a + i), then the
     /// cell-owned dofs.
@@ -47,8 +49,19 @@ impl DofMap {
     /// Two displacement dofs per node plus `per_cell` dofs per cell; `fixed_nodes` have both
     /// displacement components fixed.
     pub fn new(mesh: &Mesh, per_cell: usize, fixed_nodes: &[u32]) -> Self {
+        Self::with_globals(mesh, per_cell, fixed_nodes, 0)
+    }
+
+    /// As [`Self::new`] plus `n_global` free global unknowns at the end of the full vector (e.g.
+    /// the road height under load control).
+    pub fn with_globals(
+        mesh: &Mesh,
+        per_cell: usize,
+        fixed_nodes: &[u32],
+        n_global: usize,
+    ) -> Self {
         let n_u = 2 * mesh.n_nodes();
-        let n_full = n_u + per_cell * mesh.n_cells();
+        let n_full = n_u + per_cell * mesh.n_cells() + n_global;
         let mut fixed = vec![false; n_full];
         for &n in fixed_nodes {
             fixed[2 * n as usize] = true;
@@ -60,7 +73,13 @@ impl DofMap {
         for (d, e) in eq.iter_mut().enumerate() {
             if !fixed[d] {
                 *e = n_eq;
-                field.push(u8::from(d >= n_u));
+                field.push(if d < n_u {
+                    0
+                } else if d < n_u + per_cell * mesh.n_cells() {
+                    1
+                } else {
+                    2
+                });
                 n_eq += 1;
             }
         }
@@ -79,12 +98,18 @@ impl DofMap {
         Self {
             n_u,
             per_cell,
+            n_global,
             eq,
             n_eq: n_eq as usize,
             field,
             cell_dofs,
             cell_offsets,
         }
+    }
+
+    /// Full index of global unknown `k`.
+    pub fn global(&self, k: usize) -> usize {
+        self.eq.len() - self.n_global + k
     }
     pub fn n_full(&self) -> usize {
         self.eq.len()
@@ -160,81 +185,155 @@ impl<'a, T> SharedMut<'a, T> {
     }
 }
 
-/// Global sparse pattern, slot tables and colouring; values and residual buffers.
+/// A family of elements contributing to the global system (e.g. the cells of the mesh, or the
+/// contact facets): each element has its list of full dofs; the block stores its value slots
+/// and its colouring.
+pub struct Block {
+    pub dofs: Vec<u32>,
+    pub offsets: Vec<usize>,
+    /// Per element, `nd²` slots (row-major local pairs); `u32::MAX` where a row or column is fixed.
+    slots: Vec<u32>,
+    slot_offsets: Vec<usize>,
+    /// Element colours (no two elements of one colour share a dof); `None`: assemble serially.
+    colors: Option<Vec<Vec<u32>>>,
+}
+
+impl Block {
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    #[inline]
+    pub fn element(&self, e: usize) -> &[u32] {
+        &self.dofs[self.offsets[e]..self.offsets[e + 1]]
+    }
+    /// Greedy colouring by shared dofs; `None` if more than 64 colours would be needed
+    /// (elements sharing a global dof) or the block is too small to gain from threads.
+    fn color(dofs: &[u32], offsets: &[usize], n_full: usize) -> Option<Vec<Vec<u32>>> {
+        let n = offsets.len().saturating_sub(1);
+        if n < 256 {
+            return None;
+        }
+        let mut masks = vec![0u64; n_full];
+        let mut colors: Vec<Vec<u32>> = Vec::new();
+        for e in 0..n {
+            let el = &dofs[offsets[e]..offsets[e + 1]];
+            let used = el.iter().fold(0u64, |m, &d| m | masks[d as usize]);
+            if used == u64::MAX {
+                return None;
+            }
+            let c = (!used).trailing_zeros() as usize;
+            if colors.len() <= c {
+                colors.resize_with(c + 1, Vec::new);
+            }
+            colors[c].push(e as u32);
+            for &d in el {
+                masks[d as usize] |= 1 << c;
+            }
+        }
+        Some(colors)
+    }
+}
+
+/// Global sparse pattern (union over all blocks), per-block slot tables and colourings; the
+/// value and residual buffers.
 pub struct Assembler {
     pub n: usize,
     pub col_ptr: Vec<usize>,
     pub row_idx: Vec<usize>,
-    /// Per cell, `nd²` slots (row-major local pairs); `u32::MAX` where a row or column is fixed.
-    slots: Vec<u32>,
-    slot_offsets: Vec<usize>,
-    colors: Vec<Vec<u32>>,
+    pub blocks: Vec<Block>,
     pub values: Vec<f64>,
     pub residual: Vec<f64>,
     pub parallel: bool,
 }
 
 impl Assembler {
-    pub fn new(mesh: &Mesh, dofs: &DofMap) -> Self {
+    /// Pattern of the mesh cells only (block 0).
+    pub fn new(_mesh: &Mesh, dofs: &DofMap) -> Self {
+        Self::with_blocks(
+            dofs,
+            vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())],
+        )
+    }
+
+    /// Pattern of several element blocks, each given as (dof lists, offsets) in full-dof
+    /// numbering. Block indices follow the order given.
+    pub fn with_blocks(dofs: &DofMap, lists: Vec<(Vec<u32>, Vec<usize>)>) -> Self {
         let n = dofs.n_eq;
-        // Column lists: every pair of equations that share a cell.
         let mut cols: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for c in 0..mesh.n_cells() {
-            let cd = dofs.cell(c);
-            for &dj in cd {
-                let ej = dofs.eq[dj as usize];
-                if ej == FIXED {
-                    continue;
-                }
-                let col = &mut cols[ej as usize];
-                for &di in cd {
-                    let ei = dofs.eq[di as usize];
-                    if ei != FIXED {
-                        col.push(ei);
+        for (d, o) in &lists {
+            for e in 0..o.len().saturating_sub(1) {
+                let el = &d[o[e]..o[e + 1]];
+                for &dj in el {
+                    let ej = dofs.eq[dj as usize];
+                    if ej == FIXED {
+                        continue;
                     }
+                    let col = &mut cols[ej as usize];
+                    col.extend(
+                        el.iter()
+                            .map(|&di| dofs.eq[di as usize])
+                            .filter(|&ei| ei != FIXED),
+                    );
                 }
+            }
+            // Keep memory bounded on large meshes.
+            for col in cols.iter_mut() {
+                col.sort_unstable();
+                col.dedup();
             }
         }
         let mut col_ptr = Vec::with_capacity(n + 1);
         col_ptr.push(0usize);
         let mut row_idx = Vec::new();
         for col in &mut cols {
-            col.sort_unstable();
-            col.dedup();
             row_idx.extend(col.iter().map(|&r| r as usize));
             col_ptr.push(row_idx.len());
             *col = Vec::new();
         }
-        let mut slots = Vec::new();
-        let mut slot_offsets = vec![0];
-        for c in 0..mesh.n_cells() {
-            let cd = dofs.cell(c);
-            for &di in cd {
-                let ei = dofs.eq[di as usize];
-                for &dj in cd {
-                    let ej = dofs.eq[dj as usize];
-                    if ei == FIXED || ej == FIXED {
-                        slots.push(u32::MAX);
-                    } else {
-                        let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
-                        let pos = row_idx[s..e]
-                            .binary_search(&(ei as usize))
-                            .map(|p| s + p)
-                            .unwrap_or(usize::MAX);
-                        slots.push(pos as u32);
+        let blocks = lists
+            .into_iter()
+            .map(|(d, o)| {
+                let mut slots = Vec::new();
+                let mut slot_offsets = vec![0];
+                for e in 0..o.len().saturating_sub(1) {
+                    let el = &d[o[e]..o[e + 1]];
+                    for &di in el {
+                        let ei = dofs.eq[di as usize];
+                        for &dj in el {
+                            let ej = dofs.eq[dj as usize];
+                            if ei == FIXED || ej == FIXED {
+                                slots.push(u32::MAX);
+                            } else {
+                                let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
+                                let pos = row_idx[s..e]
+                                    .binary_search(&(ei as usize))
+                                    .map(|p| s + p)
+                                    .unwrap_or(usize::MAX);
+                                slots.push(pos as u32);
+                            }
+                        }
                     }
+                    slot_offsets.push(slots.len());
                 }
-            }
-            slot_offsets.push(slots.len());
-        }
+                let colors = Block::color(&d, &o, dofs.n_full());
+                Block {
+                    dofs: d,
+                    offsets: o,
+                    slots,
+                    slot_offsets,
+                    colors,
+                }
+            })
+            .collect();
         let nnz = row_idx.len();
         Self {
             n,
             col_ptr,
             row_idx,
-            slots,
-            slot_offsets,
-            colors: mesh.color_cells(),
+            blocks,
             values: vec![0.0; nnz],
             residual: vec![0.0; n],
             parallel: true,
@@ -244,41 +343,60 @@ impl Assembler {
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }
+    /// Number of colours of block 0 (the cells); 0 if it is assembled serially.
     pub fn n_colors(&self) -> usize {
-        self.colors.len()
+        self.blocks
+            .first()
+            .and_then(|b| b.colors.as_ref())
+            .map_or(0, Vec::len)
     }
 
-    /// Assemble the residual (and the matrix when `with_matrix`). `kernel(cell, local)` fills
-    /// the local system of `cell` (already cleared to the cell's size) with the cell's
-    /// residual and tangent in the cell's dof order.
-    pub fn assemble<K>(&mut self, dofs: &DofMap, with_matrix: bool, kernel: K)
-    where
-        K: Fn(usize, &mut LocalSystem) + Sync,
-    {
+    /// Zero the residual (and the matrix values).
+    pub fn zero(&mut self, with_matrix: bool) {
         self.residual.fill(0.0);
         if with_matrix {
             self.values.fill(0.0);
         }
+    }
+
+    /// Residual and tangent of the cells (block 0) from scratch: [`Self::zero`] then
+    /// [`Self::add_block`] for block 0.
+    pub fn assemble<K>(&mut self, dofs: &DofMap, with_matrix: bool, kernel: K)
+    where
+        K: Fn(usize, &mut LocalSystem) + Sync,
+    {
+        self.zero(with_matrix);
+        self.add_block(0, dofs, with_matrix, kernel);
+    }
+
+    /// Add the contributions of block `b`. `kernel(element, local)` fills the local system
+    /// (already cleared to the element's size) in the element's dof order.
+    pub fn add_block<K>(&mut self, b: usize, dofs: &DofMap, with_matrix: bool, kernel: K)
+    where
+        K: Fn(usize, &mut LocalSystem) + Sync,
+    {
+        let Some(block) = self.blocks.get(b) else {
+            return;
+        };
         let res = SharedMut::new(&mut self.residual);
         let val = SharedMut::new(&mut self.values);
-        let slots = &self.slots;
-        let slot_offsets = &self.slot_offsets;
-        let work = |c: usize, loc: &mut LocalSystem| {
-            let cd = dofs.cell(c);
-            let nd = cd.len();
+        let work = |e: usize, loc: &mut LocalSystem| {
+            let el = block.element(e);
+            let nd = el.len();
             loc.clear(nd);
-            kernel(c, loc);
-            // SAFETY: cells processed concurrently belong to one colour and share no node, so
-            // they touch disjoint equations and disjoint (row, col) slots.
+            kernel(e, loc);
+            // SAFETY: elements processed concurrently belong to one colour and share no dof,
+            // so they touch disjoint equations and disjoint (row, col) slots; serial blocks
+            // are processed by one thread.
             unsafe {
-                for (a, &d) in cd.iter().enumerate() {
-                    let e = dofs.eq[d as usize];
-                    if e != FIXED {
-                        *res.get_mut(e as usize) += loc.r[a];
+                for (a, &d) in el.iter().enumerate() {
+                    let q = dofs.eq[d as usize];
+                    if q != FIXED {
+                        *res.get_mut(q as usize) += loc.r[a];
                     }
                 }
                 if with_matrix {
-                    let s = &slots[slot_offsets[c]..slot_offsets[c + 1]];
+                    let s = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
                     for (slot, &kv) in s.iter().zip(&loc.k[..nd * nd]) {
                         if *slot != u32::MAX {
                             *val.get_mut(*slot as usize) += kv;
@@ -287,18 +405,19 @@ impl Assembler {
                 }
             }
         };
-        if self.parallel {
-            for color in &self.colors {
-                color.par_iter().with_min_len(64).for_each_init(
-                    || Box::new(LocalSystem::new(0)),
-                    |loc, &c| work(c as usize, loc),
-                );
+        match (&block.colors, self.parallel) {
+            (Some(colors), true) => {
+                for color in colors {
+                    color.par_iter().with_min_len(64).for_each_init(
+                        || Box::new(LocalSystem::new(0)),
+                        |loc, &e| work(e as usize, loc),
+                    );
+                }
             }
-        } else {
-            let mut loc = Box::new(LocalSystem::new(0));
-            for color in &self.colors {
-                for &c in color {
-                    work(c as usize, &mut loc);
+            _ => {
+                let mut loc = Box::new(LocalSystem::new(0));
+                for e in 0..block.len() {
+                    work(e, &mut loc);
                 }
             }
         }

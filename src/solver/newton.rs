@@ -118,7 +118,9 @@ impl Newton {
         opts: NewtonOptions,
     ) -> Result<Self, SolveError> {
         let (cp, ri) = sys.pattern();
-        let solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        let mut solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        // The determinant (an extra LBLᵀ pass for LU) is only needed by continuation.
+        solver.set_track_determinant(false);
         Ok(Self {
             opts,
             solver,
@@ -142,6 +144,7 @@ impl Newton {
     ) -> Result<(), SolveError> {
         let (cp, ri) = sys.pattern();
         self.solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        self.solver.set_track_determinant(false);
         Ok(())
     }
 
