@@ -13,6 +13,7 @@
 
 pub mod app;
 pub mod assembly;
+pub mod contact;
 pub mod driver;
 pub mod element;
 pub mod io;

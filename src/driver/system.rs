@@ -1,21 +1,45 @@
-//! [`SolidSystem`]: a [`SolidModel`] with its dofs, assembler and state, exposed to Newton as a
-//! [`NonlinearSystem`]. The hub node set is bonded to the rigid hub (u = 0 there); the load
-//! factor λ scales ω² (steady spinning) so that ω is reached by load stepping.
+//! [`SolidSystem`]: a [`SolidModel`] (plus, optionally, contact with the road) with its dofs,
+//! assembler and state, exposed to Newton as a [`NonlinearSystem`]. The hub node set is bonded
+//! to the rigid hub (u = 0 there). The load factor λ ∈ [0, 1] drives the analysis
+//! ([`Loading`]): ω² for spinning, the road position for indentation, the hub load for load
+//! control.
 
-use crate::assembly::{Assembler, DofMap};
+use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
+use crate::contact::{ContactModel, ContactSample, SlipKinematics};
+use crate::math::Vec2;
 use crate::physics::SolidModel;
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 
+/// What the load factor λ scales.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Loading {
+    /// ω² = λ ω²_target.
+    Spin { omega2: f64 },
+    /// Road height H = h_touch − λ · disp (displacement control).
+    Indent { h_touch: f64, disp: f64 },
+    /// Downward hub load P = λ · load (load control; H is an unknown).
+    Load { load: f64 },
+}
+
 pub struct SolidSystem {
     pub model: SolidModel,
+    pub contact: Option<ContactModel>,
     pub dofs: DofMap,
     pub asm: Assembler,
-    /// Full state vector (displacements, then cell pressures).
+    /// Full state vector (displacements, cell pressures, global unknowns).
     pub x: Vec<f64>,
-    /// Target ω² reached at λ = 1.
+    /// State at the last converged load step (friction history in static analyses).
+    pub x_prev: Vec<f64>,
+    pub loading: Loading,
+    /// Load factor of the current target and of the last converged step.
+    pub lambda: f64,
+    pub lambda_prev: f64,
+    /// Target ω² reached at λ = 1 (kept for the spinning driver).
     pub omega2_target: f64,
     ref_norms: Vec<f64>,
+    /// Contact facets integrated per assembly (sum, count) for reporting.
+    pub facet_visits: (usize, usize),
 }
 
 impl SolidSystem {
@@ -27,19 +51,44 @@ impl SolidSystem {
 
     /// Fix both displacement components of the given nodes (values taken from `x`, initially 0).
     pub fn with_fixed_nodes(model: SolidModel, fixed: &[u32]) -> Self {
-        let fixed = fixed.to_vec();
-        let dofs = DofMap::new(&model.mesh, model.dofs_per_cell(), &fixed);
-        let asm = Assembler::new(&model.mesh, &dofs);
-        let x = model.initial_state(&dofs);
+        Self::build(model, None, fixed)
+    }
+
+    /// Solid with contact on the outer facets; the hub set is fixed. Under load control the
+    /// road height is a global unknown, initialised to `contact.h`.
+    pub fn with_contact(model: SolidModel, contact: ContactModel) -> Self {
+        let fixed: Vec<u32> = model.mesh.node_set("hub").to_vec();
+        Self::build(model, Some(contact), &fixed)
+    }
+
+    fn build(model: SolidModel, contact: Option<ContactModel>, fixed: &[u32]) -> Self {
+        let n_global = usize::from(contact.as_ref().is_some_and(|c| c.load.is_some()));
+        let dofs = DofMap::with_globals(&model.mesh, model.dofs_per_cell(), fixed, n_global);
+        let mut blocks = vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())];
+        if let Some(c) = &contact {
+            blocks.push(c.element_dofs(&model.mesh, &dofs));
+        }
+        let asm = Assembler::with_blocks(&dofs, blocks);
+        let mut x = model.initial_state(&dofs);
+        if let (Some(c), true) = (&contact, n_global > 0) {
+            x[dofs.global(0)] = c.h;
+        }
         // Pressure residuals are volumes (∫ (J − 1) q dV): their floor is the volume scale.
         let area = domain_area(&model);
+        let h_ref = contact.as_ref().and_then(|c| c.load).unwrap_or(0.0);
         Self {
             model,
+            contact,
             dofs,
             asm,
+            x_prev: x.clone(),
             x,
+            loading: Loading::Spin { omega2: 0.0 },
+            lambda: 0.0,
+            lambda_prev: 0.0,
             omega2_target: 0.0,
-            ref_norms: vec![0.0, 1e-3 * area],
+            ref_norms: vec![0.0, 1e-3 * area, h_ref],
+            facet_visits: (0, 0),
         }
     }
 
@@ -51,13 +100,69 @@ impl SolidSystem {
     /// Set the reference norm of the displacement residual (e.g. the norm of the full load).
     pub fn set_reference_force(&mut self, f: f64) {
         self.ref_norms[0] = f;
+        if self.ref_norms[2] == 0.0 {
+            self.ref_norms[2] = f;
+        }
     }
 
     /// Norm of the residual at the current state (assembles the residual only).
     pub fn residual_norm(&mut self) -> f64 {
-        self.model
-            .assemble(&mut self.asm, &self.dofs, &self.x, false);
+        self.evaluate(false);
         self.asm.residual.iter().map(|r| r * r).sum::<f64>().sqrt()
+    }
+
+    /// Current road height (None without contact).
+    pub fn road_height(&self) -> Option<f64> {
+        self.contact.as_ref().map(|c| c.road_height(&self.dofs, &self.x))
+    }
+
+    /// Contact traction samples at the current state.
+    pub fn contact_samples(&self) -> Vec<ContactSample> {
+        match &self.contact {
+            Some(c) => c.samples(&self.model.mesh, &self.dofs, &self.x, &self.x_prev),
+            None => Vec::new(),
+        }
+    }
+
+    /// Mean number of contact facets integrated per assembly so far.
+    pub fn mean_facets_per_assembly(&self) -> f64 {
+        if self.facet_visits.1 == 0 {
+            0.0
+        } else {
+            self.facet_visits.0 as f64 / self.facet_visits.1 as f64
+        }
+    }
+
+    /// Force and moment (about the hub centre, counter-clockwise positive) exerted by the hub
+    /// on the body: the residual entries of the fixed hub dofs (R = f_int − f_ext, so at a
+    /// support R equals the reaction).
+    pub fn hub_reaction(&self) -> (Vec2, f64) {
+        let mut is_hub = vec![false; self.model.mesh.n_nodes()];
+        for &n in self.model.mesh.node_set("hub") {
+            is_hub[n as usize] = true;
+        }
+        let mut force = Vec2::zeros();
+        let mut moment = 0.0;
+        let mut loc = Box::new(LocalSystem::new(0));
+        for c in 0..self.model.mesh.n_cells() {
+            let nodes = self.model.mesh.cell_nodes(c);
+            if !nodes.iter().any(|&n| is_hub[n as usize]) {
+                continue;
+            }
+            let nd = self.dofs.cell(c).len();
+            loc.clear(nd);
+            self.model.cell_residual(c, &self.dofs, &self.x, &mut loc);
+            for (a, &n) in nodes.iter().enumerate() {
+                let n = n as usize;
+                if is_hub[n] && self.dofs.eq[2 * n] == FIXED {
+                    let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
+                    let xp = self.model.mesh.nodes[n] + Vec2::new(self.x[2 * n], self.x[2 * n + 1]);
+                    force += f;
+                    moment += xp[0] * f[1] - xp[1] * f[0];
+                }
+            }
+        }
+        (force, moment)
     }
 }
 
@@ -67,8 +172,8 @@ pub fn domain_area(model: &SolidModel) -> f64 {
     let mut a = 0.0;
     for c in 0..model.mesh.n_cells() {
         for (pt, w) in rule.points.iter().zip(&rule.weights) {
-            if let Some(pv) = model.point_values_geometry(c, pt.0, pt.1) {
-                a += pv.determinant() * w;
+            if let Some(j) = model.point_values_geometry(c, pt.0, pt.1) {
+                a += j.determinant() * w;
             }
         }
     }
@@ -83,7 +188,7 @@ impl NonlinearSystem for SolidSystem {
         &self.dofs.field
     }
     fn field_names(&self) -> &'static [&'static str] {
-        &["u", "p"]
+        &["u", "p", "H"]
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.ref_norms.clone()
@@ -92,9 +197,14 @@ impl NonlinearSystem for SolidSystem {
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        let ok = self
-            .model
-            .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        let ok = self.model.assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        if let Some(c) = &self.contact {
+            c.reset_visited();
+            let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);
+            self.asm.add_block(1, dofs, with_matrix, |e, loc| c.kernel(mesh, dofs, x, xp, e, loc, with_matrix));
+            self.facet_visits.0 += c.visited_facets();
+            self.facet_visits.1 += 1;
+        }
         ok && self.asm.residual.iter().all(|r| r.is_finite())
     }
     fn residual(&self) -> &[f64] {
@@ -117,6 +227,26 @@ impl NonlinearSystem for SolidSystem {
 
 impl LoadedSystem for SolidSystem {
     fn set_load(&mut self, lambda: f64) {
-        self.model.omega2 = lambda * self.omega2_target;
+        self.lambda = lambda;
+        match self.loading {
+            Loading::Spin { omega2 } => self.model.omega2 = lambda * omega2,
+            Loading::Indent { h_touch, disp } => {
+                if let Some(c) = &mut self.contact {
+                    c.h = h_touch - lambda * disp;
+                }
+            }
+            Loading::Load { load } => {
+                if let Some(c) = &mut self.contact {
+                    c.load = Some(lambda * load);
+                }
+            }
+        }
+        if let Some(c) = &mut self.contact {
+            c.kinematics = SlipKinematics::Static { dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE) };
+        }
+    }
+    fn commit(&mut self) {
+        self.lambda_prev = self.lambda;
+        self.x_prev.copy_from_slice(&self.x);
     }
 }

@@ -137,6 +137,11 @@ impl SolidModel {
         !self.inverted.load(Ordering::Relaxed)
     }
 
+    /// Local residual of cell `c` at state `x` (including rows of fixed dofs: reactions).
+    pub fn cell_residual(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem) {
+        self.cell_kernel(c, dofs, x, loc, false);
+    }
+
     fn cell_kernel(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem, with_k: bool) {
         match self.mesh.degree[c] {
             1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k),

@@ -11,6 +11,8 @@ use super::newton::{IterationRecord, Newton, NonlinearSystem, SolveError};
 /// A system with a scalar load factor.
 pub trait LoadedSystem: NonlinearSystem {
     fn set_load(&mut self, lambda: f64);
+    /// Called after a converged step (commit history such as the friction reference state).
+    fn commit(&mut self) {}
 }
 
 #[derive(Clone, Debug)]
@@ -62,6 +64,7 @@ pub fn solve_load_steps<S: LoadedSystem>(
                     table: rep.table,
                 });
                 lambda = target;
+                sys.commit();
                 if rep.iterations <= 4 {
                     dl *= 1.5;
                 }

@@ -1,0 +1,371 @@
+//! The contact element: integration of normal compliance and friction over the outer facets
+//! of the mesh (side ξ = +1 of the outer layer of cells).
+//!
+//! Residual contribution (R = internal − external, the contact traction being external):
+//!
+//! ```text
+//! R_a −= ∫Γc N_a (t_T, t_n) ds0,     t_n = t_n(δ, δ̇),  t_T = t_T(w, t_n, δ)
+//! ```
+//!
+//! with δ = −H − x2, x = X + u on the facet. The slip velocity w depends on the analysis
+//! ([`SlipKinematics`]): in a static analysis it is measured in the pseudo-time τ ∈ [0, 1] of the
+//! load stepping, w = (x1 − x1_prev)/Δτ − v0 (so the friction regularisation ε is a slip length
+//! over the whole loading). Under load control the road height H is a global unknown with the
+//! equation R_H = P − ∫ t_n ds0 = 0 (P: downward hub load per unit thickness), which keeps the
+//! tangent symmetric when friction is off (it is the Hessian of W + Φ_c(δ) + P H).
+//!
+//! Only facets that can reach the road are integrated: a facet is skipped when all its nodes
+//! are higher than the road by more than a margin of 10 % of its chord (a Q2 facet bulges by
+//! at most ~chord²/(8 R) ≪ 0.1 chord). The number of facets integrated per assembly is counted.
+//!
+//! Facet quadrature: Gauss (default) or Gauss–Lobatto with 2–6 points. The penalty pressure is
+//! smooth inside the patch and has a kink at its edges; Gauss points (exact to degree 2n − 1)
+//! integrate the smooth part best, Lobatto points coincide with the nodes (node-to-surface-like)
+//! and give a pressure that is blind between them: see the Hertz test for the measured
+//! difference.
+
+use super::laws::{Friction, FrictionLaw, NormalCompliance};
+use crate::assembly::{DofMap, LocalSystem};
+use crate::element::gauss_1d;
+use crate::element::lagrange_1d;
+use crate::math::Vec2;
+use crate::mesh::{Facet, Mesh};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Facet quadrature rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FacetRule {
+    Gauss(usize),
+    Lobatto(usize),
+}
+
+impl FacetRule {
+    pub fn points(&self) -> (Vec<f64>, Vec<f64>) {
+        match *self {
+            FacetRule::Gauss(n) => gauss_1d(n),
+            FacetRule::Lobatto(n) => lobatto_1d(n),
+        }
+    }
+}
+
+/// Gauss–Lobatto points and weights on [-1, 1] (2 ≤ n ≤ 6; clamped).
+pub fn lobatto_1d(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let (x, w): (&[f64], &[f64]) = match n {
+        0..=2 => (&[-1.0, 1.0], &[1.0, 1.0]),
+        3 => (&[-1.0, 0.0, 1.0], &[1.0 / 3.0, 4.0 / 3.0, 1.0 / 3.0]),
+        4 => {
+            const A: f64 = 0.447_213_595_499_958; // 1/√5
+            (&[-1.0, -A, A, 1.0], &[1.0 / 6.0, 5.0 / 6.0, 5.0 / 6.0, 1.0 / 6.0])
+        }
+        5 => {
+            const A: f64 = 0.654_653_670_707_977_1; // √(3/7)
+            (&[-1.0, -A, 0.0, A, 1.0], &[0.1, 49.0 / 90.0, 32.0 / 45.0, 49.0 / 90.0, 0.1])
+        }
+        _ => (
+            &[-1.0, -0.765_055_323_929_464_7, -0.285_231_516_480_645_1, 0.285_231_516_480_645_1, 0.765_055_323_929_464_7, 1.0],
+            &[1.0 / 15.0, 0.378_474_956_297_847, 0.554_858_377_035_486_4, 0.554_858_377_035_486_4, 0.378_474_956_297_847, 1.0 / 15.0],
+        ),
+    };
+    (x.to_vec(), w.to_vec())
+}
+
+/// How the slip velocity and the penetration rate are obtained.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SlipKinematics {
+    /// Static analysis: w = (x1 − x1_prev)/Δτ − v0 in load-stepping pseudo-time; δ̇ = 0.
+    Static { dtau: f64 },
+}
+
+/// Contact of the outer facets with the road.
+pub struct ContactModel {
+    /// Road height H (hub centre to road); under load control the current value is the global
+    /// unknown and this field is only its initial guess.
+    pub h: f64,
+    /// Road speed along +x1.
+    pub v0: f64,
+    pub normal: NormalCompliance,
+    pub friction: Friction,
+    pub rule: FacetRule,
+    /// Downward hub load P (force per unit thickness) under load control.
+    pub load: Option<f64>,
+    pub kinematics: SlipKinematics,
+    pub facets: Vec<Facet>,
+    visited: AtomicUsize,
+    pts: Vec<f64>,
+    wts: Vec<f64>,
+}
+
+/// Traction sample at a facet quadrature point.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct ContactSample {
+    /// Reference polar angle of the point (rad; −π/2 is the bottom).
+    pub theta: f64,
+    pub x1: f64,
+    pub x2: f64,
+    pub delta: f64,
+    pub t_n: f64,
+    pub t_t: f64,
+    pub w: f64,
+    /// Reference length weight of the point (ds0).
+    pub ds0: f64,
+}
+
+/// Resultants of the contact tractions on the body.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct ContactTotals {
+    pub force_x: f64,
+    pub force_y: f64,
+    /// Moment about the hub centre (counter-clockwise positive).
+    pub moment: f64,
+    pub x_min: f64,
+    pub x_max: f64,
+    pub max_pressure: f64,
+    /// Second moment ⟨x1²⟩ of the normal traction about its centroid (Hertz: a²/4).
+    pub pressure_second_moment: f64,
+    pub centroid: f64,
+}
+
+struct FacetPoint {
+    x: Vec2,
+    ds0: f64,
+    theta: f64,
+}
+
+impl ContactModel {
+    pub fn new(mesh: &Mesh, h: f64, v0: f64, normal: NormalCompliance, friction: Friction, rule: FacetRule, load: Option<f64>) -> Self {
+        let (pts, wts) = rule.points();
+        Self {
+            h,
+            v0,
+            normal,
+            friction,
+            rule,
+            load,
+            kinematics: SlipKinematics::Static { dtau: 1.0 },
+            facets: mesh.facet_set("outer").to_vec(),
+            visited: AtomicUsize::new(0),
+            pts,
+            wts,
+        }
+    }
+
+    /// Local node indices of side ξ = +1 of a degree-p cell, in η order.
+    fn side_nodes(p: usize) -> impl Iterator<Item = usize> {
+        (0..=p).map(move |j| p + (p + 1) * j)
+    }
+
+    /// Dof lists of the contact elements (full numbering): facet node dofs, then the road
+    /// height under load control.
+    pub fn element_dofs(&self, mesh: &Mesh, dofs: &DofMap) -> (Vec<u32>, Vec<usize>) {
+        let mut list = Vec::new();
+        let mut off = vec![0];
+        for f in &self.facets {
+            let c = f.cell as usize;
+            let p = mesh.degree[c] as usize;
+            let nodes = mesh.cell_nodes(c);
+            for a in Self::side_nodes(p) {
+                list.push(2 * nodes[a]);
+                list.push(2 * nodes[a] + 1);
+            }
+            if self.load.is_some() && dofs.n_global > 0 {
+                list.push(dofs.global(0) as u32);
+            }
+            off.push(list.len());
+        }
+        (list, off)
+    }
+
+    /// Current road height: the global unknown under load control, else `self.h`.
+    pub fn road_height(&self, dofs: &DofMap, x: &[f64]) -> f64 {
+        if self.load.is_some() && dofs.n_global > 0 {
+            x[dofs.global(0)]
+        } else {
+            self.h
+        }
+    }
+
+    /// Facets integrated during the last assembly.
+    pub fn visited_facets(&self) -> usize {
+        self.visited.load(Ordering::Relaxed)
+    }
+    pub fn reset_visited(&self) {
+        self.visited.store(0, Ordering::Relaxed);
+    }
+
+    /// Reference position, reference length weight and angle at facet point `q`.
+    fn facet_point(&self, mesh: &Mesh, c: usize, q: usize, n: &[f64; 3], dn: &[f64; 3], p: usize) -> FacetPoint {
+        let eta = self.pts[q];
+        if let Some((x, jac)) = mesh.geometry[c].polar_map(1.0, eta) {
+            let ds = Vec2::new(jac[(0, 1)], jac[(1, 1)]).norm() * self.wts[q];
+            return FacetPoint { x, ds0: ds, theta: x[1].atan2(x[0]) };
+        }
+        let nodes = mesh.cell_nodes(c);
+        let (mut x, mut t) = (Vec2::zeros(), Vec2::zeros());
+        for (j, a) in Self::side_nodes(p).enumerate() {
+            let xa = mesh.nodes[nodes[a] as usize];
+            x += xa * n[j];
+            t += xa * dn[j];
+        }
+        FacetPoint { x, ds0: t.norm() * self.wts[q], theta: x[1].atan2(x[0]) }
+    }
+
+    /// Whether a facet can touch the road (see module docs).
+    fn can_touch(&self, mesh: &Mesh, c: usize, x: &[f64], h: f64) -> bool {
+        let p = mesh.degree[c] as usize;
+        let nodes = mesh.cell_nodes(c);
+        let pos = |a: usize| {
+            let n = nodes[a] as usize;
+            mesh.nodes[n] + Vec2::new(x[2 * n], x[2 * n + 1])
+        };
+        let first = pos(p);
+        let last = pos(p + (p + 1) * p);
+        let margin = 0.1 * (last - first).norm();
+        Self::side_nodes(p).any(|a| pos(a)[1] < -h + margin)
+    }
+
+    /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
+    /// [`Self::element_dofs`]. `x`: current full state, `x_prev`: state of the last converged
+    /// load step (static friction).
+    pub fn kernel(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], x_prev: &[f64], e: usize, loc: &mut LocalSystem, with_k: bool) {
+        let f = self.facets[e];
+        let c = f.cell as usize;
+        let p = mesh.degree[c] as usize;
+        let h = self.road_height(dofs, x);
+        let has_h = self.load.is_some() && dofs.n_global > 0;
+        let nn = p + 1;
+        let ih = 2 * nn; // local index of H
+        if has_h && e == 0 {
+            // R_H = P − ∫ t_n ds0: the load enters once, through the first contact element.
+            loc.r[ih] += self.load.unwrap_or(0.0);
+        }
+        if !self.can_touch(mesh, c, x, h) {
+            return;
+        }
+        self.visited.fetch_add(1, Ordering::Relaxed);
+        let nodes = mesh.cell_nodes(c);
+        let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+        let nd = loc.nd;
+        let friction = self.friction.is_active();
+        let dtau = match self.kinematics {
+            SlipKinematics::Static { dtau } => dtau.max(f64::MIN_POSITIVE),
+        };
+        for q in 0..self.pts.len() {
+            let (nv, dv) = lagrange_1d(p, self.pts[q]);
+            let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+            let (mut u, mut u_old) = (Vec2::zeros(), Vec2::zeros());
+            for j in 0..nn {
+                let n = nodes[side[j]] as usize;
+                u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
+                u_old += Vec2::new(x_prev[2 * n], x_prev[2 * n + 1]) * nv[j];
+            }
+            let xc = fp.x + u;
+            let delta = -h - xc[1];
+            if delta <= 0.0 {
+                continue;
+            }
+            let nval = self.normal.eval(delta, 0.0);
+            if nval.t <= 0.0 && nval.d_delta == 0.0 {
+                continue;
+            }
+            let ds = fp.ds0;
+            // ∂t_n/∂u_{j,2} = −d_delta N_j ; ∂t_n/∂H = −d_delta.
+            let dtn_dx2 = -nval.d_delta;
+            let (mut tt, mut dtt_dx1, mut dtt_dx2) = (0.0, 0.0, 0.0);
+            if friction {
+                let w = (u[0] - u_old[0]) / dtau - self.v0;
+                let fv = self.friction.eval(w, nval.t, delta);
+                tt = fv.t;
+                dtt_dx1 = fv.d_w / dtau;
+                dtt_dx2 = fv.d_tn * dtn_dx2 - fv.d_delta;
+            }
+            for a in 0..nn {
+                loc.r[2 * a] -= nv[a] * tt * ds;
+                loc.r[2 * a + 1] -= nv[a] * nval.t * ds;
+            }
+            if has_h {
+                loc.r[ih] -= nval.t * ds;
+            }
+            if !with_k {
+                continue;
+            }
+            for a in 0..nn {
+                for b in 0..nn {
+                    let nab = nv[a] * nv[b] * ds;
+                    loc.k[(2 * a) * nd + 2 * b] -= nab * dtt_dx1;
+                    loc.k[(2 * a) * nd + 2 * b + 1] -= nab * dtt_dx2;
+                    loc.k[(2 * a + 1) * nd + 2 * b + 1] -= nab * dtn_dx2;
+                }
+                if has_h {
+                    // ∂/∂H: same as ∂/∂x2 (δ = −H − x2).
+                    loc.k[(2 * a) * nd + ih] -= nv[a] * dtt_dx2 * ds;
+                    loc.k[(2 * a + 1) * nd + ih] -= nv[a] * dtn_dx2 * ds;
+                    loc.k[ih * nd + 2 * a + 1] -= nv[a] * dtn_dx2 * ds;
+                }
+            }
+            if has_h {
+                loc.k[ih * nd + ih] -= dtn_dx2 * ds;
+            }
+        }
+    }
+
+    /// Traction samples at every facet quadrature point (contact or not).
+    pub fn samples(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], x_prev: &[f64]) -> Vec<ContactSample> {
+        let h = self.road_height(dofs, x);
+        let dtau = match self.kinematics {
+            SlipKinematics::Static { dtau } => dtau.max(f64::MIN_POSITIVE),
+        };
+        let mut out = Vec::new();
+        for f in &self.facets {
+            let c = f.cell as usize;
+            let p = mesh.degree[c] as usize;
+            let nodes = mesh.cell_nodes(c);
+            let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+            for q in 0..self.pts.len() {
+                let (nv, dv) = lagrange_1d(p, self.pts[q]);
+                let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+                let (mut u, mut u_old) = (Vec2::zeros(), Vec2::zeros());
+                for j in 0..=p {
+                    let n = nodes[side[j]] as usize;
+                    u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
+                    u_old += Vec2::new(x_prev[2 * n], x_prev[2 * n + 1]) * nv[j];
+                }
+                let xc = fp.x + u;
+                let delta = -h - xc[1];
+                let w = (u[0] - u_old[0]) / dtau - self.v0;
+                let (t_n, t_t) = if delta > 0.0 {
+                    let nv = self.normal.eval(delta, 0.0);
+                    let tt = if self.friction.is_active() { self.friction.eval(w, nv.t, delta).t } else { 0.0 };
+                    (nv.t, tt)
+                } else {
+                    (0.0, 0.0)
+                };
+                out.push(ContactSample { theta: fp.theta, x1: xc[0], x2: xc[1], delta: delta.max(0.0), t_n, t_t, w, ds0: fp.ds0 });
+            }
+        }
+        out
+    }
+
+    /// Resultant force and moment of the contact tractions on the body, patch extent, peak
+    /// pressure and the pressure's second moment.
+    pub fn totals(samples: &[ContactSample]) -> ContactTotals {
+        let mut t = ContactTotals { x_min: f64::NAN, x_max: f64::NAN, ..Default::default() };
+        let (mut p0, mut p1) = (0.0, 0.0);
+        for s in samples {
+            t.force_x += s.t_t * s.ds0;
+            t.force_y += s.t_n * s.ds0;
+            t.moment += (s.x1 * s.t_n - s.x2 * s.t_t) * s.ds0;
+            if s.t_n > 0.0 {
+                t.x_min = if t.x_min.is_nan() { s.x1 } else { t.x_min.min(s.x1) };
+                t.x_max = if t.x_max.is_nan() { s.x1 } else { t.x_max.max(s.x1) };
+                t.max_pressure = t.max_pressure.max(s.t_n);
+                p0 += s.t_n * s.ds0;
+                p1 += s.t_n * s.ds0 * s.x1;
+            }
+        }
+        if p0 > 0.0 {
+            t.centroid = p1 / p0;
+            t.pressure_second_moment = samples.iter().filter(|s| s.t_n > 0.0).map(|s| s.t_n * s.ds0 * (s.x1 - t.centroid).powi(2)).sum::<f64>() / p0;
+        }
+        t
+    }
+}

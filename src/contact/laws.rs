@@ -1,0 +1,757 @@
+//! Interface laws for the contact of the body with the rigid road: normal compliance and
+//! (regularised, non-classical) friction, each with its consistent derivatives.
+//!
+//! These are pure pointwise functions. They are evaluated at the quadrature points of the contact
+//! boundary Γ_C by the assembly kernels and, for the stick–slip oscillator of
+//! [`super::stick_slip`], on a single degree of freedom.
+//!
+//! # Sign conventions (fixed by the project, DESIGN.md §2)
+//!
+//! - Penetration δ = (−H − x2)_+ ≥ 0 (road surface x2 = −H), δ̇ its rate (δ̇ = −ẋ2 when in contact).
+//! - Slip velocity of the body relative to the road: w = ẋ1 − v0 (the paper's w_T = −w).
+//! - Normal traction on the body t_n ≥ 0 pushes it in +x2 (away from the road).
+//! - Tangential traction on the body t_T opposes slip: t_T·w ≤ 0.
+//!
+//! # Units
+//!
+//! Tractions are force per unit (reference) length of Γ_C in plane strain, in whatever consistent
+//! units the scene uses. δ is a length and w, δ̇ are velocities; so c_n has units
+//! traction/length^{m_n}, b_n traction·time/length^{1+l_n}, ε (the friction regularisation) and
+//! v_s are velocities, μ, μ_s, μ_k are dimensionless and c_T has units traction/length^{m_T}.
+//!
+//! # Normal compliance (paper Fig. 5)
+//!
+//! t_n = c_n δ^{m_n} + b_n δ^{l_n} δ̇   for δ > 0,  clamped at t_n ≥ 0 (no adhesion);
+//! t_n = 0 for δ ≤ 0. With m_n = 1 and c_n = 1/ε this is the exterior penalty. Where the clamp is
+//! active (raw t_n ≤ 0, only possible with damping and a receding body δ̇ < 0), the traction and
+//! both derivatives are zero.
+//!
+//! # Friction (paper Fig. 7 and §4)
+//!
+//! t_T = −μ(|w|) t_n φ_ε(w), with the regularised sign φ_ε:
+//!
+//! | law               | μ(|w|)                                   | φ_ε(w)                   |
+//! |-------------------|------------------------------------------|--------------------------|
+//! | [`CoulombTanh`]   | μ                                        | tanh(w/ε)                |
+//! | [`CoulombLinear`] | μ                                        | clamp(w/ε, −1, 1)        |
+//! | [`RateDependent`] | μ_k + (μ_s − μ_k) exp(−|w|/v_s)          | tanh(w/ε)                |
+//! | [`OdenMartins`]   | (compliance type) t_T = −c_T δ^{m_T} φ_ε | tanh(w/ε)                |
+//!
+//! The Oden–Martins law does not use t_n: the tangential traction is a power of the penetration,
+//! as the normal one is. With m_T = m_n and c_T = μ c_n (and no normal damping) it reduces to the
+//! regularised Coulomb law.
+//!
+//! The friction laws take t_n as an argument and use max(t_n, 0) (a negative normal traction
+//! would otherwise make friction drive the slip); d_tn is zero where t_n < 0.
+//!
+//! [`RateDependent`]: |w| is not differentiable at w = 0, but μ(|w|) tanh(w/ε) is C¹ there:
+//! sign(w) tanh(w/ε) = tanh(|w|/ε), so
+//! d/dw [μ(|w|) tanh(w/ε)] = μ'(|w|) tanh(|w|/ε) + μ(|w|) sech²(w/ε)/ε,
+//! which is continuous and even in w; that form is what [`RateDependent::eval`] uses.
+
+use serde::{Deserialize, Serialize};
+
+/// Error in the parameters of an interface law (the offending parameter is named).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LawError {
+    /// A parameter is out of its admissible range.
+    #[error("interface law parameter `{name}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name as in the scene file (`c_n`, `mu`, `eps`, ...).
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What is required.
+        reason: &'static str,
+    },
+}
+
+fn check(name: &'static str, value: f64, ok: bool, reason: &'static str) -> Result<(), LawError> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(LawError::InvalidParameter {
+            name,
+            value,
+            reason,
+        })
+    }
+}
+
+/// δ^m and d(δ^m)/dδ = m δ^{m−1} for δ > 0, with m = 1 and m = 0 handled exactly
+/// (so that no 0·∞ or powf rounding appears in the common penalty case).
+#[inline]
+fn pow_with_derivative(delta: f64, m: f64) -> (f64, f64) {
+    if m == 1.0 {
+        (delta, 1.0)
+    } else if m == 0.0 {
+        (1.0, 0.0)
+    } else if m == 2.0 {
+        (delta * delta, 2.0 * delta)
+    } else {
+        let p = delta.powf(m - 1.0);
+        (p * delta, m * p)
+    }
+}
+
+/// tanh(x) and its derivative sech²(x) = 1/cosh²(x) (accurate also where tanh(x) ≈ ±1).
+#[inline]
+fn tanh_with_derivative(x: f64) -> (f64, f64) {
+    let c = x.cosh();
+    (x.tanh(), 1.0 / (c * c))
+}
+
+/// Value of the normal compliance law and its partial derivatives.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NormalValue {
+    /// Normal traction on the body t_n ≥ 0 (pushes it in +x2).
+    pub t: f64,
+    /// ∂t_n/∂δ.
+    pub d_delta: f64,
+    /// ∂t_n/∂δ̇.
+    pub d_rate: f64,
+}
+
+/// Normal compliance with optional damping: t_n = c_n δ^{m_n} + b_n δ^{l_n} δ̇, clamped at 0.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NormalCompliance {
+    /// Stiffness coefficient c_n > 0.
+    pub c_n: f64,
+    /// Stiffness exponent m_n ≥ 1 (1: linear penalty).
+    pub m_n: f64,
+    /// Damping coefficient b_n ≥ 0 (0: no damping).
+    pub b_n: f64,
+    /// Damping exponent l_n ≥ 0.
+    pub l_n: f64,
+}
+
+impl NormalCompliance {
+    /// A law with the given parameters.
+    pub fn new(c_n: f64, m_n: f64, b_n: f64, l_n: f64) -> Self {
+        Self { c_n, m_n, b_n, l_n }
+    }
+
+    /// The exterior penalty t_n = c_n δ (m_n = 1, no damping).
+    pub fn penalty(c_n: f64) -> Self {
+        Self::new(c_n, 1.0, 0.0, 0.0)
+    }
+
+    /// Whether the rate term is present (then t_n depends on δ̇ and the tangent is unsymmetric).
+    pub fn has_damping(&self) -> bool {
+        self.b_n != 0.0
+    }
+
+    /// Check the parameters: c_n > 0, m_n ≥ 1, b_n ≥ 0, l_n ≥ 0, all finite.
+    ///
+    /// m_n ≥ 1 keeps ∂t_n/∂δ bounded at δ → 0⁺ (Newton needs that); l_n ≥ 0 likewise for ∂t_n/∂δ̇.
+    pub fn validate(&self) -> Result<(), LawError> {
+        check("c_n", self.c_n, self.c_n > 0.0, "must be > 0")?;
+        check("m_n", self.m_n, self.m_n >= 1.0, "must be >= 1")?;
+        check("b_n", self.b_n, self.b_n >= 0.0, "must be >= 0")?;
+        check("l_n", self.l_n, self.l_n >= 0.0, "must be >= 0")
+    }
+
+    /// Normal traction and its derivatives at penetration `delta` (δ) and rate `delta_dot` (δ̇).
+    ///
+    /// Zero for δ ≤ 0 and wherever the raw value c_n δ^{m_n} + b_n δ^{l_n} δ̇ is ≤ 0 (clamp).
+    #[inline]
+    pub fn eval(&self, delta: f64, delta_dot: f64) -> NormalValue {
+        if delta <= 0.0 {
+            return NormalValue::default();
+        }
+        let (pm, dpm) = pow_with_derivative(delta, self.m_n);
+        let mut t = self.c_n * pm;
+        let mut d_delta = self.c_n * dpm;
+        let mut d_rate = 0.0;
+        if self.b_n != 0.0 {
+            let (pl, dpl) = pow_with_derivative(delta, self.l_n);
+            t += self.b_n * pl * delta_dot;
+            d_delta += self.b_n * dpl * delta_dot;
+            d_rate = self.b_n * pl;
+        }
+        if t <= 0.0 {
+            return NormalValue::default();
+        }
+        NormalValue {
+            t,
+            d_delta,
+            d_rate,
+        }
+    }
+}
+
+/// Value of a friction law and its partial derivatives.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FrictionValue {
+    /// Tangential traction on the body t_T (opposes the slip w).
+    pub t: f64,
+    /// ∂t_T/∂w.
+    pub d_w: f64,
+    /// ∂t_T/∂t_n.
+    pub d_tn: f64,
+    /// ∂t_T/∂δ (non-zero only for compliance-type laws).
+    pub d_delta: f64,
+}
+
+/// A friction law: tangential traction from slip w, normal traction t_n and penetration δ.
+pub trait FrictionLaw: Send + Sync {
+    /// Traction t_T on the body and its derivatives at slip `w`, normal traction `t_n`,
+    /// penetration `delta`.
+    fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue;
+}
+
+/// Regularised Coulomb friction t_T = −μ t_n tanh(w/ε).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombTanh {
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+    /// Regularisation velocity ε > 0.
+    pub eps: f64,
+}
+
+impl CoulombTanh {
+    /// A law with coefficient `mu` and regularisation velocity `eps`.
+    pub fn new(mu: f64, eps: f64) -> Self {
+        Self { mu, eps }
+    }
+}
+
+impl FrictionLaw for CoulombTanh {
+    #[inline]
+    fn eval(&self, w: f64, t_n: f64, _delta: f64) -> FrictionValue {
+        if t_n <= 0.0 {
+            return FrictionValue::default();
+        }
+        let (phi, dphi) = tanh_with_derivative(w / self.eps);
+        FrictionValue {
+            t: -self.mu * t_n * phi,
+            d_w: -self.mu * t_n * dphi / self.eps,
+            d_tn: -self.mu * phi,
+            d_delta: 0.0,
+        }
+    }
+}
+
+/// Regularised Coulomb friction with the piecewise-linear sign t_T = −μ t_n clamp(w/ε, −1, 1).
+///
+/// Not differentiable at |w| = ε; there the derivative of the outer (sliding) branch, zero, is
+/// returned.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombLinear {
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+    /// Regularisation velocity ε > 0.
+    pub eps: f64,
+}
+
+impl CoulombLinear {
+    /// A law with coefficient `mu` and regularisation velocity `eps`.
+    pub fn new(mu: f64, eps: f64) -> Self {
+        Self { mu, eps }
+    }
+}
+
+impl FrictionLaw for CoulombLinear {
+    #[inline]
+    fn eval(&self, w: f64, t_n: f64, _delta: f64) -> FrictionValue {
+        if t_n <= 0.0 {
+            return FrictionValue::default();
+        }
+        let s = w / self.eps;
+        let (phi, dphi) = if s.abs() < 1.0 {
+            (s, 1.0 / self.eps)
+        } else {
+            (s.signum(), 0.0)
+        };
+        FrictionValue {
+            t: -self.mu * t_n * phi,
+            d_w: -self.mu * t_n * dphi,
+            d_tn: -self.mu * phi,
+            d_delta: 0.0,
+        }
+    }
+}
+
+/// Rate-dependent (static/kinetic, Stribeck-type) friction:
+/// t_T = −μ(|w|) t_n tanh(w/ε), μ(s) = μ_k + (μ_s − μ_k) exp(−s/v_s).
+///
+/// As ε → 0 and v_s → 0 with ε/v_s → 0 this tends to the classical static/kinetic Coulomb law
+/// (static coefficient μ_s at w = 0, kinetic μ_k otherwise). With μ_s > μ_k the law is velocity
+/// weakening (negative slope dμ/d|w|), the source of stick–slip.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RateDependent {
+    /// Static coefficient μ_s ≥ 0 (the value of μ at |w| = 0).
+    pub mu_s: f64,
+    /// Kinetic coefficient μ_k ≥ 0 (the limit of μ as |w| → ∞).
+    pub mu_k: f64,
+    /// Decay velocity v_s > 0 of the static-to-kinetic transition.
+    pub v_s: f64,
+    /// Regularisation velocity ε > 0.
+    pub eps: f64,
+}
+
+impl RateDependent {
+    /// A law with static and kinetic coefficients, decay velocity `v_s` and regularisation `eps`.
+    pub fn new(mu_s: f64, mu_k: f64, v_s: f64, eps: f64) -> Self {
+        Self {
+            mu_s,
+            mu_k,
+            v_s,
+            eps,
+        }
+    }
+
+    /// μ(s) and dμ/ds at s = |w| ≥ 0.
+    #[inline]
+    pub fn mu(&self, s: f64) -> (f64, f64) {
+        let e = (-s / self.v_s).exp();
+        let dm = self.mu_s - self.mu_k;
+        (self.mu_k + dm * e, -dm * e / self.v_s)
+    }
+}
+
+impl FrictionLaw for RateDependent {
+    #[inline]
+    fn eval(&self, w: f64, t_n: f64, _delta: f64) -> FrictionValue {
+        if t_n <= 0.0 {
+            return FrictionValue::default();
+        }
+        let s = w.abs();
+        let (mu, dmu) = self.mu(s);
+        let (phi, dphi) = tanh_with_derivative(w / self.eps);
+        // d/dw [μ(|w|) tanh(w/ε)] = μ'(|w|) tanh(|w|/ε) + μ(|w|) sech²(w/ε)/ε (continuous at 0).
+        let dg = dmu * phi.abs() + mu * dphi / self.eps;
+        FrictionValue {
+            t: -mu * t_n * phi,
+            d_w: -t_n * dg,
+            d_tn: -mu * phi,
+            d_delta: 0.0,
+        }
+    }
+}
+
+/// Oden–Martins compliance-type friction: t_T = −c_T δ^{m_T} tanh(w/ε), independent of t_n.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct OdenMartins {
+    /// Tangential compliance coefficient c_T ≥ 0.
+    pub c_t: f64,
+    /// Tangential compliance exponent m_T ≥ 1.
+    pub m_t: f64,
+    /// Regularisation velocity ε > 0.
+    pub eps: f64,
+}
+
+impl OdenMartins {
+    /// A law with coefficient `c_t`, exponent `m_t` and regularisation velocity `eps`.
+    pub fn new(c_t: f64, m_t: f64, eps: f64) -> Self {
+        Self { c_t, m_t, eps }
+    }
+}
+
+impl FrictionLaw for OdenMartins {
+    #[inline]
+    fn eval(&self, w: f64, _t_n: f64, delta: f64) -> FrictionValue {
+        if delta <= 0.0 {
+            return FrictionValue::default();
+        }
+        let (pm, dpm) = pow_with_derivative(delta, self.m_t);
+        let (phi, dphi) = tanh_with_derivative(w / self.eps);
+        FrictionValue {
+            t: -self.c_t * pm * phi,
+            d_w: -self.c_t * pm * dphi / self.eps,
+            d_tn: 0.0,
+            d_delta: -self.c_t * dpm * phi,
+        }
+    }
+}
+
+/// The closed set of friction laws, dispatched statically by `match`.
+///
+/// | variant           | parameters                 | scene `law =`      |
+/// |-------------------|----------------------------|--------------------|
+/// | `None`            | –                          | `"none"`           |
+/// | `CoulombTanh`     | mu, eps                    | `"coulomb_tanh"`   |
+/// | `CoulombLinear`   | mu, eps                    | `"coulomb_linear"` |
+/// | `RateDependent`   | mu_s, mu_k, v_s, eps       | `"rate_dependent"` |
+/// | `OdenMartins`     | c_t, m_t, eps              | `"oden_martins"`   |
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case")]
+pub enum Friction {
+    /// Frictionless contact: t_T = 0.
+    #[default]
+    None,
+    /// See [`CoulombTanh`].
+    CoulombTanh(CoulombTanh),
+    /// See [`CoulombLinear`].
+    CoulombLinear(CoulombLinear),
+    /// See [`RateDependent`].
+    RateDependent(RateDependent),
+    /// See [`OdenMartins`].
+    OdenMartins(OdenMartins),
+}
+
+impl Friction {
+    /// Whether the law can produce a non-zero traction (false for `None`, μ = 0 or c_T = 0), so
+    /// that callers can skip friction work altogether.
+    pub fn is_active(&self) -> bool {
+        match self {
+            Friction::None => false,
+            Friction::CoulombTanh(l) => l.mu != 0.0,
+            Friction::CoulombLinear(l) => l.mu != 0.0,
+            Friction::RateDependent(l) => l.mu_s != 0.0 || l.mu_k != 0.0,
+            Friction::OdenMartins(l) => l.c_t != 0.0,
+        }
+    }
+
+    /// The scene-file name of the law.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Friction::None => "none",
+            Friction::CoulombTanh(_) => "coulomb_tanh",
+            Friction::CoulombLinear(_) => "coulomb_linear",
+            Friction::RateDependent(_) => "rate_dependent",
+            Friction::OdenMartins(_) => "oden_martins",
+        }
+    }
+
+    /// The regularisation velocity ε (None for frictionless contact).
+    pub fn eps(&self) -> Option<f64> {
+        match self {
+            Friction::None => None,
+            Friction::CoulombTanh(l) => Some(l.eps),
+            Friction::CoulombLinear(l) => Some(l.eps),
+            Friction::RateDependent(l) => Some(l.eps),
+            Friction::OdenMartins(l) => Some(l.eps),
+        }
+    }
+
+    /// Check the parameters: coefficients ≥ 0, ε > 0, v_s > 0, m_T ≥ 1, all finite.
+    pub fn validate(&self) -> Result<(), LawError> {
+        const POS: &str = "must be > 0";
+        const NONNEG: &str = "must be >= 0";
+        match self {
+            Friction::None => Ok(()),
+            Friction::CoulombTanh(l) => {
+                check("mu", l.mu, l.mu >= 0.0, NONNEG)?;
+                check("eps", l.eps, l.eps > 0.0, POS)
+            }
+            Friction::CoulombLinear(l) => {
+                check("mu", l.mu, l.mu >= 0.0, NONNEG)?;
+                check("eps", l.eps, l.eps > 0.0, POS)
+            }
+            Friction::RateDependent(l) => {
+                check("mu_s", l.mu_s, l.mu_s >= 0.0, NONNEG)?;
+                check("mu_k", l.mu_k, l.mu_k >= 0.0, NONNEG)?;
+                check("v_s", l.v_s, l.v_s > 0.0, POS)?;
+                check("eps", l.eps, l.eps > 0.0, POS)
+            }
+            Friction::OdenMartins(l) => {
+                check("c_t", l.c_t, l.c_t >= 0.0, NONNEG)?;
+                check("m_t", l.m_t, l.m_t >= 1.0, "must be >= 1")?;
+                check("eps", l.eps, l.eps > 0.0, POS)
+            }
+        }
+    }
+}
+
+impl FrictionLaw for Friction {
+    #[inline]
+    fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue {
+        match self {
+            Friction::None => FrictionValue::default(),
+            Friction::CoulombTanh(l) => l.eval(w, t_n, delta),
+            Friction::CoulombLinear(l) => l.eval(w, t_n, delta),
+            Friction::RateDependent(l) => l.eval(w, t_n, delta),
+            Friction::OdenMartins(l) => l.eval(w, t_n, delta),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Central difference of `f` at `x` with step `h`.
+    fn cd(f: impl Fn(f64) -> f64, x: f64, h: f64) -> f64 {
+        (f(x + h) - f(x - h)) / (2.0 * h)
+    }
+
+    fn assert_close(what: &str, got: f64, want: f64, rel: f64, abs: f64) {
+        let err = (got - want).abs();
+        assert!(
+            err <= abs + rel * want.abs().max(got.abs()),
+            "{what}: analytic {got:e} vs finite difference {want:e} (err {err:e})"
+        );
+    }
+
+    /// Checks d_w, d_tn, d_delta of a friction law against central differences.
+    fn check_friction_fd(law: &Friction, w: f64, t_n: f64, delta: f64, scale_w: f64) {
+        let v = law.eval(w, t_n, delta);
+        let hw = 1e-6 * scale_w.max(w.abs() * 1e-2).min(scale_w);
+        let fd_w = cd(|x| law.eval(x, t_n, delta).t, w, hw);
+        let tag = format!("{law:?} w={w:e} tn={t_n} delta={delta:e}");
+        let t_scale = law.eval(1e9, t_n.max(1.0), delta.max(1.0)).t.abs().max(1.0);
+        assert_close(
+            &format!("d_w {tag}"),
+            v.d_w,
+            fd_w,
+            1e-5,
+            1e-9 * t_scale / scale_w,
+        );
+        let ht = 1e-6 * t_n.abs().max(1e-3);
+        let fd_tn = cd(|x| law.eval(w, x, delta).t, t_n, ht);
+        assert_close(&format!("d_tn {tag}"), v.d_tn, fd_tn, 1e-6, 1e-9);
+        if delta > 0.0 {
+            let hd = 1e-5 * delta;
+            let fd_d = cd(|x| law.eval(w, t_n, x).t, delta, hd);
+            assert_close(&format!("d_delta {tag}"), v.d_delta, fd_d, 1e-6, 1e-9);
+        }
+    }
+
+    fn laws(eps: f64) -> Vec<Friction> {
+        vec![
+            Friction::CoulombTanh(CoulombTanh::new(0.3, eps)),
+            Friction::CoulombLinear(CoulombLinear::new(0.3, eps)),
+            Friction::RateDependent(RateDependent::new(0.6, 0.4, 20.0 * eps, eps)),
+            Friction::RateDependent(RateDependent::new(0.6, 0.4, 0.1 * eps, eps)),
+            Friction::RateDependent(RateDependent::new(0.3, 0.5, 3.0 * eps, eps)),
+            Friction::OdenMartins(OdenMartins::new(250.0, 1.5, eps)),
+            Friction::OdenMartins(OdenMartins::new(250.0, 1.0, eps)),
+            Friction::OdenMartins(OdenMartins::new(250.0, 2.0, eps)),
+        ]
+    }
+
+    /// Slip velocities sampled for the finite-difference checks, as multiples of ε: dense near 0,
+    /// through the transition and far into sliding.
+    fn slip_samples() -> Vec<f64> {
+        let mut s = vec![0.0, 1e-9, 1e-6, 1e-3, 0.01, 0.1, 0.3, 0.5, 0.9, 0.99];
+        s.extend([1.01, 1.1, 1.5, 2.0, 3.0, 5.0, 10.0, 30.0, 100.0]);
+        let neg: Vec<f64> = s.iter().skip(1).map(|x| -x).collect();
+        s.extend(neg);
+        s
+    }
+
+    #[test]
+    fn friction_derivatives_match_finite_differences() {
+        let mut n = 0;
+        for eps in [1e-4, 1e-2, 1.0, 50.0] {
+            for law in laws(eps) {
+                for s in slip_samples() {
+                    // keep the linear law's kinks |w| = ε a margin away from the stencil
+                    if matches!(law, Friction::CoulombLinear(_)) && ((s.abs() - 1.0).abs() < 1e-3)
+                    {
+                        continue;
+                    }
+                    for t_n in [1e-3, 0.7, 150.0] {
+                        for delta in [1e-7, 1e-3, 0.1, 2.0] {
+                            check_friction_fd(&law, s * eps, t_n, delta, eps);
+                            n += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(n > 1000);
+    }
+
+    #[test]
+    fn rate_dependent_derivative_is_continuous_at_zero() {
+        let law = RateDependent::new(0.6, 0.4, 0.01, 1e-3);
+        let d0 = law.eval(0.0, 2.0, 0.0).d_w;
+        // at w = 0 the derivative is −t_n μ_s / ε
+        assert_close("d_w(0)", d0, -2.0 * 0.6 / 1e-3, 1e-14, 0.0);
+        for w in [1e-12, 1e-10, 1e-8] {
+            let dp = law.eval(w, 2.0, 0.0).d_w;
+            let dm = law.eval(-w, 2.0, 0.0).d_w;
+            assert_close("d_w(+w) vs d_w(0)", dp, d0, 1e-4, 0.0);
+            assert_close("d_w even", dp, dm, 1e-14, 0.0);
+        }
+    }
+
+    #[test]
+    fn normal_compliance_derivatives_match_finite_differences() {
+        for m_n in [1.0, 1.5, 2.0, 3.0] {
+            for (b_n, l_n) in [(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.5, 1.5)] {
+                let law = NormalCompliance::new(1e3, m_n, b_n, l_n);
+                for delta in [1e-9, 1e-7, 1e-5, 1e-3, 0.01, 0.1, 0.5, 2.0] {
+                    for rate in [0.0, 0.3, -0.01, 5.0, -1e-6] {
+                        let v = law.eval(delta, rate);
+                        if v.t == 0.0 {
+                            continue; // clamp region, tested separately
+                        }
+                        let raw = |d: f64, r: f64| law.eval(d, r).t;
+                        let hd = 1e-5 * delta;
+                        let fd_d = cd(|d| raw(d, rate), delta, hd);
+                        let tag = format!("m_n={m_n} b_n={b_n} l_n={l_n} delta={delta:e} rate={rate}");
+                        assert_close(&format!("d_delta {tag}"), v.d_delta, fd_d, 1e-6, 1e-12);
+                        let hr = 1e-6 * rate.abs().max(1e-3);
+                        let fd_r = cd(|r| raw(delta, r), rate, hr);
+                        assert_close(&format!("d_rate {tag}"), v.d_rate, fd_r, 1e-6, 1e-12);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn normal_compliance_linear_penalty_is_exact() {
+        let law = NormalCompliance::penalty(1e4);
+        for delta in [1e-300, 1e-12, 0.5, 3.0] {
+            let v = law.eval(delta, 0.7);
+            assert_eq!(v.t, 1e4 * delta);
+            assert_eq!(v.d_delta, 1e4);
+            assert_eq!(v.d_rate, 0.0);
+        }
+        assert!(!law.has_damping());
+        assert!(NormalCompliance::new(1.0, 1.0, 0.1, 0.0).has_damping());
+    }
+
+    #[test]
+    fn normal_compliance_is_zero_out_of_contact_and_clamped() {
+        let law = NormalCompliance::new(100.0, 1.5, 50.0, 1.0);
+        for delta in [0.0, -1e-12, -1.0] {
+            assert_eq!(law.eval(delta, 3.0), NormalValue::default());
+            assert_eq!(law.eval(delta, -3.0), NormalValue::default());
+        }
+        // receding fast: 100 δ^1.5 + 50 δ δ̇ < 0  ⇔  δ̇ < −2 δ^0.5
+        for delta in [1e-6, 1e-3, 0.1, 1.0] {
+            let rate = -2.0 * delta.sqrt() * 1.01;
+            assert_eq!(law.eval(delta, rate), NormalValue::default(), "delta={delta}");
+            let rate_ok = -2.0 * delta.sqrt() * 0.99;
+            let v = law.eval(delta, rate_ok);
+            assert!(v.t > 0.0 && v.d_rate > 0.0);
+        }
+        for delta in [1e-8, 1e-4, 1e-2, 1.0, 10.0] {
+            for rate in [-100.0, -1.0, -1e-3, 0.0, 1.0] {
+                assert!(law.eval(delta, rate).t >= 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn normal_compliance_validation() {
+        assert!(NormalCompliance::new(1.0, 1.0, 0.0, 0.0).validate().is_ok());
+        let e = NormalCompliance::new(1.0, 0.5, 0.0, 0.0).validate().unwrap_err();
+        assert!(e.to_string().contains("m_n"));
+        assert!(NormalCompliance::new(0.0, 1.0, 0.0, 0.0).validate().is_err());
+        assert!(NormalCompliance::new(f64::NAN, 1.0, 0.0, 0.0).validate().is_err());
+        assert!(NormalCompliance::new(1.0, 1.0, -1.0, 0.0).validate().is_err());
+    }
+
+    #[test]
+    fn friction_opposes_slip_and_is_bounded() {
+        for eps in [1e-3, 0.1, 10.0] {
+            for law in laws(eps) {
+                let bound = |t_n: f64, delta: f64| match law {
+                    Friction::CoulombTanh(l) => l.mu * t_n,
+                    Friction::CoulombLinear(l) => l.mu * t_n,
+                    Friction::RateDependent(l) => l.mu_s.max(l.mu_k) * t_n,
+                    Friction::OdenMartins(l) => l.c_t * delta.powf(l.m_t),
+                    Friction::None => 0.0,
+                };
+                for s in slip_samples() {
+                    let w = s * eps;
+                    for t_n in [0.0, 1e-3, 1.0, 1e3] {
+                        for delta in [0.0, 1e-4, 0.1] {
+                            let v = law.eval(w, t_n, delta);
+                            assert!(v.t * w <= 0.0, "{law:?} w={w} t={}", v.t);
+                            assert!(
+                                v.t.abs() <= bound(t_n, delta) * (1.0 + 1e-14),
+                                "{law:?} w={w} t={} bound {}",
+                                v.t,
+                                bound(t_n, delta)
+                            );
+                            // slip resistance: t_T is non-increasing in w
+                            assert!(v.d_w <= 0.0 || matches!(law, Friction::RateDependent(_)));
+                        }
+                    }
+                }
+            }
+        }
+        // velocity weakening: |t_T| decreases from ≈ μ_s t_n to μ_k t_n
+        let l = RateDependent::new(0.6, 0.4, 1e-2, 1e-5);
+        assert!((l.eval(1e-3, 1.0, 0.0).t + 0.6).abs() < 0.02);
+        assert!((l.eval(1.0, 1.0, 0.0).t + 0.4).abs() < 1e-12);
+        assert!(l.eval(0.05, 1.0, 0.0).d_w > 0.0);
+    }
+
+    #[test]
+    fn negative_normal_traction_gives_no_friction() {
+        for law in laws(0.1) {
+            let v = law.eval(0.3, -5.0, 0.0);
+            assert_eq!(v, FrictionValue::default(), "{law:?}");
+        }
+    }
+
+    #[test]
+    fn tanh_law_tends_to_sign_as_eps_vanishes() {
+        let t_n = 2.0;
+        let mu = 0.3;
+        for w in [-1.0, -1e-3, 1e-3, 0.5] {
+            let mut prev = f64::INFINITY;
+            for k in 2..12 {
+                let eps = 10f64.powi(-k);
+                let t = CoulombTanh::new(mu, eps).eval(w, t_n, 0.0).t;
+                let err = (t + mu * t_n * w.signum()).abs();
+                assert!(err <= prev, "w={w} eps={eps}: error {err} grew from {prev}");
+                prev = err;
+            }
+            assert!(prev < 1e-12, "w={w}: error {prev}");
+        }
+        // the same for the rate-dependent law with v_s = sqrt(ε): |t_T| → μ_k t_n for w ≠ 0
+        for w in [-0.5, 0.2] {
+            let eps: f64 = 1e-10;
+            let t = RateDependent::new(0.6, 0.4, eps.sqrt(), eps).eval(w, 1.0, 0.0).t;
+            assert!((t + 0.4 * w.signum()).abs() < 1e-12);
+        }
+        assert_eq!(CoulombTanh::new(mu, 1e-12).eval(0.0, t_n, 0.0).t, 0.0);
+    }
+
+    #[test]
+    fn linear_law_is_piecewise_linear() {
+        let l = CoulombLinear::new(0.5, 0.1);
+        assert_eq!(l.eval(0.05, 2.0, 0.0).t, -0.5);
+        assert_eq!(l.eval(0.05, 2.0, 0.0).d_w, -10.0);
+        assert_eq!(l.eval(-0.3, 2.0, 0.0).t, 1.0);
+        assert_eq!(l.eval(-0.3, 2.0, 0.0).d_w, 0.0);
+        assert_eq!(l.eval(-0.3, 2.0, 0.0).d_tn, 0.5);
+    }
+
+    #[test]
+    fn oden_martins_ignores_normal_traction() {
+        let l = OdenMartins::new(100.0, 2.0, 0.01);
+        let a = l.eval(0.02, 0.0, 0.1);
+        let b = l.eval(0.02, 55.0, 0.1);
+        assert_eq!(a, b);
+        assert_eq!(a.d_tn, 0.0);
+        assert_close("t", a.t, -100.0 * 0.01 * (2.0f64).tanh(), 1e-14, 0.0);
+        assert_eq!(l.eval(0.02, 1.0, 0.0), FrictionValue::default());
+        assert_eq!(l.eval(0.02, 1.0, -0.1), FrictionValue::default());
+    }
+
+    #[test]
+    fn activity_and_validation() {
+        assert!(!Friction::None.is_active());
+        assert!(!Friction::CoulombTanh(CoulombTanh::new(0.0, 0.1)).is_active());
+        assert!(Friction::CoulombTanh(CoulombTanh::new(0.3, 0.1)).is_active());
+        assert!(!Friction::CoulombLinear(CoulombLinear::new(0.0, 0.1)).is_active());
+        assert!(!Friction::RateDependent(RateDependent::new(0.0, 0.0, 1.0, 0.1)).is_active());
+        assert!(Friction::RateDependent(RateDependent::new(0.0, 0.2, 1.0, 0.1)).is_active());
+        assert!(!Friction::OdenMartins(OdenMartins::new(0.0, 1.0, 0.1)).is_active());
+        assert!(Friction::OdenMartins(OdenMartins::new(5.0, 1.0, 0.1)).is_active());
+        assert_eq!(Friction::None.eval(1.0, 1.0, 1.0), FrictionValue::default());
+
+        for law in laws(0.1) {
+            assert!(law.validate().is_ok(), "{law:?}");
+        }
+        let bad = Friction::RateDependent(RateDependent::new(0.6, 0.4, 0.0, 0.1));
+        assert!(bad.validate().unwrap_err().to_string().contains("v_s"));
+        let bad = Friction::CoulombTanh(CoulombTanh::new(0.3, 0.0));
+        assert!(bad.validate().unwrap_err().to_string().contains("eps"));
+        let bad = Friction::CoulombLinear(CoulombLinear::new(-0.3, 1.0));
+        assert!(bad.validate().unwrap_err().to_string().contains("mu"));
+        let bad = Friction::OdenMartins(OdenMartins::new(1.0, 0.5, 1.0));
+        assert!(bad.validate().unwrap_err().to_string().contains("m_t"));
+        assert!(Friction::None.validate().is_ok());
+    }
+}

@@ -1,0 +1,18 @@
+//! Contact of the cylinder's outer surface with the rigid road.
+//!
+//! Conventions (DESIGN §2): the road is the line x2 = −H moving with speed v0 along +x1 in the
+//! hub frame; penetration δ = (−H − x2)_+ ≥ 0, its rate δ̇ = −ẋ2; slip velocity of the body
+//! relative to the road w = ẋ1 − v0. Tractions act on the body per unit **reference** length of
+//! the outer boundary: the normal traction t_n ≥ 0 pushes in +x2, the tangential traction
+//! t_T = −μ t_n φ_ε(w) opposes slip.
+//!
+//! * [`laws`]: normal compliance and friction laws with consistent derivatives;
+//! * [`facet`]: the contact element on the outer facets (residual, tangent, load control);
+//! * [`stick_slip`]: the spring–mass block on a moving belt (paper §4), integrated with diffsol.
+
+pub mod facet;
+pub mod laws;
+pub mod stick_slip;
+
+pub use facet::{ContactModel, ContactSample, ContactTotals, FacetRule, SlipKinematics};
+pub use laws::{Friction, FrictionLaw, NormalCompliance};
