@@ -8,10 +8,16 @@
 //! * `nodes.csv` — reference position and displacement of every node;
 //! * `convergence.csv` — the Newton convergence table of every load step.
 
-use crate::driver::spinning::{self, SpinningResults};
+use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
+use crate::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+use crate::driver::indentation;
+use crate::driver::spinning;
+use crate::driver::system::Loading;
 use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
-use crate::io::scene::{Formulation, LinearChoice, MaterialParams, Mode, Scene};
+use crate::io::scene::{
+    ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode, Scene,
+};
 use crate::material::{
     Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
 };
@@ -81,6 +87,69 @@ pub fn build_material(scene: &Scene) -> Result<(Material, PressureMode), AppErro
 
 /// Build the solid system (mesh, material, dofs, pattern) of a scene.
 pub fn build_system(scene: &Scene) -> Result<SolidSystem, AppError> {
+    let model = build_model(scene)?;
+    if scene.analysis.mode == Mode::Static {
+        let contact = build_contact(scene, &model)?;
+        return Ok(SolidSystem::with_contact(model, contact));
+    }
+    Ok(SolidSystem::new(model, "hub"))
+}
+
+/// The road contact of a scene (`[road]`, `[contact]`, `[friction]`).
+pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, AppError> {
+    let (Some(road), Some(cs)) = (&scene.road, &scene.contact) else {
+        return Err(AppError::Unsupported(
+            "mode \"static\" needs the [road] and [contact] sections".into(),
+        ));
+    };
+    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n);
+    let friction = match scene.friction.params() {
+        None => {
+            return Err(AppError::Unsupported(
+                "friction: a parameter required by `friction.law` is missing".into(),
+            ))
+        }
+        Some(FrictionParams::None) => Friction::None,
+        Some(FrictionParams::CoulombTanh { mu, eps }) => {
+            Friction::CoulombTanh(CoulombTanh::new(mu, eps))
+        }
+        Some(FrictionParams::CoulombLinear { mu, eps }) => {
+            Friction::CoulombLinear(CoulombLinear::new(mu, eps))
+        }
+        Some(FrictionParams::RateDependent {
+            mu_s,
+            mu_k,
+            v_s,
+            eps,
+        }) => Friction::RateDependent(RateDependent::new(mu_s, mu_k, v_s, eps)),
+        Some(FrictionParams::OdenMartins { c_t, m_t, eps }) => {
+            Friction::OdenMartins(OdenMartins::new(c_t, m_t, eps))
+        }
+    };
+    let rule = match cs.quadrature {
+        ContactQuadrature::Gauss => FacetRule::Gauss(cs.points),
+        ContactQuadrature::Lobatto => FacetRule::Lobatto(cs.points),
+    };
+    let ro = scene.geometry.ro;
+    // Load control starts with a small penetration (1e-3 Ro) so that the road-height equation
+    // has a non-zero tangent; displacement control starts at first touch (H = Ro).
+    let (h0, load) = match road.load {
+        Some(_) => (ro * (1.0 - 1e-3), Some(0.0)),
+        None => (ro, None),
+    };
+    Ok(ContactModel::new(
+        &model.mesh,
+        h0,
+        road.v0,
+        normal,
+        friction,
+        rule,
+        load,
+    ))
+}
+
+/// Mesh, material and solid model of a scene.
+pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
     let ms = &scene.mesh;
     let (material, pressure) = build_material(scene)?;
     if !matches!(pressure, PressureMode::None) && ms.order != 2 {
@@ -98,8 +167,12 @@ pub fn build_system(scene: &Scene) -> Result<SolidSystem, AppError> {
         grading_r: ms.grading_r,
         grading_theta: ms.grading_theta,
     });
-    let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
-    Ok(SolidSystem::new(model, "hub"))
+    Ok(SolidModel::new(
+        mesh,
+        material,
+        scene.material.rho,
+        pressure,
+    ))
 }
 
 fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
@@ -107,7 +180,8 @@ fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
         LinearChoice::Cholesky => LinearKind::Cholesky,
         LinearChoice::Lu => LinearKind::Lu,
         LinearChoice::Auto => {
-            if matches!(sys.model.pressure, PressureMode::Exact { .. }) {
+            let friction = sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
+            if matches!(sys.model.pressure, PressureMode::Exact { .. }) || friction {
                 LinearKind::Lu
             } else {
                 LinearKind::Cholesky
@@ -122,31 +196,54 @@ pub struct RunOutcome {
     pub summary: serde_json::Value,
     pub out_dir: PathBuf,
     pub converged: bool,
-    pub results: SpinningResults,
+    /// Human-readable result lines for the terminal.
+    pub headline: Vec<String>,
 }
 
-/// Run a scene and write its outputs. A failed solve still writes every output (with the last
-/// converged state) and returns `Err(AppError::Solve)`.
-pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
-    let t0 = Instant::now();
-    ensure_dir(&opts.out_dir)?;
-    let mut sys = build_system(scene)?;
-    let kind = linear_kind(scene, &sys);
+fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptions) {
     let newton_opts = NewtonOptions {
         tol: scene.solver.tolerance,
         max_iterations: scene.solver.max_iterations,
         line_search: scene.solver.line_search,
-        verbose: opts.verbose,
+        verbose,
         ..Default::default()
     };
     let step_opts = StepOptions {
         initial_steps: scene.solver.load_steps,
         max_cutbacks: scene.solver.max_cutbacks,
-        verbose: opts.verbose,
+        verbose,
     };
+    (newton_opts, step_opts)
+}
+
+/// Run a scene and write its outputs. A failed solve still writes every output (with the last
+/// converged state) and returns `Err(AppError::Solve)`.
+pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    match scene.analysis.mode {
+        Mode::Spinning | Mode::Static => run_solid(scene, opts),
+        Mode::StickSlip => crate::driver::stick_slip_run::run(scene, opts),
+    }
+}
+
+fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    let t0 = Instant::now();
+    ensure_dir(&opts.out_dir)?;
+    let mut sys = build_system(scene)?;
+    let kind = linear_kind(scene, &sys);
+    let (newton_opts, step_opts) = solver_options(scene, opts.verbose);
     let mut report = StepReport::default();
     let solve = match scene.analysis.mode {
-        Mode::Spinning => spinning::solve_spinning(
+        Mode::Static => {
+            sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
+                Some(load) => Loading::Load { load },
+                None => Loading::Indent {
+                    h_touch: scene.geometry.ro,
+                    disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+                },
+            };
+            indentation::solve_indentation(&mut sys, kind, newton_opts, &step_opts, &mut report)
+        }
+        _ => spinning::solve_spinning(
             &mut sys,
             scene.motion.omega,
             kind,
@@ -156,8 +253,27 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         ),
     };
     let wall = t0.elapsed().as_secs_f64();
-    let res = spinning::results(&sys);
     let converged = solve.is_ok();
+    let mut headline = Vec::new();
+    let results = match scene.analysis.mode {
+        Mode::Static => {
+            let r = indentation::results(&sys, scene.geometry.ro);
+            headline.push(format!(
+                "DISP = {:.6e}: hub force = ({:.6e}, {:.6e}), hub torque = {:.3e}, contact patch x1 in [{:.5}, {:.5}], max pressure = {:.6e}",
+                r.penetration, r.hub_force_x, r.hub_force_y, r.hub_torque, r.contact_x_min, r.contact_x_max, r.max_pressure
+            ));
+            serde_json::to_value(r).unwrap_or_default()
+        }
+        _ => {
+            let r = spinning::results(&sys);
+            headline.push(format!(
+                "omega = {:.6} rad/s: u_r(outer) = {:.6e}, sigma_r(inner) = {:.6e}, sigma_theta(inner) = {:.6e}, sigma_theta(outer) = {:.6e}",
+                r.omega, r.u_r_outer, r.sigma_r_inner, r.sigma_theta_inner, r.sigma_theta_outer
+            ));
+            serde_json::to_value(r).unwrap_or_default()
+        }
+    };
+    let friction = sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
     let mut summary = serde_json::json!({
         "scene": scene.scene.name,
         "mode": scene.analysis.mode.to_string(),
@@ -166,7 +282,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "wall_time_s": wall,
         "converged": converged,
         "error": solve.as_ref().err().map(|e| e.to_string()),
-        "results": res,
+        "results": results,
+        "terms": {
+            "friction": friction,
+            "normal_damping": false,
+            "inertia": scene.analysis.mode == Mode::Spinning,
+            "history": false,
+            "pressure": !matches!(sys.model.pressure, PressureMode::None),
+            "contact_facets_per_iteration": sys.mean_facets_per_assembly(),
+        },
         "mesh": {
             "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
             "nodes": sys.model.mesh.n_nodes(), "cells": sys.model.mesh.n_cells(),
@@ -184,63 +308,91 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     sanitize(&mut summary);
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     if scene.output.csv {
-        let prof = spinning::profile(&sys);
-        write_csv(
-            &opts.out_dir.join("profile.csv"),
-            &["r", "u_r", "sigma_r", "sigma_theta", "sigma_r_theta"],
-            prof.iter()
-                .map(|p| vec![p.r, p.u_r, p.sigma_r, p.sigma_theta, p.sigma_r_theta]),
-        )?;
-        let m = &sys.model.mesh;
-        write_csv(
-            &opts.out_dir.join("nodes.csv"),
-            &["node", "X1", "X2", "u1", "u2"],
-            (0..m.n_nodes()).map(|n| {
-                vec![
-                    n as f64,
-                    m.nodes[n][0],
-                    m.nodes[n][1],
-                    sys.x[2 * n],
-                    sys.x[2 * n + 1],
-                ]
-            }),
-        )?;
-        let mut rows = Vec::new();
-        for (s, st) in report.steps.iter().enumerate() {
-            for r in &st.table {
-                let rp = r.residual_rel.get(1).copied().unwrap_or(0.0);
-                rows.push(vec![
-                    s as f64,
-                    st.lambda,
-                    r.iteration as f64,
-                    r.residual_rel[0],
-                    rp,
-                    r.increment_norm,
-                    r.alpha,
-                ]);
-            }
-        }
-        write_csv(
-            &opts.out_dir.join("convergence.csv"),
-            &[
-                "step",
-                "load_factor",
-                "iteration",
-                "residual_u_rel",
-                "residual_p_rel",
-                "increment_norm",
-                "alpha",
-            ],
-            rows.into_iter(),
-        )?;
+        write_solid_csv(&sys, &report, &opts.out_dir)?;
     }
     match solve {
         Ok(()) => Ok(RunOutcome {
             summary,
             out_dir: opts.out_dir.clone(),
             converged,
-            results: res,
+            headline,
         }),
         Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
     }
+}
+
+fn write_solid_csv(sys: &SolidSystem, report: &StepReport, dir: &Path) -> Result<(), OutputError> {
+    if sys.model.mesh.rings.is_some() && sys.contact.is_none() {
+        let prof = spinning::profile(sys);
+        write_csv(
+            &dir.join("profile.csv"),
+            &["r", "u_r", "sigma_r", "sigma_theta", "sigma_r_theta"],
+            prof.iter()
+                .map(|p| vec![p.r, p.u_r, p.sigma_r, p.sigma_theta, p.sigma_r_theta]),
+        )?;
+    }
+    if sys.contact.is_some() {
+        let samples = sys.contact_samples();
+        write_csv(
+            &dir.join("contact.csv"),
+            &[
+                "theta",
+                "x1",
+                "x2",
+                "penetration",
+                "t_n",
+                "t_t",
+                "slip_velocity",
+                "ds0",
+            ],
+            samples
+                .iter()
+                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
+        )?;
+    }
+    let m = &sys.model.mesh;
+    write_csv(
+        &dir.join("nodes.csv"),
+        &["node", "X1", "X2", "u1", "u2"],
+        (0..m.n_nodes()).map(|n| {
+            vec![
+                n as f64,
+                m.nodes[n][0],
+                m.nodes[n][1],
+                sys.x[2 * n],
+                sys.x[2 * n + 1],
+            ]
+        }),
+    )?;
+    let mut rows = Vec::new();
+    for (s, st) in report.steps.iter().enumerate() {
+        for r in &st.table {
+            let rp = r.residual_rel.get(1).copied().unwrap_or(0.0);
+            let rh = r.residual_rel.get(2).copied().unwrap_or(0.0);
+            rows.push(vec![
+                s as f64,
+                st.lambda,
+                r.iteration as f64,
+                r.residual_rel[0],
+                rp,
+                rh,
+                r.increment_norm,
+                r.alpha,
+            ]);
+        }
+    }
+    write_csv(
+        &dir.join("convergence.csv"),
+        &[
+            "step",
+            "load_factor",
+            "iteration",
+            "residual_u_rel",
+            "residual_p_rel",
+            "residual_h_rel",
+            "increment_norm",
+            "alpha",
+        ],
+        rows.into_iter(),
+    )
 }

@@ -60,22 +60,20 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
 fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool) -> ExitCode {
     let out_dir = out.unwrap_or_else(|| app::default_out_dir(&scene));
     eprintln!(
-        "tread: running scene `{}` ({:?} mode)",
+        "tread: running scene `{}` ({} mode)",
         scene.scene.name, scene.analysis.mode
     );
     match app::run(&scene, &RunOptions { out_dir, verbose }) {
         Ok(o) => {
-            let r = &o.results;
             println!(
                 "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
                 o.summary["dofs"],
                 o.summary["newton_iterations"],
                 o.summary["wall_time_s"].as_f64().unwrap_or(0.0)
             );
-            println!(
-                "omega = {:.6} rad/s: u_r(outer) = {:.6e}, sigma_r(inner) = {:.6e}, sigma_theta(inner) = {:.6e}, sigma_theta(outer) = {:.6e}",
-                r.omega, r.u_r_outer, r.sigma_r_inner, r.sigma_theta_inner, r.sigma_theta_outer
-            );
+            for line in &o.headline {
+                println!("{line}");
+            }
             println!(
                 "results written to {}",
                 o.out_dir.join("summary.json").display()

@@ -173,9 +173,27 @@ mod contact {
 
     /// A small mesh pushed into the road so that several facets are in contact, with a
     /// history state (x_prev) different from x so that friction slips.
-    fn contact_system(friction: Friction, load: Option<f64>, m_n: f64, rule: FacetRule) -> SolidSystem {
-        let mesh = annulus(&AnnulusSpec { ri: 1.0, ro: 2.0, n_r: 2, n_theta: 16, degree: 2, grading_r: 1.0, grading_theta: 0.5 });
-        let model = SolidModel::new(mesh, NeoHookean::new(2.0, 5.0).into(), 0.8, PressureMode::None);
+    fn contact_system(
+        friction: Friction,
+        load: Option<f64>,
+        m_n: f64,
+        rule: FacetRule,
+    ) -> SolidSystem {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 2,
+            n_theta: 16,
+            degree: 2,
+            grading_r: 1.0,
+            grading_theta: 0.5,
+        });
+        let model = SolidModel::new(
+            mesh,
+            NeoHookean::new(2.0, 5.0).into(),
+            0.8,
+            PressureMode::None,
+        );
         let normal = NormalCompliance::new(300.0, m_n, 0.0, 0.0);
         let cm = ContactModel::new(&model.mesh, 1.9, 0.0, normal, friction, rule, load);
         let mut sys = SolidSystem::with_contact(model, cm);
@@ -196,14 +214,62 @@ mod contact {
     #[test]
     fn contact_tangent_matches_finite_differences() {
         let cases: Vec<(&str, Friction, Option<f64>, f64, FacetRule)> = vec![
-            ("frictionless, m_n = 1, Gauss", Friction::None, None, 1.0, FacetRule::Gauss(4)),
-            ("frictionless, m_n = 2, Lobatto", Friction::None, None, 2.0, FacetRule::Lobatto(4)),
-            ("Coulomb tanh", Friction::CoulombTanh(CoulombTanh::new(0.3, 0.01)), None, 1.0, FacetRule::Gauss(4)),
-            ("Coulomb linear", Friction::CoulombLinear(CoulombLinear::new(0.3, 0.5)), None, 1.5, FacetRule::Gauss(3)),
-            ("rate dependent", Friction::RateDependent(RateDependent::new(0.5, 0.3, 0.01, 0.02)), None, 1.0, FacetRule::Gauss(4)),
-            ("Oden-Martins", Friction::OdenMartins(OdenMartins::new(5.0, 1.5, 0.02)), None, 1.0, FacetRule::Gauss(4)),
-            ("load control, frictionless", Friction::None, Some(3.0), 1.0, FacetRule::Gauss(4)),
-            ("load control, Coulomb tanh", Friction::CoulombTanh(CoulombTanh::new(0.3, 0.01)), Some(3.0), 1.0, FacetRule::Gauss(4)),
+            (
+                "frictionless, m_n = 1, Gauss",
+                Friction::None,
+                None,
+                1.0,
+                FacetRule::Gauss(4),
+            ),
+            (
+                "frictionless, m_n = 2, Lobatto",
+                Friction::None,
+                None,
+                2.0,
+                FacetRule::Lobatto(4),
+            ),
+            (
+                "Coulomb tanh",
+                Friction::CoulombTanh(CoulombTanh::new(0.3, 0.01)),
+                None,
+                1.0,
+                FacetRule::Gauss(4),
+            ),
+            (
+                "Coulomb linear",
+                Friction::CoulombLinear(CoulombLinear::new(0.3, 0.5)),
+                None,
+                1.5,
+                FacetRule::Gauss(3),
+            ),
+            (
+                "rate dependent",
+                Friction::RateDependent(RateDependent::new(0.5, 0.3, 0.01, 0.02)),
+                None,
+                1.0,
+                FacetRule::Gauss(4),
+            ),
+            (
+                "Oden-Martins",
+                Friction::OdenMartins(OdenMartins::new(5.0, 1.5, 0.02)),
+                None,
+                1.0,
+                FacetRule::Gauss(4),
+            ),
+            (
+                "load control, frictionless",
+                Friction::None,
+                Some(3.0),
+                1.0,
+                FacetRule::Gauss(4),
+            ),
+            (
+                "load control, Coulomb tanh",
+                Friction::CoulombTanh(CoulombTanh::new(0.3, 0.01)),
+                Some(3.0),
+                1.0,
+                FacetRule::Gauss(4),
+            ),
         ];
         for (name, fr, load, m_n, rule) in cases {
             let mut sys = contact_system(fr, load, m_n, rule);
@@ -213,7 +279,10 @@ mod contact {
             assert!(in_contact >= 4, "{name}: only {in_contact} contact points");
             let err = fd_error(&mut sys);
             eprintln!("{name}: {visited} facets visited, {in_contact} points in contact, max|K − K_fd|/max|K| = {err:.2e}");
-            assert!(err < 1e-6, "{name}: contact tangent differs from FD by {err:.3e}");
+            assert!(
+                err < 1e-6,
+                "{name}: contact tangent differs from FD by {err:.3e}"
+            );
         }
     }
 
@@ -225,13 +294,25 @@ mod contact {
         sys.x.iter_mut().take(sys.dofs.n_u).for_each(|v| *v = 0.0);
         sys.loading = tread::driver::system::Loading::Load { load: 3.0 };
         sys.set_reference_force(3.0);
-        let mut newton = tread::solver::Newton::new(&sys, tread::solver::LinearKind::Lu, Default::default()).unwrap();
+        let mut newton =
+            tread::solver::Newton::new(&sys, tread::solver::LinearKind::Lu, Default::default())
+                .unwrap();
         sys.set_load(1.0);
         newton.solve(&mut sys).expect("load control converges");
         let tot = ContactModel::totals(&sys.contact_samples());
         let (f, m) = sys.hub_reaction();
-        eprintln!("contact force ({:.6e}, {:.6e}), hub reaction ({:.6e}, {:.6e}), moment {m:.3e}", tot.force_x, tot.force_y, f[0], f[1]);
-        assert!((tot.force_y - 3.0).abs() < 1e-8, "contact force {} ≠ load", tot.force_y);
-        assert!((f[1] + 3.0).abs() < 1e-7 && f[0].abs() < 1e-7, "hub reaction {f:?}");
+        eprintln!(
+            "contact force ({:.6e}, {:.6e}), hub reaction ({:.6e}, {:.6e}), moment {m:.3e}",
+            tot.force_x, tot.force_y, f[0], f[1]
+        );
+        assert!(
+            (tot.force_y - 3.0).abs() < 1e-8,
+            "contact force {} ≠ load",
+            tot.force_y
+        );
+        assert!(
+            (f[1] + 3.0).abs() < 1e-7 && f[0].abs() < 1e-7,
+            "hub reaction {f:?}"
+        );
     }
 }

@@ -55,15 +55,35 @@ pub fn lobatto_1d(n: usize) -> (Vec<f64>, Vec<f64>) {
         3 => (&[-1.0, 0.0, 1.0], &[1.0 / 3.0, 4.0 / 3.0, 1.0 / 3.0]),
         4 => {
             const A: f64 = 0.447_213_595_499_958; // 1/√5
-            (&[-1.0, -A, A, 1.0], &[1.0 / 6.0, 5.0 / 6.0, 5.0 / 6.0, 1.0 / 6.0])
+            (
+                &[-1.0, -A, A, 1.0],
+                &[1.0 / 6.0, 5.0 / 6.0, 5.0 / 6.0, 1.0 / 6.0],
+            )
         }
         5 => {
             const A: f64 = 0.654_653_670_707_977_1; // √(3/7)
-            (&[-1.0, -A, 0.0, A, 1.0], &[0.1, 49.0 / 90.0, 32.0 / 45.0, 49.0 / 90.0, 0.1])
+            (
+                &[-1.0, -A, 0.0, A, 1.0],
+                &[0.1, 49.0 / 90.0, 32.0 / 45.0, 49.0 / 90.0, 0.1],
+            )
         }
         _ => (
-            &[-1.0, -0.765_055_323_929_464_7, -0.285_231_516_480_645_1, 0.285_231_516_480_645_1, 0.765_055_323_929_464_7, 1.0],
-            &[1.0 / 15.0, 0.378_474_956_297_847, 0.554_858_377_035_486_4, 0.554_858_377_035_486_4, 0.378_474_956_297_847, 1.0 / 15.0],
+            &[
+                -1.0,
+                -0.765_055_323_929_464_7,
+                -0.285_231_516_480_645_1,
+                0.285_231_516_480_645_1,
+                0.765_055_323_929_464_7,
+                1.0,
+            ],
+            &[
+                1.0 / 15.0,
+                0.378_474_956_297_847,
+                0.554_858_377_035_486_4,
+                0.554_858_377_035_486_4,
+                0.378_474_956_297_847,
+                1.0 / 15.0,
+            ],
         ),
     };
     (x.to_vec(), w.to_vec())
@@ -132,7 +152,15 @@ struct FacetPoint {
 }
 
 impl ContactModel {
-    pub fn new(mesh: &Mesh, h: f64, v0: f64, normal: NormalCompliance, friction: Friction, rule: FacetRule, load: Option<f64>) -> Self {
+    pub fn new(
+        mesh: &Mesh,
+        h: f64,
+        v0: f64,
+        normal: NormalCompliance,
+        friction: Friction,
+        rule: FacetRule,
+        load: Option<f64>,
+    ) -> Self {
         let (pts, wts) = rule.points();
         Self {
             h,
@@ -193,11 +221,23 @@ impl ContactModel {
     }
 
     /// Reference position, reference length weight and angle at facet point `q`.
-    fn facet_point(&self, mesh: &Mesh, c: usize, q: usize, n: &[f64; 3], dn: &[f64; 3], p: usize) -> FacetPoint {
+    fn facet_point(
+        &self,
+        mesh: &Mesh,
+        c: usize,
+        q: usize,
+        n: &[f64; 3],
+        dn: &[f64; 3],
+        p: usize,
+    ) -> FacetPoint {
         let eta = self.pts[q];
         if let Some((x, jac)) = mesh.geometry[c].polar_map(1.0, eta) {
             let ds = Vec2::new(jac[(0, 1)], jac[(1, 1)]).norm() * self.wts[q];
-            return FacetPoint { x, ds0: ds, theta: x[1].atan2(x[0]) };
+            return FacetPoint {
+                x,
+                ds0: ds,
+                theta: x[1].atan2(x[0]),
+            };
         }
         let nodes = mesh.cell_nodes(c);
         let (mut x, mut t) = (Vec2::zeros(), Vec2::zeros());
@@ -206,7 +246,11 @@ impl ContactModel {
             x += xa * n[j];
             t += xa * dn[j];
         }
-        FacetPoint { x, ds0: t.norm() * self.wts[q], theta: x[1].atan2(x[0]) }
+        FacetPoint {
+            x,
+            ds0: t.norm() * self.wts[q],
+            theta: x[1].atan2(x[0]),
+        }
     }
 
     /// Whether a facet can touch the road (see module docs).
@@ -226,7 +270,16 @@ impl ContactModel {
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
     /// [`Self::element_dofs`]. `x`: current full state, `x_prev`: state of the last converged
     /// load step (static friction).
-    pub fn kernel(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], x_prev: &[f64], e: usize, loc: &mut LocalSystem, with_k: bool) {
+    pub fn kernel(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        x_prev: &[f64],
+        e: usize,
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
         let f = self.facets[e];
         let c = f.cell as usize;
         let p = mesh.degree[c] as usize;
@@ -309,7 +362,13 @@ impl ContactModel {
     }
 
     /// Traction samples at every facet quadrature point (contact or not).
-    pub fn samples(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], x_prev: &[f64]) -> Vec<ContactSample> {
+    pub fn samples(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        x_prev: &[f64],
+    ) -> Vec<ContactSample> {
         let h = self.road_height(dofs, x);
         let dtau = match self.kinematics {
             SlipKinematics::Static { dtau } => dtau.max(f64::MIN_POSITIVE),
@@ -334,12 +393,25 @@ impl ContactModel {
                 let w = (u[0] - u_old[0]) / dtau - self.v0;
                 let (t_n, t_t) = if delta > 0.0 {
                     let nv = self.normal.eval(delta, 0.0);
-                    let tt = if self.friction.is_active() { self.friction.eval(w, nv.t, delta).t } else { 0.0 };
+                    let tt = if self.friction.is_active() {
+                        self.friction.eval(w, nv.t, delta).t
+                    } else {
+                        0.0
+                    };
                     (nv.t, tt)
                 } else {
                     (0.0, 0.0)
                 };
-                out.push(ContactSample { theta: fp.theta, x1: xc[0], x2: xc[1], delta: delta.max(0.0), t_n, t_t, w, ds0: fp.ds0 });
+                out.push(ContactSample {
+                    theta: fp.theta,
+                    x1: xc[0],
+                    x2: xc[1],
+                    delta: delta.max(0.0),
+                    t_n,
+                    t_t,
+                    w,
+                    ds0: fp.ds0,
+                });
             }
         }
         out
@@ -348,15 +420,27 @@ impl ContactModel {
     /// Resultant force and moment of the contact tractions on the body, patch extent, peak
     /// pressure and the pressure's second moment.
     pub fn totals(samples: &[ContactSample]) -> ContactTotals {
-        let mut t = ContactTotals { x_min: f64::NAN, x_max: f64::NAN, ..Default::default() };
+        let mut t = ContactTotals {
+            x_min: f64::NAN,
+            x_max: f64::NAN,
+            ..Default::default()
+        };
         let (mut p0, mut p1) = (0.0, 0.0);
         for s in samples {
             t.force_x += s.t_t * s.ds0;
             t.force_y += s.t_n * s.ds0;
             t.moment += (s.x1 * s.t_n - s.x2 * s.t_t) * s.ds0;
             if s.t_n > 0.0 {
-                t.x_min = if t.x_min.is_nan() { s.x1 } else { t.x_min.min(s.x1) };
-                t.x_max = if t.x_max.is_nan() { s.x1 } else { t.x_max.max(s.x1) };
+                t.x_min = if t.x_min.is_nan() {
+                    s.x1
+                } else {
+                    t.x_min.min(s.x1)
+                };
+                t.x_max = if t.x_max.is_nan() {
+                    s.x1
+                } else {
+                    t.x_max.max(s.x1)
+                };
                 t.max_pressure = t.max_pressure.max(s.t_n);
                 p0 += s.t_n * s.ds0;
                 p1 += s.t_n * s.ds0 * s.x1;
@@ -364,7 +448,12 @@ impl ContactModel {
         }
         if p0 > 0.0 {
             t.centroid = p1 / p0;
-            t.pressure_second_moment = samples.iter().filter(|s| s.t_n > 0.0).map(|s| s.t_n * s.ds0 * (s.x1 - t.centroid).powi(2)).sum::<f64>() / p0;
+            t.pressure_second_moment = samples
+                .iter()
+                .filter(|s| s.t_n > 0.0)
+                .map(|s| s.t_n * s.ds0 * (s.x1 - t.centroid).powi(2))
+                .sum::<f64>()
+                / p0;
         }
         t
     }

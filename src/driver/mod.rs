@@ -1,6 +1,8 @@
 //! Drivers: build a model from a scene, run an analysis, collect results.
 
+pub mod indentation;
 pub mod spinning;
+pub mod stick_slip_run;
 pub mod system;
 
 pub use system::SolidSystem;

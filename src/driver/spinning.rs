@@ -144,7 +144,9 @@ pub fn solve_spinning(
     report: &mut StepReport,
 ) -> Result<(), SolveError> {
     sys.omega2_target = omega * omega;
-    sys.loading = super::system::Loading::Spin { omega2: omega * omega };
+    sys.loading = super::system::Loading::Spin {
+        omega2: omega * omega,
+    };
     // Reference force: the centrifugal load at the target speed on the undeformed body.
     let saved = sys.model.omega2;
     sys.model.omega2 = sys.omega2_target;

@@ -113,7 +113,9 @@ impl SolidSystem {
 
     /// Current road height (None without contact).
     pub fn road_height(&self) -> Option<f64> {
-        self.contact.as_ref().map(|c| c.road_height(&self.dofs, &self.x))
+        self.contact
+            .as_ref()
+            .map(|c| c.road_height(&self.dofs, &self.x))
     }
 
     /// Contact traction samples at the current state.
@@ -197,11 +199,15 @@ impl NonlinearSystem for SolidSystem {
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        let ok = self.model.assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        let ok = self
+            .model
+            .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
         if let Some(c) = &self.contact {
             c.reset_visited();
             let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);
-            self.asm.add_block(1, dofs, with_matrix, |e, loc| c.kernel(mesh, dofs, x, xp, e, loc, with_matrix));
+            self.asm.add_block(1, dofs, with_matrix, |e, loc| {
+                c.kernel(mesh, dofs, x, xp, e, loc, with_matrix)
+            });
             self.facet_visits.0 += c.visited_facets();
             self.facet_visits.1 += 1;
         }
@@ -242,7 +248,9 @@ impl LoadedSystem for SolidSystem {
             }
         }
         if let Some(c) = &mut self.contact {
-            c.kinematics = SlipKinematics::Static { dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE) };
+            c.kinematics = SlipKinematics::Static {
+                dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE),
+            };
         }
     }
     fn commit(&mut self) {

@@ -13,8 +13,14 @@
 //! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
 //! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
-//! [analysis]  mode = "spinning"
-//! [motion]    omega
+//! [analysis]  mode = "spinning" | "static" | "stick_slip"
+//! [motion]    omega                                           (spinning)
+//! [road]      disp | load, v0 = 0                             (static)
+//! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "gauss", points = 4   (static)
+//! [friction]  law = "none" | "coulomb_tanh" | "coulomb_linear" | "rate_dependent" | "oden_martins",
+//!             mu, eps | mu_s, mu_k, v_s, eps | c_t, m_t, eps  (static, stick_slip)
+//! [stick_slip] mass, stiffness, normal_force, belt_speed, t_end, rtol = 1e-8, atol = 1e-10,
+//!             x0 = 0, v0, output_interval                     (stick_slip)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
 //! [output]    csv = true
@@ -41,6 +47,23 @@
 //! Line numbers come from a small locator that walks the original text tracking `[table]` headers
 //! (comments, quoted keys, dotted keys and multi-line strings/arrays are handled), so a key that was
 //! *not* overridden always reports its line in the file.
+//!
+//! Which sections a mode uses: `spinning` uses `[motion]`; `static` requires `[road]` and
+//! `[contact]` and may have `[friction]`; `stick_slip` requires `[stick_slip]` and a `[friction]`
+//! law of `coulomb_tanh`, `coulomb_linear` or `rate_dependent`. A section (or a non-zero
+//! `motion.omega`, `road.v0`, `contact.b_n`, or a friction law other than `none`) that the mode
+//! does not use is an error rather than being silently ignored. `[geometry]` and `[material]` are
+//! required in every mode; a `stick_slip` scene carries nominal values that the mode does not use.
+//!
+//! # Contact and friction conventions (DESIGN.md §2–3)
+//!
+//! The road is the line `x2 = −H`; penetration `δ = (−H − x2)_+`; normal traction (per unit
+//! *reference* length of the outer boundary) `t_n = c_n δ^m_n + b_n δ^l_n δ̇`, `δ̇ = −ẋ2`, clamped
+//! at `t_n >= 0`, pushing the body in +x2. Slip velocity of the body against the road
+//! `w = ẋ1 − v0`; tangential traction `t_T = −μ(|w|) t_n φ_ε(w)` with `φ_ε(w) = tanh(w/ε)` or
+//! `clamp(w/ε, −1, 1)`. In a static analysis there is no time: `w = dx1/dτ` in the pseudo-time
+//! `τ ∈ [0, 1]` of the load stepping, so `eps` (and `v_s`) are then slip *lengths* over the whole
+//! loading.
 //!
 //! [`Scene::to_toml_string`] writes the resolved scene (every default filled), which parses back
 //! to the same [`Scene`]; `tread check` prints it.
@@ -117,12 +140,48 @@ macro_rules! keyword_enum {
 }
 
 keyword_enum! {
-    /// What to compute (`[analysis] mode`). Only `spinning` exists for now; `static`, `transient`
-    /// and `steady` will be added as further variants.
+    /// What to compute (`[analysis] mode`). `transient` and `steady` will be added as further
+    /// variants.
     Mode, "analysis mode" {
         /// Steady spinning about the hub at `[motion] omega`, no contact: the centrifugal load
         /// `ρ ω² X` is ramped in `load_steps` steps of ω².
         Spinning => "spinning",
+        /// Quasi-static indentation of the (non-spinning) cylinder onto the road (`[road]`,
+        /// `[contact]`, optional `[friction]`), by load stepping in a pseudo-time τ ∈ [0, 1].
+        Static => "static",
+        /// The classical one-degree-of-freedom stick-slip oscillator (a mass on a spring, pressed
+        /// onto a moving belt): `[stick_slip]` and `[friction]`; no finite elements.
+        StickSlip => "stick_slip",
+    }
+}
+
+keyword_enum! {
+    /// Quadrature rule on each element edge of the contact boundary (`[contact] quadrature`).
+    #[derive(Default)]
+    ContactQuadrature, "contact quadrature" {
+        #[default]
+        /// Gauss–Legendre points (interior of the edge).
+        Gauss => "gauss",
+        /// Gauss–Lobatto points (include both end nodes; nodal-like contact).
+        Lobatto => "lobatto",
+    }
+}
+
+keyword_enum! {
+    /// Friction law (`[friction] law`).
+    #[derive(Default)]
+    FrictionLawName, "friction law" {
+        #[default]
+        /// No friction (frictionless contact).
+        None => "none",
+        /// Coulomb, `t_T = −μ t_n tanh(w/ε)`.
+        CoulombTanh => "coulomb_tanh",
+        /// Coulomb, `t_T = −μ t_n clamp(w/ε, −1, 1)`.
+        CoulombLinear => "coulomb_linear",
+        /// `μ(|w|) = μ_k + (μ_s − μ_k) exp(−|w|/v_s)`, `t_T = −μ(|w|) t_n tanh(w/ε)`.
+        RateDependent => "rate_dependent",
+        /// Oden–Martins normal-compliance friction, `t_T = −c_t δ^m_t tanh(w/ε)`.
+        OdenMartins => "oden_martins",
     }
 }
 
@@ -180,6 +239,18 @@ pub struct Scene {
     pub analysis: Analysis,
     #[serde(default)]
     pub motion: Motion,
+    /// `[road]`: required for `static`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub road: Option<RoadSpec>,
+    /// `[contact]`: required for `static`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSpec>,
+    /// `[friction]`: law `none` when absent.
+    #[serde(default)]
+    pub friction: FrictionSpec,
+    /// `[stick_slip]`: required for `stick_slip`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stick_slip: Option<StickSlipSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
@@ -413,7 +484,234 @@ impl Default for Motion {
     }
 }
 
-/// `[solver]`: Newton with load stepping in ω² and cutbacks.
+/// `[road]`: the rigid road `x2 = −H` below the hub. Exactly one of `disp` (displacement control)
+/// and `load` (load control) is given.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoadSpec {
+    /// Final penetration `Ro − H` (length, >= 0, < ro − ri), reached by load stepping from first
+    /// touch (H = Ro).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disp: Option<f64>,
+    /// Vertical force per unit thickness pushing the cylinder onto the road through the hub
+    /// (force/length, > 0); the road height H is then an unknown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load: Option<f64>,
+    /// Road speed along +x1 in the hub frame (length/time). Must be 0 in `static`.
+    #[serde(default)]
+    pub v0: f64,
+}
+
+/// `[contact]`: normal compliance `t_n = c_n δ^m_n + b_n δ^l_n δ̇` (per unit reference length of
+/// the outer boundary), integrated edge by edge with `points` points of the `quadrature` rule.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Compliance coefficient (stress/length^m_n), > 0. With `m_n = 1` it is the penalty 1/ε.
+    pub c_n: f64,
+    /// Compliance exponent, >= 1.
+    #[serde(default = "default_m_n")]
+    pub m_n: f64,
+    /// Normal damping coefficient (stress·time/length^(l_n+1)), >= 0; must be 0 in `static`.
+    #[serde(default)]
+    pub b_n: f64,
+    /// Damping exponent, >= 0.
+    #[serde(default)]
+    pub l_n: f64,
+    /// Quadrature rule on each boundary edge.
+    #[serde(default)]
+    pub quadrature: ContactQuadrature,
+    /// Quadrature points per boundary edge, `MIN_CONTACT_POINTS..=MAX_CONTACT_POINTS`.
+    #[serde(default = "default_contact_points")]
+    pub points: usize,
+}
+
+/// Default of `[contact] m_n`.
+pub const DEFAULT_M_N: f64 = 1.0;
+/// Default of `[contact] points`.
+pub const DEFAULT_CONTACT_POINTS: usize = 4;
+/// Smallest allowed `[contact] points`.
+pub const MIN_CONTACT_POINTS: usize = 2;
+/// Largest allowed `[contact] points`.
+pub const MAX_CONTACT_POINTS: usize = 6;
+
+fn default_m_n() -> f64 {
+    DEFAULT_M_N
+}
+
+fn default_contact_points() -> usize {
+    DEFAULT_CONTACT_POINTS
+}
+
+/// `[friction]`. Which of the optional parameters are required depends on `law`;
+/// [`FrictionSpec::params`] gives them as one enum.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    #[serde(default)]
+    pub law: FrictionLawName,
+    /// Coulomb coefficient (coulomb_tanh, coulomb_linear), >= 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu: Option<f64>,
+    /// Regularisation of the slip velocity (velocity; a slip length in `static`), > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eps: Option<f64>,
+    /// Static coefficient (rate_dependent), >= 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_s: Option<f64>,
+    /// Kinetic coefficient (rate_dependent), in [0, mu_s].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_k: Option<f64>,
+    /// Decay velocity of μ from mu_s to mu_k (rate_dependent), > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v_s: Option<f64>,
+    /// Oden–Martins tangential compliance coefficient (stress/length^m_t), >= 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub c_t: Option<f64>,
+    /// Oden–Martins tangential compliance exponent, >= 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub m_t: Option<f64>,
+}
+
+/// Resolved friction parameters, one variant per law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FrictionParams {
+    None,
+    CoulombTanh {
+        mu: f64,
+        eps: f64,
+    },
+    CoulombLinear {
+        mu: f64,
+        eps: f64,
+    },
+    RateDependent {
+        mu_s: f64,
+        mu_k: f64,
+        v_s: f64,
+        eps: f64,
+    },
+    OdenMartins {
+        c_t: f64,
+        m_t: f64,
+        eps: f64,
+    },
+}
+
+impl FrictionSpec {
+    /// The parameters of the chosen law. `None` only if a parameter the law requires is
+    /// missing, which cannot happen after validation.
+    pub fn params(&self) -> Option<FrictionParams> {
+        match self.law {
+            FrictionLawName::None => Some(FrictionParams::None),
+            FrictionLawName::CoulombTanh => Some(FrictionParams::CoulombTanh {
+                mu: self.mu?,
+                eps: self.eps?,
+            }),
+            FrictionLawName::CoulombLinear => Some(FrictionParams::CoulombLinear {
+                mu: self.mu?,
+                eps: self.eps?,
+            }),
+            FrictionLawName::RateDependent => Some(FrictionParams::RateDependent {
+                mu_s: self.mu_s?,
+                mu_k: self.mu_k?,
+                v_s: self.v_s?,
+                eps: self.eps?,
+            }),
+            FrictionLawName::OdenMartins => Some(FrictionParams::OdenMartins {
+                c_t: self.c_t?,
+                m_t: self.m_t?,
+                eps: self.eps?,
+            }),
+        }
+    }
+
+    /// Whether friction acts at all: false for law `none`, for a zero coefficient (`mu = 0`;
+    /// `mu_s = mu_k = 0`; `c_t = 0`) and for an incomplete law.
+    pub fn is_active(&self) -> bool {
+        match self.params() {
+            None | Some(FrictionParams::None) => false,
+            Some(FrictionParams::CoulombTanh { mu, .. })
+            | Some(FrictionParams::CoulombLinear { mu, .. }) => mu > 0.0,
+            Some(FrictionParams::RateDependent { mu_s, mu_k, .. }) => mu_s > 0.0 || mu_k > 0.0,
+            Some(FrictionParams::OdenMartins { c_t, .. }) => c_t > 0.0,
+        }
+    }
+
+    /// The keys of `[friction]` that belong to `law` (besides `law` itself).
+    pub fn keys_of(law: FrictionLawName) -> &'static [&'static str] {
+        match law {
+            FrictionLawName::None => &[],
+            FrictionLawName::CoulombTanh | FrictionLawName::CoulombLinear => &["mu", "eps"],
+            FrictionLawName::RateDependent => &["mu_s", "mu_k", "v_s", "eps"],
+            FrictionLawName::OdenMartins => &["c_t", "m_t", "eps"],
+        }
+    }
+}
+
+/// `[stick_slip]`: the one-degree-of-freedom stick-slip oscillator
+/// `mass ẍ = −stiffness x + F_T`, `F_T = −μ(|w|) normal_force φ_ε(w)`, `w = ẋ − belt_speed`
+/// (the spring is anchored at x = 0; the belt moves in +x).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StickSlipSpec {
+    /// Mass (> 0).
+    pub mass: f64,
+    /// Spring stiffness (force/length, > 0).
+    pub stiffness: f64,
+    /// Normal force pressing the mass onto the belt (> 0).
+    pub normal_force: f64,
+    /// Belt speed along +x (> 0).
+    pub belt_speed: f64,
+    /// End time (> 0).
+    pub t_end: f64,
+    /// Relative tolerance of the adaptive integrator (> 0).
+    #[serde(default = "default_rtol")]
+    pub rtol: f64,
+    /// Absolute tolerance of the adaptive integrator (> 0).
+    #[serde(default = "default_atol")]
+    pub atol: f64,
+    /// Initial position (spring elongation).
+    #[serde(default)]
+    pub x0: f64,
+    /// Initial velocity; `None` = `belt_speed` (starts sticking).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v0: Option<f64>,
+    /// Interval between output samples (in (0, t_end]); `None` = `t_end / 2000`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_interval: Option<f64>,
+}
+
+/// Default of `[stick_slip] rtol`.
+pub const DEFAULT_STICK_SLIP_RTOL: f64 = 1e-8;
+/// Default of `[stick_slip] atol`.
+pub const DEFAULT_STICK_SLIP_ATOL: f64 = 1e-10;
+/// `output_interval = t_end / STICK_SLIP_OUTPUT_SAMPLES` when not given.
+pub const STICK_SLIP_OUTPUT_SAMPLES: f64 = 2000.0;
+
+fn default_rtol() -> f64 {
+    DEFAULT_STICK_SLIP_RTOL
+}
+
+fn default_atol() -> f64 {
+    DEFAULT_STICK_SLIP_ATOL
+}
+
+impl StickSlipSpec {
+    /// The initial velocity: `v0`, or `belt_speed` (sticking) when not given.
+    pub fn initial_velocity(&self) -> f64 {
+        self.v0.unwrap_or(self.belt_speed)
+    }
+
+    /// The output interval: `output_interval`, or `t_end / 2000` when not given.
+    pub fn resolved_output_interval(&self) -> f64 {
+        self.output_interval
+            .unwrap_or(self.t_end / STICK_SLIP_OUTPUT_SAMPLES)
+    }
+}
+
+/// `[solver]`: Newton with load stepping (in ω² for `spinning`; in the road penetration or the
+/// road load for `static`) and cutbacks. Not used by `stick_slip`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSpec {
@@ -421,7 +719,7 @@ pub struct SolverSpec {
     pub tolerance: f64,
     /// Newton iterations per load step (>= 1).
     pub max_iterations: usize,
-    /// Initial number of load steps in ω² (>= 1).
+    /// Initial number of load steps (>= 1).
     pub load_steps: usize,
     /// How many times a failed step may be halved.
     pub max_cutbacks: usize,
@@ -587,6 +885,10 @@ impl Scene {
         let material: Option<MaterialSpec> = ctx.required_section(&clean, "material");
         let analysis: Option<Analysis> = ctx.required_section(&clean, "analysis");
         let motion: Option<Motion> = ctx.optional_section(&clean, "motion");
+        let road: Option<Option<RoadSpec>> = ctx.present_section(&clean, "road");
+        let contact: Option<Option<ContactSpec>> = ctx.present_section(&clean, "contact");
+        let friction: Option<FrictionSpec> = ctx.optional_section(&clean, "friction");
+        let stick_slip: Option<Option<StickSlipSpec>> = ctx.present_section(&clean, "stick_slip");
         let solver: Option<SolverSpec> = ctx.optional_section(&clean, "solver");
         let output: Option<OutputSpec> = ctx.optional_section(&clean, "output");
 
@@ -603,12 +905,41 @@ impl Scene {
         if let Some(m) = &material {
             validate_material(m, &mut out);
         }
+        let mode = analysis.as_ref().map(|a| a.mode);
         if let Some(m) = &motion {
             let omega_given = table_has(&doc, "motion", "omega");
             let omega_bad = !table_has(&clean, "motion", "omega") && omega_given;
             if !omega_bad {
-                validate_motion(analysis.as_ref().map(|a| a.mode), m, omega_given, &mut out);
+                validate_motion(mode, m, omega_given, &mut out);
             }
+        }
+        if let Some(Some(r)) = &road {
+            validate_road(r, mode, geometry.as_ref(), &mut out);
+        }
+        if let Some(Some(c)) = &contact {
+            validate_contact(c, mode, &mut out);
+        }
+        // An unknown or ill-typed `law` was dropped (and reported): the remaining keys cannot
+        // be checked against a law, and the mode cannot be checked against it.
+        let law_bad = table_has(&doc, "friction", "law") && !table_has(&clean, "friction", "law");
+        let friction_law = match (&friction, law_bad) {
+            (Some(f), false) => {
+                validate_friction(f, &mut out);
+                Some(f.law)
+            }
+            _ => None,
+        };
+        if let Some(Some(s)) = &stick_slip {
+            validate_stick_slip(s, &mut out);
+        }
+        if let Some(mode) = mode {
+            let used = SectionsGiven {
+                road: doc.contains_key("road"),
+                contact: doc.contains_key("contact"),
+                stick_slip: doc.contains_key("stick_slip"),
+                friction_law,
+            };
+            validate_mode_sections(mode, &used, &mut out);
         }
         if let Some(s) = &solver {
             validate_solver(s, &mut out);
@@ -622,39 +953,47 @@ impl Scene {
         if !ctx.issues.is_empty() {
             return Err(ctx.into_errors());
         }
-        match (
-            info, geometry, mesh, material, analysis, motion, solver, output,
-        ) {
-            (
-                Some(scene),
-                Some(geometry),
-                Some(mesh),
-                Some(mut material),
-                Some(analysis),
-                Some(motion),
-                Some(solver),
-                Some(output),
-            ) => {
-                material.resolve();
-                Ok(Scene {
-                    scene,
-                    geometry,
-                    mesh,
-                    material,
-                    analysis,
-                    motion,
-                    solver,
-                    output,
-                })
-            }
+        let (
+            Some(scene),
+            Some(geometry),
+            Some(mesh),
+            Some(mut material),
+            Some(analysis),
+            Some(motion),
+            Some(road),
+            Some(contact),
+            Some(friction),
+            Some(stick_slip),
+            Some(solver),
+            Some(output),
+        ) = (
+            info, geometry, mesh, material, analysis, motion, road, contact, friction, stick_slip,
+            solver, output,
+        )
+        else {
             // Unreachable in practice: every `None` above records an issue.
-            _ => Err(SceneErrors(vec![SceneError {
+            return Err(SceneErrors(vec![SceneError {
                 key: String::new(),
                 line: None,
                 message: "scene is incomplete".to_string(),
                 source_name: source_name.to_string(),
-            }])),
-        }
+            }]));
+        };
+        material.resolve();
+        Ok(Scene {
+            scene,
+            geometry,
+            mesh,
+            material,
+            analysis,
+            motion,
+            road,
+            contact,
+            friction,
+            stick_slip,
+            solver,
+            output,
+        })
     }
 
     /// Read a scene file and load it with [`Scene::from_toml_str`]; the path names the source.
@@ -679,7 +1018,25 @@ impl Scene {
         validate_geometry(&self.geometry, &mut out);
         validate_mesh(&self.mesh, &mut out);
         validate_material(&self.material, &mut out);
-        validate_motion(Some(self.analysis.mode), &self.motion, true, &mut out);
+        let mode = Some(self.analysis.mode);
+        validate_motion(mode, &self.motion, true, &mut out);
+        if let Some(r) = &self.road {
+            validate_road(r, mode, Some(&self.geometry), &mut out);
+        }
+        if let Some(c) = &self.contact {
+            validate_contact(c, mode, &mut out);
+        }
+        validate_friction(&self.friction, &mut out);
+        if let Some(s) = &self.stick_slip {
+            validate_stick_slip(s, &mut out);
+        }
+        let used = SectionsGiven {
+            road: self.road.is_some(),
+            contact: self.contact.is_some(),
+            stick_slip: self.stick_slip.is_some(),
+            friction_law: Some(self.friction.law),
+        };
+        validate_mode_sections(self.analysis.mode, &used, &mut out);
         validate_solver(&self.solver, &mut out);
         if out.is_empty() {
             Ok(())
@@ -804,6 +1161,57 @@ static SCHEMA: &[SectionSchema] = &[
         name: "motion",
         required: false,
         fields: &[opt("omega", Kind::Float)],
+    },
+    SectionSchema {
+        name: "road",
+        required: false,
+        fields: &[
+            opt("disp", Kind::Float),
+            opt("load", Kind::Float),
+            opt("v0", Kind::Float),
+        ],
+    },
+    SectionSchema {
+        name: "contact",
+        required: false,
+        fields: &[
+            req("c_n", Kind::Float),
+            opt("m_n", Kind::Float),
+            opt("b_n", Kind::Float),
+            opt("l_n", Kind::Float),
+            opt("quadrature", Kind::Keyword(ContactQuadrature::NAMES)),
+            opt("points", Kind::UInt),
+        ],
+    },
+    SectionSchema {
+        name: "friction",
+        required: false,
+        fields: &[
+            opt("law", Kind::Keyword(FrictionLawName::NAMES)),
+            opt("mu", Kind::Float),
+            opt("eps", Kind::Float),
+            opt("mu_s", Kind::Float),
+            opt("mu_k", Kind::Float),
+            opt("v_s", Kind::Float),
+            opt("c_t", Kind::Float),
+            opt("m_t", Kind::Float),
+        ],
+    },
+    SectionSchema {
+        name: "stick_slip",
+        required: false,
+        fields: &[
+            req("mass", Kind::Float),
+            req("stiffness", Kind::Float),
+            req("normal_force", Kind::Float),
+            req("belt_speed", Kind::Float),
+            req("t_end", Kind::Float),
+            opt("rtol", Kind::Float),
+            opt("atol", Kind::Float),
+            opt("x0", Kind::Float),
+            opt("v0", Kind::Float),
+            opt("output_interval", Kind::Float),
+        ],
     },
     SectionSchema {
         name: "solver",
@@ -940,6 +1348,9 @@ struct Issue {
     key: String,
     message: String,
     origin: Origin,
+    /// Another key whose location is reported when `key` itself is nowhere in the file (e.g.
+    /// `analysis.mode` for a section that the mode requires).
+    anchor: Option<&'static str>,
 }
 
 fn issue(key: impl Into<String>, message: impl Into<String>) -> Issue {
@@ -947,6 +1358,15 @@ fn issue(key: impl Into<String>, message: impl Into<String>) -> Issue {
         key: key.into(),
         message: message.into(),
         origin: Origin::Auto,
+        anchor: None,
+    }
+}
+
+/// An issue about a key that may be absent from the file: located at `anchor` in that case.
+fn issue_near(key: impl Into<String>, message: impl Into<String>, anchor: &'static str) -> Issue {
+    Issue {
+        anchor: Some(anchor),
+        ..issue(key, message)
     }
 }
 
@@ -967,6 +1387,7 @@ impl Ctx<'_> {
             key: key.into(),
             message: message.into(),
             origin: Origin::Override,
+            anchor: None,
         });
     }
 
@@ -1121,6 +1542,20 @@ impl Ctx<'_> {
         self.deserialize_section(value, name)
     }
 
+    /// Deserialize an optional section without defaults: `Some(None)` if absent, `Some(Some(_))`
+    /// if present and valid, `None` if present but incomplete or ill-typed (already reported).
+    fn present_section<T: DeserializeOwned>(
+        &mut self,
+        clean: &toml::Table,
+        name: &str,
+    ) -> Option<Option<T>> {
+        if clean.contains_key(name) {
+            self.required_section(clean, name).map(Some)
+        } else {
+            Some(None)
+        }
+    }
+
     /// Deserialize an optional section (defaults when absent).
     fn optional_section<T: DeserializeOwned + Default>(
         &mut self,
@@ -1159,29 +1594,48 @@ impl Ctx<'_> {
         }
     }
 
+    /// Where a key comes from: `(None, true)` for an override; else its line in the file (or
+    /// that of its nearest ancestor). A key found nowhere in the file whose section was touched
+    /// by an override (e.g. a section created by `--set`) counts as an override.
+    fn origin_of(&self, key: &str) -> (Option<usize>, bool) {
+        if self.overridden.contains(key) {
+            return (None, true);
+        }
+        match self.locator.locate(key) {
+            Some(line) => (Some(line), false),
+            None => {
+                let section = key.split('.').next().unwrap_or(key);
+                let touched = self
+                    .overridden
+                    .iter()
+                    .any(|k| k.split('.').next() == Some(section));
+                (None, touched)
+            }
+        }
+    }
+
     fn into_errors(self) -> SceneErrors {
         let mut errors: Vec<SceneError> = self
             .issues
-            .into_iter()
+            .iter()
             .map(|i| {
-                let is_override = match i.origin {
-                    Origin::Override => true,
-                    Origin::Auto => self.overridden.contains(&i.key),
+                let (line, is_override) = match i.origin {
+                    Origin::Override => (None, true),
+                    Origin::Auto => match (self.origin_of(&i.key), i.anchor) {
+                        ((None, false), Some(anchor)) => self.origin_of(anchor),
+                        (found, _) => found,
+                    },
                 };
-                if is_override {
-                    SceneError {
-                        key: i.key,
-                        line: None,
-                        message: i.message,
-                        source_name: format!("{}{OVERRIDE_TAG}", self.source_name),
-                    }
+                let source_name = if is_override {
+                    format!("{}{OVERRIDE_TAG}", self.source_name)
                 } else {
-                    SceneError {
-                        line: self.locator.locate(&i.key),
-                        key: i.key,
-                        message: i.message,
-                        source_name: self.source_name.to_string(),
-                    }
+                    self.source_name.to_string()
+                };
+                SceneError {
+                    key: i.key.clone(),
+                    line,
+                    message: i.message.clone(),
+                    source_name,
                 }
             })
             .collect();
@@ -1431,6 +1885,357 @@ fn validate_motion(mode: Option<Mode>, m: &Motion, omega_given: bool, out: &mut 
             "motion.omega",
             format!("angular speed must be >= 0, got {}", m.omega),
         ));
+        return;
+    }
+    if let Some(mode @ (Mode::Static | Mode::StickSlip)) = mode {
+        if m.omega != 0.0 {
+            out.push(issue(
+                "motion.omega",
+                format!(
+                    "analysis mode \"{mode}\" does not spin the cylinder: omega must be 0 or \
+                     omitted, got {}",
+                    m.omega
+                ),
+            ));
+        }
+    }
+}
+
+fn validate_road(r: &RoadSpec, mode: Option<Mode>, g: Option<&Geometry>, out: &mut Vec<Issue>) {
+    if let Some(d) = r.disp {
+        if !(d.is_finite() && d >= 0.0) {
+            out.push(issue(
+                "road.disp",
+                format!("penetration Ro − H must be >= 0, got {d}"),
+            ));
+        } else if let Some(g) = g.filter(|g| positive(g.ri) && g.ro.is_finite() && g.ro > g.ri) {
+            if d >= g.ro - g.ri {
+                out.push(issue(
+                    "road.disp",
+                    format!(
+                        "penetration {d} must be less than the wall thickness ro − ri = {} \
+                         (the road would reach the hub)",
+                        g.ro - g.ri
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(l) = r.load {
+        if !positive(l) {
+            out.push(issue(
+                "road.load",
+                format!("load (force per unit thickness) must be > 0, got {l}"),
+            ));
+        }
+    }
+    match (r.disp, r.load) {
+        (Some(_), Some(_)) => out.push(issue(
+            "road.disp",
+            "give either `disp` (displacement control) or `load` (load control), not both",
+        )),
+        (None, None) => out.push(issue(
+            "road.disp",
+            "one of `disp` (final penetration Ro − H, displacement control) or `load` \
+             (force per unit thickness, load control) is required",
+        )),
+        _ => {}
+    }
+    if mode == Some(Mode::Static) && r.v0 != 0.0 {
+        out.push(issue(
+            "road.v0",
+            format!(
+                "the road does not move in a static analysis (slip is w = dx1/dτ): v0 must be 0 \
+                 or omitted, got {}",
+                r.v0
+            ),
+        ));
+    }
+}
+
+fn validate_contact(c: &ContactSpec, mode: Option<Mode>, out: &mut Vec<Issue>) {
+    if !positive(c.c_n) {
+        out.push(issue(
+            "contact.c_n",
+            format!("normal compliance coefficient must be > 0, got {}", c.c_n),
+        ));
+    }
+    if !(c.m_n.is_finite() && c.m_n >= 1.0) {
+        out.push(issue(
+            "contact.m_n",
+            format!("normal compliance exponent must be >= 1, got {}", c.m_n),
+        ));
+    }
+    if !(c.b_n.is_finite() && c.b_n >= 0.0) {
+        out.push(issue(
+            "contact.b_n",
+            format!("normal damping coefficient must be >= 0, got {}", c.b_n),
+        ));
+    } else if mode == Some(Mode::Static) && c.b_n != 0.0 {
+        out.push(issue(
+            "contact.b_n",
+            format!(
+                "normal damping needs time, and a static analysis has none: b_n must be 0 or \
+                 omitted, got {}",
+                c.b_n
+            ),
+        ));
+    }
+    if !(c.l_n.is_finite() && c.l_n >= 0.0) {
+        out.push(issue(
+            "contact.l_n",
+            format!("normal damping exponent must be >= 0, got {}", c.l_n),
+        ));
+    }
+    if !(MIN_CONTACT_POINTS..=MAX_CONTACT_POINTS).contains(&c.points) {
+        out.push(issue(
+            "contact.points",
+            format!(
+                "quadrature points per edge must be in {MIN_CONTACT_POINTS}..={MAX_CONTACT_POINTS}, \
+                 got {}",
+                c.points
+            ),
+        ));
+    }
+}
+
+fn validate_friction(f: &FrictionSpec, out: &mut Vec<Issue>) {
+    let law = f.law;
+    let given: [(&str, Option<f64>); 7] = [
+        ("mu", f.mu),
+        ("eps", f.eps),
+        ("mu_s", f.mu_s),
+        ("mu_k", f.mu_k),
+        ("v_s", f.v_s),
+        ("c_t", f.c_t),
+        ("m_t", f.m_t),
+    ];
+    let allowed = FrictionSpec::keys_of(law);
+    for (key, value) in given {
+        if value.is_some() && !allowed.contains(&key) {
+            let keys = if allowed.is_empty() {
+                format!("law \"{law}\" takes no other key")
+            } else {
+                format!("its keys are law, {}", allowed.join(", "))
+            };
+            out.push(issue(
+                format!("friction.{key}"),
+                format!("`{key}` is not a parameter of friction law \"{law}\" ({keys})"),
+            ));
+        }
+    }
+    // (key, value, what, lower bound, whether the bound is strict)
+    let need = |key: &str,
+                v: Option<f64>,
+                what: &str,
+                lo: f64,
+                strict: bool,
+                out: &mut Vec<Issue>| {
+        match v {
+            None => out.push(issue(
+                format!("friction.{key}"),
+                format!("required for friction law \"{law}\" ({what})"),
+            )),
+            Some(x) if !(x.is_finite() && if strict { x > lo } else { x >= lo }) => {
+                let op = if strict { ">" } else { ">=" };
+                out.push(issue(
+                    format!("friction.{key}"),
+                    format!("{what} must be {op} {lo}, got {x}"),
+                ));
+            }
+            Some(_) => {}
+        }
+    };
+    const EPS: &str = "slip-velocity regularisation ε";
+    match law {
+        FrictionLawName::None => {}
+        FrictionLawName::CoulombTanh | FrictionLawName::CoulombLinear => {
+            need("mu", f.mu, "friction coefficient μ", 0.0, false, out);
+            need("eps", f.eps, EPS, 0.0, true, out);
+        }
+        FrictionLawName::RateDependent => {
+            need(
+                "mu_s",
+                f.mu_s,
+                "static friction coefficient μ_s",
+                0.0,
+                false,
+                out,
+            );
+            need(
+                "mu_k",
+                f.mu_k,
+                "kinetic friction coefficient μ_k",
+                0.0,
+                false,
+                out,
+            );
+            need("v_s", f.v_s, "decay velocity v_s", 0.0, true, out);
+            need("eps", f.eps, EPS, 0.0, true, out);
+            if let (Some(mu_s), Some(mu_k)) = (f.mu_s, f.mu_k) {
+                if mu_s >= 0.0 && mu_k >= 0.0 && mu_k > mu_s {
+                    out.push(issue(
+                        "friction.mu_k",
+                        format!(
+                            "kinetic coefficient μ_k = {mu_k} must not exceed the static \
+                             coefficient μ_s = {mu_s}"
+                        ),
+                    ));
+                }
+            }
+        }
+        FrictionLawName::OdenMartins => {
+            need(
+                "c_t",
+                f.c_t,
+                "tangential compliance coefficient c_t",
+                0.0,
+                false,
+                out,
+            );
+            need(
+                "m_t",
+                f.m_t,
+                "tangential compliance exponent m_t",
+                1.0,
+                false,
+                out,
+            );
+            need("eps", f.eps, EPS, 0.0, true, out);
+        }
+    }
+}
+
+fn validate_stick_slip(s: &StickSlipSpec, out: &mut Vec<Issue>) {
+    let positives: [(&str, f64, &str); 7] = [
+        ("mass", s.mass, "mass"),
+        ("stiffness", s.stiffness, "spring stiffness"),
+        ("normal_force", s.normal_force, "normal force"),
+        ("belt_speed", s.belt_speed, "belt speed"),
+        ("t_end", s.t_end, "end time"),
+        ("rtol", s.rtol, "relative tolerance"),
+        ("atol", s.atol, "absolute tolerance"),
+    ];
+    for (key, x, what) in positives {
+        if !positive(x) {
+            out.push(issue(
+                format!("stick_slip.{key}"),
+                format!("{what} must be > 0, got {x}"),
+            ));
+        }
+    }
+    if let Some(dt) = s.output_interval {
+        if !positive(dt) {
+            out.push(issue(
+                "stick_slip.output_interval",
+                format!("output interval must be > 0, got {dt}"),
+            ));
+        } else if positive(s.t_end) && dt > s.t_end {
+            out.push(issue(
+                "stick_slip.output_interval",
+                format!("output interval {dt} must not exceed t_end = {}", s.t_end),
+            ));
+        }
+    }
+}
+
+/// Which mode-dependent sections a scene has; `friction_law` is `None` when it cannot be
+/// checked (an invalid `law` already reported).
+struct SectionsGiven {
+    road: bool,
+    contact: bool,
+    stick_slip: bool,
+    friction_law: Option<FrictionLawName>,
+}
+
+fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue>) {
+    let unused = |section: &str, used_by: Mode, out: &mut Vec<Issue>| {
+        out.push(issue(
+            section,
+            format!(
+                "section [{section}] is not used by analysis mode \"{mode}\" (only by \
+                 \"{used_by}\"); remove it"
+            ),
+        ));
+    };
+    let missing = |section: &str, needs: &str, out: &mut Vec<Issue>| {
+        out.push(issue_near(
+            section,
+            format!(
+                "required section [{section}] is missing: analysis mode \"{mode}\" needs it \
+                 ({needs})"
+            ),
+            "analysis.mode",
+        ));
+    };
+    match mode {
+        Mode::Spinning => {
+            if given.road {
+                unused("road", Mode::Static, out);
+            }
+            if given.contact {
+                unused("contact", Mode::Static, out);
+            }
+            if given.stick_slip {
+                unused("stick_slip", Mode::StickSlip, out);
+            }
+            if let Some(law) = given.friction_law.filter(|l| *l != FrictionLawName::None) {
+                out.push(issue(
+                    "friction.law",
+                    format!(
+                        "analysis mode \"spinning\" has no road contact, hence no friction: law \
+                         must be \"none\" (or omit [friction]), got \"{law}\""
+                    ),
+                ));
+            }
+        }
+        Mode::Static => {
+            if !given.road {
+                missing("road", "disp or load", out);
+            }
+            if !given.contact {
+                missing("contact", "c_n", out);
+            }
+            if given.stick_slip {
+                unused("stick_slip", Mode::StickSlip, out);
+            }
+        }
+        Mode::StickSlip => {
+            if given.road {
+                unused("road", Mode::Static, out);
+            }
+            if given.contact {
+                unused("contact", Mode::Static, out);
+            }
+            if !given.stick_slip {
+                missing(
+                    "stick_slip",
+                    "mass, stiffness, normal_force, belt_speed, t_end",
+                    out,
+                );
+            }
+            match given.friction_law {
+                Some(
+                    FrictionLawName::CoulombTanh
+                    | FrictionLawName::CoulombLinear
+                    | FrictionLawName::RateDependent,
+                )
+                | None => {}
+                Some(law) => out.push(issue_near(
+                    "friction.law",
+                    format!(
+                        "analysis mode \"stick_slip\" needs a friction law \"coulomb_tanh\", \
+                         \"coulomb_linear\" or \"rate_dependent\" in [friction], got \"{law}\"{}",
+                        if law == FrictionLawName::OdenMartins {
+                            " (oden_martins needs a penetration, which this mode does not have)"
+                        } else {
+                            ""
+                        }
+                    ),
+                    "analysis.mode",
+                )),
+            }
+        }
     }
 }
 
@@ -1674,6 +2479,10 @@ mod tests {
     const INCOMPRESSIBLE: &str = include_str!("../../scenarios/spinning_incompressible.toml");
     const NEO_HOOKEAN: &str = include_str!("../../scenarios/spinning_neo_hookean.toml");
     const MOONEY_RIVLIN: &str = include_str!("../../scenarios/spinning_mooney_rivlin.toml");
+    const FRICTIONLESS: &str = include_str!("../../scenarios/indentation_frictionless.toml");
+    const FRICTION: &str = include_str!("../../scenarios/indentation_friction.toml");
+    const LOAD_CONTROL: &str = include_str!("../../scenarios/indentation_load_control.toml");
+    const STICK_SLIP: &str = include_str!("../../scenarios/stick_slip.toml");
 
     const MINIMAL: &str = r#"
 [scene]
@@ -1898,10 +2707,10 @@ omega = 0
 
     #[test]
     fn unknown_section_rejected() {
-        let text = format!("{MINIMAL}\n[road]\ndisp = 0.1\n");
+        let text = format!("{MINIMAL}\n[time]\ndt = 0.1\n");
         let e = errors(&text);
-        let err = e.find("road").unwrap_or_else(|| panic!("{e}"));
-        assert_eq!(err.line, Some(line_of(&text, "[road]")));
+        let err = e.find("time").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[time]")));
         assert!(err.message.contains("unknown section"));
     }
 
@@ -2190,8 +2999,8 @@ linear = "qr"
         assert!(err.message.contains("mesh.nr=8"), "{}", err.message);
         assert!(err.to_string().contains("(--set)"), "{err}");
 
-        let e = errors_with(MINIMAL, &["road.disp=0.1"]);
-        assert!(e.has_key("road.disp"), "{e}");
+        let e = errors_with(MINIMAL, &["time.dt=0.1"]);
+        assert!(e.has_key("time.dt"), "{e}");
         let e = errors_with(MINIMAL, &["n_r=8"]);
         assert!(e.0[0].is_override(), "{e}");
         let e = errors_with(MINIMAL, &["mesh.n_r"]);
@@ -2241,7 +3050,16 @@ linear = "qr"
 
     #[test]
     fn round_trip_through_to_toml_string() {
-        for text in [INCOMPRESSIBLE, NEO_HOOKEAN, MOONEY_RIVLIN, MINIMAL] {
+        for text in [
+            INCOMPRESSIBLE,
+            NEO_HOOKEAN,
+            MOONEY_RIVLIN,
+            MINIMAL,
+            FRICTIONLESS,
+            FRICTION,
+            LOAD_CONTROL,
+            STICK_SLIP,
+        ] {
             let s = load(text).unwrap_or_else(|e| panic!("{e}"));
             let out = s.to_toml_string();
             let back = Scene::from_toml_str(&out, "roundtrip", &[])
@@ -2294,9 +3112,18 @@ linear = "qr"
         check(MaterialModel::ALL, MaterialModel::NAMES);
         check(Formulation::ALL, Formulation::NAMES);
         check(LinearChoice::ALL, LinearChoice::NAMES);
+        check(ContactQuadrature::ALL, ContactQuadrature::NAMES);
+        check(FrictionLawName::ALL, FrictionLawName::NAMES);
         assert_eq!("spinning".parse::<Mode>(), Ok(Mode::Spinning));
-        let err = "static".parse::<Mode>().err().unwrap_or_default();
-        assert!(err.contains("\"spinning\""), "{err}");
+        assert_eq!("static".parse::<Mode>(), Ok(Mode::Static));
+        assert_eq!("stick_slip".parse::<Mode>(), Ok(Mode::StickSlip));
+        let err = "transient".parse::<Mode>().err().unwrap_or_default();
+        assert!(
+            err.contains("\"spinning\", \"static\", \"stick_slip\""),
+            "{err}"
+        );
+        assert_eq!(FrictionLawName::default(), FrictionLawName::None);
+        assert_eq!(ContactQuadrature::default(), ContactQuadrature::Gauss);
     }
 
     #[test]
@@ -2334,6 +3161,10 @@ linear = "qr"
                 }),
             ),
             ("motion", keys(&Motion::default())),
+            ("road", keys(&full_road())),
+            ("contact", keys(&full_contact())),
+            ("friction", keys(&full_friction())),
+            ("stick_slip", keys(&full_stick_slip())),
             ("solver", keys(&SolverSpec::default())),
             ("output", keys(&OutputSpec::default())),
         ];
@@ -2415,5 +3246,791 @@ mesh.n_r = 4
         for sec in ["scene", "geometry", "material", "analysis"] {
             assert!(e.has_key(sec), "{e}");
         }
+    }
+
+    // --- contact, friction, road, stick-slip ---------------------------------------------
+
+    fn full_road() -> RoadSpec {
+        RoadSpec {
+            disp: Some(0.1),
+            load: Some(1.0),
+            v0: 0.0,
+        }
+    }
+
+    fn full_contact() -> ContactSpec {
+        ContactSpec {
+            c_n: 1.0,
+            m_n: 1.0,
+            b_n: 0.0,
+            l_n: 0.0,
+            quadrature: ContactQuadrature::Gauss,
+            points: 4,
+        }
+    }
+
+    fn full_friction() -> FrictionSpec {
+        FrictionSpec {
+            law: FrictionLawName::None,
+            mu: Some(1.0),
+            eps: Some(1.0),
+            mu_s: Some(1.0),
+            mu_k: Some(1.0),
+            v_s: Some(1.0),
+            c_t: Some(1.0),
+            m_t: Some(1.0),
+        }
+    }
+
+    fn full_stick_slip() -> StickSlipSpec {
+        StickSlipSpec {
+            mass: 1.0,
+            stiffness: 1.0,
+            normal_force: 1.0,
+            belt_speed: 1.0,
+            t_end: 1.0,
+            rtol: 1e-8,
+            atol: 1e-10,
+            x0: 0.0,
+            v0: Some(0.0),
+            output_interval: Some(0.1),
+        }
+    }
+
+    /// Remove the section starting at the line `header` up to (not including) the next header.
+    fn remove_section(text: &str, header: &str) -> String {
+        let mut out = Vec::new();
+        let mut skipping = false;
+        let mut found = false;
+        for l in text.lines() {
+            let t = l.trim_start();
+            if t.starts_with('[') {
+                skipping = t.starts_with(header);
+                found |= skipping;
+            }
+            if !skipping {
+                out.push(l);
+            }
+        }
+        assert!(found, "no section {header}");
+        out.join("\n") + "\n"
+    }
+
+    /// The single error of `e`, which must name `key`, on `line`.
+    fn assert_only(e: &SceneErrors, key: &str, line: Option<usize>) {
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert_eq!(e.0[0].key, key, "{e}");
+        assert_eq!(e.0[0].line, line, "{e}");
+    }
+
+    #[test]
+    fn indentation_scenes_parse() {
+        let s = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "indentation_frictionless");
+        assert_eq!(s.analysis.mode, Mode::Static);
+        assert_eq!((s.geometry.ri, s.geometry.ro), (1.0, 2.0));
+        assert_eq!((s.mesh.n_r, s.mesh.n_theta, s.mesh.order), (6, 96, 2));
+        assert_eq!(s.mesh.grading_theta, 0.6);
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlin {
+                c1: 80.0,
+                c2: 20.0,
+                kappa: 2000.0
+            })
+        );
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(s.motion.omega, 0.0);
+        assert_eq!(
+            s.road,
+            Some(RoadSpec {
+                disp: Some(0.1),
+                load: None,
+                v0: 0.0
+            })
+        );
+        assert_eq!(
+            s.contact,
+            Some(ContactSpec {
+                c_n: 2.0e5,
+                m_n: 1.0,
+                b_n: 0.0,
+                l_n: 0.0,
+                quadrature: ContactQuadrature::Gauss,
+                points: 4
+            })
+        );
+        // c_n = 1000 G / (Ro − Ri).
+        let g = s.material.shear_modulus().unwrap_or(0.0);
+        let c_n = s.contact.as_ref().map_or(0.0, |c| c.c_n);
+        assert!((c_n - 1000.0 * g / (s.geometry.ro - s.geometry.ri)).abs() < 1e-6);
+        assert_eq!(s.friction, FrictionSpec::default());
+        assert_eq!(s.friction.params(), Some(FrictionParams::None));
+        assert!(!s.friction.is_active());
+        assert_eq!(s.stick_slip, None);
+        assert_eq!(s.solver.load_steps, 5);
+        assert!(s.validate().is_ok());
+
+        let f = load(FRICTION).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f.scene.name, "indentation_friction");
+        assert_eq!(
+            f.friction.params(),
+            Some(FrictionParams::CoulombTanh { mu: 0.3, eps: 0.01 })
+        );
+        assert!(f.friction.is_active());
+        // Same scene otherwise.
+        assert_eq!(
+            (&f.road, &f.contact, &f.mesh),
+            (&s.road, &s.contact, &s.mesh)
+        );
+        assert_eq!(f.material, s.material);
+    }
+
+    #[test]
+    fn load_control_scene_parses() {
+        let s = load(LOAD_CONTROL).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "indentation_load_control");
+        assert_eq!(s.analysis.mode, Mode::Static);
+        assert_eq!(
+            s.road,
+            Some(RoadSpec {
+                disp: None,
+                load: Some(300.0),
+                v0: 0.0
+            })
+        );
+        let base = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.contact, base.contact);
+        assert_eq!(s.friction, base.friction);
+        assert_eq!(s.mesh, base.mesh);
+        assert_eq!(s.solver, base.solver);
+    }
+
+    #[test]
+    fn stick_slip_scene_parses() {
+        let s = load(STICK_SLIP).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "stick_slip");
+        assert_eq!(s.scene.units, "m-N-s");
+        assert_eq!(s.analysis.mode, Mode::StickSlip);
+        assert_eq!(s.road, None);
+        assert_eq!(s.contact, None);
+        let ss = s
+            .stick_slip
+            .clone()
+            .unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(
+            (
+                ss.mass,
+                ss.stiffness,
+                ss.normal_force,
+                ss.belt_speed,
+                ss.t_end
+            ),
+            (1.0, 100.0, 10.0, 0.1, 20.0)
+        );
+        assert_eq!((ss.rtol, ss.atol, ss.x0), (1e-8, 1e-10, 0.0));
+        assert_eq!((ss.v0, ss.output_interval), (None, None));
+        assert_eq!(ss.initial_velocity(), 0.1);
+        assert!((ss.resolved_output_interval() - 0.01).abs() < 1e-15);
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::RateDependent {
+                mu_s: 0.6,
+                mu_k: 0.4,
+                v_s: 0.01,
+                eps: 1e-4
+            })
+        );
+        assert!(s.friction.is_active());
+        assert!(s.validate().is_ok());
+        // Defaults of an explicit minimal [stick_slip].
+        let text = STICK_SLIP
+            .lines()
+            .filter(|l| {
+                let t = l.trim_start();
+                !["rtol", "atol", "x0"].iter().any(|k| t.starts_with(k))
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let d = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let dss = d.stick_slip.unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(dss.rtol, DEFAULT_STICK_SLIP_RTOL);
+        assert_eq!(dss.atol, DEFAULT_STICK_SLIP_ATOL);
+        assert_eq!(dss.x0, 0.0);
+    }
+
+    #[test]
+    fn contact_defaults_are_filled() {
+        let text = remove_section(FRICTIONLESS, "[contact]") + "[contact]\nc_n = 1e4\n";
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.contact,
+            Some(ContactSpec {
+                c_n: 1e4,
+                m_n: DEFAULT_M_N,
+                b_n: 0.0,
+                l_n: 0.0,
+                quadrature: ContactQuadrature::Gauss,
+                points: DEFAULT_CONTACT_POINTS
+            })
+        );
+        // No [friction] at all: law none.
+        let text = remove_section(FRICTION, "[friction]");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.friction.law, FrictionLawName::None);
+        assert!(!s.friction.is_active());
+    }
+
+    #[test]
+    fn friction_params_and_is_active() {
+        let mut f = FrictionSpec {
+            law: FrictionLawName::CoulombLinear,
+            mu: Some(0.0),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert_eq!(
+            f.params(),
+            Some(FrictionParams::CoulombLinear { mu: 0.0, eps: 1e-3 })
+        );
+        assert!(!f.is_active(), "zero coefficient");
+        f.mu = Some(0.2);
+        assert!(f.is_active());
+        f.eps = None;
+        assert_eq!(f.params(), None);
+        assert!(!f.is_active(), "incomplete");
+        let om = FrictionSpec {
+            law: FrictionLawName::OdenMartins,
+            c_t: Some(5.0),
+            m_t: Some(1.5),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert_eq!(
+            om.params(),
+            Some(FrictionParams::OdenMartins {
+                c_t: 5.0,
+                m_t: 1.5,
+                eps: 1e-3
+            })
+        );
+        assert!(om.is_active());
+        let rd = FrictionSpec {
+            law: FrictionLawName::RateDependent,
+            mu_s: Some(0.0),
+            mu_k: Some(0.0),
+            v_s: Some(1.0),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert!(!rd.is_active());
+        assert_eq!(FrictionSpec::keys_of(FrictionLawName::None), &[] as &[&str]);
+        assert_eq!(
+            FrictionSpec::keys_of(FrictionLawName::RateDependent),
+            &["mu_s", "mu_k", "v_s", "eps"]
+        );
+    }
+
+    #[test]
+    fn non_positive_c_n_rejected_with_line() {
+        for bad in ["c_n = 0.0", "c_n = -2.0e5"] {
+            let text = replace_line(FRICTIONLESS, "c_n", bad);
+            let e = errors(&text);
+            assert_only(&e, "contact.c_n", Some(line_of(&text, "c_n")));
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+    }
+
+    #[test]
+    fn contact_exponents_damping_and_points_rejected() {
+        let text = replace_line(FRICTIONLESS, "m_n", "m_n = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "contact.m_n", Some(line_of(&text, "m_n")));
+        assert!(e.0[0].message.contains(">= 1"), "{e}");
+
+        let text = replace_line(FRICTIONLESS, "b_n", "b_n = -1.0");
+        let text = replace_line(&text, "l_n", "l_n = -0.5");
+        let text = replace_line(&text, "points", "points = 7");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["b_n", "l_n", "points"] {
+            let err = e
+                .find(&format!("contact.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)), "{err}");
+        }
+        let e = errors(&replace_line(FRICTIONLESS, "points", "points = 1"));
+        assert!(e.has_key("contact.points"), "{e}");
+        for ok in ["points = 2", "points = 6"] {
+            assert!(
+                load(&replace_line(FRICTIONLESS, "points", ok)).is_ok(),
+                "{ok}"
+            );
+        }
+        assert!(load(&replace_line(FRICTIONLESS, "m_n", "m_n = 1.5")).is_ok());
+    }
+
+    #[test]
+    fn negative_mu_and_non_positive_eps_rejected() {
+        let text = replace_line(FRICTION, "mu =", "mu = -0.1");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu =")));
+        assert!(e.0[0].message.contains(">= 0"), "{e}");
+        assert!(load(&replace_line(FRICTION, "mu =", "mu = 0.0")).is_ok());
+
+        for bad in ["eps = 0.0", "eps = -0.01"] {
+            let text = replace_line(FRICTION, "eps", bad);
+            let e = errors(&text);
+            assert_only(&e, "friction.eps", Some(line_of(&text, "eps")));
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+        let text = replace_line(STICK_SLIP, "eps", "eps = 0");
+        let e = errors(&text);
+        assert_only(&e, "friction.eps", Some(line_of(&text, "eps")));
+        let text = replace_line(STICK_SLIP, "mu_s", "mu_s = -0.6");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_s", Some(line_of(&text, "mu_s")));
+        let text = replace_line(STICK_SLIP, "v_s", "v_s = 0.0");
+        let e = errors(&text);
+        assert_only(&e, "friction.v_s", Some(line_of(&text, "v_s")));
+    }
+
+    #[test]
+    fn kinetic_above_static_rejected() {
+        let text = replace_line(STICK_SLIP, "mu_k", "mu_k = 0.7");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_k", Some(line_of(&text, "mu_k")));
+        assert!(e.0[0].message.contains("must not exceed"), "{e}");
+        assert!(load(&replace_line(STICK_SLIP, "mu_k", "mu_k = 0.6")).is_ok());
+    }
+
+    #[test]
+    fn oden_martins_keys_checked() {
+        let text = FRICTIONLESS.replace(
+            "law = \"none\"",
+            "law = \"oden_martins\"\nc_t = 6.0e4\nm_t = 0.5\neps = 0.01",
+        );
+        let e = errors(&text);
+        assert_only(&e, "friction.m_t", Some(line_of(&text, "m_t")));
+        let s = load(&replace_line(&text, "m_t", "m_t = 1.0")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::OdenMartins {
+                c_t: 6.0e4,
+                m_t: 1.0,
+                eps: 0.01
+            })
+        );
+        // Missing keys of the law: reported at the [friction] header.
+        let text = FRICTIONLESS.replace("law = \"none\"", "law = \"oden_martins\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["friction.c_t", "friction.m_t", "friction.eps"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, "[friction]")));
+            assert!(err.message.contains("required for friction law"), "{err}");
+        }
+    }
+
+    #[test]
+    fn both_or_neither_disp_and_load_rejected() {
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nload = 300.0");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        assert!(e.0[0].message.contains("not both"), "{e}");
+
+        let text = FRICTIONLESS
+            .lines()
+            .filter(|l| !l.starts_with("disp"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "[road]")));
+        assert!(e.0[0].message.contains("required"), "{e}");
+
+        let text = replace_line(LOAD_CONTROL, "load =", "load = 0.0");
+        let e = errors(&text);
+        assert_only(&e, "road.load", Some(line_of(&text, "load =")));
+        let text = replace_line(FRICTIONLESS, "disp", "disp = -0.1");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        // Penetration at least the wall thickness.
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 1.0");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        assert!(e.0[0].message.contains("wall thickness"), "{e}");
+        assert!(load(&replace_line(FRICTIONLESS, "disp", "disp = 0")).is_ok());
+    }
+
+    #[test]
+    fn static_without_road_or_contact_rejected() {
+        let text = remove_section(FRICTIONLESS, "[road]");
+        let e = errors(&text);
+        assert_only(&e, "road", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("\"static\""), "{e}");
+        assert!(e.0[0].message.contains("missing"), "{e}");
+
+        let text = remove_section(&text, "[contact]");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        for key in ["road", "contact"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, "mode =")));
+        }
+        // Switching a spinning scene to static by override: the mode is the anchor, so (--set).
+        let e = errors_with(MINIMAL, &["analysis.mode=static", "motion.omega=0"]);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert!(
+            e.0.iter().all(|x| x.is_override() && x.line.is_none()),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn friction_key_of_another_law_rejected() {
+        let text = replace_line(FRICTION, "eps", "eps = 0.01\nmu_s = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_s", Some(line_of(&text, "mu_s")));
+        assert!(e.0[0].message.contains("not a parameter"), "{e}");
+        assert!(e.0[0].message.contains("coulomb_tanh"), "{e}");
+        assert!(e.0[0].message.contains("law, mu, eps"), "{e}");
+
+        let text = replace_line(STICK_SLIP, "v_s", "v_s = 0.01\nmu = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu = 0.5")));
+
+        let text = FRICTIONLESS.replace("law = \"none\"", "law = \"none\"\nmu = 0.3");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu =")));
+        assert!(e.0[0].message.contains("takes no other key"), "{e}");
+    }
+
+    #[test]
+    fn invalid_friction_law_reported_once() {
+        // The keys of an unknown law are not checked against the default law.
+        let text = replace_line(FRICTION, "law", "law = \"coulomb\"");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(e.0[0].message.contains("coulomb_tanh"), "{e}");
+        let text = replace_line(STICK_SLIP, "law", "law = 3");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+    }
+
+    #[test]
+    fn stick_slip_without_section_or_law_rejected() {
+        let text = remove_section(STICK_SLIP, "[stick_slip]");
+        let e = errors(&text);
+        assert_only(&e, "stick_slip", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("missing"), "{e}");
+
+        let text = remove_section(STICK_SLIP, "[friction]");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("\"none\""), "{e}");
+
+        let text = STICK_SLIP.replace(
+            "law = \"rate_dependent\"",
+            "law = \"oden_martins\"\nc_t = 1\nm_t = 1",
+        );
+        let text = text
+            .lines()
+            .filter(|l| !["mu_s", "mu_k", "v_s"].iter().any(|k| l.starts_with(k)))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(e.0[0].message.contains("penetration"), "{e}");
+
+        // Coulomb laws are fine.
+        let text = STICK_SLIP
+            .lines()
+            .filter(|l| !["mu_s", "mu_k", "v_s"].iter().any(|k| l.starts_with(k)))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let s = load_with(&text, &["friction.law=coulomb_linear", "friction.mu=0.5"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::CoulombLinear { mu: 0.5, eps: 1e-4 })
+        );
+    }
+
+    #[test]
+    fn stick_slip_ranges_and_required_keys() {
+        let text = replace_line(STICK_SLIP, "mass", "mass = 0.0");
+        let text = replace_line(&text, "belt_speed", "belt_speed = -0.1");
+        let text = replace_line(&text, "rtol", "rtol = 0");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["mass", "belt_speed", "rtol"] {
+            let err = e
+                .find(&format!("stick_slip.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)));
+        }
+        let e = errors(&STICK_SLIP.replace("t_end = 20.0", ""));
+        let err = e.find("stick_slip.t_end").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("required key is missing"), "{err}");
+        assert_eq!(e.0.len(), 1, "{e}");
+        let e = errors_with(STICK_SLIP, &["stick_slip.output_interval=30"]);
+        assert_only(&e, "stick_slip.output_interval", None);
+        assert!(e.0[0].is_override());
+        let s = load_with(
+            STICK_SLIP,
+            &["stick_slip.output_interval=0.05", "stick_slip.v0=0"],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let ss = s.stick_slip.unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(ss.resolved_output_interval(), 0.05);
+        assert_eq!(ss.initial_velocity(), 0.0);
+    }
+
+    #[test]
+    fn sections_not_used_by_the_mode_rejected() {
+        // [road] and [contact] in a spinning scene.
+        let text = format!("{MINIMAL}\n[road]\ndisp = 0.1\n\n[contact]\nc_n = 1e5\n");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("road").and_then(|x| x.line),
+            Some(line_of(&text, "[road]"))
+        );
+        assert_eq!(
+            e.find("contact").and_then(|x| x.line),
+            Some(line_of(&text, "[contact]"))
+        );
+        assert!(e.0[0].message.contains("not used"), "{e}");
+        // An override creating [road] in a spinning scene: (--set).
+        let e = errors_with(MINIMAL, &["road.disp=0.1"]);
+        assert_only(&e, "road", None);
+        assert!(e.0[0].is_override(), "{e}");
+        // Friction in a spinning scene.
+        let text = format!("{MINIMAL}\n[friction]\nlaw = \"coulomb_tanh\"\nmu = 0.3\neps = 0.1\n");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(load(&format!("{MINIMAL}\n[friction]\nlaw = \"none\"\n")).is_ok());
+        // [stick_slip] in a static scene; [road] in a stick-slip scene.
+        let text = format!(
+            "{FRICTIONLESS}\n[stick_slip]\nmass = 1\nstiffness = 1\nnormal_force = 1\n\
+             belt_speed = 1\nt_end = 1\n"
+        );
+        let e = errors(&text);
+        assert_only(&e, "stick_slip", Some(line_of(&text, "[stick_slip]")));
+        let text = format!("{STICK_SLIP}\n[road]\nload = 1.0\n");
+        let e = errors(&text);
+        assert_only(&e, "road", Some(line_of(&text, "[road]")));
+    }
+
+    #[test]
+    fn static_rejects_spin_road_speed_and_damping() {
+        let text = format!("{FRICTIONLESS}\n[motion]\nomega = 20.0\n");
+        let e = errors(&text);
+        assert_only(&e, "motion.omega", Some(line_of(&text, "omega")));
+        let text = replace_line(FRICTIONLESS, "v0", "v0 = 1.0");
+        let e = errors(&text);
+        assert_only(&e, "road.v0", Some(line_of(&text, "v0")));
+        let text = replace_line(FRICTIONLESS, "b_n", "b_n = 5.0");
+        let e = errors(&text);
+        assert_only(&e, "contact.b_n", Some(line_of(&text, "b_n")));
+        let e = errors_with(STICK_SLIP, &["motion.omega=1"]);
+        assert_only(&e, "motion.omega", None);
+    }
+
+    #[test]
+    fn missing_c_n_reported_once() {
+        let text = FRICTIONLESS
+            .lines()
+            .filter(|l| !l.starts_with("c_n"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "contact.c_n", Some(line_of(&text, "[contact]")));
+        assert!(e.0[0].message.contains("required key is missing"), "{e}");
+        let e = errors(&replace_line(FRICTIONLESS, "c_n", "c_n = \"big\""));
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert!(e.0[0].message.contains("expected a number"), "{e}");
+    }
+
+    #[test]
+    fn overrides_of_new_keys() {
+        let s = load_with(FRICTION, &["friction.mu=0.5"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::CoulombTanh { mu: 0.5, eps: 0.01 })
+        );
+        let s = load_with(
+            FRICTIONLESS,
+            &[
+                "friction.law=coulomb_linear",
+                "friction.mu=0.2",
+                "friction.eps=1e-3",
+                "contact.quadrature=lobatto",
+                "contact.points=3",
+                "contact.m_n=2",
+                "road.disp=0.05",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::CoulombLinear { mu: 0.2, eps: 1e-3 })
+        );
+        let c = s.contact.unwrap_or_else(|| panic!("no contact"));
+        assert_eq!(
+            (c.quadrature, c.points, c.m_n),
+            (ContactQuadrature::Lobatto, 3, 2.0)
+        );
+        assert_eq!(s.road.and_then(|r| r.disp), Some(0.05));
+        let s = load_with(LOAD_CONTROL, &["road.load=250"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.road.and_then(|r| r.load), Some(250.0));
+        let s = load_with(STICK_SLIP, &["stick_slip.t_end=5", "friction.mu_k=0.3"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.stick_slip.map(|x| x.t_end), Some(5.0));
+        assert_eq!(s.friction.mu_k, Some(0.3));
+
+        // Bad override values: (--set) and the key.
+        let e = errors_with(FRICTION, &["friction.mu=-1"]);
+        assert_only(&e, "friction.mu", None);
+        assert!(e.0[0].is_override());
+        assert!(
+            e.0[0]
+                .to_string()
+                .starts_with("test.toml:(--set): key `friction.mu`"),
+            "{e}"
+        );
+        let e = errors_with(FRICTIONLESS, &["contact.quadrature=simpson"]);
+        assert_only(&e, "contact.quadrature", None);
+        assert!(e.0[0].message.contains("\"lobatto\""), "{e}");
+        // Adding `load` by override to a disp scene: the clash is reported at `disp`'s line.
+        let e = errors_with(FRICTIONLESS, &["road.load=300"]);
+        assert_only(&e, "road.disp", Some(line_of(FRICTIONLESS, "disp")));
+        // Unknown keys of the new sections.
+        let e = errors_with(FRICTION, &["friction.muu=0.5"]);
+        assert_only(&e, "friction.muu", None);
+        assert!(e.0[0].message.contains("mu_s"), "{e}");
+    }
+
+    #[test]
+    fn unknown_keys_in_new_sections_rejected() {
+        let text = replace_line(FRICTIONLESS, "c_n", "c_n = 2e5\npenalty = 1e5");
+        let e = errors(&text);
+        assert_only(&e, "contact.penalty", Some(line_of(&text, "penalty")));
+        let text = replace_line(STICK_SLIP, "mass", "mass = 1.0\ndamping = 0.1");
+        let e = errors(&text);
+        assert_only(&e, "stick_slip.damping", Some(line_of(&text, "damping")));
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nramp = 2");
+        let e = errors(&text);
+        assert_only(&e, "road.ramp", Some(line_of(&text, "ramp")));
+    }
+
+    #[test]
+    fn round_trip_of_optional_new_keys() {
+        let cases: [(&str, &[&str]); 3] = [
+            (
+                STICK_SLIP,
+                &["stick_slip.v0=0.05", "stick_slip.output_interval=0.02"],
+            ),
+            (
+                FRICTIONLESS,
+                &[
+                    "friction.law=oden_martins",
+                    "friction.c_t=6e4",
+                    "friction.m_t=1",
+                    "friction.eps=0.01",
+                    "contact.quadrature=lobatto",
+                ],
+            ),
+            (LOAD_CONTROL, &["contact.l_n=1.5"]),
+        ];
+        for (text, ov) in cases {
+            let s = load_with(text, ov).unwrap_or_else(|e| panic!("{e}"));
+            let out = s.to_toml_string();
+            let back = load(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+            assert_eq!(back, s, "{out}");
+            let direct: Scene = toml::from_str(&out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(direct, s);
+        }
+        // Absent optional sections are not written; [friction] always is.
+        let out = load(MINIMAL)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .to_toml_string();
+        assert!(
+            !out.contains("[road]") && !out.contains("[contact]"),
+            "{out}"
+        );
+        assert!(!out.contains("[stick_slip]"), "{out}");
+        assert!(out.contains("[friction]\nlaw = \"none\""), "{out}");
+    }
+
+    #[test]
+    fn schema_required_flags_match_serde() {
+        fn check<T: Serialize + DeserializeOwned + fmt::Debug>(name: &str, full: &T) {
+            let sec = section_schema(name).unwrap_or_else(|| panic!("{name}"));
+            let table = match toml::Value::try_from(full) {
+                Ok(toml::Value::Table(t)) => t,
+                other => panic!("{name}: {other:?}"),
+            };
+            for f in sec.fields {
+                assert!(table.contains_key(f.key), "{name}.{} not serialized", f.key);
+                let mut t = table.clone();
+                t.remove(f.key);
+                let r = toml::Value::Table(t).try_into::<T>();
+                assert_eq!(r.is_err(), f.required, "{name}.{}: {r:?}", f.key);
+            }
+        }
+        check(
+            "scene",
+            &SceneInfo {
+                name: "a".into(),
+                description: "d".into(),
+                units: "u".into(),
+            },
+        );
+        check("geometry", &Geometry { ri: 1.0, ro: 2.0 });
+        check("mesh", &MeshSpec::default());
+        check(
+            "material",
+            &MaterialSpec {
+                model: MaterialModel::NeoHookean,
+                rho: 1.0,
+                mu: Some(1.0),
+                lambda: Some(1.0),
+                c1: Some(1.0),
+                c2: Some(1.0),
+                kappa: Some(1.0),
+                formulation: Some(Formulation::Exact),
+            },
+        );
+        check("analysis", &Analysis { mode: Mode::Static });
+        check("motion", &Motion::default());
+        check("road", &full_road());
+        check("contact", &full_contact());
+        check("friction", &full_friction());
+        check("stick_slip", &full_stick_slip());
+        check("solver", &SolverSpec::default());
+        check("output", &OutputSpec::default());
+    }
+
+    #[test]
+    fn validate_checks_new_sections_of_scenes_built_in_code() {
+        let mut s = load(FRICTION).unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.validate().is_ok());
+        s.friction.mu = Some(-0.3);
+        if let Some(c) = s.contact.as_mut() {
+            c.c_n = 0.0;
+        }
+        s.stick_slip = Some(full_stick_slip());
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["friction.mu", "contact.c_n", "stick_slip"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, None);
+            assert_eq!(err.source_name, "<scene>");
+        }
+        s.stick_slip = None;
+        s.road = None;
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.has_key("road"), "{e}");
     }
 }
