@@ -159,10 +159,12 @@ keyword_enum! {
     /// Quadrature rule on each element edge of the contact boundary (`[contact] quadrature`).
     #[derive(Default)]
     ContactQuadrature, "contact quadrature" {
-        #[default]
         /// Gauss–Legendre points (interior of the edge).
         Gauss => "gauss",
-        /// Gauss–Lobatto points (include both end nodes; nodal-like contact).
+        /// Gauss–Lobatto points (include both end nodes; nodal-like contact). The default: it
+        /// gives the smoother pressure (tests/indentation.rs, Hertz case: peak within 1 % of p0
+        /// on the coarse mesh where 4-point Gauss overshoots by 60 %).
+        #[default]
         Lobatto => "lobatto",
     }
 }
@@ -3123,7 +3125,7 @@ linear = "qr"
             "{err}"
         );
         assert_eq!(FrictionLawName::default(), FrictionLawName::None);
-        assert_eq!(ContactQuadrature::default(), ContactQuadrature::Gauss);
+        assert_eq!(ContactQuadrature::default(), ContactQuadrature::Lobatto);
     }
 
     #[test]
