@@ -3358,7 +3358,7 @@ mesh.n_r = 4
                 m_n: 1.0,
                 b_n: 0.0,
                 l_n: 0.0,
-                quadrature: ContactQuadrature::Gauss,
+                quadrature: ContactQuadrature::Lobatto,
                 points: 4
             })
         );
@@ -3472,7 +3472,7 @@ mesh.n_r = 4
                 m_n: DEFAULT_M_N,
                 b_n: 0.0,
                 l_n: 0.0,
-                quadrature: ContactQuadrature::Gauss,
+                quadrature: ContactQuadrature::Lobatto,
                 points: DEFAULT_CONTACT_POINTS
             })
         );
