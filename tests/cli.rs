@@ -204,3 +204,84 @@ fn failed_solve_writes_summary_and_exits_nonzero() {
     assert_eq!(s["converged"], false);
     assert!(s["error"].as_str().is_some());
 }
+
+fn run_scene_file(name: &str, path: &str, extra: &[&str]) -> serde_json::Value {
+    let d = tmpdir(name);
+    let out_dir = d.join("out");
+    let mut args = vec!["run", path, "--out", out_dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let out = tread()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn indentation_scene_writes_contact_results() {
+    let s = run_scene_file(
+        "indent",
+        "scenarios/indentation_friction.toml",
+        &["--set", "mesh.n_theta=48", "--set", "mesh.n_r=3"],
+    );
+    for k in [
+        "hub_force_x",
+        "hub_force_y",
+        "hub_torque",
+        "contact_x_min",
+        "contact_x_max",
+        "max_pressure",
+    ] {
+        assert!(
+            s["results"][k].as_f64().is_some_and(f64::is_finite),
+            "results.{k} missing: {s}"
+        );
+    }
+    assert!(s["results"]["hub_force_y"].as_f64().unwrap() < 0.0);
+    assert_eq!(s["terms"]["friction"], true);
+    assert!(s["terms"]["contact_facets_per_iteration"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn stick_slip_scene_matches_closed_form_cycle() {
+    let s = run_scene_file("stickslip", "scenarios/stick_slip.toml", &[]);
+    let pe = s["results"]["period_rel_error"].as_f64().unwrap();
+    let ae = s["results"]["amplitude_rel_error"].as_f64().unwrap();
+    assert!(
+        pe.abs() < 0.01 && ae.abs() < 0.01,
+        "period error {pe}, amplitude error {ae}"
+    );
+}
+
+#[test]
+fn invalid_contact_and_friction_values_are_rejected_naming_the_key() {
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/indentation_friction.toml"
+    ))
+    .unwrap();
+    for (key, set) in [
+        ("c_n", "contact.c_n=0.0"),
+        ("m_n", "contact.m_n=0.5"),
+        ("mu", "friction.mu=-0.1"),
+        ("eps", "friction.eps=0.0"),
+    ] {
+        let d = tmpdir(&format!("bad-{key}"));
+        let f = d.join("scene.toml");
+        std::fs::write(&f, &base).unwrap();
+        let out = tread()
+            .args(["run", f.to_str().unwrap(), "--set", set])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{key}: {err}");
+        assert!(err.contains(key), "{key} not named: {err}");
+        assert!(!err.contains("panicked"));
+    }
+}

@@ -770,4 +770,28 @@ mod tests {
         assert!(bad.validate().unwrap_err().to_string().contains("m_t"));
         assert!(Friction::None.validate().is_ok());
     }
+
+    #[test]
+    fn friction_serde_is_tagged_by_law_name() {
+        let laws = [
+            Friction::None,
+            Friction::CoulombTanh(CoulombTanh::new(0.3, 1e-3)),
+            Friction::CoulombLinear(CoulombLinear::new(0.3, 1e-3)),
+            Friction::RateDependent(RateDependent::new(0.6, 0.4, 1e-2, 1e-4)),
+            Friction::OdenMartins(OdenMartins::new(10.0, 1.5, 1e-3)),
+        ];
+        for law in laws {
+            let json = serde_json::to_string(&law).unwrap_or_default();
+            assert!(
+                json.contains(&format!("\"law\":\"{}\"", law.name())),
+                "{json}"
+            );
+            let back: Friction = serde_json::from_str(&json).unwrap_or_default();
+            assert_eq!(back, law);
+        }
+        let parsed: Result<Friction, _> = serde_json::from_str(
+            r#"{"law":"rate_dependent","mu_s":0.6,"mu_k":0.4,"v_s":0.01,"eps":1e-4}"#,
+        );
+        assert!(matches!(parsed, Ok(Friction::RateDependent(_))));
+    }
 }

@@ -54,7 +54,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         x0: ss.x0,
         v0: ss.v0.unwrap_or(ss.belt_speed),
         output_interval: ss.output_interval.unwrap_or(ss.t_end / 2000.0),
-        stick_threshold: 1e-3 * ss.belt_speed,
+        stick_threshold: StickSlipSpec::suggested_stick_threshold(&friction, ss.belt_speed),
     };
     let res = simulate(&spec);
     let wall = t0.elapsed().as_secs_f64();
@@ -88,6 +88,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "slip_time": r.slip_time,
                 "cycles": r.stick_to_slip.len(),
                 "solver_stats": r.stats,
+                "period_rel_error": closed.as_ref().and_then(|c| c.as_ref().ok()).zip(r.period).map(|(c, p)| (p - c.period) / c.period),
+                "amplitude_rel_error": closed.as_ref().and_then(|c| c.as_ref().ok()).zip(r.amplitude).map(|(c, a)| (a - c.amplitude) / c.amplitude),
                 "closed_form": closed.as_ref().and_then(|c| c.as_ref().ok()).map(|c| serde_json::to_value(c).unwrap_or_default()),
             })
         }

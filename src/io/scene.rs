@@ -3439,8 +3439,8 @@ mesh.n_r = 4
             Some(FrictionParams::RateDependent {
                 mu_s: 0.6,
                 mu_k: 0.4,
-                v_s: 0.01,
-                eps: 1e-4
+                v_s: 1e-4,
+                eps: 1e-7
             })
         );
         assert!(s.friction.is_active());
@@ -3754,7 +3754,7 @@ mesh.n_r = 4
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
             s.friction.params(),
-            Some(FrictionParams::CoulombLinear { mu: 0.5, eps: 1e-4 })
+            Some(FrictionParams::CoulombLinear { mu: 0.5, eps: 1e-7 })
         );
     }
 
