@@ -123,32 +123,64 @@ fn tangent_matches_finite_differences() {
 
 #[test]
 fn serial_and_parallel_assembly_agree() {
-    let mut sys = tiny(
-        2,
-        MooneyRivlinIncompressible::new(0.8, 0.2).into(),
-        PressureMode::Exact { p0: 2.4 },
-    );
-    sys.asm.parallel = false;
-    assert!(sys.evaluate(true));
-    let (r1, k1) = (sys.residual().to_vec(), sys.matrix_values().to_vec());
-    sys.asm.parallel = true;
-    assert!(sys.evaluate(true));
-    let (r2, k2) = (sys.residual().to_vec(), sys.matrix_values().to_vec());
-    let dr = r1
-        .iter()
-        .zip(&r2)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    let dk = k1
-        .iter()
-        .zip(&k2)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    let sk = k1.iter().map(|a| a.abs()).fold(0.0, f64::max);
-    assert!(
-        dr < 1e-12 && dk < 1e-12 * sk,
-        "serial/parallel differ: {dr:.2e} {dk:.2e}"
-    );
+    // Two meshes large enough for the parallel schedules: ring-ordered cells cut into
+    // contiguous chunks (n_r = 8), and a single ring where chunks wrap around and the cells are
+    // coloured instead (n_r = 1).
+    for (n_r, n_theta, chunked) in [(8usize, 40usize, true), (1, 300, false)] {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r,
+            n_theta,
+            degree: 2,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+        });
+        let mut model = SolidModel::new(
+            mesh,
+            MooneyRivlinIncompressible::new(0.8, 0.2).into(),
+            0.8,
+            PressureMode::Exact { p0: 2.4 },
+        );
+        model.omega2 = 2.0;
+        let mut sys = SolidSystem::new(model, "hub");
+        for (d, v) in sys.x.iter_mut().enumerate() {
+            *v += 1e-4 * ((d as f64) * 0.7).sin();
+        }
+        assert_eq!(sys.asm.n_chunks() > 0, chunked, "schedule for n_r = {n_r}");
+        assert_eq!(sys.asm.n_colors() > 0, !chunked);
+        sys.asm.parallel = false;
+        assert!(sys.evaluate(true));
+        let (r1, k1) = (sys.residual().to_vec(), sys.matrix_values().to_vec());
+        sys.asm.parallel = true;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        pool.install(|| assert!(sys.evaluate(true)));
+        let (r2, k2) = (sys.residual().to_vec(), sys.matrix_values().to_vec());
+        let sr = r1.iter().map(|a| a.abs()).fold(0.0, f64::max);
+        let sk = k1.iter().map(|a| a.abs()).fold(0.0, f64::max);
+        let dr = r1
+            .iter()
+            .zip(&r2)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let dk = k1
+            .iter()
+            .zip(&k2)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "n_r = {n_r}: chunks {}, colours {}: |Δr| = {dr:.2e}, |ΔK| = {dk:.2e}",
+            sys.asm.n_chunks(),
+            sys.asm.n_colors()
+        );
+        assert!(
+            dr <= 1e-13 * sr && dk <= 1e-13 * sk,
+            "serial/parallel differ: {dr:.2e} {dk:.2e}"
+        );
+    }
 }
 
 #[test]
