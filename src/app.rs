@@ -6,7 +6,14 @@
 //!   `error` says why and `results` hold the last converged load step);
 //! * `profile.csv` — ring averages of u_r, σ_r, σ_θ, σ_rθ at the radial Gauss points;
 //! * `nodes.csv` — reference position and displacement of every node;
-//! * `convergence.csv` — the Newton convergence table of every load step.
+//! * `convergence.csv` — the Newton convergence table of every load step;
+//! * the recorder's sinks chosen by `[output] sinks` (see [`crate::io::record`] and
+//!   [`build_recorders`]): `history.csv`, `fields.pvd` + `fields/*.vtu`, `run.mcap`, `run.rrd`,
+//!   PNG plots; plus a progress bar on stderr unless `quiet`.
+//!
+//! An interrupt (Ctrl-C) stops the solve at a step boundary; every sink is finished and
+//! summary.json says `converged = false`, `"error": "interrupted"`; [`run`] then returns
+//! [`AppError::Interrupted`] (exit status 130).
 
 use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
 use crate::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
@@ -15,8 +22,10 @@ use crate::driver::spinning;
 use crate::driver::system::Loading;
 use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
+use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
 use crate::io::scene::{
     ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode, Scene,
+    Sink,
 };
 use crate::material::{
     Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
@@ -37,13 +46,75 @@ pub enum AppError {
     Solve(SolveError, PathBuf),
     #[error("scene: {0}")]
     Unsupported(String),
+    #[error("interrupted: the logs up to the last step are written to {0}")]
+    Interrupted(PathBuf),
 }
 
-#[derive(Clone, Debug)]
+impl AppError {
+    /// Process exit status: 130 interrupted, 1 solve failed, 2 invalid input or output error.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            AppError::Interrupted(_) => 130,
+            AppError::Solve(..) => 1,
+            _ => 2,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     pub out_dir: PathBuf,
     /// Print the Newton convergence table.
     pub verbose: bool,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// The sinks of `[output] sinks` writing into `out_dir` (each with decimation `[output]
+/// every`), plus the progress bar unless `quiet`. Returns warnings (a sink not available in
+/// this build).
+pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders, Vec<String>) {
+    let mut r = Recorders::new();
+    let mut warnings = Vec::new();
+    let every = scene.output.every;
+    for sink in &scene.output.sinks {
+        match sink {
+            Sink::Summary => {}
+            Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), every),
+            Sink::Vtu => r.push(Box::new(record::vtu::VtuSink::new(out_dir)), every),
+            Sink::Mcap => r.push(Box::new(record::mcap::McapSink::new(out_dir)), every),
+            Sink::Png => r.push(Box::new(record::png::PngSink::new(out_dir)), every),
+            #[cfg(feature = "rerun")]
+            Sink::Rerun => r.push(Box::new(record::rrd::RrdSink::new(out_dir)), every),
+            #[cfg(not(feature = "rerun"))]
+            Sink::Rerun => warnings.push(
+                "output sink \"rerun\" skipped: this build has no `rerun` feature".to_string(),
+            ),
+        }
+    }
+    if !quiet {
+        r.push(Box::new(record::progress::Progress::new()), 1);
+    }
+    (r, warnings)
+}
+
+/// Finish the recorder and report sink errors as warnings (logging never fails a run).
+fn finish_recorders(rec: &mut dyn Recorder, end: &RunEnd) {
+    for e in rec.run_finished(end) {
+        eprintln!("tread: warning: {e}");
+    }
+}
+
+/// Turn the outcome of a solve into the run's result (interrupts first).
+fn solve_outcome(
+    solve: Result<(), SolveError>,
+    outcome: RunOutcome,
+) -> Result<RunOutcome, AppError> {
+    match solve {
+        Ok(()) => Ok(outcome),
+        Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(outcome.out_dir)),
+        Err(e) => Err(AppError::Solve(e, outcome.out_dir)),
+    }
 }
 
 /// Default output directory of a scene: `out/<scene name>/`.
@@ -232,6 +303,25 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let kind = linear_kind(scene, &sys);
     let (newton_opts, step_opts) = solver_options(scene, opts.verbose);
     let mut report = StepReport::default();
+    let (mut recorders, warnings) = build_recorders(scene, &opts.out_dir, opts.quiet);
+    for w in warnings {
+        eprintln!("tread: warning: {w}");
+    }
+    let scene_toml = scene.to_toml_string();
+    let mode = scene.analysis.mode.to_string();
+    let omega = scene.motion.omega;
+    recorders.run_started(&RunMeta {
+        scene_name: &scene.scene.name,
+        mode: &mode,
+        scene_toml: &scene_toml,
+        version: env!("CARGO_PKG_VERSION"),
+        features: record::build_features(),
+        mesh: Some(&sys.model.mesh),
+        time_name: "load_factor",
+        time_end: 1.0,
+        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
+    });
+    let rec: &mut dyn Recorder = &mut recorders;
     let solve = match scene.analysis.mode {
         Mode::Static => {
             sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
@@ -241,7 +331,14 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
                 },
             };
-            indentation::solve_indentation(&mut sys, kind, newton_opts, &step_opts, &mut report)
+            indentation::solve_indentation(
+                &mut sys,
+                kind,
+                newton_opts,
+                &step_opts,
+                &mut report,
+                rec,
+            )
         }
         _ => spinning::solve_spinning(
             &mut sys,
@@ -250,10 +347,12 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             newton_opts,
             &step_opts,
             &mut report,
+            rec,
         ),
     };
     let wall = t0.elapsed().as_secs_f64();
     let converged = solve.is_ok();
+    let interrupted = matches!(solve, Err(SolveError::Interrupted { .. }));
     let mut headline = Vec::new();
     let results = match scene.analysis.mode {
         Mode::Static => {
@@ -305,20 +404,38 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         },
         "version": env!("CARGO_PKG_VERSION"),
     });
+    if interrupted {
+        summary["solver"]["interrupted_at"] = serde_json::json!(match &solve {
+            Err(SolveError::Interrupted { lambda }) => *lambda,
+            _ => 0.0,
+        });
+    }
     sanitize(&mut summary);
+    let error = solve.as_ref().err().map(|e| e.to_string());
+    finish_recorders(
+        &mut recorders,
+        &RunEnd {
+            converged,
+            interrupted,
+            error: error.as_deref(),
+            steps: report.steps.iter().filter(|s| s.converged).count() as u64,
+            wall_time_s: wall,
+            summary: Some(&summary),
+        },
+    );
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
-    if scene.output.csv {
+    if scene.output.has(Sink::Csv) {
         write_solid_csv(&sys, &report, &opts.out_dir)?;
     }
-    match solve {
-        Ok(()) => Ok(RunOutcome {
+    solve_outcome(
+        solve,
+        RunOutcome {
             summary,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,
-        }),
-        Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
-    }
+        },
+    )
 }
 
 fn write_solid_csv(sys: &SolidSystem, report: &StepReport, dir: &Path) -> Result<(), OutputError> {

@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use tread::app::{self, AppError, RunOptions};
+use tread::app::{self, RunOptions};
 use tread::io::Scene;
 
 /// The scene run by `tread` without arguments (also `cargo run --release`).
@@ -22,6 +22,9 @@ struct Cli {
     /// Threads for assembly (0 = all cores).
     #[arg(long, global = true)]
     threads: Option<usize>,
+    /// No progress bar, minimal output.
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -49,6 +52,14 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Open a log (.rrd or .mcap) in the Rerun viewer, or convert an .mcap to .rrd (--to).
+    Replay {
+        /// The log: run.rrd or run.mcap from an output directory.
+        log: PathBuf,
+        /// Convert (MCAP to .rrd) into this file instead of opening a viewer.
+        #[arg(long, value_name = "FILE")]
+        to: Option<PathBuf>,
+    },
 }
 
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
@@ -57,22 +68,32 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
     Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
 }
 
-fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool) -> ExitCode {
+fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {
     let out_dir = out.unwrap_or_else(|| app::default_out_dir(&scene));
-    eprintln!(
-        "tread: running scene `{}` ({} mode)",
-        scene.scene.name, scene.analysis.mode
-    );
-    match app::run(&scene, &RunOptions { out_dir, verbose }) {
+    if !quiet {
+        eprintln!(
+            "tread: running scene `{}` ({} mode)",
+            scene.scene.name, scene.analysis.mode
+        );
+    }
+    tread::io::record::install_interrupt_handler();
+    let opts = RunOptions {
+        out_dir,
+        verbose,
+        quiet,
+    };
+    match app::run(&scene, &opts) {
         Ok(o) => {
-            println!(
-                "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
-                o.summary["dofs"],
-                o.summary["newton_iterations"],
-                o.summary["wall_time_s"].as_f64().unwrap_or(0.0)
-            );
-            for line in &o.headline {
-                println!("{line}");
+            if !quiet {
+                println!(
+                    "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
+                    o.summary["dofs"],
+                    o.summary["newton_iterations"],
+                    o.summary["wall_time_s"].as_f64().unwrap_or(0.0)
+                );
+                for line in &o.headline {
+                    println!("{line}");
+                }
             }
             println!(
                 "results written to {}",
@@ -80,13 +101,9 @@ fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool) -> ExitCode {
             );
             ExitCode::SUCCESS
         }
-        Err(e @ AppError::Solve(..)) => {
-            eprintln!("tread: error: {e}");
-            ExitCode::from(1)
-        }
         Err(e) => {
             eprintln!("tread: error: {e}");
-            ExitCode::from(2)
+            ExitCode::from(e.exit_code())
         }
     }
 }
@@ -104,7 +121,7 @@ fn main() -> ExitCode {
     }
     match cli.command {
         None => match Scene::from_toml_str(DEFAULT_SCENE, DEFAULT_SCENE_NAME, &[]) {
-            Ok(scene) => run_scene(scene, None, false),
+            Ok(scene) => run_scene(scene, None, false, cli.quiet),
             Err(e) => {
                 eprintln!("tread: error in the embedded default scene:\n{e}");
                 ExitCode::from(2)
@@ -127,7 +144,7 @@ fn main() -> ExitCode {
                             .num_threads(s.solver.threads)
                             .build_global();
                     }
-                    run_scene(s, out, verbose)
+                    run_scene(s, out, verbose, cli.quiet)
                 }
                 Err(e) => {
                     eprintln!("tread: invalid scene:\n{e}");
@@ -149,5 +166,17 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Some(Command::Replay { log, to }) => {
+            match tread::io::replay::replay(&log, to.as_deref()) {
+                Ok(msg) => {
+                    println!("{msg}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tread: {e}");
+                    ExitCode::from(1)
+                }
+            }
+        }
     }
 }

@@ -93,6 +93,7 @@ fn solve(c: &Case) -> (IndentationResults, StepReport, usize) {
             verbose: false,
         },
         &mut rep,
+        &mut (),
     )
     .expect("indentation converges");
     (results(&sys, c.ro), rep, sys.n_dofs())

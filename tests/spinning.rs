@@ -50,7 +50,8 @@ fn solve(sys: &mut SolidSystem, omega: f64, kind: LinearKind, steps: usize) -> S
         max_cutbacks: 8,
         verbose: false,
     };
-    solve_spinning(sys, omega, kind, opts, &so, &mut rep).expect("spinning solve converges");
+    solve_spinning(sys, omega, kind, opts, &so, &mut rep, &mut ())
+        .expect("spinning solve converges");
     rep
 }
 

@@ -11,6 +11,7 @@
 use super::system::{Loading, SolidSystem};
 use crate::contact::ContactModel;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
+use crate::io::record::Recorder;
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -40,6 +41,7 @@ pub fn solve_indentation(
     newton_opts: NewtonOptions,
     step_opts: &StepOptions,
     report: &mut StepReport,
+    rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     // Reference force for the convergence test: the hub load, or a Hertz-like estimate
     // c_n · DISP · √(2 Ro DISP) for displacement control.
@@ -54,7 +56,7 @@ pub fn solve_indentation(
     };
     sys.set_reference_force(fref.abs().max(f64::MIN_POSITIVE));
     let mut newton = Newton::new(sys, kind, newton_opts)?;
-    solve_load_steps(sys, &mut newton, step_opts, report)
+    solve_load_steps(sys, &mut newton, step_opts, report, rec)
 }
 
 pub fn results(sys: &SolidSystem, ro: f64) -> IndentationResults {

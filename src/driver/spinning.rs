@@ -13,6 +13,7 @@ use super::system::SolidSystem;
 use crate::element::gauss_1d;
 use crate::math::{Mat2, Vec2};
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
+use crate::io::record::Recorder;
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 
 /// Ring-averaged results of a spinning solution.
@@ -142,6 +143,7 @@ pub fn solve_spinning(
     newton_opts: NewtonOptions,
     step_opts: &StepOptions,
     report: &mut StepReport,
+    rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     sys.omega2_target = omega * omega;
     sys.loading = super::system::Loading::Spin {
@@ -163,5 +165,5 @@ pub fn solve_spinning(
     sys.model.omega2 = saved;
     sys.set_reference_force((f_spin - f_rest).abs().max(f_rest).max(f64::MIN_POSITIVE));
     let mut newton = Newton::new(sys, kind, newton_opts)?;
-    solve_load_steps(sys, &mut newton, step_opts, report)
+    solve_load_steps(sys, &mut newton, step_opts, report, rec)
 }

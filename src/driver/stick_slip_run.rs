@@ -1,13 +1,19 @@
 //! Driver of the `stick_slip` mode: the spring–mass block on a moving belt (paper §4) from the
-//! scene's `[stick_slip]` and `[friction]` sections; writes `history.csv` and summary.json with
-//! the measured period and slip amplitude, and the closed-form static/kinetic cycle for
-//! comparison when the law is rate dependent.
+//! scene's `[stick_slip]` and `[friction]` sections; writes summary.json with the measured period
+//! and slip amplitude, and the closed-form static/kinetic cycle for comparison when the law is
+//! rate dependent.
+//!
+//! Recording: diffsol integrates the whole interval first; then every output sample is sent to
+//! the recorder as a step (time = t, no mesh, scalars `x`, `v`, `friction_force`, `slipping`),
+//! so `history.csv` (CSV sink), `run.mcap`, `run.rrd` and `series.png` carry the time history.
+//! An interrupt stops the replay at a sample.
 
 use crate::app::{AppError, RunOptions, RunOutcome};
 use crate::contact::laws::{CoulombLinear, CoulombTanh, RateDependent};
 use crate::contact::stick_slip::{closed_form_cycle, simulate, Phase, StickSlipSpec};
 use crate::contact::Friction;
-use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::output::{ensure_dir, sanitize, write_json};
+use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::io::scene::{FrictionParams, Scene};
 use std::time::Instant;
 
@@ -56,11 +62,68 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         output_interval: ss.output_interval.unwrap_or(ss.t_end / 2000.0),
         stick_threshold: StickSlipSpec::suggested_stick_threshold(&friction, ss.belt_speed),
     };
+    let (mut recorders, warnings) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    for w in warnings {
+        eprintln!("tread: warning: {w}");
+    }
+    let scene_toml = scene.to_toml_string();
+    let mode = scene.analysis.mode.to_string();
+    recorders.run_started(&RunMeta {
+        scene_name: &scene.scene.name,
+        mode: &mode,
+        scene_toml: &scene_toml,
+        version: env!("CARGO_PKG_VERSION"),
+        features: record::build_features(),
+        mesh: None,
+        time_name: "time",
+        time_end: ss.t_end,
+        revolution_period: None,
+    });
     let res = simulate(&spec);
+    let mut interrupted = false;
+    let mut steps = 0u64;
+    if let Ok(r) = &res {
+        let n = r.samples.len();
+        for (i, smp) in r.samples.iter().enumerate() {
+            if record::interrupted() {
+                interrupted = true;
+                break;
+            }
+            let info = StepInfo {
+                index: i as u64,
+                time: smp.t,
+                dt: if i > 0 { smp.t - r.samples[i - 1].t } else { 0.0 },
+                newton_iterations: 0,
+                residual: 0.0,
+                is_final: i + 1 == n,
+            };
+            let scalars = [
+                ("x", smp.x),
+                ("v", smp.v),
+                ("friction_force", smp.friction_force),
+                ("slipping", f64::from(u8::from(smp.phase == Phase::Slip))),
+            ];
+            let view = StepView {
+                mesh: None,
+                x: &[],
+                stress: &[],
+                contact: &[],
+                hub: None,
+                energy: None,
+                road_height: None,
+                omega: 0.0,
+                scalars: &scalars,
+            };
+            let wants = recorders.wants_view(&info);
+            recorders.step(&info, wants.then_some(&view));
+            steps += 1;
+        }
+    }
     let wall = t0.elapsed().as_secs_f64();
-    let (converged, error) = match &res {
-        Ok(_) => (true, None),
-        Err(e) => (false, Some(e.to_string())),
+    let (converged, error) = match (&res, interrupted) {
+        (_, true) => (false, Some("interrupted".to_string())),
+        (Ok(_), false) => (true, None),
+        (Err(e), false) => (false, Some(e.to_string())),
     };
     let closed = static_kinetic.map(|(mu_s, mu_k)| {
         closed_form_cycle(
@@ -107,21 +170,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "version": env!("CARGO_PKG_VERSION"),
     });
     sanitize(&mut summary);
+    for e in recorders.run_finished(&RunEnd {
+        converged,
+        interrupted,
+        error: error.as_deref(),
+        steps,
+        wall_time_s: wall,
+        summary: Some(&summary),
+    }) {
+        eprintln!("tread: warning: {e}");
+    }
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
-    if let Ok(r) = &res {
-        write_csv(
-            &opts.out_dir.join("history.csv"),
-            &["t", "x", "v", "friction_force", "slipping"],
-            r.samples.iter().map(|s| {
-                vec![
-                    s.t,
-                    s.x,
-                    s.v,
-                    s.friction_force,
-                    f64::from(u8::from(s.phase == Phase::Slip)),
-                ]
-            }),
-        )?;
+    if interrupted {
+        return Err(AppError::Interrupted(opts.out_dir.clone()));
     }
     match res {
         Ok(_) => Ok(RunOutcome {

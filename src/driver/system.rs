@@ -10,6 +10,8 @@ use crate::math::Vec2;
 use crate::physics::SolidModel;
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
+use crate::io::record::{Recorder, StepInfo};
+use super::frame::SolidFrame;
 
 /// What the load factor λ scales.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -256,5 +258,13 @@ impl LoadedSystem for SolidSystem {
     fn commit(&mut self) {
         self.lambda_prev = self.lambda;
         self.x_prev.copy_from_slice(&self.x);
+    }
+    fn record_step(&self, info: &StepInfo, rec: &mut dyn Recorder) {
+        if rec.wants_view(info) {
+            let frame = SolidFrame::capture(self);
+            rec.step(info, Some(&frame.view(self, &[])));
+        } else {
+            rec.step(info, None);
+        }
     }
 }

@@ -23,7 +23,8 @@
 //!             x0 = 0, v0, output_interval                     (stick_slip)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
-//! [output]    csv = true
+//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1
+//!             (sinks from "summary", "csv", "vtu", "mcap", "rerun", "png")
 //! ```
 //!
 //! # Loading
@@ -222,6 +223,24 @@ keyword_enum! {
         Cholesky => "cholesky",
         /// Sparse LU.
         Lu => "lu",
+    }
+}
+
+keyword_enum! {
+    /// An output sink (`[output] sinks`); see `src/io/record/mod.rs` and README.md (Outputs).
+    Sink, "output sink" {
+        /// `summary.json` (always written, also when not listed).
+        Summary => "summary",
+        /// CSV tables: `history.csv` (time histories) and the end-of-run tables.
+        Csv => "csv",
+        /// ParaView: `fields.pvd` + `fields/step_*.vtu` (and `steady.vtu`).
+        Vtu => "vtu",
+        /// `run.mcap` (protobuf channels readable by Foxglove and the Rerun viewer).
+        Mcap => "mcap",
+        /// `run.rrd` for the Rerun viewer (needs the default `rerun` cargo feature).
+        Rerun => "rerun",
+        /// PNG plots (hub forces, energy, contact distributions, branch diagrams).
+        Png => "png",
     }
 }
 
@@ -746,17 +765,32 @@ impl Default for SolverSpec {
     }
 }
 
-/// `[output]`.
+/// `[output]`: which sinks record the run and how often.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputSpec {
-    /// Write CSV profiles.
-    pub csv: bool,
+    /// Output sinks; `summary.json` is written whether listed or not.
+    pub sinks: Vec<Sink>,
+    /// Decimation: steps between recorded frames (>= 1); the final step is always recorded.
+    pub every: usize,
 }
+
+/// Default of `[output] sinks`: the light-weight outputs (MCAP and Rerun logs are opt-in).
+pub const DEFAULT_SINKS: &[Sink] = &[Sink::Summary, Sink::Csv, Sink::Vtu, Sink::Png];
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { csv: true }
+        OutputSpec {
+            sinks: DEFAULT_SINKS.to_vec(),
+            every: 1,
+        }
+    }
+}
+
+impl OutputSpec {
+    /// Whether `sink` is listed.
+    pub fn has(&self, sink: Sink) -> bool {
+        self.sinks.contains(&sink)
     }
 }
 
@@ -946,6 +980,9 @@ impl Scene {
         if let Some(s) = &solver {
             validate_solver(s, &mut out);
         }
+        if let Some(o) = &output {
+            validate_output(o, &mut out);
+        }
         // A key already reported by the schema pass (unknown or ill-typed) is not reported again
         // (e.g. as "required" because its ill-typed value was dropped).
         let reported: BTreeSet<String> = ctx.issues.iter().map(|i| i.key.clone()).collect();
@@ -1040,6 +1077,7 @@ impl Scene {
         };
         validate_mode_sections(self.analysis.mode, &used, &mut out);
         validate_solver(&self.solver, &mut out);
+        validate_output(&self.output, &mut out);
         if out.is_empty() {
             Ok(())
         } else {
@@ -1084,6 +1122,8 @@ enum Kind {
     Bool,
     Str,
     Keyword(&'static [&'static str]),
+    /// An array of keywords (no duplicates).
+    KeywordList(&'static [&'static str]),
 }
 
 struct FieldSchema {
@@ -1231,7 +1271,10 @@ static SCHEMA: &[SectionSchema] = &[
     SectionSchema {
         name: "output",
         required: false,
-        fields: &[opt("csv", Kind::Bool)],
+        fields: &[
+            opt("sinks", Kind::KeywordList(Sink::NAMES)),
+            opt("every", Kind::UInt),
+        ],
     },
 ];
 
@@ -1316,6 +1359,28 @@ fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
                 ));
             }
         }
+        (Kind::KeywordList(names), toml::Value::Array(items)) => {
+            let mut seen = BTreeSet::new();
+            for item in items {
+                let Some(s) = item.as_str() else {
+                    return Err(format!(
+                        "expected an array of strings, one or more of {}; found {}",
+                        quoted_list(names),
+                        describe_value(item)
+                    ));
+                };
+                if !names.contains(&s) {
+                    return Err(format!(
+                        "unknown value \"{s}\"; expected any of {}",
+                        quoted_list(names)
+                    ));
+                }
+                if !seen.insert(s) {
+                    return Err(format!("\"{s}\" is listed twice"));
+                }
+            }
+            true
+        }
         _ => false,
     };
     if ok {
@@ -1327,6 +1392,9 @@ fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
             Kind::Bool => "a boolean (true or false)".to_string(),
             Kind::Str => "a string".to_string(),
             Kind::Keyword(names) => format!("a string, one of {}", quoted_list(names)),
+            Kind::KeywordList(names) => {
+                format!("an array of strings from {}", quoted_list(names))
+            }
         };
         Err(format!("expected {expected}, found {}", describe_value(v)))
     }
@@ -1660,6 +1728,13 @@ fn parse_override_value(text: &str, kind: Kind) -> toml::Value {
         .filter(|t| t.len() == 1)
         .and_then(|mut t| t.remove("v"));
     match (parsed, kind) {
+        // `--set output.sinks=csv,mcap` (no brackets or quotes) is a comma-separated list.
+        (Some(v @ toml::Value::Array(_)), Kind::KeywordList(_)) => v,
+        (_, Kind::KeywordList(_)) => toml::Value::Array(
+            text.split(',')
+                .map(|w| toml::Value::String(w.trim().trim_matches('"').to_string()))
+                .collect(),
+        ),
         (Some(v @ toml::Value::String(_)), _) => v,
         (_, Kind::Str | Kind::Keyword(_)) => toml::Value::String(text.to_string()),
         (Some(v), _) => v,
@@ -2256,6 +2331,17 @@ fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
     }
 }
 
+fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
+    if s.every < 1 {
+        out.push(issue("output.every", "must be >= 1, got 0"));
+    }
+    for (i, k) in s.sinks.iter().enumerate() {
+        if s.sinks[..i].contains(k) {
+            out.push(issue("output.sinks", format!("\"{k}\" is listed twice")));
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Line locator
 // ---------------------------------------------------------------------------------------------
@@ -2642,7 +2728,8 @@ omega = 20.0
         assert_eq!(s.solver.linear, LinearChoice::Auto);
         assert_eq!(s.solver.threads, 0);
         assert!(s.solver.line_search);
-        assert!(s.output.csv);
+        assert_eq!(s.output.sinks, DEFAULT_SINKS);
+        assert_eq!(s.output.every, 1);
         assert_eq!(s.material.formulation, None);
         assert_eq!(s.material.kappa, None);
         assert!(s.validate().is_ok());
@@ -2956,7 +3043,8 @@ linear = "qr"
                 "mesh.n_r=8",
                 " motion.omega = 30.5 ",
                 "solver.linear=lu",
-                "output.csv=false",
+                "output.sinks=csv,mcap",
+                "output.every=5",
                 "scene.name=run2024",
                 "scene.description=\"quoted text\"",
             ],
@@ -2965,8 +3053,13 @@ linear = "qr"
         assert_eq!(s.mesh.n_r, 8);
         assert_eq!(s.motion.omega, 30.5);
         assert_eq!(s.solver.linear, LinearChoice::Lu);
-        assert!(!s.output.csv);
+        assert_eq!(s.output.sinks, [Sink::Csv, Sink::Mcap]);
+        assert_eq!(s.output.every, 5);
         assert_eq!(s.scene.name, "run2024");
+        let s = load_with(MINIMAL, &["output.sinks=[\"rerun\"]"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.output.sinks, [Sink::Rerun]);
+        let s = load_with(MINIMAL, &["output.sinks=[]"]).unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.output.sinks.is_empty());
         assert_eq!(s.scene.description, "quoted text");
         // A string-valued key takes an unquoted number literally.
         let s = load_with(MINIMAL, &["scene.name=2024"]).unwrap_or_else(|e| panic!("{e}"));
@@ -3090,8 +3183,27 @@ linear = "qr"
     }
 
     #[test]
+    fn output_sinks_are_checked() {
+        let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"hdf5\"]\nevery = 0\n");
+        let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
+        let sinks = e.find("output.sinks").unwrap_or_else(|| panic!("{e}"));
+        assert!(sinks.message.contains("hdf5") && sinks.line.is_some(), "{e}");
+        assert!(e.has_key("output.every"), "{e}");
+        let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"csv\"]\n");
+        let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.find("output.sinks").is_some_and(|x| x.message.contains("twice")), "{e}");
+        let e = errors_with(MINIMAL, &["output.sinks=csv,nope"]);
+        assert!(e.find("output.sinks").is_some_and(|x| x.message.contains("nope")), "{e}");
+        // Round trip of a non-default list.
+        let s = load_with(MINIMAL, &["output.sinks=mcap,rerun", "output.every=3"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let back = load(&s.to_toml_string()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back, s);
+    }
+
+    #[test]
     fn serde_itself_rejects_unknown_fields() {
-        let text = format!("{MINIMAL}\n[output]\ncsv = true\npng = true\n");
+        let text = format!("{MINIMAL}\n[output]\nevery = 2\npng = true\n");
         let r: Result<Scene, _> = toml::from_str(&text);
         let e = r.err().map(|e| e.to_string()).unwrap_or_default();
         assert!(e.contains("png"), "{e}");
@@ -3116,6 +3228,7 @@ linear = "qr"
         check(LinearChoice::ALL, LinearChoice::NAMES);
         check(ContactQuadrature::ALL, ContactQuadrature::NAMES);
         check(FrictionLawName::ALL, FrictionLawName::NAMES);
+        check(Sink::ALL, Sink::NAMES);
         assert_eq!("spinning".parse::<Mode>(), Ok(Mode::Spinning));
         assert_eq!("static".parse::<Mode>(), Ok(Mode::Static));
         assert_eq!("stick_slip".parse::<Mode>(), Ok(Mode::StickSlip));

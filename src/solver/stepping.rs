@@ -7,12 +7,18 @@
 
 use super::linear::{LinearError, LinearKind};
 use super::newton::{IterationRecord, Newton, NonlinearSystem, SolveError};
+use crate::io::record::{self, Recorder, RejectedStep, StepInfo};
 
 /// A system with a scalar load factor.
 pub trait LoadedSystem: NonlinearSystem {
     fn set_load(&mut self, lambda: f64);
     /// Called after a converged step (commit history such as the friction reference state).
     fn commit(&mut self) {}
+    /// Send the accepted step `info` to the recorder, with a view of the state when the
+    /// recorder wants one. The default sends no view.
+    fn record_step(&self, info: &StepInfo, rec: &mut dyn Recorder) {
+        rec.step(info, None);
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -38,16 +44,29 @@ pub struct StepReport {
     pub switched_to_lu: bool,
 }
 
+/// Largest relative residual (over fields) of the last row of a Newton table.
+pub fn final_residual(table: &[IterationRecord]) -> f64 {
+    table
+        .last()
+        .map_or(0.0, |r| r.residual_rel.iter().copied().fold(0.0, f64::max))
+}
+
+/// Drive λ from 0 to 1 (see the module docs); events go to `rec` (pass `&mut ()` for none).
 pub fn solve_load_steps<S: LoadedSystem>(
     sys: &mut S,
     newton: &mut Newton,
     opts: &StepOptions,
     report: &mut StepReport,
+    rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     let mut lambda = 0.0;
     let mut dl = 1.0 / opts.initial_steps.max(1) as f64;
     let mut saved = Vec::new();
+    let mut index: u64 = 0;
     while lambda < 1.0 {
+        if record::interrupted() {
+            return Err(SolveError::Interrupted { lambda });
+        }
         let target = (lambda + dl).min(1.0);
         sys.save_state(&mut saved);
         sys.set_load(target);
@@ -56,6 +75,15 @@ pub fn solve_load_steps<S: LoadedSystem>(
         }
         match newton.solve(sys) {
             Ok(rep) => {
+                record::emit_newton_table(rec, index, target, &rep.table, sys.field_names());
+                let info = StepInfo {
+                    index,
+                    time: target,
+                    dt: target - lambda,
+                    newton_iterations: rep.iterations,
+                    residual: final_residual(&rep.table),
+                    is_final: target >= 1.0,
+                };
                 report.total_iterations += rep.iterations;
                 report.steps.push(StepRecord {
                     lambda: target,
@@ -65,6 +93,8 @@ pub fn solve_load_steps<S: LoadedSystem>(
                 });
                 lambda = target;
                 sys.commit();
+                sys.record_step(&info, rec);
+                index += 1;
                 if rep.iterations <= 4 {
                     dl *= 1.5;
                 }
@@ -80,6 +110,13 @@ pub fn solve_load_steps<S: LoadedSystem>(
                 report.switched_to_lu = true;
             }
             Err(e) => {
+                let reason = e.to_string();
+                rec.step_rejected(&RejectedStep {
+                    index,
+                    time: target,
+                    dt: target - lambda,
+                    reason: &reason,
+                });
                 report.cutbacks += 1;
                 report.steps.push(StepRecord {
                     lambda: target,

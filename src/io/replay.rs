@@ -1,0 +1,411 @@
+//! `tread replay LOG [--to FILE]`: open a log in the Rerun viewer, or convert an MCAP log to a
+//! Rerun `.rrd`.
+//!
+//! * `LOG.rrd`: runs the Rerun viewer (`rerun LOG.rrd`) and waits for it.
+//! * `LOG.mcap`: converts it to a temporary `.rrd` ([`mcap_to_rrd`]) and opens that; with
+//!   `--to FILE.rrd` only converts.
+//!
+//! The viewer is the `rerun` executable on `PATH` (or `$TREAD_RERUN_BIN`); when there is none,
+//! [`ReplayError::NoViewer`] says how to install it.
+//!
+//! The conversion reads the MCAP with a streaming reader (a truncated file converts up to its
+//! last complete chunk), decodes every protobuf message with the schema embedded in the file
+//! (prost-reflect) and logs: `foxglove.SceneUpdate` triangles and lines as `Mesh3D` and
+//! `LineStrips3D` (so the deformed mesh appears, which the Rerun viewer's own MCAP importer does
+//! not map), `foxglove.PointCloud` as `Points3D` (with its red/green/blue fields as colours),
+//! `foxglove.Log` as `TextLog`, and every numeric field of any other message as a `Scalars`
+//! series at `<topic>/<field>`. Timelines: `sim_time` = log_time (ns from 0) and `step` (the
+//! `index` of the latest `/tread/step` message at the same log time, or a message's own `step`
+//! field). Metadata records become static text documents under `metadata/<name>`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    #[error(
+        "the Rerun viewer (`rerun`) is not installed or not on PATH.\n\
+         Install it with one of:\n  \
+         pip install rerun-sdk==0.36.*          # provides the `rerun` command\n  \
+         cargo install rerun-cli --version 0.36.3 --locked\n\
+         then run `tread replay {0}` again (or `rerun {0}`).\n\
+         An .mcap log also opens in Foxglove (https://app.foxglove.dev, or the desktop app): \
+         File > Open local file."
+    )]
+    NoViewer(String),
+    #[error("cannot read {0}: {1}")]
+    Read(PathBuf, String),
+    #[error("cannot write {0}: {1}")]
+    Write(PathBuf, String),
+    #[error("{0}: unknown log type (expected .rrd or .mcap)")]
+    UnknownType(PathBuf),
+    #[error("the viewer failed: {0}")]
+    Viewer(String),
+    #[error("converting MCAP to .rrd needs the `rerun` cargo feature (a default feature)")]
+    NoRerunFeature,
+}
+
+/// What a conversion read.
+#[derive(Debug, Default, Clone)]
+pub struct ConvertStats {
+    pub messages: u64,
+    /// Messages whose schema was not protobuf or could not be decoded.
+    pub skipped: u64,
+    /// The file ended early (truncated: e.g. a killed run).
+    pub truncated: bool,
+}
+
+/// The viewer executable: `$TREAD_RERUN_BIN`, else `rerun` found on PATH.
+pub fn find_viewer() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("TREAD_RERUN_BIN") {
+        let p = PathBuf::from(p);
+        return p.is_file().then_some(p);
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join(if cfg!(windows) { "rerun.exe" } else { "rerun" }))
+        .find(|p| p.is_file())
+}
+
+fn kind(log: &Path) -> Option<&'static str> {
+    match log.extension().and_then(|e| e.to_str()) {
+        Some("rrd") => Some("rrd"),
+        Some("mcap") => Some("mcap"),
+        _ => None,
+    }
+}
+
+/// Run `tread replay LOG [--to FILE]`; returns a line to print.
+pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
+    if !log.is_file() {
+        return Err(ReplayError::Read(log.to_path_buf(), "no such file".into()));
+    }
+    let k = kind(log).ok_or_else(|| ReplayError::UnknownType(log.to_path_buf()))?;
+    match (k, to) {
+        ("mcap", Some(to)) => {
+            let st = mcap_to_rrd(log, to)?;
+            Ok(format!(
+                "converted {} messages{}{} to {}",
+                st.messages,
+                if st.skipped > 0 {
+                    format!(" ({} not decodable, skipped)", st.skipped)
+                } else {
+                    String::new()
+                },
+                if st.truncated {
+                    " (the MCAP was truncated: converted up to its last complete chunk)"
+                } else {
+                    ""
+                },
+                to.display()
+            ))
+        }
+        ("rrd", Some(to)) => {
+            std::fs::copy(log, to).map_err(|e| ReplayError::Write(to.to_path_buf(), e.to_string()))?;
+            Ok(format!("copied {} to {}", log.display(), to.display()))
+        }
+        ("mcap", None) => {
+            let viewer =
+                find_viewer().ok_or_else(|| ReplayError::NoViewer(log.display().to_string()))?;
+            let tmp = std::env::temp_dir().join(format!("tread-replay-{}.rrd", std::process::id()));
+            mcap_to_rrd(log, &tmp)?;
+            let r = open(&viewer, &tmp);
+            let _ = std::fs::remove_file(&tmp);
+            r
+        }
+        _ => {
+            let viewer =
+                find_viewer().ok_or_else(|| ReplayError::NoViewer(log.display().to_string()))?;
+            open(&viewer, log)
+        }
+    }
+}
+
+fn open(viewer: &Path, file: &Path) -> Result<String, ReplayError> {
+    let status = Command::new(viewer)
+        .arg(file)
+        .status()
+        .map_err(|e| ReplayError::Viewer(format!("{}: {e}", viewer.display())))?;
+    if status.success() {
+        Ok(format!("viewer closed ({})", file.display()))
+    } else {
+        Err(ReplayError::Viewer(format!("{} exited with {status}", viewer.display())))
+    }
+}
+
+/// Convert an MCAP log to a Rerun `.rrd` (see the module docs).
+#[cfg(not(feature = "rerun"))]
+pub fn mcap_to_rrd(_mcap: &Path, _rrd: &Path) -> Result<ConvertStats, ReplayError> {
+    Err(ReplayError::NoRerunFeature)
+}
+
+/// Convert an MCAP log to a Rerun `.rrd` (see the module docs).
+#[cfg(feature = "rerun")]
+pub fn mcap_to_rrd(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayError> {
+    convert::run(mcap_path, rrd)
+}
+
+#[cfg(feature = "rerun")]
+mod convert {
+    use super::{ConvertStats, ReplayError};
+    use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
+    use std::collections::{BTreeMap, HashMap};
+    use std::path::Path;
+
+    pub fn run(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayError> {
+        let bytes = std::fs::read(mcap_path)
+            .map_err(|e| ReplayError::Read(mcap_path.to_path_buf(), e.to_string()))?;
+        let rec = rerun::RecordingStreamBuilder::new("tread")
+            .send_properties(false)
+            .save(rrd)
+            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+        rec.set_log_time_enabled(false);
+        rec.set_log_tick_enabled(false);
+        let mut st = ConvertStats::default();
+        // Metadata records (not part of the message stream).
+        if let Ok(reader) = mcap::read::LinearReader::new(&bytes) {
+            for r in reader {
+                match r {
+                    Ok(mcap::records::Record::Metadata(m)) => {
+                        let mut doc = format!("# {}\n\n", m.name);
+                        for (k, v) in &m.metadata {
+                            if v.contains('\n') {
+                                doc.push_str(&format!("**{k}**:\n\n```\n{v}\n```\n\n"));
+                            } else {
+                                doc.push_str(&format!("**{k}**: {v}\n\n"));
+                            }
+                        }
+                        let _ = rec.log_static(
+                            format!("metadata/{}", m.name),
+                            &rerun::TextDocument::new(doc)
+                                .with_media_type(rerun::MediaType::markdown()),
+                        );
+                    }
+                    Ok(_) => {}
+                    Err(_) => break,
+                }
+            }
+        }
+        let stream = mcap::MessageStream::new(&bytes)
+            .map_err(|e| ReplayError::Read(mcap_path.to_path_buf(), e.to_string()))?;
+        let mut pools: HashMap<u16, Option<MessageDescriptor>> = HashMap::new();
+        let mut step_at: BTreeMap<u64, i64> = BTreeMap::new();
+        for m in stream {
+            let m = match m {
+                Ok(m) => m,
+                Err(_) => {
+                    st.truncated = true;
+                    break;
+                }
+            };
+            let desc = pools
+                .entry(m.channel.id)
+                .or_insert_with(|| descriptor(&m.channel))
+                .clone();
+            let Some(desc) = desc else {
+                st.skipped += 1;
+                continue;
+            };
+            let Ok(msg) = DynamicMessage::decode(desc.clone(), m.data.as_ref()) else {
+                st.skipped += 1;
+                continue;
+            };
+            st.messages += 1;
+            let topic = m.channel.topic.trim_start_matches('/').to_string();
+            if topic == "tread/step" {
+                if let Some(i) = uint_field(&msg, "index") {
+                    step_at.insert(m.log_time, i as i64);
+                }
+            }
+            rec.set_duration_secs("sim_time", m.log_time as f64 * 1e-9);
+            let step = uint_field(&msg, "step")
+                .map(|s| s as i64)
+                .or_else(|| step_at.get(&m.log_time).copied());
+            match step {
+                Some(s) => rec.set_time_sequence("step", s),
+                None => rec.disable_timeline("step"),
+            }
+            match desc.full_name() {
+                "foxglove.SceneUpdate" => scene_update(&rec, &topic, &msg),
+                "foxglove.PointCloud" => point_cloud(&rec, &topic, &msg),
+                "foxglove.Log" => {
+                    if let Some(Value::String(t)) = msg.get_field_by_name("message").map(|v| v.into_owned()) {
+                        let _ = rec.log(topic.as_str(), &rerun::TextLog::new(t));
+                    }
+                }
+                _ => {
+                    for (f, v) in msg.fields() {
+                        let name = f.name();
+                        if matches!(name, "step" | "time" | "index") {
+                            continue;
+                        }
+                        if let Some(x) = number(v) {
+                            if x.is_finite() {
+                                let _ = rec.log(
+                                    format!("{topic}/{name}"),
+                                    &rerun::Scalars::single(x),
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        rec.flush_blocking()
+            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+        drop(rec);
+        Ok(st)
+    }
+
+    fn descriptor(ch: &mcap::Channel) -> Option<MessageDescriptor> {
+        let schema = ch.schema.as_ref()?;
+        if schema.encoding != "protobuf" || ch.message_encoding != "protobuf" {
+            return None;
+        }
+        let pool = DescriptorPool::decode(schema.data.as_ref()).ok()?;
+        pool.get_message_by_name(&schema.name)
+    }
+
+    fn number(v: &Value) -> Option<f64> {
+        Some(match v {
+            Value::F64(x) => *x,
+            Value::F32(x) => f64::from(*x),
+            Value::I32(x) => f64::from(*x),
+            Value::I64(x) => *x as f64,
+            Value::U32(x) => f64::from(*x),
+            Value::U64(x) => *x as f64,
+            Value::Bool(b) => f64::from(u8::from(*b)),
+            _ => return None,
+        })
+    }
+
+    fn uint_field(msg: &DynamicMessage, name: &str) -> Option<u64> {
+        match msg.get_field_by_name(name)?.as_ref() {
+            Value::U64(x) => Some(*x),
+            Value::U32(x) => Some(u64::from(*x)),
+            _ => None,
+        }
+    }
+
+    fn f64_of(m: &DynamicMessage, name: &str) -> f64 {
+        m.get_field_by_name(name)
+            .and_then(|v| number(&v))
+            .unwrap_or(0.0)
+    }
+
+    fn messages(m: &DynamicMessage, name: &str) -> Vec<DynamicMessage> {
+        match m.get_field_by_name(name).map(|v| v.into_owned()) {
+            Some(Value::List(l)) => l
+                .into_iter()
+                .filter_map(|v| match v {
+                    Value::Message(x) => Some(x),
+                    _ => None,
+                })
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    fn point3(p: &DynamicMessage) -> [f32; 3] {
+        [f64_of(p, "x") as f32, f64_of(p, "y") as f32, f64_of(p, "z") as f32]
+    }
+
+    fn color(c: &DynamicMessage) -> rerun::Color {
+        let b = |n: &str| (f64_of(c, n) * 255.0).round().clamp(0.0, 255.0) as u8;
+        rerun::Color::from_unmultiplied_rgba(b("r"), b("g"), b("b"), b("a"))
+    }
+
+    fn scene_update(rec: &rerun::RecordingStream, topic: &str, msg: &DynamicMessage) {
+        for e in messages(msg, "entities") {
+            let id = match e.get_field_by_name("id").map(|v| v.into_owned()) {
+                Some(Value::String(s)) if !s.is_empty() => s,
+                _ => "entity".to_string(),
+            };
+            for (k, t) in messages(&e, "triangles").iter().enumerate() {
+                let pts: Vec<[f32; 3]> = messages(t, "points").iter().map(point3).collect();
+                let idx: Vec<u32> = match t.get_field_by_name("indices").map(|v| v.into_owned()) {
+                    Some(Value::List(l)) => l
+                        .iter()
+                        .filter_map(|v| match v {
+                            Value::U32(x) => Some(*x),
+                            _ => None,
+                        })
+                        .collect(),
+                    _ => Vec::new(),
+                };
+                let tris: Vec<[u32; 3]> = if idx.is_empty() {
+                    (0..pts.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect()
+                } else {
+                    idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+                };
+                let colors: Vec<rerun::Color> = messages(t, "colors").iter().map(color).collect();
+                let mut mesh = rerun::Mesh3D::new(pts).with_triangle_indices(tris);
+                if !colors.is_empty() {
+                    mesh = mesh.with_vertex_colors(colors);
+                }
+                let _ = rec.log(format!("{topic}/{id}/triangles/{k}"), &mesh);
+            }
+            let strips: Vec<Vec<[f32; 3]>> = messages(&e, "lines")
+                .iter()
+                .map(|l| messages(l, "points").iter().map(point3).collect())
+                .collect();
+            if !strips.is_empty() {
+                let _ = rec.log(format!("{topic}/{id}/lines"), &rerun::LineStrips3D::new(strips));
+            }
+        }
+    }
+
+    fn point_cloud(rec: &rerun::RecordingStream, topic: &str, msg: &DynamicMessage) {
+        let stride = f64_of(msg, "point_stride") as usize;
+        let data = match msg.get_field_by_name("data").map(|v| v.into_owned()) {
+            Some(Value::Bytes(b)) => b,
+            _ => return,
+        };
+        let mut fields: HashMap<String, (usize, i32)> = HashMap::new();
+        for f in messages(msg, "fields") {
+            let name = match f.get_field_by_name("name").map(|v| v.into_owned()) {
+                Some(Value::String(s)) => s,
+                _ => continue,
+            };
+            let ty = match f.get_field_by_name("type").map(|v| v.into_owned()) {
+                Some(Value::EnumNumber(n)) => n,
+                _ => 0,
+            };
+            fields.insert(name, (f64_of(&f, "offset") as usize, ty));
+        }
+        if stride == 0 {
+            return;
+        }
+        let read = |p: usize, name: &str| -> Option<f64> {
+            let (off, ty) = *fields.get(name)?;
+            let b = data.get(p * stride + off..)?;
+            Some(match ty {
+                1 => f64::from(*b.first()?),
+                7 => f64::from(f32::from_le_bytes(b.get(..4)?.try_into().ok()?)),
+                8 => f64::from_le_bytes(b.get(..8)?.try_into().ok()?),
+                _ => return None,
+            })
+        };
+        let n = data.len() / stride;
+        let pos: Vec<[f32; 3]> = (0..n)
+            .map(|p| {
+                [
+                    read(p, "x").unwrap_or(0.0) as f32,
+                    read(p, "y").unwrap_or(0.0) as f32,
+                    read(p, "z").unwrap_or(0.0) as f32,
+                ]
+            })
+            .collect();
+        let mut pts = rerun::Points3D::new(pos);
+        if fields.contains_key("red") {
+            let c: Vec<rerun::Color> = (0..n)
+                .map(|p| {
+                    let g = |k| read(p, k).unwrap_or(0.0).clamp(0.0, 255.0) as u8;
+                    rerun::Color::from_rgb(g("red"), g("green"), g("blue"))
+                })
+                .collect();
+            pts = pts.with_colors(c);
+        }
+        let _ = rec.log(topic, &pts);
+    }
+}

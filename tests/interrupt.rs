@@ -1,0 +1,240 @@
+//! Interrupt safety of the `tread` binary: Ctrl-C (SIGINT) during a long load-stepping run
+//! stops at a step boundary, finishes every log (all readable, consistent with each other) and
+//! exits with 130 and `"error": "interrupted"` in summary.json; SIGKILL leaves an MCAP readable
+//! up to its last completed chunk and a CSV complete up to its last row. Also `tread replay`.
+
+mod logread;
+
+use logread::*;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+
+fn tread() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tread"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("tread-int-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Static frictionless indentation in 40 load steps: contact Newton solves take more than 4
+/// iterations, so the increments do not grow and the run takes many steps.
+const LONG: &str = r#"
+[scene]
+name = "long_run"
+[geometry]
+ri = 1.0
+ro = 2.0
+[mesh]
+n_r = 4
+n_theta = 96
+grading_theta = 0.5
+[material]
+model = "mooney_rivlin"
+c1 = 80.0
+c2 = 20.0
+kappa = 2000.0
+rho = 0.027
+[analysis]
+mode = "static"
+[road]
+disp = 0.1
+[contact]
+c_n = 2.0e5
+[solver]
+load_steps = 40
+[output]
+sinks = ["summary", "csv", "vtu", "mcap", "rerun"]
+"#;
+
+fn start(dir: &Path) -> Child {
+    let f = dir.join("scene.toml");
+    std::fs::write(&f, LONG).unwrap();
+    tread()
+        .args(["run", f.to_str().unwrap(), "--out"])
+        .arg(dir.join("out"))
+        .arg("-q")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Wait until history.csv has at least `rows` data rows (or the child ended).
+fn wait_rows(child: &mut Child, csv: &Path, rows: usize) -> usize {
+    let t0 = Instant::now();
+    loop {
+        let n = std::fs::read_to_string(csv)
+            .map(|s| s.lines().count().saturating_sub(1))
+            .unwrap_or(0);
+        if n >= rows {
+            return n;
+        }
+        if let Ok(Some(st)) = child.try_wait() {
+            panic!("the run ended ({st}) before {rows} steps were logged");
+        }
+        assert!(t0.elapsed() < Duration::from_secs(300), "timeout");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn signal(child: &Child, sig: &str) {
+    let st = Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+}
+
+#[test]
+fn sigint_finishes_every_log_and_exits_130() {
+    let dir = tmpdir("sigint");
+    let mut child = start(&dir);
+    let out = dir.join("out");
+    wait_rows(&mut child, &out.join("history.csv"), 2);
+    signal(&child, "-INT");
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["error"], "interrupted");
+    let steps = s["solver"]["load_steps"].as_u64().unwrap() as usize;
+    assert!(steps >= 2 && steps < 40, "stopped early: {steps} steps");
+    let lambda = s["solver"]["interrupted_at"].as_f64().unwrap();
+
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    assert_eq!(rows.len(), steps);
+    let t = column(&h, &rows, "time");
+    assert!((t[steps - 1] - lambda).abs() < 1e-12);
+    let pvd = parse_pvd(&out.join("fields.pvd"));
+    assert_eq!(pvd.len(), steps);
+    let v = parse_vtu(&out.join(&pvd[steps - 1].1));
+    assert!((v.time - lambda).abs() < 1e-9);
+    // The MCAP was finished: it reads to its end, with the summary metadata.
+    let m = read_mcap(&out.join("run.mcap"));
+    assert!(!m.truncated);
+    assert_eq!(m.count("/tread/step"), steps);
+    assert_eq!(m.count("/tread/nodes"), steps);
+    assert_eq!(m.metadata["summary"]["interrupted"], "true");
+    assert_eq!(m.metadata["summary"]["error"], "interrupted");
+    #[cfg(feature = "rerun")]
+    {
+        let r = read_rrd(&out.join("run.rrd"));
+        assert_eq!(r["/body/mesh"].mesh_vertices.len(), steps);
+        assert_eq!(r["/hub/force_y"].scalars.len(), steps);
+        let hf = column(&h, &rows, "hub_force_y");
+        assert!((r["/hub/force_y"].scalars[steps - 1] - hf[steps - 1]).abs() <= 1e-9 * hf[steps - 1].abs());
+    }
+}
+
+#[test]
+fn sigkill_leaves_mcap_and_csv_readable() {
+    let dir = tmpdir("sigkill");
+    let mut child = start(&dir);
+    let out = dir.join("out");
+    wait_rows(&mut child, &out.join("history.csv"), 3);
+    signal(&child, "-KILL");
+    let st = child.wait().unwrap();
+    assert_eq!(st.code(), None, "killed by a signal");
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let n = rows.len();
+    assert!(n >= 3 && n < 40);
+    assert_eq!(column(&h, &rows, "step"), (0..n).map(|k| k as f64).collect::<Vec<_>>());
+    let m = read_mcap(&out.join("run.mcap"));
+    assert!(m.truncated, "a killed run leaves no summary section");
+    let idx: Vec<f64> = m
+        .topic("/tread/step")
+        .iter()
+        .map(|x| f64_field(&x.msg, "index"))
+        .collect();
+    // Every step in the CSV but possibly the last one (killed between the two sinks) is in the
+    // MCAP, with its view; nothing is garbled.
+    assert!(idx.len() + 1 >= n && idx.len() <= n + 1, "{} vs {n}", idx.len());
+    assert_eq!(idx, (0..idx.len()).map(|k| k as f64).collect::<Vec<_>>());
+    assert_eq!(m.count("/tread/nodes"), idx.len());
+    let hub = m.topic("/tread/hub");
+    let hf = column(&h, &rows, "hub_force_y");
+    for (k, x) in hub.iter().enumerate().take(n) {
+        assert!((f64_field(&x.msg, "force_y") - hf[k]).abs() <= 1e-9 * hf[k].abs());
+    }
+    // The VTU series lists only complete files.
+    for (_, f) in parse_pvd(&out.join("fields.pvd")) {
+        assert!(parse_vtu(&out.join(f)).n_points > 0);
+    }
+}
+
+#[test]
+fn replay_without_viewer_tells_how_to_install() {
+    let dir = tmpdir("replay");
+    let log = dir.join("x.rrd");
+    std::fs::write(&log, b"not really").unwrap();
+    let o = tread()
+        .args(["replay", log.to_str().unwrap()])
+        .env("TREAD_RERUN_BIN", dir.join("no-such-viewer"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("pip install rerun-sdk") && e.contains("cargo install rerun-cli"), "{e}");
+    let o = tread()
+        .args(["replay", dir.join("x.txt").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    // A viewer that exists is started with the log (here `true`, which exits at once).
+    if let Some(t) = ["/bin/true", "/usr/bin/true"].iter().find(|p| Path::new(p).is_file()) {
+        let o = tread()
+            .args(["replay", log.to_str().unwrap()])
+            .env("TREAD_RERUN_BIN", t)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+}
+
+#[cfg(feature = "rerun")]
+#[test]
+fn replay_converts_mcap_to_rrd() {
+    let dir = tmpdir("convert");
+    let f = dir.join("scene.toml");
+    std::fs::write(
+        &f,
+        LONG.replace("load_steps = 40", "load_steps = 2")
+            .replace("n_theta = 96", "n_theta = 32"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = tread()
+        .args(["run", f.to_str().unwrap(), "-q", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = read_mcap(&out.join("run.mcap"));
+    let steps = m.count("/tread/step");
+    let rrd = dir.join("converted.rrd");
+    let o = tread()
+        .args(["replay", out.join("run.mcap").to_str().unwrap(), "--to", rrd.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("converted {} messages", m.messages.len())));
+    let r = read_rrd(&rrd);
+    // Numeric fields become series with the step timeline; the scene mesh becomes a Mesh3D.
+    let fy = &r["/tread/hub/force_y"];
+    assert_eq!(fy.scalars.len(), steps);
+    let want: Vec<f64> = m.topic("/tread/hub").iter().map(|x| f64_field(&x.msg, "force_y")).collect();
+    assert_eq!(fy.scalars, want);
+    assert_eq!(fy.times.iter().map(|x| x.0).collect::<Vec<_>>(), (0..steps as i64).collect::<Vec<_>>());
+    let mesh = &r["/tread/mesh/body/triangles/0"];
+    assert_eq!(mesh.mesh_vertices.len(), steps);
+    assert_eq!(r["/tread/nodes"].times.len(), steps);
+    assert!(r["/metadata/scene"].static_rows >= 1);
+}
