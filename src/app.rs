@@ -75,6 +75,7 @@ pub struct RunOptions {
 /// this build).
 pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders, Vec<String>) {
     let mut r = Recorders::new();
+    #[cfg_attr(feature = "rerun", allow(unused_mut))]
     let mut warnings = Vec::new();
     let every = scene.output.every;
     for sink in &scene.output.sinks {

@@ -148,7 +148,7 @@ pub fn mcap_to_rrd(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayE
 #[cfg(feature = "rerun")]
 mod convert {
     use super::{ConvertStats, ReplayError};
-    use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
+    use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, Value};
     use std::collections::{BTreeMap, HashMap};
     use std::path::Path;
 

@@ -302,12 +302,12 @@ pub fn read_rrd(path: &Path) -> BTreeMap<String, RrdEntity> {
         }
         let steps: Vec<i64> = chunk
             .timelines()
-            .get(&rerun::TimelineName::new("step"))
+            .get(&rerun::TimelineName::from("step"))
             .map(|c| c.times_raw().to_vec())
             .unwrap_or_else(|| vec![-1; chunk.num_rows()]);
         let sim: Vec<i64> = chunk
             .timelines()
-            .get(&rerun::TimelineName::new("sim_time"))
+            .get(&rerun::TimelineName::from("sim_time"))
             .map(|c| c.times_raw().to_vec())
             .unwrap_or_else(|| vec![-1; chunk.num_rows()]);
         let s: Vec<Option<f64>> = if chunk.components().get_array(scalars_id).is_some() {
