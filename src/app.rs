@@ -24,8 +24,7 @@ use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
 use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
 use crate::io::scene::{
-    ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode, Scene,
-    Sink,
+    ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode, Scene, Sink,
 };
 use crate::material::{
     Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,

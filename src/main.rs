@@ -166,17 +166,15 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
-        Some(Command::Replay { log, to }) => {
-            match tread::io::replay::replay(&log, to.as_deref()) {
-                Ok(msg) => {
-                    println!("{msg}");
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("tread: {e}");
-                    ExitCode::from(1)
-                }
+        Some(Command::Replay { log, to }) => match tread::io::replay::replay(&log, to.as_deref()) {
+            Ok(msg) => {
+                println!("{msg}");
+                ExitCode::SUCCESS
             }
-        }
+            Err(e) => {
+                eprintln!("tread: {e}");
+                ExitCode::from(1)
+            }
+        },
     }
 }

@@ -130,7 +130,10 @@ fn sigint_finishes_every_log_and_exits_130() {
         assert_eq!(r["/body/mesh"].mesh_vertices.len(), steps);
         assert_eq!(r["/hub/force_y"].scalars.len(), steps);
         let hf = column(&h, &rows, "hub_force_y");
-        assert!((r["/hub/force_y"].scalars[steps - 1] - hf[steps - 1]).abs() <= 1e-9 * hf[steps - 1].abs());
+        assert!(
+            (r["/hub/force_y"].scalars[steps - 1] - hf[steps - 1]).abs()
+                <= 1e-9 * hf[steps - 1].abs()
+        );
     }
 }
 
@@ -146,7 +149,10 @@ fn sigkill_leaves_mcap_and_csv_readable() {
     let (h, rows) = read_csv(&out.join("history.csv"));
     let n = rows.len();
     assert!(n >= 3 && n < 40);
-    assert_eq!(column(&h, &rows, "step"), (0..n).map(|k| k as f64).collect::<Vec<_>>());
+    assert_eq!(
+        column(&h, &rows, "step"),
+        (0..n).map(|k| k as f64).collect::<Vec<_>>()
+    );
     let m = read_mcap(&out.join("run.mcap"));
     assert!(m.truncated, "a killed run leaves no summary section");
     let idx: Vec<f64> = m
@@ -156,7 +162,11 @@ fn sigkill_leaves_mcap_and_csv_readable() {
         .collect();
     // Every step in the CSV but possibly the last one (killed between the two sinks) is in the
     // MCAP, with its view; nothing is garbled.
-    assert!(idx.len() + 1 >= n && idx.len() <= n + 1, "{} vs {n}", idx.len());
+    assert!(
+        idx.len() + 1 >= n && idx.len() <= n + 1,
+        "{} vs {n}",
+        idx.len()
+    );
     assert_eq!(idx, (0..idx.len()).map(|k| k as f64).collect::<Vec<_>>());
     assert_eq!(m.count("/tread/nodes"), idx.len());
     let hub = m.topic("/tread/hub");
@@ -182,14 +192,20 @@ fn replay_without_viewer_tells_how_to_install() {
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains("pip install rerun-sdk") && e.contains("cargo install rerun-cli"), "{e}");
+    assert!(
+        e.contains("pip install rerun-sdk") && e.contains("cargo install rerun-cli"),
+        "{e}"
+    );
     let o = tread()
         .args(["replay", dir.join("x.txt").to_str().unwrap()])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(1));
     // A viewer that exists is started with the log (here `true`, which exits at once).
-    if let Some(t) = ["/bin/true", "/usr/bin/true"].iter().find(|p| Path::new(p).is_file()) {
+    if let Some(t) = ["/bin/true", "/usr/bin/true"]
+        .iter()
+        .find(|p| Path::new(p).is_file())
+    {
         let o = tread()
             .args(["replay", log.to_str().unwrap()])
             .env("TREAD_RERUN_BIN", t)
@@ -222,18 +238,31 @@ fn replay_converts_mcap_to_rrd() {
     let steps = m.count("/tread/step");
     let rrd = dir.join("converted.rrd");
     let o = tread()
-        .args(["replay", out.join("run.mcap").to_str().unwrap(), "--to", rrd.to_str().unwrap()])
+        .args([
+            "replay",
+            out.join("run.mcap").to_str().unwrap(),
+            "--to",
+            rrd.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stdout).contains(&format!("converted {} messages", m.messages.len())));
+    assert!(String::from_utf8_lossy(&o.stdout)
+        .contains(&format!("converted {} messages", m.messages.len())));
     let r = read_rrd(&rrd);
     // Numeric fields become series with the step timeline; the scene mesh becomes a Mesh3D.
     let fy = &r["/tread/hub/force_y"];
     assert_eq!(fy.scalars.len(), steps);
-    let want: Vec<f64> = m.topic("/tread/hub").iter().map(|x| f64_field(&x.msg, "force_y")).collect();
+    let want: Vec<f64> = m
+        .topic("/tread/hub")
+        .iter()
+        .map(|x| f64_field(&x.msg, "force_y"))
+        .collect();
     assert_eq!(fy.scalars, want);
-    assert_eq!(fy.times.iter().map(|x| x.0).collect::<Vec<_>>(), (0..steps as i64).collect::<Vec<_>>());
+    assert_eq!(
+        fy.times.iter().map(|x| x.0).collect::<Vec<_>>(),
+        (0..steps as i64).collect::<Vec<_>>()
+    );
     let mesh = &r["/tread/mesh/body/triangles/0"];
     assert_eq!(mesh.mesh_vertices.len(), steps);
     assert_eq!(r["/tread/nodes"].times.len(), steps);

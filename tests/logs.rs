@@ -78,10 +78,17 @@ fn static_run_every_output_reads_back() {
     let (h, rows) = read_csv(&dir.join("history.csv"));
     assert_eq!(rows.len(), steps);
     let t = column(&h, &rows, "time");
-    assert_eq!(column(&h, &rows, "step"), (0..steps).map(|i| i as f64).collect::<Vec<_>>());
+    assert_eq!(
+        column(&h, &rows, "step"),
+        (0..steps).map(|i| i as f64).collect::<Vec<_>>()
+    );
     assert!(t.windows(2).all(|w| w[1] > w[0]) && (t[steps - 1] - 1.0).abs() < 1e-15);
     let hfy = column(&h, &rows, "hub_force_y");
-    assert!((hfy[steps - 1] - fy).abs() <= 1e-9 * fy.abs(), "{} vs {fy}", hfy[steps - 1]);
+    assert!(
+        (hfy[steps - 1] - fy).abs() <= 1e-9 * fy.abs(),
+        "{} vs {fy}",
+        hfy[steps - 1]
+    );
     // Load stepping from first touch: the hub force grows monotonically in magnitude.
     assert!(hfy.windows(2).all(|w| w[1] < w[0]), "{hfy:?}");
     let es = column(&h, &rows, "energy_strain");
@@ -113,7 +120,13 @@ fn static_run_every_output_reads_back() {
     // MCAP: counts per topic, log times = λ in ns, values = the other outputs.
     let m = read_mcap(&dir.join("run.mcap"));
     assert!(!m.truncated, "a finished MCAP reads to its end");
-    for topic in ["/tread/step", "/tread/nodes", "/tread/mesh", "/tread/hub", "/tread/energy"] {
+    for topic in [
+        "/tread/step",
+        "/tread/nodes",
+        "/tread/mesh",
+        "/tread/hub",
+        "/tread/energy",
+    ] {
         assert_eq!(m.count(topic), steps, "{topic}");
     }
     assert_eq!(m.count("/tread/contact"), steps);
@@ -138,7 +151,9 @@ fn static_run_every_output_reads_back() {
     assert_eq!(data.len(), stride * n_nodes);
     let (x1, x2) = (column(&nh, &nodes, "X1"), column(&nh, &nodes, "X2"));
     for n in 0..n_nodes {
-        let f = |o: usize| f32::from_le_bytes(data[n * stride + o..n * stride + o + 4].try_into().unwrap());
+        let f = |o: usize| {
+            f32::from_le_bytes(data[n * stride + o..n * stride + o + 4].try_into().unwrap())
+        };
         assert!((f64::from(f(0)) - (x1[n] + u1[n])).abs() < 1e-5);
         assert!((f64::from(f(4)) - (x2[n] + u2[n])).abs() < 1e-5);
     }
@@ -147,10 +162,16 @@ fn static_run_every_output_reads_back() {
     let tn = list_f64(patch, "t_n");
     let ds0 = list_f64(patch, "ds0");
     let fc: f64 = tn.iter().zip(&ds0).map(|(a, b)| a * b).sum();
-    assert!((fc + fy).abs() <= 1e-6 * fy.abs(), "contact {fc} vs hub {fy}");
+    assert!(
+        (fc + fy).abs() <= 1e-6 * fy.abs(),
+        "contact {fc} vs hub {fy}"
+    );
     assert_eq!(m.metadata["scene"]["name"], "logs_static");
     assert!(m.metadata["scene"]["toml"].contains("[contact]"));
-    assert_eq!(m.metadata["build"]["tread_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(
+        m.metadata["build"]["tread_version"],
+        env!("CARGO_PKG_VERSION")
+    );
     assert_eq!(m.metadata["summary"]["converged"], "true");
     assert!(m.count("/tread/log") >= 2);
 
@@ -178,7 +199,12 @@ fn static_run_every_output_reads_back() {
     }
 
     // PNG plots exist and are PNG images of the drawn size.
-    for p in ["hub_forces.png", "hub_torque.png", "energy.png", "contact.png"] {
+    for p in [
+        "hub_forces.png",
+        "hub_torque.png",
+        "energy.png",
+        "contact.png",
+    ] {
         assert_eq!(png_size(&dir.join(p)), (900, 560), "{p}");
     }
 }
@@ -245,7 +271,10 @@ every = {every}
         };
         let frame = rec.wants_view(&info).then(|| SolidFrame::capture(&sys));
         let scalars = [("angle", omega * t)];
-        rec.step(&info, frame.as_ref().map(|f| f.view(&sys, &scalars)).as_ref());
+        rec.step(
+            &info,
+            frame.as_ref().map(|f| f.view(&sys, &scalars)).as_ref(),
+        );
     }
     let errs = rec.run_finished(&RunEnd {
         converged: true,
@@ -284,7 +313,10 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
     let ke = rho * omega * omega * std::f64::consts::PI * (ro.powi(4) - ri.powi(4)) / 4.0;
 
     let (h, rows) = read_csv(&dir.join("history.csv"));
-    assert_eq!(column(&h, &rows, "step"), recorded.iter().map(|k| *k as f64).collect::<Vec<_>>());
+    assert_eq!(
+        column(&h, &rows, "step"),
+        recorded.iter().map(|k| *k as f64).collect::<Vec<_>>()
+    );
     for (r, k) in column(&h, &rows, "time").iter().zip(&recorded) {
         assert!((r - dt * (*k + 1) as f64).abs() < 1e-15);
     }
@@ -294,7 +326,10 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
     for e in column(&h, &rows, "energy_strain") {
         // Relative to the elastic energy scale μ·A (A = π (ro² − ri²)).
         let scale = 200.0 * std::f64::consts::PI * (ro * ro - ri * ri);
-        assert!(e.abs() <= 1e-4 * scale, "strain energy of a rigid rotation: {e}");
+        assert!(
+            e.abs() <= 1e-4 * scale,
+            "strain energy of a rigid rotation: {e}"
+        );
     }
     for tau in column(&h, &rows, "max_shear_stress") {
         assert!(tau.abs() < 1e-2 * 200.0, "{tau}"); // vs the shear modulus μ = 200
@@ -311,7 +346,10 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
     let v = parse_vtu(&dir.join(&pvd.last().unwrap().1));
     let ang = omega * dt * steps as f64;
     for (n, p) in mesh.nodes.iter().enumerate() {
-        let u = [v.arrays["displacement"][3 * n], v.arrays["displacement"][3 * n + 1]];
+        let u = [
+            v.arrays["displacement"][3 * n],
+            v.arrays["displacement"][3 * n + 1],
+        ];
         assert!((p[0] + u[0] - (ang.cos() * p[0] - ang.sin() * p[1])).abs() < 1e-9);
         assert!((p[1] + u[1] - (ang.sin() * p[0] + ang.cos() * p[1])).abs() < 1e-9);
     }
@@ -335,7 +373,10 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
         let r = read_rrd(&dir.join("run.rrd"));
         assert_eq!(r["/body/mesh"].mesh_vertices.len(), recorded.len());
         let k = &r["/energy/kinetic"];
-        assert_eq!(k.times.iter().map(|x| x.0 as u64).collect::<Vec<_>>(), recorded);
+        assert_eq!(
+            k.times.iter().map(|x| x.0 as u64).collect::<Vec<_>>(),
+            recorded
+        );
         assert!(k.scalars.iter().all(|e| (e - ke).abs() <= 2e-5 * ke));
         assert_eq!(r["/newton/iterations"].scalars.len(), steps as usize);
         let sim: Vec<i64> = k.times.iter().map(|x| x.1).collect();

@@ -147,7 +147,9 @@ fn main() {
             "--steps" => steps = v.parse().unwrap_or(24).max(1),
             "--out" => out = PathBuf::from(v),
             _ => {
-                eprintln!("usage: tread-bench-log [--repeats R] [--n-theta N] [--steps S] [--out DIR]");
+                eprintln!(
+                    "usage: tread-bench-log [--repeats R] [--n-theta N] [--steps S] [--out DIR]"
+                );
                 std::process::exit(2);
             }
         }

@@ -10,8 +10,8 @@
 
 use super::system::{Loading, SolidSystem};
 use crate::contact::ContactModel;
-use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::io::record::Recorder;
+use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 
 #[derive(Clone, Debug, Default, serde::Serialize)]

@@ -11,9 +11,9 @@
 
 use super::system::SolidSystem;
 use crate::element::gauss_1d;
+use crate::io::record::Recorder;
 use crate::math::{Mat2, Vec2};
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
-use crate::io::record::Recorder;
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 
 /// Ring-averaged results of a spinning solution.

@@ -92,7 +92,11 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             let info = StepInfo {
                 index: i as u64,
                 time: smp.t,
-                dt: if i > 0 { smp.t - r.samples[i - 1].t } else { 0.0 },
+                dt: if i > 0 {
+                    smp.t - r.samples[i - 1].t
+                } else {
+                    0.0
+                },
                 newton_iterations: 0,
                 residual: 0.0,
                 is_final: i + 1 == n,

@@ -4,14 +4,14 @@
 //! ([`Loading`]): ω² for spinning, the road position for indentation, the hub load for load
 //! control.
 
+use super::frame::SolidFrame;
 use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
+use crate::io::record::{Recorder, StepInfo};
 use crate::math::Vec2;
 use crate::physics::SolidModel;
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
-use crate::io::record::{Recorder, StepInfo};
-use super::frame::SolidFrame;
 
 /// What the load factor λ scales.
 #[derive(Clone, Copy, Debug, PartialEq)]

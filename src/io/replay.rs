@@ -101,7 +101,8 @@ pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
             ))
         }
         ("rrd", Some(to)) => {
-            std::fs::copy(log, to).map_err(|e| ReplayError::Write(to.to_path_buf(), e.to_string()))?;
+            std::fs::copy(log, to)
+                .map_err(|e| ReplayError::Write(to.to_path_buf(), e.to_string()))?;
             Ok(format!("copied {} to {}", log.display(), to.display()))
         }
         ("mcap", None) => {
@@ -129,7 +130,10 @@ fn open(viewer: &Path, file: &Path) -> Result<String, ReplayError> {
     if status.success() {
         Ok(format!("viewer closed ({})", file.display()))
     } else {
-        Err(ReplayError::Viewer(format!("{} exited with {status}", viewer.display())))
+        Err(ReplayError::Viewer(format!(
+            "{} exited with {status}",
+            viewer.display()
+        )))
     }
 }
 
@@ -229,7 +233,9 @@ mod convert {
                 "foxglove.SceneUpdate" => scene_update(&rec, &topic, &msg),
                 "foxglove.PointCloud" => point_cloud(&rec, &topic, &msg),
                 "foxglove.Log" => {
-                    if let Some(Value::String(t)) = msg.get_field_by_name("message").map(|v| v.into_owned()) {
+                    if let Some(Value::String(t)) =
+                        msg.get_field_by_name("message").map(|v| v.into_owned())
+                    {
                         let _ = rec.log(topic.as_str(), &rerun::TextLog::new(t));
                     }
                 }
@@ -241,10 +247,8 @@ mod convert {
                         }
                         if let Some(x) = number(v) {
                             if x.is_finite() {
-                                let _ = rec.log(
-                                    format!("{topic}/{name}"),
-                                    &rerun::Scalars::single(x),
-                                );
+                                let _ =
+                                    rec.log(format!("{topic}/{name}"), &rerun::Scalars::single(x));
                             }
                         }
                     }
@@ -307,7 +311,11 @@ mod convert {
     }
 
     fn point3(p: &DynamicMessage) -> [f32; 3] {
-        [f64_of(p, "x") as f32, f64_of(p, "y") as f32, f64_of(p, "z") as f32]
+        [
+            f64_of(p, "x") as f32,
+            f64_of(p, "y") as f32,
+            f64_of(p, "z") as f32,
+        ]
     }
 
     fn color(c: &DynamicMessage) -> rerun::Color {
@@ -334,7 +342,9 @@ mod convert {
                     _ => Vec::new(),
                 };
                 let tris: Vec<[u32; 3]> = if idx.is_empty() {
-                    (0..pts.len() as u32 / 3).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect()
+                    (0..pts.len() as u32 / 3)
+                        .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
+                        .collect()
                 } else {
                     idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
                 };
@@ -350,7 +360,10 @@ mod convert {
                 .map(|l| messages(l, "points").iter().map(point3).collect())
                 .collect();
             if !strips.is_empty() {
-                let _ = rec.log(format!("{topic}/{id}/lines"), &rerun::LineStrips3D::new(strips));
+                let _ = rec.log(
+                    format!("{topic}/{id}/lines"),
+                    &rerun::LineStrips3D::new(strips),
+                );
             }
         }
     }

@@ -3056,11 +3056,11 @@ linear = "qr"
         assert_eq!(s.output.sinks, [Sink::Csv, Sink::Mcap]);
         assert_eq!(s.output.every, 5);
         assert_eq!(s.scene.name, "run2024");
+        assert_eq!(s.scene.description, "quoted text");
         let s = load_with(MINIMAL, &["output.sinks=[\"rerun\"]"]).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.output.sinks, [Sink::Rerun]);
         let s = load_with(MINIMAL, &["output.sinks=[]"]).unwrap_or_else(|e| panic!("{e}"));
         assert!(s.output.sinks.is_empty());
-        assert_eq!(s.scene.description, "quoted text");
         // A string-valued key takes an unquoted number literally.
         let s = load_with(MINIMAL, &["scene.name=2024"]).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.scene.name, "2024");
@@ -3187,13 +3187,24 @@ linear = "qr"
         let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"hdf5\"]\nevery = 0\n");
         let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
         let sinks = e.find("output.sinks").unwrap_or_else(|| panic!("{e}"));
-        assert!(sinks.message.contains("hdf5") && sinks.line.is_some(), "{e}");
+        assert!(
+            sinks.message.contains("hdf5") && sinks.line.is_some(),
+            "{e}"
+        );
         assert!(e.has_key("output.every"), "{e}");
         let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"csv\"]\n");
         let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
-        assert!(e.find("output.sinks").is_some_and(|x| x.message.contains("twice")), "{e}");
+        assert!(
+            e.find("output.sinks")
+                .is_some_and(|x| x.message.contains("twice")),
+            "{e}"
+        );
         let e = errors_with(MINIMAL, &["output.sinks=csv,nope"]);
-        assert!(e.find("output.sinks").is_some_and(|x| x.message.contains("nope")), "{e}");
+        assert!(
+            e.find("output.sinks")
+                .is_some_and(|x| x.message.contains("nope")),
+            "{e}"
+        );
         // Round trip of a non-default list.
         let s = load_with(MINIMAL, &["output.sinks=mcap,rerun", "output.every=3"])
             .unwrap_or_else(|e| panic!("{e}"));

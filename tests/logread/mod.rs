@@ -93,7 +93,11 @@ pub fn read_mcap(path: &Path) -> Mcap {
                 break;
             }
         };
-        let schema = m.channel.schema.as_ref().expect("every channel has a schema");
+        let schema = m
+            .channel
+            .schema
+            .as_ref()
+            .expect("every channel has a schema");
         assert_eq!(schema.encoding, "protobuf", "{}", m.channel.topic);
         assert_eq!(m.channel.message_encoding, "protobuf");
         let desc = descs
@@ -124,7 +128,11 @@ pub fn read_mcap(path: &Path) -> Mcap {
 /// `(header, rows)` of a CSV file (empty fields as NaN).
 pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert!(!text.contains("NaN") && !text.contains("inf"), "{}", path.display());
+    assert!(
+        !text.contains("NaN") && !text.contains("inf"),
+        "{}",
+        path.display()
+    );
     let mut lines = text.lines();
     let header: Vec<String> = lines
         .next()
@@ -136,7 +144,13 @@ pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
         .filter(|l| !l.is_empty())
         .map(|l| {
             l.split(',')
-                .map(|c| if c.is_empty() { f64::NAN } else { c.parse().unwrap() })
+                .map(|c| {
+                    if c.is_empty() {
+                        f64::NAN
+                    } else {
+                        c.parse().unwrap()
+                    }
+                })
                 .collect::<Vec<f64>>()
         })
         .collect();
@@ -328,7 +342,12 @@ pub fn read_rrd(path: &Path) -> BTreeMap<String, RrdEntity> {
         };
         let e = rows.entry(entity).or_default();
         for i in 0..chunk.num_rows() {
-            e.push((steps[i], sim[i], s.get(i).copied().flatten(), v.get(i).cloned().flatten()));
+            e.push((
+                steps[i],
+                sim[i],
+                s.get(i).copied().flatten(),
+                v.get(i).cloned().flatten(),
+            ));
         }
     }
     let mut out: BTreeMap<String, RrdEntity> = BTreeMap::new();

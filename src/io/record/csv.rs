@@ -29,7 +29,11 @@ impl CsvSink {
         }
     }
 
-    fn write_row(&mut self, info: &StepInfo, series: &[(&'static str, f64)]) -> std::io::Result<()> {
+    fn write_row(
+        &mut self,
+        info: &StepInfo,
+        series: &[(&'static str, f64)],
+    ) -> std::io::Result<()> {
         if self.out.is_none() {
             let mut w = BufWriter::new(File::create(&self.path)?);
             self.columns = series.iter().map(|(n, _)| *n).collect();
@@ -83,7 +87,8 @@ impl Recorder for CsvSink {
     fn run_finished(&mut self, _end: &RunEnd) -> Vec<RecordError> {
         if let Some(mut w) = self.out.take() {
             if let Err(e) = w.flush() {
-                self.error.get_or_insert(RecordError::new("csv", &self.path, e));
+                self.error
+                    .get_or_insert(RecordError::new("csv", &self.path, e));
             }
         }
         self.error.take().into_iter().collect()

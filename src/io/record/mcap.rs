@@ -38,8 +38,8 @@
 //! last complete message). Non-finite numbers are written as 0 (absent for optional fields).
 
 use super::{
-    colormap, display_triangles, or_zero, boundary_loops, ContinuationPoint, NewtonIteration,
-    RecordError, Recorder, RejectedStep, RunEnd, RunMeta, StepInfo, StepView, SteadyReached,
+    boundary_loops, colormap, display_triangles, or_zero, ContinuationPoint, NewtonIteration,
+    RecordError, Recorder, RejectedStep, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
 };
 use foxglove::messages as fm;
 use foxglove::Encode;
@@ -208,9 +208,7 @@ impl McapSink {
             .chunk_size(Some(CHUNK_SIZE))
             .profile("")
             .library(format!("tread {}", env!("CARGO_PKG_VERSION")));
-        let w = opts
-            .create(BufWriter::new(f))
-            .map_err(|e| e.to_string())?;
+        let w = opts.create(BufWriter::new(f)).map_err(|e| e.to_string())?;
         self.writer = Some(w);
         Ok(())
     }
@@ -378,8 +376,16 @@ impl McapSink {
                 let w = 1.5 * self.ro;
                 lines.push(line(
                     vec![
-                        fm::Point3 { x: -w, y: -h, z: 0.0 },
-                        fm::Point3 { x: w, y: -h, z: 0.0 },
+                        fm::Point3 {
+                            x: -w,
+                            y: -h,
+                            z: 0.0,
+                        },
+                        fm::Point3 {
+                            x: w,
+                            y: -h,
+                            z: 0.0,
+                        },
                     ],
                     [0.5, 0.3, 0.1],
                 ));
@@ -507,7 +513,12 @@ fn identity_pose() -> fm::Pose {
     }
 }
 
-fn point_cloud(time: f64, fields: &[(&str, u32, i32)], stride: u32, data: Vec<u8>) -> fm::PointCloud {
+fn point_cloud(
+    time: f64,
+    fields: &[(&str, u32, i32)],
+    stride: u32,
+    data: Vec<u8>,
+) -> fm::PointCloud {
     fm::PointCloud {
         timestamp: Some(timestamp(time)),
         frame_id: "hub".to_string(),
@@ -573,10 +584,16 @@ impl Recorder for McapSink {
             &[
                 ("tread_version", meta.version),
                 ("features", meta.features),
-                ("time_unit_note", "log_time = step time in ns (load factor counted as seconds)"),
+                (
+                    "time_unit_note",
+                    "log_time = step time in ns (load factor counted as seconds)",
+                ),
             ],
         );
-        let text = format!("run started: scene {} ({} mode)", meta.scene_name, meta.mode);
+        let text = format!(
+            "run started: scene {} ({} mode)",
+            meta.scene_name, meta.mode
+        );
         self.log_text(0.0, fm::log::Level::Info, &text);
     }
     fn wants_view(&self, _info: &StepInfo) -> bool {
@@ -678,7 +695,10 @@ impl Recorder for McapSink {
                 "summary",
                 &[
                     ("converged", &converged),
-                    ("interrupted", if end.interrupted { "true" } else { "false" }),
+                    (
+                        "interrupted",
+                        if end.interrupted { "true" } else { "false" },
+                    ),
                     ("error", end.error.unwrap_or("")),
                     ("steps", &steps),
                     ("summary_json", &summary),

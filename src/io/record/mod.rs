@@ -522,7 +522,11 @@ pub fn colormap(t: f64) -> [u8; 3] {
         [94.0, 201.0, 98.0],
         [253.0, 231.0, 37.0],
     ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let s = t * 4.0;
     let i = (s.floor() as usize).min(3);
     let f = s - i as f64;

@@ -84,7 +84,11 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     if !lo.is_finite() {
         return (0.0, 1.0);
     }
-    let pad = 0.05 * (hi - lo).abs().max(1e-12 * hi.abs().max(lo.abs())).max(f64::MIN_POSITIVE);
+    let pad = 0.05
+        * (hi - lo)
+            .abs()
+            .max(1e-12 * hi.abs().max(lo.abs()))
+            .max(f64::MIN_POSITIVE);
     if hi - lo <= 0.0 {
         let d = if lo == 0.0 { 1.0 } else { 0.05 * lo.abs() };
         return (lo - d, hi + d);
@@ -212,7 +216,13 @@ impl Recorder for PngSink {
             let p = self.dir.join("hub_torque.png");
             draw(
                 "hub_torque.png",
-                line_chart(&p, "Hub torque on the body", &tn, "torque", &[("M", &self.hub[2])]),
+                line_chart(
+                    &p,
+                    "Hub torque on the body",
+                    &tn,
+                    "torque",
+                    &[("M", &self.hub[2])],
+                ),
             );
         }
         if !self.energy[0].is_empty() {
@@ -249,13 +259,22 @@ impl Recorder for PngSink {
             let title = format!("Contact tractions at {tn} = {:.4e}", self.contact_time);
             draw(
                 "contact.png",
-                line_chart(&p, &title, "x1", "traction per unit reference length", &[("t_n", &n), ("t_T", &t)]),
+                line_chart(
+                    &p,
+                    &title,
+                    "x1",
+                    "traction per unit reference length",
+                    &[("t_n", &n), ("t_T", &t)],
+                ),
             );
         }
         if !self.branch.is_empty() {
             let p = self.dir.join("branch.png");
-            let s: Vec<(&str, &[(f64, f64)])> =
-                self.branch.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
+            let s: Vec<(&str, &[(f64, f64)])> = self
+                .branch
+                .iter()
+                .map(|(n, v)| (n.as_str(), v.as_slice()))
+                .collect();
             draw(
                 "branch.png",
                 line_chart(&p, "Solution branch", &self.branch_param, "measure", &s),
@@ -263,9 +282,15 @@ impl Recorder for PngSink {
         }
         if !self.model.is_empty() {
             let p = self.dir.join("series.png");
-            let s: Vec<(&str, &[(f64, f64)])> =
-                self.model.iter().map(|(n, v)| (n.as_str(), v.as_slice())).collect();
-            draw("series.png", line_chart(&p, "Model scalars", &tn, "value", &s));
+            let s: Vec<(&str, &[(f64, f64)])> = self
+                .model
+                .iter()
+                .map(|(n, v)| (n.as_str(), v.as_slice()))
+                .collect();
+            draw(
+                "series.png",
+                line_chart(&p, "Model scalars", &tn, "value", &s),
+            );
         }
         errors
     }

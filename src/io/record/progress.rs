@@ -11,7 +11,7 @@
 //! ⠙ [00:00:12] ████████░░░░░░░░  t = 1.250e-1 / 5.000e-1  rev 2.98  step 1250  104.2 steps/s
 //! ```
 
-use super::{Recorder, RejectedStep, RecordError, RunEnd, RunMeta, StepInfo};
+use super::{RecordError, Recorder, RejectedStep, RunEnd, RunMeta, StepInfo};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::time::Instant;
 
@@ -82,15 +82,17 @@ impl Progress {
 
 impl Recorder for Progress {
     fn run_started(&mut self, meta: &RunMeta) {
-        self.time_end = if meta.time_end > 0.0 { meta.time_end } else { 1.0 };
+        self.time_end = if meta.time_end > 0.0 {
+            meta.time_end
+        } else {
+            1.0
+        };
         self.period = meta.revolution_period;
         self.load_factor = meta.time_name == "load_factor";
         self.start = Instant::now();
         let bar = ProgressBar::with_draw_target(Some(TICKS), ProgressDrawTarget::stderr());
-        let style = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar());
+        let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
         bar.set_style(style);
         bar.set_message(format!("{}: starting", meta.scene_name));
         self.bar = Some(bar);

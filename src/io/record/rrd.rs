@@ -24,8 +24,8 @@
 //! | `log` | TextLog | run start and end, rejected steps, interrupts |
 
 use super::{
-    boundary_loops, colormap, display_triangles, ContinuationPoint, NewtonIteration,
-    RecordError, Recorder, RejectedStep, RunEnd, RunMeta, StepInfo, StepView, SteadyReached,
+    boundary_loops, colormap, display_triangles, ContinuationPoint, NewtonIteration, RecordError,
+    Recorder, RejectedStep, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
 };
 use rerun::RecordingStream;
 use std::collections::BTreeSet;
@@ -126,7 +126,9 @@ impl RrdSink {
         let mmax = m.iter().copied().fold(0.0, f64::max);
         let colors: Vec<rerun::Color> = (0..nn)
             .map(|n| {
-                let t = m.get(n).map_or(0.0, |x| if mmax > 0.0 { x / mmax } else { 0.0 });
+                let t = m
+                    .get(n)
+                    .map_or(0.0, |x| if mmax > 0.0 { x / mmax } else { 0.0 });
                 let c = colormap(t);
                 rerun::Color::from_rgb(c[0], c[1], c[2])
             })
@@ -146,8 +148,7 @@ impl RrdSink {
         if !strips.is_empty() {
             let r = rec.log(
                 format!("{entity}/boundary"),
-                &rerun::LineStrips3D::new(strips)
-                    .with_colors([rerun::Color::from_rgb(30, 30, 30)]),
+                &rerun::LineStrips3D::new(strips).with_colors([rerun::Color::from_rgb(30, 30, 30)]),
             );
             self.check(r);
         }
@@ -173,11 +174,12 @@ impl RrdSink {
             .collect();
         if !v.contact.is_empty() {
             let pmax = patch.iter().map(|s| s.t_n).fold(0.0, f64::max);
-            let tmax = patch
-                .iter()
-                .map(|s| s.t_n.hypot(s.t_t))
-                .fold(0.0, f64::max);
-            let scale = if tmax > 0.0 { 0.2 * self.ro / tmax } else { 0.0 };
+            let tmax = patch.iter().map(|s| s.t_n.hypot(s.t_t)).fold(0.0, f64::max);
+            let scale = if tmax > 0.0 {
+                0.2 * self.ro / tmax
+            } else {
+                0.0
+            };
             let points: Vec<[f32; 3]> = patch
                 .iter()
                 .map(|s| [s.x1 as f32, s.x2 as f32, 0.0])
@@ -205,19 +207,13 @@ impl RrdSink {
             self.check(r);
             let x1: Vec<f64> = patch.iter().map(|s| s.x1).collect();
             let tn: Vec<f64> = patch.iter().map(|s| s.t_n).collect();
-            let tt: Vec<f64> = patch
-                .iter()
-                .map(|s| super::or_zero(s.t_t))
-                .collect();
+            let tt: Vec<f64> = patch.iter().map(|s| super::or_zero(s.t_t)).collect();
             let r = rec.log(
                 "contact/pressure",
                 &rerun::BarChart::new(tn).with_abscissa(x1.clone()),
             );
             self.check(r);
-            let r = rec.log(
-                "contact/shear",
-                &rerun::BarChart::new(tt).with_abscissa(x1),
-            );
+            let r = rec.log("contact/shear", &rerun::BarChart::new(tt).with_abscissa(x1));
             self.check(r);
         }
         for (name, value) in v.series(info) {
@@ -281,7 +277,10 @@ impl Recorder for RrdSink {
         );
         self.check(r);
         self.set_step_time(0, 0.0);
-        self.text("INFO", &format!("run started: {} ({} mode)", meta.scene_name, meta.mode));
+        self.text(
+            "INFO",
+            &format!("run started: {} ({} mode)", meta.scene_name, meta.mode),
+        );
     }
     fn wants_view(&self, _info: &StepInfo) -> bool {
         self.rec.is_some()
@@ -322,7 +321,11 @@ impl Recorder for RrdSink {
     fn continuation_point(&mut self, p: &ContinuationPoint) {
         let Some(rec) = self.rec.clone() else { return };
         rec.set_time_sequence("branch_point", p.index as i64);
-        self.scalar(&format!("branch/{}", p.parameter_name), p.parameter_name, p.parameter);
+        self.scalar(
+            &format!("branch/{}", p.parameter_name),
+            p.parameter_name,
+            p.parameter,
+        );
         self.scalar("branch/arc_length", "arc length", p.arc_length);
         self.scalar("branch/det_sign", "sign of det K", f64::from(p.det_sign));
         for (n, v) in p.measures {
@@ -330,7 +333,10 @@ impl Recorder for RrdSink {
         }
         rec.disable_timeline("branch_point");
         if self.branch_header.is_none() {
-            let mut h = format!("| point | {} | arc length | det sign | kind |", p.parameter_name);
+            let mut h = format!(
+                "| point | {} | arc length | det sign | kind |",
+                p.parameter_name
+            );
             for (n, _) in p.measures {
                 let _ = write!(h, " {n} |");
             }

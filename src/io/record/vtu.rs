@@ -10,7 +10,7 @@
 //! Q2 and VTK_QUAD (9) for Q1; the field data `TimeValue` is the step's time. Non-finite values
 //! are written as 0.
 
-use super::{or_zero, RecordError, Recorder, RunEnd, StepInfo, StepView, SteadyReached};
+use super::{or_zero, RecordError, Recorder, RunEnd, SteadyReached, StepInfo, StepView};
 use crate::mesh::Mesh;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -97,7 +97,9 @@ pub fn vtu_text(mesh: &Mesh, view: &StepView, time: f64) -> String {
     );
     s.push_str("</FieldData>\n");
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{nn}\" NumberOfCells=\"{nc}\">");
-    s.push_str("<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+    s.push_str(
+        "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+    );
     for p in &mesh.nodes {
         let _ = writeln!(s, "{} {} 0", num(p[0]), num(p[1]));
     }
