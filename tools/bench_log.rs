@@ -6,7 +6,8 @@
 //!   `--quiet`),
 //! * with every sink on (CSV, VTU, MCAP, PNG, and Rerun when built with the `rerun` feature),
 //!
-//! alternating the variants, `--repeats` times each; prints the medians and the ratios, plus
+//! alternating the variants (order rotated every round), `--repeats` times each; prints the
+//! medians and the ratios, plus
 //! the cost of one step event on an empty fan-out (nanoseconds, over 10⁶ calls). Usage:
 //!
 //! ```text
@@ -166,9 +167,12 @@ fn main() {
     let variants = [Variant::Unit, Variant::Empty, Variant::All];
     let mut times: Vec<Vec<f64>> = vec![Vec::new(); 3];
     let mut nsteps = 0;
-    // One warm-up of each, then alternate.
+    // One warm-up of each, then alternate, rotating the order every round (no variant always
+    // runs right after the heavy one).
     for rep in 0..=repeats {
-        for (k, v) in variants.iter().enumerate() {
+        for j in 0..3 {
+            let k = (j + rep) % 3;
+            let v = &variants[k];
             match run(&scene, *v, &out) {
                 Ok((t, n)) => {
                     nsteps = n;
@@ -183,6 +187,10 @@ fn main() {
             }
         }
     }
+    let mins: Vec<f64> = times
+        .iter()
+        .map(|t| t.iter().copied().fold(f64::INFINITY, f64::min))
+        .collect();
     let m: Vec<f64> = times.into_iter().map(median).collect();
     // Per-event cost on an empty fan-out.
     let mut empty = Recorders::new();
@@ -208,13 +216,19 @@ fn main() {
         "spinning solve, n_theta = {n_theta}, {nsteps} load steps, median of {repeats} (features: {})",
         if record::build_features().is_empty() { "none" } else { record::build_features() }
     );
-    println!("| recorder | median (s) | ratio to no recorder |");
-    println!("|---|---|---|");
-    for (name, t) in ["none (`&mut ()`)", "empty fan-out (no sinks)", "all sinks"]
+    println!("| recorder | median (s) | ratio of medians | min (s) | ratio of minima |");
+    println!("|---|---|---|---|---|");
+    for (k, name) in ["none (`&mut ()`)", "empty fan-out (no sinks)", "all sinks"]
         .iter()
-        .zip(&m)
+        .enumerate()
     {
-        println!("| {name} | {t:.4} | {:.4} |", t / m[0]);
+        println!(
+            "| {name} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            m[k],
+            m[k] / m[0],
+            mins[k],
+            mins[k] / mins[0]
+        );
     }
     println!("step event on an empty fan-out: {per_event_ns:.1} ns");
 }
