@@ -10,7 +10,10 @@ use std::path::{Path, PathBuf};
 use tread::app::{self, RunOptions};
 use tread::driver::frame::SolidFrame;
 use tread::io::record::mcap::McapSink;
-use tread::io::record::{self, Recorder, Recorders, RunEnd, RunMeta, StepInfo};
+use tread::io::record::{
+    self, ContinuationPoint, PointKind, Recorder, Recorders, RunEnd, RunMeta, SteadyReached,
+    StepInfo,
+};
 use tread::io::Scene;
 
 fn tmpdir(name: &str) -> PathBuf {
@@ -276,6 +279,33 @@ every = {every}
             frame.as_ref().map(|f| f.view(&sys, &scalars)).as_ref(),
         );
     }
+    // Then, as a steady/continuation driver would: five branch points and a steady state.
+    for i in 0..5u64 {
+        let measures = [("u_r_outer", 0.01 * i as f64), ("hub_torque", -(i as f64))];
+        rec.continuation_point(&ContinuationPoint {
+            index: i,
+            parameter_name: "omega",
+            parameter: 10.0 + i as f64,
+            arc_length: i as f64,
+            newton_iterations: 3,
+            det_sign: if i < 3 { 1 } else { -1 },
+            kind: if i == 3 {
+                PointKind::LimitPoint
+            } else {
+                PointKind::Regular
+            },
+            measures: &measures,
+        });
+    }
+    let frame = SolidFrame::capture(&sys);
+    rec.steady_reached(
+        &SteadyReached {
+            time: dt * steps as f64,
+            change: 1e-9,
+            results: &[("hub_force_y", -5.0)],
+        },
+        &frame.view(&sys, &[]),
+    );
     let errs = rec.run_finished(&RunEnd {
         converged: true,
         interrupted: false,
@@ -356,9 +386,19 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
 
     let m = read_mcap(&dir.join("run.mcap"));
     assert_eq!(m.count("/tread/step"), steps as usize, "every step's info");
-    assert_eq!(m.count("/tread/nodes"), recorded.len(), "decimated views");
+    // Decimated views, and the steady state's field at the end.
+    assert_eq!(
+        m.count("/tread/nodes"),
+        recorded.len() + 1,
+        "decimated views"
+    );
     assert_eq!(m.count("/tread/series/angle"), recorded.len());
-    let lt: Vec<u64> = m.topic("/tread/nodes").iter().map(|x| x.log_time).collect();
+    let lt: Vec<u64> = m
+        .topic("/tread/nodes")
+        .iter()
+        .take(recorded.len())
+        .map(|x| x.log_time)
+        .collect();
     let want: Vec<u64> = recorded
         .iter()
         .map(|k| (dt * (*k + 1) as f64 * 1e9).round() as u64)
@@ -368,9 +408,36 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
         assert!((f64_field(&x.msg, "value") - omega * dt * (*k + 1) as f64).abs() < 1e-12);
     }
 
+    // Branch points and the steady state.
+    let bp = m.topic("/tread/continuation");
+    assert_eq!(bp.len(), 5);
+    for (i, p) in bp.iter().enumerate() {
+        assert_eq!(f64_field(&p.msg, "parameter"), 10.0 + i as f64);
+        assert_eq!(
+            list_f64(&p.msg, "measure_values"),
+            vec![0.01 * i as f64, -(i as f64)]
+        );
+        assert_eq!(
+            f64_field(&p.msg, "det_sign"),
+            if i < 3 { 1.0 } else { -1.0 }
+        );
+    }
+    let sd = m.topic("/tread/steady");
+    assert_eq!(sd.len(), 1);
+    assert_eq!(list_f64(&sd[0].msg, "values"), vec![-5.0]);
+    let st = parse_vtu(&dir.join("steady.vtu"));
+    assert_eq!(st.n_points, mesh.n_nodes());
+    assert_eq!(png_size(&dir.join("branch.png")), (900, 560));
+
     #[cfg(feature = "rerun")]
     {
         let r = read_rrd(&dir.join("run.rrd"));
+        let mut om = r["/branch/omega"].scalars.clone();
+        om.sort_by(f64::total_cmp);
+        assert_eq!(om, vec![10.0, 11.0, 12.0, 13.0, 14.0]);
+        assert_eq!(r["/branch/hub_torque"].scalars.len(), 5);
+        assert!(r["/branch/table"].static_rows >= 1);
+        assert_eq!(r["/steady/mesh"].mesh_vertices, vec![mesh.n_nodes()]);
         assert_eq!(r["/body/mesh"].mesh_vertices.len(), recorded.len());
         let k = &r["/energy/kinetic"];
         assert_eq!(

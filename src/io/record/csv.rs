@@ -64,7 +64,8 @@ impl CsvSink {
 
 fn fmt(v: f64) -> String {
     if v.is_finite() {
-        format!("{v:.12e}")
+        // `+ 0.0` turns −0 into 0.
+        format!("{:.12e}", v + 0.0)
     } else {
         String::new()
     }
