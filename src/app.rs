@@ -406,7 +406,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     });
     if interrupted {
         summary["solver"]["interrupted_at"] = serde_json::json!(match &solve {
-            Err(SolveError::Interrupted { lambda }) => *lambda,
+            Err(SolveError::Interrupted { at }) => *at,
             _ => 0.0,
         });
     }

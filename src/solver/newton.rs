@@ -49,9 +49,9 @@ pub enum SolveError {
     LineSearch { min_alpha: f64, residual: f64 },
     #[error("initial state is inadmissible (J ≤ 0 or non-finite residual)")]
     InadmissibleStart,
-    /// Ctrl-C at a step boundary; `lambda` is the last converged load factor (or time).
+    /// Ctrl-C at a step boundary; `at` is the last converged load factor (or time).
     #[error("interrupted")]
-    Interrupted { lambda: f64 },
+    Interrupted { at: f64 },
     #[error("load stepping gave up at load factor {lambda:.6} after {cutbacks} cut-backs: {last}")]
     TooManyCutbacks {
         lambda: f64,

@@ -65,7 +65,7 @@ pub fn solve_load_steps<S: LoadedSystem>(
     let mut index: u64 = 0;
     while lambda < 1.0 {
         if record::interrupted() {
-            return Err(SolveError::Interrupted { lambda });
+            return Err(SolveError::Interrupted { at: lambda });
         }
         let target = (lambda + dl).min(1.0);
         sys.save_state(&mut saved);

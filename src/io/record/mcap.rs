@@ -347,7 +347,7 @@ impl McapSink {
 
             // Scene update: the deformed mesh, its boundary and the road.
             let p3 = |n: usize| {
-                let p = pos(n as usize);
+                let p = pos(n);
                 fm::Point3 {
                     x: or_zero(p[0]),
                     y: or_zero(p[1]),

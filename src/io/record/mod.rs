@@ -24,25 +24,38 @@
 //! # How a driver calls it
 //!
 //! ```ignore
-//! use tread::io::record::{self, Recorder, StepInfo};
+//! use tread::driver::frame::SolidFrame;
+//! use tread::io::record::{self, Recorder, RejectedStep, StepInfo};
+//! use tread::solver::stepping::final_residual;
 //!
-//! fn my_driver(sys: &mut SolidSystem, rec: &mut dyn Recorder) -> Result<(), SolveError> {
+//! fn my_driver(sys: &mut SolidSystem, newton: &mut Newton, t_end: f64, dt: f64,
+//!              rec: &mut dyn Recorder) -> Result<(), SolveError> {
 //!     // (the application calls rec.run_started(&meta) before and rec.run_finished(&end) after)
-//!     let mut index = 0;
-//!     let mut t = 0.0;
+//!     let (mut index, mut t) = (0u64, 0.0);
 //!     while t < t_end {
 //!         if record::interrupted() {
-//!             return Err(SolveError::Interrupted); // at a step boundary: logs stay consistent
+//!             // At a step boundary: the logs hold whole steps only.
+//!             return Err(SolveError::Interrupted { at: t });
 //!         }
-//!         let rep = newton.solve(sys)?;
-//!         record::emit_newton_table(rec, index, t + dt, &rep.table, sys.field_names());
-//!         t += dt;
-//!         let info = StepInfo { index, time: t, dt, newton_iterations: rep.iterations,
-//!                               residual: rep.final_residual(), is_final: t >= t_end };
-//!         // Build the view only when some sink records this step (decimation).
-//!         let frame = rec.wants_view(&info).then(|| SolidFrame::capture(sys));
-//!         rec.step(&info, frame.as_ref().map(|f| f.view(sys, &[])).as_ref());
-//!         index += 1;
+//!         match newton.solve(sys) {
+//!             Ok(rep) => {
+//!                 record::emit_newton_table(rec, index, t + dt, &rep.table, sys.field_names());
+//!                 t += dt;
+//!                 let info = StepInfo { index, time: t, dt, newton_iterations: rep.iterations,
+//!                                       residual: final_residual(&rep.table),
+//!                                       is_final: t >= t_end };
+//!                 // Build the view only when some sink records this step (decimation).
+//!                 let frame = rec.wants_view(&info).then(|| SolidFrame::capture(sys));
+//!                 let extra = [("revolutions", t / period)];       // optional model scalars
+//!                 rec.step(&info, frame.as_ref().map(|f| f.view(sys, &extra)).as_ref());
+//!                 index += 1;
+//!             }
+//!             Err(e) => {
+//!                 let reason = e.to_string();
+//!                 rec.step_rejected(&RejectedStep { index, time: t + dt, dt, reason: &reason });
+//!                 // … cut dt and retry
+//!             }
+//!         }
 //!     }
 //!     Ok(())
 //! }
@@ -50,7 +63,11 @@
 //!
 //! [`crate::driver::frame::SolidFrame`] builds a [`StepView`] of a `SolidSystem` (nodal
 //! stresses, contact samples, hub loads, energies); load stepping does all of this through
-//! [`crate::solver::stepping::LoadedSystem::record_step`].
+//! [`crate::solver::stepping::LoadedSystem::record_step`]. A progress bar for a time-stepping
+//! driver is [`progress::Progress`] (in the fan-out built by `app::build_recorders` unless
+//! `--quiet`): give `RunMeta { time_name: "time", time_end, revolution_period, .. }` and it shows
+//! simulated time, revolutions, steps and steps per second. The application builds the sinks
+//! from the scene with `app::build_recorders(scene, out_dir, quiet)`.
 //!
 //! # Time
 //!
@@ -410,7 +427,7 @@ impl Recorders {
 
 impl Entry {
     fn admits(&self, info: &StepInfo) -> bool {
-        info.is_final || info.index % self.every == 0
+        info.is_final || info.index.is_multiple_of(self.every)
     }
 }
 
