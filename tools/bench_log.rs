@@ -187,6 +187,11 @@ fn main() {
             }
         }
     }
+    // Ratios within each round (the variants of a round run back to back: slow drifts of the
+    // machine's load cancel), then their median.
+    let round_ratio =
+        |k: usize| median(times[k].iter().zip(&times[0]).map(|(a, b)| a / b).collect());
+    let rr: Vec<f64> = (0..3).map(round_ratio).collect();
     let mins: Vec<f64> = times
         .iter()
         .map(|t| t.iter().copied().fold(f64::INFINITY, f64::min))
@@ -216,18 +221,21 @@ fn main() {
         "spinning solve, n_theta = {n_theta}, {nsteps} load steps, median of {repeats} (features: {})",
         if record::build_features().is_empty() { "none" } else { record::build_features() }
     );
-    println!("| recorder | median (s) | ratio of medians | min (s) | ratio of minima |");
-    println!("|---|---|---|---|---|");
+    println!(
+        "| recorder | median (s) | ratio of medians | min (s) | ratio of minima | median of per-round ratios |"
+    );
+    println!("|---|---|---|---|---|---|");
     for (k, name) in ["none (`&mut ()`)", "empty fan-out (no sinks)", "all sinks"]
         .iter()
         .enumerate()
     {
         println!(
-            "| {name} | {:.4} | {:.4} | {:.4} | {:.4} |",
+            "| {name} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
             m[k],
             m[k] / m[0],
             mins[k],
-            mins[k] / mins[0]
+            mins[k] / mins[0],
+            rr[k]
         );
     }
     println!("step event on an empty fan-out: {per_event_ns:.1} ns");
