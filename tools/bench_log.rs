@@ -16,7 +16,7 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use tread::app::{build_system, RunOptions};
+use tread::app::build_system;
 use tread::driver::spinning::solve_spinning;
 use tread::io::record::{self, Recorder, Recorders, RunMeta, StepInfo};
 use tread::io::Scene;
@@ -155,7 +155,6 @@ fn main() {
             }
         }
     }
-    let _ = RunOptions::default();
     let scene = match scene(n_theta, steps) {
         Ok(s) => s,
         Err(e) => {

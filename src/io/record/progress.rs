@@ -115,3 +115,34 @@ impl Recorder for Progress {
         Vec::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn time_stepping_message_shows_time_revolutions_and_rate() {
+        let mut p = Progress::new();
+        p.load_factor = false;
+        p.time_end = 0.5;
+        p.period = Some(0.1);
+        let info = StepInfo {
+            index: 99,
+            time: 0.25,
+            dt: 0.0025,
+            newton_iterations: 3,
+            residual: 1e-11,
+            is_final: false,
+        };
+        let m = p.message(&info);
+        assert!(
+            m.starts_with("t = 2.500e-1 / 5.000e-1  rev 2.50  step 100"),
+            "{m}"
+        );
+        assert!(m.ends_with("steps/s"), "{m}");
+        p.load_factor = true;
+        assert!(p
+            .message(&info)
+            .starts_with("λ = 0.2500  step 100  Newton 3"));
+    }
+}
