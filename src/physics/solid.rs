@@ -137,6 +137,71 @@ impl SolidModel {
         !self.inverted.load(Ordering::Relaxed)
     }
 
+    /// Scalar mass matrix ρ0 ∫ N_a N_b dV of cell `c` (row-major, `n × n` with n the cell's node
+    /// count), with (p + 2)² Gauss points (N_a N_b det J has degree 2p + 1 per direction on the
+    /// polar map: exact).
+    pub fn cell_mass(&self, c: usize, out: &mut Vec<f64>) {
+        match self.mesh.degree[c] {
+            1 => self.cell_mass_generic::<Q1, 4>(c, 3, out),
+            _ => self.cell_mass_generic::<Q2, 9>(c, 4, out),
+        }
+    }
+
+    fn cell_mass_generic<E: Lagrange2D, const N: usize>(&self, c: usize, q: usize, out: &mut Vec<f64>) {
+        let tab = ShapeTable::<N>::gauss::<E>(q);
+        out.clear();
+        out.resize(N * N, 0.0);
+        for k in 0..tab.len() {
+            let (xi, eta) = tab.points[k];
+            let (_, jac) = self.map(c, xi, eta, &tab.n[k], &tab.dn[k]);
+            let w = tab.weights[k] * jac.determinant() * self.rho;
+            for a in 0..N {
+                for b in 0..N {
+                    out[a * N + b] += tab.n[k][a] * tab.n[k][b] * w;
+                }
+            }
+        }
+    }
+
+    /// HRZ lumping of a cell mass matrix (`n × n`): diagonal entries scaled so that they sum to
+    /// the cell mass. Positive for Q2 (row-sum lumping gives zero or negative corner masses).
+    pub fn hrz_lump(m: &[f64], n: usize) -> Vec<f64> {
+        let total: f64 = m.iter().sum();
+        let diag: f64 = (0..n).map(|a| m[a * n + a]).sum();
+        (0..n).map(|a| m[a * n + a] * total / diag).collect()
+    }
+
+    /// Clear the "inadmissible state met" flag before a custom assembly with [`Self::cell_system`].
+    pub fn reset_admissible(&self) {
+        self.inverted.store(false, Ordering::Relaxed);
+    }
+    /// Whether no quadrature point met J ≤ 0 since [`Self::reset_admissible`].
+    pub fn admissible(&self) -> bool {
+        !self.inverted.load(Ordering::Relaxed)
+    }
+
+    /// Local residual and tangent of cell `c` at state `x` (static part: internal work,
+    /// θ-referential inertia, body force, pressure terms).
+    pub fn cell_system(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem, with_k: bool) {
+        self.cell_kernel(c, dofs, x, loc, with_k);
+    }
+
+    /// Strain energy ∫ W(∇u) dV of the whole mesh at state `x` (displacement part only).
+    pub fn strain_energy(&self, dofs: &DofMap, x: &[f64]) -> f64 {
+        let mut e = 0.0;
+        for c in 0..self.mesh.n_cells() {
+            let (pts, ws) = crate::element::gauss_1d(3);
+            for (i, xi) in pts.iter().enumerate() {
+                for (j, eta) in pts.iter().enumerate() {
+                    if let Some(pv) = self.point_values(c, dofs, x, *xi, *eta) {
+                        e += self.material.energy(&pv.grad_u) * ws[i] * ws[j] * pv.jac.determinant();
+                    }
+                }
+            }
+        }
+        e
+    }
+
     /// Local residual of cell `c` at state `x` (including rows of fixed dofs: reactions).
     pub fn cell_residual(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem) {
         self.cell_kernel(c, dofs, x, loc, false);
