@@ -190,7 +190,10 @@ fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
         LinearChoice::Cholesky => LinearKind::Cholesky,
         LinearChoice::Lu => LinearKind::Lu,
         LinearChoice::Auto => {
-            let friction = sys.contact.as_ref().is_some_and(|c| c.friction.is_active() || c.normal.has_damping());
+            let friction = sys
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction.is_active() || c.normal.has_damping());
             if matches!(sys.model.pressure, PressureMode::Exact { .. }) || friction {
                 LinearKind::Lu
             } else {

@@ -286,7 +286,15 @@ impl ContactModel {
     /// Displacement and velocity at facet point `q` of cell `c` (see [`SlipKinematics`] for
     /// the meaning of `aux`).
     #[inline]
-    fn point_motion(&self, nodes: &[u32], side: &[usize; 3], nn: usize, nv: &[f64; 3], x: &[f64], aux: &[f64]) -> (Vec2, Vec2) {
+    fn point_motion(
+        &self,
+        nodes: &[u32],
+        side: &[usize; 3],
+        nn: usize,
+        nv: &[f64; 3],
+        x: &[f64],
+        aux: &[f64],
+    ) -> (Vec2, Vec2) {
         let (mut u, mut a) = (Vec2::zeros(), Vec2::zeros());
         for j in 0..nn {
             let n = nodes[side[j]] as usize;
@@ -304,7 +312,16 @@ impl ContactModel {
     /// [`Self::element_dofs`]. `x`: current full state; `aux`: the state of the last converged
     /// load step (static) or the velocity field (dynamic), see [`SlipKinematics`].
     #[allow(clippy::too_many_arguments)]
-    pub fn kernel(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], aux: &[f64], e: usize, loc: &mut LocalSystem, with_k: bool) {
+    pub fn kernel(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        aux: &[f64],
+        e: usize,
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
         let f = self.facets[e];
         let c = f.cell as usize;
         let p = mesh.degree[c] as usize;
@@ -385,7 +402,13 @@ impl ContactModel {
 
     /// Traction samples at every facet quadrature point (contact or not); `aux` as in
     /// [`Self::kernel`].
-    pub fn samples(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64], aux: &[f64]) -> Vec<ContactSample> {
+    pub fn samples(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        aux: &[f64],
+    ) -> Vec<ContactSample> {
         let h = self.road_height(dofs, x);
         let (_, _, dynamic) = self.kinematics.factors();
         let damping = dynamic && self.normal.has_damping();
@@ -404,12 +427,25 @@ impl ContactModel {
                 let w = vel[0] - self.v0;
                 let (t_n, t_t) = if delta > 0.0 {
                     let nv = self.normal.eval(delta, if damping { -vel[1] } else { 0.0 });
-                    let tt = if self.friction.is_active() { self.friction.eval(w, nv.t, delta).t } else { 0.0 };
+                    let tt = if self.friction.is_active() {
+                        self.friction.eval(w, nv.t, delta).t
+                    } else {
+                        0.0
+                    };
                     (nv.t, tt)
                 } else {
                     (0.0, 0.0)
                 };
-                out.push(ContactSample { theta: fp.theta, x1: xc[0], x2: xc[1], delta: delta.max(0.0), t_n, t_t, w, ds0: fp.ds0 });
+                out.push(ContactSample {
+                    theta: fp.theta,
+                    x1: xc[0],
+                    x2: xc[1],
+                    delta: delta.max(0.0),
+                    t_n,
+                    t_t,
+                    w,
+                    ds0: fp.ds0,
+                });
             }
         }
         out

@@ -121,7 +121,13 @@ impl GenAlpha {
         let af = r / (r + 1.0);
         let gamma = 0.5 - am + af;
         let beta = 0.25 * (1.0 - am + af).powi(2);
-        Self { rho_inf: r, am, af, gamma, beta }
+        Self {
+            rho_inf: r,
+            am,
+            af,
+            gamma,
+            beta,
+        }
     }
 }
 
@@ -283,7 +289,9 @@ impl Transient {
             for a in 0..nn {
                 for b in 0..nn {
                     let (na, nb) = (nodes[a] as usize, nodes[b] as usize);
-                    e += 0.5 * m[a * nn + b] * (v[2 * na] * v[2 * nb] + v[2 * na + 1] * v[2 * nb + 1]);
+                    e += 0.5
+                        * m[a * nn + b]
+                        * (v[2 * na] * v[2 * nb] + v[2 * na + 1] * v[2 * nb + 1]);
                 }
             }
         }
@@ -306,7 +314,9 @@ impl Transient {
                 continue;
             }
             loc.clear(self.sys.dofs.cell(c).len());
-            self.sys.model.cell_residual(c, &self.sys.dofs, &self.sys.x, &mut loc);
+            self.sys
+                .model
+                .cell_residual(c, &self.sys.dofs, &self.sys.x, &mut loc);
             let nn = nodes.len();
             let mm = &self.mass[self.mass_off[c]..self.mass_off[c + 1]];
             for a in 0..nn {
@@ -347,7 +357,8 @@ impl Transient {
         let dt = self.dt;
         let (b, g) = (ga.beta, ga.gamma);
         for d in 0..self.un.len() {
-            let a1 = (self.sys.x[d] - self.un[d] - dt * self.vn[d]) / (b * dt * dt) - (0.5 / b - 1.0) * self.an[d];
+            let a1 = (self.sys.x[d] - self.un[d] - dt * self.vn[d]) / (b * dt * dt)
+                - (0.5 / b - 1.0) * self.an[d];
             let v1 = self.vn[d] + dt * ((1.0 - g) * self.an[d] + g * a1);
             self.a1[d] = a1;
             self.v1[d] = v1;
@@ -383,7 +394,14 @@ impl Transient {
     /// `cm` for the acceleration `aa`. `prev` adds `prev · f_n` (the forces of the last
     /// committed step): force-averaged generalized-α, objective because every force is
     /// evaluated at an actual configuration.
-    fn assemble_dynamic(&mut self, with_matrix: bool, fs: f64, kv: f64, cm: f64, prev: f64) -> bool {
+    fn assemble_dynamic(
+        &mut self,
+        with_matrix: bool,
+        fs: f64,
+        kv: f64,
+        cm: f64,
+        prev: f64,
+    ) -> bool {
         let sys = &mut self.sys;
         sys.model.reset_admissible();
         sys.asm.zero(with_matrix);
@@ -541,10 +559,16 @@ impl Transient {
         let mut minv = vec![0.0; n];
         for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
             if e != FIXED {
-                minv[e as usize] = if self.ml[d] > 0.0 { 1.0 / self.ml[d] } else { 0.0 };
+                minv[e as usize] = if self.ml[d] > 0.0 {
+                    1.0 / self.ml[d]
+                } else {
+                    0.0
+                };
             }
         }
-        let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.1 * ((i as f64) * 0.37).sin()).collect();
+        let mut x: Vec<f64> = (0..n)
+            .map(|i| 1.0 + 0.1 * ((i as f64) * 0.37).sin())
+            .collect();
         let mut y = vec![0.0; n];
         let mut lam = 0.0;
         for _ in 0..60 {
@@ -640,7 +664,16 @@ impl SteadyMonitor {
     /// the node angle, extract the referential field at that instant and compare. Returns
     /// true when steady (changes below `tol`).
     #[allow(clippy::too_many_arguments)]
-    pub fn check(&mut self, tr: &Transient, t0: f64, u0: &[f64], v0: &[f64], snap0: &Snapshot, snap1: &Snapshot, tol: f64) -> bool {
+    pub fn check(
+        &mut self,
+        tr: &Transient,
+        t0: f64,
+        u0: &[f64],
+        v0: &[f64],
+        snap0: &Snapshot,
+        snap1: &Snapshot,
+        tol: f64,
+    ) -> bool {
         let k1 = (tr.kin.phi(tr.t) / self.dtheta).floor() as i64;
         if self.last_k == i64::MIN {
             self.last_k = k1;
@@ -678,7 +711,10 @@ impl SteadyMonitor {
                 let i = m * per + l;
                 let j = m * per + (l + kk) % per;
                 for c in 0..2 {
-                    let u = h00 * u0[2 * i + c] + h10 * h * v0[2 * i + c] + h01 * tr.un[2 * i + c] + h11 * h * tr.vn[2 * i + c];
+                    let u = h00 * u0[2 * i + c]
+                        + h10 * h * v0[2 * i + c]
+                        + h01 * tr.un[2 * i + c]
+                        + h11 * h * tr.vn[2 * i + c];
                     let xi = mesh.nodes[i][c] + u;
                     field[2 * j + c] = xi - mesh.nodes[j][c];
                 }
@@ -695,10 +731,24 @@ impl SteadyMonitor {
         self.passages += 1;
         let mut steady = false;
         if let Some((pf, ps)) = &self.prev {
-            let num = field.iter().zip(pf).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
-            let den = field.iter().map(|a| a * a).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
-            let fscale = snap.hub_force_x.hypot(snap.hub_force_y).max(f64::MIN_POSITIVE);
-            let df = (snap.hub_force_x - ps.hub_force_x).hypot(snap.hub_force_y - ps.hub_force_y) / fscale;
+            let num = field
+                .iter()
+                .zip(pf)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt();
+            let den = field
+                .iter()
+                .map(|a| a * a)
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
+            let fscale = snap
+                .hub_force_x
+                .hypot(snap.hub_force_y)
+                .max(f64::MIN_POSITIVE);
+            let df = (snap.hub_force_x - ps.hub_force_x).hypot(snap.hub_force_y - ps.hub_force_y)
+                / fscale;
             let tscale = fscale * mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
             let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
             self.last_change = (num / den, df, dm);
@@ -734,15 +784,26 @@ pub fn integrate(
     kind: crate::solver::LinearKind,
     mut on_step: impl FnMut(&Transient, &TransientReport),
 ) -> Result<TransientReport, (SolveError, TransientReport)> {
-    let mut rep = TransientReport { dt_min_used: f64::INFINITY, ..Default::default() };
+    let mut rep = TransientReport {
+        dt_min_used: f64::INFINITY,
+        ..Default::default()
+    };
     let mut newton = match Newton::new(&tr.sys, kind, newton_opts) {
         Ok(n) => n,
         Err(e) => return Err((e, rep)),
     };
     // Reference force: weight-like scale ρ |Ω| ω² Ro + hub load.
     let area = super::system::domain_area(&tr.sys.model);
-    let ro = tr.sys.model.mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
-    let fref = tr.sys.model.rho * area * (tr.kin.omega.target.powi(2) * ro).max(1.0) + tr.kin.load.map_or(0.0, |l| l.target.abs());
+    let ro = tr
+        .sys
+        .model
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| x.norm())
+        .fold(0.0, f64::max);
+    let fref = tr.sys.model.rho * area * (tr.kin.omega.target.powi(2) * ro).max(1.0)
+        + tr.kin.load.map_or(0.0, |l| l.target.abs());
     tr.sys.set_reference_force(fref);
     let mut monitor = SteadyMonitor::new(&tr.sys);
     tr.prescribe(tr.t);
@@ -752,7 +813,11 @@ pub fn integrate(
     let mut dt = match tr.scheme {
         Scheme::CentralDifference => {
             let s = tr.stable_step();
-            if s.is_finite() { (0.9 * s).min(opts.dt) } else { opts.dt }
+            if s.is_finite() {
+                (0.9 * s).min(opts.dt)
+            } else {
+                opts.dt
+            }
         }
         _ => opts.dt,
     };
@@ -761,7 +826,9 @@ pub fn integrate(
     let (mut u0, mut v0, mut a0) = (tr.un.clone(), tr.vn.clone(), tr.an.clone());
     let mut saved = Vec::new();
     while tr.t < opts.t_end - 1e-12 * opts.t_end && rep.steps < opts.max_steps {
-        dt = dt.min(opts.t_end - tr.t).max(opts.dt_min.min(opts.t_end - tr.t));
+        dt = dt
+            .min(opts.t_end - tr.t)
+            .max(opts.dt_min.min(opts.t_end - tr.t));
         let t0 = tr.t;
         u0.copy_from_slice(&tr.un);
         v0.copy_from_slice(&tr.vn);
@@ -769,7 +836,10 @@ pub fn integrate(
         tr.sys.save_state(&mut saved);
         match tr.step(&mut newton, dt) {
             Ok((err, its)) => {
-                let reject = opts.adaptive && matches!(tr.scheme, Scheme::GeneralizedAlpha(_)) && err > 4.0 * opts.error_tol && dt > opts.dt_min;
+                let reject = opts.adaptive
+                    && matches!(tr.scheme, Scheme::GeneralizedAlpha(_))
+                    && err > 4.0 * opts.error_tol
+                    && dt > opts.dt_min;
                 if reject {
                     tr.t = t0;
                     tr.un.copy_from_slice(&u0);
@@ -777,7 +847,8 @@ pub fn integrate(
                     tr.an.copy_from_slice(&a0);
                     tr.sys.restore_state(&saved);
                     rep.rejected += 1;
-                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9)).max(opts.dt_min);
+                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9))
+                        .max(opts.dt_min);
                     continue;
                 }
                 rep.steps += 1;
@@ -786,7 +857,10 @@ pub fn integrate(
                 rep.dt_max_used = rep.dt_max_used.max(dt);
                 let snap1 = tr.snapshot_light();
                 if let Some(m) = &mut monitor {
-                    if tr.t >= tr.kin.ramps_done() && m.check(tr, t0, &u0, &v0, &snap0, &snap1, opts.steady_tol) && !rep.steady {
+                    if tr.t >= tr.kin.ramps_done()
+                        && m.check(tr, t0, &u0, &v0, &snap0, &snap1, opts.steady_tol)
+                        && !rep.steady
+                    {
                         rep.steady = true;
                         rep.time_to_steady = Some(tr.t);
                     }
@@ -800,7 +874,8 @@ pub fn integrate(
                     break;
                 }
                 if opts.adaptive && matches!(tr.scheme, Scheme::GeneralizedAlpha(_)) && err > 0.0 {
-                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.5, 1.5)).clamp(opts.dt_min, opts.dt_max);
+                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.5, 1.5))
+                        .clamp(opts.dt_min, opts.dt_max);
                 }
             }
             Err(e) => {
@@ -810,7 +885,9 @@ pub fn integrate(
                 tr.an.copy_from_slice(&a0);
                 tr.sys.restore_state(&saved);
                 rep.rejected += 1;
-                if dt <= opts.dt_min * (1.0 + 1e-12) || matches!(tr.scheme, Scheme::CentralDifference) {
+                if dt <= opts.dt_min * (1.0 + 1e-12)
+                    || matches!(tr.scheme, Scheme::CentralDifference)
+                {
                     rep.final_time = tr.t;
                     return Err((e, rep));
                 }
@@ -832,7 +909,14 @@ impl Transient {
     /// Hub reaction only (no energies): cheap per-step snapshot.
     pub fn snapshot_light(&self) -> Snapshot {
         let (f, m) = self.hub_reaction();
-        Snapshot { t: self.t, phi: self.kin.phi(self.t), hub_force_x: f[0], hub_force_y: f[1], hub_torque: m, ..Default::default() }
+        Snapshot {
+            t: self.t,
+            phi: self.kin.phi(self.t),
+            hub_force_x: f[0],
+            hub_force_y: f[1],
+            hub_torque: m,
+            ..Default::default()
+        }
     }
 }
 
@@ -867,7 +951,11 @@ impl NonlinearSystem for RigidSpin<'_> {
         for d in 0..tr.un.len() {
             tr.xa[d] = tr.sys.x[d];
             tr.va[d] = 0.0;
-            tr.aa[d] = if d < n_u { -self.omega2 * (tr.sys.model.mesh.nodes[d / 2][d % 2] + tr.sys.x[d]) } else { 0.0 };
+            tr.aa[d] = if d < n_u {
+                -self.omega2 * (tr.sys.model.mesh.nodes[d / 2][d % 2] + tr.sys.x[d])
+            } else {
+                0.0
+            };
         }
         // d(aa)/du = −ω² on displacement dofs: the mass term contributes −ω² M to the tangent.
         tr.assemble_dynamic(with_matrix, 1.0, 0.0, -self.omega2, 0.0)
@@ -900,7 +988,12 @@ impl Transient {
     /// c_a = (4/Δt²) tan²(ωΔt/2) instead of ω², and v = (2/Δt) tan(ωΔt/2) e3 × x. With a lumped
     /// mass (no coupling to the hub's accelerations) the integrator then reproduces the rigid
     /// rotation to round-off: a sharp test of objectivity.
-    pub fn start_rigid_spin(&mut self, omega: f64, kind: crate::solver::LinearKind, trapezoidal_dt: Option<f64>) -> Result<(), SolveError> {
+    pub fn start_rigid_spin(
+        &mut self,
+        omega: f64,
+        kind: crate::solver::LinearKind,
+        trapezoidal_dt: Option<f64>,
+    ) -> Result<(), SolveError> {
         let (ca, cv) = match trapezoidal_dt {
             Some(dt) => {
                 let t = (0.5 * omega * dt).tan();
@@ -908,11 +1001,16 @@ impl Transient {
             }
             None => (omega * omega, omega),
         };
-        let opts = NewtonOptions { tol: 1e-12, max_iterations: 30, ..Default::default() };
+        let opts = NewtonOptions {
+            tol: 1e-12,
+            max_iterations: 30,
+            ..Default::default()
+        };
         let steps = 4;
         let mut newton = Newton::new(&self.sys, kind, opts)?;
         let area = super::system::domain_area(&self.sys.model);
-        self.sys.set_reference_force(self.sys.model.rho * area * omega * omega);
+        self.sys
+            .set_reference_force(self.sys.model.rho * area * omega * omega);
         for s in 1..=steps {
             let omega2 = ca * s as f64 / steps as f64;
             let mut rs = RigidSpin { tr: self, omega2 };
@@ -927,8 +1025,12 @@ impl Transient {
             self.an[d] = -ca * p[0];
             self.an[d + 1] = -ca * p[1];
         }
+        // The hub nodes carry the exact rates of the prescribed rotation, as during stepping.
         self.v1.copy_from_slice(&self.vn);
         self.a1.copy_from_slice(&self.an);
+        self.hub_rates(self.t);
+        self.vn.copy_from_slice(&self.v1);
+        self.an.copy_from_slice(&self.a1);
         Ok(())
     }
 

@@ -22,7 +22,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let Some(ts) = &scene.time else {
-        return Err(AppError::Unsupported("mode \"transient\" needs the [time] section".into()));
+        return Err(AppError::Unsupported(
+            "mode \"transient\" needs the [time] section".into(),
+        ));
     };
     let scheme = match ts.integrator {
         IntegratorName::GeneralizedAlpha => Scheme::GeneralizedAlpha(GenAlpha::new(ts.rho_inf)),
@@ -45,11 +47,23 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let road = scene.road.as_ref();
     let ramp = road.map_or(0.0, |r| r.ramp);
     let kin = Kinematics {
-        omega: Ramp { target: scene.motion.omega, time: scene.motion.ramp },
-        disp: road.and_then(|r| r.disp).map(|d| Ramp { target: d, time: ramp }),
+        omega: Ramp {
+            target: scene.motion.omega,
+            time: scene.motion.ramp,
+        },
+        disp: road.and_then(|r| r.disp).map(|d| Ramp {
+            target: d,
+            time: ramp,
+        }),
         h_touch: scene.geometry.ro,
-        load: road.and_then(|r| r.load).map(|l| Ramp { target: l, time: ramp }),
-        v0: Ramp { target: road.map_or(0.0, |r| r.v0), time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)) },
+        load: road.and_then(|r| r.load).map(|l| Ramp {
+            target: l,
+            time: ramp,
+        }),
+        v0: Ramp {
+            target: road.map_or(0.0, |r| r.v0),
+            time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
+        },
     };
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme, kin, lumped);
@@ -101,7 +115,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Ok(r) => (r, None),
         Err((e, r)) => (r, Some(e)),
     };
-    let samples = tr.sys.contact.as_ref().map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn)).unwrap_or_default();
+    let samples = tr
+        .sys
+        .contact
+        .as_ref()
+        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
+        .unwrap_or_default();
     let tot = ContactModel::totals(&samples);
     let (f, m) = tr.hub_reaction();
     let results = serde_json::json!({
@@ -125,8 +144,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "integrator": tr.scheme.name(),
         "mass": if lumped { "lumped" } else { "consistent" },
     });
-    let friction = tr.sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
-    let damping = tr.sys.contact.as_ref().is_some_and(|c| c.normal.has_damping());
+    let friction = tr
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.friction.is_active());
+    let damping = tr
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.normal.has_damping());
     let converged = err.is_none();
     let mut summary = serde_json::json!({
         "scene": scene.scene.name,
@@ -154,11 +181,26 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     sanitize(&mut summary);
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     if scene.output.csv {
-        write_csv(&opts.out_dir.join("history.csv"), &["t", "phi", "hub_force_x", "hub_force_y", "hub_torque"], history.into_iter())?;
+        write_csv(
+            &opts.out_dir.join("history.csv"),
+            &["t", "phi", "hub_force_x", "hub_force_y", "hub_torque"],
+            history.into_iter(),
+        )?;
         write_csv(
             &opts.out_dir.join("contact.csv"),
-            &["theta", "x1", "x2", "penetration", "t_n", "t_t", "slip_velocity", "ds0"],
-            samples.iter().map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
+            &[
+                "theta",
+                "x1",
+                "x2",
+                "penetration",
+                "t_n",
+                "t_t",
+                "slip_velocity",
+                "ds0",
+            ],
+            samples
+                .iter()
+                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
         )?;
         if let Some(rl) = tr.sys.model.mesh.rings {
             if let Some(field) = tr.steady_field.as_ref() {
@@ -166,7 +208,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 write_csv(
                     &opts.out_dir.join("steady_field.csv"),
                     &["ring", "pos", "X1", "X2", "u1", "u2"],
-                    (0..mesh.n_nodes()).map(|n| vec![(n / rl.per_ring) as f64, (n % rl.per_ring) as f64, mesh.nodes[n][0], mesh.nodes[n][1], field[2 * n], field[2 * n + 1]]),
+                    (0..mesh.n_nodes()).map(|n| {
+                        vec![
+                            (n / rl.per_ring) as f64,
+                            (n % rl.per_ring) as f64,
+                            mesh.nodes[n][0],
+                            mesh.nodes[n][1],
+                            field[2 * n],
+                            field[2 * n + 1],
+                        ]
+                    }),
                 )?;
             }
         }
@@ -176,7 +227,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         rep.final_time, rep.revolutions, rep.steps, rep.steady, rep.time_to_steady, f[0], f[1], m, tot.x_min, tot.x_max
     )];
     match err {
-        None => Ok(RunOutcome { summary, out_dir: opts.out_dir.clone(), converged, headline }),
+        None => Ok(RunOutcome {
+            summary,
+            out_dir: opts.out_dir.clone(),
+            converged,
+            headline,
+        }),
         Some(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
     }
 }

@@ -117,7 +117,9 @@ impl Mesh {
     /// angles). With the polar map a nodal rotation by 0.3 rad leaves residual forces of
     /// ~1e-3 of the typical nodal force on a 2 × 32 mesh.
     pub fn make_isoparametric(&mut self) {
-        self.geometry.iter_mut().for_each(|g| *g = CellGeometry::Isoparametric);
+        self.geometry
+            .iter_mut()
+            .for_each(|g| *g = CellGeometry::Isoparametric);
     }
 
     /// Greedy colouring of the cells such that no two cells of one colour share a node.

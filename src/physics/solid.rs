@@ -147,7 +147,12 @@ impl SolidModel {
         }
     }
 
-    fn cell_mass_generic<E: Lagrange2D, const N: usize>(&self, c: usize, q: usize, out: &mut Vec<f64>) {
+    fn cell_mass_generic<E: Lagrange2D, const N: usize>(
+        &self,
+        c: usize,
+        q: usize,
+        out: &mut Vec<f64>,
+    ) {
         let tab = ShapeTable::<N>::gauss::<E>(q);
         out.clear();
         out.resize(N * N, 0.0);
@@ -182,7 +187,14 @@ impl SolidModel {
 
     /// Local residual and tangent of cell `c` at state `x` (static part: internal work,
     /// θ-referential inertia, body force, pressure terms).
-    pub fn cell_system(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem, with_k: bool) {
+    pub fn cell_system(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
         self.cell_kernel(c, dofs, x, loc, with_k);
     }
 
@@ -194,7 +206,8 @@ impl SolidModel {
             for (i, xi) in pts.iter().enumerate() {
                 for (j, eta) in pts.iter().enumerate() {
                     if let Some(pv) = self.point_values(c, dofs, x, *xi, *eta) {
-                        e += self.material.energy(&pv.grad_u) * ws[i] * ws[j] * pv.jac.determinant();
+                        e +=
+                            self.material.energy(&pv.grad_u) * ws[i] * ws[j] * pv.jac.determinant();
                     }
                 }
             }
