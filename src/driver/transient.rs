@@ -406,9 +406,9 @@ impl Transient {
         sys.model.reset_admissible();
         sys.asm.zero(with_matrix);
         let (model, dofs) = (&sys.model, &sys.dofs);
-        let (xa, aa, mass, off) = (&self.xa, &self.aa, &self.mass, &self.mass_off);
+        let (xa, va, aa, mass, off) = (&self.xa, &self.va, &self.aa, &self.mass, &self.mass_off);
         sys.asm.add_block(0, dofs, with_matrix, |c, loc| {
-            model.cell_system(c, dofs, xa, loc, with_matrix);
+            model.cell_system_viscous(c, dofs, xa, va, kv, loc, with_matrix);
             let nd = loc.nd;
             if fs != 1.0 {
                 loc.r[..nd].iter_mut().for_each(|v| *v *= fs);

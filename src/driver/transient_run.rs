@@ -36,7 +36,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             )))
         }
     };
-    let model = build_model(scene)?;
+    let mut model = build_model(scene)?;
+    model.strain_rate_damping = ts.strain_rate_damping;
     let sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;
@@ -167,6 +168,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "terms": {
             "friction": friction,
             "normal_damping": damping,
+            "strain_rate_damping": tr.sys.model.strain_rate_damping > 0.0,
             "inertia": true,
             "history": false,
             "pressure": tr.sys.dofs.per_cell > 0,

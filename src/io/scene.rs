@@ -943,6 +943,10 @@ pub struct TimeSpec {
     /// Maximum number of time steps (>= 1).
     #[serde(default = "default_max_steps")]
     pub max_steps: usize,
+    /// Objective viscous damping on the rate of Green strain, S_v = η Ė (stress·time, >= 0;
+    /// default 0). Damps the transient towards steady rolling without damping rigid rotation.
+    #[serde(default)]
+    pub strain_rate_damping: f64,
 }
 
 /// Default of `[time] rho_inf`.
@@ -994,6 +998,7 @@ impl TimeSpec {
             stop_at_steady: true,
             mass: MassKind::default(),
             max_steps: DEFAULT_MAX_STEPS,
+            strain_rate_damping: 0.0,
         }
     }
 
@@ -1568,6 +1573,7 @@ static SCHEMA: &[SectionSchema] = &[
             opt("stop_at_steady", Kind::Bool),
             opt("mass", Kind::Keyword(MassKind::NAMES)),
             opt("max_steps", Kind::UInt),
+            opt("strain_rate_damping", Kind::Float),
         ],
     },
     SectionSchema {
@@ -2620,6 +2626,15 @@ fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>) {
     }
     if t.max_steps < 1 {
         out.push(issue("time.max_steps", "must be >= 1, got 0"));
+    }
+    if !(t.strain_rate_damping >= 0.0 && t.strain_rate_damping.is_finite()) {
+        out.push(issue(
+            "time.strain_rate_damping",
+            format!(
+                "Green-strain-rate viscosity must be >= 0, got {}",
+                t.strain_rate_damping
+            ),
+        ));
     }
     if mass_given
         && t.integrator == IntegratorName::CentralDifference
@@ -4722,6 +4737,7 @@ mesh.n_r = 4
                 stop_at_steady: true,
                 mass: MassKind::Consistent,
                 max_steps: 200_000,
+                strain_rate_damping: 0.0,
             }
         );
         assert!((t.resolved_dt_min() - 2.0e-8).abs() < 1e-20);
@@ -5137,6 +5153,7 @@ mesh.n_r = 4
                 stop_at_steady: false,
                 mass: MassKind::Lumped,
                 max_steps: 10,
+                strain_rate_damping: 0.0,
             }
         );
         // road.v0_ramp follows the overridden motion.ramp.
