@@ -17,11 +17,13 @@
 //! * Damping is objective: no mass-proportional damping; dissipation comes from the contact
 //!   (normal damping b_n, friction) and from the integrator (ρ∞ < 1).
 //! * Steady-state extraction ([`SteadyMonitor`]): with a uniform circumferential mesh, whenever
-//!   φ(t) is a multiple k of the nodal angle step Δθ = 2π / (nodes per ring), material node
-//!   (ring m, position l) sits on referential node (m, l + k): the referential field is a
+//!   φ(t) is a multiple k of the cell angle Δθ = 2π / n_θ (p node steps: the mesh is invariant
+//!   under a rotation by one cell, not by one node, since vertex and mid-side nodes alternate),
+//!   material node (ring m, position l) sits on referential node (m, l + p k): the referential
+//!   field is a
 //!   re-indexing (displacements interpolated to that instant by cubic Hermite interpolation
 //!   from the two bracketing steps). Rolling is steady when that field, the hub forces and the
-//!   torque change by less than `steady_tol` (relative) from one node passage to the next.
+//!   torque change by less than `steady_tol` (relative) over two consecutive passages.
 
 use super::system::SolidSystem;
 use crate::assembly::{LocalSystem, FIXED};
@@ -643,13 +645,18 @@ pub struct SteadyMonitor {
     pub passages: usize,
     /// Referential displacement field at the last passage (2 per referential node).
     pub field: Vec<f64>,
+    /// One row per passage: t, changes (field, force, torque), hub force x, y, torque.
+    pub log: Vec<[f64; 7]>,
+    below_once: bool,
 }
 
 impl SteadyMonitor {
     pub fn new(sys: &SolidSystem) -> Option<Self> {
         let rl = sys.model.mesh.rings?;
+        // The mesh repeats itself every cell, not every node (Q2: vertex and mid-side nodes
+        // alternate), so the passages are taken every p node steps = one cell.
         Some(Self {
-            dtheta: 2.0 * PI / rl.per_ring as f64,
+            dtheta: 2.0 * PI / rl.n_theta as f64,
             rings: rl.rings,
             per_ring: rl.per_ring,
             last_k: i64::MIN,
@@ -657,6 +664,8 @@ impl SteadyMonitor {
             last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY),
             passages: 0,
             field: Vec::new(),
+            log: Vec::new(),
+            below_once: false,
         })
     }
 
@@ -705,7 +714,8 @@ impl SteadyMonitor {
         let mesh = &tr.sys.model.mesh;
         let per = self.per_ring;
         let mut field = vec![0.0; 2 * mesh.n_nodes()];
-        let kk = k1.rem_euclid(per as i64) as usize;
+        let kk = (k1 * (per / (2.0 * PI / self.dtheta).round() as usize) as i64)
+            .rem_euclid(per as i64) as usize;
         for m in 0..self.rings {
             for l in 0..per {
                 let i = m * per + l;
@@ -752,8 +762,20 @@ impl SteadyMonitor {
             let tscale = fscale * mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
             let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
             self.last_change = (num / den, df, dm);
-            steady = num / den < tol && df < tol && dm < tol;
+            // Steady: two consecutive passages below the tolerance.
+            let below = num / den < tol && df < tol && dm < tol;
+            steady = below && self.below_once;
+            self.below_once = below;
         }
+        self.log.push([
+            ts,
+            self.last_change.0,
+            self.last_change.1,
+            self.last_change.2,
+            snap.hub_force_x,
+            snap.hub_force_y,
+            snap.hub_torque,
+        ]);
         self.field = field.clone();
         self.prev = Some((field, snap));
         steady
@@ -773,6 +795,10 @@ pub struct TransientReport {
     pub dt_min_used: f64,
     pub dt_max_used: f64,
     pub passages: usize,
+    /// Relative changes (referential field, hub force, torque) over the last node passage.
+    pub last_change: [f64; 3],
+    /// Node-passage log (see [`SteadyMonitor::log`]).
+    pub passage_log: Vec<[f64; 7]>,
     pub history: Vec<Snapshot>,
 }
 
@@ -865,6 +891,7 @@ pub fn integrate(
                         rep.time_to_steady = Some(tr.t);
                     }
                     rep.passages = m.passages;
+                    rep.last_change = [m.last_change.0, m.last_change.1, m.last_change.2];
                 }
                 snap0 = snap1;
                 rep.final_time = tr.t;
@@ -900,6 +927,7 @@ pub fn integrate(
         if m.passages > 0 {
             tr.steady_field = Some(m.field.clone());
         }
+        rep.passage_log = m.log.clone();
     }
     rep.history.push(tr.snapshot());
     Ok(rep)

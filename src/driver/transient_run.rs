@@ -2,7 +2,8 @@
 //! scene, integrate until steady (or t_end) with a progress line, and write the outputs:
 //! summary.json (`results.time_to_steady`, `revolutions`, `steps`, `steady`, hub forces, torque
 //! and contact patch under the indentation keys), `history.csv` (hub forces and torque per
-//! step), `contact.csv` (final tractions) and `steady_field.csv` (the referential field
+//! step), `passages.csv` (per node passage: changes of the referential field, hub force and
+//! torque, and the hub force and torque), `contact.csv` (final tractions) and `steady_field.csv` (the referential field
 //! extracted at the last node passage, see [`crate::driver::transient::SteadyMonitor`]).
 //!
 //! `steady_field.csv` format (shared with the steady mode): one row per referential node,
@@ -132,6 +133,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "steady": rep.steady,
         "final_time": rep.final_time,
         "node_passages": rep.passages,
+        "steady_change_field": rep.last_change[0],
+        "steady_change_force": rep.last_change[1],
+        "steady_change_torque": rep.last_change[2],
         "dt_min_used": rep.dt_min_used,
         "dt_max_used": rep.dt_max_used,
         "hub_force_x": f[0],
@@ -142,6 +146,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "max_pressure": tot.max_pressure,
         "contact_force_x": tot.force_x,
         "contact_force_y": tot.force_y,
+        "contact_centroid": tot.centroid,
+        "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
         "integrator": tr.scheme.name(),
         "mass": if lumped { "lumped" } else { "consistent" },
     });
@@ -183,6 +189,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     sanitize(&mut summary);
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     if scene.output.csv {
+        write_csv(
+            &opts.out_dir.join("passages.csv"),
+            &[
+                "t",
+                "change_field",
+                "change_force",
+                "change_torque",
+                "hub_force_x",
+                "hub_force_y",
+                "hub_torque",
+            ],
+            rep.passage_log.iter().map(|r| r.to_vec()),
+        )?;
         write_csv(
             &opts.out_dir.join("history.csv"),
             &["t", "phi", "hub_force_x", "hub_force_y", "hub_torque"],
