@@ -12,7 +12,7 @@ use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::stepping::{StepOptions, StepReport};
-use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};
+use tread::solver::{LinearKind, NewtonOptions, NonlinearSystem};
 
 const RHO: f64 = 0.027;
 
@@ -63,6 +63,7 @@ fn opts(dt: f64, t_end: f64) -> TimeOptions {
         stop_at_steady: false,
         max_steps: 1_000_000,
         lumped: false,
+        land_on_passages: false,
     }
 }
 

@@ -162,6 +162,9 @@ pub struct TimeOptions {
     pub stop_at_steady: bool,
     pub max_steps: usize,
     pub lumped: bool,
+    /// After the ramps, shorten steps so that they land exactly on node passages (equal steps
+    /// within each passage). Off for fixed-step studies.
+    pub land_on_passages: bool,
 }
 
 /// Hub reaction, contact resultants and energies at one instant.
@@ -855,17 +858,50 @@ pub fn integrate(
         dt = dt
             .min(opts.t_end - tr.t)
             .max(opts.dt_min.min(opts.t_end - tr.t));
+        // Land exactly on the next node passage once the ramps are done, so that the
+        // referential field and the hub forces are sampled from a computed state (the hub force
+        // varies quickly within a passage as nodes enter the patch: interpolating it is noisy).
+        let mut dt_step = dt;
+        if let (Some(m), true) = (&monitor, opts.land_on_passages) {
+            if tr.t >= tr.kin.ramps_done() && tr.kin.omega.target > 0.0 {
+                let k = (tr.kin.phi(tr.t) / m.dtheta + 1e-9).floor() + 1.0;
+                let target = k * m.dtheta;
+                // Time of the next passage (φ is monotone) within a generous bracket.
+                let mut hi = tr.t + dt;
+                while tr.kin.phi(hi) < target && hi < opts.t_end {
+                    hi += dt;
+                }
+                let mut lo = tr.t;
+                for _ in 0..80 {
+                    let mid = 0.5 * (lo + hi);
+                    if tr.kin.phi(mid) < target {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                // Equal steps up to the passage: every passage is then computed with the
+                // same step pattern, so a steady state is exactly periodic between passages.
+                let remaining = hi - tr.t;
+                if remaining > 1e-3 * dt {
+                    let m = (remaining / dt - 1e-9).ceil().max(1.0);
+                    dt_step = remaining / m;
+                }
+            }
+        }
+        let h = dt_step;
+        let shortened = h < dt;
         let t0 = tr.t;
         u0.copy_from_slice(&tr.un);
         v0.copy_from_slice(&tr.vn);
         a0.copy_from_slice(&tr.an);
         tr.sys.save_state(&mut saved);
-        match tr.step(&mut newton, dt) {
+        match tr.step(&mut newton, h) {
             Ok((err, its)) => {
                 let reject = opts.adaptive
                     && matches!(tr.scheme, Scheme::GeneralizedAlpha(_))
                     && err > 4.0 * opts.error_tol
-                    && dt > opts.dt_min;
+                    && h > opts.dt_min;
                 if reject {
                     tr.t = t0;
                     tr.un.copy_from_slice(&u0);
@@ -873,14 +909,14 @@ pub fn integrate(
                     tr.an.copy_from_slice(&a0);
                     tr.sys.restore_state(&saved);
                     rep.rejected += 1;
-                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9))
+                    dt = (h * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9))
                         .max(opts.dt_min);
                     continue;
                 }
                 rep.steps += 1;
                 rep.newton_iterations += its;
-                rep.dt_min_used = rep.dt_min_used.min(dt);
-                rep.dt_max_used = rep.dt_max_used.max(dt);
+                rep.dt_min_used = rep.dt_min_used.min(h);
+                rep.dt_max_used = rep.dt_max_used.max(h);
                 let snap1 = tr.snapshot_light();
                 if let Some(m) = &mut monitor {
                     if tr.t >= tr.kin.ramps_done()
@@ -901,8 +937,15 @@ pub fn integrate(
                     break;
                 }
                 if opts.adaptive && matches!(tr.scheme, Scheme::GeneralizedAlpha(_)) && err > 0.0 {
-                    dt = (dt * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.5, 1.5))
+                    let proposed = (h * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.5, 1.5))
                         .clamp(opts.dt_min, opts.dt_max);
+                    // A step shortened to land on a passage says nothing against the
+                    // controller's step.
+                    dt = if shortened {
+                        proposed.max(dt.min(opts.dt_max))
+                    } else {
+                        proposed
+                    };
                 }
             }
             Err(e) => {
@@ -912,6 +955,7 @@ pub fn integrate(
                 tr.an.copy_from_slice(&a0);
                 tr.sys.restore_state(&saved);
                 rep.rejected += 1;
+                dt = h;
                 if dt <= opts.dt_min * (1.0 + 1e-12)
                     || matches!(tr.scheme, Scheme::CentralDifference)
                 {

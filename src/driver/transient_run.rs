@@ -81,6 +81,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         stop_at_steady: ts.stop_at_steady,
         max_steps: ts.max_steps,
         lumped,
+        land_on_passages: true,
     };
     let newton_opts = NewtonOptions {
         tol: scene.solver.tolerance,
