@@ -229,7 +229,7 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
             ms.order
         )));
     }
-    let mesh = annulus(&AnnulusSpec {
+    let mut mesh = annulus(&AnnulusSpec {
         ri: scene.geometry.ri,
         ro: scene.geometry.ro,
         n_r: ms.n_r,
@@ -238,6 +238,9 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
         grading_r: ms.grading_r,
         grading_theta: ms.grading_theta,
     });
+    // Isoparametric cells: nodes on the exact circles, rigid motions represented exactly
+    // (objectivity; see `Mesh::make_isoparametric`).
+    mesh.make_isoparametric();
     Ok(SolidModel::new(
         mesh,
         material,
@@ -246,12 +249,22 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
     ))
 }
 
+/// Linear solver for a scene's system: Cholesky for symmetric positive problems, LU for the
+/// exact incompressible saddle point and whenever friction or damping makes the tangent
+/// unsymmetric.
+pub fn linear_kind_for(scene: &Scene, sys: &SolidSystem) -> LinearKind {
+    linear_kind(scene, sys)
+}
+
 fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
     match scene.solver.linear {
         LinearChoice::Cholesky => LinearKind::Cholesky,
         LinearChoice::Lu => LinearKind::Lu,
         LinearChoice::Auto => {
-            let friction = sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
+            let friction = sys
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction.is_active() || c.normal.has_damping());
             if matches!(sys.model.pressure, PressureMode::Exact { .. }) || friction {
                 LinearKind::Lu
             } else {
@@ -293,6 +306,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     match scene.analysis.mode {
         Mode::Spinning | Mode::Static => run_solid(scene, opts),
         Mode::StickSlip => crate::driver::stick_slip_run::run(scene, opts),
+        Mode::Transient => crate::driver::transient_run::run(scene, opts),
     }
 }
 

@@ -7,8 +7,8 @@ use tread::app::{self, RunOptions};
 use tread::io::Scene;
 
 /// The scene run by `tread` without arguments (also `cargo run --release`).
-const DEFAULT_SCENE: &str = include_str!("../scenarios/spinning_incompressible.toml");
-const DEFAULT_SCENE_NAME: &str = "scenarios/spinning_incompressible.toml (embedded)";
+const DEFAULT_SCENE: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
+const DEFAULT_SCENE_NAME: &str = "scenarios/oden_hollow_cylinder.toml (embedded)";
 
 #[derive(Parser, Debug)]
 #[command(

@@ -92,8 +92,24 @@ pub fn lobatto_1d(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// How the slip velocity and the penetration rate are obtained.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SlipKinematics {
-    /// Static analysis: w = (x1 − x1_prev)/Δτ − v0 in load-stepping pseudo-time; δ̇ = 0.
+    /// Static analysis: the auxiliary vector is the state of the last converged load step;
+    /// velocity v = (x − x_prev)/Δτ in load-stepping pseudo-time, w = v1 − v0; no normal
+    /// damping (δ̇ is not a physical rate).
     Static { dtau: f64 },
+    /// Dynamic analysis: the auxiliary vector is the velocity field; the unknown moves the
+    /// positions by `kx` and the velocities by `kv` per unit change (e.g. generalized-α:
+    /// kx = 1 − α_f, kv = (1 − α_f) γ / (β Δt)). w = v1 − v0, δ̇ = −v2.
+    Dynamic { kx: f64, kv: f64 },
+}
+
+impl SlipKinematics {
+    /// (kx, kv, damping active).
+    fn factors(&self) -> (f64, f64, bool) {
+        match *self {
+            SlipKinematics::Static { dtau } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
+            SlipKinematics::Dynamic { kx, kv } => (kx, kv, true),
+        }
+    }
 }
 
 /// Contact of the outer facets with the road.
@@ -267,15 +283,41 @@ impl ContactModel {
         Self::side_nodes(p).any(|a| pos(a)[1] < -h + margin)
     }
 
+    /// Displacement and velocity at facet point `q` of cell `c` (see [`SlipKinematics`] for
+    /// the meaning of `aux`).
+    #[inline]
+    fn point_motion(
+        &self,
+        nodes: &[u32],
+        side: &[usize; 3],
+        nn: usize,
+        nv: &[f64; 3],
+        x: &[f64],
+        aux: &[f64],
+    ) -> (Vec2, Vec2) {
+        let (mut u, mut a) = (Vec2::zeros(), Vec2::zeros());
+        for j in 0..nn {
+            let n = nodes[side[j]] as usize;
+            u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
+            a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
+        }
+        let vel = match self.kinematics {
+            SlipKinematics::Static { dtau } => (u - a) / dtau.max(f64::MIN_POSITIVE),
+            SlipKinematics::Dynamic { .. } => a,
+        };
+        (u, vel)
+    }
+
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
-    /// [`Self::element_dofs`]. `x`: current full state, `x_prev`: state of the last converged
-    /// load step (static friction).
+    /// [`Self::element_dofs`]. `x`: current full state; `aux`: the state of the last converged
+    /// load step (static) or the velocity field (dynamic), see [`SlipKinematics`].
+    #[allow(clippy::too_many_arguments)]
     pub fn kernel(
         &self,
         mesh: &Mesh,
         dofs: &DofMap,
         x: &[f64],
-        x_prev: &[f64],
+        aux: &[f64],
         e: usize,
         loc: &mut LocalSystem,
         with_k: bool,
@@ -299,37 +341,35 @@ impl ContactModel {
         let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
         let nd = loc.nd;
         let friction = self.friction.is_active();
-        let dtau = match self.kinematics {
-            SlipKinematics::Static { dtau } => dtau.max(f64::MIN_POSITIVE),
-        };
+        let (kx, kv, dynamic) = self.kinematics.factors();
+        let damping = dynamic && self.normal.has_damping();
         for q in 0..self.pts.len() {
             let (nv, dv) = lagrange_1d(p, self.pts[q]);
             let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
-            let (mut u, mut u_old) = (Vec2::zeros(), Vec2::zeros());
-            for j in 0..nn {
-                let n = nodes[side[j]] as usize;
-                u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
-                u_old += Vec2::new(x_prev[2 * n], x_prev[2 * n + 1]) * nv[j];
-            }
+            let (u, vel) = self.point_motion(nodes, &side, nn, &nv, x, aux);
             let xc = fp.x + u;
             let delta = -h - xc[1];
             if delta <= 0.0 {
                 continue;
             }
-            let nval = self.normal.eval(delta, 0.0);
+            let rate = if damping { -vel[1] } else { 0.0 };
+            let nval = self.normal.eval(delta, rate);
             if nval.t <= 0.0 && nval.d_delta == 0.0 {
                 continue;
             }
             let ds = fp.ds0;
-            // ∂t_n/∂u_{j,2} = −d_delta N_j ; ∂t_n/∂H = −d_delta.
-            let dtn_dx2 = -nval.d_delta;
-            let (mut tt, mut dtt_dx1, mut dtt_dx2) = (0.0, 0.0, 0.0);
+            // Derivatives with respect to the unknowns: ∂t_n/∂u_{j,2} = (−d_delta kx − d_rate kv) N_j
+            // (δ = −H − x2, δ̇ = −v2); ∂/∂H has the same kx part (no rate part).
+            let dtn_dx2 = -nval.d_delta * kx - if damping { nval.d_rate * kv } else { 0.0 };
+            let dtn_dh = -nval.d_delta * kx;
+            let (mut tt, mut dtt_dx1, mut dtt_dx2, mut dtt_dh) = (0.0, 0.0, 0.0, 0.0);
             if friction {
-                let w = (u[0] - u_old[0]) / dtau - self.v0;
+                let w = vel[0] - self.v0;
                 let fv = self.friction.eval(w, nval.t, delta);
                 tt = fv.t;
-                dtt_dx1 = fv.d_w / dtau;
-                dtt_dx2 = fv.d_tn * dtn_dx2 - fv.d_delta;
+                dtt_dx1 = fv.d_w * kv;
+                dtt_dx2 = fv.d_tn * dtn_dx2 - fv.d_delta * kx;
+                dtt_dh = fv.d_tn * dtn_dh - fv.d_delta * kx;
             }
             for a in 0..nn {
                 loc.r[2 * a] -= nv[a] * tt * ds;
@@ -349,30 +389,29 @@ impl ContactModel {
                     loc.k[(2 * a + 1) * nd + 2 * b + 1] -= nab * dtn_dx2;
                 }
                 if has_h {
-                    // ∂/∂H: same as ∂/∂x2 (δ = −H − x2).
-                    loc.k[(2 * a) * nd + ih] -= nv[a] * dtt_dx2 * ds;
-                    loc.k[(2 * a + 1) * nd + ih] -= nv[a] * dtn_dx2 * ds;
+                    loc.k[(2 * a) * nd + ih] -= nv[a] * dtt_dh * ds;
+                    loc.k[(2 * a + 1) * nd + ih] -= nv[a] * dtn_dh * ds;
                     loc.k[ih * nd + 2 * a + 1] -= nv[a] * dtn_dx2 * ds;
                 }
             }
             if has_h {
-                loc.k[ih * nd + ih] -= dtn_dx2 * ds;
+                loc.k[ih * nd + ih] -= dtn_dh * ds;
             }
         }
     }
 
-    /// Traction samples at every facet quadrature point (contact or not).
+    /// Traction samples at every facet quadrature point (contact or not); `aux` as in
+    /// [`Self::kernel`].
     pub fn samples(
         &self,
         mesh: &Mesh,
         dofs: &DofMap,
         x: &[f64],
-        x_prev: &[f64],
+        aux: &[f64],
     ) -> Vec<ContactSample> {
         let h = self.road_height(dofs, x);
-        let dtau = match self.kinematics {
-            SlipKinematics::Static { dtau } => dtau.max(f64::MIN_POSITIVE),
-        };
+        let (_, _, dynamic) = self.kinematics.factors();
+        let damping = dynamic && self.normal.has_damping();
         let mut out = Vec::new();
         for f in &self.facets {
             let c = f.cell as usize;
@@ -382,17 +421,12 @@ impl ContactModel {
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
                 let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
-                let (mut u, mut u_old) = (Vec2::zeros(), Vec2::zeros());
-                for j in 0..=p {
-                    let n = nodes[side[j]] as usize;
-                    u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
-                    u_old += Vec2::new(x_prev[2 * n], x_prev[2 * n + 1]) * nv[j];
-                }
+                let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, x, aux);
                 let xc = fp.x + u;
                 let delta = -h - xc[1];
-                let w = (u[0] - u_old[0]) / dtau - self.v0;
+                let w = vel[0] - self.v0;
                 let (t_n, t_t) = if delta > 0.0 {
-                    let nv = self.normal.eval(delta, 0.0);
+                    let nv = self.normal.eval(delta, if damping { -vel[1] } else { 0.0 });
                     let tt = if self.friction.is_active() {
                         self.friction.eval(w, nv.t, delta).t
                     } else {

@@ -58,6 +58,11 @@ impl SolidFrame {
 
 /// Nodal Cauchy stress `[σ11, σ22, σ12]`, averaged over the cells sharing each node.
 pub fn nodal_stress(sys: &SolidSystem) -> Vec<[f64; 3]> {
+    nodal_stress_at(sys, &sys.x)
+}
+
+/// [`nodal_stress`] of the state `x` (full vector, same layout as `sys.x`).
+pub fn nodal_stress_at(sys: &SolidSystem, x: &[f64]) -> Vec<[f64; 3]> {
     let mesh = &sys.model.mesh;
     let mut sum = vec![[0.0; 3]; mesh.n_nodes()];
     let mut count = vec![0u32; mesh.n_nodes()];
@@ -68,7 +73,7 @@ pub fn nodal_stress(sys: &SolidSystem) -> Vec<[f64; 3]> {
             for i in 0..=p {
                 let xi = -1.0 + 2.0 * i as f64 / p as f64;
                 let eta = -1.0 + 2.0 * j as f64 / p as f64;
-                if let Some(pv) = sys.model.point_values(c, &sys.dofs, &sys.x, xi, eta) {
+                if let Some(pv) = sys.model.point_values(c, &sys.dofs, x, xi, eta) {
                     let s = pv.sigma;
                     if s.iter().all(|v| v.is_finite()) {
                         let n = nodes[i + (p + 1) * j] as usize;

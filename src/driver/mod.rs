@@ -5,5 +5,7 @@ pub mod indentation;
 pub mod spinning;
 pub mod stick_slip_run;
 pub mod system;
+pub mod transient;
+pub mod transient_run;
 
 pub use system::SolidSystem;

@@ -13,14 +13,19 @@
 //! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
 //! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
-//! [analysis]  mode = "spinning" | "static" | "stick_slip"
-//! [motion]    omega                                           (spinning)
-//! [road]      disp | load, v0 = 0                             (static)
-//! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "gauss", points = 4   (static)
+//! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
+//! [motion]    omega, ramp = 0                                 (spinning, transient)
+//! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
+//! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
+//!                                                             (static, transient)
 //! [friction]  law = "none" | "coulomb_tanh" | "coulomb_linear" | "rate_dependent" | "oden_martins",
-//!             mu, eps | mu_s, mu_k, v_s, eps | c_t, m_t, eps  (static, stick_slip)
+//!             mu, eps | mu_s, mu_k, v_s, eps | c_t, m_t, eps  (static, stick_slip, transient)
 //! [stick_slip] mass, stiffness, normal_force, belt_speed, t_end, rtol = 1e-8, atol = 1e-10,
 //!             x0 = 0, v0, output_interval                     (stick_slip)
+//! [time]      integrator = "generalized_alpha" | "central_difference" | "bdf" | "sdirk",
+//!             rho_inf = 0.8, dt, dt_min = dt·1e-4, dt_max = dt·10, t_end, adaptive = true,
+//!             error_tol = 1e-4, steady_tol = 1e-4, stop_at_steady = true,
+//!             mass = "consistent" | "lumped", max_steps = 200000  (transient)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
 //! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1
@@ -31,7 +36,8 @@
 //!
 //! [`Scene::from_toml_str`] parses the text, applies `--set section.key=value` overrides, fills the
 //! defaults, resolves model-dependent defaults (the incompressible formulation and, for the
-//! perturbed Lagrangian, `kappa = 1e4 (c1 + c2)`) and validates. It collects **all** problems it can
+//! perturbed Lagrangian, `kappa = 1e4 (c1 + c2)`; `time.mass = "lumped"` for the
+//! `central_difference` integrator) and validates. It collects **all** problems it can
 //! find (unknown sections and keys, wrong types, missing required keys, out-of-range values, keys
 //! that do not belong to the chosen material model) and returns them together as [`SceneErrors`],
 //! each naming the dotted key (`geometry.ri`) and the line of the original file where the key (or,
@@ -51,10 +57,32 @@
 //!
 //! Which sections a mode uses: `spinning` uses `[motion]`; `static` requires `[road]` and
 //! `[contact]` and may have `[friction]`; `stick_slip` requires `[stick_slip]` and a `[friction]`
-//! law of `coulomb_tanh`, `coulomb_linear` or `rate_dependent`. A section (or a non-zero
-//! `motion.omega`, `road.v0`, `contact.b_n`, or a friction law other than `none`) that the mode
-//! does not use is an error rather than being silently ignored. `[geometry]` and `[material]` are
-//! required in every mode; a `stick_slip` scene carries nominal values that the mode does not use.
+//! law of `coulomb_tanh`, `coulomb_linear` or `rate_dependent`; `transient` requires `[time]` and
+//! `motion.omega`, and may have `[road]` with `[contact]` (both or neither; without them the
+//! cylinder spins up in time without contact) and, only with contact, `[friction]`. A section (or a
+//! non-zero `motion.omega`, `motion.ramp`, `road.v0`, `road.ramp`, `road.v0_ramp`, `contact.b_n`,
+//! or a friction law other than `none`) that the mode does not use is an error rather than being
+//! silently ignored. `[geometry]` and `[material]` are required in every mode; a `stick_slip`
+//! scene carries nominal values that the mode does not use. A `transient` scene that stops at the
+//! steady state (`time.stop_at_steady`) needs a mesh uniform in θ (`mesh.grading_theta = 0`): the
+//! steady-state extraction re-indexes nodes by whole nodal angle steps (DESIGN.md §4).
+//!
+//! # Time (transient mode)
+//!
+//! Time starts at `t = 0` with the cylinder at rest, undeformed, and the road (if any) at first
+//! touch (`H = Ro`). The hub angular speed, the road penetration (or load) and the road speed are
+//! brought in by C² ramps `f(t) = S(t / ramp)` with the quintic smoothstep
+//! `S(s) = 6s⁵ − 15s⁴ + 10s³` on `[0, 1]` (`S = 0` before, `1` after; `S′ = S″ = 0` at both
+//! ends; a zero ramp applies the full value at once): `ω(t) = omega·S(t / motion.ramp)`,
+//! `DISP(t) = disp·S(t / road.ramp)` (or the load), `v0(t) = v0·S(t / road.v0_ramp)`. See
+//! [`smoothstep`], [`Motion::omega_at`], [`Motion::angle_at`], [`RoadSpec::ramp_factor`] and
+//! [`RoadSpec::v0_at`]. The run stops at `time.t_end`, after `time.max_steps` steps, or, with
+//! `time.stop_at_steady`, once rolling is steady: the referential field, the hub forces and the
+//! torque change by less than `steady_tol` (relative) over one node passage. In `transient`,
+//! `[solver]` drives the Newton iterations of each implicit time step (`tolerance`,
+//! `max_iterations`, `linear`, `threads`, `line_search`); a step whose Newton iteration fails is
+//! retried with half the step, at most `max_cutbacks` times and not below `time.dt_min`;
+//! `load_steps` is not used (the ramps apply the loads in time).
 //!
 //! # Contact and friction conventions (DESIGN.md §2–3)
 //!
@@ -67,7 +95,9 @@
 //! loading.
 //!
 //! [`Scene::to_toml_string`] writes the resolved scene (every default filled), which parses back
-//! to the same [`Scene`]; `tread check` prints it.
+//! to the same [`Scene`]; `tread check` prints it. Optional keys whose defaults follow other keys
+//! (`time.dt_min`, `time.dt_max`, `road.v0_ramp`, `stick_slip.v0`, `stick_slip.output_interval`)
+//! stay unset when not given; methods give the values (`resolved_*`, `initial_velocity`).
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -141,8 +171,7 @@ macro_rules! keyword_enum {
 }
 
 keyword_enum! {
-    /// What to compute (`[analysis] mode`). `transient` and `steady` will be added as further
-    /// variants.
+    /// What to compute (`[analysis] mode`). `steady` will be added as a further variant.
     Mode, "analysis mode" {
         /// Steady spinning about the hub at `[motion] omega`, no contact: the centrifugal load
         /// `ρ ω² X` is ramped in `load_steps` steps of ω².
@@ -153,6 +182,42 @@ keyword_enum! {
         /// The classical one-degree-of-freedom stick-slip oscillator (a mass on a spring, pressed
         /// onto a moving belt): `[stick_slip]` and `[friction]`; no finite elements.
         StickSlip => "stick_slip",
+        /// The dynamic Lagrangian model (material mesh rotating with the body) integrated in time
+        /// (`[time]`) until rolling is steady: the hub spins up to `[motion] omega`; with `[road]`
+        /// and `[contact]` (optional, both or neither) the road rises and moves at `v0`, and
+        /// `[friction]` may act. Without them: a cylinder spinning up in time, no contact.
+        Transient => "transient",
+    }
+}
+
+keyword_enum! {
+    /// Time integrator of the `transient` mode (`[time] integrator`).
+    #[derive(Default)]
+    IntegratorName, "time integrator" {
+        #[default]
+        /// Generalized-α (Chung–Hulbert) on the second-order system, with spectral radius at
+        /// infinity `rho_inf` (1 = trapezoidal / Newmark average acceleration). Implicit.
+        GeneralizedAlpha => "generalized_alpha",
+        /// Explicit central difference with the lumped (HRZ) mass; the step is also bounded by a
+        /// stable-step estimate.
+        CentralDifference => "central_difference",
+        /// Variable-order BDF on the first-order form `y = (u, v)` (diffsol), with its own error
+        /// control.
+        Bdf => "bdf",
+        /// SDIRK on the first-order form `y = (u, v)` (diffsol), with its own error control.
+        Sdirk => "sdirk",
+    }
+}
+
+keyword_enum! {
+    /// Mass matrix of the `transient` mode (`[time] mass`).
+    #[derive(Default)]
+    MassKind, "mass matrix" {
+        #[default]
+        /// Consistent mass matrix.
+        Consistent => "consistent",
+        /// Lumped (diagonal, HRZ-type for Q2) mass matrix.
+        Lumped => "lumped",
     }
 }
 
@@ -260,10 +325,10 @@ pub struct Scene {
     pub analysis: Analysis,
     #[serde(default)]
     pub motion: Motion,
-    /// `[road]`: required for `static`.
+    /// `[road]`: required for `static`; optional for `transient` (with `[contact]`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub road: Option<RoadSpec>,
-    /// `[contact]`: required for `static`.
+    /// `[contact]`: required for `static`; optional for `transient` (with `[road]`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSpec>,
     /// `[friction]`: law `none` when absent.
@@ -272,6 +337,9 @@ pub struct Scene {
     /// `[stick_slip]`: required for `stick_slip`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stick_slip: Option<StickSlipSpec>,
+    /// `[time]`: required for `transient`, forbidden otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time: Option<TimeSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
@@ -495,13 +563,99 @@ pub struct Analysis {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Motion {
-    /// Target angular speed (rad/s, counter-clockwise), >= 0. Required for `spinning`.
+    /// Target angular speed (rad/s, counter-clockwise), >= 0. Required for `spinning` and
+    /// `transient`.
     pub omega: f64,
+    /// Time over which the hub angular speed goes from 0 to `omega` with the C² smoothstep
+    /// (time, >= 0; 0 = at once). Only in `transient`: must be 0 in the other modes.
+    pub ramp: f64,
 }
 
 impl Default for Motion {
     fn default() -> Self {
-        Motion { omega: 0.0 }
+        Motion {
+            omega: 0.0,
+            ramp: 0.0,
+        }
+    }
+}
+
+impl Motion {
+    /// Hub angular speed at time `t` of a transient run: `omega · S(t / ramp)`.
+    pub fn omega_at(&self, t: f64) -> f64 {
+        self.omega * ramp_value(t, self.ramp)
+    }
+
+    /// Hub angular acceleration at time `t`: `omega · S′(t / ramp) / ramp` (0 outside the ramp).
+    pub fn omega_dot_at(&self, t: f64) -> f64 {
+        self.omega * ramp_rate(t, self.ramp)
+    }
+
+    /// Hub rotation angle φ(t) = ∫₀ᵗ ω, exact for the smoothstep ramp (0 for t <= 0); after the
+    /// ramp, `omega · (t − ramp / 2)`.
+    pub fn angle_at(&self, t: f64) -> f64 {
+        self.omega * ramp_integral(t, self.ramp)
+    }
+}
+
+/// The C² ("quintic") smoothstep `S(s) = 6s⁵ − 15s⁴ + 10s³` for `s` in `[0, 1]`, 0 below and 1
+/// above: `S′` and `S″` vanish at both ends. Every ramp of a transient scene uses it.
+pub fn smoothstep(s: f64) -> f64 {
+    if s <= 0.0 {
+        0.0
+    } else if s >= 1.0 {
+        1.0
+    } else {
+        s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
+    }
+}
+
+/// `dS/ds = 30 s² (1 − s)²` on `[0, 1]`, 0 outside.
+pub fn smoothstep_derivative(s: f64) -> f64 {
+    if s <= 0.0 || s >= 1.0 {
+        0.0
+    } else {
+        30.0 * s * s * (1.0 - s) * (1.0 - s)
+    }
+}
+
+/// `∫₀ˢ S = s⁶ − 3s⁵ + 2.5s⁴` on `[0, 1]`, 0 below, `s − 1/2` above.
+pub fn smoothstep_integral(s: f64) -> f64 {
+    if s <= 0.0 {
+        0.0
+    } else if s >= 1.0 {
+        s - 0.5
+    } else {
+        s * s * s * s * (2.5 + s * (-3.0 + s))
+    }
+}
+
+/// `S(t / ramp)`; a zero (or invalid) ramp is a step at `t = 0` (1 for `t >= 0`).
+fn ramp_value(t: f64, ramp: f64) -> f64 {
+    if ramp > 0.0 {
+        smoothstep(t / ramp)
+    } else if t >= 0.0 {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// `d/dt S(t / ramp)`; 0 for a zero ramp.
+fn ramp_rate(t: f64, ramp: f64) -> f64 {
+    if ramp > 0.0 {
+        smoothstep_derivative(t / ramp) / ramp
+    } else {
+        0.0
+    }
+}
+
+/// `∫₀ᵗ S(τ / ramp) dτ`.
+fn ramp_integral(t: f64, ramp: f64) -> f64 {
+    if ramp > 0.0 {
+        ramp * smoothstep_integral(t / ramp)
+    } else {
+        t.max(0.0)
     }
 }
 
@@ -521,6 +675,38 @@ pub struct RoadSpec {
     /// Road speed along +x1 in the hub frame (length/time). Must be 0 in `static`.
     #[serde(default)]
     pub v0: f64,
+    /// Time over which the road is raised from first touch to `disp` (or the load applied) with
+    /// the C² smoothstep (time, >= 0; 0 = at once). Only in `transient`: must be 0 in `static`.
+    #[serde(default)]
+    pub ramp: f64,
+    /// Time over which the road speed goes from 0 to `v0` with the C² smoothstep (time, >= 0);
+    /// `None` = `motion.ramp`. Only in `transient`: must be 0 or omitted in `static`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v0_ramp: Option<f64>,
+}
+
+impl RoadSpec {
+    /// The road-speed ramp: `v0_ramp`, or `motion.ramp` when not given.
+    pub fn resolved_v0_ramp(&self, motion: &Motion) -> f64 {
+        self.v0_ramp.unwrap_or(motion.ramp)
+    }
+
+    /// Fraction of the final penetration `disp` (or of the `load`) applied at time `t` of a
+    /// transient run: `S(t / ramp)`.
+    pub fn ramp_factor(&self, t: f64) -> f64 {
+        ramp_value(t, self.ramp)
+    }
+
+    /// Time derivative of [`RoadSpec::ramp_factor`].
+    pub fn ramp_factor_rate(&self, t: f64) -> f64 {
+        ramp_rate(t, self.ramp)
+    }
+
+    /// Road speed at time `t` of a transient run: `v0 · S(t / v0_ramp)`, with the resolved
+    /// `v0_ramp` (see [`RoadSpec::resolved_v0_ramp`]).
+    pub fn v0_at(&self, t: f64, motion: &Motion) -> f64 {
+        self.v0 * ramp_value(t, self.resolved_v0_ramp(motion))
+    }
 }
 
 /// `[contact]`: normal compliance `t_n = c_n δ^m_n + b_n δ^l_n δ̇` (per unit reference length of
@@ -731,8 +917,138 @@ impl StickSlipSpec {
     }
 }
 
+/// `[time]`: time integration of the `transient` mode (required there, forbidden otherwise).
+/// `dt_min` and `dt_max` stay `None` when not given (their defaults follow `dt`; see
+/// [`TimeSpec::resolved_dt_min`], [`TimeSpec::resolved_dt_max`]). After
+/// [`Scene::from_toml_str`], `mass` is `lumped` for `central_difference` (which always uses the
+/// lumped mass; an explicit `"consistent"` with it is an error).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Time integrator.
+    #[serde(default)]
+    pub integrator: IntegratorName,
+    /// Spectral radius at infinity of generalized-α, in [0, 1] (1 = trapezoidal / Newmark
+    /// average acceleration: no numerical dissipation). Used only by `generalized_alpha`.
+    #[serde(default = "default_rho_inf")]
+    pub rho_inf: f64,
+    /// Initial time step (time, > 0, <= t_end).
+    pub dt: f64,
+    /// Smallest step (time, > 0, <= dt); `None` = `dt · 1e-4`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
+    /// Largest step (time, >= dt); `None` = `dt · 10`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_max: Option<f64>,
+    /// Maximum simulated time (time, > 0); the run stops earlier when steady if
+    /// `stop_at_steady`.
+    pub t_end: f64,
+    /// Step-size control from a local error estimate.
+    #[serde(default = "default_true")]
+    pub adaptive: bool,
+    /// Relative local error tolerance of the step-size control (> 0).
+    #[serde(default = "default_error_tol")]
+    pub error_tol: f64,
+    /// Relative change of the referential field, hub forces and torque over one node passage
+    /// below which rolling is declared steady (> 0).
+    #[serde(default = "default_steady_tol")]
+    pub steady_tol: f64,
+    /// Stop as soon as rolling is steady.
+    #[serde(default = "default_true")]
+    pub stop_at_steady: bool,
+    /// Mass matrix (`central_difference`: always lumped).
+    #[serde(default)]
+    pub mass: MassKind,
+    /// Maximum number of time steps (>= 1).
+    #[serde(default = "default_max_steps")]
+    pub max_steps: usize,
+    /// Objective viscous damping on the rate of Green strain, S_v = η Ė (stress·time, >= 0;
+    /// default 0). Damps the transient towards steady rolling without damping rigid rotation.
+    #[serde(default)]
+    pub strain_rate_damping: f64,
+}
+
+/// Default of `[time] rho_inf`.
+pub const DEFAULT_RHO_INF: f64 = 0.8;
+/// `dt_min = DT_MIN_FACTOR · dt` when not given.
+pub const DT_MIN_FACTOR: f64 = 1e-4;
+/// `dt_max = DT_MAX_FACTOR · dt` when not given.
+pub const DT_MAX_FACTOR: f64 = 10.0;
+/// Default of `[time] error_tol`.
+pub const DEFAULT_ERROR_TOL: f64 = 1e-4;
+/// Default of `[time] steady_tol`.
+pub const DEFAULT_STEADY_TOL: f64 = 1e-4;
+/// Default of `[time] max_steps`.
+pub const DEFAULT_MAX_STEPS: usize = 200_000;
+
+fn default_rho_inf() -> f64 {
+    DEFAULT_RHO_INF
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_error_tol() -> f64 {
+    DEFAULT_ERROR_TOL
+}
+
+fn default_steady_tol() -> f64 {
+    DEFAULT_STEADY_TOL
+}
+
+fn default_max_steps() -> usize {
+    DEFAULT_MAX_STEPS
+}
+
+impl TimeSpec {
+    /// A `[time]` with the given initial step and end time and every other key at its default.
+    pub fn new(dt: f64, t_end: f64) -> TimeSpec {
+        TimeSpec {
+            integrator: IntegratorName::default(),
+            rho_inf: DEFAULT_RHO_INF,
+            dt,
+            dt_min: None,
+            dt_max: None,
+            t_end,
+            adaptive: true,
+            error_tol: DEFAULT_ERROR_TOL,
+            steady_tol: DEFAULT_STEADY_TOL,
+            stop_at_steady: true,
+            mass: MassKind::default(),
+            max_steps: DEFAULT_MAX_STEPS,
+            strain_rate_damping: 0.0,
+        }
+    }
+
+    /// The smallest step: `dt_min`, or `dt · 1e-4` when not given.
+    pub fn resolved_dt_min(&self) -> f64 {
+        self.dt_min.unwrap_or(self.dt * DT_MIN_FACTOR)
+    }
+
+    /// The largest step: `dt_max`, or `dt · 10` when not given.
+    pub fn resolved_dt_max(&self) -> f64 {
+        self.dt_max.unwrap_or(self.dt * DT_MAX_FACTOR)
+    }
+
+    /// The mass matrix actually used: `lumped` for `central_difference`, else `mass`.
+    pub fn effective_mass(&self) -> MassKind {
+        match self.integrator {
+            IntegratorName::CentralDifference => MassKind::Lumped,
+            _ => self.mass,
+        }
+    }
+
+    /// Whether the integrator is explicit (`central_difference`).
+    pub fn is_explicit(&self) -> bool {
+        self.integrator == IntegratorName::CentralDifference
+    }
+}
+
 /// `[solver]`: Newton with load stepping (in ω² for `spinning`; in the road penetration or the
-/// road load for `static`) and cutbacks. Not used by `stick_slip`.
+/// road load for `static`) and cutbacks. In `transient`: the Newton iterations of each implicit
+/// time step, a failed step being retried with half the step (`load_steps` unused). Not used by
+/// `stick_slip`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSpec {
@@ -925,6 +1241,7 @@ impl Scene {
         let contact: Option<Option<ContactSpec>> = ctx.present_section(&clean, "contact");
         let friction: Option<FrictionSpec> = ctx.optional_section(&clean, "friction");
         let stick_slip: Option<Option<StickSlipSpec>> = ctx.present_section(&clean, "stick_slip");
+        let time: Option<Option<TimeSpec>> = ctx.present_section(&clean, "time");
         let solver: Option<SolverSpec> = ctx.optional_section(&clean, "solver");
         let output: Option<OutputSpec> = ctx.optional_section(&clean, "output");
 
@@ -948,6 +1265,7 @@ impl Scene {
             if !omega_bad {
                 validate_motion(mode, m, omega_given, &mut out);
             }
+            validate_motion_ramp(mode, m, &mut out);
         }
         if let Some(Some(r)) = &road {
             validate_road(r, mode, geometry.as_ref(), &mut out);
@@ -968,14 +1286,23 @@ impl Scene {
         if let Some(Some(s)) = &stick_slip {
             validate_stick_slip(s, &mut out);
         }
+        // An explicitly written `mass` (valid or not) counts as given.
+        let time_mass_given = table_has(&doc, "time", "mass");
+        if let Some(Some(t)) = &time {
+            validate_time(t, time_mass_given, &mut out);
+        }
         if let Some(mode) = mode {
             let used = SectionsGiven {
                 road: doc.contains_key("road"),
                 contact: doc.contains_key("contact"),
                 stick_slip: doc.contains_key("stick_slip"),
+                time: doc.contains_key("time"),
                 friction_law,
             };
             validate_mode_sections(mode, &used, &mut out);
+        }
+        if let (Some(m), Some(Some(t))) = (&mesh, &time) {
+            validate_steady_extraction(mode, m, t, &mut out);
         }
         if let Some(s) = &solver {
             validate_solver(s, &mut out);
@@ -1003,11 +1330,12 @@ impl Scene {
             Some(contact),
             Some(friction),
             Some(stick_slip),
+            Some(mut time),
             Some(solver),
             Some(output),
         ) = (
             info, geometry, mesh, material, analysis, motion, road, contact, friction, stick_slip,
-            solver, output,
+            time, solver, output,
         )
         else {
             // Unreachable in practice: every `None` above records an issue.
@@ -1019,6 +1347,11 @@ impl Scene {
             }]));
         };
         material.resolve();
+        if let Some(t) = time.as_mut() {
+            if !time_mass_given {
+                t.mass = t.effective_mass();
+            }
+        }
         Ok(Scene {
             scene,
             geometry,
@@ -1030,6 +1363,7 @@ impl Scene {
             contact,
             friction,
             stick_slip,
+            time,
             solver,
             output,
         })
@@ -1059,6 +1393,7 @@ impl Scene {
         validate_material(&self.material, &mut out);
         let mode = Some(self.analysis.mode);
         validate_motion(mode, &self.motion, true, &mut out);
+        validate_motion_ramp(mode, &self.motion, &mut out);
         if let Some(r) = &self.road {
             validate_road(r, mode, Some(&self.geometry), &mut out);
         }
@@ -1069,10 +1404,15 @@ impl Scene {
         if let Some(s) = &self.stick_slip {
             validate_stick_slip(s, &mut out);
         }
+        if let Some(t) = &self.time {
+            validate_time(t, true, &mut out);
+            validate_steady_extraction(mode, &self.mesh, t, &mut out);
+        }
         let used = SectionsGiven {
             road: self.road.is_some(),
             contact: self.contact.is_some(),
             stick_slip: self.stick_slip.is_some(),
+            time: self.time.is_some(),
             friction_law: Some(self.friction.law),
         };
         validate_mode_sections(self.analysis.mode, &used, &mut out);
@@ -1202,7 +1542,7 @@ static SCHEMA: &[SectionSchema] = &[
     SectionSchema {
         name: "motion",
         required: false,
-        fields: &[opt("omega", Kind::Float)],
+        fields: &[opt("omega", Kind::Float), opt("ramp", Kind::Float)],
     },
     SectionSchema {
         name: "road",
@@ -1211,6 +1551,8 @@ static SCHEMA: &[SectionSchema] = &[
             opt("disp", Kind::Float),
             opt("load", Kind::Float),
             opt("v0", Kind::Float),
+            opt("ramp", Kind::Float),
+            opt("v0_ramp", Kind::Float),
         ],
     },
     SectionSchema {
@@ -1253,6 +1595,25 @@ static SCHEMA: &[SectionSchema] = &[
             opt("x0", Kind::Float),
             opt("v0", Kind::Float),
             opt("output_interval", Kind::Float),
+        ],
+    },
+    SectionSchema {
+        name: "time",
+        required: false,
+        fields: &[
+            opt("integrator", Kind::Keyword(IntegratorName::NAMES)),
+            opt("rho_inf", Kind::Float),
+            req("dt", Kind::Float),
+            opt("dt_min", Kind::Float),
+            opt("dt_max", Kind::Float),
+            req("t_end", Kind::Float),
+            opt("adaptive", Kind::Bool),
+            opt("error_tol", Kind::Float),
+            opt("steady_tol", Kind::Float),
+            opt("stop_at_steady", Kind::Bool),
+            opt("mass", Kind::Keyword(MassKind::NAMES)),
+            opt("max_steps", Kind::UInt),
+            opt("strain_rate_damping", Kind::Float),
         ],
     },
     SectionSchema {
@@ -1950,12 +2311,15 @@ fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
 }
 
 fn validate_motion(mode: Option<Mode>, m: &Motion, omega_given: bool, out: &mut Vec<Issue>) {
-    if mode == Some(Mode::Spinning) && !omega_given {
-        out.push(issue(
-            "motion.omega",
-            "required for analysis mode \"spinning\" (target angular speed, rad/s)",
-        ));
-        return;
+    if let Some(mode @ (Mode::Spinning | Mode::Transient)) = mode {
+        if !omega_given {
+            out.push(issue_near(
+                "motion.omega",
+                format!("required for analysis mode \"{mode}\" (target angular speed, rad/s)"),
+                "analysis.mode",
+            ));
+            return;
+        }
     }
     if !(m.omega.is_finite() && m.omega >= 0.0) {
         out.push(issue(
@@ -1978,7 +2342,49 @@ fn validate_motion(mode: Option<Mode>, m: &Motion, omega_given: bool, out: &mut 
     }
 }
 
+fn validate_motion_ramp(mode: Option<Mode>, m: &Motion, out: &mut Vec<Issue>) {
+    if !(m.ramp.is_finite() && m.ramp >= 0.0) {
+        out.push(issue(
+            "motion.ramp",
+            format!("spin-up ramp time must be >= 0, got {}", m.ramp),
+        ));
+    } else if m.ramp != 0.0 {
+        if let Some(mode) = mode.filter(|m| *m != Mode::Transient) {
+            out.push(issue(
+                "motion.ramp",
+                format!(
+                    "the spin-up ramp is a time, and analysis mode \"{mode}\" has none (only \
+                     \"transient\" does): ramp must be 0 or omitted, got {}",
+                    m.ramp
+                ),
+            ));
+        }
+    }
+}
+
+/// A ramp time of `[road]`: finite, >= 0, and 0 in `static` (which has no time).
+fn validate_road_ramp(key: &str, value: f64, what: &str, mode: Option<Mode>, out: &mut Vec<Issue>) {
+    if !(value.is_finite() && value >= 0.0) {
+        out.push(issue(
+            format!("road.{key}"),
+            format!("{what} time must be >= 0, got {value}"),
+        ));
+    } else if value != 0.0 && mode == Some(Mode::Static) {
+        out.push(issue(
+            format!("road.{key}"),
+            format!(
+                "a static analysis has no time for a {what} (its load steps play that role; only \
+                 \"transient\" has time): {key} must be 0 or omitted, got {value}"
+            ),
+        ));
+    }
+}
+
 fn validate_road(r: &RoadSpec, mode: Option<Mode>, g: Option<&Geometry>, out: &mut Vec<Issue>) {
+    validate_road_ramp("ramp", r.ramp, "road ramp", mode, out);
+    if let Some(v) = r.v0_ramp {
+        validate_road_ramp("v0_ramp", v, "road-speed ramp", mode, out);
+    }
     if let Some(d) = r.disp {
         if !(d.is_finite() && d >= 0.0) {
             out.push(issue(
@@ -2216,22 +2622,148 @@ fn validate_stick_slip(s: &StickSlipSpec, out: &mut Vec<Issue>) {
     }
 }
 
+fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>) {
+    let dt_ok = positive(t.dt);
+    if !dt_ok {
+        out.push(issue(
+            "time.dt",
+            format!("initial time step must be > 0, got {}", t.dt),
+        ));
+    }
+    let t_end_ok = positive(t.t_end);
+    if !t_end_ok {
+        out.push(issue(
+            "time.t_end",
+            format!("end time must be > 0, got {}", t.t_end),
+        ));
+    }
+    if dt_ok && t_end_ok && t.dt > t.t_end {
+        out.push(issue(
+            "time.dt",
+            format!(
+                "initial time step dt = {} must not exceed t_end = {}",
+                t.dt, t.t_end
+            ),
+        ));
+    }
+    if !(t.rho_inf.is_finite() && (0.0..=1.0).contains(&t.rho_inf)) {
+        out.push(issue(
+            "time.rho_inf",
+            format!(
+                "spectral radius at infinity of generalized-α must be in [0, 1], got {}",
+                t.rho_inf
+            ),
+        ));
+    }
+    if let Some(x) = t.dt_min {
+        if !positive(x) {
+            out.push(issue(
+                "time.dt_min",
+                format!("smallest time step must be > 0, got {x}"),
+            ));
+        } else if dt_ok && x > t.dt {
+            out.push(issue(
+                "time.dt_min",
+                format!(
+                    "smallest time step dt_min = {x} must not exceed dt = {}",
+                    t.dt
+                ),
+            ));
+        }
+    }
+    if let Some(x) = t.dt_max {
+        if !positive(x) {
+            out.push(issue(
+                "time.dt_max",
+                format!("largest time step must be > 0, got {x}"),
+            ));
+        } else if dt_ok && x < t.dt {
+            out.push(issue(
+                "time.dt_max",
+                format!("largest time step dt_max = {x} must be >= dt = {}", t.dt),
+            ));
+        }
+    }
+    if !positive(t.error_tol) {
+        out.push(issue(
+            "time.error_tol",
+            format!(
+                "relative local error tolerance must be > 0, got {}",
+                t.error_tol
+            ),
+        ));
+    }
+    if !positive(t.steady_tol) {
+        out.push(issue(
+            "time.steady_tol",
+            format!("steady-state tolerance must be > 0, got {}", t.steady_tol),
+        ));
+    }
+    if t.max_steps < 1 {
+        out.push(issue("time.max_steps", "must be >= 1, got 0"));
+    }
+    if !(t.strain_rate_damping >= 0.0 && t.strain_rate_damping.is_finite()) {
+        out.push(issue(
+            "time.strain_rate_damping",
+            format!(
+                "Green-strain-rate viscosity must be >= 0, got {}",
+                t.strain_rate_damping
+            ),
+        ));
+    }
+    if mass_given
+        && t.integrator == IntegratorName::CentralDifference
+        && t.mass == MassKind::Consistent
+    {
+        out.push(issue(
+            "time.mass",
+            "integrator \"central_difference\" always uses the lumped mass: mass must be \
+             \"lumped\" or omitted, got \"consistent\"",
+        ));
+    }
+}
+
+/// A transient run that stops at the steady state extracts it by re-indexing nodes by whole
+/// nodal angle steps, which needs a mesh uniform in θ.
+fn validate_steady_extraction(
+    mode: Option<Mode>,
+    m: &MeshSpec,
+    t: &TimeSpec,
+    out: &mut Vec<Issue>,
+) {
+    // An out-of-range grading is reported by validate_mesh.
+    let graded = m.grading_theta > 0.0 && m.grading_theta < 1.0;
+    if mode == Some(Mode::Transient) && t.stop_at_steady && graded {
+        out.push(issue(
+            "mesh.grading_theta",
+            format!(
+                "a transient run that stops at the steady state (time.stop_at_steady) needs a \
+                 mesh uniform in θ: the steady state is extracted by re-indexing nodes by whole \
+                 nodal angle steps; set grading_theta = 0 (or time.stop_at_steady = false), got {}",
+                m.grading_theta
+            ),
+        ));
+    }
+}
+
 /// Which mode-dependent sections a scene has; `friction_law` is `None` when it cannot be
 /// checked (an invalid `law` already reported).
 struct SectionsGiven {
     road: bool,
     contact: bool,
     stick_slip: bool,
+    time: bool,
     friction_law: Option<FrictionLawName>,
 }
 
 fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue>) {
-    let unused = |section: &str, used_by: Mode, out: &mut Vec<Issue>| {
+    const ROAD_MODES: &str = "\"static\" and \"transient\"";
+    let unused = |section: &str, used_by: &str, out: &mut Vec<Issue>| {
         out.push(issue(
             section,
             format!(
                 "section [{section}] is not used by analysis mode \"{mode}\" (only by \
-                 \"{used_by}\"); remove it"
+                 {used_by}); remove it"
             ),
         ));
     };
@@ -2245,25 +2777,36 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
             "analysis.mode",
         ));
     };
+    let no_contact_friction = |law: FrictionLawName, what: &str, out: &mut Vec<Issue>| {
+        out.push(issue(
+            "friction.law",
+            format!(
+                "analysis mode \"{mode}\" {what}, hence no friction: law must be \"none\" (or \
+                 omit [friction]), got \"{law}\""
+            ),
+        ));
+    };
+    if given.time && mode != Mode::Transient {
+        let note = if mode == Mode::StickSlip {
+            "; the oscillator's t_end and tolerances are in [stick_slip]"
+        } else {
+            ""
+        };
+        unused("time", &format!("\"transient\"{note}"), out);
+    }
     match mode {
         Mode::Spinning => {
             if given.road {
-                unused("road", Mode::Static, out);
+                unused("road", ROAD_MODES, out);
             }
             if given.contact {
-                unused("contact", Mode::Static, out);
+                unused("contact", ROAD_MODES, out);
             }
             if given.stick_slip {
-                unused("stick_slip", Mode::StickSlip, out);
+                unused("stick_slip", "\"stick_slip\"", out);
             }
             if let Some(law) = given.friction_law.filter(|l| *l != FrictionLawName::None) {
-                out.push(issue(
-                    "friction.law",
-                    format!(
-                        "analysis mode \"spinning\" has no road contact, hence no friction: law \
-                         must be \"none\" (or omit [friction]), got \"{law}\""
-                    ),
-                ));
+                no_contact_friction(law, "has no road contact", out);
             }
         }
         Mode::Static => {
@@ -2274,15 +2817,15 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
                 missing("contact", "c_n", out);
             }
             if given.stick_slip {
-                unused("stick_slip", Mode::StickSlip, out);
+                unused("stick_slip", "\"stick_slip\"", out);
             }
         }
         Mode::StickSlip => {
             if given.road {
-                unused("road", Mode::Static, out);
+                unused("road", ROAD_MODES, out);
             }
             if given.contact {
-                unused("contact", Mode::Static, out);
+                unused("contact", ROAD_MODES, out);
             }
             if !given.stick_slip {
                 missing(
@@ -2311,6 +2854,40 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
                     ),
                     "analysis.mode",
                 )),
+            }
+        }
+        Mode::Transient => {
+            if !given.time {
+                missing("time", "dt, t_end", out);
+            }
+            if given.stick_slip {
+                unused("stick_slip", "\"stick_slip\"", out);
+            }
+            // Road contact needs both the road and the contact law; neither = no contact.
+            match (given.road, given.contact) {
+                (true, false) => out.push(issue_near(
+                    "contact",
+                    "analysis mode \"transient\" has [road] but no [contact]: give both (rolling \
+                     on the road) or neither (spinning up without contact); [contact] needs c_n",
+                    "road",
+                )),
+                (false, true) => out.push(issue_near(
+                    "road",
+                    "analysis mode \"transient\" has [contact] but no [road]: give both (rolling \
+                     on the road) or neither (spinning up without contact); [road] needs disp \
+                     or load",
+                    "contact",
+                )),
+                _ => {}
+            }
+            if !given.road && !given.contact {
+                if let Some(law) = given.friction_law.filter(|l| *l != FrictionLawName::None) {
+                    no_contact_friction(
+                        law,
+                        "without [road] and [contact] has no road contact",
+                        out,
+                    );
+                }
             }
         }
     }
@@ -2571,6 +3148,8 @@ mod tests {
     const FRICTION: &str = include_str!("../../scenarios/indentation_friction.toml");
     const LOAD_CONTROL: &str = include_str!("../../scenarios/indentation_load_control.toml");
     const STICK_SLIP: &str = include_str!("../../scenarios/stick_slip.toml");
+    const ODEN: &str = include_str!("../../scenarios/oden_hollow_cylinder.toml");
+    const ROLLING_FRICTIONLESS: &str = include_str!("../../scenarios/rolling_frictionless.toml");
 
     const MINIMAL: &str = r#"
 [scene]
@@ -2796,10 +3375,10 @@ omega = 0
 
     #[test]
     fn unknown_section_rejected() {
-        let text = format!("{MINIMAL}\n[time]\ndt = 0.1\n");
+        let text = format!("{MINIMAL}\n[continuation]\ntarget = 0.1\n");
         let e = errors(&text);
-        let err = e.find("time").unwrap_or_else(|| panic!("{e}"));
-        assert_eq!(err.line, Some(line_of(&text, "[time]")));
+        let err = e.find("continuation").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[continuation]")));
         assert!(err.message.contains("unknown section"));
     }
 
@@ -3094,8 +3673,12 @@ linear = "qr"
         assert!(err.message.contains("mesh.nr=8"), "{}", err.message);
         assert!(err.to_string().contains("(--set)"), "{err}");
 
-        let e = errors_with(MINIMAL, &["time.dt=0.1"]);
-        assert!(e.has_key("time.dt"), "{e}");
+        let e = errors_with(MINIMAL, &["continuation.target=0.1"]);
+        assert_only(&e, "continuation.target", None);
+        assert!(e.0[0].message.contains("unknown section"), "{e}");
+        let e = errors_with(MINIMAL, &["time.dtt=0.1"]);
+        assert_only(&e, "time.dtt", None);
+        assert!(e.0[0].message.contains("keys of [time]"), "{e}");
         let e = errors_with(MINIMAL, &["n_r=8"]);
         assert!(e.0[0].is_override(), "{e}");
         let e = errors_with(MINIMAL, &["mesh.n_r"]);
@@ -3154,6 +3737,8 @@ linear = "qr"
             FRICTION,
             LOAD_CONTROL,
             STICK_SLIP,
+            ODEN,
+            ROLLING_FRICTIONLESS,
         ] {
             let s = load(text).unwrap_or_else(|e| panic!("{e}"));
             let out = s.to_toml_string();
@@ -3243,10 +3828,19 @@ linear = "qr"
         assert_eq!("spinning".parse::<Mode>(), Ok(Mode::Spinning));
         assert_eq!("static".parse::<Mode>(), Ok(Mode::Static));
         assert_eq!("stick_slip".parse::<Mode>(), Ok(Mode::StickSlip));
-        let err = "transient".parse::<Mode>().err().unwrap_or_default();
+        assert_eq!("transient".parse::<Mode>(), Ok(Mode::Transient));
+        let err = "steady".parse::<Mode>().err().unwrap_or_default();
         assert!(
-            err.contains("\"spinning\", \"static\", \"stick_slip\""),
+            err.contains("\"spinning\", \"static\", \"stick_slip\", \"transient\""),
             "{err}"
+        );
+        check(IntegratorName::ALL, IntegratorName::NAMES);
+        check(MassKind::ALL, MassKind::NAMES);
+        assert_eq!(IntegratorName::default(), IntegratorName::GeneralizedAlpha);
+        assert_eq!(MassKind::default(), MassKind::Consistent);
+        assert_eq!(
+            IntegratorName::NAMES,
+            &["generalized_alpha", "central_difference", "bdf", "sdirk"]
         );
         assert_eq!(FrictionLawName::default(), FrictionLawName::None);
         assert_eq!(ContactQuadrature::default(), ContactQuadrature::Lobatto);
@@ -3291,6 +3885,7 @@ linear = "qr"
             ("contact", keys(&full_contact())),
             ("friction", keys(&full_friction())),
             ("stick_slip", keys(&full_stick_slip())),
+            ("time", keys(&full_time())),
             ("solver", keys(&SolverSpec::default())),
             ("output", keys(&OutputSpec::default())),
         ];
@@ -3361,6 +3956,9 @@ mesh.n_r = 4
             "[mesh]\nn_r = -9223372036854775808\nn_theta = 9223372036854775807",
             "[material]\nmodel = 3\n[analysis]\nmode = \"static\"",
             "a = \"\"\"\nunterminated",
+            "time = 3\n[analysis]\nmode = \"transient\"",
+            "[analysis]\nmode = \"transient\"\n[time]\ndt = []\nt_end = {}\nmax_steps = -1\nmass = 1",
+            "[analysis]\nmode = \"transient\"\n[motion]\nramp = \"x\"\n[road]\nramp = -1e308\nv0_ramp = nan",
         ];
         for text in inputs {
             let r = Scene::from_toml_str(text, "x", &["=".into(), "..=".into(), "a.b.c=1".into()]);
@@ -3381,6 +3979,8 @@ mesh.n_r = 4
             disp: Some(0.1),
             load: Some(1.0),
             v0: 0.0,
+            ramp: 0.0,
+            v0_ramp: Some(0.0),
         }
     }
 
@@ -3420,6 +4020,14 @@ mesh.n_r = 4
             x0: 0.0,
             v0: Some(0.0),
             output_interval: Some(0.1),
+        }
+    }
+
+    fn full_time() -> TimeSpec {
+        TimeSpec {
+            dt_min: Some(1e-6),
+            dt_max: Some(1e-2),
+            ..TimeSpec::new(1e-3, 1.0)
         }
     }
 
@@ -3472,7 +4080,9 @@ mesh.n_r = 4
             Some(RoadSpec {
                 disp: Some(0.1),
                 load: None,
-                v0: 0.0
+                v0: 0.0,
+                ramp: 0.0,
+                v0_ramp: None
             })
         );
         assert_eq!(
@@ -3522,7 +4132,9 @@ mesh.n_r = 4
             Some(RoadSpec {
                 disp: None,
                 load: Some(300.0),
-                v0: 0.0
+                v0: 0.0,
+                ramp: 0.0,
+                v0_ramp: None
             })
         );
         let base = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
@@ -4045,9 +4657,10 @@ mesh.n_r = 4
         let text = replace_line(STICK_SLIP, "mass", "mass = 1.0\ndamping = 0.1");
         let e = errors(&text);
         assert_only(&e, "stick_slip.damping", Some(line_of(&text, "damping")));
-        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nramp = 2");
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nspeed = 2");
         let e = errors(&text);
-        assert_only(&e, "road.ramp", Some(line_of(&text, "ramp")));
+        assert_only(&e, "road.speed", Some(line_of(&text, "speed")));
+        assert!(e.0[0].message.contains("v0_ramp"), "{e}");
     }
 
     #[test]
@@ -4134,6 +4747,7 @@ mesh.n_r = 4
         check("contact", &full_contact());
         check("friction", &full_friction());
         check("stick_slip", &full_stick_slip());
+        check("time", &full_time());
         check("solver", &SolverSpec::default());
         check("output", &OutputSpec::default());
     }
@@ -4158,5 +4772,682 @@ mesh.n_r = 4
         s.road = None;
         let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
         assert!(e.has_key("road"), "{e}");
+    }
+
+    // --- transient mode, [time], ramps ------------------------------------------------------
+
+    /// MINIMAL as a transient scene without contact: only the required keys of [time].
+    fn minimal_transient() -> String {
+        MINIMAL.replace("mode = \"spinning\"", "mode = \"transient\"")
+            + "\n[time]\ndt = 1e-3\nt_end = 0.5\n"
+    }
+
+    #[test]
+    fn oden_scene_parses() {
+        let s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "oden_hollow_cylinder");
+        assert_eq!(s.analysis.mode, Mode::Transient);
+        assert_eq!((s.geometry.ri, s.geometry.ro), (1.0, 2.0));
+        assert_eq!(
+            (
+                s.mesh.n_r,
+                s.mesh.n_theta,
+                s.mesh.order,
+                s.mesh.grading_theta
+            ),
+            (3, 64, 2, 0.0)
+        );
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlin {
+                c1: 80.0,
+                c2: 20.0,
+                kappa: 20000.0
+            })
+        );
+        // Nearly incompressible: κ / G = 100.
+        let g = s.material.shear_modulus().unwrap_or(0.0);
+        assert_eq!(s.material.bulk_modulus().unwrap_or(0.0) / g, 100.0);
+        // Critical spin c_R / Ro ≈ 395 rpm, the paper's top speed.
+        let c_r = 0.955 * s.shear_wave_speed().unwrap_or(0.0);
+        let rpm = c_r / s.geometry.ro * 60.0 / (2.0 * std::f64::consts::PI);
+        assert!((rpm - 395.0).abs() < 10.0, "critical spin {rpm} rpm");
+        assert_eq!(
+            s.motion,
+            Motion {
+                omega: 10.0,
+                ramp: 0.05
+            }
+        );
+        let road = s.road.clone().unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!((road.disp, road.load, road.ramp), (Some(0.1), None, 0.05));
+        assert_eq!(road.v0_ramp, None);
+        assert_eq!(road.resolved_v0_ramp(&s.motion), 0.05);
+        // Free-rolling-like road speed: v0 = ω (Ro − DISP/3).
+        let r_eff = s.geometry.ro - 0.1 / 3.0;
+        assert!(
+            (road.v0 - s.motion.omega * r_eff).abs() < 1e-5,
+            "{}",
+            road.v0
+        );
+        assert_eq!(
+            s.contact,
+            Some(ContactSpec {
+                c_n: 2.0e4,
+                m_n: 1.0,
+                b_n: 5.0,
+                l_n: 0.0,
+                quadrature: ContactQuadrature::Lobatto,
+                points: 4
+            })
+        );
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::CoulombTanh { mu: 0.3, eps: 0.5 })
+        );
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(
+            t,
+            TimeSpec {
+                integrator: IntegratorName::GeneralizedAlpha,
+                rho_inf: 0.8,
+                dt: 2.0e-4,
+                dt_min: None,
+                dt_max: None,
+                t_end: 2.0,
+                adaptive: true,
+                error_tol: 1e-3,
+                steady_tol: 1e-3,
+                stop_at_steady: true,
+                mass: MassKind::Consistent,
+                max_steps: 200_000,
+                strain_rate_damping: 1.0,
+            }
+        );
+        assert!((t.resolved_dt_min() - 2.0e-8).abs() < 1e-20);
+        assert!((t.resolved_dt_max() - 2.0e-3).abs() < 1e-15);
+        assert_eq!(t.effective_mass(), MassKind::Consistent);
+        assert!(!t.is_explicit());
+        assert_eq!((s.solver.load_steps, s.solver.tolerance), (1, 1e-8));
+        assert_eq!(s.stick_slip, None);
+        assert!(s.validate().is_ok());
+
+        // The frictionless scene is the same scene without friction.
+        let f = load(ROLLING_FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f.scene.name, "rolling_frictionless");
+        assert_eq!(f.friction, FrictionSpec::default());
+        assert!(!f.friction.is_active());
+        assert_eq!(
+            (&f.geometry, &f.mesh, &f.material, &f.analysis),
+            (&s.geometry, &s.mesh, &s.material, &s.analysis)
+        );
+        assert_eq!(
+            (&f.motion, &f.road, &f.contact),
+            (&s.motion, &s.road, &s.contact)
+        );
+        assert_eq!(
+            (&f.time, &f.solver, &f.output),
+            (&s.time, &s.solver, &s.output)
+        );
+        assert!(f.validate().is_ok());
+    }
+
+    #[test]
+    fn time_defaults_are_filled() {
+        let s = load(&minimal_transient()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.analysis.mode, Mode::Transient);
+        // A spinning cylinder in time: no road, no contact.
+        assert_eq!((&s.road, &s.contact), (&None, &None));
+        assert_eq!(s.motion.ramp, 0.0);
+        let t = s.time.unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t, TimeSpec::new(1e-3, 0.5));
+        assert_eq!(t.integrator, IntegratorName::GeneralizedAlpha);
+        assert_eq!(t.rho_inf, DEFAULT_RHO_INF);
+        assert_eq!(t.rho_inf, 0.8);
+        assert_eq!((t.dt_min, t.dt_max), (None, None));
+        assert_eq!(t.resolved_dt_min(), 1e-3 * DT_MIN_FACTOR);
+        assert_eq!(t.resolved_dt_max(), 1e-3 * DT_MAX_FACTOR);
+        assert!(t.adaptive && t.stop_at_steady);
+        assert_eq!((t.error_tol, t.steady_tol), (1e-4, 1e-4));
+        assert_eq!(t.mass, MassKind::Consistent);
+        assert_eq!(t.max_steps, 200_000);
+        assert_eq!(t.max_steps, DEFAULT_MAX_STEPS);
+
+        // Road defaults in transient: no ramps, v0_ramp follows motion.ramp.
+        let text = remove_section(&remove_section(ODEN, "[road]"), "[time]")
+            + "[road]\ndisp = 0.05\nv0 = 3.0\n[time]\ndt = 1e-3\nt_end = 1\n";
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let road = s.road.unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!((road.ramp, road.v0_ramp), (0.0, None));
+        assert_eq!(road.resolved_v0_ramp(&s.motion), s.motion.ramp);
+        assert_eq!(road.resolved_v0_ramp(&s.motion), 0.05);
+    }
+
+    #[test]
+    fn time_ranges_rejected_with_key_and_line() {
+        let cases: [(&str, &str, &str, &str); 14] = [
+            ("dt =", "dt = 0.0", "time.dt", "> 0"),
+            ("dt =", "dt = -2e-4", "time.dt", "> 0"),
+            ("t_end", "t_end = 0", "time.t_end", "> 0"),
+            ("t_end", "t_end = -1.0", "time.t_end", "> 0"),
+            ("dt =", "dt = 3.0", "time.dt", "must not exceed t_end"),
+            ("rho_inf", "rho_inf = -0.1", "time.rho_inf", "[0, 1]"),
+            ("rho_inf", "rho_inf = 1.01", "time.rho_inf", "[0, 1]"),
+            (
+                "dt =",
+                "dt = 2e-4\ndt_min = 3e-4",
+                "time.dt_min",
+                "must not exceed dt",
+            ),
+            ("dt =", "dt = 2e-4\ndt_min = 0", "time.dt_min", "> 0"),
+            ("dt =", "dt = 2e-4\ndt_max = 1e-4", "time.dt_max", ">= dt"),
+            ("error_tol", "error_tol = 0.0", "time.error_tol", "> 0"),
+            ("steady_tol", "steady_tol = 0", "time.steady_tol", "> 0"),
+            ("steady_tol", "steady_tol = -1e-3", "time.steady_tol", "> 0"),
+            ("max_steps", "max_steps = 0", "time.max_steps", ">= 1"),
+        ];
+        for (prefix, new, key, what) in cases {
+            let text = replace_line(ODEN, prefix, new);
+            let e = errors(&text);
+            let field = key.trim_start_matches("time.");
+            assert_only(&e, key, Some(line_of(&text, &format!("{field} ="))));
+            assert!(e.0[0].message.contains(what), "{new}: {e}");
+            assert!(
+                e.0[0].to_string().starts_with(&format!(
+                    "test.toml:{}: key `{key}`",
+                    line_of(&text, &format!("{field} ="))
+                )),
+                "{e}"
+            );
+        }
+        // Boundary values are accepted.
+        for ok in [
+            ("rho_inf", "rho_inf = 0"),
+            ("rho_inf", "rho_inf = 1.0"),
+            ("dt =", "dt = 2e-4\ndt_min = 2e-4\ndt_max = 2e-4"),
+            ("dt =", "dt = 2.0"),
+        ] {
+            let text = replace_line(ODEN, ok.0, ok.1);
+            assert!(load(&text).is_ok(), "{}", ok.1);
+        }
+        // Several problems of [time] at once, each on its own line.
+        let text = replace_line(ODEN, "rho_inf", "rho_inf = 2");
+        let text = replace_line(&text, "t_end", "t_end = 0");
+        let text = replace_line(&text, "error_tol", "error_tol = -1");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["rho_inf", "t_end", "error_tol"] {
+            let err = e
+                .find(&format!("time.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)));
+        }
+        // Missing required keys: at the [time] header.
+        let text = ODEN
+            .lines()
+            .filter(|l| !l.starts_with("dt =") && !l.starts_with("t_end"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        for key in ["time.dt", "time.t_end"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, "[time]")));
+            assert!(err.message.contains("required key is missing"), "{err}");
+        }
+        // Wrong types and unknown values.
+        let text = replace_line(ODEN, "integrator", "integrator = \"newmark\"");
+        let e = errors(&text);
+        assert_only(&e, "time.integrator", Some(line_of(&text, "integrator")));
+        assert!(e.0[0].message.contains("\"generalized_alpha\""), "{e}");
+        let text = replace_line(ODEN, "adaptive", "adaptive = 1");
+        let e = errors(&text);
+        assert_only(&e, "time.adaptive", Some(line_of(&text, "adaptive")));
+        let text = replace_line(ODEN, "max_steps", "max_steps = 1.5");
+        let e = errors(&text);
+        assert_only(&e, "time.max_steps", Some(line_of(&text, "max_steps")));
+        let text = replace_line(ODEN, "dt =", "dt = 2e-4\ndt_step = 1");
+        let e = errors(&text);
+        assert_only(&e, "time.dt_step", Some(line_of(&text, "dt_step")));
+        assert!(e.0[0].message.contains("steady_tol"), "{e}");
+    }
+
+    #[test]
+    fn central_difference_uses_lumped_mass() {
+        // Explicit consistent mass with central difference: named at its line.
+        let text = replace_line(ODEN, "integrator", "integrator = \"central_difference\"");
+        let e = errors(&text);
+        assert_only(&e, "time.mass", Some(line_of(&text, "mass =")));
+        assert!(e.0[0].message.contains("lumped"), "{e}");
+        // Omitted: resolved to lumped (and written so by to_toml_string).
+        let text = text
+            .lines()
+            .filter(|l| !l.starts_with("mass ="))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t.integrator, IntegratorName::CentralDifference);
+        assert_eq!(
+            (t.mass, t.effective_mass()),
+            (MassKind::Lumped, MassKind::Lumped)
+        );
+        assert!(t.is_explicit());
+        let out = s.to_toml_string();
+        assert!(out.contains("mass = \"lumped\""), "{out}");
+        assert_eq!(load(&out).unwrap_or_else(|e| panic!("{e}\n{out}")), s);
+        // Explicit lumped is fine; an override back to consistent is reported as (--set).
+        assert!(load(&replace_line(
+            &text,
+            "integrator",
+            "integrator = \"central_difference\"\nmass = \"lumped\""
+        ))
+        .is_ok());
+        let e = errors_with(&text, &["time.mass=consistent"]);
+        assert_only(&e, "time.mass", None);
+        assert!(e.0[0].is_override(), "{e}");
+        // An unknown mass is reported once, not also as "consistent".
+        let e = errors_with(&text, &["time.mass=diagonal"]);
+        assert_only(&e, "time.mass", None);
+        assert!(e.0[0].message.contains("\"lumped\""), "{e}");
+        // Other integrators keep the consistent default.
+        let s = load_with(ODEN, &["time.integrator=bdf"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.time.map(|t| t.mass), Some(MassKind::Consistent));
+        let s = load_with(ODEN, &["time.integrator=sdirk", "time.mass=lumped"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.time.map(|t| (t.integrator, t.mass)),
+            Some((IntegratorName::Sdirk, MassKind::Lumped))
+        );
+    }
+
+    #[test]
+    fn time_section_only_in_transient() {
+        let time = "\n[time]\ndt = 1e-3\nt_end = 1.0\n";
+        for base in [MINIMAL, FRICTIONLESS, STICK_SLIP] {
+            let text = format!("{base}{time}");
+            let e = errors(&text);
+            assert_only(&e, "time", Some(line_of(&text, "[time]")));
+            assert!(e.0[0].message.contains("not used"), "{e}");
+            assert!(e.0[0].message.contains("\"transient\""), "{e}");
+        }
+        // Created by an override: (--set).
+        let e = errors_with(MINIMAL, &["time.dt=1e-3", "time.t_end=1"]);
+        assert_only(&e, "time", None);
+        assert!(e.0[0].is_override(), "{e}");
+        // Required in transient: at the line of `mode`.
+        let text = remove_section(ODEN, "[time]");
+        let e = errors(&text);
+        assert_only(&e, "time", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("missing"), "{e}");
+        assert!(e.0[0].message.contains("dt, t_end"), "{e}");
+        // [stick_slip] in a transient scene.
+        let text = format!(
+            "{ODEN}\n[stick_slip]\nmass = 1\nstiffness = 1\nnormal_force = 1\nbelt_speed = 1\n\
+             t_end = 1\n"
+        );
+        let e = errors(&text);
+        assert_only(&e, "stick_slip", Some(line_of(&text, "[stick_slip]")));
+    }
+
+    #[test]
+    fn transient_requires_omega() {
+        let text = ODEN
+            .lines()
+            .filter(|l| !l.starts_with("omega"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "motion.omega", Some(line_of(&text, "[motion]")));
+        assert!(e.0[0].message.contains("\"transient\""), "{e}");
+        // No [motion] at all: at the line of `mode`.
+        let text = remove_section(&minimal_transient(), "[motion]");
+        let e = errors(&text);
+        assert_only(&e, "motion.omega", Some(line_of(&text, "mode =")));
+        let e = errors(&remove_section(MINIMAL, "[motion]"));
+        assert_only(&e, "motion.omega", Some(line_of(MINIMAL, "mode =")));
+        // omega = 0 is allowed (a road moving under a non-spinning cylinder).
+        assert!(load(&replace_line(ODEN, "omega", "omega = 0")).is_ok());
+        let e = errors(&replace_line(ODEN, "omega", "omega = -10"));
+        assert!(e.has_key("motion.omega"), "{e}");
+    }
+
+    #[test]
+    fn transient_allows_road_speed_damping_and_spin() {
+        // Static still rejects them (see static_rejects_spin_road_speed_and_damping); in
+        // transient they are the point.
+        let s = load_with(
+            ODEN,
+            &[
+                "road.v0=-5",
+                "contact.b_n=0",
+                "motion.omega=40",
+                "contact.l_n=1",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.road.as_ref().map(|r| r.v0), Some(-5.0));
+        assert_eq!(s.motion.omega, 40.0);
+        assert_eq!(s.contact.as_ref().map(|c| (c.b_n, c.l_n)), Some((0.0, 1.0)));
+        // Load control in transient.
+        let s = load_with(
+            &ODEN.replace("disp = 0.1", "load = 300.0"),
+            &["road.ramp=0.1"],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let road = s.road.unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!((road.disp, road.load, road.ramp), (None, Some(300.0), 0.1));
+    }
+
+    #[test]
+    fn ramps_only_in_transient() {
+        // motion.ramp in spinning (file) and static (override).
+        let text = replace_line(MINIMAL, "omega", "omega = 20.0\nramp = 0.1");
+        let e = errors(&text);
+        assert_only(&e, "motion.ramp", Some(line_of(&text, "ramp")));
+        assert!(e.0[0].message.contains("\"spinning\""), "{e}");
+        let e = errors_with(FRICTIONLESS, &["motion.ramp=0.1"]);
+        assert_only(&e, "motion.ramp", None);
+        assert!(e.0[0].is_override(), "{e}");
+        let e = errors_with(STICK_SLIP, &["motion.ramp=1"]);
+        assert_only(&e, "motion.ramp", None);
+        // road.ramp and road.v0_ramp in static.
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nramp = 0.05");
+        let e = errors(&text);
+        assert_only(&e, "road.ramp", Some(line_of(&text, "ramp")));
+        assert!(e.0[0].message.contains("static"), "{e}");
+        let text = replace_line(FRICTIONLESS, "v0", "v0 = 0.0\nv0_ramp = 0.05");
+        let e = errors(&text);
+        assert_only(&e, "road.v0_ramp", Some(line_of(&text, "v0_ramp")));
+        // Zero ramps are fine anywhere.
+        let text = replace_line(FRICTIONLESS, "v0", "v0 = 0.0\nv0_ramp = 0\nramp = 0.0");
+        assert!(load(&text).is_ok());
+        assert!(load(&replace_line(MINIMAL, "omega", "omega = 20.0\nramp = 0")).is_ok());
+        // Negative or non-finite ramps in transient.
+        let text = replace_line(ODEN, "ramp = 0.05", "ramp = -0.05");
+        let e = errors(&text);
+        assert_only(&e, "motion.ramp", Some(line_of(&text, "ramp = -0.05")));
+        assert!(e.0[0].message.contains(">= 0"), "{e}");
+        let e = errors_with(ODEN, &["road.ramp=-1", "road.v0_ramp=-2"]);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert!(e.has_key("road.ramp") && e.has_key("road.v0_ramp"), "{e}");
+        assert!(e.0.iter().all(|x| x.is_override()), "{e}");
+        let e = errors_with(ODEN, &["motion.ramp=inf"]);
+        assert_only(&e, "motion.ramp", None);
+        // v0_ramp given: it wins over motion.ramp.
+        let s = load_with(ODEN, &["road.v0_ramp=0.2"]).unwrap_or_else(|e| panic!("{e}"));
+        let road = s.road.clone().unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!(road.v0_ramp, Some(0.2));
+        assert_eq!(road.resolved_v0_ramp(&s.motion), 0.2);
+    }
+
+    #[test]
+    fn transient_road_contact_and_friction_rules() {
+        // Neither [road] nor [contact]: a spinning cylinder in time (frictionless).
+        let text = remove_section(&remove_section(ROLLING_FRICTIONLESS, "[road]"), "[contact]");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((s.road, s.contact), (None, None));
+        // ... but friction needs contact.
+        let text = remove_section(&remove_section(ODEN, "[road]"), "[contact]");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(e.0[0].message.contains("\"transient\""), "{e}");
+        assert!(e.0[0].message.contains("\"coulomb_tanh\""), "{e}");
+        // One without the other: named, at the header of the one given.
+        let text = remove_section(ODEN, "[contact]");
+        let e = errors(&text);
+        assert_only(&e, "contact", Some(line_of(&text, "[road]")));
+        assert!(e.0[0].message.contains("both"), "{e}");
+        let text = remove_section(ODEN, "[road]");
+        let e = errors(&text);
+        assert_only(&e, "road", Some(line_of(&text, "[contact]")));
+        assert!(e.0[0].message.contains("both"), "{e}");
+        // Every friction law is allowed with contact.
+        let s = load_with(
+            ROLLING_FRICTIONLESS,
+            &[
+                "friction.law=oden_martins",
+                "friction.c_t=6e3",
+                "friction.m_t=1",
+                "friction.eps=0.5",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.friction.is_active());
+    }
+
+    #[test]
+    fn graded_mesh_rejected_when_stopping_at_steady() {
+        let text = replace_line(ODEN, "grading_theta", "grading_theta = 0.5");
+        let e = errors(&text);
+        assert_only(
+            &e,
+            "mesh.grading_theta",
+            Some(line_of(&text, "grading_theta")),
+        );
+        assert!(e.0[0].message.contains("uniform in θ"), "{e}");
+        // Without stopping at the steady state a graded mesh is allowed.
+        let text = replace_line(&text, "stop_at_steady", "stop_at_steady = false");
+        assert!(load(&text).is_ok());
+        // An out-of-range grading is reported once.
+        let e = errors(&replace_line(ODEN, "grading_theta", "grading_theta = 1.0"));
+        assert_eq!(e.0.len(), 1, "{e}");
+        // Static scenes keep their graded meshes.
+        assert!(load(FRICTIONLESS).is_ok());
+    }
+
+    #[test]
+    fn overrides_of_time_keys() {
+        let s = load_with(ODEN, &["time.dt=1e-4"]).unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t.dt, 1e-4);
+        assert!((t.resolved_dt_min() - 1e-8).abs() < 1e-20);
+        assert!((t.resolved_dt_max() - 1e-3).abs() < 1e-15);
+        let s = load_with(
+            ODEN,
+            &[
+                "time.integrator=central_difference",
+                "time.mass=lumped",
+                "time.adaptive=false",
+                "time.stop_at_steady=false",
+                "time.t_end=0.5",
+                "time.rho_inf=1",
+                "time.dt_min=1e-6",
+                "time.dt_max=1e-3",
+                "time.error_tol=1e-5",
+                "time.steady_tol=1e-5",
+                "time.max_steps=10",
+                "motion.ramp=0.1",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(
+            t,
+            TimeSpec {
+                integrator: IntegratorName::CentralDifference,
+                rho_inf: 1.0,
+                dt: 2e-4,
+                dt_min: Some(1e-6),
+                dt_max: Some(1e-3),
+                t_end: 0.5,
+                adaptive: false,
+                error_tol: 1e-5,
+                steady_tol: 1e-5,
+                stop_at_steady: false,
+                mass: MassKind::Lumped,
+                max_steps: 10,
+                strain_rate_damping: 1.0,
+            }
+        );
+        // road.v0_ramp follows the overridden motion.ramp.
+        assert_eq!(
+            s.road.as_ref().map(|r| r.resolved_v0_ramp(&s.motion)),
+            Some(0.1)
+        );
+        // Bad override values: (--set) and the key.
+        let e = errors_with(ODEN, &["time.dt=-1e-4"]);
+        assert_only(&e, "time.dt", None);
+        assert!(e.0[0].is_override());
+        assert!(
+            e.0[0]
+                .to_string()
+                .starts_with("test.toml:(--set): key `time.dt`"),
+            "{e}"
+        );
+        let e = errors_with(ODEN, &["time.dt=5"]);
+        assert_only(&e, "time.dt", None);
+        assert!(e.0[0].message.contains("t_end"), "{e}");
+        // dt overridden below an explicit dt_min in the file: dt_min keeps its line.
+        let text = replace_line(ODEN, "dt =", "dt = 2e-4\ndt_min = 1e-5");
+        let e = errors_with(&text, &["time.dt=1e-6"]);
+        assert_only(&e, "time.dt_min", Some(line_of(&text, "dt_min")));
+        let e = errors_with(ODEN, &["time.integrator=euler"]);
+        assert_only(&e, "time.integrator", None);
+        assert!(e.0[0].message.contains("\"sdirk\""), "{e}");
+        // Switching a spinning scene to transient by override.
+        let s = load_with(
+            MINIMAL,
+            &["analysis.mode=transient", "time.dt=1e-3", "time.t_end=1"],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.time.map(|t| (t.dt, t.t_end)), Some((1e-3, 1.0)));
+        let e = errors_with(MINIMAL, &["analysis.mode=transient"]);
+        assert_only(&e, "time", None);
+        assert!(e.0[0].is_override(), "{e}");
+    }
+
+    #[test]
+    fn round_trip_of_transient_keys() {
+        let cases: [(&str, &[&str]); 3] = [
+            (
+                ODEN,
+                &[
+                    "time.dt_min=1e-7",
+                    "time.dt_max=1e-3",
+                    "road.v0_ramp=0.2",
+                    "time.integrator=bdf",
+                ],
+            ),
+            (
+                ROLLING_FRICTIONLESS,
+                &["time.integrator=central_difference", "time.mass=lumped"],
+            ),
+            (
+                &ODEN.replace("disp = 0.1", "load = 300.0"),
+                &["time.rho_inf=0"],
+            ),
+        ];
+        for (text, ov) in cases {
+            let s = load_with(text, ov).unwrap_or_else(|e| panic!("{e}"));
+            let out = s.to_toml_string();
+            let back = load(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+            assert_eq!(back, s, "{out}");
+            let direct: Scene = toml::from_str(&out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(direct, s);
+            assert!(out.contains("[time]") && out.contains("ramp = "), "{out}");
+        }
+        let s = load(&minimal_transient()).unwrap_or_else(|e| panic!("{e}"));
+        let out = s.to_toml_string();
+        assert!(
+            out.contains("[time]\nintegrator = \"generalized_alpha\""),
+            "{out}"
+        );
+        assert!(!out.contains("dt_min") && !out.contains("[road]"), "{out}");
+        assert_eq!(load(&out).unwrap_or_else(|e| panic!("{e}\n{out}")), s);
+        // Scenes of the other modes write no [time].
+        let out = load(FRICTIONLESS)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .to_toml_string();
+        assert!(!out.contains("[time]"), "{out}");
+    }
+
+    #[test]
+    fn validate_checks_transient_scenes_built_in_code() {
+        let mut s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.validate().is_ok());
+        if let Some(t) = s.time.as_mut() {
+            t.dt = -1.0;
+            t.integrator = IntegratorName::CentralDifference;
+            t.mass = MassKind::Consistent;
+        }
+        s.motion.ramp = -1.0;
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["time.dt", "time.mass", "motion.ramp"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!((err.line, err.source_name.as_str()), (None, "<scene>"));
+        }
+        s.time = None;
+        s.motion.ramp = 0.0;
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.has_key("time"), "{e}");
+        // [time] in a static scene built in code.
+        let mut st = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        st.time = Some(TimeSpec::new(1e-3, 1.0));
+        let e = st.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.has_key("time"), "{e}");
+    }
+
+    #[test]
+    fn smoothstep_ramps() {
+        assert_eq!((smoothstep(-1.0), smoothstep(0.0)), (0.0, 0.0));
+        assert_eq!((smoothstep(1.0), smoothstep(2.0)), (1.0, 1.0));
+        assert!((smoothstep(0.5) - 0.5).abs() < 1e-15);
+        // Symmetric, monotone, C²: derivative and integral consistent with S.
+        let h = 1e-6;
+        for i in 1..100 {
+            let x = i as f64 / 100.0;
+            assert!((smoothstep(x) + smoothstep(1.0 - x) - 1.0).abs() < 1e-14);
+            assert!(smoothstep(x) >= smoothstep(x - 0.01));
+            let d = (smoothstep(x + h) - smoothstep(x - h)) / (2.0 * h);
+            assert!((d - smoothstep_derivative(x)).abs() < 1e-6, "{x}");
+            let q = (smoothstep_integral(x + h) - smoothstep_integral(x - h)) / (2.0 * h);
+            assert!((q - smoothstep(x)).abs() < 1e-6, "{x}");
+        }
+        assert_eq!(smoothstep_derivative(0.0), 0.0);
+        assert_eq!(smoothstep_derivative(1.0), 0.0);
+        assert!((smoothstep_integral(1.0) - 0.5).abs() < 1e-15);
+        assert!((smoothstep_integral(3.0) - 2.5).abs() < 1e-15);
+
+        let m = Motion {
+            omega: 10.0,
+            ramp: 0.05,
+        };
+        assert_eq!((m.omega_at(-1.0), m.omega_at(0.0)), (0.0, 0.0));
+        assert!((m.omega_at(0.025) - 5.0).abs() < 1e-12);
+        assert_eq!(m.omega_at(0.05), 10.0);
+        assert_eq!(m.omega_at(1.0), 10.0);
+        assert!((m.angle_at(1.0) - 10.0 * (1.0 - 0.025)).abs() < 1e-12);
+        assert!((m.angle_at(0.05) - 10.0 * 0.025).abs() < 1e-12);
+        assert_eq!(m.angle_at(-1.0), 0.0);
+        assert!((m.omega_dot_at(0.025) - 10.0 * 1.875 / 0.05).abs() < 1e-9);
+        assert_eq!(m.omega_dot_at(0.06), 0.0);
+        // A zero ramp: full speed at once.
+        let step = Motion {
+            omega: 10.0,
+            ramp: 0.0,
+        };
+        assert_eq!((step.omega_at(0.0), step.omega_at(0.3)), (10.0, 10.0));
+        assert!((step.angle_at(0.3) - 3.0).abs() < 1e-12);
+        assert_eq!(step.omega_dot_at(0.0), 0.0);
+
+        let road = RoadSpec {
+            disp: Some(0.1),
+            load: None,
+            v0: 20.0,
+            ramp: 0.1,
+            v0_ramp: None,
+        };
+        assert!((road.ramp_factor(0.05) - 0.5).abs() < 1e-12);
+        assert_eq!(road.ramp_factor(0.2), 1.0);
+        assert!((road.ramp_factor_rate(0.05) - 1.875 / 0.1).abs() < 1e-9);
+        assert!((road.v0_at(0.025, &m) - 10.0).abs() < 1e-12);
+        assert_eq!(road.v0_at(0.05, &m), 20.0);
+        let late = RoadSpec {
+            v0_ramp: Some(0.5),
+            ..road
+        };
+        assert!((late.v0_at(0.25, &m) - 10.0).abs() < 1e-12);
     }
 }

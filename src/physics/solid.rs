@@ -53,6 +53,9 @@ pub struct SolidModel {
     pub omega2: f64,
     pub pressure: PressureMode,
     pub body_force: Option<BodyForce>,
+    /// Objective viscous damping on the rate of Green strain, S_v = η Ė (transient mode only;
+    /// active when a velocity field is passed to [`Self::cell_system_viscous`]).
+    pub strain_rate_damping: f64,
     q1: ShapeTable<4>,
     q2: ShapeTable<9>,
     /// Set by a kernel that met J ≤ 0 at a quadrature point.
@@ -88,6 +91,7 @@ impl SolidModel {
             omega2: 0.0,
             pressure,
             body_force: None,
+            strain_rate_damping: 0.0,
             q1: ShapeTable::gauss::<Q1>(2),
             q2: ShapeTable::gauss::<Q2>(3),
             inverted: AtomicBool::new(false),
@@ -132,20 +136,125 @@ impl SolidModel {
     ) -> bool {
         self.inverted.store(false, Ordering::Relaxed);
         asm.assemble(dofs, with_matrix, |c, loc| {
-            self.cell_kernel(c, dofs, x, loc, with_matrix)
+            self.cell_kernel(c, dofs, x, loc, with_matrix, None)
         });
         !self.inverted.load(Ordering::Relaxed)
     }
 
-    /// Local residual of cell `c` at state `x` (including rows of fixed dofs: reactions).
-    pub fn cell_residual(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem) {
-        self.cell_kernel(c, dofs, x, loc, false);
+    /// Scalar mass matrix ρ0 ∫ N_a N_b dV of cell `c` (row-major, `n × n` with n the cell's node
+    /// count), with (p + 2)² Gauss points (N_a N_b det J has degree 2p + 1 per direction on the
+    /// polar map: exact).
+    pub fn cell_mass(&self, c: usize, out: &mut Vec<f64>) {
+        match self.mesh.degree[c] {
+            1 => self.cell_mass_generic::<Q1, 4>(c, 3, out),
+            _ => self.cell_mass_generic::<Q2, 9>(c, 4, out),
+        }
     }
 
-    fn cell_kernel(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem, with_k: bool) {
+    fn cell_mass_generic<E: Lagrange2D, const N: usize>(
+        &self,
+        c: usize,
+        q: usize,
+        out: &mut Vec<f64>,
+    ) {
+        let tab = ShapeTable::<N>::gauss::<E>(q);
+        out.clear();
+        out.resize(N * N, 0.0);
+        for k in 0..tab.len() {
+            let (xi, eta) = tab.points[k];
+            let (_, jac) = self.map(c, xi, eta, &tab.n[k], &tab.dn[k]);
+            let w = tab.weights[k] * jac.determinant() * self.rho;
+            for a in 0..N {
+                for b in 0..N {
+                    out[a * N + b] += tab.n[k][a] * tab.n[k][b] * w;
+                }
+            }
+        }
+    }
+
+    /// HRZ lumping of a cell mass matrix (`n × n`): diagonal entries scaled so that they sum to
+    /// the cell mass. Positive for Q2 (row-sum lumping gives zero or negative corner masses).
+    pub fn hrz_lump(m: &[f64], n: usize) -> Vec<f64> {
+        let total: f64 = m.iter().sum();
+        let diag: f64 = (0..n).map(|a| m[a * n + a]).sum();
+        (0..n).map(|a| m[a * n + a] * total / diag).collect()
+    }
+
+    /// Clear the "inadmissible state met" flag before a custom assembly with [`Self::cell_system`].
+    pub fn reset_admissible(&self) {
+        self.inverted.store(false, Ordering::Relaxed);
+    }
+    /// Whether no quadrature point met J ≤ 0 since [`Self::reset_admissible`].
+    pub fn admissible(&self) -> bool {
+        !self.inverted.load(Ordering::Relaxed)
+    }
+
+    /// Local residual and tangent of cell `c` at state `x` (static part: internal work,
+    /// θ-referential inertia, body force, pressure terms).
+    pub fn cell_system(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
+        self.cell_kernel(c, dofs, x, loc, with_k, None);
+    }
+
+    /// As [`Self::cell_system`] plus the viscous stress P_v = F S_v, S_v = η Ė with
+    /// Ė = ½(Ḟᵀ F + Fᵀ Ḟ), Ḟ = ∇v; `vel` is the full velocity vector and `kv` = ∂v/∂u of the
+    /// time integrator (the tangent includes both the F and the Ḟ dependence). Ė vanishes for a
+    /// rigid rotation (Ḟ = W F with W skew), so rigid spinning is not damped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_system_viscous(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        vel: &[f64],
+        kv: f64,
+        loc: &mut LocalSystem,
+        with_k: bool,
+    ) {
+        let visc = (self.strain_rate_damping > 0.0).then_some((vel, kv));
+        self.cell_kernel(c, dofs, x, loc, with_k, visc);
+    }
+
+    /// Strain energy ∫ W(∇u) dV of the whole mesh at state `x` (displacement part only).
+    pub fn strain_energy(&self, dofs: &DofMap, x: &[f64]) -> f64 {
+        let mut e = 0.0;
+        for c in 0..self.mesh.n_cells() {
+            let (pts, ws) = crate::element::gauss_1d(3);
+            for (i, xi) in pts.iter().enumerate() {
+                for (j, eta) in pts.iter().enumerate() {
+                    if let Some(pv) = self.point_values(c, dofs, x, *xi, *eta) {
+                        e +=
+                            self.material.energy(&pv.grad_u) * ws[i] * ws[j] * pv.jac.determinant();
+                    }
+                }
+            }
+        }
+        e
+    }
+
+    /// Local residual of cell `c` at state `x` (including rows of fixed dofs: reactions).
+    pub fn cell_residual(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem) {
+        self.cell_kernel(c, dofs, x, loc, false, None);
+    }
+
+    fn cell_kernel(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        loc: &mut LocalSystem,
+        with_k: bool,
+        visc: Option<(&[f64], f64)>,
+    ) {
         match self.mesh.degree[c] {
-            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k),
-            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k),
+            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k, visc),
+            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k, visc),
         }
     }
 
@@ -283,6 +392,7 @@ impl SolidModel {
         x: &[f64],
         loc: &mut LocalSystem,
         with_k: bool,
+        visc: Option<(&[f64], f64)>,
     ) {
         let cd = dofs.cell(c);
         let nd = cd.len();
@@ -292,6 +402,12 @@ impl SolidModel {
             u[a] = x[cd[a] as usize];
         }
         let u = &u[..nu];
+        let mut vloc = [0.0; 18];
+        if let Some((vel, _)) = visc {
+            for a in 0..nu {
+                vloc[a] = vel[cd[a] as usize];
+            }
+        }
         // Pressure coefficients of this cell.
         let mut pc = Vector3::zeros();
         let mut minv = Matrix3::zeros();
@@ -346,6 +462,33 @@ impl SolidModel {
             } else {
                 (self.material.stress(&h), Tangent::zeros())
             };
+            if let Some((_, kv)) = visc {
+                // Viscous stress on the Green-strain rate (objective).
+                let eta = self.strain_rate_damping;
+                let f = Mat2::identity() + h;
+                let fd = Self::grad_u(&vloc[..nu], &g);
+                let sv = (fd.transpose() * f + f.transpose() * fd) * (0.5 * eta);
+                p_st += f * sv;
+                if with_k {
+                    for k in 0..2 {
+                        for l in 0..2 {
+                            let mut e = Mat2::zeros();
+                            e[(k, l)] = 1.0;
+                            let ds = (e.transpose() * f * kv
+                                + fd.transpose() * e
+                                + e.transpose() * fd
+                                + f.transpose() * e * kv)
+                                * (0.5 * eta);
+                            let dp = e * sv + f * ds;
+                            for i in 0..2 {
+                                for j in 0..2 {
+                                    a_t[(v(i, j), v(k, l))] += dp[(i, j)];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
             let mut qv = Vector3::zeros();
             let mut cof = Mat2::zeros();
             if has_p {

@@ -1,0 +1,339 @@
+//! Driver of the `transient` mode: build the model, the kinematics and the integrator from the
+//! scene, integrate until steady (or t_end) with a progress bar, and write the outputs:
+//! summary.json (`results.time_to_steady`, `revolutions`, `steps`, `steady`, hub forces, torque
+//! and contact patch under the indentation keys), `passages.csv` (per node passage: changes of
+//! the referential field, hub force and torque, and the hub force and torque), `contact.csv`
+//! (final tractions) and `steady_field.csv` (the referential field extracted at the last node
+//! passage, see [`crate::driver::transient::SteadyMonitor`]).
+//!
+//! Recording ([`crate::io::record`]): every accepted time step is a recorder step (time = t);
+//! its view (decimated by `[output] every`) has the nodal stresses of u_n, the contact samples,
+//! the hub loads, the strain and kinetic energy (consistent mass) and the scalars `phi` (hub
+//! angle) and `revolutions`; `history.csv` is the CSV sink's time history. The first node passage
+//! at which the state is steady sends `steady_reached`. Ctrl-C stops at a step boundary.
+//!
+//! `steady_field.csv` format (shared with the steady mode): one row per referential node,
+//! `ring, pos, X1, X2, u1, u2`, where (X1, X2) is the referential (spatial) node position and
+//! u = χ − X the displacement of the material point that sits there.
+
+use super::frame::nodal_stress_at;
+use super::system::SolidSystem;
+use super::transient::{integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient};
+use crate::app::{build_contact, build_model, linear_kind_for, AppError, RunOptions, RunOutcome};
+use crate::contact::ContactModel;
+use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::record::{
+    self, Energy, HubLoads, Recorder, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
+};
+use crate::io::scene::{IntegratorName, MassKind, Scene, Sink};
+use crate::solver::{NewtonOptions, SolveError};
+use std::time::Instant;
+
+pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    let t0 = Instant::now();
+    ensure_dir(&opts.out_dir)?;
+    let Some(ts) = &scene.time else {
+        return Err(AppError::Unsupported(
+            "mode \"transient\" needs the [time] section".into(),
+        ));
+    };
+    let scheme = match ts.integrator {
+        IntegratorName::GeneralizedAlpha => Scheme::GeneralizedAlpha(GenAlpha::new(ts.rho_inf)),
+        IntegratorName::CentralDifference => Scheme::CentralDifference,
+        IntegratorName::Bdf | IntegratorName::Sdirk => {
+            return Err(AppError::Unsupported(format!(
+                "time.integrator = \"{}\" is not implemented yet (use \"generalized_alpha\" or \"central_difference\")",
+                ts.integrator
+            )))
+        }
+    };
+    let mut model = build_model(scene)?;
+    model.strain_rate_damping = ts.strain_rate_damping;
+    let sys = match (&scene.road, &scene.contact) {
+        (Some(_), Some(_)) => {
+            let c = build_contact(scene, &model)?;
+            SolidSystem::with_contact(model, c)
+        }
+        _ => SolidSystem::new(model, "hub"),
+    };
+    let road = scene.road.as_ref();
+    let ramp = road.map_or(0.0, |r| r.ramp);
+    let kin = Kinematics {
+        omega: Ramp {
+            target: scene.motion.omega,
+            time: scene.motion.ramp,
+        },
+        disp: road.and_then(|r| r.disp).map(|d| Ramp {
+            target: d,
+            time: ramp,
+        }),
+        h_touch: scene.geometry.ro,
+        load: road.and_then(|r| r.load).map(|l| Ramp {
+            target: l,
+            time: ramp,
+        }),
+        v0: Ramp {
+            target: road.map_or(0.0, |r| r.v0),
+            time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
+        },
+    };
+    let lumped = ts.effective_mass() == MassKind::Lumped;
+    let mut tr = Transient::new(sys, scheme, kin, lumped);
+    let kind = linear_kind_for(scene, &tr.sys);
+    let time_opts = TimeOptions {
+        dt: ts.dt,
+        dt_min: ts.resolved_dt_min(),
+        dt_max: ts.resolved_dt_max(),
+        t_end: ts.t_end,
+        adaptive: ts.adaptive,
+        error_tol: ts.error_tol,
+        steady_tol: ts.steady_tol,
+        stop_at_steady: ts.stop_at_steady,
+        max_steps: ts.max_steps,
+        lumped,
+        land_on_passages: true,
+    };
+    let newton_opts = NewtonOptions {
+        tol: scene.solver.tolerance,
+        max_iterations: scene.solver.max_iterations,
+        line_search: scene.solver.line_search,
+        verbose: opts.verbose,
+        ..Default::default()
+    };
+    let (mut recorders, warnings) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    for w in warnings {
+        eprintln!("tread: warning: {w}");
+    }
+    let scene_toml = scene.to_toml_string();
+    let mode = scene.analysis.mode.to_string();
+    let omega = scene.motion.omega;
+    recorders.run_started(&RunMeta {
+        scene_name: &scene.scene.name,
+        mode: &mode,
+        scene_toml: &scene_toml,
+        version: env!("CARGO_PKG_VERSION"),
+        features: record::build_features(),
+        mesh: Some(&tr.sys.model.mesh),
+        time_name: "time",
+        time_end: time_opts.t_end,
+        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
+    });
+    let (mut t_prev, mut its_prev, mut was_steady) = (0.0, 0usize, false);
+    let res = integrate(&mut tr, &time_opts, newton_opts, kind, |tr, rep| {
+        let info = StepInfo {
+            index: rep.steps.saturating_sub(1) as u64,
+            time: tr.t,
+            dt: tr.t - t_prev,
+            newton_iterations: rep.newton_iterations - its_prev,
+            residual: 0.0,
+            // The integration loop's own end conditions.
+            is_final: tr.t >= time_opts.t_end - 1e-12 * time_opts.t_end
+                || rep.steps >= time_opts.max_steps
+                || (rep.steady && time_opts.stop_at_steady),
+        };
+        t_prev = tr.t;
+        its_prev = rep.newton_iterations;
+        let became_steady = rep.steady && !was_steady;
+        was_steady = rep.steady;
+        if !(recorders.wants_view(&info) || became_steady) {
+            recorders.step(&info, None);
+            return;
+        }
+        let snap = tr.snapshot();
+        let stress = nodal_stress_at(&tr.sys, &tr.un);
+        let contact = tr
+            .sys
+            .contact
+            .as_ref()
+            .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
+            .unwrap_or_default();
+        let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
+        let view = StepView {
+            mesh: Some(&tr.sys.model.mesh),
+            x: &tr.un,
+            stress: &stress,
+            contact: &contact,
+            hub: Some(HubLoads {
+                force: [snap.hub_force_x, snap.hub_force_y],
+                torque: snap.hub_torque,
+            }),
+            energy: Some(Energy {
+                strain: snap.strain_energy,
+                kinetic: snap.kinetic_energy,
+            }),
+            road_height: tr.sys.road_height(),
+            omega: tr.kin.omega.value(tr.t),
+            scalars: &scalars,
+        };
+        let wants = recorders.wants_view(&info);
+        recorders.step(&info, wants.then_some(&view));
+        if became_steady {
+            let results = [
+                ("hub_force_x", snap.hub_force_x),
+                ("hub_force_y", snap.hub_force_y),
+                ("hub_torque", snap.hub_torque),
+                ("revolutions", rep.revolutions),
+            ];
+            recorders.steady_reached(
+                &SteadyReached {
+                    time: tr.t,
+                    change: rep.last_change.iter().copied().fold(0.0, f64::max),
+                    results: &results,
+                },
+                &view,
+            );
+        }
+    });
+    let wall = t0.elapsed().as_secs_f64();
+    let (rep, err) = match res {
+        Ok(r) => (r, None),
+        Err((e, r)) => (r, Some(e)),
+    };
+    let samples = tr
+        .sys
+        .contact
+        .as_ref()
+        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
+        .unwrap_or_default();
+    let tot = ContactModel::totals(&samples);
+    let (f, m) = tr.hub_reaction();
+    let results = serde_json::json!({
+        "time_to_steady": rep.time_to_steady,
+        "revolutions": rep.revolutions,
+        "steps": rep.steps,
+        "rejected_steps": rep.rejected,
+        "steady": rep.steady,
+        "final_time": rep.final_time,
+        "node_passages": rep.passages,
+        "steady_change_field": rep.last_change[0],
+        "steady_change_force": rep.last_change[1],
+        "steady_change_torque": rep.last_change[2],
+        "dt_min_used": rep.dt_min_used,
+        "dt_max_used": rep.dt_max_used,
+        "hub_force_x": f[0],
+        "hub_force_y": f[1],
+        "hub_torque": m,
+        "contact_x_min": tot.x_min,
+        "contact_x_max": tot.x_max,
+        "max_pressure": tot.max_pressure,
+        "contact_force_x": tot.force_x,
+        "contact_force_y": tot.force_y,
+        "contact_centroid": tot.centroid,
+        "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
+        "integrator": tr.scheme.name(),
+        "mass": if lumped { "lumped" } else { "consistent" },
+    });
+    let friction = tr
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.friction.is_active());
+    let damping = tr
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.normal.has_damping());
+    let converged = err.is_none();
+    let mut summary = serde_json::json!({
+        "scene": scene.scene.name,
+        "mode": scene.analysis.mode.to_string(),
+        "dofs": tr.sys.n_dofs(),
+        "newton_iterations": rep.newton_iterations,
+        "wall_time_s": wall,
+        "converged": converged,
+        "error": err.as_ref().map(|e| e.to_string()),
+        "results": results,
+        "terms": {
+            "friction": friction,
+            "normal_damping": damping,
+            "strain_rate_damping": tr.sys.model.strain_rate_damping > 0.0,
+            "inertia": true,
+            "history": false,
+            "pressure": tr.sys.dofs.per_cell > 0,
+            "contact_facets_per_iteration": tr.sys.mean_facets_per_assembly(),
+        },
+        "mesh": {
+            "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
+            "nodes": tr.sys.model.mesh.n_nodes(), "cells": tr.sys.model.mesh.n_cells(),
+        },
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    sanitize(&mut summary);
+    let interrupted = matches!(err, Some(SolveError::Interrupted { .. }));
+    let error = err.as_ref().map(|e| e.to_string());
+    for e in recorders.run_finished(&RunEnd {
+        converged,
+        interrupted,
+        error: error.as_deref(),
+        steps: rep.steps as u64,
+        wall_time_s: wall,
+        summary: Some(&summary),
+    }) {
+        eprintln!("tread: warning: {e}");
+    }
+    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    if scene.output.has(Sink::Csv) {
+        write_csv(
+            &opts.out_dir.join("passages.csv"),
+            &[
+                "t",
+                "change_field",
+                "change_force",
+                "change_torque",
+                "hub_force_x",
+                "hub_force_y",
+                "hub_torque",
+            ],
+            rep.passage_log.iter().map(|r| r.to_vec()),
+        )?;
+        write_csv(
+            &opts.out_dir.join("contact.csv"),
+            &[
+                "theta",
+                "x1",
+                "x2",
+                "penetration",
+                "t_n",
+                "t_t",
+                "slip_velocity",
+                "ds0",
+            ],
+            samples
+                .iter()
+                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
+        )?;
+        if let Some(rl) = tr.sys.model.mesh.rings {
+            if let Some(field) = tr.steady_field.as_ref() {
+                let mesh = &tr.sys.model.mesh;
+                write_csv(
+                    &opts.out_dir.join("steady_field.csv"),
+                    &["ring", "pos", "X1", "X2", "u1", "u2"],
+                    (0..mesh.n_nodes()).map(|n| {
+                        vec![
+                            (n / rl.per_ring) as f64,
+                            (n % rl.per_ring) as f64,
+                            mesh.nodes[n][0],
+                            mesh.nodes[n][1],
+                            field[2 * n],
+                            field[2 * n + 1],
+                        ]
+                    }),
+                )?;
+            }
+        }
+    }
+    let headline = vec![format!(
+        "t = {:.4e} s, {:.3} revolutions, {} steps, steady = {} (at t = {:?}); hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}]",
+        rep.final_time, rep.revolutions, rep.steps, rep.steady, rep.time_to_steady, f[0], f[1], m, tot.x_min, tot.x_max
+    )];
+    match err {
+        None => Ok(RunOutcome {
+            summary,
+            out_dir: opts.out_dir.clone(),
+            converged,
+            headline,
+        }),
+        Some(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
+        Some(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
+    }
+}
