@@ -338,8 +338,8 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
     let omega = scene.motion.omega;
     let (ri, ro, rho) = (1.0f64, 2.0f64, 0.027);
     // A rigid rotation: no strain energy; kinetic ½ ρ ω² ∫|X|² dA = ρ ω² π (ro⁴ − ri⁴)/4. The
-    // Q2 interpolation of the rotation on exact-geometry (polar) cells is not exact: O(h³)
-    // errors, ~1e-6 relative here.
+    // Q2 interpolation of the rotation and the isoparametric cells (the default geometry) are
+    // not exact on this coarse mesh: O(h³) errors, ~1e-4 relative here.
     let ke = rho * omega * omega * std::f64::consts::PI * (ro.powi(4) - ri.powi(4)) / 4.0;
 
     let (h, rows) = read_csv(&dir.join("history.csv"));
@@ -351,7 +351,7 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
         assert!((r - dt * (*k + 1) as f64).abs() < 1e-15);
     }
     for e in column(&h, &rows, "energy_kinetic") {
-        assert!((e - ke).abs() <= 2e-5 * ke, "{e} vs {ke}");
+        assert!((e - ke).abs() <= 5e-4 * ke, "{e} vs {ke}");
     }
     for e in column(&h, &rows, "energy_strain") {
         // Relative to the elastic energy scale μ·A (A = π (ro² − ri²)).
@@ -444,7 +444,7 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
             k.times.iter().map(|x| x.0 as u64).collect::<Vec<_>>(),
             recorded
         );
-        assert!(k.scalars.iter().all(|e| (e - ke).abs() <= 2e-5 * ke));
+        assert!(k.scalars.iter().all(|e| (e - ke).abs() <= 5e-4 * ke));
         assert_eq!(r["/newton/iterations"].scalars.len(), steps as usize);
         let sim: Vec<i64> = k.times.iter().map(|x| x.1).collect();
         assert_eq!(sim.iter().map(|x| *x as u64).collect::<Vec<_>>(), want);
