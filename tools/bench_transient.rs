@@ -360,7 +360,7 @@ struct Outcome {
     failure: Option<String>,
 }
 
-/// Time options of a run. `reference`: tighter steady_tol for (b).
+/// Time options of a run (`steady_tol`: the benchmark's or the tighter one of a reference).
 fn time_options(
     scene: &Scene,
     case: &Case,
