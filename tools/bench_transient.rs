@@ -963,7 +963,13 @@ fn write_png(path: &Path, title: &str, rows: &[Row], repeats: usize) -> Result<(
         .configure_mesh()
         .x_desc(format!("wall time [s] (median of {repeats})"))
         .y_desc("relative error vs reference")
-        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| {
+            if (0.01..1000.0).contains(v) {
+                format!("{}", (v * 100.0).round() / 100.0)
+            } else {
+                format!("{v:.0e}")
+            }
+        })
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(|x| e(&x))?;
@@ -1267,7 +1273,7 @@ fn run(args: &Args) -> Result<(), String> {
             None => wins.push((w.clone(), 1)),
         }
     }
-    wins.sort_by(|a, b| b.1.cmp(&a.1));
+    wins.sort_by_key(|w| std::cmp::Reverse(w.1));
     if let Some((w, k)) = wins.first() {
         println!(
             "\nCheapest integrator overall: **{w}**, cheapest at {k} of the {reached} (part, error level) pairs that some run reached{}.",
