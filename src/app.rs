@@ -252,11 +252,7 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
 /// Linear solver for a scene's system: Cholesky for symmetric positive problems, LU for the
 /// exact incompressible saddle point and whenever friction or damping makes the tangent
 /// unsymmetric.
-pub fn linear_kind_for(scene: &Scene, sys: &SolidSystem) -> LinearKind {
-    linear_kind(scene, sys)
-}
-
-fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
+pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
     match scene.solver.linear {
         LinearChoice::Cholesky => LinearKind::Cholesky,
         LinearChoice::Lu => LinearKind::Lu,
@@ -284,7 +280,8 @@ pub struct RunOutcome {
     pub headline: Vec<String>,
 }
 
-fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptions) {
+/// Newton and load-stepping options from the scene's `[solver]`.
+pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptions) {
     let newton_opts = NewtonOptions {
         tol: scene.solver.tolerance,
         max_iterations: scene.solver.max_iterations,

@@ -107,11 +107,17 @@ fn main() {
     let pool1 = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
-        .expect("thread pool");
+        .unwrap_or_else(|e| {
+            eprintln!("tread-bench: cannot build a thread pool: {e}");
+            std::process::exit(1)
+        });
     let pool2 = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
-        .expect("thread pool");
+        .unwrap_or_else(|e| {
+            eprintln!("tread-bench: cannot build a thread pool: {e}");
+            std::process::exit(1)
+        });
     let sizes = [
         (8usize, 80usize),
         (16, 160),

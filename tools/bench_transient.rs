@@ -46,10 +46,10 @@
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use tread::app::{build_contact, build_model, linear_kind_for};
+use tread::app::{build_contact, build_model, linear_kind};
 use tread::contact::ContactModel;
 use tread::driver::transient::{
-    integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
+    integrate, GenAlpha, Scheme, TimeOptions, Transient, TransientReport,
 };
 use tread::driver::SolidSystem;
 use tread::io::scene::{DEFAULT_ERROR_TOL, DEFAULT_RHO_INF, DEFAULT_STEADY_TOL};
@@ -320,29 +320,9 @@ fn build(scene: &Scene, scheme: Scheme, lumped: bool) -> Result<(Transient, Line
         }
         _ => SolidSystem::new(model, "hub"),
     };
-    let road = scene.road.as_ref();
-    let ramp = road.map_or(0.0, |r| r.ramp);
-    let kin = Kinematics {
-        omega: Ramp {
-            target: scene.motion.omega,
-            time: scene.motion.ramp,
-        },
-        disp: road.and_then(|r| r.disp).map(|d| Ramp {
-            target: d,
-            time: ramp,
-        }),
-        h_touch: scene.geometry.ro,
-        load: road.and_then(|r| r.load).map(|l| Ramp {
-            target: l,
-            time: ramp,
-        }),
-        v0: Ramp {
-            target: road.map_or(0.0, |r| r.v0),
-            time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
-        },
-    };
+    let kin = tread::driver::transient_run::kinematics(scene);
     let tr = Transient::new(sys, scheme, kin, lumped);
-    let kind = linear_kind_for(scene, &tr.sys);
+    let kind = linear_kind(scene, &tr.sys);
     Ok((tr, kind))
 }
 

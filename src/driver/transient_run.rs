@@ -19,14 +19,14 @@
 use super::frame::nodal_stress_at;
 use super::system::SolidSystem;
 use super::transient::{integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient};
-use crate::app::{build_contact, build_model, linear_kind_for, AppError, RunOptions, RunOutcome};
+use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{
     self, Energy, HubLoads, Recorder, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
 };
 use crate::io::scene::{IntegratorName, MassKind, Scene, Sink};
-use crate::solver::{NewtonOptions, SolveError};
+use crate::solver::SolveError;
 use std::time::Instant;
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
@@ -56,30 +56,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
         _ => SolidSystem::new(model, "hub"),
     };
-    let road = scene.road.as_ref();
-    let ramp = road.map_or(0.0, |r| r.ramp);
-    let kin = Kinematics {
-        omega: Ramp {
-            target: scene.motion.omega,
-            time: scene.motion.ramp,
-        },
-        disp: road.and_then(|r| r.disp).map(|d| Ramp {
-            target: d,
-            time: ramp,
-        }),
-        h_touch: scene.geometry.ro,
-        load: road.and_then(|r| r.load).map(|l| Ramp {
-            target: l,
-            time: ramp,
-        }),
-        v0: Ramp {
-            target: road.map_or(0.0, |r| r.v0),
-            time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
-        },
-    };
+    let kin = kinematics(scene);
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme, kin, lumped);
-    let kind = linear_kind_for(scene, &tr.sys);
+    let kind = linear_kind(scene, &tr.sys);
     let time_opts = TimeOptions {
         dt: ts.dt,
         dt_min: ts.resolved_dt_min(),
@@ -93,13 +73,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         lumped,
         land_on_passages: true,
     };
-    let newton_opts = NewtonOptions {
-        tol: scene.solver.tolerance,
-        max_iterations: scene.solver.max_iterations,
-        line_search: scene.solver.line_search,
-        verbose: opts.verbose,
-        ..Default::default()
-    };
+    let (newton_opts, _) = crate::app::solver_options(scene, opts.verbose);
     let (mut recorders, warnings) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
     for w in warnings {
         eprintln!("tread: warning: {w}");
@@ -335,5 +309,31 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }),
         Some(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
         Some(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
+    }
+}
+
+/// Hub and road kinematics of a transient scene: ω, DISP (or the hub load) and v0 ramped in
+/// with the scene's ramp times.
+pub fn kinematics(scene: &Scene) -> Kinematics {
+    let road = scene.road.as_ref();
+    let ramp = road.map_or(0.0, |r| r.ramp);
+    Kinematics {
+        omega: Ramp {
+            target: scene.motion.omega,
+            time: scene.motion.ramp,
+        },
+        disp: road.and_then(|r| r.disp).map(|d| Ramp {
+            target: d,
+            time: ramp,
+        }),
+        h_touch: scene.geometry.ro,
+        load: road.and_then(|r| r.load).map(|l| Ramp {
+            target: l,
+            time: ramp,
+        }),
+        v0: Ramp {
+            target: road.map_or(0.0, |r| r.v0),
+            time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
+        },
     }
 }

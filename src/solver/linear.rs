@@ -290,10 +290,9 @@ impl LbltDet {
             let sym = LbltSymbolic::new(pattern, SymmetricOrdering::Custom(perm))?;
             self.delayed = Some((self.zero_diag.clone(), sym));
         }
-        let sym = if use_delayed {
-            &self.delayed.as_ref().expect("set above").1
-        } else {
-            &self.amd
+        let sym = match (&self.delayed, use_delayed) {
+            (Some((_, d)), true) => d,
+            _ => &self.amd,
         };
         grow_scratch(mem, mem_req, sym.scratch());
         let len = sym.symbolic.len_val();
