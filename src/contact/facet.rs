@@ -100,6 +100,11 @@ pub enum SlipKinematics {
     /// positions by `kx` and the velocities by `kv` per unit change (e.g. generalized-α:
     /// kx = 1 − α_f, kv = (1 − α_f) γ / (β Δt)). w = v1 − v0, δ̇ = −v2.
     Dynamic { kx: f64, kv: f64 },
+    /// Steady rolling on the referential (spatial) mesh (DESIGN §5): the unknown is the motion
+    /// χ(r, θ) = X + u, the velocity is v = ω ∂θχ, differentiated along the facet
+    /// (∂θ = (d/dη) / (dθ/dη), θ the polar angle of the reference facet point), so
+    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used.
+    Steady { omega: f64 },
 }
 
 impl SlipKinematics {
@@ -108,6 +113,7 @@ impl SlipKinematics {
         match *self {
             SlipKinematics::Static { dtau } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
             SlipKinematics::Dynamic { kx, kv } => (kx, kv, true),
+            SlipKinematics::Steady { omega } => (1.0, omega, true),
         }
     }
 }
@@ -165,6 +171,10 @@ struct FacetPoint {
     x: Vec2,
     ds0: f64,
     theta: f64,
+    /// ∂θX = (dX/dη)/(dθ/dη) of the reference facet at the point.
+    dx_dtheta: Vec2,
+    /// ∂θN_j = (dN_j/dη)/(dθ/dη) of the facet shape functions.
+    dn_dtheta: [f64; 3],
 }
 
 impl ContactModel {
@@ -247,25 +257,27 @@ impl ContactModel {
         p: usize,
     ) -> FacetPoint {
         let eta = self.pts[q];
-        if let Some((x, jac)) = mesh.geometry[c].polar_map(1.0, eta) {
-            let ds = Vec2::new(jac[(0, 1)], jac[(1, 1)]).norm() * self.wts[q];
-            return FacetPoint {
-                x,
-                ds0: ds,
-                theta: x[1].atan2(x[0]),
-            };
-        }
-        let nodes = mesh.cell_nodes(c);
-        let (mut x, mut t) = (Vec2::zeros(), Vec2::zeros());
-        for (j, a) in Self::side_nodes(p).enumerate() {
-            let xa = mesh.nodes[nodes[a] as usize];
-            x += xa * n[j];
-            t += xa * dn[j];
-        }
+        let (x, t) = if let Some((x, jac)) = mesh.geometry[c].polar_map(1.0, eta) {
+            (x, Vec2::new(jac[(0, 1)], jac[(1, 1)]))
+        } else {
+            let nodes = mesh.cell_nodes(c);
+            let (mut x, mut t) = (Vec2::zeros(), Vec2::zeros());
+            for (j, a) in Self::side_nodes(p).enumerate() {
+                let xa = mesh.nodes[nodes[a] as usize];
+                x += xa * n[j];
+                t += xa * dn[j];
+            }
+            (x, t)
+        };
+        // dθ/dη of the reference point: (X1 X2' − X2 X1') / |X|².
+        let dtheta = (x[0] * t[1] - x[1] * t[0]) / x.norm_squared();
+        let inv = if dtheta != 0.0 { 1.0 / dtheta } else { 0.0 };
         FacetPoint {
             x,
             ds0: t.norm() * self.wts[q],
             theta: x[1].atan2(x[0]),
+            dx_dtheta: t * inv,
+            dn_dtheta: dn.map(|d| d * inv),
         }
     }
 
@@ -286,26 +298,60 @@ impl ContactModel {
     /// Displacement and velocity at facet point `q` of cell `c` (see [`SlipKinematics`] for
     /// the meaning of `aux`).
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn point_motion(
         &self,
         nodes: &[u32],
         side: &[usize; 3],
         nn: usize,
         nv: &[f64; 3],
+        fp: &FacetPoint,
         x: &[f64],
         aux: &[f64],
     ) -> (Vec2, Vec2) {
-        let (mut u, mut a) = (Vec2::zeros(), Vec2::zeros());
+        let mut u = Vec2::zeros();
         for j in 0..nn {
             let n = nodes[side[j]] as usize;
             u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
-            a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
         }
         let vel = match self.kinematics {
-            SlipKinematics::Static { dtau } => (u - a) / dtau.max(f64::MIN_POSITIVE),
-            SlipKinematics::Dynamic { .. } => a,
+            SlipKinematics::Static { dtau } => {
+                let mut a = Vec2::zeros();
+                for j in 0..nn {
+                    let n = nodes[side[j]] as usize;
+                    a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
+                }
+                (u - a) / dtau.max(f64::MIN_POSITIVE)
+            }
+            SlipKinematics::Dynamic { .. } => {
+                let mut a = Vec2::zeros();
+                for j in 0..nn {
+                    let n = nodes[side[j]] as usize;
+                    a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
+                }
+                a
+            }
+            SlipKinematics::Steady { omega } => {
+                // ω ∂θχ = ω (dX/dη + du/dη) / (dθ/dη).
+                let mut du = Vec2::zeros();
+                for j in 0..nn {
+                    let n = nodes[side[j]] as usize;
+                    du += Vec2::new(x[2 * n], x[2 * n + 1]) * fp.dn_dtheta[j];
+                }
+                (fp.dx_dtheta + du) * omega
+            }
         };
         (u, vel)
+    }
+
+    /// ∂v/∂u_b (per facet node b, same for both components): kv N_b (static, dynamic) or
+    /// ω ∂θN_b (steady).
+    #[inline]
+    fn velocity_coefficients(&self, nv: &[f64; 3], fp: &FacetPoint, kv: f64) -> [f64; 3] {
+        match self.kinematics {
+            SlipKinematics::Steady { omega } => fp.dn_dtheta.map(|d| omega * d),
+            _ => nv.map(|n| kv * n),
+        }
     }
 
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
@@ -346,7 +392,7 @@ impl ContactModel {
         for q in 0..self.pts.len() {
             let (nv, dv) = lagrange_1d(p, self.pts[q]);
             let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
-            let (u, vel) = self.point_motion(nodes, &side, nn, &nv, x, aux);
+            let (u, vel) = self.point_motion(nodes, &side, nn, &nv, &fp, x, aux);
             let xc = fp.x + u;
             let delta = -h - xc[1];
             if delta <= 0.0 {
@@ -358,17 +404,25 @@ impl ContactModel {
                 continue;
             }
             let ds = fp.ds0;
-            // Derivatives with respect to the unknowns: ∂t_n/∂u_{j,2} = (−d_delta kx − d_rate kv) N_j
-            // (δ = −H − x2, δ̇ = −v2); ∂/∂H has the same kx part (no rate part).
-            let dtn_dx2 = -nval.d_delta * kx - if damping { nval.d_rate * kv } else { 0.0 };
+            // Derivatives with respect to the unknowns (δ = −H − x2, δ̇ = −v2): with
+            // ∂x/∂u_b = kx N_b and ∂v/∂u_b = cv_b ([`Self::velocity_coefficients`]),
+            // ∂t_n/∂u_{b,2} = −d_delta kx N_b − d_rate cv_b; ∂/∂H has the kx part only.
+            let cv = self.velocity_coefficients(&nv, &fp, kv);
+            let d_rate = if damping { nval.d_rate } else { 0.0 };
+            let mut dtn_du2 = [0.0; 3];
+            for b in 0..nn {
+                dtn_du2[b] = -nval.d_delta * kx * nv[b] - d_rate * cv[b];
+            }
             let dtn_dh = -nval.d_delta * kx;
-            let (mut tt, mut dtt_dx1, mut dtt_dx2, mut dtt_dh) = (0.0, 0.0, 0.0, 0.0);
+            let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) = (0.0, [0.0; 3], [0.0; 3], 0.0);
             if friction {
                 let w = vel[0] - self.v0;
                 let fv = self.friction.eval(w, nval.t, delta);
                 tt = fv.t;
-                dtt_dx1 = fv.d_w * kv;
-                dtt_dx2 = fv.d_tn * dtn_dx2 - fv.d_delta * kx;
+                for b in 0..nn {
+                    dtt_du1[b] = fv.d_w * cv[b];
+                    dtt_du2[b] = fv.d_tn * dtn_du2[b] - fv.d_delta * kx * nv[b];
+                }
                 dtt_dh = fv.d_tn * dtn_dh - fv.d_delta * kx;
             }
             for a in 0..nn {
@@ -382,16 +436,16 @@ impl ContactModel {
                 continue;
             }
             for a in 0..nn {
+                let na = nv[a] * ds;
                 for b in 0..nn {
-                    let nab = nv[a] * nv[b] * ds;
-                    loc.k[(2 * a) * nd + 2 * b] -= nab * dtt_dx1;
-                    loc.k[(2 * a) * nd + 2 * b + 1] -= nab * dtt_dx2;
-                    loc.k[(2 * a + 1) * nd + 2 * b + 1] -= nab * dtn_dx2;
+                    loc.k[(2 * a) * nd + 2 * b] -= na * dtt_du1[b];
+                    loc.k[(2 * a) * nd + 2 * b + 1] -= na * dtt_du2[b];
+                    loc.k[(2 * a + 1) * nd + 2 * b + 1] -= na * dtn_du2[b];
                 }
                 if has_h {
-                    loc.k[(2 * a) * nd + ih] -= nv[a] * dtt_dh * ds;
-                    loc.k[(2 * a + 1) * nd + ih] -= nv[a] * dtn_dh * ds;
-                    loc.k[ih * nd + 2 * a + 1] -= nv[a] * dtn_dx2 * ds;
+                    loc.k[(2 * a) * nd + ih] -= na * dtt_dh;
+                    loc.k[(2 * a + 1) * nd + ih] -= na * dtn_dh;
+                    loc.k[ih * nd + 2 * a + 1] -= dtn_du2[a] * ds;
                 }
             }
             if has_h {
@@ -421,7 +475,7 @@ impl ContactModel {
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
                 let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
-                let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, x, aux);
+                let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, &fp, x, aux);
                 let xc = fp.x + u;
                 let delta = -h - xc[1];
                 let w = vel[0] - self.v0;

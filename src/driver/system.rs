@@ -250,9 +250,12 @@ impl LoadedSystem for SolidSystem {
             }
         }
         if let Some(c) = &mut self.contact {
-            c.kinematics = SlipKinematics::Static {
-                dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE),
-            };
+            // Steady rolling measures velocities by ω ∂θχ, not in the load-stepping time.
+            if !matches!(c.kinematics, SlipKinematics::Steady { .. }) {
+                c.kinematics = SlipKinematics::Static {
+                    dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE),
+                };
+            }
         }
     }
     fn commit(&mut self) {

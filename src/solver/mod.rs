@@ -1,7 +1,9 @@
 //! Nonlinear and linear solvers: the [`NonlinearSystem`] trait, sparse direct solvers with the
 //! symbolic analysis done once ([`linear`]), Newton with backtracking line search and a
-//! per-iteration convergence table ([`newton`]), and load stepping with cut-back ([`stepping`]).
+//! per-iteration convergence table ([`newton`]), load stepping with cut-back ([`stepping`]) and
+//! Riks–Crisfield arc-length continuation ([`continuation`]).
 
+pub mod continuation;
 pub mod linear;
 pub mod newton;
 pub mod stepping;

@@ -1,0 +1,710 @@
+//! Riks–Crisfield arc-length continuation of R(x, λ) = 0 in a scalar parameter λ (ω, a load,
+//! a penetration), with bordered solves on one factorization per iteration, step-size control
+//! from the Newton iteration count, and detection of limit and bifurcation points.
+//!
+//! # Arc length
+//!
+//! Increments from the last converged point (x_n, λ_n) are measured in the scaled norm
+//!
+//! ```text
+//! ‖(Δx, Δλ)‖² = ‖Δx‖² / x_s² + Δλ² / λ_s²
+//! ```
+//!
+//! (x_s, λ_s: [`ContinuationOptions::x_scale`], [`ContinuationOptions::lambda_scale`]), and every
+//! step has ‖(Δx, Δλ)‖ = Δs (Crisfield's spherical constraint).
+//!
+//! * **Predictor**: tangent t = −K⁻¹ R_λ at the converged point (K = ∂R/∂x, R_λ = ∂R/∂λ by a
+//!   central difference of the residual in λ: two residual-only assemblies), scaled to length
+//!   Δs and oriented to make a positive scaled inner product with the previous step (so the
+//!   branch is followed through limit points, where λ turns back).
+//! * **Corrector**: per iteration one assembly of R and K, one factorization and two solves
+//!   a = −K⁻¹R, b = −K⁻¹R_λ (the bordered system solved by block elimination);
+//!   δx = a + δλ b with δλ a root of the quadratic spherical constraint; of the two roots the
+//!   one whose new increment makes the smaller angle with the old one (Crisfield). Complex
+//!   roots fall back to the linearised (Riks) constraint.
+//! * **Step control**: after a converged step Δs ← Δs · clamp(√(N_d / N), 0.5, 2) (N iterations,
+//!   N_d = `desired_iterations`), within [ds_min, ds_max]. A failed step (no convergence in
+//!   `max_iterations`, inadmissible state, singular solve) restores the last point and halves Δs,
+//!   at most `max_cutbacks` times in a row.
+//!
+//! # Special points
+//!
+//! * **Limit point**: the λ-component of the predictor changes sign between consecutive steps
+//!   (λ turns back). Its λ is estimated by the extremum of the parabola through the last three
+//!   points.
+//! * **Bifurcation point**: the sign of det K changes between consecutive converged points
+//!   while λ keeps its direction. det K sign is taken from the factorization when it is known
+//!   (Cholesky; LU of a symmetric matrix, via faer's LBLᵀ, see [`super::linear`]). For an
+//!   unsymmetric tangent (friction, normal damping) faer's LU does not expose its pivots, so a
+//!   **test function** is used instead: the Rayleigh-quotient estimate g = 1 / (cᵀ K⁻¹ c) of the
+//!   eigenvalue of K of smallest modulus, with c refined by two steps of inverse iteration per
+//!   converged point (c ← K⁻¹c / ‖K⁻¹c‖, two extra solves on the factorization already there).
+//!   A real eigenvalue crossing zero changes the sign of g (and of det K). The point is located
+//!   by linear interpolation of g (or of the signed log-determinant). Both are reported in the
+//!   branch table ([`BranchPoint::det_sign`], [`BranchPoint::test_function`]).
+
+use super::linear::{LinearKind, SparseSolver};
+use super::newton::{NonlinearSystem, SolveError};
+use std::time::Instant;
+
+/// A nonlinear system with a scalar parameter λ.
+pub trait ParametricSystem: NonlinearSystem {
+    fn parameter(&self) -> f64;
+    fn set_parameter(&mut self, lambda: f64);
+}
+
+#[derive(Clone, Debug)]
+pub struct ContinuationOptions {
+    /// Stop once λ has passed this value (in the direction of travel).
+    pub target: f64,
+    /// Initial direction of λ: +1 or −1.
+    pub direction: f64,
+    /// Initial, smallest and largest arc length (scaled units, see the module docs).
+    pub ds0: f64,
+    pub ds_min: f64,
+    pub ds_max: f64,
+    pub x_scale: f64,
+    pub lambda_scale: f64,
+    pub max_steps: usize,
+    pub max_iterations: usize,
+    pub desired_iterations: usize,
+    pub max_cutbacks: usize,
+    /// Relative residual tolerance per field, against the system's reference norms.
+    pub tol: f64,
+    /// Bifurcation test function by inverse iteration when det K is not available.
+    pub test_function: bool,
+    pub verbose: bool,
+}
+
+impl Default for ContinuationOptions {
+    fn default() -> Self {
+        Self {
+            target: 1.0,
+            direction: 1.0,
+            ds0: 0.1,
+            ds_min: 1e-6,
+            ds_max: 1.0,
+            x_scale: 1.0,
+            lambda_scale: 1.0,
+            max_steps: 200,
+            max_iterations: 12,
+            desired_iterations: 4,
+            max_cutbacks: 8,
+            tol: 1e-8,
+            test_function: true,
+            verbose: false,
+        }
+    }
+}
+
+/// What a converged point is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PointKind {
+    Start,
+    Regular,
+    /// λ turned back between the previous point and this one.
+    LimitPoint,
+    /// det K (or the test function) changed sign between the previous point and this one
+    /// without λ turning back.
+    Bifurcation,
+}
+
+/// One converged point of the branch.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BranchPoint {
+    pub step: usize,
+    pub lambda: f64,
+    pub kind: PointKind,
+    /// Corrector iterations of this step (0 for the start).
+    pub iterations: usize,
+    pub cutbacks: usize,
+    /// Arc length of this step (scaled units).
+    pub ds: f64,
+    /// dλ/ds of the predictor that left this point.
+    pub dlambda_ds: f64,
+    /// Sign of det K at the point (+1, −1; NaN when not available, see the module docs).
+    pub det_sign: f64,
+    /// log|det K| when known (NaN otherwise).
+    pub log_abs_det: f64,
+    /// Smallest-modulus eigenvalue estimate of K (test function; NaN when off).
+    pub test_function: f64,
+    /// Wall time of the step (s) and of one factorization + solve at this point (s).
+    pub wall_time_s: f64,
+    pub factor_solve_s: f64,
+}
+
+/// A detected special point, located between two converged points.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SpecialPoint {
+    pub kind: PointKind,
+    /// Estimated parameter value.
+    pub lambda: f64,
+    /// Step after which it was detected.
+    pub step: usize,
+    /// What detected it: "dlambda_sign", "det_sign" or "test_function".
+    pub detected_by: &'static str,
+}
+
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct ContinuationReport {
+    pub points: Vec<BranchPoint>,
+    pub special: Vec<SpecialPoint>,
+    pub total_iterations: usize,
+    pub cutbacks: usize,
+    pub assemblies: usize,
+    pub factorizations: usize,
+    /// Why the continuation stopped.
+    pub stop_reason: String,
+}
+
+/// Arc-length continuation driver (owns the sparse solver and the work vectors).
+pub struct Continuation {
+    pub opts: ContinuationOptions,
+    solver: SparseSolver,
+    refs: Vec<f64>,
+    r_lambda: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    tu: Vec<f64>,
+    du: Vec<f64>,
+    c: Vec<f64>,
+    z: Vec<f64>,
+    saved: Vec<f64>,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl Continuation {
+    pub fn new<S: ParametricSystem>(
+        sys: &S,
+        kind: LinearKind,
+        opts: ContinuationOptions,
+    ) -> Result<Self, SolveError> {
+        let (cp, ri) = sys.pattern();
+        let n = sys.n_eq();
+        let mut solver = SparseSolver::new(n, cp, ri, kind)?;
+        solver.set_track_determinant(true);
+        // A deterministic, non-special start vector for the inverse iteration.
+        let mut c: Vec<f64> = (0..n)
+            .map(|i| 1.0 + 0.5 * ((i as f64) * 0.618_033_988_749_895).fract())
+            .collect();
+        let cn = dot(&c, &c).sqrt().max(f64::MIN_POSITIVE);
+        c.iter_mut().for_each(|v| *v /= cn);
+        Ok(Self {
+            opts,
+            solver,
+            refs: sys.reference_norms(),
+            r_lambda: vec![0.0; n],
+            a: vec![0.0; n],
+            b: vec![0.0; n],
+            tu: vec![0.0; n],
+            du: vec![0.0; n],
+            c,
+            z: vec![0.0; n],
+            saved: Vec::new(),
+        })
+    }
+
+    /// ∂R/∂λ by a central difference (leaves the system evaluated at λ, residual only).
+    fn residual_derivative<S: ParametricSystem>(&mut self, sys: &mut S) -> bool {
+        let lam = sys.parameter();
+        let h = 1e-6 * lam.abs().max(self.opts.lambda_scale);
+        sys.set_parameter(lam + h);
+        let ok1 = sys.evaluate(false);
+        self.r_lambda.copy_from_slice(sys.residual());
+        sys.set_parameter(lam - h);
+        let ok2 = sys.evaluate(false);
+        for (d, r) in self.r_lambda.iter_mut().zip(sys.residual()) {
+            *d = (*d - r) / (2.0 * h);
+        }
+        sys.set_parameter(lam);
+        ok1 && ok2 && self.r_lambda.iter().all(|v| v.is_finite())
+    }
+
+    fn converged<S: ParametricSystem>(&self, sys: &S) -> (bool, f64) {
+        let fields = sys.fields();
+        let nf = self.refs.len().max(1);
+        let mut norms = vec![0.0; nf];
+        for (r, &f) in sys.residual().iter().zip(fields) {
+            let f = (f as usize).min(nf - 1);
+            norms[f] += r * r;
+        }
+        let mut worst: f64 = 0.0;
+        for (n2, r) in norms.iter().zip(&self.refs) {
+            let rel = n2.sqrt() / r.max(f64::MIN_POSITIVE);
+            worst = worst.max(if *r > 0.0 || *n2 > 0.0 { rel } else { 0.0 });
+        }
+        (worst <= self.opts.tol, worst)
+    }
+
+    /// Scaled inner product of two increments.
+    fn sdot(&self, x1: &[f64], l1: f64, x2: &[f64], l2: f64) -> f64 {
+        let xs2 = self.opts.x_scale * self.opts.x_scale;
+        let ls2 = self.opts.lambda_scale * self.opts.lambda_scale;
+        dot(x1, x2) / xs2 + l1 * l2 / ls2
+    }
+
+    /// Factorize K at the current (converged) state, record det sign / test function and
+    /// compute the unit tangent (tu, tl) in scaled norm. Requires an evaluation with matrix.
+    fn tangent<S: ParametricSystem>(&mut self, sys: &mut S) -> Result<(f64, f64, f64, f64, f64), SolveError> {
+        if !self.residual_derivative(sys) || !sys.evaluate(true) {
+            return Err(SolveError::InadmissibleStart);
+        }
+        let t0 = Instant::now();
+        self.solver.factorize(sys.matrix_values())?;
+        for (t, r) in self.tu.iter_mut().zip(&self.r_lambda) {
+            *t = -r;
+        }
+        self.solver.solve_in_place(&mut self.tu)?;
+        let fs = t0.elapsed().as_secs_f64();
+        let (sign, logdet) = self.solver.det_sign_log();
+        let mut g = f64::NAN;
+        if self.opts.test_function {
+            for _ in 0..2 {
+                self.z.copy_from_slice(&self.c);
+                self.solver.solve_in_place(&mut self.z)?;
+                let cz = dot(&self.c, &self.z);
+                let zn = dot(&self.z, &self.z).sqrt();
+                if !(zn.is_finite() && zn > 0.0) {
+                    break;
+                }
+                g = 1.0 / cz;
+                for (c, z) in self.c.iter_mut().zip(&self.z) {
+                    *c = z / zn;
+                }
+            }
+        }
+        let tl = 1.0;
+        let norm = self.sdot(&self.tu, tl, &self.tu, tl).sqrt();
+        for t in &mut self.tu {
+            *t /= norm;
+        }
+        Ok((tl / norm, sign, logdet, g, fs))
+    }
+
+    /// Follow the branch from the current (converged) state of `sys`. `on_point` is called at
+    /// the start and after every converged step; it returns `false` to stop (e.g. interrupt).
+    pub fn run<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        on_point: &mut dyn FnMut(&S, &BranchPoint) -> bool,
+    ) -> Result<ContinuationReport, SolveError> {
+        let mut rep = ContinuationReport::default();
+        let t_start = Instant::now();
+        let (mut tl, sign, logdet, g, fs) = self.tangent(sys)?;
+        rep.factorizations += 1;
+        rep.assemblies += 3;
+        if tl * self.opts.direction < 0.0 {
+            tl = -tl;
+            self.tu.iter_mut().for_each(|t| *t = -*t);
+        }
+        let start = BranchPoint {
+            step: 0,
+            lambda: sys.parameter(),
+            kind: PointKind::Start,
+            iterations: 0,
+            cutbacks: 0,
+            ds: 0.0,
+            dlambda_ds: tl,
+            det_sign: sign,
+            log_abs_det: logdet,
+            test_function: g,
+            wall_time_s: t_start.elapsed().as_secs_f64(),
+            factor_solve_s: fs,
+        };
+        if !on_point(sys, &start) {
+            rep.points.push(start);
+            rep.stop_reason = "stopped by the caller".into();
+            return Ok(rep);
+        }
+        rep.points.push(start);
+        let mut ds = self.opts.ds0;
+        // Previous step increment (for orientation), as the unit tangent to start.
+        let (mut prev_sign, mut prev_g, mut prev_logdet) = (sign, g, logdet);
+        let mut tangent_l = tl;
+        for step in 1..=self.opts.max_steps {
+            let t0 = Instant::now();
+            let lam_n = sys.parameter();
+            sys.save_state(&mut self.saved);
+            let mut cutbacks = 0;
+            let iterations = loop {
+                match self.corrector(sys, ds, tangent_l, &mut rep) {
+                    Ok(it) => break it,
+                    Err(e) => {
+                        sys.restore_state(&self.saved);
+                        sys.set_parameter(lam_n);
+                        cutbacks += 1;
+                        rep.cutbacks += 1;
+                        ds *= 0.5;
+                        if self.opts.verbose {
+                            eprintln!("  continuation step {step}: {e}; cut back to ds = {ds:.3e}");
+                        }
+                        if cutbacks > self.opts.max_cutbacks || ds < self.opts.ds_min {
+                            rep.stop_reason = format!(
+                                "step {step} failed after {cutbacks} cut-backs at lambda = {lam_n:.6e}: {e}"
+                            );
+                            return Err(SolveError::TooManyCutbacks {
+                                lambda: lam_n,
+                                cutbacks,
+                                last: Box::new(e),
+                            });
+                        }
+                    }
+                }
+            };
+            rep.total_iterations += iterations;
+            // Increment of this step (for orientation of the next predictor).
+            let lam = sys.parameter();
+            let dl = lam - lam_n;
+            // The increment in equation numbering is carried by du.
+            let dx = self.du.clone();
+            // Old tangent projected on the chord of the step (for the limit-point estimate).
+            let p0 = self.sdot(&self.tu, tangent_l, &dx, dl) / ds;
+            // New tangent at the converged point.
+            let (mut ntl, sign, logdet, g, fs) = self.tangent(sys)?;
+            rep.factorizations += 1;
+            rep.assemblies += 3;
+            if self.sdot(&self.tu, ntl, &dx, dl) < 0.0 {
+                ntl = -ntl;
+                self.tu.iter_mut().for_each(|t| *t = -*t);
+            }
+            let mut kind = PointKind::Regular;
+            if ntl * tangent_l < 0.0 {
+                kind = PointKind::LimitPoint;
+                rep.special.push(SpecialPoint {
+                    kind,
+                    lambda: {
+                        // λ as a graph over the chord: slopes dλ/dσ = t_λ / (t · e).
+                        let p1 = self.sdot(&self.tu, ntl, &dx, dl) / ds;
+                        limit_estimate(lam_n, lam, tangent_l / p0, ntl / p1, ds)
+                    },
+                    step,
+                    detected_by: "dlambda_sign",
+                });
+            } else if sign.is_finite() && prev_sign.is_finite() && sign * prev_sign < 0.0 {
+                kind = PointKind::Bifurcation;
+                let l = interpolate_zero(lam_n, lam, prev_sign * prev_logdet.exp().min(1e300), sign * logdet.exp().min(1e300));
+                rep.special.push(SpecialPoint {
+                    kind,
+                    lambda: l,
+                    step,
+                    detected_by: "det_sign",
+                });
+            } else if !(sign.is_finite() && prev_sign.is_finite())
+                && g.is_finite()
+                && prev_g.is_finite()
+                && g * prev_g < 0.0
+            {
+                kind = PointKind::Bifurcation;
+                rep.special.push(SpecialPoint {
+                    kind,
+                    lambda: interpolate_zero(lam_n, lam, prev_g, g),
+                    step,
+                    detected_by: "test_function",
+                });
+            }
+            let _ = prev_logdet;
+            prev_sign = sign;
+            prev_g = g;
+            prev_logdet = logdet;
+            tangent_l = ntl;
+            let point = BranchPoint {
+                step,
+                lambda: lam,
+                kind,
+                iterations,
+                cutbacks,
+                ds,
+                dlambda_ds: ntl,
+                det_sign: sign,
+                log_abs_det: logdet,
+                test_function: g,
+                wall_time_s: t0.elapsed().as_secs_f64(),
+                factor_solve_s: fs,
+            };
+            if self.opts.verbose {
+                eprintln!(
+                    "  continuation step {step}: lambda = {lam:.6e}, {iterations} iterations, ds = {ds:.3e}, det sign {sign}, g = {g:.3e} ({kind:?})"
+                );
+            }
+            let go_on = on_point(sys, &point);
+            rep.points.push(point);
+            if !go_on {
+                rep.stop_reason = "stopped by the caller".into();
+                return Ok(rep);
+            }
+            if (lam - self.opts.target) * self.opts.direction >= 0.0 && kind != PointKind::LimitPoint
+                && dl * self.opts.direction > 0.0
+            {
+                rep.stop_reason = format!("target lambda = {} reached", self.opts.target);
+                return Ok(rep);
+            }
+            let f = (self.opts.desired_iterations as f64 / iterations.max(1) as f64)
+                .sqrt()
+                .clamp(0.5, 2.0);
+            ds = (ds * f).clamp(self.opts.ds_min, self.opts.ds_max);
+        }
+        rep.stop_reason = format!("max_steps = {} reached", self.opts.max_steps);
+        Ok(rep)
+    }
+
+    /// One predictor–corrector step of arc length `ds` from the current converged state.
+    /// On success the state is the new point and `self.du` the increment (equation numbering).
+    fn corrector<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        ds: f64,
+        tl: f64,
+        rep: &mut ContinuationReport,
+    ) -> Result<usize, SolveError> {
+        let lam_n = sys.parameter();
+        // Predictor.
+        for (d, t) in self.du.iter_mut().zip(&self.tu) {
+            *d = ds * t;
+        }
+        let mut dl = ds * tl;
+        sys.update(1.0, &self.du);
+        sys.set_parameter(lam_n + dl);
+        let xs2 = self.opts.x_scale * self.opts.x_scale;
+        let ls2 = self.opts.lambda_scale * self.opts.lambda_scale;
+        for it in 1..=self.opts.max_iterations {
+            if !self.residual_derivative(sys) || !sys.evaluate(true) {
+                return Err(SolveError::InadmissibleStart);
+            }
+            rep.assemblies += 3;
+            let (conv, worst) = self.converged(sys);
+            if conv && it > 1 {
+                return Ok(it - 1);
+            }
+            if !worst.is_finite() {
+                return Err(SolveError::InadmissibleStart);
+            }
+            self.solver.factorize(sys.matrix_values())?;
+            rep.factorizations += 1;
+            for (a, r) in self.a.iter_mut().zip(sys.residual()) {
+                *a = -r;
+            }
+            self.solver.solve_in_place(&mut self.a)?;
+            for (b, r) in self.b.iter_mut().zip(&self.r_lambda) {
+                *b = -r;
+            }
+            self.solver.solve_in_place(&mut self.b)?;
+            // Quadratic spherical constraint for δλ, with Δx' = Δx + a.
+            let mut aa = dot(&self.b, &self.b) / xs2 + 1.0 / ls2;
+            let mut bb = 0.0;
+            let mut cc = 0.0;
+            for i in 0..self.du.len() {
+                let dxp = self.du[i] + self.a[i];
+                bb += dxp * self.b[i];
+                cc += dxp * dxp;
+            }
+            bb = 2.0 * (bb / xs2 + dl / ls2);
+            cc = cc / xs2 + dl * dl / ls2 - ds * ds;
+            if aa <= 0.0 {
+                aa = f64::MIN_POSITIVE;
+            }
+            let disc = bb * bb - 4.0 * aa * cc;
+            let dlam = if disc >= 0.0 {
+                let sq = disc.sqrt();
+                let q = -0.5 * (bb + bb.signum() * sq);
+                let r1 = q / aa;
+                let r2 = if q != 0.0 { cc / q } else { r1 };
+                // Root making the smaller angle with the current increment.
+                let cos = |r: f64| {
+                    let mut s = 0.0;
+                    for i in 0..self.du.len() {
+                        s += (self.du[i] + self.a[i] + r * self.b[i]) * self.du[i];
+                    }
+                    s / xs2 + (dl + r) * dl / ls2
+                };
+                if cos(r1) >= cos(r2) {
+                    r1
+                } else {
+                    r2
+                }
+            } else {
+                // Linearised (Riks) constraint: the correction is orthogonal to the increment.
+                let num = ds * ds - (dot(&self.du, &self.du) + dot(&self.du, &self.a)) / xs2 - dl * dl / ls2;
+                let den = dot(&self.du, &self.b) / xs2 + dl / ls2;
+                if den.abs() < f64::MIN_POSITIVE {
+                    return Err(SolveError::NotConverged {
+                        iterations: it,
+                        residual: worst,
+                    });
+                }
+                num / den
+            };
+            for i in 0..self.du.len() {
+                self.a[i] += dlam * self.b[i];
+                self.du[i] += self.a[i];
+            }
+            dl += dlam;
+            sys.update(1.0, &self.a);
+            sys.set_parameter(lam_n + dl);
+            if self.opts.verbose {
+                eprintln!("    corrector {it}: residual {worst:.3e}, dlambda {dl:.4e}");
+            }
+        }
+        if !sys.evaluate(true) {
+            return Err(SolveError::InadmissibleStart);
+        }
+        let (conv, worst) = self.converged(sys);
+        if conv {
+            return Ok(self.opts.max_iterations);
+        }
+        Err(SolveError::NotConverged {
+            iterations: self.opts.max_iterations,
+            residual: worst,
+        })
+    }
+}
+
+/// Zero of the line through (l0, g0), (l1, g1).
+fn interpolate_zero(l0: f64, l1: f64, g0: f64, g1: f64) -> f64 {
+    if (g1 - g0).abs() > 0.0 && g0.is_finite() && g1.is_finite() {
+        l0 - g0 * (l1 - l0) / (g1 - g0)
+    } else {
+        0.5 * (l0 + l1)
+    }
+}
+
+/// λ at a limit point between two converged points: the extremum of the cubic Hermite
+/// interpolant λ(σ) over the chord of the step (σ ∈ [0, ds]) with end slopes dλ/dσ = t0, t1 of
+/// opposite signs.
+fn limit_estimate(l0: f64, l1: f64, t0: f64, t1: f64, ds: f64) -> f64 {
+    if !(t0 * t1 < 0.0) || ds <= 0.0 {
+        return l1;
+    }
+    // dλ/du of the Hermite cubic (u = s/ds) is A u² + B u + C; its root in (0, 1).
+    let a = 6.0 * (l0 - l1) + 3.0 * ds * (t0 + t1);
+    let b = 6.0 * (l1 - l0) - ds * (4.0 * t0 + 2.0 * t1);
+    let c = ds * t0;
+    let mut u = t0 / (t0 - t1);
+    if a.abs() > 1e-14 * (b.abs() + c.abs()) {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let sq = disc.sqrt();
+            let roots = [(-b + sq) / (2.0 * a), (-b - sq) / (2.0 * a)];
+            if let Some(r) = roots.into_iter().find(|r| (0.0..=1.0).contains(r)) {
+                u = r;
+            }
+        }
+    } else if b != 0.0 && (0.0..=1.0).contains(&(-c / b)) {
+        u = -c / b;
+    }
+    let (h00, h10, h01, h11) = (
+        2.0 * u.powi(3) - 3.0 * u * u + 1.0,
+        u.powi(3) - 2.0 * u * u + u,
+        -2.0 * u.powi(3) + 3.0 * u * u,
+        u.powi(3) - u * u,
+    );
+    h00 * l0 + h10 * ds * t0 + h01 * l1 + h11 * ds * t1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// R(x, λ) = x³ − 3x − λ (one equation): limit points at x = ±1, λ = ∓2. Starting at
+    /// x = −2 (λ = −2) and increasing λ, the branch passes the limit at λ = 2 (x = −1), turns
+    /// back through λ = 0 to the second limit at λ = −2 (x = 1), and goes on to λ = 10.
+    struct Cubic {
+        x: f64,
+        lam: f64,
+        r: [f64; 1],
+        k: [f64; 1],
+    }
+
+    impl NonlinearSystem for Cubic {
+        fn n_eq(&self) -> usize {
+            1
+        }
+        fn fields(&self) -> &[u8] {
+            &[0]
+        }
+        fn field_names(&self) -> &'static [&'static str] {
+            &["x"]
+        }
+        fn reference_norms(&self) -> Vec<f64> {
+            vec![1.0]
+        }
+        fn pattern(&self) -> (&[usize], &[usize]) {
+            (&[0, 1], &[0])
+        }
+        fn evaluate(&mut self, _m: bool) -> bool {
+            self.r[0] = self.x.powi(3) - 3.0 * self.x - self.lam;
+            self.k[0] = 3.0 * self.x * self.x - 3.0;
+            true
+        }
+        fn residual(&self) -> &[f64] {
+            &self.r
+        }
+        fn matrix_values(&self) -> &[f64] {
+            &self.k
+        }
+        fn update(&mut self, alpha: f64, dx: &[f64]) {
+            self.x += alpha * dx[0];
+        }
+        fn save_state(&self, buf: &mut Vec<f64>) {
+            buf.clear();
+            buf.push(self.x);
+        }
+        fn restore_state(&mut self, buf: &[f64]) {
+            self.x = buf[0];
+        }
+    }
+
+    impl ParametricSystem for Cubic {
+        fn parameter(&self) -> f64 {
+            self.lam
+        }
+        fn set_parameter(&mut self, lambda: f64) {
+            self.lam = lambda;
+        }
+    }
+
+    #[test]
+    fn cubic_passes_both_limit_points() {
+        let mut sys = Cubic {
+            x: -2.0,
+            lam: -2.0,
+            r: [0.0],
+            k: [0.0],
+        };
+        let opts = ContinuationOptions {
+            target: 10.0,
+            ds0: 0.2,
+            ds_max: 0.5,
+            tol: 1e-12,
+            max_steps: 500,
+            ..Default::default()
+        };
+        let mut cont = Continuation::new(&sys, LinearKind::Lu, opts).unwrap();
+        let mut xs = Vec::new();
+        let rep = cont
+            .run(&mut sys, &mut |s: &Cubic, _p| {
+                xs.push(s.x);
+                true
+            })
+            .unwrap();
+        // Every point is on the curve.
+        for (p, x) in rep.points.iter().zip(&xs) {
+            assert!((x.powi(3) - 3.0 * x - p.lambda).abs() < 1e-9, "off the curve");
+        }
+        let limits: Vec<f64> = rep
+            .special
+            .iter()
+            .filter(|s| s.kind == PointKind::LimitPoint)
+            .map(|s| s.lambda)
+            .collect();
+        assert_eq!(limits.len(), 2, "{:?}", rep.special);
+        assert!((limits[0] - 2.0).abs() < 0.01, "first limit at {}", limits[0]);
+        assert!((limits[1] + 2.0).abs() < 0.01, "second limit at {}", limits[1]);
+        assert!(sys.lam >= 10.0 && sys.x > 2.0);
+        // det K = 3x² − 3 changes sign at both limit points (and these are not bifurcations).
+        assert!(rep.special.iter().all(|s| s.kind != PointKind::Bifurcation));
+    }
+}
