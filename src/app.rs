@@ -304,6 +304,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Mode::Spinning | Mode::Static => run_solid(scene, opts),
         Mode::StickSlip => crate::driver::stick_slip_run::run(scene, opts),
         Mode::Transient => crate::driver::transient_run::run(scene, opts),
+        Mode::Steady => crate::driver::steady_run::run(scene, opts),
     }
 }
 

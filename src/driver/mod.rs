@@ -3,6 +3,8 @@
 pub mod frame;
 pub mod indentation;
 pub mod spinning;
+pub mod steady;
+pub mod steady_run;
 pub mod stick_slip_run;
 pub mod system;
 pub mod transient;

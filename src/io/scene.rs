@@ -187,6 +187,25 @@ keyword_enum! {
         /// and `[contact]` (optional, both or neither) the road rises and moves at `v0`, and
         /// `[friction]` may act. Without them: a cylinder spinning up in time, no contact.
         Transient => "transient",
+        /// Steady rolling solved directly in the θ-referential (Eulerian/ALE) description: the
+        /// same scene as `transient` (`[road]` and `[contact]` optional, both or neither; the
+        /// ramps and `[time]` are ignored), at `[motion] omega` and `road.v0`, optionally
+        /// followed by arc-length continuation (`[continuation]`).
+        Steady => "steady",
+    }
+}
+
+keyword_enum! {
+    /// Parameter of the arc-length continuation (`[continuation] parameter`).
+    #[derive(Default)]
+    ContinuationParameter, "continuation parameter" {
+        #[default]
+        /// Angular speed ω (rad/s); the road speed keeps its ratio v0 / ω.
+        Omega => "omega",
+        /// Hub load (force per unit thickness; needs `road.load`).
+        Load => "load",
+        /// Penetration DISP = Ro − H (needs `road.disp`).
+        Disp => "disp",
     }
 }
 
@@ -337,9 +356,12 @@ pub struct Scene {
     /// `[stick_slip]`: required for `stick_slip`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stick_slip: Option<StickSlipSpec>,
-    /// `[time]`: required for `transient`, forbidden otherwise.
+    /// `[time]`: required for `transient`, allowed (unused) in `steady`, forbidden otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time: Option<TimeSpec>,
+    /// `[continuation]`: optional, `steady` only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub continuation: Option<ContinuationSpec>,
     #[serde(default)]
     pub solver: SolverSpec,
     #[serde(default)]
@@ -856,6 +878,39 @@ impl FrictionSpec {
     }
 }
 
+/// `[continuation]` (`steady` mode): Riks–Crisfield arc-length continuation from the first
+/// steady solution to `target`. Arc lengths are in scaled units: ‖Δu‖ / u_s and Δλ / λ_s with
+/// u_s the norm of the first solution's displacement vector and λ_s = |target − start|, so
+/// `ds = 0.05` is about 1/20 of the way when the solution changes proportionally.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContinuationSpec {
+    pub parameter: ContinuationParameter,
+    /// Final parameter value (rad/s, force per unit thickness, or length).
+    pub target: f64,
+    /// Initial arc length (scaled, > 0).
+    pub ds: f64,
+    /// Largest arc length (scaled, >= ds).
+    pub ds_max: f64,
+    /// Maximum number of continuation steps (>= 1).
+    pub max_steps: usize,
+    /// Corrector iterations aimed at by the step-size control (>= 1).
+    pub desired_iterations: usize,
+}
+
+impl Default for ContinuationSpec {
+    fn default() -> Self {
+        Self {
+            parameter: ContinuationParameter::Omega,
+            target: 0.0,
+            ds: 0.05,
+            ds_max: 0.25,
+            max_steps: 200,
+            desired_iterations: 4,
+        }
+    }
+}
+
 /// `[stick_slip]`: the one-degree-of-freedom stick-slip oscillator
 /// `mass ẍ = −stiffness x + F_T`, `F_T = −μ(|w|) normal_force φ_ε(w)`, `w = ẋ − belt_speed`
 /// (the spring is anchored at x = 0; the belt moves in +x).
@@ -1242,6 +1297,8 @@ impl Scene {
         let friction: Option<FrictionSpec> = ctx.optional_section(&clean, "friction");
         let stick_slip: Option<Option<StickSlipSpec>> = ctx.present_section(&clean, "stick_slip");
         let time: Option<Option<TimeSpec>> = ctx.present_section(&clean, "time");
+        let continuation: Option<Option<ContinuationSpec>> =
+            ctx.present_section(&clean, "continuation");
         let solver: Option<SolverSpec> = ctx.optional_section(&clean, "solver");
         let output: Option<OutputSpec> = ctx.optional_section(&clean, "output");
 
@@ -1291,12 +1348,16 @@ impl Scene {
         if let Some(Some(t)) = &time {
             validate_time(t, time_mass_given, &mut out);
         }
+        if let Some(Some(c)) = &continuation {
+            validate_continuation(c, mode, road.as_ref().and_then(|r| r.as_ref()), &mut out);
+        }
         if let Some(mode) = mode {
             let used = SectionsGiven {
                 road: doc.contains_key("road"),
                 contact: doc.contains_key("contact"),
                 stick_slip: doc.contains_key("stick_slip"),
                 time: doc.contains_key("time"),
+                continuation: doc.contains_key("continuation"),
                 friction_law,
             };
             validate_mode_sections(mode, &used, &mut out);
@@ -1331,11 +1392,12 @@ impl Scene {
             Some(friction),
             Some(stick_slip),
             Some(mut time),
+            Some(continuation),
             Some(solver),
             Some(output),
         ) = (
             info, geometry, mesh, material, analysis, motion, road, contact, friction, stick_slip,
-            time, solver, output,
+            time, continuation, solver, output,
         )
         else {
             // Unreachable in practice: every `None` above records an issue.
@@ -1364,6 +1426,7 @@ impl Scene {
             friction,
             stick_slip,
             time,
+            continuation,
             solver,
             output,
         })
@@ -1408,11 +1471,15 @@ impl Scene {
             validate_time(t, true, &mut out);
             validate_steady_extraction(mode, &self.mesh, t, &mut out);
         }
+        if let Some(c) = &self.continuation {
+            validate_continuation(c, mode, self.road.as_ref(), &mut out);
+        }
         let used = SectionsGiven {
             road: self.road.is_some(),
             contact: self.contact.is_some(),
             stick_slip: self.stick_slip.is_some(),
             time: self.time.is_some(),
+            continuation: self.continuation.is_some(),
             friction_law: Some(self.friction.law),
         };
         validate_mode_sections(self.analysis.mode, &used, &mut out);
@@ -1614,6 +1681,18 @@ static SCHEMA: &[SectionSchema] = &[
             opt("mass", Kind::Keyword(MassKind::NAMES)),
             opt("max_steps", Kind::UInt),
             opt("strain_rate_damping", Kind::Float),
+        ],
+    },
+    SectionSchema {
+        name: "continuation",
+        required: false,
+        fields: &[
+            opt("parameter", Kind::Keyword(ContinuationParameter::NAMES)),
+            req("target", Kind::Float),
+            opt("ds", Kind::Float),
+            opt("ds_max", Kind::Float),
+            opt("max_steps", Kind::UInt),
+            opt("desired_iterations", Kind::UInt),
         ],
     },
     SectionSchema {
@@ -2311,7 +2390,7 @@ fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
 }
 
 fn validate_motion(mode: Option<Mode>, m: &Motion, omega_given: bool, out: &mut Vec<Issue>) {
-    if let Some(mode @ (Mode::Spinning | Mode::Transient)) = mode {
+    if let Some(mode @ (Mode::Spinning | Mode::Transient | Mode::Steady)) = mode {
         if !omega_given {
             out.push(issue_near(
                 "motion.omega",
@@ -2349,7 +2428,7 @@ fn validate_motion_ramp(mode: Option<Mode>, m: &Motion, out: &mut Vec<Issue>) {
             format!("spin-up ramp time must be >= 0, got {}", m.ramp),
         ));
     } else if m.ramp != 0.0 {
-        if let Some(mode) = mode.filter(|m| *m != Mode::Transient) {
+        if let Some(mode) = mode.filter(|m| !matches!(m, Mode::Transient | Mode::Steady)) {
             out.push(issue(
                 "motion.ramp",
                 format!(
@@ -2753,6 +2832,7 @@ struct SectionsGiven {
     contact: bool,
     stick_slip: bool,
     time: bool,
+    continuation: bool,
     friction_law: Option<FrictionLawName>,
 }
 
@@ -2786,7 +2866,10 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
             ),
         ));
     };
-    if given.time && mode != Mode::Transient {
+    if given.continuation && mode != Mode::Steady {
+        unused("continuation", "\"steady\"", out);
+    }
+    if given.time && !matches!(mode, Mode::Transient | Mode::Steady) {
         let note = if mode == Mode::StickSlip {
             "; the oscillator's t_end and tolerances are in [stick_slip]"
         } else {
@@ -2856,8 +2939,8 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
                 )),
             }
         }
-        Mode::Transient => {
-            if !given.time {
+        Mode::Transient | Mode::Steady => {
+            if !given.time && mode == Mode::Transient {
                 missing("time", "dt, t_end", out);
             }
             if given.stick_slip {
@@ -2867,15 +2950,20 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
             match (given.road, given.contact) {
                 (true, false) => out.push(issue_near(
                     "contact",
-                    "analysis mode \"transient\" has [road] but no [contact]: give both (rolling \
-                     on the road) or neither (spinning up without contact); [contact] needs c_n",
+                    format!(
+                        "analysis mode \"{mode}\" has [road] but no [contact]: give both \
+                         (rolling on the road) or neither (spinning up without contact); \
+                         [contact] needs c_n"
+                    ),
                     "road",
                 )),
                 (false, true) => out.push(issue_near(
                     "road",
-                    "analysis mode \"transient\" has [contact] but no [road]: give both (rolling \
-                     on the road) or neither (spinning up without contact); [road] needs disp \
-                     or load",
+                    format!(
+                        "analysis mode \"{mode}\" has [contact] but no [road]: give both \
+                         (rolling on the road) or neither (spinning up without contact); [road] \
+                         needs disp or load"
+                    ),
                     "contact",
                 )),
                 _ => {}
@@ -2890,6 +2978,61 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
                 }
             }
         }
+    }
+}
+
+fn validate_continuation(
+    c: &ContinuationSpec,
+    mode: Option<Mode>,
+    road: Option<&RoadSpec>,
+    out: &mut Vec<Issue>,
+) {
+    if !(c.target.is_finite() && c.target >= 0.0) {
+        out.push(issue(
+            "continuation.target",
+            format!("final parameter value must be finite and >= 0, got {}", c.target),
+        ));
+    }
+    if !positive(c.ds) {
+        out.push(issue(
+            "continuation.ds",
+            format!("initial arc length must be > 0, got {}", c.ds),
+        ));
+    }
+    if !(c.ds_max.is_finite() && c.ds_max >= c.ds) {
+        out.push(issue(
+            "continuation.ds_max",
+            format!("largest arc length must be >= ds = {}, got {}", c.ds, c.ds_max),
+        ));
+    }
+    if c.max_steps < 1 {
+        out.push(issue("continuation.max_steps", "must be >= 1, got 0"));
+    }
+    if c.desired_iterations < 1 {
+        out.push(issue("continuation.desired_iterations", "must be >= 1, got 0"));
+    }
+    if mode != Some(Mode::Steady) {
+        return;
+    }
+    match (c.parameter, road) {
+        (ContinuationParameter::Load, r) if r.and_then(|r| r.load).is_none() => out.push(issue(
+            "continuation.parameter",
+            "parameter \"load\" continues in the hub load: it needs load control (road.load)",
+        )),
+        (ContinuationParameter::Disp, r) if r.and_then(|r| r.disp).is_none() => out.push(issue(
+            "continuation.parameter",
+            "parameter \"disp\" continues in the penetration: it needs displacement control \
+             (road.disp)",
+        )),
+        (ContinuationParameter::Disp, Some(r)) => {
+            if c.target >= 0.0 && r.disp.is_some_and(|d| c.target == d) {
+                out.push(issue(
+                    "continuation.target",
+                    "target equals the starting penetration road.disp: nothing to continue",
+                ));
+            }
+        }
+        _ => {}
     }
 }
 

@@ -677,7 +677,7 @@ mod tests {
         let opts = ContinuationOptions {
             target: 10.0,
             ds0: 0.2,
-            ds_max: 0.5,
+            ds_max: 0.25,
             tol: 1e-12,
             max_steps: 500,
             ..Default::default()

@@ -1,0 +1,303 @@
+//! Steady rolling in the θ-referential (Eulerian/ALE) description (DESIGN §5; the paper's
+//! Figs. 2–8).
+//!
+//! The mesh stays in space and material flows through it along the reference circles. The
+//! unknown is the motion χ(X) = X + u(X) of the material point that is at the referential
+//! position X (numbering and positions as the transient mode's extracted field, so the two can
+//! be compared node by node). The residual is the [`crate::physics::SolidModel`] one with the
+//! inertia term −ω² ∫ ρ0 ∂θχ · ∂θη (the paper's B), plus the contact element of
+//! [`crate::contact`] with [`SlipKinematics::Steady`]: normal compliance with damping on
+//! δ̇ = −ω ∂θχ2 and friction on the slip w = ω ∂θχ1 − v0. With friction or damping the tangent
+//! is unsymmetric (LU).
+//!
+//! **Not in the steady residual**: the transient mode's objective strain-rate damping
+//! (`time.strain_rate_damping`). In the referential description it needs ∇(∂θχ), i.e. second
+//! derivatives of the shape functions, which the element layer does not provide yet; a scene
+//! that has it gets a warning from `tread run --mode steady` and from `compare`.
+//!
+//! # Procedure
+//!
+//! 1. At the scene's ω (and v0), the road is brought in by load stepping (displacement control:
+//!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state.
+//! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
+//!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
+//!    Newton solve from the previous state.
+//! 3. Optionally, Riks–Crisfield continuation ([`crate::solver::continuation`]) in ω, the hub
+//!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
+//!    ratio: the creep stays put while the speed changes).
+
+use super::system::{Loading, SolidSystem};
+use crate::contact::{ContactModel, SlipKinematics};
+use crate::io::record::Recorder;
+use crate::solver::continuation::ParametricSystem;
+use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
+use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
+
+/// The parameter of a continuation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SteadyParameter {
+    /// Angular speed ω (rad/s), with v0 / ω fixed.
+    Omega,
+    /// Downward hub load (force per unit thickness; load control).
+    Load,
+    /// Penetration DISP = Ro − H (displacement control).
+    Disp,
+}
+
+/// A [`SolidSystem`] in steady rolling with one of its data as the parameter λ.
+pub struct SteadyRolling {
+    pub sys: SolidSystem,
+    pub param: SteadyParameter,
+    /// v0 / ω kept fixed when ω is the parameter.
+    pub v0_per_omega: f64,
+    /// Outer radius (H = ro − disp).
+    pub ro: f64,
+}
+
+impl SteadyRolling {
+    /// Wrap a system with contact; sets the steady kinematics at angular speed `omega`.
+    pub fn new(sys: SolidSystem, omega: f64, ro: f64) -> Self {
+        let v0 = sys.contact.as_ref().map_or(0.0, |c| c.v0);
+        let mut s = Self {
+            sys,
+            param: SteadyParameter::Omega,
+            v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
+            ro,
+        };
+        s.set_omega(omega, v0);
+        s
+    }
+
+    pub fn omega(&self) -> f64 {
+        self.sys.model.omega2.max(0.0).sqrt()
+    }
+
+    pub fn v0(&self) -> f64 {
+        self.sys.contact.as_ref().map_or(0.0, |c| c.v0)
+    }
+
+    /// Set ω and v0 (inertia ω², contact kinematics).
+    pub fn set_omega(&mut self, omega: f64, v0: f64) {
+        self.sys.model.omega2 = omega * omega;
+        if let Some(c) = &mut self.sys.contact {
+            c.kinematics = SlipKinematics::Steady { omega };
+            c.v0 = v0;
+        }
+    }
+
+    pub fn set_v0(&mut self, v0: f64) {
+        if let Some(c) = &mut self.sys.contact {
+            c.v0 = v0;
+        }
+    }
+
+    /// Hub torque (moment the hub exerts on the body, counter-clockwise positive).
+    pub fn hub_torque(&self) -> f64 {
+        self.sys.hub_reaction().1
+    }
+
+    /// Penetration DISP = Ro − H at the current state.
+    pub fn penetration(&self) -> f64 {
+        self.ro - self.sys.road_height().unwrap_or(self.ro)
+    }
+}
+
+impl NonlinearSystem for SteadyRolling {
+    fn n_eq(&self) -> usize {
+        self.sys.n_eq()
+    }
+    fn fields(&self) -> &[u8] {
+        self.sys.fields()
+    }
+    fn field_names(&self) -> &'static [&'static str] {
+        self.sys.field_names()
+    }
+    fn reference_norms(&self) -> Vec<f64> {
+        self.sys.reference_norms()
+    }
+    fn pattern(&self) -> (&[usize], &[usize]) {
+        self.sys.pattern()
+    }
+    fn evaluate(&mut self, with_matrix: bool) -> bool {
+        self.sys.evaluate(with_matrix)
+    }
+    fn residual(&self) -> &[f64] {
+        self.sys.residual()
+    }
+    fn matrix_values(&self) -> &[f64] {
+        self.sys.matrix_values()
+    }
+    fn update(&mut self, alpha: f64, dx: &[f64]) {
+        self.sys.update(alpha, dx)
+    }
+    fn save_state(&self, buf: &mut Vec<f64>) {
+        self.sys.save_state(buf)
+    }
+    fn restore_state(&mut self, buf: &[f64]) {
+        self.sys.restore_state(buf)
+    }
+}
+
+impl ParametricSystem for SteadyRolling {
+    fn parameter(&self) -> f64 {
+        match self.param {
+            SteadyParameter::Omega => self.omega(),
+            SteadyParameter::Load => self
+                .sys
+                .contact
+                .as_ref()
+                .and_then(|c| c.load)
+                .unwrap_or(0.0),
+            SteadyParameter::Disp => self.ro - self.sys.contact.as_ref().map_or(self.ro, |c| c.h),
+        }
+    }
+    fn set_parameter(&mut self, lambda: f64) {
+        match self.param {
+            SteadyParameter::Omega => {
+                let v0 = self.v0_per_omega * lambda;
+                self.set_omega(lambda, v0);
+            }
+            SteadyParameter::Load => {
+                if let Some(c) = &mut self.sys.contact {
+                    c.load = Some(lambda);
+                }
+            }
+            SteadyParameter::Disp => {
+                let ro = self.ro;
+                if let Some(c) = &mut self.sys.contact {
+                    c.h = ro - lambda;
+                }
+            }
+        }
+    }
+}
+
+/// Reference force for the convergence tests: c_n DISP^m √(2 Ro DISP) (a Hertz-like patch
+/// force), or the hub load.
+pub fn reference_force(contact: &ContactModel, loading: &Loading, ro: f64) -> f64 {
+    match *loading {
+        Loading::Load { load } => load,
+        Loading::Indent { disp, .. } => {
+            contact.normal.c_n * disp.powf(contact.normal.m_n) * (2.0 * ro * disp).sqrt()
+        }
+        Loading::Spin { .. } => 1.0,
+    }
+    .abs()
+    .max(f64::MIN_POSITIVE)
+}
+
+/// Step 1: bring the road in at the current ω and v0 by load stepping.
+pub fn press(
+    st: &mut SteadyRolling,
+    loading: Loading,
+    kind: LinearKind,
+    newton_opts: NewtonOptions,
+    step_opts: &StepOptions,
+    report: &mut StepReport,
+    rec: &mut dyn Recorder,
+) -> Result<(), SolveError> {
+    st.sys.loading = loading;
+    if let Some(c) = &st.sys.contact {
+        let f = reference_force(c, &loading, st.ro);
+        st.sys.set_reference_force(f);
+    }
+    let mut newton = Newton::new(&st.sys, kind, newton_opts)?;
+    solve_load_steps(&mut st.sys, &mut newton, step_opts, report, rec)
+}
+
+/// Result of [`solve_torque`].
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct TorqueSolve {
+    pub v0: f64,
+    pub torque: f64,
+    pub evaluations: usize,
+    pub newton_iterations: usize,
+    /// (v0, torque) of every evaluation.
+    pub history: Vec<(f64, f64)>,
+}
+
+/// Step 2: adjust v0 until the hub torque equals `target` (0 = free rolling), by a secant
+/// iteration safeguarded by bisection once the root is bracketed. Converged when
+/// |T − target| ≤ `tol` · `torque_scale`.
+pub fn solve_torque(
+    st: &mut SteadyRolling,
+    target: f64,
+    torque_scale: f64,
+    tol: f64,
+    newton: &mut Newton,
+    max_evaluations: usize,
+) -> Result<TorqueSolve, SolveError> {
+    let mut out = TorqueSolve::default();
+    let mut saved = Vec::new();
+    let mut eval = |st: &mut SteadyRolling, v0: f64, out: &mut TorqueSolve| -> Result<f64, SolveError> {
+        st.sys.save_state(&mut saved);
+        st.set_v0(v0);
+        match newton.solve(st) {
+            Ok(r) => {
+                out.newton_iterations += r.iterations;
+                out.evaluations += 1;
+                let t = st.hub_torque() - target;
+                out.history.push((v0, t + target));
+                Ok(t)
+            }
+            Err(e) => {
+                st.sys.restore_state(&saved);
+                Err(e)
+            }
+        }
+    };
+    let omega = st.omega();
+    // Velocity scale for the first secant step: 1e-3 of the rolling speed.
+    let vs = (omega * st.ro).abs().max(st.v0().abs()).max(f64::MIN_POSITIVE);
+    let mut a = st.v0();
+    let mut fa = eval(st, a, &mut out)?;
+    if fa.abs() <= tol * torque_scale {
+        out.v0 = a;
+        out.torque = fa + target;
+        return Ok(out);
+    }
+    let mut b = a + 1e-3 * vs * if fa > 0.0 { 1.0 } else { -1.0 };
+    let mut fb = eval(st, b, &mut out)?;
+    // Bracket [lo, hi] once the torque has changed sign.
+    let mut bracket: Option<(f64, f64, f64, f64)> = None;
+    for _ in 0..max_evaluations {
+        if fb.abs() <= tol * torque_scale {
+            out.v0 = b;
+            out.torque = fb + target;
+            return Ok(out);
+        }
+        if fa * fb < 0.0 {
+            bracket = Some((a, fa, b, fb));
+        }
+        let mut c = if fb != fa { b - fb * (b - a) / (fb - fa) } else { b + 1e-3 * vs };
+        if let Some((lo, flo, hi, fhi)) = bracket {
+            let (l, h) = (lo.min(hi), lo.max(hi));
+            if !(c > l && c < h) {
+                c = 0.5 * (lo + hi);
+            }
+            let _ = (flo, fhi);
+        } else {
+            // Limit the secant step to 20 % of the rolling speed.
+            let max_step = 0.2 * vs;
+            c = b + (c - b).clamp(-max_step, max_step);
+        }
+        let fc = eval(st, c, &mut out)?;
+        if let Some((lo, flo, hi, fhi)) = bracket {
+            // Keep the bracket around the root.
+            if flo * fc < 0.0 {
+                bracket = Some((lo, flo, c, fc));
+            } else {
+                bracket = Some((c, fc, hi, fhi));
+            }
+        }
+        a = b;
+        fa = fb;
+        b = c;
+        fb = fc;
+    }
+    Err(SolveError::NotConverged {
+        iterations: out.evaluations,
+        residual: fb.abs() / torque_scale.max(f64::MIN_POSITIVE),
+    })
+}

@@ -1,0 +1,515 @@
+//! Driver of the `steady` mode ([`super::steady`]): build the scene's model in the
+//! θ-referential description, press the road in at the scene's ω and v0, optionally follow the
+//! branch by arc-length continuation (`[continuation]`), and write the outputs.
+//!
+//! summary.json `results` has the keys of the transient mode (`steady`, `time_to_steady` = 0,
+//! `revolutions` = 0, `steps`, `hub_force_x`, `hub_force_y`, `hub_torque`, `contact_x_min`,
+//! `contact_x_max`, `max_pressure`, `contact_force_x`, `contact_force_y`, `contact_centroid`,
+//! `contact_half_width_moment`) for the final state, plus `omega`, `v0`, `penetration`, and,
+//! with continuation, `branch` (one row per converged point, as `branch.csv`),
+//! `special_points` (limit and bifurcation points with their estimated parameter) and
+//! `continuation` (stop reason, counts).
+//!
+//! Files: `steady_field.csv` (same format as the transient mode's, see
+//! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
+//! `nodes.csv`, `branch.csv` (continuation) and, with the `png` sink, `branch.png` and
+//! `contact.png`. Recorder steps: the load steps of the pressing stage (time = load factor in
+//! [0, 1]), then one per continuation point (time = 1 + step).
+
+use super::spinning;
+use super::steady::{press, SteadyParameter, SteadyRolling};
+use super::system::{Loading, SolidSystem};
+use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
+use crate::contact::ContactModel;
+use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
+use crate::io::scene::{ContinuationParameter, Scene, Sink};
+use crate::solver::continuation::{
+    BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
+};
+use crate::solver::stepping::{LoadedSystem, StepReport};
+use crate::solver::{LinearKind, SolveError};
+use std::time::Instant;
+
+/// One row of the branch table.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BranchRow {
+    pub step: usize,
+    pub lambda: f64,
+    pub omega: f64,
+    pub v0: f64,
+    pub penetration: f64,
+    pub hub_force_x: f64,
+    pub hub_force_y: f64,
+    pub hub_torque: f64,
+    pub contact_x_min: f64,
+    pub contact_x_max: f64,
+    pub max_pressure: f64,
+    pub det_sign: f64,
+    pub test_function: f64,
+    pub iterations: usize,
+    pub kind: PointKind,
+    pub wall_time_s: f64,
+    pub factor_solve_s: f64,
+}
+
+impl BranchRow {
+    pub const HEADER: [&'static str; 17] = [
+        "step",
+        "lambda",
+        "omega",
+        "v0",
+        "penetration",
+        "hub_force_x",
+        "hub_force_y",
+        "hub_torque",
+        "contact_x_min",
+        "contact_x_max",
+        "max_pressure",
+        "det_sign",
+        "test_function",
+        "iterations",
+        "kind",
+        "wall_time_s",
+        "factor_solve_s",
+    ];
+
+    fn values(&self) -> Vec<f64> {
+        let kind = match self.kind {
+            PointKind::Start => 0.0,
+            PointKind::Regular => 1.0,
+            PointKind::LimitPoint => 2.0,
+            PointKind::Bifurcation => 3.0,
+        };
+        vec![
+            self.step as f64,
+            self.lambda,
+            self.omega,
+            self.v0,
+            self.penetration,
+            self.hub_force_x,
+            self.hub_force_y,
+            self.hub_torque,
+            self.contact_x_min,
+            self.contact_x_max,
+            self.max_pressure,
+            self.det_sign,
+            self.test_function,
+            self.iterations as f64,
+            kind,
+            self.wall_time_s,
+            self.factor_solve_s,
+        ]
+    }
+}
+
+fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
+    let t = ContactModel::totals(&st.sys.contact_samples());
+    let (f, m) = st.sys.hub_reaction();
+    BranchRow {
+        step: p.step,
+        lambda: p.lambda,
+        omega: st.omega(),
+        v0: st.v0(),
+        penetration: st.penetration(),
+        hub_force_x: f[0],
+        hub_force_y: f[1],
+        hub_torque: m,
+        contact_x_min: t.x_min,
+        contact_x_max: t.x_max,
+        max_pressure: t.max_pressure,
+        det_sign: p.det_sign,
+        test_function: p.test_function,
+        iterations: p.iterations,
+        kind: p.kind,
+        wall_time_s: p.wall_time_s,
+        factor_solve_s: p.factor_solve_s,
+    }
+}
+
+/// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).
+pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
+    let model = build_model(scene)?;
+    let sys = match (&scene.road, &scene.contact) {
+        (Some(_), Some(_)) => {
+            let c = build_contact(scene, &model)?;
+            SolidSystem::with_contact(model, c)
+        }
+        _ => SolidSystem::new(model, "hub"),
+    };
+    Ok(SteadyRolling::new(
+        sys,
+        scene.motion.omega,
+        scene.geometry.ro,
+    ))
+}
+
+/// Solve the steady state at the scene's ω and v0 (pressing stage). `report` collects the
+/// load steps.
+pub fn solve_steady(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    verbose: bool,
+    report: &mut StepReport,
+    rec: &mut dyn Recorder,
+) -> Result<(), SolveError> {
+    let kind = linear_kind(scene, &st.sys);
+    let (newton_opts, step_opts) = crate::app::solver_options(scene, verbose);
+    if st.sys.contact.is_none() {
+        // No contact: the steady problem is steady spinning.
+        return spinning::solve_spinning(
+            &mut st.sys,
+            scene.motion.omega,
+            kind,
+            newton_opts,
+            &step_opts,
+            report,
+            rec,
+        );
+    }
+    let loading = match scene.road.as_ref().and_then(|r| r.load) {
+        Some(load) => Loading::Load { load },
+        None => Loading::Indent {
+            h_touch: scene.geometry.ro,
+            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+        },
+    };
+    press(st, loading, kind, newton_opts, &step_opts, report, rec)
+}
+
+/// The warnings of a steady run of this scene (terms of the transient model it does not have).
+pub fn warnings(scene: &Scene) -> Vec<String> {
+    let mut w = Vec::new();
+    if let Some(t) = &scene.time {
+        if t.strain_rate_damping > 0.0 {
+            w.push(format!(
+                "time.strain_rate_damping = {} is not part of the steady residual (the steady \
+                 mode has no strain-rate damping yet); results will differ from a transient run \
+                 with it by the viscous stresses",
+                t.strain_rate_damping
+            ));
+        }
+    }
+    w
+}
+
+pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    let t0 = Instant::now();
+    ensure_dir(&opts.out_dir)?;
+    let mut warn = warnings(scene);
+    let mut st = build_steady(scene)?;
+    let (mut recorders, w) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    warn.extend(w);
+    for w in &warn {
+        eprintln!("tread: warning: {w}");
+    }
+    let scene_toml = scene.to_toml_string();
+    let mode = scene.analysis.mode.to_string();
+    let omega = scene.motion.omega;
+    let n_cont = scene.continuation.as_ref().map_or(0, |c| c.max_steps);
+    recorders.run_started(&RunMeta {
+        scene_name: &scene.scene.name,
+        mode: &mode,
+        scene_toml: &scene_toml,
+        version: env!("CARGO_PKG_VERSION"),
+        features: record::build_features(),
+        mesh: Some(&st.sys.model.mesh),
+        time_name: "load_factor",
+        time_end: 1.0 + n_cont as f64,
+        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
+    });
+    let mut report = StepReport::default();
+    let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, &mut recorders);
+    let t_first = t0.elapsed().as_secs_f64();
+    let mut cont: Option<ContinuationReport> = None;
+    let mut rows: Vec<BranchRow> = Vec::new();
+    if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
+        st.param = match cs.parameter {
+            ContinuationParameter::Omega => SteadyParameter::Omega,
+            ContinuationParameter::Load => SteadyParameter::Load,
+            ContinuationParameter::Disp => SteadyParameter::Disp,
+        };
+        use crate::solver::continuation::ParametricSystem;
+        let start = st.parameter();
+        let u_norm = {
+            let n = st.sys.model.mesh.n_nodes();
+            st.sys.x[..2 * n].iter().map(|v| v * v).sum::<f64>().sqrt()
+        };
+        let copts = ContinuationOptions {
+            target: cs.target,
+            direction: if cs.target >= start { 1.0 } else { -1.0 },
+            ds0: cs.ds,
+            ds_min: cs.ds * 1e-4,
+            ds_max: cs.ds_max,
+            x_scale: u_norm.max(1e-12 * scene.geometry.ro),
+            lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
+            max_steps: cs.max_steps,
+            max_iterations: scene.solver.max_iterations.min(15),
+            desired_iterations: cs.desired_iterations,
+            max_cutbacks: scene.solver.max_cutbacks,
+            tol: scene.solver.tolerance,
+            test_function: true,
+            verbose: opts.verbose,
+        };
+        let n0 = report.steps.len() as u64;
+        let res = Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
+            let rec: &mut dyn Recorder = &mut recorders;
+            c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
+                rows.push(branch_row(s, p));
+                let info = StepInfo {
+                    index: n0 + p.step as u64,
+                    time: 1.0 + p.step as f64,
+                    dt: if p.step == 0 { 0.0 } else { 1.0 },
+                    newton_iterations: p.iterations,
+                    residual: 0.0,
+                    is_final: false,
+                };
+                if p.step > 0 {
+                    s.sys.record_step(&info, rec);
+                }
+                !record::interrupted()
+            })
+        });
+        match res {
+            Ok(r) => {
+                if record::interrupted() {
+                    solve = Err(SolveError::Interrupted {
+                        at: st.parameter(),
+                    });
+                }
+                cont = Some(r);
+            }
+            Err(e) => solve = Err(e),
+        }
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let converged = solve.is_ok();
+    let samples = st.sys.contact_samples();
+    let tot = ContactModel::totals(&samples);
+    let (f, m) = st.sys.hub_reaction();
+    let steps = report.steps.iter().filter(|s| s.converged).count()
+        + cont.as_ref().map_or(0, |c| c.points.len().saturating_sub(1));
+    let mut results = serde_json::json!({
+        "steady": converged,
+        "time_to_steady": 0.0,
+        "revolutions": 0.0,
+        "steps": steps,
+        "omega": st.omega(),
+        "v0": st.v0(),
+        "penetration": st.penetration(),
+        "hub_force_x": f[0],
+        "hub_force_y": f[1],
+        "hub_torque": m,
+        "contact_x_min": tot.x_min,
+        "contact_x_max": tot.x_max,
+        "max_pressure": tot.max_pressure,
+        "contact_force_x": tot.force_x,
+        "contact_force_y": tot.force_y,
+        "contact_centroid": tot.centroid,
+        "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
+        "wall_time_first_solution_s": t_first,
+    });
+    if let Some(c) = &cont {
+        results["branch"] = serde_json::to_value(&rows).unwrap_or_default();
+        results["special_points"] = serde_json::to_value(&c.special).unwrap_or_default();
+        results["continuation"] = serde_json::json!({
+            "parameter": scene.continuation.as_ref().map(|c| c.parameter.to_string()),
+            "stop_reason": c.stop_reason,
+            "steps": c.points.len().saturating_sub(1),
+            "corrector_iterations": c.total_iterations,
+            "cutbacks": c.cutbacks,
+            "assemblies": c.assemblies,
+            "factorizations": c.factorizations,
+        });
+    }
+    let friction = st.sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
+    let damping = st.sys.contact.as_ref().is_some_and(|c| c.normal.has_damping());
+    let mut summary = serde_json::json!({
+        "scene": scene.scene.name,
+        "mode": mode,
+        "dofs": st.sys.n_dofs(),
+        "newton_iterations": report.total_iterations + cont.as_ref().map_or(0, |c| c.total_iterations),
+        "wall_time_s": wall,
+        "converged": converged,
+        "error": solve.as_ref().err().map(|e| e.to_string()),
+        "warnings": warn,
+        "results": results,
+        "terms": {
+            "friction": friction,
+            "normal_damping": damping,
+            "strain_rate_damping": false,
+            "inertia": st.sys.model.omega2 > 0.0,
+            "history": false,
+            "pressure": st.sys.dofs.per_cell > 0,
+            "contact_facets_per_iteration": st.sys.mean_facets_per_assembly(),
+        },
+        "mesh": {
+            "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
+            "nodes": st.sys.model.mesh.n_nodes(), "cells": st.sys.model.mesh.n_cells(),
+        },
+        "solver": {
+            "linear": format!("{:?}", if report.switched_to_lu { LinearKind::Lu } else { linear_kind(scene, &st.sys) }).to_lowercase(),
+            "load_steps": report.steps.iter().filter(|s| s.converged).count(),
+            "cutbacks": report.cutbacks,
+            "threads": rayon::current_num_threads(),
+        },
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    sanitize(&mut summary);
+    let interrupted = matches!(solve, Err(SolveError::Interrupted { .. }));
+    let error = solve.as_ref().err().map(|e| e.to_string());
+    let final_info = StepInfo {
+        index: steps as u64,
+        time: 1.0 + rows.len().saturating_sub(1) as f64,
+        dt: 0.0,
+        newton_iterations: 0,
+        residual: 0.0,
+        is_final: true,
+    };
+    st.sys.record_step(&final_info, &mut recorders);
+    for e in recorders.run_finished(&RunEnd {
+        converged,
+        interrupted,
+        error: error.as_deref(),
+        steps: steps as u64,
+        wall_time_s: wall,
+        summary: Some(&summary),
+    }) {
+        eprintln!("tread: warning: {e}");
+    }
+    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    if scene.output.has(Sink::Csv) {
+        write_steady_csv(&st.sys, &opts.out_dir)?;
+        if !rows.is_empty() {
+            write_csv(
+                &opts.out_dir.join("branch.csv"),
+                &BranchRow::HEADER,
+                rows.iter().map(|r| r.values()),
+            )?;
+        }
+    }
+    if scene.output.has(Sink::Png) {
+        let dir = &opts.out_dir;
+        let pts = |g: &dyn Fn(&BranchRow) -> f64| -> Vec<(f64, f64)> {
+            rows.iter()
+                .map(|r| (r.lambda, g(r)))
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect()
+        };
+        if rows.len() > 1 {
+            let fy = pts(&|r| r.hub_force_y);
+            let fx = pts(&|r| r.hub_force_x);
+            let tq = pts(&|r| r.hub_torque);
+            let label = scene
+                .continuation
+                .as_ref()
+                .map_or("parameter".to_string(), |c| c.parameter.to_string());
+            if let Err(e) = record::png::line_chart(
+                &dir.join("branch.png"),
+                "Steady branch: hub loads",
+                &label,
+                "hub force / torque (per unit thickness)",
+                &[("hub_force_x", &fx), ("hub_force_y", &fy), ("hub_torque", &tq)],
+            ) {
+                eprintln!("tread: warning: branch.png: {e}");
+            }
+        }
+        if !samples.is_empty() {
+            let tn: Vec<(f64, f64)> = samples.iter().filter(|s| s.t_n > 0.0).map(|s| (s.x1, s.t_n)).collect();
+            let tt: Vec<(f64, f64)> = samples.iter().filter(|s| s.t_n > 0.0).map(|s| (s.x1, s.t_t)).collect();
+            if !tn.is_empty() {
+                if let Err(e) = record::png::line_chart(
+                    &dir.join("contact.png"),
+                    "Steady contact tractions",
+                    "x1",
+                    "traction per unit reference length",
+                    &[("t_n", &tn), ("t_t", &tt)],
+                ) {
+                    eprintln!("tread: warning: contact.png: {e}");
+                }
+            }
+        }
+    }
+    let mut headline = vec![format!(
+        "steady at omega = {:.6} rad/s, v0 = {:.6}: hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}], max pressure = {:.4e}",
+        st.omega(), st.v0(), f[0], f[1], m, tot.x_min, tot.x_max, tot.max_pressure
+    )];
+    if let Some(c) = &cont {
+        headline.push(format!(
+            "continuation: {} steps ({}), {} special points{}",
+            c.points.len().saturating_sub(1),
+            c.stop_reason,
+            c.special.len(),
+            c.special
+                .iter()
+                .map(|s| format!("; {:?} at {:.6}", s.kind, s.lambda))
+                .collect::<String>()
+        ));
+    }
+    match solve {
+        Ok(()) => Ok(RunOutcome {
+            summary,
+            out_dir: opts.out_dir.clone(),
+            converged,
+            headline,
+        }),
+        Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
+        Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
+    }
+}
+
+/// `steady_field.csv`, `contact.csv` and `nodes.csv` of a steady state.
+pub fn write_steady_csv(
+    sys: &SolidSystem,
+    dir: &std::path::Path,
+) -> Result<(), crate::io::output::OutputError> {
+    let mesh = &sys.model.mesh;
+    if let Some(rl) = mesh.rings {
+        write_csv(
+            &dir.join("steady_field.csv"),
+            &["ring", "pos", "X1", "X2", "u1", "u2"],
+            (0..mesh.n_nodes()).map(|n| {
+                vec![
+                    (n / rl.per_ring) as f64,
+                    (n % rl.per_ring) as f64,
+                    mesh.nodes[n][0],
+                    mesh.nodes[n][1],
+                    sys.x[2 * n],
+                    sys.x[2 * n + 1],
+                ]
+            }),
+        )?;
+    }
+    let samples = sys.contact_samples();
+    if !samples.is_empty() {
+        write_csv(
+            &dir.join("contact.csv"),
+            &[
+                "theta",
+                "x1",
+                "x2",
+                "penetration",
+                "t_n",
+                "t_t",
+                "slip_velocity",
+                "ds0",
+            ],
+            samples
+                .iter()
+                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
+        )?;
+    }
+    write_csv(
+        &dir.join("nodes.csv"),
+        &["node", "X1", "X2", "u1", "u2"],
+        (0..mesh.n_nodes()).map(|n| {
+            vec![
+                n as f64,
+                mesh.nodes[n][0],
+                mesh.nodes[n][1],
+                sys.x[2 * n],
+                sys.x[2 * n + 1],
+            ]
+        }),
+    )
+}
