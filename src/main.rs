@@ -46,6 +46,21 @@ enum Command {
         #[arg(short, long)]
         verbose: bool,
     },
+    /// Run a rolling scene in both modes (transient until steady, then steady) and compare
+    /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png,
+    /// with each mode's own outputs in OUT/transient/ and OUT/steady/.
+    Compare {
+        /// Scene file (TOML) with [time] (for the transient run), see scenarios/README.md.
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>_compare/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene key, e.g. --set motion.omega=20 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(short, long)]
+        verbose: bool,
+    },
     /// Validate a scene and print it with every default filled in.
     Check {
         scene: PathBuf,
@@ -69,7 +84,24 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
 }
 
 fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {
-    let out_dir = out.unwrap_or_else(|| app::default_out_dir(&scene));
+    run_with(scene, out, verbose, quiet, false)
+}
+
+fn run_with(
+    scene: Scene,
+    out: Option<PathBuf>,
+    verbose: bool,
+    quiet: bool,
+    compare: bool,
+) -> ExitCode {
+    let out_dir = out.unwrap_or_else(|| {
+        let d = app::default_out_dir(&scene);
+        if compare {
+            d.with_file_name(format!("{}_compare", scene.scene.name))
+        } else {
+            d
+        }
+    });
     if !quiet {
         eprintln!(
             "tread: running scene `{}` ({} mode)",
@@ -82,7 +114,12 @@ fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> 
         verbose,
         quiet,
     };
-    match app::run(&scene, &opts) {
+    let result = if compare {
+        tread::driver::compare::run(&scene, &opts)
+    } else {
+        app::run(&scene, &opts)
+    };
+    match result {
         Ok(o) => {
             if !quiet {
                 println!(
@@ -152,6 +189,18 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Some(Command::Compare {
+            scene,
+            out,
+            set,
+            verbose,
+        }) => match load(&scene, &set) {
+            Ok(s) => run_with(s, out, verbose, cli.quiet, true),
+            Err(e) => {
+                eprintln!("tread: invalid scene:\n{e}");
+                ExitCode::from(2)
+            }
+        },
         Some(Command::Check { scene, set }) => match load(&scene, &set) {
             Ok(s) => {
                 println!(

@@ -1,5 +1,6 @@
 //! Drivers: build a model from a scene, run an analysis, collect results.
 
+pub mod compare;
 pub mod frame;
 pub mod indentation;
 pub mod spinning;

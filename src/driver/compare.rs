@@ -1,0 +1,291 @@
+//! `tread compare SCENE`: the same scene in both modes (DESIGN §6).
+//!
+//! 1. The transient mode (`analysis.mode = "transient"`, the scene's `[time]`) runs until steady
+//!    into `OUT/transient/` and extracts the referential field at its last node passage.
+//! 2. The steady mode (no continuation) solves the same scene into `OUT/steady/`.
+//! 3. `OUT/summary.json` gets `results.compare` and `OUT/compare.csv` one row per quantity:
+//!    * hub forces and torque from both; `hub_force_x_rel_diff` and `hub_force_y_rel_diff` are
+//!      |F_i(transient) − F_i(steady)| / |F(steady)| (relative to the magnitude of the steady
+//!      hub force vector, so that a component near zero, e.g. Fx without friction, is not
+//!      divided by itself); `hub_torque_abs_diff` = |T_t − T_s|;
+//!    * the referential displacement fields (`steady_field.csv` of both): `field_rel_l2` =
+//!      ‖u_t − u_s‖_L2(Ω) / ‖u_s‖_L2(Ω) (integrated with the finite-element interpolation on the
+//!      referential mesh, 3×3 Gauss points per cell), `field_max_abs` = max over nodes of
+//!      |u_t − u_s|, `field_rel_max` = that over max |u_s|;
+//!    * contact patch ends and peak pressure from both;
+//!    * `wall_time_transient_s`, `wall_time_steady_s`, `speedup` (their ratio), whether the
+//!      transient run reached its steady state (`transient_steady`) and when.
+//!
+//!    With the `png` sink, `OUT/contact_compare.png` draws t_n and t_T along x1 from both.
+//!
+//! The steady residual has no strain-rate damping ([`super::steady`]); a scene with
+//! `time.strain_rate_damping > 0` is compared anyway and a warning says so.
+
+use super::steady_run;
+use crate::app::{self, AppError, RunOptions, RunOutcome};
+use crate::element::QuadRule;
+use crate::io::output::{ensure_dir, sanitize, write_json, OutputError};
+use crate::io::scene::{Mode, Scene, Sink};
+use crate::math::Vec2;
+use std::path::Path;
+
+/// Read a CSV written by [`crate::io::output::write_csv`]: header and rows of numbers.
+pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .ok_or_else(|| format!("{} is empty", path.display()))?
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut rows = Vec::new();
+    for (i, l) in lines.enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let row: Result<Vec<f64>, _> = l.split(',').map(|v| v.trim().parse::<f64>()).collect();
+        rows.push(row.map_err(|e| format!("{} line {}: {e}", path.display(), i + 2))?);
+    }
+    Ok((header, rows))
+}
+
+/// Displacement field (2 per node, node order) from a `steady_field.csv`.
+fn read_field(path: &Path, n_nodes: usize, per_ring: usize) -> Result<Vec<f64>, String> {
+    let (h, rows) = read_csv(path)?;
+    let col = |name: &str| {
+        h.iter()
+            .position(|c| c == name)
+            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
+    };
+    let (ir, ip, iu1, iu2) = (col("ring")?, col("pos")?, col("u1")?, col("u2")?);
+    let mut u = vec![0.0; 2 * n_nodes];
+    for r in &rows {
+        let n = r[ir] as usize * per_ring + r[ip] as usize;
+        if n >= n_nodes {
+            return Err(format!("{}: node {n} out of range", path.display()));
+        }
+        u[2 * n] = r[iu1];
+        u[2 * n + 1] = r[iu2];
+    }
+    Ok(u)
+}
+
+/// Field differences on the referential mesh of `scene`: (relative L2, max |Δu|, max |u_s|).
+pub fn field_difference(scene: &Scene, u_t: &[f64], u_s: &[f64]) -> Result<(f64, f64, f64), AppError> {
+    let sys = crate::driver::SolidSystem::new(app::build_model(scene)?, "hub");
+    let n = sys.model.mesh.n_nodes();
+    let mut xd = sys.x.clone();
+    let mut xs = sys.x.clone();
+    for i in 0..2 * n {
+        xd[i] = u_t[i] - u_s[i];
+        xs[i] = u_s[i];
+    }
+    let rule = QuadRule::gauss_2d(3);
+    let (mut num, mut den) = (0.0, 0.0);
+    for c in 0..sys.model.mesh.n_cells() {
+        for (pt, w) in rule.points.iter().zip(&rule.weights) {
+            let (Some(pd), Some(ps)) = (
+                sys.model.point_values(c, &sys.dofs, &xd, pt.0, pt.1),
+                sys.model.point_values(c, &sys.dofs, &xs, pt.0, pt.1),
+            ) else {
+                continue;
+            };
+            let dv = ps.jac.determinant().abs() * w;
+            num += pd.u.norm_squared() * dv;
+            den += ps.u.norm_squared() * dv;
+        }
+    }
+    let node = |u: &[f64], k: usize| Vec2::new(u[2 * k], u[2 * k + 1]);
+    let max_d = (0..n)
+        .map(|k| (node(u_t, k) - node(u_s, k)).norm())
+        .fold(0.0, f64::max);
+    let max_s = (0..n).map(|k| node(u_s, k).norm()).fold(0.0, f64::max);
+    let rel = if den > 0.0 { (num / den).sqrt() } else { f64::NAN };
+    Ok((rel, max_d, max_s))
+}
+
+fn with_csv(scene: &Scene, mode: Mode) -> Scene {
+    let mut s = scene.clone();
+    s.analysis.mode = mode;
+    if !s.output.has(Sink::Csv) {
+        s.output.sinks.push(Sink::Csv);
+    }
+    if mode == Mode::Steady {
+        s.continuation = None;
+    }
+    s
+}
+
+fn f(v: &serde_json::Value, key: &str) -> f64 {
+    v["results"][key].as_f64().unwrap_or(f64::NAN)
+}
+
+pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    ensure_dir(&opts.out_dir)?;
+    if scene.time.is_none() {
+        return Err(AppError::Unsupported(
+            "compare runs the transient mode, which needs the [time] section".into(),
+        ));
+    }
+    let mut warnings = steady_run::warnings(scene);
+    let tr_scene = with_csv(scene, Mode::Transient);
+    let tr_opts = RunOptions {
+        out_dir: opts.out_dir.join("transient"),
+        ..opts.clone()
+    };
+    let tr = match app::run(&tr_scene, &tr_opts) {
+        Ok(o) => o,
+        Err(AppError::Solve(e, dir)) => {
+            return Err(AppError::Solve(e, dir));
+        }
+        Err(e) => return Err(e),
+    };
+    let st_scene = with_csv(scene, Mode::Steady);
+    let st_opts = RunOptions {
+        out_dir: opts.out_dir.join("steady"),
+        ..opts.clone()
+    };
+    let st = app::run(&st_scene, &st_opts)?;
+    let (ts, ss) = (&tr.summary, &st.summary);
+    if ts["results"]["steady"].as_bool() != Some(true) {
+        warnings.push(
+            "the transient run did not reach its steady state (time.t_end or max_steps first): \
+             its last extracted field is compared"
+                .into(),
+        );
+    }
+    // Fields on the referential mesh.
+    let model = app::build_model(scene)?;
+    let n = model.mesh.n_nodes();
+    let per_ring = model.mesh.rings.map_or(n, |r| r.per_ring);
+    let u_t = read_field(&tr_opts.out_dir.join("steady_field.csv"), n, per_ring)
+        .map_err(|e| AppError::Unsupported(format!("compare: transient field: {e}")))?;
+    let u_s = read_field(&st_opts.out_dir.join("steady_field.csv"), n, per_ring)
+        .map_err(|e| AppError::Unsupported(format!("compare: steady field: {e}")))?;
+    let (rel_l2, max_d, max_s) = field_difference(scene, &u_t, &u_s)?;
+    let (fxt, fyt, tqt) = (f(ts, "hub_force_x"), f(ts, "hub_force_y"), f(ts, "hub_torque"));
+    let (fxs, fys, tqs) = (f(ss, "hub_force_x"), f(ss, "hub_force_y"), f(ss, "hub_torque"));
+    let fmag = fxs.hypot(fys).max(f64::MIN_POSITIVE);
+    let (wt, ws) = (
+        ts["wall_time_s"].as_f64().unwrap_or(f64::NAN),
+        ss["wall_time_s"].as_f64().unwrap_or(f64::NAN),
+    );
+    let compare = serde_json::json!({
+        "hub_force_x_transient": fxt, "hub_force_x_steady": fxs,
+        "hub_force_y_transient": fyt, "hub_force_y_steady": fys,
+        "hub_torque_transient": tqt, "hub_torque_steady": tqs,
+        "hub_force_x_rel_diff": (fxt - fxs).abs() / fmag,
+        "hub_force_y_rel_diff": (fyt - fys).abs() / fmag,
+        "hub_torque_abs_diff": (tqt - tqs).abs(),
+        "hub_torque_rel_diff": (tqt - tqs).abs() / (fmag * scene.geometry.ro),
+        "field_rel_l2": rel_l2,
+        "field_max_abs": max_d,
+        "field_rel_max": if max_s > 0.0 { max_d / max_s } else { f64::NAN },
+        "contact_x_min_transient": f(ts, "contact_x_min"), "contact_x_min_steady": f(ss, "contact_x_min"),
+        "contact_x_max_transient": f(ts, "contact_x_max"), "contact_x_max_steady": f(ss, "contact_x_max"),
+        "max_pressure_transient": f(ts, "max_pressure"), "max_pressure_steady": f(ss, "max_pressure"),
+        "wall_time_transient_s": wt,
+        "wall_time_steady_s": ws,
+        "speedup": wt / ws,
+        "transient_steady": ts["results"]["steady"].as_bool().unwrap_or(false),
+        "transient_time_to_steady": ts["results"]["time_to_steady"],
+        "transient_steps": ts["results"]["steps"],
+    });
+    let mut summary = serde_json::json!({
+        "scene": scene.scene.name,
+        "mode": "compare",
+        "dofs": ss["dofs"],
+        "converged": tr.converged && st.converged,
+        "warnings": warnings,
+        "results": { "compare": compare },
+        "transient_dir": tr_opts.out_dir.display().to_string(),
+        "steady_dir": st_opts.out_dir.display().to_string(),
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    sanitize(&mut summary);
+    for w in &warnings {
+        eprintln!("tread: warning: {w}");
+    }
+    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    let c = &summary["results"]["compare"];
+    let g = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+    let pair = |name: &str, a: f64, b: f64| vec![name.to_string(), a.to_string(), b.to_string(), (a - b).abs().to_string()];
+    let rows = vec![
+        pair("hub_force_x", fxt, fxs),
+        pair("hub_force_y", fyt, fys),
+        pair("hub_torque", tqt, tqs),
+        pair("contact_x_min", g("contact_x_min_transient"), g("contact_x_min_steady")),
+        pair("contact_x_max", g("contact_x_max_transient"), g("contact_x_max_steady")),
+        pair("max_pressure", g("max_pressure_transient"), g("max_pressure_steady")),
+        pair("wall_time_s", wt, ws),
+    ];
+    write_text_csv(&opts.out_dir.join("compare.csv"), &["quantity", "transient", "steady", "abs_diff"], &rows)?;
+    if scene.output.has(Sink::Png) {
+        contact_plot(&tr_opts.out_dir, &st_opts.out_dir, &opts.out_dir.join("contact_compare.png"));
+    }
+    let headline = vec![
+        format!(
+            "hub force transient ({fxt:.5e}, {fyt:.5e}) vs steady ({fxs:.5e}, {fys:.5e}): relative differences {:.3e}, {:.3e}; torque {tqt:.5e} vs {tqs:.5e}",
+            g("hub_force_x_rel_diff"), g("hub_force_y_rel_diff")
+        ),
+        format!(
+            "referential field: relative L2 difference {rel_l2:.3e}, max |du| = {max_d:.3e}; wall time transient {wt:.3} s, steady {ws:.3} s (speed-up {:.1})",
+            wt / ws
+        ),
+    ];
+    Ok(RunOutcome {
+        summary,
+        out_dir: opts.out_dir.clone(),
+        converged: tr.converged && st.converged,
+        headline,
+    })
+}
+
+fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), OutputError> {
+    let mut s = header.join(",");
+    s.push('\n');
+    for r in rows {
+        s.push_str(&r.join(","));
+        s.push('\n');
+    }
+    std::fs::write(path, s).map_err(|source| OutputError {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// t_n and t_T along x1 from both modes' `contact.csv` (warnings only on failure).
+fn contact_plot(tr: &Path, st: &Path, out: &Path) {
+    let load = |dir: &Path| -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+        let (h, rows) = read_csv(&dir.join("contact.csv")).ok()?;
+        let ix = h.iter().position(|c| c == "x1")?;
+        let in_ = h.iter().position(|c| c == "t_n")?;
+        let it = h.iter().position(|c| c == "t_t")?;
+        let mut rows: Vec<&Vec<f64>> = rows.iter().filter(|r| r[in_] > 0.0).collect();
+        rows.sort_by(|a, b| a[ix].total_cmp(&b[ix]));
+        Some((
+            rows.iter().map(|r| (r[ix], r[in_])).collect(),
+            rows.iter().map(|r| (r[ix], r[it])).collect(),
+        ))
+    };
+    let (Some((tn_t, tt_t)), Some((tn_s, tt_s))) = (load(tr), load(st)) else {
+        eprintln!("tread: warning: contact_compare.png: no contact.csv from both modes");
+        return;
+    };
+    if let Err(e) = crate::io::record::png::line_chart(
+        out,
+        "Contact tractions: transient (extracted) vs steady",
+        "x1",
+        "traction per unit reference length",
+        &[
+            ("t_n transient", &tn_t),
+            ("t_n steady", &tn_s),
+            ("t_T transient", &tt_t),
+            ("t_T steady", &tt_s),
+        ],
+    ) {
+        eprintln!("tread: warning: contact_compare.png: {e}");
+    }
+}
