@@ -17,9 +17,7 @@
 //!      transient run reached its steady state (`transient_steady`) and when.
 //!
 //!    With the `png` sink, `OUT/contact_compare.png` draws t_n and t_T along x1 from both.
-//!
-//! The steady residual has no strain-rate damping ([`super::steady`]); a scene with
-//! `time.strain_rate_damping > 0` is compared anyway and a warning says so.
+
 
 use super::steady_run;
 use crate::app::{self, AppError, RunOptions, RunOutcome};

@@ -10,10 +10,10 @@
 //! δ̇ = −ω ∂θχ2 and friction on the slip w = ω ∂θχ1 − v0. With friction or damping the tangent
 //! is unsymmetric (LU).
 //!
-//! **Not in the steady residual**: the transient mode's objective strain-rate damping
-//! (`time.strain_rate_damping`). In the referential description it needs ∇(∂θχ), i.e. second
-//! derivatives of the shape functions, which the element layer does not provide yet; a scene
-//! that has it gets a warning from `tread run --mode steady` and from `compare`.
+//! The transient mode's objective strain-rate damping (`time.strain_rate_damping`, S_v = η Ė)
+//! is in the steady residual too: a material point's Green-strain rate is, in the referential
+//! frame, Ė = sym(Fᵀ ∇v) with v = ω ∂θχ, and ∇v = ω (W + Σ_a u_a ⊗ ∇(∂θN_a)) needs the second
+//! derivatives of the shape functions ([`crate::physics::SolidModel::steady_omega`]).
 //!
 //! # Procedure
 //!
@@ -80,6 +80,7 @@ impl SteadyRolling {
     /// Set ω and v0 (inertia ω², contact kinematics).
     pub fn set_omega(&mut self, omega: f64, v0: f64) {
         self.sys.model.omega2 = omega * omega;
+        self.sys.model.steady_omega = Some(omega);
         if let Some(c) = &mut self.sys.contact {
             c.kinematics = SlipKinematics::Steady { omega };
             c.v0 = v0;

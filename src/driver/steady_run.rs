@@ -129,7 +129,8 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
 
 /// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).
 pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
-    let model = build_model(scene)?;
+    let mut model = build_model(scene)?;
+    model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
     let sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;
@@ -177,20 +178,10 @@ pub fn solve_steady(
     press(st, loading, kind, newton_opts, &step_opts, report, rec)
 }
 
-/// The warnings of a steady run of this scene (terms of the transient model it does not have).
-pub fn warnings(scene: &Scene) -> Vec<String> {
-    let mut w = Vec::new();
-    if let Some(t) = &scene.time {
-        if t.strain_rate_damping > 0.0 {
-            w.push(format!(
-                "time.strain_rate_damping = {} is not part of the steady residual (the steady \
-                 mode has no strain-rate damping yet); results will differ from a transient run \
-                 with it by the viscous stresses",
-                t.strain_rate_damping
-            ));
-        }
-    }
-    w
+/// The warnings of a steady run of this scene (none so far: the steady residual has every
+/// term of the transient model).
+pub fn warnings(_scene: &Scene) -> Vec<String> {
+    Vec::new()
 }
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
@@ -337,7 +328,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "terms": {
             "friction": friction,
             "normal_damping": damping,
-            "strain_rate_damping": false,
+            "strain_rate_damping": st.sys.model.strain_rate_damping > 0.0,
             "inertia": st.sys.model.omega2 > 0.0,
             "history": false,
             "pressure": st.sys.dofs.per_cell > 0,

@@ -71,6 +71,16 @@ pub struct ShapeTable<const N: usize> {
     pub weights: Vec<f64>,
     pub n: Vec<[f64; N]>,
     pub dn: Vec<[[f64; 2]; N]>,
+    /// Second reference derivatives (∂ξξ, ∂ξη, ∂ηη).
+    pub d2n: Vec<[[f64; 3]; N]>,
+}
+
+/// Second derivatives of the 1D Lagrange basis of degree `p` (1 or 2) on [-1, 1].
+pub fn lagrange_1d_second(p: usize) -> [f64; 3] {
+    match p {
+        1 => [0.0; 3],
+        _ => [1.0, -2.0, 1.0],
+    }
 }
 
 impl<const N: usize> ShapeTable<N> {
@@ -79,18 +89,31 @@ impl<const N: usize> ShapeTable<N> {
         assert_eq!(E::N, N, "element/node-count mismatch");
         let mut n = Vec::with_capacity(points.len());
         let mut dn = Vec::with_capacity(points.len());
+        let mut d2n = Vec::with_capacity(points.len());
+        let m = E::P + 1;
+        let dd = lagrange_1d_second(E::P);
         for &(x, y) in &points {
             let mut nv = [0.0; N];
             let mut dv = [[0.0; 2]; N];
             E::eval(x, y, &mut nv, &mut dv);
+            let (nx, dx) = lagrange_1d(E::P, x);
+            let (ny, dy) = lagrange_1d(E::P, y);
+            let mut d2 = [[0.0; 3]; N];
+            for j in 0..m {
+                for i in 0..m {
+                    d2[i + m * j] = [dd[i] * ny[j], dx[i] * dy[j], nx[i] * dd[j]];
+                }
+            }
             n.push(nv);
             dn.push(dv);
+            d2n.push(d2);
         }
         Self {
             points,
             weights,
             n,
             dn,
+            d2n,
         }
     }
     /// Tabulate at a tensor Gauss rule with `q` points per direction.
