@@ -52,9 +52,9 @@ use crate::solver::SolveError;
 use diffsol::op::unit::UnitCallable;
 use diffsol::op::ParameterisedOp;
 use diffsol::{
-    ConstantOp, FaerContext, FaerSparseLU, FaerSparseMat, FaerVec, LinearOp, Matrix,
-    NonLinearOp, NonLinearOpJacobian, Op, OdeBuilder, OdeEquations, OdeEquationsRef,
-    OdeSolverMethod, OdeSolverProblem, OdeSolverStopReason, Vector, VectorCommon,
+    ConstantOp, FaerContext, FaerSparseLU, FaerSparseMat, FaerVec, LinearOp, Matrix, NonLinearOp,
+    NonLinearOpJacobian, OdeBuilder, OdeEquations, OdeEquationsRef, OdeSolverMethod,
+    OdeSolverProblem, OdeSolverStopReason, Op, Vector, VectorCommon,
 };
 use faer::sparse::SymbolicSparseColMat;
 use std::cell::RefCell;
@@ -179,7 +179,10 @@ impl<'t> FirstOrder<'t> {
                         continue;
                     }
                     for i in 0..2 {
-                        let (er, ec) = (dofs.eq[cd[2 * a + i] as usize], dofs.eq[cd[2 * b + i] as usize]);
+                        let (er, ec) = (
+                            dofs.eq[cd[2 * a + i] as usize],
+                            dofs.eq[cd[2 * b + i] as usize],
+                        );
                         if er == FIXED || ec == FIXED {
                             continue;
                         }
@@ -296,7 +299,14 @@ impl<'t> FirstOrder<'t> {
         tr.assemble_dynamic(true, 1.0, 0.0, 0.0, 0.0);
         let k = tr.sys.asm.values.clone();
         tr.assemble_dynamic(true, 1.0, 1.0, 0.0, 0.0);
-        let c: Vec<f64> = tr.sys.asm.values.iter().zip(&k).map(|(a, b)| a - b).collect();
+        let c: Vec<f64> = tr
+            .sys
+            .asm
+            .values
+            .iter()
+            .zip(&k)
+            .map(|(a, b)| a - b)
+            .collect();
         (k, c)
     }
 
@@ -672,7 +682,12 @@ pub fn integrate_first_order(
     let mut solver = match res {
         Ok(Ok(s)) => s,
         Ok(Err(e)) => return Err((fail(t0, e.to_string()), rep)),
-        Err(p) => return Err((fail(t0, format!("diffsol panicked: {}", panic_message(p))), rep)),
+        Err(p) => {
+            return Err((
+                fail(t0, format!("diffsol panicked: {}", panic_message(p))),
+                rep,
+            ))
+        }
     };
     let fo = &problem.eqn;
 
@@ -701,9 +716,7 @@ pub fn integrate_first_order(
         }
         Some(hi)
     };
-    let stop_after = |t: f64| -> f64 {
-        next_passage(t).map_or(opts.t_end, |p| p.min(opts.t_end))
-    };
+    let stop_after = |t: f64| -> f64 { next_passage(t).map_or(opts.t_end, |p| p.min(opts.t_end)) };
     let mut t_stop = stop_after(t0);
     if let Err(e) = solver.set_stop_time(t_stop) {
         return Err((fail(t0, e.to_string()), rep));
@@ -726,7 +739,12 @@ pub fn integrate_first_order(
         let reason = match step {
             Ok(Ok(r)) => r,
             Ok(Err(e)) => break Err(fail(t_prev, e.to_string())),
-            Err(p) => break Err(fail(t_prev, format!("diffsol panicked: {}", panic_message(p)))),
+            Err(p) => {
+                break Err(fail(
+                    t_prev,
+                    format!("diffsol panicked: {}", panic_message(p)),
+                ))
+            }
         };
         let (t, y, dy) = solver.state_vectors();
         if !y.iter().all(|v| v.is_finite()) {
@@ -738,6 +756,18 @@ pub fn integrate_first_order(
             t
         };
         solver.bump_newton_fail_limit();
+        if std::env::var_os("TREAD_ODE_DEBUG").is_some() && rep.steps % 500 == 0 {
+            let o = match &solver {
+                Solver::Bdf(s) => s.order(),
+                Solver::Sdirk(s) => s.order(),
+            };
+            eprintln!(
+                "step {} t = {t:.6e} h = {:.3e} order {o} stats {:?}",
+                rep.steps,
+                t - t_prev,
+                solver.stats()
+            );
+        }
         fo.commit(t, &y, &dy);
         y_prev.copy_from_slice(&y);
         dy_prev.copy_from_slice(&dy);
@@ -786,6 +816,17 @@ pub fn integrate_first_order(
     // The driver's state is the last accepted step (rhs evaluations of a failed step used the
     // assembly buffers as scratch).
     fo.commit(t_prev, &y_prev, &dy_prev);
+    if std::env::var_os("TREAD_ODE_DEBUG").is_some() {
+        let st = match &solver {
+            Solver::Bdf(s) => s.get_statistics().clone(),
+            Solver::Sdirk(s) => s.get_statistics().clone(),
+        };
+        eprintln!(
+            "diffsol {}: {st:?}; (rhs, jacobian) evaluations {:?}",
+            method.name(),
+            fo.evaluations()
+        );
+    }
     let mut tr = fo.tr.borrow_mut();
     if let Some(m) = &monitor {
         rep.passages = m.passages;
