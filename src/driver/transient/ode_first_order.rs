@@ -756,18 +756,6 @@ pub fn integrate_first_order(
             t
         };
         solver.bump_newton_fail_limit();
-        if std::env::var_os("TREAD_ODE_DEBUG").is_some() && rep.steps % 500 == 0 {
-            let o = match &solver {
-                Solver::Bdf(s) => s.order(),
-                Solver::Sdirk(s) => s.order(),
-            };
-            eprintln!(
-                "step {} t = {t:.6e} h = {:.3e} order {o} stats {:?}",
-                rep.steps,
-                t - t_prev,
-                solver.stats()
-            );
-        }
         fo.commit(t, &y, &dy);
         y_prev.copy_from_slice(&y);
         dy_prev.copy_from_slice(&dy);
@@ -816,17 +804,6 @@ pub fn integrate_first_order(
     // The driver's state is the last accepted step (rhs evaluations of a failed step used the
     // assembly buffers as scratch).
     fo.commit(t_prev, &y_prev, &dy_prev);
-    if std::env::var_os("TREAD_ODE_DEBUG").is_some() {
-        let st = match &solver {
-            Solver::Bdf(s) => s.get_statistics().clone(),
-            Solver::Sdirk(s) => s.get_statistics().clone(),
-        };
-        eprintln!(
-            "diffsol {}: {st:?}; (rhs, jacobian) evaluations {:?}",
-            method.name(),
-            fo.evaluations()
-        );
-    }
     let mut tr = fo.tr.borrow_mut();
     if let Some(m) = &monitor {
         rep.passages = m.passages;
