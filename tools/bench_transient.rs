@@ -3,7 +3,9 @@
 //! * generalized-α with ρ∞ ∈ {1.0, 0.8, 0.5} (consistent mass), at a sequence of fixed steps
 //!   and with the adaptive step control at a sequence of `error_tol`;
 //! * central difference (lumped mass) at fractions of the stable-step estimate
-//!   `Transient::stable_step` (0.9 is what `integrate` uses).
+//!   `Transient::stable_step` (0.9 is what `integrate` uses);
+//! * diffsol's BDF and SDIRK (ESDIRK34) on the first-order form y = (u, v) (consistent mass,
+//!   `driver::transient::ode_first_order`) with rtol = each adaptive `error_tol`.
 //!
 //! Problem: the paper-like cylinder of `scenarios/oden_hollow_cylinder.toml` (Ri = 1, Ro = 2,
 //! compressible Mooney–Rivlin c1 = 80, c2 = 20, κ = 20000, ρ = 0.027, Coulomb-tanh friction,
@@ -48,6 +50,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tread::app::{build_contact, build_model, linear_kind};
 use tread::contact::ContactModel;
+use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use tread::driver::transient::{
     integrate, GenAlpha, Scheme, TimeOptions, Transient, TransientReport,
 };
@@ -145,6 +148,8 @@ fn parse_args() -> Result<Args, String> {
 enum Method {
     GenAlpha(f64),
     Central,
+    /// diffsol BDF / SDIRK on y = (u, v) (consistent mass, diffsol's own error control).
+    Ode(OdeMethod),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -176,6 +181,7 @@ impl Case {
         match self.method {
             Method::GenAlpha(r) => format!("generalized-α ρ∞={r:.1}"),
             Method::Central => "central difference (lumped)".into(),
+            Method::Ode(m) => format!("diffsol {} on y = (u, v)", m.name()),
         }
     }
     /// One polyline of the plot / one family of the recommendation.
@@ -184,6 +190,7 @@ impl Case {
             (Method::GenAlpha(r), Setting::Adaptive(_)) => format!("GA ρ∞={r:.1} adaptive"),
             (Method::GenAlpha(r), _) => format!("GA ρ∞={r:.1} fixed Δt"),
             (Method::Central, _) => "central difference".into(),
+            (Method::Ode(m), _) => format!("diffsol {}", m.name()),
         }
     }
     fn setting(&self, dt_stable: f64, part: Part) -> String {
@@ -205,13 +212,19 @@ impl Case {
         match self.method {
             Method::GenAlpha(r) => Scheme::GeneralizedAlpha(GenAlpha::new(r)),
             Method::Central => Scheme::CentralDifference,
+            // Unused by the diffsol integrators.
+            Method::Ode(_) => Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
         }
     }
+    /// CSV columns scheme (0 generalized-α, 1 central difference, 2 diffsol BDF, 3 diffsol
+    /// SDIRK), rho_inf, adaptive, dt, error_tol, stable_fraction.
     fn csv_codes(&self, dt_stable: f64, part: Part) -> [f64; 6] {
         let nan = f64::NAN;
         let (scheme, rho) = match self.method {
             Method::GenAlpha(r) => (0.0, r),
             Method::Central => (1.0, nan),
+            Method::Ode(OdeMethod::Bdf) => (2.0, nan),
+            Method::Ode(_) => (3.0, nan),
         };
         match self.setting {
             Setting::Fixed(dt) => [scheme, rho, 0.0, dt, nan, nan],
@@ -284,6 +297,16 @@ impl Plan {
             for &tol in tols {
                 v.push(Case {
                     method: Method::GenAlpha(r),
+                    setting: Setting::Adaptive(tol),
+                });
+            }
+        }
+        // diffsol BDF and SDIRK (ESDIRK34) at the adaptive runs' tolerances (rtol = error_tol,
+        // see driver::transient::ode_first_order for the absolute tolerances).
+        for m in [OdeMethod::Bdf, OdeMethod::Esdirk34] {
+            for &tol in tols {
+                v.push(Case {
+                    method: Method::Ode(m),
                     setting: Setting::Adaptive(tol),
                 });
             }
@@ -396,7 +419,18 @@ fn run_once(
         ..Default::default()
     };
     let t0 = Instant::now();
-    let res = integrate(&mut tr, &opts, newton, kind, |_, _| {});
+    let res = match case.method {
+        Method::Ode(m) => {
+            let tol = OdeTolerances::from_scene(
+                opts.error_tol,
+                scene.geometry.ro,
+                scene.motion.omega,
+                opts.t_end,
+            );
+            integrate_first_order(&mut tr, m, &opts, tol, |_, _| {})
+        }
+        _ => integrate(&mut tr, &opts, newton, kind, |_, _| {}),
+    };
     let wall = t0.elapsed().as_secs_f64();
     let (rep, failure) = match res {
         Ok(r) => (r, None),
@@ -890,6 +924,10 @@ fn series_color(s: &str) -> RGBColor {
         RGBColor(214, 39, 40)
     } else if s.contains("ρ∞=0.5") {
         RGBColor(44, 160, 44)
+    } else if s.contains("bdf") {
+        RGBColor(255, 127, 14)
+    } else if s.contains("sdirk") {
+        RGBColor(140, 86, 75)
     } else {
         RGBColor(148, 103, 189)
     }

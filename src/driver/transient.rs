@@ -1121,3 +1121,7 @@ impl Transient {
             .collect()
     }
 }
+
+/// diffsol's BDF / SDIRK on the first-order form y = (u, v) (a child module: it drives the
+/// private assembly state of [`Transient`]).
+pub mod ode_first_order;

@@ -52,6 +52,9 @@ pub enum SolveError {
     /// Ctrl-C at a step boundary; `at` is the last converged load factor (or time).
     #[error("interrupted")]
     Interrupted { at: f64 },
+    /// A time integrator outside this crate (diffsol) failed at time `t`.
+    #[error("time integrator failed at t = {t:.6e}: {message}")]
+    Integrator { t: f64, message: String },
     #[error("load stepping gave up at load factor {lambda:.6} after {cutbacks} cut-backs: {last}")]
     TooManyCutbacks {
         lambda: f64,
