@@ -46,6 +46,7 @@ pub struct BranchRow {
     pub contact_x_max: f64,
     pub max_pressure: f64,
     pub det_sign: f64,
+    pub negative_eigenvalues: f64,
     pub test_function: f64,
     pub iterations: usize,
     pub kind: PointKind,
@@ -54,7 +55,7 @@ pub struct BranchRow {
 }
 
 impl BranchRow {
-    pub const HEADER: [&'static str; 17] = [
+    pub const HEADER: [&'static str; 18] = [
         "step",
         "lambda",
         "omega",
@@ -67,6 +68,7 @@ impl BranchRow {
         "contact_x_max",
         "max_pressure",
         "det_sign",
+        "negative_eigenvalues",
         "test_function",
         "iterations",
         "kind",
@@ -94,6 +96,7 @@ impl BranchRow {
             self.contact_x_max,
             self.max_pressure,
             self.det_sign,
+            self.negative_eigenvalues,
             self.test_function,
             self.iterations as f64,
             kind,
@@ -119,6 +122,7 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
         contact_x_max: t.x_max,
         max_pressure: t.max_pressure,
         det_sign: p.det_sign,
+        negative_eigenvalues: p.negative_eigenvalues,
         test_function: p.test_function,
         iterations: p.iterations,
         kind: p.kind,

@@ -304,7 +304,8 @@ impl Transient {
     }
 
     /// Hub reaction (force and moment of the hub on the body) at the end-of-step state
-    /// (x, v1, a1): internal, contact-free cell residual plus inertia at the hub nodes.
+    /// (x, v1, a1): internal (elastic and viscous), contact-free cell residual plus inertia at
+    /// the hub nodes.
     pub fn hub_reaction(&self) -> (Vec2, f64) {
         let mesh = &self.sys.model.mesh;
         let mut is_hub = vec![false; mesh.n_nodes()];
@@ -319,9 +320,16 @@ impl Transient {
                 continue;
             }
             loc.clear(self.sys.dofs.cell(c).len());
-            self.sys
-                .model
-                .cell_residual(c, &self.sys.dofs, &self.sys.x, &mut loc);
+            // Elastic and viscous (strain-rate damping) stresses: both load the hub.
+            self.sys.model.cell_system_viscous(
+                c,
+                &self.sys.dofs,
+                &self.sys.x,
+                &self.v1,
+                0.0,
+                &mut loc,
+                false,
+            );
             let nn = nodes.len();
             let mm = &self.mass[self.mass_off[c]..self.mass_off[c + 1]];
             for a in 0..nn {

@@ -32,14 +32,19 @@
 //! * **Limit point**: the λ-component of the predictor changes sign between consecutive steps
 //!   (λ turns back). Its λ is estimated by the extremum of the parabola through the last three
 //!   points.
-//! * **Bifurcation point**: the sign of det K changes between consecutive converged points
-//!   while λ keeps its direction. det K sign is taken from the factorization when it is known
+//! * **Bifurcation point**: the number of negative eigenvalues of K (its inertia, from faer's
+//!   LBLᵀ when K is symmetric) or the sign of det K changes between consecutive converged points
+//!   while λ keeps its direction (located at the midpoint of the step for an inertia change). det K sign is taken from the factorization when it is known
 //!   (Cholesky; LU of a symmetric matrix, via faer's LBLᵀ, see [`super::linear`]). For an
 //!   unsymmetric tangent (friction, normal damping) faer's LU does not expose its pivots, so a
 //!   **test function** is used instead: the Rayleigh-quotient estimate g = 1 / (cᵀ K⁻¹ c) of the
-//!   eigenvalue of K of smallest modulus, with c refined by two steps of inverse iteration per
-//!   converged point (c ← K⁻¹c / ‖K⁻¹c‖, two extra solves on the factorization already there).
-//!   A real eigenvalue crossing zero changes the sign of g (and of det K). The point is located
+//!   eigenvalue of K of smallest modulus, with c refined by three steps of inverse iteration per
+//!   converged point (c ← K⁻¹c / ‖K⁻¹c‖, three extra solves on the factorization already
+//!   there). A real eigenvalue crossing zero changes the sign of g (and of det K). **Limit**:
+//!   the iteration follows the mode that was smallest; an eigenvalue that comes down fast from
+//!   far away (as standing-wave modes do) can cross zero before the iteration has switched to
+//!   it, so g can miss a crossing that the inertia count sees (observed on the spinning
+//!   annulus). Treat g as a hint; the inertia / det sign, when available, is authoritative. The point is located
 //!   by linear interpolation of g (or of the signed log-determinant). Both are reported in the
 //!   branch table ([`BranchPoint::det_sign`], [`BranchPoint::test_function`]).
 
@@ -127,6 +132,11 @@ pub struct BranchPoint {
     pub det_sign: f64,
     /// log|det K| when known (NaN otherwise).
     pub log_abs_det: f64,
+    /// Number of negative eigenvalues of K (inertia, from the LBLᵀ factorization of a
+    /// symmetric K; NaN when not available). Standing-wave modes of a rotationally symmetric
+    /// mesh come in (cos, sin) pairs, which cross zero together without changing det K's
+    /// sign: this count sees them.
+    pub negative_eigenvalues: f64,
     /// Smallest-modulus eigenvalue estimate of K (test function; NaN when off).
     pub test_function: f64,
     /// Wall time of the step (s) and of one factorization + solve at this point (s).
@@ -142,7 +152,7 @@ pub struct SpecialPoint {
     pub lambda: f64,
     /// Step after which it was detected.
     pub step: usize,
-    /// What detected it: "dlambda_sign", "det_sign" or "test_function".
+    /// What detected it: "dlambda_sign", "negative_eigenvalues", "det_sign" or "test_function".
     pub detected_by: &'static str,
 }
 
@@ -249,7 +259,11 @@ impl Continuation {
 
     /// Factorize K at the current (converged) state, record det sign / test function and
     /// compute the unit tangent (tu, tl) in scaled norm. Requires an evaluation with matrix.
-    fn tangent<S: ParametricSystem>(&mut self, sys: &mut S) -> Result<(f64, f64, f64, f64, f64), SolveError> {
+    #[allow(clippy::type_complexity)]
+    fn tangent<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+    ) -> Result<(f64, f64, f64, f64, f64, f64), SolveError> {
         if !self.residual_derivative(sys) || !sys.evaluate(true) {
             return Err(SolveError::InadmissibleStart);
         }
@@ -261,9 +275,13 @@ impl Continuation {
         self.solver.solve_in_place(&mut self.tu)?;
         let fs = t0.elapsed().as_secs_f64();
         let (sign, logdet) = self.solver.det_sign_log();
+        let neg = self
+            .solver
+            .negative_eigenvalues()
+            .map_or(f64::NAN, |n| n as f64);
         let mut g = f64::NAN;
         if self.opts.test_function {
-            for _ in 0..2 {
+            for _ in 0..3 {
                 self.z.copy_from_slice(&self.c);
                 self.solver.solve_in_place(&mut self.z)?;
                 let cz = dot(&self.c, &self.z);
@@ -282,7 +300,7 @@ impl Continuation {
         for t in &mut self.tu {
             *t /= norm;
         }
-        Ok((tl / norm, sign, logdet, g, fs))
+        Ok((tl / norm, sign, logdet, g, fs, neg))
     }
 
     /// Follow the branch from the current (converged) state of `sys`. `on_point` is called at
@@ -294,7 +312,7 @@ impl Continuation {
     ) -> Result<ContinuationReport, SolveError> {
         let mut rep = ContinuationReport::default();
         let t_start = Instant::now();
-        let (mut tl, sign, logdet, g, fs) = self.tangent(sys)?;
+        let (mut tl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
         rep.factorizations += 1;
         rep.assemblies += 3;
         if tl * self.opts.direction < 0.0 {
@@ -311,6 +329,7 @@ impl Continuation {
             dlambda_ds: tl,
             det_sign: sign,
             log_abs_det: logdet,
+            negative_eigenvalues: neg,
             test_function: g,
             wall_time_s: t_start.elapsed().as_secs_f64(),
             factor_solve_s: fs,
@@ -323,7 +342,7 @@ impl Continuation {
         rep.points.push(start);
         let mut ds = self.opts.ds0;
         // Previous step increment (for orientation), as the unit tangent to start.
-        let (mut prev_sign, mut prev_g, mut prev_logdet) = (sign, g, logdet);
+        let (mut prev_sign, mut prev_g, mut prev_logdet, mut prev_neg) = (sign, g, logdet, neg);
         let mut tangent_l = tl;
         for step in 1..=self.opts.max_steps {
             let t0 = Instant::now();
@@ -364,7 +383,7 @@ impl Continuation {
             // Old tangent projected on the chord of the step (for the limit-point estimate).
             let p0 = self.sdot(&self.tu, tangent_l, &dx, dl) / ds;
             // New tangent at the converged point.
-            let (mut ntl, sign, logdet, g, fs) = self.tangent(sys)?;
+            let (mut ntl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
             rep.factorizations += 1;
             rep.assemblies += 3;
             if self.sdot(&self.tu, ntl, &dx, dl) < 0.0 {
@@ -383,6 +402,15 @@ impl Continuation {
                     },
                     step,
                     detected_by: "dlambda_sign",
+                });
+            } else if neg.is_finite() && prev_neg.is_finite() && neg != prev_neg {
+                // The inertia changed: eigenvalues crossed zero (pairs included).
+                kind = PointKind::Bifurcation;
+                rep.special.push(SpecialPoint {
+                    kind,
+                    lambda: 0.5 * (lam_n + lam),
+                    step,
+                    detected_by: "negative_eigenvalues",
                 });
             } else if sign.is_finite() && prev_sign.is_finite() && sign * prev_sign < 0.0 {
                 kind = PointKind::Bifurcation;
@@ -410,6 +438,7 @@ impl Continuation {
             prev_sign = sign;
             prev_g = g;
             prev_logdet = logdet;
+            prev_neg = neg;
             tangent_l = ntl;
             let point = BranchPoint {
                 step,
@@ -421,6 +450,7 @@ impl Continuation {
                 dlambda_ds: ntl,
                 det_sign: sign,
                 log_abs_det: logdet,
+                negative_eigenvalues: neg,
                 test_function: g,
                 wall_time_s: t0.elapsed().as_secs_f64(),
                 factor_solve_s: fs,
