@@ -15,6 +15,7 @@
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
+//!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
 //! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
 //! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
 //!                                                             (static, transient)
@@ -206,6 +207,20 @@ keyword_enum! {
         Bdf => "bdf",
         /// SDIRK on the first-order form `y = (u, v)` (diffsol), with its own error control.
         Sdirk => "sdirk",
+    }
+}
+
+keyword_enum! {
+    /// How the hub rotation is driven (`[motion] control`, transient mode).
+    #[derive(Default)]
+    Control, "hub control" {
+        #[default]
+        /// Prescribed hub angular speed ω(t) = omega · S(t / ramp).
+        Speed => "speed",
+        /// Prescribed hub torque T(t) = torque · S(t / ramp) on a hub of rotational inertia
+        /// `hub_inertia`; the hub angle is an unknown. The hub and body start in rigid spin at
+        /// `omega`; the road speed drives the rolling and the hub finds its own ω.
+        Torque => "torque",
     }
 }
 
@@ -566,9 +581,20 @@ pub struct Motion {
     /// Target angular speed (rad/s, counter-clockwise), >= 0. Required for `spinning` and
     /// `transient`.
     pub omega: f64,
-    /// Time over which the hub angular speed goes from 0 to `omega` with the C² smoothstep
-    /// (time, >= 0; 0 = at once). Only in `transient`: must be 0 in the other modes.
+    /// Time over which the hub angular speed goes from 0 to `omega` (speed control) or the
+    /// hub torque from 0 to `torque` (torque control) with the C² smoothstep (time, >= 0; 0 = at
+    /// once). Only in `transient`: must be 0 in the other modes.
     pub ramp: f64,
+    /// `speed` (prescribed ω(t)) or `torque` (prescribed hub torque; `transient` with
+    /// `generalized_alpha` only).
+    pub control: Control,
+    /// Rotational inertia of the hub per unit thickness (mass·length² per unit thickness,
+    /// e.g. lbf·s²), > 0; required for (and only used by) torque control. 0 = not given.
+    pub hub_inertia: f64,
+    /// Applied hub torque about +x3 (counter-clockwise positive) per unit thickness
+    /// (force·length per unit thickness, e.g. lbf·in/in), ramped in over `ramp`; 0 = free
+    /// rolling. Only with torque control.
+    pub torque: f64,
 }
 
 impl Default for Motion {
@@ -576,6 +602,9 @@ impl Default for Motion {
         Motion {
             omega: 0.0,
             ramp: 0.0,
+            control: Control::Speed,
+            hub_inertia: 0.0,
+            torque: 0.0,
         }
     }
 }
@@ -1266,6 +1295,11 @@ impl Scene {
                 validate_motion(mode, m, omega_given, &mut out);
             }
             validate_motion_ramp(mode, m, &mut out);
+            let integrator = match &time {
+                Some(Some(t)) => Some(t.integrator),
+                _ => None,
+            };
+            validate_motion_control(mode, m, integrator, &mut out);
         }
         if let Some(Some(r)) = &road {
             validate_road(r, mode, geometry.as_ref(), &mut out);
@@ -1394,6 +1428,12 @@ impl Scene {
         let mode = Some(self.analysis.mode);
         validate_motion(mode, &self.motion, true, &mut out);
         validate_motion_ramp(mode, &self.motion, &mut out);
+        validate_motion_control(
+            mode,
+            &self.motion,
+            self.time.as_ref().map(|t| t.integrator),
+            &mut out,
+        );
         if let Some(r) = &self.road {
             validate_road(r, mode, Some(&self.geometry), &mut out);
         }
@@ -1542,7 +1582,13 @@ static SCHEMA: &[SectionSchema] = &[
     SectionSchema {
         name: "motion",
         required: false,
-        fields: &[opt("omega", Kind::Float), opt("ramp", Kind::Float)],
+        fields: &[
+            opt("omega", Kind::Float),
+            opt("ramp", Kind::Float),
+            opt("control", Kind::Keyword(Control::NAMES)),
+            opt("hub_inertia", Kind::Float),
+            opt("torque", Kind::Float),
+        ],
     },
     SectionSchema {
         name: "road",
@@ -2358,6 +2404,71 @@ fn validate_motion_ramp(mode: Option<Mode>, m: &Motion, out: &mut Vec<Issue>) {
                     m.ramp
                 ),
             ));
+        }
+    }
+}
+
+/// `control`, `hub_inertia`, `torque`: torque control only in `transient` with
+/// `generalized_alpha`; it needs `hub_inertia > 0`; `hub_inertia` and a non-zero `torque` only
+/// with torque control.
+fn validate_motion_control(
+    mode: Option<Mode>,
+    m: &Motion,
+    integrator: Option<IntegratorName>,
+    out: &mut Vec<Issue>,
+) {
+    if !m.hub_inertia.is_finite() || m.hub_inertia < 0.0 {
+        out.push(issue(
+            "motion.hub_inertia",
+            format!("hub rotational inertia must be > 0, got {}", m.hub_inertia),
+        ));
+    }
+    if !m.torque.is_finite() {
+        out.push(issue(
+            "motion.torque",
+            format!("hub torque must be finite, got {}", m.torque),
+        ));
+    }
+    match m.control {
+        Control::Torque => {
+            if let Some(mode) = mode.filter(|m| *m != Mode::Transient) {
+                out.push(issue(
+                    "motion.control",
+                    format!(
+                        "torque control is only available in analysis mode \"transient\", not \"{mode}\""
+                    ),
+                ));
+            }
+            if let Some(i) = integrator.filter(|i| *i != IntegratorName::GeneralizedAlpha) {
+                out.push(issue(
+                    "motion.control",
+                    format!(
+                        "torque control needs time.integrator = \"generalized_alpha\" (the hub \
+                         angle is solved in the implicit step), got \"{i}\""
+                    ),
+                ));
+            }
+            if m.hub_inertia == 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "required (> 0) with control = \"torque\": rotational inertia of the hub \
+                     per unit thickness",
+                ));
+            }
+        }
+        Control::Speed => {
+            if m.hub_inertia != 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "only used with control = \"torque\" (the hub speed is prescribed)",
+                ));
+            }
+            if m.torque != 0.0 {
+                out.push(issue(
+                    "motion.torque",
+                    "only used with control = \"torque\" (the hub speed is prescribed)",
+                ));
+            }
         }
     }
 }
