@@ -152,3 +152,29 @@ fn torque_control_tangent_matches_finite_differences() {
         assert!(e < 1e-6, "tangent differs from FD (load control {load}): {e:.3e}");
     }
 }
+
+#[test]
+#[ignore]
+fn debug_free_rolling() {
+    use tread::driver::transient::{integrate, TimeOptions};
+    let text = std::fs::read_to_string(format!("{}/scenarios/free_rolling.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let scene = Scene::from_toml_str(&text, "x", &[]).unwrap();
+    let mut model = tread::app::build_model(&scene).unwrap();
+    model.strain_rate_damping = 1.0;
+    let c = tread::app::build_contact(&scene, &model).unwrap();
+    let sys = SolidSystem::with_contact(model, c);
+    let kin = tread::driver::transient_run::kinematics(&scene);
+    let mut tr = Transient::new(sys, Scheme::GeneralizedAlpha(GenAlpha::new(0.5)), kin, false);
+    tr.enable_torque_control(0.5, Ramp { target: 0.0, time: 0.0 }, 2.0);
+    tr.start_rigid_spin(2.0, tread::solver::LinearKind::Lu, None).unwrap();
+    let o = TimeOptions { dt: 2e-3, dt_min: 2e-7, dt_max: 2e-2, t_end: 3.0, adaptive: true, error_tol: 1e-3, steady_tol: 1e-6, stop_at_steady: false, max_steps: 100000, lumped: false, land_on_passages: true };
+    let mut k = 0;
+    let _ = integrate(&mut tr, &o, tread::solver::NewtonOptions { tol: 1e-8, ..Default::default() }, tread::solver::LinearKind::Lu, |tr, _| {
+        k += 1;
+        if k % 20 == 0 {
+            let ip = tr.hub_angle.as_ref().unwrap().iphi;
+            let (_, m) = tr.hub_reaction();
+            eprintln!("t {:.4} omega {:.6} phidd {:.4e} I*phidd {:.4e} M_r {:.4e}", tr.t, tr.vn[ip], tr.an[ip], 0.5 * tr.an[ip], m);
+        }
+    });
+}

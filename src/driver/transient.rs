@@ -23,7 +23,11 @@
 //!   field is a
 //!   re-indexing (displacements interpolated to that instant by cubic Hermite interpolation
 //!   from the two bracketing steps). Rolling is steady when that field, the hub forces and the
-//!   torque change by less than `steady_tol` (relative) over two consecutive passages.
+//!   torque change by less than `steady_tol` (relative) over two consecutive passages (and
+//!   the hub speed, which varies under torque control).
+//! * Torque control ([`Transient::enable_torque_control`]): the hub angle φ is a global unknown
+//!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
+//!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
 use super::system::SolidSystem;
 use crate::assembly::{LocalSystem, SharedMut, FIXED, MAX_LOCAL};
@@ -175,6 +179,8 @@ pub struct Snapshot {
     pub hub_force_x: f64,
     pub hub_force_y: f64,
     pub hub_torque: f64,
+    /// Hub angular speed.
+    pub omega: f64,
     pub kinetic_energy: f64,
     pub strain_energy: f64,
 }
@@ -510,6 +516,7 @@ impl Transient {
             hub_force_x: f[0],
             hub_force_y: f[1],
             hub_torque: m,
+            omega: self.omega_now(),
             kinetic_energy: self.kinetic_energy(&self.vn),
             strain_energy: self.sys.model.strain_energy(&self.sys.dofs, &self.un),
         }
@@ -960,12 +967,13 @@ pub struct SteadyMonitor {
     last_k: i64,
     prev: Option<(Vec<f64>, Snapshot)>,
     /// Relative changes at the last passage: (field, force, torque).
-    pub last_change: (f64, f64, f64),
+    pub last_change: (f64, f64, f64, f64),
     pub passages: usize,
     /// Referential displacement field at the last passage (2 per referential node).
     pub field: Vec<f64>,
-    /// One row per passage: t, changes (field, force, torque), hub force x, y, torque.
-    pub log: Vec<[f64; 7]>,
+    /// One row per passage: t, changes (field, force, torque), hub force x, y, torque, hub
+    /// speed ω, change of ω.
+    pub log: Vec<[f64; 9]>,
     below_once: bool,
 }
 
@@ -980,7 +988,7 @@ impl SteadyMonitor {
             per_ring: rl.per_ring,
             last_k: i64::MIN,
             prev: None,
-            last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY),
+            last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::INFINITY),
             passages: 0,
             field: Vec::new(),
             log: Vec::new(),
@@ -1060,6 +1068,7 @@ impl SteadyMonitor {
             hub_force_x: snap0.hub_force_x + s * (snap1.hub_force_x - snap0.hub_force_x),
             hub_force_y: snap0.hub_force_y + s * (snap1.hub_force_y - snap0.hub_force_y),
             hub_torque: snap0.hub_torque + s * (snap1.hub_torque - snap0.hub_torque),
+            omega: snap0.omega + s * (snap1.omega - snap0.omega),
             ..*snap1
         };
         self.passages += 1;
@@ -1085,9 +1094,11 @@ impl SteadyMonitor {
                 / fscale;
             let tscale = fscale * mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
             let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
-            self.last_change = (num / den, df, dm);
+            // Hub speed (varies under torque control; 0 change under speed control).
+            let dw = (snap.omega - ps.omega).abs() / snap.omega.abs().max(f64::MIN_POSITIVE);
+            self.last_change = (num / den, df, dm, dw);
             // Steady: two consecutive passages below the tolerance.
-            let below = num / den < tol && df < tol && dm < tol;
+            let below = num / den < tol && df < tol && dm < tol && dw < tol;
             steady = below && self.below_once;
             self.below_once = below;
         }
@@ -1099,6 +1110,8 @@ impl SteadyMonitor {
             snap.hub_force_x,
             snap.hub_force_y,
             snap.hub_torque,
+            snap.omega,
+            self.last_change.3,
         ]);
         self.field = field.clone();
         self.prev = Some((field, snap));
@@ -1119,10 +1132,11 @@ pub struct TransientReport {
     pub dt_min_used: f64,
     pub dt_max_used: f64,
     pub passages: usize,
-    /// Relative changes (referential field, hub force, torque) over the last node passage.
-    pub last_change: [f64; 3],
+    /// Relative changes (referential field, hub force, torque, hub speed) over the last node
+    /// passage.
+    pub last_change: [f64; 4],
     /// Node-passage log (see [`SteadyMonitor::log`]).
-    pub passage_log: Vec<[f64; 7]>,
+    pub passage_log: Vec<[f64; 9]>,
     pub history: Vec<Snapshot>,
 }
 
@@ -1286,7 +1300,12 @@ pub fn integrate(
                         rep.time_to_steady = Some(tr.t);
                     }
                     rep.passages = m.passages;
-                    rep.last_change = [m.last_change.0, m.last_change.1, m.last_change.2];
+                    rep.last_change = [
+                        m.last_change.0,
+                        m.last_change.1,
+                        m.last_change.2,
+                        m.last_change.3,
+                    ];
                 }
                 snap0 = snap1;
                 rep.final_time = tr.t;
@@ -1346,6 +1365,7 @@ impl Transient {
             hub_force_x: f[0],
             hub_force_y: f[1],
             hub_torque: m,
+            omega: self.omega_now(),
             ..Default::default()
         }
     }

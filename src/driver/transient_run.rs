@@ -1,8 +1,12 @@
 //! Driver of the `transient` mode: build the model, the kinematics and the integrator from the
 //! scene, integrate until steady (or t_end) with a progress bar, and write the outputs:
 //! summary.json (`results.time_to_steady`, `revolutions`, `steps`, `steady`, hub forces, torque
-//! and contact patch under the indentation keys), `passages.csv` (per node passage: changes of
-//! the referential field, hub force and torque, and the hub force and torque), `contact.csv`
+//! and contact patch under the indentation keys; `control`, `omega_steady` (hub angular speed at
+//! the end of the run: at the steady passage when stopping at steady; the prescribed ω under
+//! speed control, the computed one under torque control), `applied_torque`, `rolling_radius` =
+//! v0 / ω, `contact_moment` (moment of the contact tractions about the hub centre),
+//! `steady_change_omega`), `passages.csv` (per node passage: changes of the referential field,
+//! hub force, torque and hub speed, and the hub force, torque and speed), `contact.csv`
 //! (final tractions) and `steady_field.csv` (the referential field extracted at the last node
 //! passage, see [`crate::driver::transient::SteadyMonitor`]).
 //!
@@ -215,6 +219,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "steady_change_field": rep.last_change[0],
         "steady_change_force": rep.last_change[1],
         "steady_change_torque": rep.last_change[2],
+        "steady_change_omega": rep.last_change[3],
         "dt_min_used": rep.dt_min_used,
         "dt_max_used": rep.dt_max_used,
         "hub_force_x": f[0],
@@ -290,6 +295,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "hub_force_x",
                 "hub_force_y",
                 "hub_torque",
+                "omega",
+                "change_omega",
             ],
             rep.passage_log.iter().map(|r| r.to_vec()),
         )?;
