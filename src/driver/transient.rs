@@ -385,6 +385,12 @@ impl Transient {
         }
     }
 
+    /// Full index of the road height under load control.
+    fn road_height_dof(&self) -> Option<usize> {
+        let c = self.sys.contact.as_ref()?;
+        (c.load.is_some() && self.sys.dofs.n_global > 0).then(|| self.sys.dofs.global(0))
+    }
+
     /// Hub angular acceleration of the committed state.
     pub fn hub_accel(&self) -> f64 {
         match &self.hub_angle {
@@ -534,6 +540,12 @@ impl Transient {
             let v1 = self.vn[d] + dt * ((1.0 - g) * self.an[d] + g * a1);
             self.a1[d] = a1;
             self.v1[d] = v1;
+        }
+        // Load control: the road height is massless (quasi-static): no rate, so that the
+        // predictor keeps it where it was.
+        if let Some(ih) = self.road_height_dof() {
+            self.v1[ih] = 0.0;
+            self.a1[ih] = 0.0;
         }
         // Under torque control the hub nodes are part of the dynamics (through φ): Newmark
         // rates like every other node, consistent with the tangent.
@@ -726,6 +738,17 @@ impl Transient {
         self.sys.x = saved_x;
         self.fprev.clear();
         self.fprev.extend_from_slice(&self.sys.asm.residual);
+        // Load control: the road-height equation P − ∫ t_n ds0 = 0 is algebraic (massless
+        // road): it holds at t_{n+1}, not force-averaged (an inconsistent start would otherwise
+        // be carried into every step and can demand a negative pressure).
+        if let Some(c) = &self.sys.contact {
+            if c.load.is_some() && self.sys.dofs.n_global > 0 {
+                let e = self.sys.dofs.eq[self.sys.dofs.global(0)];
+                if e != FIXED {
+                    self.fprev[e as usize] = 0.0;
+                }
+            }
+        }
         ok
     }
 
@@ -939,7 +962,8 @@ impl NonlinearSystem for Transient {
         self.t_eval = self.t + dt;
         let kv = ga.gamma / (ga.beta * dt);
         let cm = (1.0 - ga.am) / (ga.beta * dt * dt);
-        self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af)
+        let ok = self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af);
+        ok
     }
     fn residual(&self) -> &[f64] {
         self.sys.residual()
@@ -1170,6 +1194,24 @@ pub fn integrate(
         + tr.kin.load.map_or(0.0, |l| l.target.abs());
     tr.sys.set_reference_force(fref);
     let mut monitor = SteadyMonitor::new(&tr.sys);
+    // Load control: the road height H is a massless unknown whose equation P − ∫ t_n ds0 = 0
+    // has no stiffness while nothing touches (a singular tangent at first touch, where the
+    // road starts). Start it a hair inside the lowest contact point (10⁻⁶ of the wall) so that
+    // this point is in contact: the penalty then gives ∂R_H/∂H > 0, and the ramped load P(t) > 0 keeps it
+    // in contact afterwards.
+    if let Some(c) = &tr.sys.contact {
+        if c.load.is_some() && tr.sys.dofs.n_global > 0 {
+            let ih = tr.sys.dofs.global(0);
+            let lowest = c
+                .samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn)
+                .iter()
+                .map(|s| s.x2)
+                .fold(f64::INFINITY, f64::min);
+            let h0 = -lowest - 1e-6 * tr.wall;
+            tr.un[ih] = h0;
+            tr.sys.x[ih] = h0;
+        }
+    }
     tr.prescribe(tr.t);
     if !tr.update_fprev() {
         return Err((SolveError::InadmissibleStart, rep));
