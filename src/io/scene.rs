@@ -1299,7 +1299,13 @@ impl Scene {
                 Some(Some(t)) => Some(t.integrator),
                 _ => None,
             };
-            validate_motion_control(mode, m, integrator, &mut out);
+            // An unknown or ill-typed `control` was dropped (and reported): the other keys
+            // cannot be checked against it.
+            let control_bad =
+                table_has(&doc, "motion", "control") && !table_has(&clean, "motion", "control");
+            if !control_bad {
+                validate_motion_control(mode, m, integrator, &mut out);
+            }
         }
         if let Some(Some(r)) = &road {
             validate_road(r, mode, geometry.as_ref(), &mut out);
@@ -3261,6 +3267,8 @@ mod tests {
     const STICK_SLIP: &str = include_str!("../../scenarios/stick_slip.toml");
     const ODEN: &str = include_str!("../../scenarios/oden_hollow_cylinder.toml");
     const ROLLING_FRICTIONLESS: &str = include_str!("../../scenarios/rolling_frictionless.toml");
+    const FREE_ROLLING: &str = include_str!("../../scenarios/free_rolling.toml");
+    const BRAKING: &str = include_str!("../../scenarios/braking.toml");
 
     const MINIMAL: &str = r#"
 [scene]
@@ -3850,6 +3858,8 @@ linear = "qr"
             STICK_SLIP,
             ODEN,
             ROLLING_FRICTIONLESS,
+            FREE_ROLLING,
+            BRAKING,
         ] {
             let s = load(text).unwrap_or_else(|e| panic!("{e}"));
             let out = s.to_toml_string();
@@ -4927,7 +4937,8 @@ mesh.n_r = 4
             s.motion,
             Motion {
                 omega: 10.0,
-                ramp: 0.05
+                ramp: 0.05,
+                ..Motion::default()
             }
         );
         let road = s.road.clone().unwrap_or_else(|| panic!("no [road]"));
@@ -5001,6 +5012,80 @@ mesh.n_r = 4
             (&s.time, &s.solver, &s.output)
         );
         assert!(f.validate().is_ok());
+    }
+
+    #[test]
+    fn torque_control_scenes_parse() {
+        let f = load(FREE_ROLLING).unwrap_or_else(|e| panic!("{e}"));
+        let b = load(BRAKING).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((f.scene.name.as_str(), b.scene.name.as_str()), ("free_rolling", "braking"));
+        for s in [&f, &b] {
+            assert_eq!(s.analysis.mode, Mode::Transient);
+            assert_eq!(s.motion.control, Control::Torque);
+            assert_eq!(s.motion.hub_inertia, 0.5);
+            assert_eq!(s.motion.omega, 2.0);
+            assert_eq!((s.mesh.n_r, s.mesh.n_theta), (2, 32));
+            let road = s.road.as_ref().unwrap_or_else(|| panic!("no road"));
+            assert_eq!((road.disp, road.v0_ramp), (Some(0.1), Some(0.0)));
+            assert!(s.friction.is_active());
+            assert!(s.validate().is_ok());
+        }
+        assert_eq!((f.motion.torque, f.motion.ramp), (0.0, 0.0));
+        assert_eq!((b.motion.torque, b.motion.ramp), (-10.0, 0.2));
+        // The two scenes differ only in the torque, its ramp and the naming.
+        assert_eq!(
+            (&f.geometry, &f.mesh, &f.material, &f.road, &f.contact, &f.friction, &f.time),
+            (&b.geometry, &b.mesh, &b.material, &b.road, &b.contact, &b.friction, &b.time)
+        );
+        // Defaults: speed control, no inertia, no torque.
+        let s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (s.motion.control, s.motion.hub_inertia, s.motion.torque),
+            (Control::Speed, 0.0, 0.0)
+        );
+    }
+
+    #[test]
+    fn torque_control_keys_are_validated() {
+        // Torque control without an inertia (or a negative one): reported on the key.
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=0"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=-1"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        // Torque and inertia are only for torque control; lines of the file.
+        let text = BRAKING.replace("control = \"torque\"", "control = \"speed\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("motion.torque").and_then(|x| x.line),
+            Some(line_of(&text, "torque = -10.0"))
+        );
+        assert_eq!(
+            e.find("motion.hub_inertia").and_then(|x| x.line),
+            Some(line_of(&text, "hub_inertia ="))
+        );
+        // Only generalized-α, only transient.
+        let e = errors_with(
+            FREE_ROLLING,
+            &["time.integrator=central_difference", "time.mass=lumped"],
+        );
+        assert_only(
+            &e,
+            "motion.control",
+            Some(line_of(FREE_ROLLING, "control = \"torque\"")),
+        );
+        assert!(e.0[0].message.contains("generalized_alpha"), "{e}");
+        let e = errors_with(MINIMAL, &["motion.control=torque", "motion.hub_inertia=1"]);
+        assert!(e.has_key("motion.control"), "{e}");
+        // Unknown keyword, wrong type, non-finite torque.
+        let e = errors_with(FREE_ROLLING, &["motion.control=brake"]);
+        assert_only(&e, "motion.control", None);
+        assert!(e.0[0].message.contains("speed"), "{e}");
+        let text = FREE_ROLLING.replace("torque = 0.0 ", "torque = \"none\" ");
+        let e = errors(&text);
+        assert_only(&e, "motion.torque", Some(line_of(&text, "torque = \"none\"")));
+        let e = errors_with(BRAKING, &["motion.torque=nan"]);
+        assert_only(&e, "motion.torque", None);
     }
 
     #[test]
@@ -5524,6 +5609,7 @@ mesh.n_r = 4
         let m = Motion {
             omega: 10.0,
             ramp: 0.05,
+            ..Motion::default()
         };
         assert_eq!((m.omega_at(-1.0), m.omega_at(0.0)), (0.0, 0.0));
         assert!((m.omega_at(0.025) - 5.0).abs() < 1e-12);
@@ -5538,6 +5624,7 @@ mesh.n_r = 4
         let step = Motion {
             omega: 10.0,
             ramp: 0.0,
+            ..Motion::default()
         };
         assert_eq!((step.omega_at(0.0), step.omega_at(0.3)), (10.0, 10.0));
         assert!((step.angle_at(0.3) - 3.0).abs() < 1e-12);
