@@ -402,3 +402,107 @@ fn spin_up_reproduces_steady_spinning() {
         "spin-up differs from steady spinning: {d_st:.3e}"
     );
 }
+
+/// Central difference with strong strain-rate damping and a stiff contact penalty: the
+/// stable-step estimate must include both (a step at 0.9 × the estimate stays bounded), and the
+/// undamped, contact-free estimate is then too large (the run blows up and says the explicit
+/// step is unstable).
+#[test]
+fn central_difference_stable_step_includes_damping_and_contact() {
+    let build = |damping: f64, c_n: f64| {
+        let mut m = model(2, 16);
+        m.strain_rate_damping = damping;
+        let normal = NormalCompliance::new(c_n, 1.0, 0.0, 0.0);
+        let cm = ContactModel::new(
+            &m.mesh,
+            1.98,
+            0.0,
+            normal,
+            Friction::None,
+            FacetRule::Lobatto(4),
+            None,
+        );
+        let mut kin = spin(0.0, 0.0);
+        kin.disp = Some(Ramp {
+            target: 0.02,
+            time: 0.0,
+        });
+        Transient::new(
+            SolidSystem::with_contact(m, cm),
+            Scheme::CentralDifference,
+            kin,
+            true,
+        )
+    };
+    let mut plain = build(0.0, 1e-6);
+    let dt_plain = plain.stable_step(0.02);
+    let mut tr = build(5.0, 2.0e6);
+    let dt_new = tr.stable_step(0.02);
+    eprintln!("stable step: undamped, no contact {dt_plain:.3e}; with η = 5 psi·s and c_n = 2e6 psi/in {dt_new:.3e}");
+    assert!(dt_new < 0.5 * dt_plain, "{dt_new:.3e} vs {dt_plain:.3e}");
+    // March `steps` explicit steps of `dt` from rest with the road 0.02 in deep.
+    let march = |tr: &mut Transient, dt: f64, steps: usize| -> Result<f64, String> {
+        let mut newton = tread::solver::Newton::new(&tr.sys, LinearKind::Lu, newton_opts())
+            .map_err(|e| e.to_string())?;
+        for _ in 0..steps {
+            tr.step(&mut newton, dt).map_err(|e| e.to_string())?;
+        }
+        let e = tr.kinetic_energy(&tr.vn);
+        if e.is_finite() {
+            Ok(e)
+        } else {
+            Err("non-finite energy".into())
+        }
+    };
+    let stable = march(&mut build(5.0, 2.0e6), 0.9 * dt_new, 2000);
+    eprintln!("0.9 × new estimate: {stable:?}");
+    let e = stable.unwrap_or_else(|e| panic!("unstable at 0.9 × the estimate: {e}"));
+    // Energy stays bounded by the work of the road pressed in (no growth to huge values).
+    assert!(e < 1e3, "kinetic energy {e}");
+    let mut tr_old = build(5.0, 2.0e6);
+    tr_old.dt_stable = dt_plain;
+    let blown = march(&mut tr_old, 0.9 * dt_plain, 2000);
+    eprintln!("0.9 × undamped contact-free estimate: {blown:?}");
+    let msg = blown.err().unwrap_or_else(|| panic!("the old estimate did not blow up"));
+    assert!(msg.contains("unstable"), "{msg}");
+}
+
+/// A node passage that a step lands on exactly (φ/Δθ an integer up to round-off) is counted
+/// at that step, not one step late.
+#[test]
+fn passages_landed_on_are_counted_at_that_step() {
+    let omega = 20.0;
+    let mut tr = Transient::new(
+        SolidSystem::new(model(2, 16), "hub"),
+        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        spin(omega, 0.0),
+        true,
+    );
+    tr.start_rigid_spin(omega, LinearKind::Cholesky, None)
+        .unwrap();
+    let dtheta = 2.0 * std::f64::consts::PI / 16.0;
+    let mut o = opts(dtheta / omega / 7.0, 0.6);
+    o.land_on_passages = true;
+    let mut seen = Vec::new();
+    let rep = integrate(&mut tr, &o, newton_opts(), LinearKind::Cholesky, |tr, rep| {
+        seen.push((tr.t, rep.passages))
+    })
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
+    assert!(rep.passage_log.len() >= 3, "{} passages", rep.passage_log.len());
+    for (t, n) in &seen {
+        let expected = rep
+            .passage_log
+            .iter()
+            .filter(|r| r[0] <= t * (1.0 + 1e-9))
+            .count();
+        assert_eq!(*n, expected, "at t = {t}: {n} passages counted, {expected} passed");
+    }
+    // Every passage was landed on by a step (and logged at that step's time).
+    for r in &rep.passage_log {
+        assert!(
+            seen.iter().any(|(t, _)| (t - r[0]).abs() <= 1e-9 * t),
+            "passage at {} is not a step time",
+            r[0]
+        );
+    }
+}

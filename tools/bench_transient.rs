@@ -1164,7 +1164,8 @@ fn run(args: &Args) -> Result<(), String> {
     // Stable-step estimate of central difference (as `integrate` computes it, at t = 0).
     let dt_stable = {
         let (mut tr, _) = build(&scene, Scheme::CentralDifference, true)?;
-        tr.stable_step()
+        let delta_ref = tr.kin.disp.map_or(0.0, |d| d.target);
+        tr.stable_step(delta_ref)
     };
     if !dt_stable.is_finite() {
         return Err("the stable-step estimate of central difference failed".into());

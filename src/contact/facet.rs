@@ -454,6 +454,33 @@ impl ContactModel {
         }
     }
 
+    /// Gershgorin row sums of the boundary matrix ∫Γc N_a N_b ds0 over the contact facets, per
+    /// mesh node (0 off the contact boundary): an upper bound on the eigenvalues of the contact
+    /// penalty (× ∂t_n/∂δ) and damping (× ∂t_n/∂δ̇) matrices, for stable-step estimates.
+    pub fn boundary_row_sums(&self, mesh: &Mesh) -> Vec<f64> {
+        let mut out = vec![0.0; mesh.n_nodes()];
+        for f in &self.facets {
+            let c = f.cell as usize;
+            let p = mesh.degree[c] as usize;
+            let nodes = mesh.cell_nodes(c);
+            let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+            let mut m = [[0.0f64; 3]; 3];
+            for q in 0..self.pts.len() {
+                let (nv, dv) = lagrange_1d(p, self.pts[q]);
+                let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+                for a in 0..=p {
+                    for b in 0..=p {
+                        m[a][b] += nv[a] * nv[b] * fp.ds0;
+                    }
+                }
+            }
+            for a in 0..=p {
+                out[nodes[side[a]] as usize] += m[a][..=p].iter().map(|v| v.abs()).sum::<f64>();
+            }
+        }
+        out
+    }
+
     /// Traction samples at every facet quadrature point (contact or not); `aux` as in
     /// [`Self::kernel`].
     pub fn samples(

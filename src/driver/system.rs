@@ -89,7 +89,7 @@ impl SolidSystem {
             lambda: 0.0,
             lambda_prev: 0.0,
             omega2_target: 0.0,
-            ref_norms: vec![0.0, 1e-3 * area, h_ref],
+            ref_norms: vec![0.0, 1e-3 * area, h_ref, 0.0],
             facet_visits: (0, 0),
         }
     }
@@ -105,6 +105,49 @@ impl SolidSystem {
         if self.ref_norms[2] == 0.0 {
             self.ref_norms[2] = f;
         }
+        // The hub-angle equation (torque control) is a moment balance: force × outer radius.
+        let ro = self.model.mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        self.ref_norms[3] = f * ro;
+    }
+
+    /// Torque control: add the hub rotation angle φ as the last global unknown (field 3,
+    /// "phi") and a block coupling φ with every dof of the cells that touch the hub (the hub
+    /// nodes stay fixed dofs whose values follow x = Q(φ) X). Rebuilds the dof map and the
+    /// assembler; the state keeps its values (φ = 0). Returns (full index of φ, block index).
+    pub fn add_hub_angle(&mut self) -> (usize, usize) {
+        let mesh = &self.model.mesh;
+        let hub: Vec<u32> = mesh.node_set("hub").to_vec();
+        let n_global = self.dofs.n_global + 1;
+        let mut dofs =
+            DofMap::with_globals(mesh, self.model.dofs_per_cell(), &hub, n_global);
+        let iphi = dofs.global(n_global - 1);
+        let mut blocks = vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())];
+        if let Some(c) = &self.contact {
+            blocks.push(c.element_dofs(mesh, &dofs));
+        }
+        let mut is_hub = vec![false; mesh.n_nodes()];
+        for &n in &hub {
+            is_hub[n as usize] = true;
+        }
+        let (mut list, mut off) = (Vec::new(), vec![0]);
+        for c in 0..mesh.n_cells() {
+            if mesh.cell_nodes(c).iter().any(|&n| is_hub[n as usize]) {
+                list.extend_from_slice(dofs.cell(c));
+                list.push(iphi as u32);
+                off.push(list.len());
+            }
+        }
+        let block = blocks.len();
+        blocks.push((list, off));
+        let eq = dofs.eq[iphi] as usize;
+        dofs.field[eq] = 3;
+        let parallel = self.asm.parallel;
+        self.asm = Assembler::with_blocks(&dofs, blocks);
+        self.asm.parallel = parallel;
+        self.dofs = dofs;
+        self.x.push(0.0);
+        self.x_prev.push(0.0);
+        (iphi, block)
     }
 
     /// Norm of the residual at the current state (assembles the residual only).
@@ -192,7 +235,7 @@ impl NonlinearSystem for SolidSystem {
         &self.dofs.field
     }
     fn field_names(&self) -> &'static [&'static str] {
-        &["u", "p", "H"]
+        &["u", "p", "H", "phi"]
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.ref_norms.clone()

@@ -23,10 +23,14 @@
 //!   field is a
 //!   re-indexing (displacements interpolated to that instant by cubic Hermite interpolation
 //!   from the two bracketing steps). Rolling is steady when that field, the hub forces and the
-//!   torque change by less than `steady_tol` (relative) over two consecutive passages.
+//!   torque change by less than `steady_tol` (relative) over two consecutive passages (and
+//!   the hub speed, which varies under torque control).
+//! * Torque control ([`Transient::enable_torque_control`]): the hub angle φ is a global unknown
+//!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
+//!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
 use super::system::SolidSystem;
-use crate::assembly::{LocalSystem, FIXED};
+use crate::assembly::{LocalSystem, SharedMut, FIXED, MAX_LOCAL};
 use crate::contact::SlipKinematics;
 use crate::math::Vec2;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
@@ -175,9 +179,37 @@ pub struct Snapshot {
     pub hub_force_x: f64,
     pub hub_force_y: f64,
     pub hub_torque: f64,
+    /// Hub angular speed.
+    pub omega: f64,
     pub kinetic_energy: f64,
     pub strain_energy: f64,
 }
+
+/// Torque control of the hub (see [`Transient::enable_torque_control`]).
+#[derive(Clone, Debug)]
+pub struct HubAngle {
+    /// Rotational inertia of the hub per unit thickness (mass·length²/thickness), > 0.
+    pub inertia: f64,
+    /// Applied hub torque about +x3 (counter-clockwise positive) per unit thickness.
+    pub torque: Ramp,
+    /// Full index of φ (its rate and acceleration live at the same index of v, a).
+    pub iphi: usize,
+    /// Equation number of φ.
+    eq: usize,
+    /// Assembler block coupling φ with the hub cells.
+    block: usize,
+    /// Value slot of the (φ, φ) tangent entry.
+    diag_slot: usize,
+    /// Each cell's index among the cells touching the hub (u32::MAX if none), in the order
+    /// of the assembler block.
+    hub_slot: Vec<u32>,
+    /// Per hub cell: K t (column), tᵀ K (row), tᵀ r and the (φ, φ) entry; stride [`HUB_STRIDE`].
+    store: Vec<f64>,
+    /// Hold φ fixed (φ row: R = 0, K = 1): the rigid-spin start solves for u at φ = 0.
+    frozen: bool,
+}
+
+const HUB_STRIDE: usize = 2 * MAX_LOCAL + 2;
 
 /// The transient model: a [`SolidSystem`] (state x = u at t_{n+1} during a step) plus the
 /// mass, the kinematics and the time-stepping state.
@@ -206,6 +238,15 @@ pub struct Transient {
     fprev: Vec<f64>,
     /// Referential field extracted at the last node passage (2 per referential node).
     pub steady_field: Option<Vec<f64>>,
+    /// Torque control (hub angle as an unknown); `None`: speed control (φ(t) prescribed).
+    pub hub_angle: Option<HubAngle>,
+    is_hub: Vec<bool>,
+    /// Time at which the applied loads of the current assembly are evaluated.
+    t_eval: f64,
+    /// Wall thickness Ro − Ri (length scale of the error estimate's floor).
+    wall: f64,
+    /// Last stable-step estimate of the central-difference scheme (NaN before any).
+    pub dt_stable: f64,
 }
 
 impl Transient {
@@ -237,8 +278,14 @@ impl Transient {
             mass_off.push(mass.len());
         }
         let hub = sys.model.mesh.node_set("hub").to_vec();
+        let mut is_hub = vec![false; sys.model.mesh.n_nodes()];
+        for &h in &hub {
+            is_hub[h as usize] = true;
+        }
         let z = vec![0.0; n];
         let un = sys.x.clone();
+        let radii = sys.model.mesh.nodes.iter().map(|x| x.norm());
+        let wall = radii.clone().fold(0.0, f64::max) - radii.fold(f64::INFINITY, f64::min);
         Self {
             sys,
             scheme,
@@ -260,18 +307,136 @@ impl Transient {
             ml,
             fprev: Vec::new(),
             steady_field: None,
+            hub_angle: None,
+            is_hub,
+            t_eval: 0.0,
+            wall,
+            dt_stable: f64::NAN,
         }
     }
 
-    /// Set the prescribed hub displacements and road state at time `t` into `x`.
-    fn prescribe(&mut self, t: f64) {
-        let phi = self.kin.phi(t);
-        let (s, c) = phi.sin_cos();
+    /// Torque control: the hub angle φ becomes an unknown with the equation of motion
+    /// I φ̈ = T(t) − M_r, M_r = Σ_hub nodes (x_b × R_b) the moment that the hub exerts on the body
+    /// (R_b: the residual rows of the hub nodes, internal + inertia forces). The hub nodes follow
+    /// x_b = Q(φ) X_b; their velocities and accelerations come from the same Newmark update as
+    /// every other node, and φ̇, φ̈ from the Newmark update of φ, so the whole step is one
+    /// Newton solve with a consistent tangent (the φ row and column are the projections
+    /// tᵀ K and K t of the hub rows and columns onto t_b = ∂x_b/∂φ = e3 × x_b, plus
+    /// ∂t_b/∂φ · R_b = −x_b · R_b and I ∂φ̈/∂φ). The generalized-α force averaging applies
+    /// to the torque too. `omega0` is the initial hub speed φ̇(0) (use
+    /// [`Self::start_rigid_spin`] to start the body spinning with it). Generalized-α only.
+    pub fn enable_torque_control(&mut self, inertia: f64, torque: Ramp, omega0: f64) {
+        let (iphi, block) = self.sys.add_hub_angle();
+        for v in [
+            &mut self.un,
+            &mut self.vn,
+            &mut self.an,
+            &mut self.v1,
+            &mut self.a1,
+            &mut self.xa,
+            &mut self.va,
+            &mut self.aa,
+            &mut self.ml,
+        ] {
+            v.push(0.0);
+        }
+        self.vn[iphi] = omega0;
+        self.v1[iphi] = omega0;
+        let mesh = &self.sys.model.mesh;
+        let mut hub_slot = vec![u32::MAX; mesh.n_cells()];
+        let mut n_hub_cells = 0;
+        for c in 0..mesh.n_cells() {
+            if mesh.cell_nodes(c).iter().any(|&n| self.is_hub[n as usize]) {
+                hub_slot[c] = n_hub_cells;
+                n_hub_cells += 1;
+            }
+        }
+        let eq = self.sys.dofs.eq[iphi] as usize;
+        let asm = &self.sys.asm;
+        let diag_slot = (asm.col_ptr[eq]..asm.col_ptr[eq + 1])
+            .find(|&p| asm.row_idx[p] == eq)
+            .unwrap_or(usize::MAX);
+        self.hub_angle = Some(HubAngle {
+            inertia,
+            torque,
+            iphi,
+            eq,
+            block,
+            diag_slot,
+            store: vec![0.0; HUB_STRIDE * n_hub_cells as usize],
+            hub_slot,
+            frozen: false,
+        });
+    }
+
+    /// Hub angle of the committed state.
+    pub fn phi_now(&self) -> f64 {
+        match &self.hub_angle {
+            Some(h) => self.un[h.iphi],
+            None => self.kin.phi(self.t),
+        }
+    }
+
+    /// Hub angular speed of the committed state.
+    pub fn omega_now(&self) -> f64 {
+        match &self.hub_angle {
+            Some(h) => self.vn[h.iphi],
+            None => self.kin.omega.value(self.t),
+        }
+    }
+
+    /// Full index of the road height under load control.
+    fn road_height_dof(&self) -> Option<usize> {
+        let c = self.sys.contact.as_ref()?;
+        (c.load.is_some() && self.sys.dofs.n_global > 0).then(|| self.sys.dofs.global(0))
+    }
+
+    /// Hub angular acceleration of the committed state.
+    pub fn hub_accel(&self) -> f64 {
+        match &self.hub_angle {
+            Some(h) => self.an[h.iphi],
+            None => self.kin.omega.rate(self.t),
+        }
+    }
+
+    /// Time when every ramp (and the torque ramp) has finished.
+    pub fn ramps_done(&self) -> f64 {
+        let t = self.kin.ramps_done();
+        self.hub_angle.as_ref().map_or(t, |h| t.max(h.torque.time))
+    }
+
+    /// Applied hub torque at time `t` (0 under speed control).
+    pub fn applied_torque(&self, t: f64) -> f64 {
+        self.hub_angle.as_ref().map_or(0.0, |h| h.torque.value(t))
+    }
+
+    /// Hub displacements x_b − X_b = (Q(φ) − I) X_b into `sys.x` for φ = `sys.x[iphi]`.
+    fn place_hub(&mut self) {
+        let Some(h) = &self.hub_angle else {
+            return;
+        };
+        let (s, c) = self.sys.x[h.iphi].sin_cos();
         for &n in &self.hub {
             let x = self.sys.model.mesh.nodes[n as usize];
             let n = n as usize;
             self.sys.x[2 * n] = c * x[0] - s * x[1] - x[0];
             self.sys.x[2 * n + 1] = s * x[0] + c * x[1] - x[1];
+        }
+    }
+
+    /// Set the prescribed hub displacements and road state at time `t` into `x`.
+    fn prescribe(&mut self, t: f64) {
+        if self.hub_angle.is_some() {
+            self.place_hub();
+        } else {
+            let phi = self.kin.phi(t);
+            let (s, c) = phi.sin_cos();
+            for &n in &self.hub {
+                let x = self.sys.model.mesh.nodes[n as usize];
+                let n = n as usize;
+                self.sys.x[2 * n] = c * x[0] - s * x[1] - x[0];
+                self.sys.x[2 * n + 1] = s * x[0] + c * x[1] - x[1];
+            }
         }
         if let Some(cm) = &mut self.sys.contact {
             if let Some(d) = self.kin.disp {
@@ -320,7 +485,7 @@ impl Transient {
                 continue;
             }
             loc.clear(self.sys.dofs.cell(c).len());
-            // Elastic and viscous (strain-rate damping) stresses: both load the hub.
+            // With the viscous (strain-rate) stress: it is part of what the hub transmits.
             self.sys.model.cell_system_viscous(
                 c,
                 &self.sys.dofs,
@@ -354,10 +519,11 @@ impl Transient {
         let (f, m) = self.hub_reaction();
         Snapshot {
             t: self.t,
-            phi: self.kin.phi(self.t),
+            phi: self.phi_now(),
             hub_force_x: f[0],
             hub_force_y: f[1],
             hub_torque: m,
+            omega: self.omega_now(),
             kinetic_energy: self.kinetic_energy(&self.vn),
             strain_energy: self.sys.model.strain_energy(&self.sys.dofs, &self.un),
         }
@@ -376,7 +542,17 @@ impl Transient {
             self.a1[d] = a1;
             self.v1[d] = v1;
         }
-        self.hub_rates(self.t + dt);
+        // Load control: the road height is massless (quasi-static): no rate, so that the
+        // predictor keeps it where it was.
+        if let Some(ih) = self.road_height_dof() {
+            self.v1[ih] = 0.0;
+            self.a1[ih] = 0.0;
+        }
+        // Under torque control the hub nodes are part of the dynamics (through φ): Newmark
+        // rates like every other node, consistent with the tangent.
+        if self.hub_angle.is_none() {
+            self.hub_rates(self.t + dt);
+        }
         for d in 0..self.un.len() {
             self.xa[d] = self.sys.x[d];
             self.va[d] = self.v1[d];
@@ -420,6 +596,12 @@ impl Transient {
         sys.asm.zero(with_matrix);
         let (model, dofs) = (&sys.model, &sys.dofs);
         let (xa, va, aa, mass, off) = (&self.xa, &self.va, &self.aa, &self.mass, &self.mass_off);
+        let is_hub = &self.is_hub;
+        // Torque control: each hub cell leaves its projections on t_b = e3 × x_b in `store`.
+        let (hub_slot, store) = match &mut self.hub_angle {
+            Some(h) => (Some(&h.hub_slot), Some(SharedMut::new(&mut h.store))),
+            None => (None, None),
+        };
         sys.asm.add_block(0, dofs, with_matrix, |c, loc| {
             model.cell_system_viscous(c, dofs, xa, va, kv, loc, with_matrix);
             let nd = loc.nd;
@@ -446,6 +628,48 @@ impl Transient {
                     }
                 }
             }
+            if let (Some(hs), Some(st)) = (hub_slot, &store) {
+                let slot = hs[c];
+                if slot != u32::MAX {
+                    let base = slot as usize * HUB_STRIDE;
+                    // SAFETY: each hub cell writes only its own stride of `store`.
+                    let w = |i: usize, v: f64| unsafe { *st.get_mut(base + i) = v };
+                    let nodes = model.mesh.cell_nodes(c);
+                    let pos = |a: usize| {
+                        let n = nodes[a] as usize;
+                        model.mesh.nodes[n] + Vec2::new(xa[2 * n], xa[2 * n + 1])
+                    };
+                    let hub_t = |a: usize| {
+                        let x = pos(a);
+                        Vec2::new(-x[1], x[0])
+                    };
+                    let (mut rphi, mut kpp) = (0.0, 0.0);
+                    for a in (0..nn).filter(|&a| is_hub[nodes[a] as usize]) {
+                        let (t, x) = (hub_t(a), pos(a));
+                        rphi += t[0] * loc.r[2 * a] + t[1] * loc.r[2 * a + 1];
+                        kpp -= x[0] * loc.r[2 * a] + x[1] * loc.r[2 * a + 1];
+                    }
+                    w(2 * MAX_LOCAL, rphi);
+                    if with_matrix {
+                        // Column K t and row tᵀ K over the local dofs.
+                        for i in 0..nd {
+                            let (mut col, mut row) = (0.0, 0.0);
+                            for b in (0..nn).filter(|&b| is_hub[nodes[b] as usize]) {
+                                let t = hub_t(b);
+                                col += loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
+                                row += t[0] * loc.k[(2 * b) * nd + i]
+                                    + t[1] * loc.k[(2 * b + 1) * nd + i];
+                            }
+                            w(i, col);
+                            w(MAX_LOCAL + i, row);
+                            if i < 2 * nn && is_hub[nodes[i / 2] as usize] {
+                                kpp += hub_t(i / 2)[i % 2] * col;
+                            }
+                        }
+                        w(2 * MAX_LOCAL + 1, kpp);
+                    }
+                }
+            }
         });
         let ok = model.admissible();
         if let Some(c) = &mut sys.contact {
@@ -467,6 +691,34 @@ impl Transient {
             sys.facet_visits.0 += c.visited_facets();
             sys.facet_visits.1 += 1;
         }
+        if let Some(h) = &self.hub_angle {
+            // φ row: Σ_b t_b · R_b (scattered from the hub cells) + I φ̈_α − fs T(t).
+            if !h.frozen {
+                let st = &h.store;
+                sys.asm.add_block(h.block, dofs, with_matrix, |e, loc| {
+                    let base = e * HUB_STRIDE;
+                    let nd = loc.nd - 1;
+                    loc.r[nd] = st[base + 2 * MAX_LOCAL];
+                    if with_matrix {
+                        for i in 0..nd {
+                            loc.k[i * (nd + 1) + nd] = st[base + i];
+                            loc.k[nd * (nd + 1) + i] = st[base + MAX_LOCAL + i];
+                        }
+                        loc.k[nd * (nd + 1) + nd] = st[base + 2 * MAX_LOCAL + 1];
+                    }
+                });
+                sys.asm.residual[h.eq] +=
+                    h.inertia * self.aa[h.iphi] - fs * h.torque.value(self.t_eval);
+                if with_matrix && h.diag_slot != usize::MAX {
+                    sys.asm.values[h.diag_slot] += h.inertia * cm;
+                }
+            } else {
+                sys.asm.residual[h.eq] = 0.0;
+                if with_matrix && h.diag_slot != usize::MAX {
+                    sys.asm.values[h.diag_slot] = 1.0;
+                }
+            }
+        }
         if prev != 0.0 {
             for (r, f) in sys.asm.residual.iter_mut().zip(&self.fprev) {
                 *r += prev * f;
@@ -477,6 +729,7 @@ impl Transient {
 
     /// Static forces f(u_n, v_n) of the committed state into `fprev`.
     fn update_fprev(&mut self) -> bool {
+        self.t_eval = self.t;
         self.xa.copy_from_slice(&self.un);
         self.va.copy_from_slice(&self.vn);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
@@ -486,6 +739,17 @@ impl Transient {
         self.sys.x = saved_x;
         self.fprev.clear();
         self.fprev.extend_from_slice(&self.sys.asm.residual);
+        // Load control: the road-height equation P − ∫ t_n ds0 = 0 is algebraic (massless
+        // road): it holds at t_{n+1}, not force-averaged (an inconsistent start would otherwise
+        // be carried into every step and can demand a negative pressure).
+        if let Some(c) = &self.sys.contact {
+            if c.load.is_some() && self.sys.dofs.n_global > 0 {
+                let e = self.sys.dofs.eq[self.sys.dofs.global(0)];
+                if e != FIXED {
+                    self.fprev[e as usize] = 0.0;
+                }
+            }
+        }
         ok
     }
 
@@ -503,15 +767,32 @@ impl Transient {
                 self.prescribe(t1);
                 let rep = newton.solve(self)?;
                 self.newmark(&ga);
+                // Local error relative to the deformation: the displacement from the rigidly
+                // rotated reference Q(φ_{n+1}) X (the step increment, used before, is dominated
+                // by the rigid rotation ωΔt R and made the estimate blind to error_tol). RMS
+                // over the nodes, with a floor of 1e-3 of the wall thickness.
+                let phi1 = match &self.hub_angle {
+                    Some(h) => self.sys.x[h.iphi],
+                    None => self.kin.phi(t1),
+                };
+                let (sn, cs) = phi1.sin_cos();
                 let mut num = 0.0;
                 let mut den = 0.0;
-                for d in 0..self.sys.dofs.n_u {
-                    let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.a1[d] - self.an[d]);
-                    num += e * e;
-                    let du = self.sys.x[d] - self.un[d];
-                    den += du * du;
+                let mesh = &self.sys.model.mesh;
+                for n in 0..mesh.n_nodes() {
+                    let xr = mesh.nodes[n];
+                    let rigid = [cs * xr[0] - sn * xr[1] - xr[0], sn * xr[0] + cs * xr[1] - xr[1]];
+                    for (i, r) in rigid.iter().enumerate() {
+                        let d = 2 * n + i;
+                        let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.a1[d] - self.an[d]);
+                        num += e * e;
+                        let ud = self.sys.x[d] - r;
+                        den += ud * ud;
+                    }
                 }
-                let err = num.sqrt() / den.sqrt().max(f64::MIN_POSITIVE);
+                let nd = (2 * mesh.n_nodes()).max(1) as f64;
+                let floor = 1e-3 * self.wall;
+                let err = (num / nd).sqrt() / (den / nd).sqrt().max(floor);
                 self.commit(t1);
                 Ok((err, rep.iterations))
             }
@@ -522,8 +803,14 @@ impl Transient {
                 self.xa.copy_from_slice(&self.sys.x);
                 self.va.copy_from_slice(&self.vn);
                 self.aa.iter_mut().for_each(|v| *v = 0.0);
+                self.t_eval = self.t;
                 if !self.assemble_dynamic(false, 1.0, 0.0, 0.0, 0.0) {
-                    return Err(SolveError::InadmissibleStart);
+                    // From an admissible committed state, only an unstable step gets here.
+                    return Err(SolveError::ExplicitUnstable {
+                        t: self.t,
+                        dt,
+                        dt_stable: self.dt_stable,
+                    });
                 }
                 for d in 0..self.un.len() {
                     let e = self.sys.dofs.eq[d];
@@ -559,35 +846,73 @@ impl Transient {
         self.update_fprev();
     }
 
-    /// Stable time step of the central-difference scheme: 2/ω_max with ω_max² the largest
-    /// eigenvalue of M_L⁻¹ K (power iteration on the assembled tangent at the current state).
-    pub fn stable_step(&mut self) -> f64 {
+    /// Stable time step of the central-difference scheme with its lagged-velocity damping:
+    /// Δt = (2/ω_max)(√(1 + ξ²) − ξ) (Belytschko), ω_max² the largest eigenvalue of
+    /// M_L⁻¹ (K + K_c) by power iteration on the tangent at the current state plus the contact
+    /// penalty K_c = ∂t_n/∂δ · diag(Σ_b |∫ N_a N_b ds0|) on the x2 dofs of the whole contact
+    /// boundary (every facet may come into contact while rolling; evaluated at the final
+    /// penetration `delta_ref`), and ξ = vᵀ C v / (2 ω_max vᵀ M_L v) on the dominant mode v, with C
+    /// the strain-rate damping matrix (K assembled with ∂v/∂u = 1 minus K) plus the contact
+    /// normal damping ∂t_n/∂δ̇ on the same boundary diagonal. 5 % margin on ω_max (power
+    /// iteration approaches λ_max from below).
+    pub fn stable_step(&mut self, delta_ref: f64) -> f64 {
         self.sys.x.copy_from_slice(&self.un);
         self.xa.copy_from_slice(&self.un);
         self.va.copy_from_slice(&self.vn);
+        self.aa.iter_mut().for_each(|v| *v = 0.0);
+        self.t_eval = self.t;
         if !self.assemble_dynamic(true, 1.0, 0.0, 0.0, 0.0) {
             return f64::NAN;
         }
+        let k = self.sys.asm.values.clone();
         let n = self.sys.dofs.n_eq;
-        let mut minv = vec![0.0; n];
-        for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
-            if e != FIXED {
-                minv[e as usize] = if self.ml[d] > 0.0 {
-                    1.0 / self.ml[d]
-                } else {
-                    0.0
-                };
+        let mut cmat = Vec::new();
+        if self.sys.model.strain_rate_damping > 0.0 {
+            if !self.assemble_dynamic(true, 1.0, 1.0, 0.0, 0.0) {
+                return f64::NAN;
+            }
+            cmat = self
+                .sys
+                .asm
+                .values
+                .iter()
+                .zip(&k)
+                .map(|(a, b)| a - b)
+                .collect();
+        }
+        // Boundary diagonals of the contact penalty and damping (equation numbering).
+        let (mut kc, mut cc) = (vec![0.0; n], vec![0.0; n]);
+        if let Some(cm) = &self.sys.contact {
+            let nv = cm.normal.eval(delta_ref.max(f64::MIN_POSITIVE), 0.0);
+            let w = cm.boundary_row_sums(&self.sys.model.mesh);
+            for (node, wa) in w.iter().enumerate() {
+                let e = self.sys.dofs.eq[2 * node + 1];
+                if e != FIXED && *wa > 0.0 {
+                    kc[e as usize] = nv.d_delta * wa;
+                    cc[e as usize] = nv.d_rate * wa;
+                }
             }
         }
+        let mut ml = vec![0.0; n];
+        for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
+            if e != FIXED && d < self.sys.dofs.n_u {
+                ml[e as usize] = self.ml[d];
+            }
+        }
+        let minv: Vec<f64> = ml
+            .iter()
+            .map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 })
+            .collect();
         let mut x: Vec<f64> = (0..n)
             .map(|i| 1.0 + 0.1 * ((i as f64) * 0.37).sin())
             .collect();
         let mut y = vec![0.0; n];
         let mut lam = 0.0;
-        for _ in 0..60 {
+        self.sys.asm.values.copy_from_slice(&k);
+        for _ in 0..80 {
             self.sys.asm.matvec(&x, &mut y);
             for i in 0..n {
-                y[i] *= minv[i];
+                y[i] = (y[i] + kc[i] * x[i]) * minv[i];
             }
             let ny = y.iter().map(|v| v * v).sum::<f64>().sqrt();
             let nx = x.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -596,8 +921,20 @@ impl Transient {
                 x[i] = y[i] / ny.max(f64::MIN_POSITIVE);
             }
         }
-        // Power iteration underestimates λ_max slightly: 5 % margin.
-        2.0 / (1.05 * lam).sqrt()
+        let omega = (1.05 * lam).sqrt();
+        // Damping ratio of the dominant mode.
+        let mut xcx: f64 = (0..n).map(|i| cc[i] * x[i] * x[i]).sum();
+        if !cmat.is_empty() {
+            self.sys.asm.values.copy_from_slice(&cmat);
+            self.sys.asm.matvec(&x, &mut y);
+            xcx += x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
+            self.sys.asm.values.copy_from_slice(&k);
+        }
+        let xmx: f64 = (0..n).map(|i| ml[i] * x[i] * x[i]).sum();
+        let xi = (xcx / (2.0 * omega * xmx.max(f64::MIN_POSITIVE))).max(0.0);
+        let dt = (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi);
+        self.dt_stable = dt;
+        dt
     }
 }
 
@@ -623,9 +960,11 @@ impl NonlinearSystem for Transient {
         };
         self.newmark(&ga);
         let dt = self.dt;
+        self.t_eval = self.t + dt;
         let kv = ga.gamma / (ga.beta * dt);
         let cm = (1.0 - ga.am) / (ga.beta * dt * dt);
-        self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af)
+        let ok = self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af);
+        ok
     }
     fn residual(&self) -> &[f64] {
         self.sys.residual()
@@ -635,6 +974,7 @@ impl NonlinearSystem for Transient {
     }
     fn update(&mut self, alpha: f64, dx: &[f64]) {
         self.sys.update(alpha, dx);
+        self.place_hub();
     }
     fn save_state(&self, buf: &mut Vec<f64>) {
         self.sys.save_state(buf);
@@ -652,12 +992,13 @@ pub struct SteadyMonitor {
     last_k: i64,
     prev: Option<(Vec<f64>, Snapshot)>,
     /// Relative changes at the last passage: (field, force, torque).
-    pub last_change: (f64, f64, f64),
+    pub last_change: (f64, f64, f64, f64),
     pub passages: usize,
     /// Referential displacement field at the last passage (2 per referential node).
     pub field: Vec<f64>,
-    /// One row per passage: t, changes (field, force, torque), hub force x, y, torque.
-    pub log: Vec<[f64; 7]>,
+    /// One row per passage: t, changes (field, force, torque), hub force x, y, torque, hub
+    /// speed ω, change of ω.
+    pub log: Vec<[f64; 9]>,
     below_once: bool,
 }
 
@@ -672,7 +1013,7 @@ impl SteadyMonitor {
             per_ring: rl.per_ring,
             last_k: i64::MIN,
             prev: None,
-            last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY),
+            last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::INFINITY),
             passages: 0,
             field: Vec::new(),
             log: Vec::new(),
@@ -682,7 +1023,10 @@ impl SteadyMonitor {
 
     /// After an accepted step from (t0, u0, v0) to (t1, u1, v1): if φ crossed a multiple of
     /// the node angle, extract the referential field at that instant and compare. Returns
-    /// true when steady (changes below `tol`).
+    /// true when steady (changes below `tol`). `phi_at(t)` is the hub angle on [t0, t1]
+    /// (monotone): the prescribed φ(t) under speed control, its cubic Hermite interpolant
+    /// under torque control. A passage that lands on the step end to within a relative 1e-9
+    /// counts at this step (not one step late).
     #[allow(clippy::too_many_arguments)]
     pub fn check(
         &mut self,
@@ -693,8 +1037,10 @@ impl SteadyMonitor {
         snap0: &Snapshot,
         snap1: &Snapshot,
         tol: f64,
+        phi_at: &dyn Fn(f64) -> f64,
     ) -> bool {
-        let k1 = (tr.kin.phi(tr.t) / self.dtheta).floor() as i64;
+        let q = phi_at(tr.t) / self.dtheta;
+        let k1 = (q + 1e-9 * q.abs().max(1.0)).floor() as i64;
         if self.last_k == i64::MIN {
             self.last_k = k1;
             return false;
@@ -708,7 +1054,7 @@ impl SteadyMonitor {
         let (mut lo, mut hi) = (t0, tr.t);
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
-            if tr.kin.phi(mid) < target {
+            if phi_at(mid) < target {
                 lo = mid;
             } else {
                 hi = mid;
@@ -747,6 +1093,7 @@ impl SteadyMonitor {
             hub_force_x: snap0.hub_force_x + s * (snap1.hub_force_x - snap0.hub_force_x),
             hub_force_y: snap0.hub_force_y + s * (snap1.hub_force_y - snap0.hub_force_y),
             hub_torque: snap0.hub_torque + s * (snap1.hub_torque - snap0.hub_torque),
+            omega: snap0.omega + s * (snap1.omega - snap0.omega),
             ..*snap1
         };
         self.passages += 1;
@@ -772,9 +1119,11 @@ impl SteadyMonitor {
                 / fscale;
             let tscale = fscale * mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
             let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
-            self.last_change = (num / den, df, dm);
+            // Hub speed (varies under torque control; 0 change under speed control).
+            let dw = (snap.omega - ps.omega).abs() / snap.omega.abs().max(f64::MIN_POSITIVE);
+            self.last_change = (num / den, df, dm, dw);
             // Steady: two consecutive passages below the tolerance.
-            let below = num / den < tol && df < tol && dm < tol;
+            let below = num / den < tol && df < tol && dm < tol && dw < tol;
             steady = below && self.below_once;
             self.below_once = below;
         }
@@ -786,6 +1135,8 @@ impl SteadyMonitor {
             snap.hub_force_x,
             snap.hub_force_y,
             snap.hub_torque,
+            snap.omega,
+            self.last_change.3,
         ]);
         self.field = field.clone();
         self.prev = Some((field, snap));
@@ -806,10 +1157,11 @@ pub struct TransientReport {
     pub dt_min_used: f64,
     pub dt_max_used: f64,
     pub passages: usize,
-    /// Relative changes (referential field, hub force, torque) over the last node passage.
-    pub last_change: [f64; 3],
+    /// Relative changes (referential field, hub force, torque, hub speed) over the last node
+    /// passage.
+    pub last_change: [f64; 4],
     /// Node-passage log (see [`SteadyMonitor::log`]).
-    pub passage_log: Vec<[f64; 7]>,
+    pub passage_log: Vec<[f64; 9]>,
     pub history: Vec<Snapshot>,
 }
 
@@ -843,13 +1195,33 @@ pub fn integrate(
         + tr.kin.load.map_or(0.0, |l| l.target.abs());
     tr.sys.set_reference_force(fref);
     let mut monitor = SteadyMonitor::new(&tr.sys);
+    // Load control: the road height H is a massless unknown whose equation P − ∫ t_n ds0 = 0
+    // has no stiffness while nothing touches (a singular tangent at first touch, where the
+    // road starts). Start it a hair inside the lowest contact point (10⁻⁶ of the wall) so that
+    // this point is in contact: the penalty then gives ∂R_H/∂H > 0, and the ramped load P(t) > 0 keeps it
+    // in contact afterwards.
+    if let Some(c) = &tr.sys.contact {
+        if c.load.is_some() && tr.sys.dofs.n_global > 0 {
+            let ih = tr.sys.dofs.global(0);
+            let lowest = c
+                .samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn)
+                .iter()
+                .map(|s| s.x2)
+                .fold(f64::INFINITY, f64::min);
+            let h0 = -lowest - 1e-6 * tr.wall;
+            tr.un[ih] = h0;
+            tr.sys.x[ih] = h0;
+        }
+    }
     tr.prescribe(tr.t);
     if !tr.update_fprev() {
         return Err((SolveError::InadmissibleStart, rep));
     }
     let mut dt = match tr.scheme {
         Scheme::CentralDifference => {
-            let s = tr.stable_step();
+            // Penetration at which the contact stiffness is taken (only matters for m_n ≠ 1).
+            let delta_ref = tr.kin.disp.map_or(0.05 * tr.wall, |d| d.target);
+            let s = tr.stable_step(delta_ref);
             if s.is_finite() {
                 (0.9 * s).min(opts.dt)
             } else {
@@ -875,18 +1247,32 @@ pub fn integrate(
         // varies quickly within a passage as nodes enter the patch: interpolating it is noisy).
         let mut dt_step = dt;
         if let (Some(m), true) = (&monitor, opts.land_on_passages) {
-            if tr.t >= tr.kin.ramps_done() && tr.kin.omega.target > 0.0 {
-                let k = (tr.kin.phi(tr.t) / m.dtheta + 1e-9).floor() + 1.0;
+            if tr.t >= tr.ramps_done() && tr.omega_now() > 0.0 {
+                let q = tr.phi_now() / m.dtheta;
+                let k = (q + 1e-9 * q.abs().max(1.0)).floor() + 1.0;
                 let target = k * m.dtheta;
+                // Predicted hub angle: exact under speed control; under torque control the
+                // quadratic φ_n + φ̇_n τ + ½ φ̈_n τ² from the committed state (the monitor
+                // interpolates the passage it actually lands near).
+                let (t_n, phi_n, w_n, wd_n) = (tr.t, tr.phi_now(), tr.omega_now(), tr.hub_accel());
+                let torque = tr.hub_angle.is_some();
+                let phi_pred = |t: f64| {
+                    if torque {
+                        let tau = t - t_n;
+                        phi_n + tau * (w_n + 0.5 * tau * wd_n).max(0.0)
+                    } else {
+                        tr.kin.phi(t)
+                    }
+                };
                 // Time of the next passage (φ is monotone) within a generous bracket.
                 let mut hi = tr.t + dt;
-                while tr.kin.phi(hi) < target && hi < opts.t_end {
+                while phi_pred(hi) < target && hi < opts.t_end {
                     hi += dt;
                 }
                 let mut lo = tr.t;
                 for _ in 0..80 {
                     let mid = 0.5 * (lo + hi);
-                    if tr.kin.phi(mid) < target {
+                    if phi_pred(mid) < target {
                         lo = mid;
                     } else {
                         hi = mid;
@@ -931,19 +1317,42 @@ pub fn integrate(
                 rep.dt_max_used = rep.dt_max_used.max(h);
                 let snap1 = tr.snapshot_light();
                 if let Some(m) = &mut monitor {
-                    if tr.t >= tr.kin.ramps_done()
-                        && m.check(tr, t0, &u0, &v0, &snap0, &snap1, opts.steady_tol)
+                    // Hub angle on [t0, t1]: prescribed, or the cubic Hermite interpolant of
+                    // (φ, φ̇) at the two ends under torque control.
+                    let hermite = tr.hub_angle.as_ref().map(|h| {
+                        (u0[h.iphi], v0[h.iphi], tr.un[h.iphi], tr.vn[h.iphi])
+                    });
+                    let (t1, kin) = (tr.t, &tr.kin);
+                    let phi_at = |t: f64| match hermite {
+                        Some((p0, w0, p1, w1)) => {
+                            let hh = t1 - t0;
+                            let s = if hh > 0.0 { (t - t0) / hh } else { 1.0 };
+                            let (s2, s3) = (s * s, s * s * s);
+                            (2.0 * s3 - 3.0 * s2 + 1.0) * p0
+                                + (s3 - 2.0 * s2 + s) * hh * w0
+                                + (-2.0 * s3 + 3.0 * s2) * p1
+                                + (s3 - s2) * hh * w1
+                        }
+                        None => kin.phi(t),
+                    };
+                    if tr.t >= tr.ramps_done()
+                        && m.check(tr, t0, &u0, &v0, &snap0, &snap1, opts.steady_tol, &phi_at)
                         && !rep.steady
                     {
                         rep.steady = true;
                         rep.time_to_steady = Some(tr.t);
                     }
                     rep.passages = m.passages;
-                    rep.last_change = [m.last_change.0, m.last_change.1, m.last_change.2];
+                    rep.last_change = [
+                        m.last_change.0,
+                        m.last_change.1,
+                        m.last_change.2,
+                        m.last_change.3,
+                    ];
                 }
                 snap0 = snap1;
                 rep.final_time = tr.t;
-                rep.revolutions = tr.kin.phi(tr.t) / (2.0 * PI);
+                rep.revolutions = tr.phi_now() / (2.0 * PI);
                 on_step(tr, &rep);
                 if rep.steady && opts.stop_at_steady {
                     break;
@@ -995,10 +1404,11 @@ impl Transient {
         let (f, m) = self.hub_reaction();
         Snapshot {
             t: self.t,
-            phi: self.kin.phi(self.t),
+            phi: self.phi_now(),
             hub_force_x: f[0],
             hub_force_y: f[1],
             hub_torque: m,
+            omega: self.omega_now(),
             ..Default::default()
         }
     }
@@ -1095,11 +1505,22 @@ impl Transient {
         let area = super::system::domain_area(&self.sys.model);
         self.sys
             .set_reference_force(self.sys.model.rho * area * omega * omega);
+        if let Some(h) = &mut self.hub_angle {
+            h.frozen = true;
+        }
+        let mut res = Ok(());
         for s in 1..=steps {
             let omega2 = ca * s as f64 / steps as f64;
             let mut rs = RigidSpin { tr: self, omega2 };
-            newton.solve(&mut rs)?;
+            if let Err(e) = newton.solve(&mut rs) {
+                res = Err(e);
+                break;
+            }
         }
+        if let Some(h) = &mut self.hub_angle {
+            h.frozen = false;
+        }
+        res?;
         let n_u = self.sys.dofs.n_u;
         self.un.copy_from_slice(&self.sys.x);
         for d in (0..n_u).step_by(2) {
@@ -1113,6 +1534,11 @@ impl Transient {
         self.v1.copy_from_slice(&self.vn);
         self.a1.copy_from_slice(&self.an);
         self.hub_rates(self.t);
+        if let Some(h) = &self.hub_angle {
+            // The hub spins with the body: φ = 0, φ̇ = ω (the discrete rate with Δt given).
+            self.v1[h.iphi] = cv;
+            self.a1[h.iphi] = 0.0;
+        }
         self.vn.copy_from_slice(&self.v1);
         self.an.copy_from_slice(&self.a1);
         Ok(())

@@ -1,8 +1,12 @@
 //! Driver of the `transient` mode: build the model, the kinematics and the integrator from the
 //! scene, integrate until steady (or t_end) with a progress bar, and write the outputs:
 //! summary.json (`results.time_to_steady`, `revolutions`, `steps`, `steady`, hub forces, torque
-//! and contact patch under the indentation keys), `passages.csv` (per node passage: changes of
-//! the referential field, hub force and torque, and the hub force and torque), `contact.csv`
+//! and contact patch under the indentation keys; `control`, `omega_steady` (hub angular speed at
+//! the end of the run: at the steady passage when stopping at steady; the prescribed ω under
+//! speed control, the computed one under torque control), `applied_torque`, `rolling_radius` =
+//! v0 / ω, `contact_moment` (moment of the contact tractions about the hub centre),
+//! `steady_change_omega`), `passages.csv` (per node passage: changes of the referential field,
+//! hub force, torque and hub speed, and the hub force, torque and speed), `contact.csv`
 //! (final tractions) and `steady_field.csv` (the referential field extracted at the last node
 //! passage, see [`crate::driver::transient::SteadyMonitor`]).
 //!
@@ -28,8 +32,8 @@ use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{
     self, Energy, HubLoads, Recorder, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
 };
-use crate::io::scene::{IntegratorName, MassKind, Scene, Sink};
-use crate::solver::SolveError;
+use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink};
+use crate::solver::{LinearKind, SolveError};
 use std::time::Instant;
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
@@ -62,7 +66,33 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let kin = kinematics(scene);
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme, kin, lumped);
-    let kind = linear_kind(scene, &tr.sys);
+    let torque_control = scene.motion.control == Control::Torque;
+    let kind = if torque_control {
+        // The φ row and column make the tangent indefinite-looking to Cholesky in general.
+        LinearKind::Lu
+    } else {
+        linear_kind(scene, &tr.sys)
+    };
+    if torque_control {
+        if !matches!(scheme, Scheme::GeneralizedAlpha(_)) {
+            return Err(AppError::Unsupported(
+                "motion.control = \"torque\" needs time.integrator = \"generalized_alpha\"".into(),
+            ));
+        }
+        tr.enable_torque_control(
+            scene.motion.hub_inertia,
+            Ramp {
+                target: scene.motion.torque,
+                time: scene.motion.ramp,
+            },
+            scene.motion.omega,
+        );
+        // Start: hub and body in rigid spin at omega (no contact yet: the road is at first touch).
+        if scene.motion.omega > 0.0 {
+            tr.start_rigid_spin(scene.motion.omega, kind, None)
+                .map_err(|e| AppError::Solve(e, opts.out_dir.clone()))?;
+        }
+    }
     let time_opts = TimeOptions {
         dt: ts.dt,
         dt_min: ts.resolved_dt_min(),
@@ -139,7 +169,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 kinetic: snap.kinetic_energy,
             }),
             road_height: tr.sys.road_height(),
-            omega: tr.kin.omega.value(tr.t),
+            omega: tr.omega_now(),
             scalars: &scalars,
         };
         let wants = recorders.wants_view(&info);
@@ -181,7 +211,14 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         .unwrap_or_default();
     let tot = ContactModel::totals(&samples);
     let (f, m) = tr.hub_reaction();
+    let omega_hub = tr.omega_now();
+    let v0_end = tr.kin.v0.value(tr.t);
     let results = serde_json::json!({
+        "control": scene.motion.control.as_str(),
+        "omega_steady": omega_hub,
+        "applied_torque": tr.applied_torque(tr.t),
+        "rolling_radius": if omega_hub != 0.0 { v0_end / omega_hub } else { f64::NAN },
+        "contact_moment": tot.moment,
         "time_to_steady": rep.time_to_steady,
         "revolutions": rep.revolutions,
         "steps": rep.steps,
@@ -192,6 +229,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "steady_change_field": rep.last_change[0],
         "steady_change_force": rep.last_change[1],
         "steady_change_torque": rep.last_change[2],
+        "steady_change_omega": rep.last_change[3],
         "dt_min_used": rep.dt_min_used,
         "dt_max_used": rep.dt_max_used,
         "hub_force_x": f[0],
@@ -267,6 +305,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "hub_force_x",
                 "hub_force_y",
                 "hub_torque",
+                "omega",
+                "change_omega",
             ],
             rep.passage_log.iter().map(|r| r.to_vec()),
         )?;
@@ -323,14 +363,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
 }
 
 /// Hub and road kinematics of a transient scene: ω, DISP (or the hub load) and v0 ramped in
-/// with the scene's ramp times.
+/// with the scene's ramp times. Under torque control ω is the initial spin (no ramp: the hub
+/// starts spinning at omega; `motion.ramp` ramps the torque instead).
 pub fn kinematics(scene: &Scene) -> Kinematics {
     let road = scene.road.as_ref();
     let ramp = road.map_or(0.0, |r| r.ramp);
+    let omega_ramp = match scene.motion.control {
+        Control::Speed => scene.motion.ramp,
+        Control::Torque => 0.0,
+    };
     Kinematics {
         omega: Ramp {
             target: scene.motion.omega,
-            time: scene.motion.ramp,
+            time: omega_ramp,
         },
         disp: road.and_then(|r| r.disp).map(|d| Ramp {
             target: d,

@@ -15,6 +15,7 @@
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
+//!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
 //! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
 //! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
 //!                                                             (static, transient)
@@ -225,6 +226,20 @@ keyword_enum! {
         Bdf => "bdf",
         /// SDIRK on the first-order form `y = (u, v)` (diffsol), with its own error control.
         Sdirk => "sdirk",
+    }
+}
+
+keyword_enum! {
+    /// How the hub rotation is driven (`[motion] control`, transient mode).
+    #[derive(Default)]
+    Control, "hub control" {
+        #[default]
+        /// Prescribed hub angular speed ω(t) = omega · S(t / ramp).
+        Speed => "speed",
+        /// Prescribed hub torque T(t) = torque · S(t / ramp) on a hub of rotational inertia
+        /// `hub_inertia`; the hub angle is an unknown. The hub and body start in rigid spin at
+        /// `omega`; the road speed drives the rolling and the hub finds its own ω.
+        Torque => "torque",
     }
 }
 
@@ -588,9 +603,20 @@ pub struct Motion {
     /// Target angular speed (rad/s, counter-clockwise), >= 0. Required for `spinning` and
     /// `transient`.
     pub omega: f64,
-    /// Time over which the hub angular speed goes from 0 to `omega` with the C² smoothstep
-    /// (time, >= 0; 0 = at once). Only in `transient`: must be 0 in the other modes.
+    /// Time over which the hub angular speed goes from 0 to `omega` (speed control) or the
+    /// hub torque from 0 to `torque` (torque control) with the C² smoothstep (time, >= 0; 0 = at
+    /// once). Only in `transient`: must be 0 in the other modes.
     pub ramp: f64,
+    /// `speed` (prescribed ω(t)) or `torque` (prescribed hub torque; `transient` with
+    /// `generalized_alpha` only).
+    pub control: Control,
+    /// Rotational inertia of the hub per unit thickness (mass·length² per unit thickness,
+    /// e.g. lbf·s²), > 0; required for (and only used by) torque control. 0 = not given.
+    pub hub_inertia: f64,
+    /// Applied hub torque about +x3 (counter-clockwise positive) per unit thickness
+    /// (force·length per unit thickness, e.g. lbf·in/in), ramped in over `ramp`; 0 = free
+    /// rolling. Only with torque control.
+    pub torque: f64,
 }
 
 impl Default for Motion {
@@ -598,6 +624,9 @@ impl Default for Motion {
         Motion {
             omega: 0.0,
             ramp: 0.0,
+            control: Control::Speed,
+            hub_inertia: 0.0,
+            torque: 0.0,
         }
     }
 }
@@ -1323,6 +1352,17 @@ impl Scene {
                 validate_motion(mode, m, omega_given, &mut out);
             }
             validate_motion_ramp(mode, m, &mut out);
+            let integrator = match &time {
+                Some(Some(t)) => Some(t.integrator),
+                _ => None,
+            };
+            // An unknown or ill-typed `control` was dropped (and reported): the other keys
+            // cannot be checked against it.
+            let control_bad =
+                table_has(&doc, "motion", "control") && !table_has(&clean, "motion", "control");
+            if !control_bad {
+                validate_motion_control(mode, m, integrator, &mut out);
+            }
         }
         if let Some(Some(r)) = &road {
             validate_road(r, mode, geometry.as_ref(), &mut out);
@@ -1457,6 +1497,12 @@ impl Scene {
         let mode = Some(self.analysis.mode);
         validate_motion(mode, &self.motion, true, &mut out);
         validate_motion_ramp(mode, &self.motion, &mut out);
+        validate_motion_control(
+            mode,
+            &self.motion,
+            self.time.as_ref().map(|t| t.integrator),
+            &mut out,
+        );
         if let Some(r) = &self.road {
             validate_road(r, mode, Some(&self.geometry), &mut out);
         }
@@ -1609,7 +1655,13 @@ static SCHEMA: &[SectionSchema] = &[
     SectionSchema {
         name: "motion",
         required: false,
-        fields: &[opt("omega", Kind::Float), opt("ramp", Kind::Float)],
+        fields: &[
+            opt("omega", Kind::Float),
+            opt("ramp", Kind::Float),
+            opt("control", Kind::Keyword(Control::NAMES)),
+            opt("hub_inertia", Kind::Float),
+            opt("torque", Kind::Float),
+        ],
     },
     SectionSchema {
         name: "road",
@@ -2437,6 +2489,71 @@ fn validate_motion_ramp(mode: Option<Mode>, m: &Motion, out: &mut Vec<Issue>) {
                     m.ramp
                 ),
             ));
+        }
+    }
+}
+
+/// `control`, `hub_inertia`, `torque`: torque control only in `transient` with
+/// `generalized_alpha`; it needs `hub_inertia > 0`; `hub_inertia` and a non-zero `torque` only
+/// with torque control.
+fn validate_motion_control(
+    mode: Option<Mode>,
+    m: &Motion,
+    integrator: Option<IntegratorName>,
+    out: &mut Vec<Issue>,
+) {
+    if !m.hub_inertia.is_finite() || m.hub_inertia < 0.0 {
+        out.push(issue(
+            "motion.hub_inertia",
+            format!("hub rotational inertia must be > 0, got {}", m.hub_inertia),
+        ));
+    }
+    if !m.torque.is_finite() {
+        out.push(issue(
+            "motion.torque",
+            format!("hub torque must be finite, got {}", m.torque),
+        ));
+    }
+    match m.control {
+        Control::Torque => {
+            if let Some(mode) = mode.filter(|m| *m != Mode::Transient) {
+                out.push(issue(
+                    "motion.control",
+                    format!(
+                        "torque control is only available in analysis mode \"transient\", not \"{mode}\""
+                    ),
+                ));
+            }
+            if let Some(i) = integrator.filter(|i| *i != IntegratorName::GeneralizedAlpha) {
+                out.push(issue(
+                    "motion.control",
+                    format!(
+                        "torque control needs time.integrator = \"generalized_alpha\" (the hub \
+                         angle is solved in the implicit step), got \"{i}\""
+                    ),
+                ));
+            }
+            if m.hub_inertia == 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "required (> 0) with control = \"torque\": rotational inertia of the hub \
+                     per unit thickness",
+                ));
+            }
+        }
+        Control::Speed => {
+            if m.hub_inertia != 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "only used with control = \"torque\" (the hub speed is prescribed)",
+                ));
+            }
+            if m.torque != 0.0 {
+                out.push(issue(
+                    "motion.torque",
+                    "only used with control = \"torque\" (the hub speed is prescribed)",
+                ));
+            }
         }
     }
 }
@@ -3293,6 +3410,8 @@ mod tests {
     const STICK_SLIP: &str = include_str!("../../scenarios/stick_slip.toml");
     const ODEN: &str = include_str!("../../scenarios/oden_hollow_cylinder.toml");
     const ROLLING_FRICTIONLESS: &str = include_str!("../../scenarios/rolling_frictionless.toml");
+    const FREE_ROLLING: &str = include_str!("../../scenarios/free_rolling.toml");
+    const BRAKING: &str = include_str!("../../scenarios/braking.toml");
 
     const MINIMAL: &str = r#"
 [scene]
@@ -3882,6 +4001,8 @@ linear = "qr"
             STICK_SLIP,
             ODEN,
             ROLLING_FRICTIONLESS,
+            FREE_ROLLING,
+            BRAKING,
         ] {
             let s = load(text).unwrap_or_else(|e| panic!("{e}"));
             let out = s.to_toml_string();
@@ -4959,7 +5080,8 @@ mesh.n_r = 4
             s.motion,
             Motion {
                 omega: 10.0,
-                ramp: 0.05
+                ramp: 0.05,
+                ..Motion::default()
             }
         );
         let road = s.road.clone().unwrap_or_else(|| panic!("no [road]"));
@@ -5033,6 +5155,80 @@ mesh.n_r = 4
             (&s.time, &s.solver, &s.output)
         );
         assert!(f.validate().is_ok());
+    }
+
+    #[test]
+    fn torque_control_scenes_parse() {
+        let f = load(FREE_ROLLING).unwrap_or_else(|e| panic!("{e}"));
+        let b = load(BRAKING).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((f.scene.name.as_str(), b.scene.name.as_str()), ("free_rolling", "braking"));
+        for s in [&f, &b] {
+            assert_eq!(s.analysis.mode, Mode::Transient);
+            assert_eq!(s.motion.control, Control::Torque);
+            assert_eq!(s.motion.hub_inertia, 0.5);
+            assert_eq!(s.motion.omega, 2.0);
+            assert_eq!((s.mesh.n_r, s.mesh.n_theta), (2, 32));
+            let road = s.road.as_ref().unwrap_or_else(|| panic!("no road"));
+            assert_eq!((road.disp, road.v0_ramp), (Some(0.1), Some(0.0)));
+            assert!(s.friction.is_active());
+            assert!(s.validate().is_ok());
+        }
+        assert_eq!((f.motion.torque, f.motion.ramp), (0.0, 0.0));
+        assert_eq!((b.motion.torque, b.motion.ramp), (-10.0, 0.2));
+        // The two scenes differ only in the torque, its ramp and the naming.
+        assert_eq!(
+            (&f.geometry, &f.mesh, &f.material, &f.road, &f.contact, &f.friction, &f.time),
+            (&b.geometry, &b.mesh, &b.material, &b.road, &b.contact, &b.friction, &b.time)
+        );
+        // Defaults: speed control, no inertia, no torque.
+        let s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (s.motion.control, s.motion.hub_inertia, s.motion.torque),
+            (Control::Speed, 0.0, 0.0)
+        );
+    }
+
+    #[test]
+    fn torque_control_keys_are_validated() {
+        // Torque control without an inertia (or a negative one): reported on the key.
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=0"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=-1"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        // Torque and inertia are only for torque control; lines of the file.
+        let text = BRAKING.replace("control = \"torque\"", "control = \"speed\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("motion.torque").and_then(|x| x.line),
+            Some(line_of(&text, "torque = -10.0"))
+        );
+        assert_eq!(
+            e.find("motion.hub_inertia").and_then(|x| x.line),
+            Some(line_of(&text, "hub_inertia ="))
+        );
+        // Only generalized-α, only transient.
+        let e = errors_with(
+            FREE_ROLLING,
+            &["time.integrator=central_difference", "time.mass=lumped"],
+        );
+        assert_only(
+            &e,
+            "motion.control",
+            Some(line_of(FREE_ROLLING, "control = \"torque\"")),
+        );
+        assert!(e.0[0].message.contains("generalized_alpha"), "{e}");
+        let e = errors_with(MINIMAL, &["motion.control=torque", "motion.hub_inertia=1"]);
+        assert!(e.has_key("motion.control"), "{e}");
+        // Unknown keyword, wrong type, non-finite torque.
+        let e = errors_with(FREE_ROLLING, &["motion.control=brake"]);
+        assert_only(&e, "motion.control", None);
+        assert!(e.0[0].message.contains("speed"), "{e}");
+        let text = FREE_ROLLING.replace("torque = 0.0 ", "torque = \"none\" ");
+        let e = errors(&text);
+        assert_only(&e, "motion.torque", Some(line_of(&text, "torque = \"none\"")));
+        let e = errors_with(BRAKING, &["motion.torque=nan"]);
+        assert_only(&e, "motion.torque", None);
     }
 
     #[test]
@@ -5556,6 +5752,7 @@ mesh.n_r = 4
         let m = Motion {
             omega: 10.0,
             ramp: 0.05,
+            ..Motion::default()
         };
         assert_eq!((m.omega_at(-1.0), m.omega_at(0.0)), (0.0, 0.0));
         assert!((m.omega_at(0.025) - 5.0).abs() < 1e-12);
@@ -5570,6 +5767,7 @@ mesh.n_r = 4
         let step = Motion {
             omega: 10.0,
             ramp: 0.0,
+            ..Motion::default()
         };
         assert_eq!((step.omega_at(0.0), step.omega_at(0.3)), (10.0, 10.0));
         assert!((step.angle_at(0.3) - 3.0).abs() < 1e-12);

@@ -49,6 +49,9 @@ pub enum SolveError {
     LineSearch { min_alpha: f64, residual: f64 },
     #[error("initial state is inadmissible (J ≤ 0 or non-finite residual)")]
     InadmissibleStart,
+    /// An explicit (central-difference) step produced an inadmissible or non-finite state.
+    #[error("the explicit central-difference step is unstable: the state blew up at t = {t:.6e} (Δt = {dt:.3e}, stable-step estimate {dt_stable:.3e}); reduce time.dt")]
+    ExplicitUnstable { t: f64, dt: f64, dt_stable: f64 },
     /// Ctrl-C at a step boundary; `at` is the last converged load factor (or time).
     #[error("interrupted")]
     Interrupted { at: f64 },

@@ -771,14 +771,21 @@ pub fn integrate_first_order(
             let snap1 = tr.snapshot_light();
             if let Some(m) = &mut monitor {
                 if tr.t >= ramps_done
-                    && m.check(&tr, t_prev, &u0, &v0, &snap0, &snap1, opts.steady_tol)
+                    && m.check(&tr, t_prev, &u0, &v0, &snap0, &snap1, opts.steady_tol, &|t| {
+                        tr.kin.phi(t)
+                    })
                     && !rep.steady
                 {
                     rep.steady = true;
                     rep.time_to_steady = Some(tr.t);
                 }
                 rep.passages = m.passages;
-                rep.last_change = [m.last_change.0, m.last_change.1, m.last_change.2];
+                rep.last_change = [
+                    m.last_change.0,
+                    m.last_change.1,
+                    m.last_change.2,
+                    m.last_change.3,
+                ];
             }
             snap0 = snap1;
             rep.final_time = tr.t;
