@@ -324,7 +324,8 @@ impl Transient {
     /// tᵀ K and K t of the hub rows and columns onto t_b = ∂x_b/∂φ = e3 × x_b, plus
     /// ∂t_b/∂φ · R_b = −x_b · R_b and I ∂φ̈/∂φ). The generalized-α force averaging applies
     /// to the torque too. `omega0` is the initial hub speed φ̇(0) (use
-    /// [`Self::start_rigid_spin`] to start the body spinning with it). Generalized-α only.
+    /// [`Self::start_rigid_spin`] to start the body spinning with it). Generalized-α only;
+    /// not with cell-owned (exact pressure) dofs (the coupling block would exceed MAX_LOCAL).
     pub fn enable_torque_control(&mut self, inertia: f64, torque: Ramp, omega0: f64) {
         let (iphi, block) = self.sys.add_hub_angle();
         for v in [

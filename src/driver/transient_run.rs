@@ -74,6 +74,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         linear_kind(scene, &tr.sys)
     };
     if torque_control {
+        // The φ coupling block holds a cell's dofs plus φ; with the exact Q2/P1 pressure that
+        // is 22 > MAX_LOCAL local dofs (and the pressure rows would need the φ column too).
+        if tr.sys.dofs.per_cell > 0 {
+            return Err(AppError::Unsupported(
+                "motion.control = \"torque\" does not support the exact incompressible formulation (use material.formulation = \"perturbed\" or a compressible model)".into(),
+            ));
+        }
         if !matches!(scheme, Scheme::GeneralizedAlpha(_)) {
             return Err(AppError::Unsupported(
                 "motion.control = \"torque\" needs time.integrator = \"generalized_alpha\"".into(),
