@@ -3637,10 +3637,10 @@ omega = 0
 
     #[test]
     fn unknown_section_rejected() {
-        let text = format!("{MINIMAL}\n[continuation]\ntarget = 0.1\n");
+        let text = format!("{MINIMAL}\n[adaptivity]\ntarget = 0.1\n");
         let e = errors(&text);
-        let err = e.find("continuation").unwrap_or_else(|| panic!("{e}"));
-        assert_eq!(err.line, Some(line_of(&text, "[continuation]")));
+        let err = e.find("adaptivity").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "[adaptivity]")));
         assert!(err.message.contains("unknown section"));
     }
 
@@ -3935,8 +3935,8 @@ linear = "qr"
         assert!(err.message.contains("mesh.nr=8"), "{}", err.message);
         assert!(err.to_string().contains("(--set)"), "{err}");
 
-        let e = errors_with(MINIMAL, &["continuation.target=0.1"]);
-        assert_only(&e, "continuation.target", None);
+        let e = errors_with(MINIMAL, &["adaptivity.target=0.1"]);
+        assert_only(&e, "adaptivity.target", None);
         assert!(e.0[0].message.contains("unknown section"), "{e}");
         let e = errors_with(MINIMAL, &["time.dtt=0.1"]);
         assert_only(&e, "time.dtt", None);
@@ -4093,9 +4093,11 @@ linear = "qr"
         assert_eq!("static".parse::<Mode>(), Ok(Mode::Static));
         assert_eq!("stick_slip".parse::<Mode>(), Ok(Mode::StickSlip));
         assert_eq!("transient".parse::<Mode>(), Ok(Mode::Transient));
-        let err = "steady".parse::<Mode>().err().unwrap_or_default();
+        assert_eq!("steady".parse::<Mode>(), Ok(Mode::Steady));
+        check(ContinuationParameter::ALL, ContinuationParameter::NAMES);
+        let err = "dynamic".parse::<Mode>().err().unwrap_or_default();
         assert!(
-            err.contains("\"spinning\", \"static\", \"stick_slip\", \"transient\""),
+            err.contains("\"spinning\", \"static\", \"stick_slip\", \"transient\", \"steady\""),
             "{err}"
         );
         check(IntegratorName::ALL, IntegratorName::NAMES);
@@ -4150,6 +4152,7 @@ linear = "qr"
             ("friction", keys(&full_friction())),
             ("stick_slip", keys(&full_stick_slip())),
             ("time", keys(&full_time())),
+            ("continuation", keys(&ContinuationSpec::default())),
             ("solver", keys(&SolverSpec::default())),
             ("output", keys(&OutputSpec::default())),
         ];

@@ -10,8 +10,9 @@
 //! ‖(Δx, Δλ)‖² = ‖Δx‖² / x_s² + Δλ² / λ_s²
 //! ```
 //!
-//! (x_s, λ_s: [`ContinuationOptions::x_scale`], [`ContinuationOptions::lambda_scale`]), and every
-//! step has ‖(Δx, Δλ)‖ = Δs (Crisfield's spherical constraint).
+//! (x_s, λ_s: [`ContinuationOptions::x_scale`], [`ContinuationOptions::lambda_scale`]; ‖Δx‖ over
+//! the equations of field 0, the displacements: pressures and global unknowns have other units
+//! and are left out), and every step has ‖(Δx, Δλ)‖ = Δs (Crisfield's spherical constraint).
 //!
 //! * **Predictor**: tangent t = −K⁻¹ R_λ at the converged point (K = ∂R/∂x, R_λ = ∂R/∂λ by a
 //!   central difference of the residual in λ: two residual-only assemblies), scaled to length
@@ -181,6 +182,10 @@ pub struct Continuation {
     c: Vec<f64>,
     z: Vec<f64>,
     saved: Vec<f64>,
+    saved_tmp: Vec<f64>,
+    /// 1 for the equations of field 0 (displacements), 0 for the others (pressures, global
+    /// unknowns): the arc length is measured on the displacements and λ.
+    weight: Vec<f64>,
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -215,6 +220,12 @@ impl Continuation {
             c,
             z: vec![0.0; n],
             saved: Vec::new(),
+            saved_tmp: Vec::new(),
+            weight: sys
+                .fields()
+                .iter()
+                .map(|&f| if f == 0 { 1.0 } else { 0.0 })
+                .collect(),
         })
     }
 
@@ -254,7 +265,16 @@ impl Continuation {
     fn sdot(&self, x1: &[f64], l1: f64, x2: &[f64], l2: f64) -> f64 {
         let xs2 = self.opts.x_scale * self.opts.x_scale;
         let ls2 = self.opts.lambda_scale * self.opts.lambda_scale;
-        dot(x1, x2) / xs2 + l1 * l2 / ls2
+        self.wdot(x1, x2) / xs2 + l1 * l2 / ls2
+    }
+
+    /// Σ w_i a_i b_i (displacement equations only).
+    fn wdot(&self, a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .zip(&self.weight)
+            .map(|((x, y), w)| w * x * y)
+            .sum()
     }
 
     /// Factorize K at the current (converged) state, record det sign / test function and
@@ -365,7 +385,7 @@ impl Continuation {
                             rep.stop_reason = format!(
                                 "step {step} failed after {cutbacks} cut-backs at lambda = {lam_n:.6e}: {e}"
                             );
-                            return Err(SolveError::TooManyCutbacks {
+                            return Err(SolveError::ContinuationStalled {
                                 lambda: lam_n,
                                 cutbacks,
                                 last: Box::new(e),
@@ -500,18 +520,51 @@ impl Continuation {
         sys.set_parameter(lam_n + dl);
         let xs2 = self.opts.x_scale * self.opts.x_scale;
         let ls2 = self.opts.lambda_scale * self.opts.lambda_scale;
-        for it in 1..=self.opts.max_iterations {
+        // Last correction (δx in `a`, δλ) for the backtracking below.
+        let mut prev_worst = f64::INFINITY;
+        let mut last_dlam = 0.0;
+        let mut halvings = 0;
+        let mut it = 0;
+        while it < self.opts.max_iterations {
+            it += 1;
+            let ok = sys.evaluate(false);
+            rep.assemblies += 1;
+            let (conv, worst) = self.converged(sys);
+            // Backtracking: a correction that does not reduce the residual (a contact point
+            // switching in and out of the patch makes the residual non-smooth and full Newton
+            // corrections can cycle) is halved, at most 4 times; the arc-length constraint is
+            // restored by the next corrections.
+            if it > 1 && (!ok || !worst.is_finite() || worst > prev_worst) && halvings < 4 {
+                halvings += 1;
+                for v in self.a.iter_mut() {
+                    *v *= 0.5;
+                }
+                last_dlam *= 0.5;
+                for (d, a) in self.du.iter_mut().zip(&self.a) {
+                    *d -= a;
+                }
+                dl -= last_dlam;
+                let neg: Vec<f64> = self.a.iter().map(|v| -v).collect();
+                sys.update(1.0, &neg);
+                sys.set_parameter(lam_n + dl);
+                it -= 1;
+                continue;
+            }
+            halvings = 0;
+            if !ok || !worst.is_finite() {
+                return Err(SolveError::InadmissibleStart);
+            }
+            if conv && it > 1 {
+                if !sys.evaluate(true) {
+                    return Err(SolveError::InadmissibleStart);
+                }
+                return Ok(it - 1);
+            }
+            prev_worst = worst;
             if !self.residual_derivative(sys) || !sys.evaluate(true) {
                 return Err(SolveError::InadmissibleStart);
             }
             rep.assemblies += 3;
-            let (conv, worst) = self.converged(sys);
-            if conv && it > 1 {
-                return Ok(it - 1);
-            }
-            if !worst.is_finite() {
-                return Err(SolveError::InadmissibleStart);
-            }
             self.solver.factorize(sys.matrix_values())?;
             rep.factorizations += 1;
             for (a, r) in self.a.iter_mut().zip(sys.residual()) {
@@ -523,13 +576,13 @@ impl Continuation {
             }
             self.solver.solve_in_place(&mut self.b)?;
             // Quadratic spherical constraint for δλ, with Δx' = Δx + a.
-            let mut aa = dot(&self.b, &self.b) / xs2 + 1.0 / ls2;
+            let mut aa = self.wdot(&self.b, &self.b) / xs2 + 1.0 / ls2;
             let mut bb = 0.0;
             let mut cc = 0.0;
             for i in 0..self.du.len() {
                 let dxp = self.du[i] + self.a[i];
-                bb += dxp * self.b[i];
-                cc += dxp * dxp;
+                bb += self.weight[i] * dxp * self.b[i];
+                cc += self.weight[i] * dxp * dxp;
             }
             bb = 2.0 * (bb / xs2 + dl / ls2);
             cc = cc / xs2 + dl * dl / ls2 - ds * ds;
@@ -546,7 +599,7 @@ impl Continuation {
                 let cos = |r: f64| {
                     let mut s = 0.0;
                     for i in 0..self.du.len() {
-                        s += (self.du[i] + self.a[i] + r * self.b[i]) * self.du[i];
+                        s += self.weight[i] * (self.du[i] + self.a[i] + r * self.b[i]) * self.du[i];
                     }
                     s / xs2 + (dl + r) * dl / ls2
                 };
@@ -557,8 +610,10 @@ impl Continuation {
                 }
             } else {
                 // Linearised (Riks) constraint: the correction is orthogonal to the increment.
-                let num = ds * ds - (dot(&self.du, &self.du) + dot(&self.du, &self.a)) / xs2 - dl * dl / ls2;
-                let den = dot(&self.du, &self.b) / xs2 + dl / ls2;
+                let num = ds * ds
+                    - (self.wdot(&self.du, &self.du) + self.wdot(&self.du, &self.a)) / xs2
+                    - dl * dl / ls2;
+                let den = self.wdot(&self.du, &self.b) / xs2 + dl / ls2;
                 if den.abs() < f64::MIN_POSITIVE {
                     return Err(SolveError::NotConverged {
                         iterations: it,
@@ -572,8 +627,26 @@ impl Continuation {
                 self.du[i] += self.a[i];
             }
             dl += dlam;
+            last_dlam = dlam;
             sys.update(1.0, &self.a);
             sys.set_parameter(lam_n + dl);
+            // Increment criterion (the residual of a field with a tiny reference, e.g. the
+            // pressure constraints, can sit at its round-off floor): a correction at the
+            // round-off level of the state is convergence.
+            let corr = self.wdot(&self.a, &self.a).sqrt();
+            let xn = {
+                sys.save_state(&mut self.saved_tmp);
+                self.saved_tmp.iter().map(|v| v * v).sum::<f64>().sqrt()
+            };
+            if corr <= 1e-12 * xn.max(self.opts.x_scale)
+                && dlam.abs() <= 1e-12 * self.opts.lambda_scale.max((lam_n + dl).abs())
+                && worst < 1e-3
+            {
+                if !sys.evaluate(true) {
+                    return Err(SolveError::InadmissibleStart);
+                }
+                return Ok(it);
+            }
             if self.opts.verbose {
                 eprintln!("    corrector {it}: residual {worst:.3e}, dlambda {dl:.4e}");
             }

@@ -58,6 +58,12 @@ pub enum SolveError {
     /// A time integrator outside this crate (diffsol) failed at time `t`.
     #[error("time integrator failed at t = {t:.6e}: {message}")]
     Integrator { t: f64, message: String },
+    #[error("continuation gave up at parameter {lambda:.6e} after {cutbacks} arc-length cut-backs: {last}")]
+    ContinuationStalled {
+        lambda: f64,
+        cutbacks: usize,
+        last: Box<SolveError>,
+    },
     #[error("load stepping gave up at load factor {lambda:.6} after {cutbacks} cut-backs: {last}")]
     TooManyCutbacks {
         lambda: f64,
