@@ -45,6 +45,9 @@ pub struct BranchRow {
     pub contact_x_min: f64,
     pub contact_x_max: f64,
     pub max_pressure: f64,
+    /// Standing-wave indicator: half the peak-to-peak radial displacement of the outer
+    /// surface nodes more than 60° away from the bottom (outside the patch region).
+    pub wave_amplitude: f64,
     pub det_sign: f64,
     pub negative_eigenvalues: f64,
     pub test_function: f64,
@@ -55,7 +58,7 @@ pub struct BranchRow {
 }
 
 impl BranchRow {
-    pub const HEADER: [&'static str; 18] = [
+    pub const HEADER: [&'static str; 19] = [
         "step",
         "lambda",
         "omega",
@@ -67,6 +70,7 @@ impl BranchRow {
         "contact_x_min",
         "contact_x_max",
         "max_pressure",
+        "wave_amplitude",
         "det_sign",
         "negative_eigenvalues",
         "test_function",
@@ -95,6 +99,7 @@ impl BranchRow {
             self.contact_x_min,
             self.contact_x_max,
             self.max_pressure,
+            self.wave_amplitude,
             self.det_sign,
             self.negative_eigenvalues,
             self.test_function,
@@ -121,6 +126,7 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
         contact_x_min: t.x_min,
         contact_x_max: t.x_max,
         max_pressure: t.max_pressure,
+        wave_amplitude: wave_amplitude(&st.sys),
         det_sign: p.det_sign,
         negative_eigenvalues: p.negative_eigenvalues,
         test_function: p.test_function,
@@ -129,6 +135,32 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
         wall_time_s: p.wall_time_s,
         factor_solve_s: p.factor_solve_s,
     }
+}
+
+/// Half the peak-to-peak radial displacement of the outer-ring nodes whose reference angle is
+/// more than 60° from the bottom (θ = −π/2): standing waves around the cylinder show here,
+/// the contact flattening does not.
+pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
+    let mesh = &sys.model.mesh;
+    let Some(rl) = mesh.rings else {
+        return f64::NAN;
+    };
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let last = rl.rings - 1;
+    for pos in 0..rl.per_ring {
+        let n = last * rl.per_ring + pos;
+        let x = mesh.nodes[n];
+        let th = x[1].atan2(x[0]);
+        let d = (th + std::f64::consts::FRAC_PI_2).rem_euclid(2.0 * std::f64::consts::PI);
+        let d = d.min(2.0 * std::f64::consts::PI - d);
+        if d < std::f64::consts::PI / 3.0 {
+            continue;
+        }
+        let ur = (sys.x[2 * n] * x[0] + sys.x[2 * n + 1] * x[1]) / x.norm();
+        lo = lo.min(ur);
+        hi = hi.max(ur);
+    }
+    0.5 * (hi - lo)
 }
 
 /// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).

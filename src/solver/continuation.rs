@@ -370,7 +370,21 @@ impl Continuation {
             sys.save_state(&mut self.saved);
             let mut cutbacks = 0;
             let iterations = loop {
-                match self.corrector(sys, ds, tangent_l, &mut rep) {
+                let res = self.corrector(sys, ds, tangent_l, &mut rep).and_then(|it| {
+                    // A corrector that lands on the backward intersection of the sphere with
+                    // the branch (increment against the tangent) would reverse the direction
+                    // of travel: rejected like a failure.
+                    let dl = sys.parameter() - lam_n;
+                    if self.sdot(&self.tu, tangent_l, &self.du, dl) > 0.0 {
+                        Ok(it)
+                    } else {
+                        Err(SolveError::NotConverged {
+                            iterations: it,
+                            residual: f64::NAN,
+                        })
+                    }
+                });
+                match res {
                     Ok(it) => break it,
                     Err(e) => {
                         sys.restore_state(&self.saved);
@@ -402,11 +416,12 @@ impl Continuation {
             let dx = self.du.clone();
             // Old tangent projected on the chord of the step (for the limit-point estimate).
             let p0 = self.sdot(&self.tu, tangent_l, &dx, dl) / ds;
-            // New tangent at the converged point.
+            // New tangent at the converged point, oriented along the previous one.
+            let old_tu = self.tu.clone();
             let (mut ntl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
             rep.factorizations += 1;
             rep.assemblies += 3;
-            if self.sdot(&self.tu, ntl, &dx, dl) < 0.0 {
+            if self.sdot(&self.tu, ntl, &old_tu, tangent_l) < 0.0 {
                 ntl = -ntl;
                 self.tu.iter_mut().for_each(|t| *t = -*t);
             }
