@@ -279,9 +279,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             verbose: opts.verbose,
         };
         let n0 = report.steps.len() as u64;
+        let mut partial = None;
         let res = Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
             let rec: &mut dyn Recorder = &mut recorders;
-            c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
+            let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
                 rows.push(branch_row(s, p));
                 let info = StepInfo {
                     index: n0 + p.step as u64,
@@ -295,7 +296,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     s.sys.record_step(&info, rec);
                 }
                 !record::interrupted()
-            })
+            });
+            partial = c.partial.take();
+            r
         });
         match res {
             Ok(r) => {
@@ -306,7 +309,11 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 }
                 cont = Some(r);
             }
-            Err(e) => solve = Err(e),
+            Err(e) => {
+                // Keep the branch computed before the failure.
+                cont = partial;
+                solve = Err(e);
+            }
         }
     }
     let wall = t0.elapsed().as_secs_f64();

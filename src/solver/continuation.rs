@@ -183,6 +183,8 @@ pub struct Continuation {
     z: Vec<f64>,
     saved: Vec<f64>,
     saved_tmp: Vec<f64>,
+    /// The report up to the failure when [`Self::run`] returns an error.
+    pub partial: Option<ContinuationReport>,
     /// 1 for the equations of field 0 (displacements), 0 for the others (pressures, global
     /// unknowns): the arc length is measured on the displacements and λ.
     weight: Vec<f64>,
@@ -221,6 +223,7 @@ impl Continuation {
             z: vec![0.0; n],
             saved: Vec::new(),
             saved_tmp: Vec::new(),
+            partial: None,
             weight: sys
                 .fields()
                 .iter()
@@ -399,6 +402,7 @@ impl Continuation {
                             rep.stop_reason = format!(
                                 "step {step} failed after {cutbacks} cut-backs at lambda = {lam_n:.6e}: {e}"
                             );
+                            self.partial = Some(std::mem::take(&mut rep));
                             return Err(SolveError::ContinuationStalled {
                                 lambda: lam_n,
                                 cutbacks,
