@@ -3411,6 +3411,7 @@ mod tests {
     const ODEN: &str = include_str!("../../scenarios/oden_hollow_cylinder.toml");
     const ROLLING_FRICTIONLESS: &str = include_str!("../../scenarios/rolling_frictionless.toml");
     const FREE_ROLLING: &str = include_str!("../../scenarios/free_rolling.toml");
+    const STEADY_SWEEP: &str = include_str!("../../scenarios/oden_steady_sweep.toml");
     const BRAKING: &str = include_str!("../../scenarios/braking.toml");
 
     const MINIMAL: &str = r#"
@@ -3633,6 +3634,28 @@ omega = 0
             "{shown}"
         );
         assert_eq!(e.0.len(), 1, "{e}");
+    }
+
+    #[test]
+    fn steady_sweep_scene_and_continuation_rules() {
+        let s = load(STEADY_SWEEP).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.analysis.mode, Mode::Steady);
+        let c = s.continuation.clone().unwrap_or_default();
+        assert_eq!(c.parameter, ContinuationParameter::Omega);
+        assert_eq!(c.target, 60.0);
+        // [continuation] only in steady mode, with the line of its header.
+        let e = errors_with(STEADY_SWEEP, &["analysis.mode=\"transient\""]);
+        let err = e.find("continuation").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("not used"), "{e}");
+        // load continuation needs load control.
+        let e = errors_with(STEADY_SWEEP, &["continuation.parameter=\"load\""]);
+        assert_only(&e, "continuation.parameter", None);
+        // ds_max < ds.
+        let e = errors_with(STEADY_SWEEP, &["continuation.ds_max=0.001"]);
+        assert_only(&e, "continuation.ds_max", None);
+        // A transient scene runs in steady mode with --mode steady ([time] allowed).
+        let t = load_with(ODEN, &["analysis.mode=\"steady\""]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(t.analysis.mode, Mode::Steady);
     }
 
     #[test]
@@ -4003,6 +4026,7 @@ linear = "qr"
             ROLLING_FRICTIONLESS,
             FREE_ROLLING,
             BRAKING,
+            STEADY_SWEEP,
         ] {
             let s = load(text).unwrap_or_else(|e| panic!("{e}"));
             let out = s.to_toml_string();
