@@ -505,6 +505,24 @@ impl Continuation {
                 rep.stop_reason = "stopped by the caller".into();
                 return Ok(rep);
             }
+            // A corrector that keeps landing on the same two points (observed past a limit
+            // point of a non-smooth problem) makes no progress: stop and say so.
+            let k = rep.points.len();
+            if k >= 5 {
+                let tol = 1e-9 * self.opts.lambda_scale.max(lam.abs());
+                let p = &rep.points;
+                if (p[k - 1].lambda - p[k - 3].lambda).abs() < tol
+                    && (p[k - 2].lambda - p[k - 4].lambda).abs() < tol
+                {
+                    rep.stop_reason = format!(
+                        "the continuation cycles between lambda = {:.6e} and {:.6e} without progress",
+                        p[k - 2].lambda,
+                        p[k - 1].lambda
+                    );
+                    self.partial = Some(std::mem::take(&mut rep));
+                    return Err(SolveError::ContinuationCycles { lambda: lam });
+                }
+            }
             if (lam - self.opts.target) * self.opts.direction >= 0.0 && kind != PointKind::LimitPoint
                 && dl * self.opts.direction > 0.0
             {

@@ -58,6 +58,8 @@ pub enum SolveError {
     /// A time integrator outside this crate (diffsol) failed at time `t`.
     #[error("time integrator failed at t = {t:.6e}: {message}")]
     Integrator { t: f64, message: String },
+    #[error("continuation stopped at parameter {lambda:.6e}: the corrector cycles between the same two points without progress (a non-smooth residual past a limit point)")]
+    ContinuationCycles { lambda: f64 },
     #[error("continuation gave up at parameter {lambda:.6e} after {cutbacks} arc-length cut-backs: {last}")]
     ContinuationStalled {
         lambda: f64,
