@@ -171,6 +171,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "converged": converged,
         "error": error,
         "results": results,
+        // One mass on a belt: friction and inertia, nothing else (no mesh, no contact facets).
+        "terms": {
+            "friction": true,
+            "normal_damping": false,
+            "inertia": true,
+            "history": false,
+            "pressure": false,
+            "contact_facets_per_iteration": 0.0,
+        },
         "version": env!("CARGO_PKG_VERSION"),
     });
     sanitize(&mut summary);
