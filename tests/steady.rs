@@ -246,3 +246,45 @@ fn continuation_in_omega_follows_the_branch() {
     assert!(dir.join("branch.csv").exists());
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn strain_rate_damping_does_not_act_on_steady_spinning() {
+    // A cylinder in steady spin without contact: every material point keeps its strain, Ė = 0,
+    // so the steady-mode viscous stress η sym(Fᵀ ∇v), v = ω ∂θχ, must vanish up to the
+    // discretization of an axisymmetric field on the isoparametric mesh: the change it causes
+    // must shrink under circumferential refinement.
+    let solve = |eta: f64, n_theta: usize| {
+        let mut mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 4,
+            n_theta,
+            degree: 2,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+        });
+        mesh.make_isoparametric();
+        let mat: Material = MooneyRivlin::new(80.0, 20.0, 20000.0).into();
+        let mut model = SolidModel::new(mesh, mat, 0.027, PressureMode::None);
+        model.strain_rate_damping = eta;
+        let sys = SolidSystem::new(model, "hub");
+        let mut st = SteadyRolling::new(sys, 40.0, 2.0);
+        st.sys.set_reference_force(1.0);
+        let mut newton = Newton::new(&st.sys, LinearKind::Lu, Default::default()).unwrap();
+        newton.solve(&mut st).unwrap();
+        println!("  eta = {eta}, n_theta = {n_theta}: hub torque {:.3e}", st.hub_torque());
+        st.sys.x.clone()
+    };
+    let mut rel = Vec::new();
+    for nt in [24, 48, 96] {
+        let (u0, u1) = (solve(0.0, nt), solve(20.0, nt));
+        let umax = u0.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let diff = u0.iter().zip(&u1).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        println!("n_theta = {nt}: max |u| = {umax:.3e}, change with eta = 20 psi s: {diff:.3e} ({:.3e} relative)", diff / umax);
+        assert!(umax > 1e-4);
+        rel.push(diff / umax);
+    }
+    // Observed: about 2^-4 per halving of h.
+    assert!(rel[1] < rel[0] / 4.0 && rel[2] < rel[1] / 4.0, "{rel:?}");
+    assert!(rel[2] < 1e-3, "{rel:?}");
+}
