@@ -1,0 +1,535 @@
+//! Numerical-stability stress matrix (not a test): sweeps one factor at a time around small base
+//! scenes and classifies every run.
+//!
+//! ```text
+//! cargo run --release --bin tread-stress -- [--smoke] [--out DIR]
+//! ```
+//!
+//! Factors (each around a base scene built from `scenarios/` with `--set`-style overrides,
+//! coarse meshes and short runs so the full matrix takes a few minutes):
+//!
+//! | factor | scene | mode | values |
+//! |---|---|---|---|
+//! | `dt` | `rolling_frictionless` (2 × 32 Q2, t_end = 0.04 s, fixed step) | transient | 1e-4 … t_end |
+//! | `integrator` | same | transient | generalized_alpha, central_difference, bdf, sdirk |
+//! | `omega` | `oden_hollow_cylinder` (2 × 32) | steady | 5 … 80 rad/s (critical ≈ 41–47 rad/s) |
+//! | `c_n` | `indentation_friction` (2 × 48) / `oden_hollow_cylinder` | static / steady | 0.1 … 1e6 × G / (Ro − Ri) |
+//! | `kappa_over_G` | `indentation_friction`, `oden_hollow_cylinder` | static / steady | 10 … 1e6, and the exact incompressible Q2/P1 |
+//! | `mu` | `indentation_friction` / `oden_hollow_cylinder` | static / steady | 0 … 1 |
+//! | `eps_over_v0` | `oden_hollow_cylinder` | steady | 1e-1 … 1e-6 of v0 |
+//! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / h / δ_ref^(m_n − 1) (p ≈ G at δ_ref = 0.01 in) |
+//!
+//! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
+//! `solver.cutbacks` or `results.rejected_steps` > 0), `failed` with a class from the typed
+//! error (`newton_not_converged`, `line_search`, `inadmissible`, `explicit_unstable`,
+//! `continuation`, `integrator`, `linear_solver`, `invalid_input`, `output`, `other`), or
+//! `panic` (a bug). A wrapped error (load stepping or time-step halving that gave up) is classed
+//! by its innermost cause. Every case's `summary.json` and CSV files are scanned for non-finite
+//! number text (`NaN`, `nan`, `inf` tokens), which must never be written.
+//!
+//! Writes `OUT/stress_matrix.csv` and `OUT/stress_matrix.md` (default OUT: `out/stress`) and
+//! prints the Markdown. `--smoke` runs a handful of fast cases (tool correctness, for CI).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use tread::app::{AppError, RunOptions};
+use tread::io::Scene;
+use tread::solver::newton::SolveError;
+
+const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
+const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
+const INDENT: &str = include_str!("../scenarios/indentation_friction.toml");
+
+/// Shear modulus G = 2 (C1 + C2) of the scenes' rubber (psi) and wall thickness Ro − Ri (in).
+const G: f64 = 200.0;
+const WALL: f64 = 1.0;
+/// R_eff ≈ Ro − DISP/3 of the rolling scenes: free-rolling road speed v0 = ω R_eff.
+const R_EFF: f64 = 1.966667;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Base {
+    /// `rolling_frictionless.toml`, transient, coarse and short, fixed step.
+    Transient,
+    /// `oden_hollow_cylinder.toml` in steady mode, coarse.
+    Steady,
+    /// `indentation_friction.toml`, static, coarse.
+    Static,
+}
+
+impl Base {
+    fn file(self) -> &'static str {
+        match self {
+            Base::Transient => "rolling_frictionless",
+            Base::Steady => "oden_hollow_cylinder",
+            Base::Static => "indentation_friction",
+        }
+    }
+    fn mode(self) -> &'static str {
+        match self {
+            Base::Transient => "transient",
+            Base::Steady => "steady",
+            Base::Static => "static",
+        }
+    }
+    fn text(self) -> &'static str {
+        match self {
+            Base::Transient => ROLLING,
+            Base::Steady => ODEN,
+            Base::Static => INDENT,
+        }
+    }
+    /// The small base scene's overrides.
+    fn overrides(self) -> Vec<String> {
+        let mut v: Vec<String> = match self {
+            Base::Transient => vec![
+                "mesh.n_theta=32",
+                "mesh.n_r=2",
+                "motion.ramp=0.02",
+                "road.ramp=0.02",
+                "time.t_end=0.04",
+                "time.dt=1e-3",
+                "time.adaptive=false",
+                "time.stop_at_steady=false",
+            ],
+            Base::Steady => vec!["mesh.n_theta=32", "mesh.n_r=2", "analysis.mode=steady"],
+            Base::Static => vec!["mesh.n_theta=48", "mesh.n_r=2", "solver.tolerance=1e-8"],
+        }
+        .into_iter()
+        .map(String::from)
+        .collect();
+        v.push("output.sinks=[\"summary\", \"csv\"]".into());
+        v
+    }
+}
+
+struct Case {
+    factor: &'static str,
+    value: String,
+    base: Base,
+    set: Vec<String>,
+    /// Keys (`key = ` at the start of a line) removed from the scene text before parsing; an
+    /// override cannot remove a key (the exact incompressible model rejects `kappa`).
+    drop_keys: Vec<&'static str>,
+}
+
+fn case(factor: &'static str, value: impl ToString, base: Base, set: &[String]) -> Case {
+    Case {
+        factor,
+        value: value.to_string(),
+        base,
+        set: set.to_vec(),
+        drop_keys: Vec::new(),
+    }
+}
+
+fn steady_omega(omega: f64) -> Vec<String> {
+    vec![
+        format!("motion.omega={omega}"),
+        format!("road.v0={}", omega * R_EFF),
+    ]
+}
+
+fn full_cases() -> Vec<Case> {
+    let mut c = Vec::new();
+    // Time step (fixed), generalized-α; dt = t_end is one step through both ramps.
+    for dt in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 2e-2, 4e-2] {
+        c.push(case("dt", dt, Base::Transient, &[format!("time.dt={dt}")]));
+    }
+    // Integrators at dt = 1e-3 (bdf and sdirk use diffsol's own error control) and at a large step.
+    for integ in ["generalized_alpha", "central_difference", "bdf", "sdirk"] {
+        for dt in [1e-3, 1e-2] {
+            let mut set = vec![format!("time.integrator={integ}"), format!("time.dt={dt}")];
+            if integ == "central_difference" {
+                set.push("time.mass=lumped".into());
+            }
+            c.push(case("integrator", format!("{integ} dt={dt}"), Base::Transient, &set));
+        }
+    }
+    // ω through the critical speed, steady mode (direct Newton at ω, no continuation).
+    for omega in [5.0, 10.0, 20.0, 30.0, 38.0, 42.0, 46.0, 50.0, 60.0, 80.0] {
+        c.push(case("omega", omega, Base::Steady, &steady_omega(omega)));
+    }
+    // c_n relative to G / (Ro − Ri).
+    for rel in [0.1, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
+        let cn = rel * G / WALL;
+        c.push(case("c_n_over_G_h", rel, Base::Static, &[format!("contact.c_n={cn}")]));
+    }
+    for rel in [1.0, 1e2, 1e4, 1e6] {
+        let cn = rel * G / WALL;
+        c.push(case("c_n_over_G_h", rel, Base::Steady, &[format!("contact.c_n={cn}")]));
+    }
+    // κ / G, compressible Mooney–Rivlin, then the incompressible model (perturbed, exact).
+    for base in [Base::Static, Base::Steady] {
+        for rel in [10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
+            c.push(case("kappa_over_G", rel, base, &[format!("material.kappa={}", rel * G)]));
+        }
+        for rel in [1e2, 1e4] {
+            c.push(Case {
+                factor: "kappa_over_G",
+                value: format!("{rel} incompressible perturbed"),
+                base,
+                set: vec![
+                    "material.model=mooney_rivlin_incompressible".into(),
+                    "material.formulation=perturbed".into(),
+                    format!("material.kappa={}", rel * G),
+                ],
+                drop_keys: vec!["kappa"],
+            });
+        }
+        c.push(Case {
+            factor: "kappa_over_G",
+            value: "inf (incompressible exact)".into(),
+            base,
+            set: vec![
+                "material.model=mooney_rivlin_incompressible".into(),
+                "material.formulation=exact".into(),
+            ],
+            drop_keys: vec!["kappa"],
+        });
+    }
+    // Friction coefficient.
+    for base in [Base::Static, Base::Steady] {
+        for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
+            c.push(case("mu", mu, base, &[format!("friction.mu={mu}")]));
+        }
+    }
+    // Regularisation ε relative to the rolling speed v0 (steady; v0 = 19.67 in/s).
+    for rel in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
+        let eps = rel * 10.0 * R_EFF;
+        c.push(case("eps_over_v0", rel, Base::Steady, &[format!("friction.eps={eps}")]));
+    }
+    // Compliance exponent, c_n scaled so p = G at δ = 0.01 in (p = c_n δ^m_n).
+    for base in [Base::Static, Base::Steady] {
+        for m in [1, 2, 3] {
+            let cn = G / 0.01f64.powi(m);
+            c.push(case("m_n", m, base, &[format!("contact.m_n={m}"), format!("contact.c_n={cn}")]));
+        }
+    }
+    c
+}
+
+fn smoke_cases() -> Vec<Case> {
+    vec![
+        case("dt", 1e-2, Base::Transient, &["time.dt=1e-2".into(), "time.t_end=0.02".into()]),
+        case(
+            "integrator",
+            "central_difference dt=1e-2",
+            Base::Transient,
+            &[
+                "time.integrator=central_difference".into(),
+                "time.mass=lumped".into(),
+                "time.dt=1e-2".into(),
+                "time.t_end=0.02".into(),
+            ],
+        ),
+        case("omega", 10.0, Base::Steady, &steady_omega(10.0)),
+        case("c_n_over_G_h", 1e3, Base::Static, &["contact.c_n=2e5".into()]),
+        case("invalid", "mesh.n_r=0", Base::Static, &["mesh.n_r=0".into()]),
+    ]
+}
+
+struct Row {
+    factor: String,
+    value: String,
+    scene: String,
+    mode: String,
+    outcome: &'static str,
+    class: String,
+    message: String,
+    wall: f64,
+    nan: usize,
+}
+
+/// Class of a solve error: its innermost cause when it wraps one.
+fn solve_class(e: &SolveError) -> &'static str {
+    match e {
+        SolveError::Linear(_) => "linear_solver",
+        SolveError::NotConverged { .. } => "newton_not_converged",
+        SolveError::LineSearch { .. } => "line_search",
+        SolveError::InadmissibleStart => "inadmissible",
+        SolveError::ExplicitUnstable { .. } => "explicit_unstable",
+        SolveError::Interrupted { .. } => "interrupted",
+        SolveError::Integrator { .. } => "integrator",
+        SolveError::ContinuationCycles { .. } => "continuation",
+        SolveError::ContinuationStalled { .. } => "continuation",
+        SolveError::TooManyCutbacks { last, .. } => solve_class(last),
+    }
+}
+
+fn app_class(e: &AppError) -> &'static str {
+    match e {
+        AppError::Solve(se, _) => solve_class(se),
+        AppError::Unsupported(_) => "invalid_input",
+        AppError::Output(_) => "output",
+        AppError::Interrupted(_) => "interrupted",
+    }
+}
+
+/// Tokens of `text` that spell a non-finite number (`nan`, `inf`, `infinity`, any case).
+fn count_nonfinite(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|t| {
+            let t = t.to_ascii_lowercase();
+            t == "nan" || t == "inf" || t == "infinity"
+        })
+        .count()
+}
+
+/// Non-finite tokens in `summary.json` and every `*.csv` of `dir`.
+fn scan_outputs(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut n = 0;
+    for e in entries.flatten() {
+        let p = e.path();
+        let name = p.file_name().and_then(|s| s.to_str()).unwrap_or("");
+        if name == "summary.json" || name.ends_with(".csv") {
+            if let Ok(t) = std::fs::read_to_string(&p) {
+                n += count_nonfinite(&t);
+            }
+        }
+    }
+    n
+}
+
+fn count_key(v: &serde_json::Value, path: &[&str]) -> u64 {
+    let mut cur = v;
+    for k in path {
+        match cur.get(k) {
+            Some(x) => cur = x,
+            None => return 0,
+        }
+    }
+    cur.as_u64().unwrap_or(0)
+}
+
+fn one_line(s: &str) -> String {
+    let s = s.replace(['\n', '\r'], " ");
+    if s.chars().count() > 300 {
+        s.chars().take(300).collect::<String>() + "…"
+    } else {
+        s
+    }
+}
+
+fn run_case(i: usize, c: &Case, out: &Path) -> Row {
+    let dir: PathBuf = out.join("cases").join(format!("{i:03}_{}_{}", c.factor, c.base.mode()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut text = c.base.text().to_string();
+    if !c.drop_keys.is_empty() {
+        text = text
+            .lines()
+            .filter(|l| {
+                let t = l.trim_start();
+                !c.drop_keys.iter().any(|k| {
+                    t.strip_prefix(k)
+                        .is_some_and(|r| r.trim_start().starts_with('='))
+                })
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+    }
+    let mut set = c.base.overrides();
+    set.extend(c.set.iter().cloned());
+    let mut row = Row {
+        factor: c.factor.to_string(),
+        value: c.value.clone(),
+        scene: c.base.file().to_string(),
+        mode: c.base.mode().to_string(),
+        outcome: "failed",
+        class: String::new(),
+        message: String::new(),
+        wall: 0.0,
+        nan: 0,
+    };
+    let t0 = Instant::now();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let scene = Scene::from_toml_str(&text, c.base.file(), &set).map_err(|e| {
+            ("invalid_input", e.to_string())
+        })?;
+        let opts = RunOptions {
+            out_dir: dir.clone(),
+            verbose: false,
+            quiet: true,
+        };
+        tread::app::run(&scene, &opts).map_err(|e| (app_class(&e), e.to_string()))
+    }));
+    row.wall = t0.elapsed().as_secs_f64();
+    match result {
+        Ok(Ok(o)) => {
+            let cut = count_key(&o.summary, &["solver", "cutbacks"])
+                + count_key(&o.summary, &["results", "rejected_steps"]);
+            if !o.converged {
+                row.class = "not_converged_flag".into();
+                row.message = "run returned Ok with converged = false".into();
+            } else if cut > 0 {
+                row.outcome = "recovered";
+                row.message = format!(
+                    "cutbacks {}, rejected steps {}",
+                    count_key(&o.summary, &["solver", "cutbacks"]),
+                    count_key(&o.summary, &["results", "rejected_steps"])
+                );
+            } else {
+                row.outcome = "converged";
+            }
+        }
+        Ok(Err((class, msg))) => {
+            row.class = class.to_string();
+            row.message = one_line(&msg);
+        }
+        Err(payload) => {
+            row.outcome = "panic";
+            row.class = "panic".into();
+            let msg = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "panic with a non-string payload".into());
+            row.message = one_line(&msg);
+        }
+    }
+    row.nan = scan_outputs(&dir);
+    row
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|")
+}
+
+fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<String> {
+    let mut csv = String::from(
+        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs\n",
+    );
+    for r in rows {
+        csv += &format!(
+            "{},{},{},{},{},{},{},{:.3},{}\n",
+            csv_field(&r.factor),
+            csv_field(&r.value),
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            csv_field(&r.message),
+            r.wall,
+            r.nan
+        );
+    }
+    std::fs::write(out.join("stress_matrix.csv"), csv)?;
+
+    let mut md = String::from("# Stress matrix\n\n");
+    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | message |\n";
+    md += "|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |\n",
+            r.factor,
+            md_cell(&r.value),
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            r.wall,
+            r.nan,
+            md_cell(&r.message)
+        );
+    }
+    let mut outcomes: Vec<(&str, usize)> = Vec::new();
+    for o in ["converged", "recovered", "failed", "panic"] {
+        outcomes.push((o, rows.iter().filter(|r| r.outcome == o).count()));
+    }
+    md += "\n| outcome | cases |\n|---|---|\n";
+    for (o, n) in &outcomes {
+        md += &format!("| {o} | {n} |\n");
+    }
+    let mut classes: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.class.is_empty())
+        .map(|r| r.class.clone())
+        .collect();
+    classes.sort();
+    classes.dedup();
+    md += "\n| failure class | cases |\n|---|---|\n";
+    for cl in &classes {
+        md += &format!("| {cl} | {} |\n", rows.iter().filter(|r| &r.class == cl).count());
+    }
+    let nan_cases = rows.iter().filter(|r| r.nan > 0).count();
+    md += &format!(
+        "\n{} cases, {} with NaN/inf text in their outputs, total wall time {:.1} s\n",
+        rows.len(),
+        nan_cases,
+        total_wall
+    );
+    std::fs::write(out.join("stress_matrix.md"), &md)?;
+    Ok(md)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let mut smoke = false;
+    let mut out = PathBuf::from("out/stress");
+    let mut i = 1;
+    while i < args.len() {
+        match args[i].as_str() {
+            "--smoke" => smoke = true,
+            "--out" if i + 1 < args.len() => {
+                out = PathBuf::from(&args[i + 1]);
+                i += 1;
+            }
+            other => {
+                eprintln!("tread-stress: unknown argument `{other}` (use --smoke and --out DIR)");
+                std::process::exit(2);
+            }
+        }
+        i += 1;
+    }
+    if let Err(e) = std::fs::create_dir_all(&out) {
+        eprintln!("tread-stress: cannot create {}: {e}", out.display());
+        std::process::exit(2);
+    }
+    // Panics are caught and counted per case; keep their message on one line.
+    std::panic::set_hook(Box::new(|info| {
+        eprintln!("tread-stress: panic: {info}");
+    }));
+    let cases = if smoke { smoke_cases() } else { full_cases() };
+    let t0 = Instant::now();
+    let mut rows = Vec::new();
+    for (k, c) in cases.iter().enumerate() {
+        let r = run_case(k, c, &out);
+        eprintln!(
+            "[{:>3}/{}] {} = {} ({}, {}): {} {} {:.2} s{}",
+            k + 1,
+            cases.len(),
+            r.factor,
+            r.value,
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            r.wall,
+            if r.nan > 0 { format!(", {} NaN/inf tokens", r.nan) } else { String::new() }
+        );
+        rows.push(r);
+    }
+    match write_reports(&rows, &out, t0.elapsed().as_secs_f64()) {
+        Ok(md) => println!("{md}"),
+        Err(e) => {
+            eprintln!("tread-stress: cannot write the reports in {}: {e}", out.display());
+            std::process::exit(2);
+        }
+    }
+    let panics = rows.iter().filter(|r| r.outcome == "panic").count();
+    let nans = rows.iter().filter(|r| r.nan > 0).count();
+    if smoke && (panics > 0 || nans > 0) {
+        std::process::exit(1);
+    }
+}
