@@ -10,14 +10,15 @@
 //!
 //! | factor | scene | mode | values |
 //! |---|---|---|---|
-//! | `dt` | `rolling_frictionless` (2 × 32 Q2, t_end = 0.04 s, fixed step) | transient | 1e-4 … t_end |
-//! | `integrator` | same | transient | generalized_alpha, central_difference, bdf, sdirk |
-//! | `omega` | `oden_hollow_cylinder` (2 × 32) | steady | 5 … 80 rad/s (critical ≈ 41–47 rad/s) |
-//! | `c_n` | `indentation_friction` (2 × 48) / `oden_hollow_cylinder` | static / steady | 0.1 … 1e6 × G / (Ro − Ri) |
-//! | `kappa_over_G` | `indentation_friction`, `oden_hollow_cylinder` | static / steady | 10 … 1e6, and the exact incompressible Q2/P1 |
-//! | `mu` | `indentation_friction` / `oden_hollow_cylinder` | static / steady | 0 … 1 |
-//! | `eps_over_v0` | `oden_hollow_cylinder` | steady | 1e-1 … 1e-6 of v0 |
-//! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / h / δ_ref^(m_n − 1) (p ≈ G at δ_ref = 0.01 in) |
+//! | `dt` | `rolling_frictionless` (2 × 32 Q2, t_end = 0.1 s, fixed step) | transient | 1e-4 … t_end (one step) |
+//! | `integrator` | same | transient | generalized_alpha, central_difference, bdf, sdirk at dt 1e-3, 1e-2, 1e-1 |
+//! | `omega` | `oden_hollow_cylinder` (3 × 64) | steady | 5 … 80 rad/s (critical ≈ 41–47 rad/s), direct Newton, no continuation |
+//! | `omega (m_n=2)` | same, quadratic compliance c_n = 2e6 | steady | 10 … 60 rad/s |
+//! | `c_n_over_G_h` | `indentation_friction` (4 × 64) / `oden_hollow_cylinder` | static / steady | c_n = 0.1 … 1e6 × G / (Ro − Ri) |
+//! | `kappa_over_G` | `indentation_friction`, `oden_hollow_cylinder` | static / steady | 10 … 1e6 (compressible), incompressible perturbed, exact Q2/P1 |
+//! | `mu` | `indentation_friction`, `oden_hollow_cylinder` | static / steady / transient | 0 … 1 |
+//! | `eps_over_v0` | `oden_hollow_cylinder` | steady / transient (2 × 32) | ε = 1e-1 … 1e-6 × v0 |
+//! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / δ_ref^m_n (p = G at δ_ref = 0.01 in) |
 //!
 //! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
 //! `solver.cutbacks` or `results.rejected_steps` > 0), `failed` with a class from the typed
@@ -51,8 +52,10 @@ const R_EFF: f64 = 1.966667;
 enum Base {
     /// `rolling_frictionless.toml`, transient, coarse and short, fixed step.
     Transient,
-    /// `oden_hollow_cylinder.toml` in steady mode, coarse.
+    /// `oden_hollow_cylinder.toml` in steady mode (its own 3 × 64 mesh).
     Steady,
+    /// `oden_hollow_cylinder.toml`, transient with friction, coarse and short, fixed step.
+    TransientFriction,
     /// `indentation_friction.toml`, static, coarse.
     Static,
 }
@@ -61,13 +64,13 @@ impl Base {
     fn file(self) -> &'static str {
         match self {
             Base::Transient => "rolling_frictionless",
-            Base::Steady => "oden_hollow_cylinder",
+            Base::Steady | Base::TransientFriction => "oden_hollow_cylinder",
             Base::Static => "indentation_friction",
         }
     }
     fn mode(self) -> &'static str {
         match self {
-            Base::Transient => "transient",
+            Base::Transient | Base::TransientFriction => "transient",
             Base::Steady => "steady",
             Base::Static => "static",
         }
@@ -75,25 +78,23 @@ impl Base {
     fn text(self) -> &'static str {
         match self {
             Base::Transient => ROLLING,
-            Base::Steady => ODEN,
+            Base::Steady | Base::TransientFriction => ODEN,
             Base::Static => INDENT,
         }
     }
     /// The small base scene's overrides.
     fn overrides(self) -> Vec<String> {
         let mut v: Vec<String> = match self {
-            Base::Transient => vec![
+            Base::Transient | Base::TransientFriction => vec![
                 "mesh.n_theta=32",
                 "mesh.n_r=2",
-                "motion.ramp=0.02",
-                "road.ramp=0.02",
-                "time.t_end=0.04",
+                "time.t_end=0.1",
                 "time.dt=1e-3",
                 "time.adaptive=false",
                 "time.stop_at_steady=false",
             ],
-            Base::Steady => vec!["mesh.n_theta=32", "mesh.n_r=2", "analysis.mode=steady"],
-            Base::Static => vec!["mesh.n_theta=48", "mesh.n_r=2", "solver.tolerance=1e-8"],
+            Base::Steady => vec!["analysis.mode=steady"],
+            Base::Static => vec!["mesh.n_theta=64", "mesh.n_r=4", "solver.tolerance=1e-8"],
         }
         .into_iter()
         .map(String::from)
@@ -132,13 +133,13 @@ fn steady_omega(omega: f64) -> Vec<String> {
 
 fn full_cases() -> Vec<Case> {
     let mut c = Vec::new();
-    // Time step (fixed), generalized-α; dt = t_end is one step through both ramps.
-    for dt in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 2e-2, 4e-2] {
+    // Time step (fixed), generalized-α; ramps 0.05 s, dt = t_end = 0.1 s is one step through both.
+    for dt in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 5e-2, 1e-1] {
         c.push(case("dt", dt, Base::Transient, &[format!("time.dt={dt}")]));
     }
     // Integrators at dt = 1e-3 (bdf and sdirk use diffsol's own error control) and at a large step.
     for integ in ["generalized_alpha", "central_difference", "bdf", "sdirk"] {
-        for dt in [1e-3, 1e-2] {
+        for dt in [1e-3, 1e-2, 1e-1] {
             let mut set = vec![format!("time.integrator={integ}"), format!("time.dt={dt}")];
             if integ == "central_difference" {
                 set.push("time.mass=lumped".into());
@@ -149,6 +150,12 @@ fn full_cases() -> Vec<Case> {
     // ω through the critical speed, steady mode (direct Newton at ω, no continuation).
     for omega in [5.0, 10.0, 20.0, 30.0, 38.0, 42.0, 46.0, 50.0, 60.0, 80.0] {
         c.push(case("omega", omega, Base::Steady, &steady_omega(omega)));
+    }
+    // The same with the smooth (C¹) quadratic compliance of `oden_steady_sweep.toml`.
+    for omega in [10.0, 30.0, 42.0, 46.0, 50.0, 60.0] {
+        let mut set = steady_omega(omega);
+        set.extend(["contact.m_n=2".to_string(), "contact.c_n=2e6".to_string()]);
+        c.push(case("omega (m_n=2)", omega, Base::Steady, &set));
     }
     // c_n relative to G / (Ro − Ri).
     for rel in [0.1, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
@@ -199,6 +206,13 @@ fn full_cases() -> Vec<Case> {
         let eps = rel * 10.0 * R_EFF;
         c.push(case("eps_over_v0", rel, Base::Steady, &[format!("friction.eps={eps}")]));
     }
+    for rel in [1e-1, 1e-3, 1e-5] {
+        let eps = rel * 10.0 * R_EFF;
+        c.push(case("eps_over_v0", rel, Base::TransientFriction, &[format!("friction.eps={eps}")]));
+    }
+    for mu in [0.0, 1.0] {
+        c.push(case("mu", mu, Base::TransientFriction, &[format!("friction.mu={mu}")]));
+    }
     // Compliance exponent, c_n scaled so p = G at δ = 0.01 in (p = c_n δ^m_n).
     for base in [Base::Static, Base::Steady] {
         for m in [1, 2, 3] {
@@ -213,6 +227,12 @@ fn smoke_cases() -> Vec<Case> {
     vec![
         case("dt", 1e-2, Base::Transient, &["time.dt=1e-2".into(), "time.t_end=0.02".into()]),
         case(
+            "eps_over_v0",
+            1e-3,
+            Base::TransientFriction,
+            &["friction.eps=0.0197".into(), "time.dt=1e-2".into(), "time.t_end=0.02".into()],
+        ),
+        case(
             "integrator",
             "central_difference dt=1e-2",
             Base::Transient,
@@ -223,7 +243,11 @@ fn smoke_cases() -> Vec<Case> {
                 "time.t_end=0.02".into(),
             ],
         ),
-        case("omega", 10.0, Base::Steady, &steady_omega(10.0)),
+        case("omega", 10.0, Base::Steady, &{
+            let mut s = steady_omega(10.0);
+            s.extend(["mesh.n_theta=32".to_string(), "mesh.n_r=2".to_string()]);
+            s
+        }),
         case("c_n_over_G_h", 1e3, Base::Static, &["contact.c_n=2e5".into()]),
         case("invalid", "mesh.n_r=0", Base::Static, &["mesh.n_r=0".into()]),
     ]
@@ -239,6 +263,7 @@ struct Row {
     message: String,
     wall: f64,
     nan: usize,
+    newton: u64,
 }
 
 /// Class of a solve error: its innermost cause when it wraps one.
@@ -343,6 +368,7 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         message: String::new(),
         wall: 0.0,
         nan: 0,
+        newton: 0,
     };
     let t0 = Instant::now();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -391,6 +417,11 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         }
     }
     row.nan = scan_outputs(&dir);
+    // Newton iterations from the summary (also written by a failed run).
+    row.newton = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .map_or(0, |v| count_key(&v, &["newton_iterations"]));
     row
 }
 
@@ -408,11 +439,11 @@ fn md_cell(s: &str) -> String {
 
 fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<String> {
     let mut csv = String::from(
-        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs\n",
+        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs,newton_iterations\n",
     );
     for r in rows {
         csv += &format!(
-            "{},{},{},{},{},{},{},{:.3},{}\n",
+            "{},{},{},{},{},{},{},{:.3},{},{}\n",
             csv_field(&r.factor),
             csv_field(&r.value),
             r.scene,
@@ -421,17 +452,18 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
             r.class,
             csv_field(&r.message),
             r.wall,
-            r.nan
+            r.nan,
+            r.newton
         );
     }
     std::fs::write(out.join("stress_matrix.csv"), csv)?;
 
     let mut md = String::from("# Stress matrix\n\n");
-    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | message |\n";
-    md += "|---|---|---|---|---|---|---|---|---|\n";
+    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | Newton its | message |\n";
+    md += "|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} | {} |\n",
             r.factor,
             md_cell(&r.value),
             r.scene,
@@ -440,6 +472,7 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
             r.class,
             r.wall,
             r.nan,
+            r.newton,
             md_cell(&r.message)
         );
     }
