@@ -19,6 +19,7 @@
 //! | `mu` | `indentation_friction`, `oden_hollow_cylinder` | static / steady / transient | 0 … 1 |
 //! | `eps_over_v0` | `oden_hollow_cylinder` | steady / transient (2 × 32) | ε = 1e-1 … 1e-6 × v0 |
 //! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / δ_ref^m_n (p = G at δ_ref = 0.01 in) |
+//! | `extreme` | all three | all | a deep indentation, c_n = 1e12, κ = 1e10, ω = 0, ε = 1e-12, a 1 × 8 mesh, undamped runs |
 //!
 //! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
 //! `solver.cutbacks` or `results.rejected_steps` > 0), `failed` with a class from the typed
@@ -219,6 +220,27 @@ fn full_cases() -> Vec<Case> {
             let cn = G / 0.01f64.powi(m);
             c.push(case("m_n", m, base, &[format!("contact.m_n={m}"), format!("contact.c_n={cn}")]));
         }
+    }
+    // Extremes beyond the sweeps above, to look for panics and non-finite output.
+    let ext: [(&str, Base, &[&str]); 9] = [
+        ("road.disp=0.5", Base::Static, &["road.disp=0.5"]),
+        ("road.disp=0.9", Base::Static, &["road.disp=0.9"]),
+        ("c_n=1e12", Base::Static, &["contact.c_n=1e12"]),
+        ("kappa=1e10", Base::Static, &["material.kappa=1e10"]),
+        ("omega=0 v0=0", Base::Steady, &["motion.omega=0", "road.v0=0"]),
+        ("eps=1e-12", Base::Steady, &["friction.eps=1e-12"]),
+        ("mesh 1 x 8", Base::Steady, &["mesh.n_r=1", "mesh.n_theta=8"]),
+        ("b_n=0 rho_inf=1 dt=t_end", Base::Transient, &["contact.b_n=0", "time.rho_inf=1", "time.dt=0.1"]),
+        ("central_difference b_n=0 eta=0", Base::Transient, &[
+            "time.integrator=central_difference",
+            "time.mass=lumped",
+            "contact.b_n=0",
+            "time.strain_rate_damping=0",
+        ]),
+    ];
+    for (label, base, set) in ext {
+        let set: Vec<String> = set.iter().map(|x| x.to_string()).collect();
+        c.push(case("extreme", label, base, &set));
     }
     c
 }
@@ -502,6 +524,12 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
         nan_cases,
         total_wall
     );
+    md += "\nOutcomes: `converged` = Ok with no cut-back and no rejected step; `recovered` = Ok with \
+`solver.cutbacks` or `results.rejected_steps` > 0 (for `bdf` and `sdirk` the rejected steps are \
+diffsol's error-control rejections, part of the normal step-size control); `failed` = a typed \
+error, classed by its innermost cause (a load stepping or step halving that gave up is classed by \
+the last Newton failure). `converged` means the solver's own criterion was met, not that the answer \
+is accurate: compare the summaries (`cases/*/summary.json`) across a sweep.\n";
     std::fs::write(out.join("stress_matrix.md"), &md)?;
     Ok(md)
 }
