@@ -145,7 +145,12 @@ fn full_cases() -> Vec<Case> {
             if integ == "central_difference" {
                 set.push("time.mass=lumped".into());
             }
-            c.push(case("integrator", format!("{integ} dt={dt}"), Base::Transient, &set));
+            c.push(case(
+                "integrator",
+                format!("{integ} dt={dt}"),
+                Base::Transient,
+                &set,
+            ));
         }
     }
     // ω through the critical speed, steady mode (direct Newton at ω, no continuation).
@@ -161,16 +166,31 @@ fn full_cases() -> Vec<Case> {
     // c_n relative to G / (Ro − Ri).
     for rel in [0.1, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
         let cn = rel * G / WALL;
-        c.push(case("c_n_over_G_h", rel, Base::Static, &[format!("contact.c_n={cn}")]));
+        c.push(case(
+            "c_n_over_G_h",
+            rel,
+            Base::Static,
+            &[format!("contact.c_n={cn}")],
+        ));
     }
     for rel in [1.0, 1e2, 1e4, 1e6] {
         let cn = rel * G / WALL;
-        c.push(case("c_n_over_G_h", rel, Base::Steady, &[format!("contact.c_n={cn}")]));
+        c.push(case(
+            "c_n_over_G_h",
+            rel,
+            Base::Steady,
+            &[format!("contact.c_n={cn}")],
+        ));
     }
     // κ / G, compressible Mooney–Rivlin, then the incompressible model (perturbed, exact).
     for base in [Base::Static, Base::Steady] {
         for rel in [10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
-            c.push(case("kappa_over_G", rel, base, &[format!("material.kappa={}", rel * G)]));
+            c.push(case(
+                "kappa_over_G",
+                rel,
+                base,
+                &[format!("material.kappa={}", rel * G)],
+            ));
         }
         for rel in [1e2, 1e4] {
             c.push(Case {
@@ -205,20 +225,40 @@ fn full_cases() -> Vec<Case> {
     // Regularisation ε relative to the rolling speed v0 (steady; v0 = 19.67 in/s).
     for rel in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
         let eps = rel * 10.0 * R_EFF;
-        c.push(case("eps_over_v0", rel, Base::Steady, &[format!("friction.eps={eps}")]));
+        c.push(case(
+            "eps_over_v0",
+            rel,
+            Base::Steady,
+            &[format!("friction.eps={eps}")],
+        ));
     }
     for rel in [1e-1, 1e-3, 1e-5] {
         let eps = rel * 10.0 * R_EFF;
-        c.push(case("eps_over_v0", rel, Base::TransientFriction, &[format!("friction.eps={eps}")]));
+        c.push(case(
+            "eps_over_v0",
+            rel,
+            Base::TransientFriction,
+            &[format!("friction.eps={eps}")],
+        ));
     }
     for mu in [0.0, 1.0] {
-        c.push(case("mu", mu, Base::TransientFriction, &[format!("friction.mu={mu}")]));
+        c.push(case(
+            "mu",
+            mu,
+            Base::TransientFriction,
+            &[format!("friction.mu={mu}")],
+        ));
     }
     // Compliance exponent, c_n scaled so p = G at δ = 0.01 in (p = c_n δ^m_n).
     for base in [Base::Static, Base::Steady] {
         for m in [1, 2, 3] {
             let cn = G / 0.01f64.powi(m);
-            c.push(case("m_n", m, base, &[format!("contact.m_n={m}"), format!("contact.c_n={cn}")]));
+            c.push(case(
+                "m_n",
+                m,
+                base,
+                &[format!("contact.m_n={m}"), format!("contact.c_n={cn}")],
+            ));
         }
     }
     // Extremes beyond the sweeps above, to look for panics and non-finite output.
@@ -227,16 +267,32 @@ fn full_cases() -> Vec<Case> {
         ("road.disp=0.9", Base::Static, &["road.disp=0.9"]),
         ("c_n=1e12", Base::Static, &["contact.c_n=1e12"]),
         ("kappa=1e10", Base::Static, &["material.kappa=1e10"]),
-        ("omega=0 v0=0", Base::Steady, &["motion.omega=0", "road.v0=0"]),
+        (
+            "omega=0 v0=0",
+            Base::Steady,
+            &["motion.omega=0", "road.v0=0"],
+        ),
         ("eps=1e-12", Base::Steady, &["friction.eps=1e-12"]),
-        ("mesh 1 x 8", Base::Steady, &["mesh.n_r=1", "mesh.n_theta=8"]),
-        ("b_n=0 rho_inf=1 dt=t_end", Base::Transient, &["contact.b_n=0", "time.rho_inf=1", "time.dt=0.1"]),
-        ("central_difference b_n=0 eta=0", Base::Transient, &[
-            "time.integrator=central_difference",
-            "time.mass=lumped",
-            "contact.b_n=0",
-            "time.strain_rate_damping=0",
-        ]),
+        (
+            "mesh 1 x 8",
+            Base::Steady,
+            &["mesh.n_r=1", "mesh.n_theta=8"],
+        ),
+        (
+            "b_n=0 rho_inf=1 dt=t_end",
+            Base::Transient,
+            &["contact.b_n=0", "time.rho_inf=1", "time.dt=0.1"],
+        ),
+        (
+            "central_difference b_n=0 eta=0",
+            Base::Transient,
+            &[
+                "time.integrator=central_difference",
+                "time.mass=lumped",
+                "contact.b_n=0",
+                "time.strain_rate_damping=0",
+            ],
+        ),
     ];
     for (label, base, set) in ext {
         let set: Vec<String> = set.iter().map(|x| x.to_string()).collect();
@@ -247,12 +303,21 @@ fn full_cases() -> Vec<Case> {
 
 fn smoke_cases() -> Vec<Case> {
     vec![
-        case("dt", 1e-2, Base::Transient, &["time.dt=1e-2".into(), "time.t_end=0.02".into()]),
+        case(
+            "dt",
+            1e-2,
+            Base::Transient,
+            &["time.dt=1e-2".into(), "time.t_end=0.02".into()],
+        ),
         case(
             "eps_over_v0",
             1e-3,
             Base::TransientFriction,
-            &["friction.eps=0.0197".into(), "time.dt=1e-2".into(), "time.t_end=0.02".into()],
+            &[
+                "friction.eps=0.0197".into(),
+                "time.dt=1e-2".into(),
+                "time.t_end=0.02".into(),
+            ],
         ),
         case(
             "integrator",
@@ -270,8 +335,18 @@ fn smoke_cases() -> Vec<Case> {
             s.extend(["mesh.n_theta=32".to_string(), "mesh.n_r=2".to_string()]);
             s
         }),
-        case("c_n_over_G_h", 1e3, Base::Static, &["contact.c_n=2e5".into()]),
-        case("invalid", "mesh.n_r=0", Base::Static, &["mesh.n_r=0".into()]),
+        case(
+            "c_n_over_G_h",
+            1e3,
+            Base::Static,
+            &["contact.c_n=2e5".into()],
+        ),
+        case(
+            "invalid",
+            "mesh.n_r=0",
+            Base::Static,
+            &["mesh.n_r=0".into()],
+        ),
     ]
 }
 
@@ -362,7 +437,9 @@ fn one_line(s: &str) -> String {
 }
 
 fn run_case(i: usize, c: &Case, out: &Path) -> Row {
-    let dir: PathBuf = out.join("cases").join(format!("{i:03}_{}_{}", c.factor, c.base.mode()));
+    let dir: PathBuf = out
+        .join("cases")
+        .join(format!("{i:03}_{}_{}", c.factor, c.base.mode()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut text = c.base.text().to_string();
     if !c.drop_keys.is_empty() {
@@ -394,9 +471,8 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
     };
     let t0 = Instant::now();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let scene = Scene::from_toml_str(&text, c.base.file(), &set).map_err(|e| {
-            ("invalid_input", e.to_string())
-        })?;
+        let scene = Scene::from_toml_str(&text, c.base.file(), &set)
+            .map_err(|e| ("invalid_input", e.to_string()))?;
         let opts = RunOptions {
             out_dir: dir.clone(),
             verbose: false,
@@ -515,7 +591,10 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
     classes.dedup();
     md += "\n| failure class | cases |\n|---|---|\n";
     for cl in &classes {
-        md += &format!("| {cl} | {} |\n", rows.iter().filter(|r| &r.class == cl).count());
+        md += &format!(
+            "| {cl} | {} |\n",
+            rows.iter().filter(|r| &r.class == cl).count()
+        );
     }
     let nan_cases = rows.iter().filter(|r| r.nan > 0).count();
     md += &format!(
@@ -577,14 +656,21 @@ fn main() {
             r.outcome,
             r.class,
             r.wall,
-            if r.nan > 0 { format!(", {} NaN/inf tokens", r.nan) } else { String::new() }
+            if r.nan > 0 {
+                format!(", {} NaN/inf tokens", r.nan)
+            } else {
+                String::new()
+            }
         );
         rows.push(r);
     }
     match write_reports(&rows, &out, t0.elapsed().as_secs_f64()) {
         Ok(md) => println!("{md}"),
         Err(e) => {
-            eprintln!("tread-stress: cannot write the reports in {}: {e}", out.display());
+            eprintln!(
+                "tread-stress: cannot write the reports in {}: {e}",
+                out.display()
+            );
             std::process::exit(2);
         }
     }
