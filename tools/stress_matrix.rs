@@ -13,6 +13,7 @@
 //! | `dt` | `rolling_frictionless` (2 × 32 Q2, t_end = 0.1 s, fixed step) | transient | 1e-4 … t_end (one step) |
 //! | `integrator` | same | transient | generalized_alpha, central_difference, bdf, sdirk at dt 1e-3, 1e-2, 1e-1 |
 //! | `omega` | `oden_hollow_cylinder` (3 × 64) | steady | 5 … 80 rad/s (critical ≈ 41–47 rad/s), direct Newton, no continuation |
+//! | `omega (continuation)` | `oden_steady_sweep` (3 × 64), m_n = 2 and 1 | steady | arc length in ω from 10 to 60 rad/s |
 //! | `omega (m_n=2)` | same, quadratic compliance c_n = 2e6 | steady | 10 … 60 rad/s |
 //! | `c_n_over_G_h` | `indentation_friction` (4 × 64) / `oden_hollow_cylinder` | static / steady | c_n = 0.1 … 1e6 × G / (Ro − Ri) |
 //! | `kappa_over_G` | `indentation_friction`, `oden_hollow_cylinder` | static / steady | 10 … 1e6 (compressible), incompressible perturbed, exact Q2/P1 |
@@ -42,6 +43,7 @@ use tread::solver::newton::SolveError;
 
 const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
 const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
+const SWEEP: &str = include_str!("../scenarios/oden_steady_sweep.toml");
 const INDENT: &str = include_str!("../scenarios/indentation_friction.toml");
 
 /// Shear modulus G = 2 (C1 + C2) of the scenes' rubber (psi) and wall thickness Ro − Ri (in).
@@ -60,6 +62,8 @@ enum Base {
     TransientFriction,
     /// `indentation_friction.toml`, static, coarse.
     Static,
+    /// `oden_steady_sweep.toml`: steady, arc-length continuation in ω from 10 rad/s.
+    Sweep,
 }
 
 impl Base {
@@ -68,12 +72,13 @@ impl Base {
             Base::Transient => "rolling_frictionless",
             Base::Steady | Base::TransientFriction => "oden_hollow_cylinder",
             Base::Static => "indentation_friction",
+            Base::Sweep => "oden_steady_sweep",
         }
     }
     fn mode(self) -> &'static str {
         match self {
             Base::Transient | Base::TransientFriction => "transient",
-            Base::Steady => "steady",
+            Base::Steady | Base::Sweep => "steady",
             Base::Static => "static",
         }
     }
@@ -82,6 +87,7 @@ impl Base {
             Base::Transient => ROLLING,
             Base::Steady | Base::TransientFriction => ODEN,
             Base::Static => INDENT,
+            Base::Sweep => SWEEP,
         }
     }
     /// The small base scene's overrides.
@@ -96,6 +102,7 @@ impl Base {
                 "time.stop_at_steady=false",
             ],
             Base::Steady => vec!["analysis.mode=steady"],
+            Base::Sweep => vec![],
             Base::Static => vec!["mesh.n_theta=64", "mesh.n_r=4", "solver.tolerance=1e-8"],
         }
         .into_iter()
@@ -164,6 +171,20 @@ fn full_cases() -> Vec<Case> {
         set.extend(["contact.m_n=2".to_string(), "contact.c_n=2e6".to_string()]);
         c.push(case("omega (m_n=2)", omega, Base::Steady, &set));
     }
+    // Arc-length continuation in ω from 10 rad/s through the critical speed (target 60 rad/s):
+    // the smooth m_n = 2 of the scene, and the linear penalty whose kink at δ = 0 stops it early.
+    c.push(case(
+        "omega (continuation)",
+        "10 -> 60, m_n=2",
+        Base::Sweep,
+        &[],
+    ));
+    c.push(case(
+        "omega (continuation)",
+        "10 -> 60, m_n=1",
+        Base::Sweep,
+        &["contact.m_n=1".to_string(), "contact.c_n=2e4".to_string()],
+    ));
     // c_n relative to G / (Ro − Ri).
     for rel in [0.1, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
         let cn = rel * G / WALL;
@@ -387,6 +408,7 @@ fn solve_class(e: &SolveError) -> &'static str {
         SolveError::Interrupted { .. } => "interrupted",
         SolveError::Integrator { .. } => "integrator",
         SolveError::ContinuationCycles { .. } => "continuation",
+        SolveError::ContinuationReversed { .. } => "continuation",
         SolveError::ContinuationStalled { .. } => "continuation",
         SolveError::TooManyCutbacks { last, .. } => solve_class(last),
     }
@@ -449,10 +471,24 @@ fn one_line(s: &str) -> String {
     }
 }
 
+/// `factor` with every character other than `[A-Za-z0-9_-]` replaced by `_`.
+fn dir_name(factor: &str) -> String {
+    factor
+        .chars()
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() || ch == '-' {
+                ch
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
 fn run_case(i: usize, c: &Case, out: &Path) -> Row {
-    let dir: PathBuf = out
-        .join("cases")
-        .join(format!("{i:03}_{}_{}", c.factor, c.base.mode()));
+    let dir: PathBuf =
+        out.join("cases")
+            .join(format!("{i:03}_{}_{}", dir_name(c.factor), c.base.mode()));
     let _ = std::fs::remove_dir_all(&dir);
     let mut text = c.base.text().to_string();
     if !c.drop_keys.is_empty() {
