@@ -381,9 +381,8 @@ impl Continuation {
                     if self.sdot(&self.tu, tangent_l, &self.du, dl) > 0.0 {
                         Ok(it)
                     } else {
-                        Err(SolveError::NotConverged {
-                            iterations: it,
-                            residual: f64::NAN,
+                        Err(SolveError::ContinuationReversed {
+                            lambda: sys.parameter(),
                         })
                     }
                 });
@@ -694,6 +693,11 @@ impl Continuation {
         let (conv, worst) = self.converged(sys);
         if conv {
             return Ok(self.opts.max_iterations);
+        }
+        // A non-finite residual after the last correction is an inadmissible state, as inside
+        // the loop (not "not converged with residual NaN").
+        if !worst.is_finite() {
+            return Err(SolveError::InadmissibleStart);
         }
         Err(SolveError::NotConverged {
             iterations: self.opts.max_iterations,

@@ -60,6 +60,10 @@ pub enum SolveError {
     Integrator { t: f64, message: String },
     #[error("continuation stopped at parameter {lambda:.6e}: the corrector cycles between the same two points without progress (a non-smooth residual past a limit point)")]
     ContinuationCycles { lambda: f64 },
+    /// The arc-length corrector converged, but on the backward intersection of the sphere with
+    /// the branch: accepting it would reverse the direction of travel.
+    #[error("the arc-length corrector converged backwards at parameter {lambda:.6e} (against the tangent)")]
+    ContinuationReversed { lambda: f64 },
     #[error("continuation gave up at parameter {lambda:.6e} after {cutbacks} arc-length cut-backs: {last}")]
     ContinuationStalled {
         lambda: f64,

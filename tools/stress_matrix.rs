@@ -1,0 +1,731 @@
+//! Numerical-stability stress matrix (not a test): sweeps one factor at a time around small base
+//! scenes and classifies every run.
+//!
+//! ```text
+//! cargo run --release --bin tread-stress -- [--smoke] [--out DIR]
+//! ```
+//!
+//! Factors (each around a base scene built from `scenarios/` with `--set`-style overrides,
+//! coarse meshes and short runs so the full matrix takes a few minutes):
+//!
+//! | factor | scene | mode | values |
+//! |---|---|---|---|
+//! | `dt` | `rolling_frictionless` (2 × 32 Q2, t_end = 0.1 s, fixed step) | transient | 1e-4 … t_end (one step) |
+//! | `integrator` | same | transient | generalized_alpha, central_difference, bdf, sdirk at dt 1e-3, 1e-2, 1e-1 |
+//! | `omega` | `oden_hollow_cylinder` (3 × 64) | steady | 5 … 80 rad/s (critical ≈ 41–47 rad/s), direct Newton, no continuation |
+//! | `omega (continuation)` | `oden_steady_sweep` (3 × 64), m_n = 2 and 1 | steady | arc length in ω from 10 to 60 rad/s |
+//! | `omega (m_n=2)` | same, quadratic compliance c_n = 2e6 | steady | 10 … 60 rad/s |
+//! | `c_n_over_G_h` | `indentation_friction` (4 × 64) / `oden_hollow_cylinder` | static / steady | c_n = 0.1 … 1e6 × G / (Ro − Ri) |
+//! | `kappa_over_G` | `indentation_friction`, `oden_hollow_cylinder` | static / steady | 10 … 1e6 (compressible), incompressible perturbed, exact Q2/P1 |
+//! | `mu` | `indentation_friction`, `oden_hollow_cylinder` | static / steady / transient | 0 … 1 |
+//! | `eps_over_v0` | `oden_hollow_cylinder` | steady / transient (2 × 32) | ε = 1e-1 … 1e-6 × v0 |
+//! | `eps_over_v0 (v0=21)` | same near free rolling (v0 = 21 in/s) | steady | ε = 1e-1 … 1e-6 × v0 |
+//! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / δ_ref^m_n (p = G at δ_ref = 0.01 in) |
+//! | `extreme` | all three | all | a deep indentation, c_n = 1e12, κ = 1e10, ω = 0, ε = 1e-12, a 1 × 8 mesh, undamped runs |
+//!
+//! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
+//! `solver.cutbacks` or `results.rejected_steps` > 0), `failed` with a class from the typed
+//! error (`newton_not_converged`, `line_search`, `inadmissible`, `explicit_unstable`,
+//! `continuation`, `integrator`, `linear_solver`, `invalid_input`, `output`, `other`), or
+//! `panic` (a bug). A wrapped error (load stepping or time-step halving that gave up) is classed
+//! by its innermost cause. Every case's `summary.json` and CSV files are scanned for non-finite
+//! number text (`NaN`, `nan`, `inf` tokens), which must never be written.
+//!
+//! Writes `OUT/stress_matrix.csv` and `OUT/stress_matrix.md` (default OUT: `out/stress`) and
+//! prints the Markdown. `--smoke` runs a handful of fast cases (tool correctness, for CI).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use tread::app::{AppError, RunOptions};
+use tread::io::Scene;
+use tread::solver::newton::SolveError;
+
+const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
+const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
+const SWEEP: &str = include_str!("../scenarios/oden_steady_sweep.toml");
+const INDENT: &str = include_str!("../scenarios/indentation_friction.toml");
+
+/// Shear modulus G = 2 (C1 + C2) of the scenes' rubber (psi) and wall thickness Ro − Ri (in).
+const G: f64 = 200.0;
+const WALL: f64 = 1.0;
+/// R_eff ≈ Ro − DISP/3 of the rolling scenes: free-rolling road speed v0 = ω R_eff.
+const R_EFF: f64 = 1.966667;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Base {
+    /// `rolling_frictionless.toml`, transient, coarse and short, fixed step.
+    Transient,
+    /// `oden_hollow_cylinder.toml` in steady mode (its own 3 × 64 mesh).
+    Steady,
+    /// `oden_hollow_cylinder.toml`, transient with friction, coarse and short, fixed step.
+    TransientFriction,
+    /// `indentation_friction.toml`, static, coarse.
+    Static,
+    /// `oden_steady_sweep.toml`: steady, arc-length continuation in ω from 10 rad/s.
+    Sweep,
+}
+
+impl Base {
+    fn file(self) -> &'static str {
+        match self {
+            Base::Transient => "rolling_frictionless",
+            Base::Steady | Base::TransientFriction => "oden_hollow_cylinder",
+            Base::Static => "indentation_friction",
+            Base::Sweep => "oden_steady_sweep",
+        }
+    }
+    fn mode(self) -> &'static str {
+        match self {
+            Base::Transient | Base::TransientFriction => "transient",
+            Base::Steady | Base::Sweep => "steady",
+            Base::Static => "static",
+        }
+    }
+    fn text(self) -> &'static str {
+        match self {
+            Base::Transient => ROLLING,
+            Base::Steady | Base::TransientFriction => ODEN,
+            Base::Static => INDENT,
+            Base::Sweep => SWEEP,
+        }
+    }
+    /// The small base scene's overrides.
+    fn overrides(self) -> Vec<String> {
+        let mut v: Vec<String> = match self {
+            Base::Transient | Base::TransientFriction => vec![
+                "mesh.n_theta=32",
+                "mesh.n_r=2",
+                "time.t_end=0.1",
+                "time.dt=1e-3",
+                "time.adaptive=false",
+                "time.stop_at_steady=false",
+            ],
+            Base::Steady => vec!["analysis.mode=steady"],
+            Base::Sweep => vec![],
+            Base::Static => vec!["mesh.n_theta=64", "mesh.n_r=4", "solver.tolerance=1e-8"],
+        }
+        .into_iter()
+        .map(String::from)
+        .collect();
+        v.push("output.sinks=[\"summary\", \"csv\"]".into());
+        v
+    }
+}
+
+struct Case {
+    factor: &'static str,
+    value: String,
+    base: Base,
+    set: Vec<String>,
+    /// Keys (`key = ` at the start of a line) removed from the scene text before parsing; an
+    /// override cannot remove a key (the exact incompressible model rejects `kappa`).
+    drop_keys: Vec<&'static str>,
+}
+
+fn case(factor: &'static str, value: impl ToString, base: Base, set: &[String]) -> Case {
+    Case {
+        factor,
+        value: value.to_string(),
+        base,
+        set: set.to_vec(),
+        drop_keys: Vec::new(),
+    }
+}
+
+fn steady_omega(omega: f64) -> Vec<String> {
+    vec![
+        format!("motion.omega={omega}"),
+        format!("road.v0={}", omega * R_EFF),
+    ]
+}
+
+fn full_cases() -> Vec<Case> {
+    let mut c = Vec::new();
+    // Time step (fixed), generalized-α; ramps 0.05 s, dt = t_end = 0.1 s is one step through both.
+    for dt in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 5e-2, 1e-1] {
+        c.push(case("dt", dt, Base::Transient, &[format!("time.dt={dt}")]));
+    }
+    // Integrators at dt = 1e-3 (bdf and sdirk use diffsol's own error control) and at a large step.
+    for integ in ["generalized_alpha", "central_difference", "bdf", "sdirk"] {
+        for dt in [1e-3, 1e-2, 1e-1] {
+            let mut set = vec![format!("time.integrator={integ}"), format!("time.dt={dt}")];
+            if integ == "central_difference" {
+                set.push("time.mass=lumped".into());
+            }
+            c.push(case(
+                "integrator",
+                format!("{integ} dt={dt}"),
+                Base::Transient,
+                &set,
+            ));
+        }
+    }
+    // ω through the critical speed, steady mode (direct Newton at ω, no continuation).
+    for omega in [5.0, 10.0, 20.0, 30.0, 38.0, 42.0, 46.0, 50.0, 60.0, 80.0] {
+        c.push(case("omega", omega, Base::Steady, &steady_omega(omega)));
+    }
+    // The same with the smooth (C¹) quadratic compliance of `oden_steady_sweep.toml`.
+    for omega in [10.0, 30.0, 42.0, 46.0, 50.0, 60.0] {
+        let mut set = steady_omega(omega);
+        set.extend(["contact.m_n=2".to_string(), "contact.c_n=2e6".to_string()]);
+        c.push(case("omega (m_n=2)", omega, Base::Steady, &set));
+    }
+    // Arc-length continuation in ω from 10 rad/s through the critical speed (target 60 rad/s):
+    // the smooth m_n = 2 of the scene, and the linear penalty whose kink at δ = 0 stops it early.
+    c.push(case(
+        "omega (continuation)",
+        "10 -> 60, m_n=2",
+        Base::Sweep,
+        &[],
+    ));
+    c.push(case(
+        "omega (continuation)",
+        "10 -> 60, m_n=1",
+        Base::Sweep,
+        &["contact.m_n=1".to_string(), "contact.c_n=2e4".to_string()],
+    ));
+    // c_n relative to G / (Ro − Ri).
+    for rel in [0.1, 1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
+        let cn = rel * G / WALL;
+        c.push(case(
+            "c_n_over_G_h",
+            rel,
+            Base::Static,
+            &[format!("contact.c_n={cn}")],
+        ));
+    }
+    for rel in [1.0, 1e2, 1e4, 1e6] {
+        let cn = rel * G / WALL;
+        c.push(case(
+            "c_n_over_G_h",
+            rel,
+            Base::Steady,
+            &[format!("contact.c_n={cn}")],
+        ));
+    }
+    // κ / G, compressible Mooney–Rivlin, then the incompressible model (perturbed, exact).
+    for base in [Base::Static, Base::Steady] {
+        for rel in [10.0, 1e2, 1e3, 1e4, 1e5, 1e6] {
+            c.push(case(
+                "kappa_over_G",
+                rel,
+                base,
+                &[format!("material.kappa={}", rel * G)],
+            ));
+        }
+        for rel in [1e2, 1e4] {
+            c.push(Case {
+                factor: "kappa_over_G",
+                value: format!("{rel} incompressible perturbed"),
+                base,
+                set: vec![
+                    "material.model=mooney_rivlin_incompressible".into(),
+                    "material.formulation=perturbed".into(),
+                    format!("material.kappa={}", rel * G),
+                ],
+                drop_keys: vec!["kappa"],
+            });
+        }
+        c.push(Case {
+            factor: "kappa_over_G",
+            value: "inf (incompressible exact)".into(),
+            base,
+            set: vec![
+                "material.model=mooney_rivlin_incompressible".into(),
+                "material.formulation=exact".into(),
+            ],
+            drop_keys: vec!["kappa"],
+        });
+    }
+    // Friction coefficient.
+    for base in [Base::Static, Base::Steady] {
+        for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
+            c.push(case("mu", mu, base, &[format!("friction.mu={mu}")]));
+        }
+    }
+    // Regularisation ε relative to the rolling speed v0 (steady; v0 = 19.67 in/s).
+    for rel in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
+        let eps = rel * 10.0 * R_EFF;
+        c.push(case(
+            "eps_over_v0",
+            rel,
+            Base::Steady,
+            &[format!("friction.eps={eps}")],
+        ));
+    }
+    // Near free rolling (v0 = 21 in/s at ω = 10: hub force x ≈ 0, slip |w| ≲ 0.3 in/s), where
+    // a small ε resolves a stick zone; at the scene's v0 = ω R_eff the patch slides everywhere
+    // (|w| ≈ 1–2 in/s) and ε hardly matters.
+    for rel in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6] {
+        let eps = rel * 21.0;
+        c.push(case(
+            "eps_over_v0 (v0=21)",
+            rel,
+            Base::Steady,
+            &["road.v0=21".to_string(), format!("friction.eps={eps}")],
+        ));
+    }
+    for rel in [1e-1, 1e-3, 1e-5] {
+        let eps = rel * 10.0 * R_EFF;
+        c.push(case(
+            "eps_over_v0",
+            rel,
+            Base::TransientFriction,
+            &[format!("friction.eps={eps}")],
+        ));
+    }
+    for mu in [0.0, 1.0] {
+        c.push(case(
+            "mu",
+            mu,
+            Base::TransientFriction,
+            &[format!("friction.mu={mu}")],
+        ));
+    }
+    // Compliance exponent, c_n scaled so p = G at δ = 0.01 in (p = c_n δ^m_n).
+    for base in [Base::Static, Base::Steady] {
+        for m in [1, 2, 3] {
+            let cn = G / 0.01f64.powi(m);
+            c.push(case(
+                "m_n",
+                m,
+                base,
+                &[format!("contact.m_n={m}"), format!("contact.c_n={cn}")],
+            ));
+        }
+    }
+    // Extremes beyond the sweeps above, to look for panics and non-finite output.
+    let ext: [(&str, Base, &[&str]); 9] = [
+        ("road.disp=0.5", Base::Static, &["road.disp=0.5"]),
+        ("road.disp=0.9", Base::Static, &["road.disp=0.9"]),
+        ("c_n=1e12", Base::Static, &["contact.c_n=1e12"]),
+        ("kappa=1e10", Base::Static, &["material.kappa=1e10"]),
+        (
+            "omega=0 v0=0",
+            Base::Steady,
+            &["motion.omega=0", "road.v0=0"],
+        ),
+        ("eps=1e-12", Base::Steady, &["friction.eps=1e-12"]),
+        (
+            "mesh 1 x 8",
+            Base::Steady,
+            &["mesh.n_r=1", "mesh.n_theta=8"],
+        ),
+        (
+            "b_n=0 rho_inf=1 dt=t_end",
+            Base::Transient,
+            &["contact.b_n=0", "time.rho_inf=1", "time.dt=0.1"],
+        ),
+        (
+            "central_difference b_n=0 eta=0",
+            Base::Transient,
+            &[
+                "time.integrator=central_difference",
+                "time.mass=lumped",
+                "contact.b_n=0",
+                "time.strain_rate_damping=0",
+            ],
+        ),
+    ];
+    for (label, base, set) in ext {
+        let set: Vec<String> = set.iter().map(|x| x.to_string()).collect();
+        c.push(case("extreme", label, base, &set));
+    }
+    c
+}
+
+fn smoke_cases() -> Vec<Case> {
+    vec![
+        case(
+            "dt",
+            1e-2,
+            Base::Transient,
+            &["time.dt=1e-2".into(), "time.t_end=0.02".into()],
+        ),
+        case(
+            "eps_over_v0",
+            1e-3,
+            Base::TransientFriction,
+            &[
+                "friction.eps=0.0197".into(),
+                "time.dt=1e-2".into(),
+                "time.t_end=0.02".into(),
+            ],
+        ),
+        case(
+            "integrator",
+            "central_difference dt=1e-2",
+            Base::Transient,
+            &[
+                "time.integrator=central_difference".into(),
+                "time.mass=lumped".into(),
+                "time.dt=1e-2".into(),
+                "time.t_end=0.02".into(),
+            ],
+        ),
+        case("omega", 10.0, Base::Steady, &{
+            let mut s = steady_omega(10.0);
+            s.extend(["mesh.n_theta=32".to_string(), "mesh.n_r=2".to_string()]);
+            s
+        }),
+        case(
+            "c_n_over_G_h",
+            1e3,
+            Base::Static,
+            &["contact.c_n=2e5".into()],
+        ),
+        case(
+            "invalid",
+            "mesh.n_r=0",
+            Base::Static,
+            &["mesh.n_r=0".into()],
+        ),
+    ]
+}
+
+struct Row {
+    factor: String,
+    value: String,
+    scene: String,
+    mode: String,
+    outcome: &'static str,
+    class: String,
+    message: String,
+    wall: f64,
+    nan: usize,
+    newton: u64,
+}
+
+/// Class of a solve error: its innermost cause when it wraps one.
+fn solve_class(e: &SolveError) -> &'static str {
+    match e {
+        SolveError::Linear(_) => "linear_solver",
+        SolveError::NotConverged { .. } => "newton_not_converged",
+        SolveError::LineSearch { .. } => "line_search",
+        SolveError::InadmissibleStart => "inadmissible",
+        SolveError::ExplicitUnstable { .. } => "explicit_unstable",
+        SolveError::Interrupted { .. } => "interrupted",
+        SolveError::Integrator { .. } => "integrator",
+        SolveError::ContinuationCycles { .. } => "continuation",
+        SolveError::ContinuationReversed { .. } => "continuation",
+        SolveError::ContinuationStalled { .. } => "continuation",
+        SolveError::TooManyCutbacks { last, .. } => solve_class(last),
+    }
+}
+
+fn app_class(e: &AppError) -> &'static str {
+    match e {
+        AppError::Solve(se, _) => solve_class(se),
+        AppError::Unsupported(_) => "invalid_input",
+        AppError::Output(_) => "output",
+        AppError::Interrupted(_) => "interrupted",
+    }
+}
+
+/// Tokens of `text` that spell a non-finite number (`nan`, `inf`, `infinity`, any case).
+fn count_nonfinite(text: &str) -> usize {
+    text.split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|t| {
+            let t = t.to_ascii_lowercase();
+            t == "nan" || t == "inf" || t == "infinity"
+        })
+        .count()
+}
+
+/// Non-finite tokens in `summary.json` and every `*.csv` of `dir`.
+fn scan_outputs(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut n = 0;
+    for e in entries.flatten() {
+        let p = e.path();
+        let name = p.file_name().and_then(|s| s.to_str()).unwrap_or("");
+        if name == "summary.json" || name.ends_with(".csv") {
+            if let Ok(t) = std::fs::read_to_string(&p) {
+                n += count_nonfinite(&t);
+            }
+        }
+    }
+    n
+}
+
+fn count_key(v: &serde_json::Value, path: &[&str]) -> u64 {
+    let mut cur = v;
+    for k in path {
+        match cur.get(k) {
+            Some(x) => cur = x,
+            None => return 0,
+        }
+    }
+    cur.as_u64().unwrap_or(0)
+}
+
+fn one_line(s: &str) -> String {
+    let s = s.replace(['\n', '\r'], " ");
+    if s.chars().count() > 300 {
+        s.chars().take(300).collect::<String>() + "…"
+    } else {
+        s
+    }
+}
+
+/// `factor` with every character other than `[A-Za-z0-9_-]` replaced by `_`.
+fn dir_name(factor: &str) -> String {
+    factor
+        .chars()
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() || ch == '-' {
+                ch
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+fn run_case(i: usize, c: &Case, out: &Path) -> Row {
+    let dir: PathBuf =
+        out.join("cases")
+            .join(format!("{i:03}_{}_{}", dir_name(c.factor), c.base.mode()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut text = c.base.text().to_string();
+    if !c.drop_keys.is_empty() {
+        text = text
+            .lines()
+            .filter(|l| {
+                let t = l.trim_start();
+                !c.drop_keys.iter().any(|k| {
+                    t.strip_prefix(k)
+                        .is_some_and(|r| r.trim_start().starts_with('='))
+                })
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+    }
+    let mut set = c.base.overrides();
+    set.extend(c.set.iter().cloned());
+    let mut row = Row {
+        factor: c.factor.to_string(),
+        value: c.value.clone(),
+        scene: c.base.file().to_string(),
+        mode: c.base.mode().to_string(),
+        outcome: "failed",
+        class: String::new(),
+        message: String::new(),
+        wall: 0.0,
+        nan: 0,
+        newton: 0,
+    };
+    let t0 = Instant::now();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let scene = Scene::from_toml_str(&text, c.base.file(), &set)
+            .map_err(|e| ("invalid_input", e.to_string()))?;
+        let opts = RunOptions {
+            out_dir: dir.clone(),
+            verbose: false,
+            quiet: true,
+        };
+        tread::app::run(&scene, &opts).map_err(|e| (app_class(&e), e.to_string()))
+    }));
+    row.wall = t0.elapsed().as_secs_f64();
+    match result {
+        Ok(Ok(o)) => {
+            let cut = count_key(&o.summary, &["solver", "cutbacks"])
+                + count_key(&o.summary, &["results", "rejected_steps"]);
+            if !o.converged {
+                row.class = "not_converged_flag".into();
+                row.message = "run returned Ok with converged = false".into();
+            } else if cut > 0 {
+                row.outcome = "recovered";
+                row.message = format!(
+                    "cutbacks {}, rejected steps {}",
+                    count_key(&o.summary, &["solver", "cutbacks"]),
+                    count_key(&o.summary, &["results", "rejected_steps"])
+                );
+            } else {
+                row.outcome = "converged";
+            }
+        }
+        Ok(Err((class, msg))) => {
+            row.class = class.to_string();
+            row.message = one_line(&msg);
+        }
+        Err(payload) => {
+            row.outcome = "panic";
+            row.class = "panic".into();
+            let msg = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_else(|| "panic with a non-string payload".into());
+            row.message = one_line(&msg);
+        }
+    }
+    row.nan = scan_outputs(&dir);
+    // Newton iterations from the summary (also written by a failed run).
+    row.newton = std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .map_or(0, |v| count_key(&v, &["newton_iterations"]));
+    row
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|")
+}
+
+fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<String> {
+    let mut csv = String::from(
+        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs,newton_iterations\n",
+    );
+    for r in rows {
+        csv += &format!(
+            "{},{},{},{},{},{},{},{:.3},{},{}\n",
+            csv_field(&r.factor),
+            csv_field(&r.value),
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            csv_field(&r.message),
+            r.wall,
+            r.nan,
+            r.newton
+        );
+    }
+    std::fs::write(out.join("stress_matrix.csv"), csv)?;
+
+    let mut md = String::from("# Stress matrix\n\n");
+    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | Newton its | message |\n";
+    md += "|---|---|---|---|---|---|---|---|---|---|\n";
+    for r in rows {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} | {} |\n",
+            r.factor,
+            md_cell(&r.value),
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            r.wall,
+            r.nan,
+            r.newton,
+            md_cell(&r.message)
+        );
+    }
+    let mut outcomes: Vec<(&str, usize)> = Vec::new();
+    for o in ["converged", "recovered", "failed", "panic"] {
+        outcomes.push((o, rows.iter().filter(|r| r.outcome == o).count()));
+    }
+    md += "\n| outcome | cases |\n|---|---|\n";
+    for (o, n) in &outcomes {
+        md += &format!("| {o} | {n} |\n");
+    }
+    let mut classes: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.class.is_empty())
+        .map(|r| r.class.clone())
+        .collect();
+    classes.sort();
+    classes.dedup();
+    md += "\n| failure class | cases |\n|---|---|\n";
+    for cl in &classes {
+        md += &format!(
+            "| {cl} | {} |\n",
+            rows.iter().filter(|r| &r.class == cl).count()
+        );
+    }
+    let nan_cases = rows.iter().filter(|r| r.nan > 0).count();
+    md += &format!(
+        "\n{} cases, {} with NaN/inf text in their outputs, total wall time {:.1} s\n",
+        rows.len(),
+        nan_cases,
+        total_wall
+    );
+    md += "\nOutcomes: `converged` = Ok with no cut-back and no rejected step; `recovered` = Ok with \
+`solver.cutbacks` or `results.rejected_steps` > 0 (for `bdf` and `sdirk` the rejected steps are \
+diffsol's error-control rejections, part of the normal step-size control); `failed` = a typed \
+error, classed by its innermost cause (a load stepping or step halving that gave up is classed by \
+the last Newton failure). `converged` means the solver's own criterion was met, not that the answer \
+is accurate: compare the summaries (`cases/*/summary.json`) across a sweep.\n";
+    std::fs::write(out.join("stress_matrix.md"), &md)?;
+    Ok(md)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let mut smoke = false;
+    let mut out = PathBuf::from("out/stress");
+    let mut i = 1;
+    while i < args.len() {
+        match args[i].as_str() {
+            "--smoke" => smoke = true,
+            "--out" if i + 1 < args.len() => {
+                out = PathBuf::from(&args[i + 1]);
+                i += 1;
+            }
+            other => {
+                eprintln!("tread-stress: unknown argument `{other}` (use --smoke and --out DIR)");
+                std::process::exit(2);
+            }
+        }
+        i += 1;
+    }
+    if let Err(e) = std::fs::create_dir_all(&out) {
+        eprintln!("tread-stress: cannot create {}: {e}", out.display());
+        std::process::exit(2);
+    }
+    // Panics are caught and counted per case; keep their message on one line.
+    std::panic::set_hook(Box::new(|info| {
+        eprintln!("tread-stress: panic: {info}");
+    }));
+    let cases = if smoke { smoke_cases() } else { full_cases() };
+    let t0 = Instant::now();
+    let mut rows = Vec::new();
+    for (k, c) in cases.iter().enumerate() {
+        let r = run_case(k, c, &out);
+        eprintln!(
+            "[{:>3}/{}] {} = {} ({}, {}): {} {} {:.2} s{}",
+            k + 1,
+            cases.len(),
+            r.factor,
+            r.value,
+            r.scene,
+            r.mode,
+            r.outcome,
+            r.class,
+            r.wall,
+            if r.nan > 0 {
+                format!(", {} NaN/inf tokens", r.nan)
+            } else {
+                String::new()
+            }
+        );
+        rows.push(r);
+    }
+    match write_reports(&rows, &out, t0.elapsed().as_secs_f64()) {
+        Ok(md) => println!("{md}"),
+        Err(e) => {
+            eprintln!(
+                "tread-stress: cannot write the reports in {}: {e}",
+                out.display()
+            );
+            std::process::exit(2);
+        }
+    }
+    let panics = rows.iter().filter(|r| r.outcome == "panic").count();
+    let nans = rows.iter().filter(|r| r.nan > 0).count();
+    if smoke && (panics > 0 || nans > 0) {
+        std::process::exit(1);
+    }
+}
