@@ -151,10 +151,17 @@ struct Solved {
 }
 
 /// Run `text` with `overrides` `repeats` times; `Err` only when the scene is invalid.
-fn solve(text: &str, name: &str, overrides: &[String], repeats: usize, scratch: &Path) -> Result<Solved, String> {
+fn solve(
+    text: &str,
+    name: &str,
+    overrides: &[String],
+    repeats: usize,
+    scratch: &Path,
+) -> Result<Solved, String> {
     let mut set: Vec<String> = overrides.to_vec();
     set.push("output.sinks=[\"summary\"]".to_string());
-    let scene = Scene::from_toml_str(text, name, &set).map_err(|e| format!("{name} {overrides:?}: {e}"))?;
+    let scene =
+        Scene::from_toml_str(text, name, &set).map_err(|e| format!("{name} {overrides:?}: {e}"))?;
     let mut walls = Vec::new();
     let mut last = (Value::Null, false, String::new());
     for r in 0..repeats {
@@ -212,12 +219,24 @@ impl RefCache {
             .and_then(|t| serde_json::from_str::<Value>(&t).ok())
             .and_then(|v| v.as_object().cloned())
             .unwrap_or_default();
-        RefCache { path, map, fresh, refreshed: Vec::new() }
+        RefCache {
+            path,
+            map,
+            fresh,
+            refreshed: Vec::new(),
+        }
     }
 
     /// The reference values `keys` of `text` + `overrides`, computed (once per run with
     /// `--fresh-reference`) when not cached.
-    fn get(&mut self, text: &str, name: &str, overrides: &[String], keys: &[&str], scratch: &Path) -> Result<Value, String> {
+    fn get(
+        &mut self,
+        text: &str,
+        name: &str,
+        overrides: &[String],
+        keys: &[&str],
+        scratch: &Path,
+    ) -> Result<Value, String> {
         let key = fnv1a(&format!("{text}\n{}", overrides.join("\n")));
         let cached = self.map.get(&key).cloned();
         if let Some(v) = cached {
@@ -243,7 +262,10 @@ impl RefCache {
         });
         self.map.insert(key.clone(), v.clone());
         self.refreshed.push(key);
-        let _ = std::fs::write(&self.path, serde_json::to_string_pretty(&Value::Object(self.map.clone())).unwrap_or_default());
+        let _ = std::fs::write(
+            &self.path,
+            serde_json::to_string_pretty(&Value::Object(self.map.clone())).unwrap_or_default(),
+        );
         Ok(v)
     }
 }
@@ -297,7 +319,14 @@ fn errors(norm: Norm, keys: &[&str], values: &[f64], reference: &Value) -> Vec<f
     }
 }
 
-fn make_row(variant: &str, setting: &str, s: &Solved, keys: &[&str], norm: Norm, reference: &Value) -> Row {
+fn make_row(
+    variant: &str,
+    setting: &str,
+    s: &Solved,
+    keys: &[&str],
+    norm: Norm,
+    reference: &Value,
+) -> Row {
     let values: Vec<f64> = keys
         .iter()
         .map(|k| s.summary["results"][*k].as_f64().unwrap_or(f64::NAN))
@@ -369,13 +398,24 @@ fn fitted_rate(rows: &[Row], variant: &str) -> f64 {
         return f64::NAN;
     }
     let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     sxy / sxx
 }
 
-fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Row], reference_note: &str, rates: bool) {
+fn write_outputs(
+    out: &Path,
+    study: &str,
+    title: &str,
+    keys: &[&str],
+    rows: &[Row],
+    reference_note: &str,
+    rates: bool,
+) {
     // CSV
     let mut csv = String::from("study,variant,setting,dofs,wall_time_s,error");
     for k in keys {
@@ -386,7 +426,14 @@ fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Ro
     }
     csv.push_str(",rate_vs_dofs,pareto,error_alt,pareto_alt,converged,note\n");
     for r in rows {
-        csv.push_str(&format!("{study},{},{},{},{:.6e},{:.6e}", r.variant, r.setting.replace(',', ";"), r.dofs, r.wall, r.error));
+        csv.push_str(&format!(
+            "{study},{},{},{},{:.6e},{:.6e}",
+            r.variant,
+            r.setting.replace(',', ";"),
+            r.dofs,
+            r.wall,
+            r.error
+        ));
         for v in &r.values {
             csv.push_str(&format!(",{v:.10e}"));
         }
@@ -456,7 +503,9 @@ fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Ro
     draw(format!("wp_{study}.png"), "log10 wall time (s)", &by_wall);
     let has_alt = rows.iter().any(|r| r.error_alt.is_finite());
     if has_alt {
-        let okalt = |r: &&Row| r.error_alt.is_finite() && r.error_alt > 0.0 && r.wall.is_finite() && r.wall > 0.0;
+        let okalt = |r: &&Row| {
+            r.error_alt.is_finite() && r.error_alt > 0.0 && r.wall.is_finite() && r.wall > 0.0
+        };
         let mut series: Vec<(String, Vec<(f64, f64)>)> = variants
             .iter()
             .map(|v| {
@@ -477,10 +526,18 @@ fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Ro
             .collect();
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         series.push(("Pareto front".into(), front));
-        draw(format!("wp_{study}_alt.png"), "log10 wall time (s)", &series);
+        draw(
+            format!("wp_{study}_alt.png"),
+            "log10 wall time (s)",
+            &series,
+        );
     }
     if rates {
-        draw(format!("wp_{study}_dofs.png"), "log10 DOFs", &per(&|r: &Row| r.dofs));
+        draw(
+            format!("wp_{study}_dofs.png"),
+            "log10 DOFs",
+            &per(&|r: &Row| r.dofs),
+        );
     }
     // Markdown
     println!("\n### {title}\n");
@@ -509,16 +566,39 @@ fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Ro
     }
     println!("---|");
     for r in rows {
-        print!("| {} | {} | {} | {:.3} | {:.2e} |", r.variant, r.setting, r.dofs, r.wall, r.error);
+        print!(
+            "| {} | {} | {} | {:.3} | {:.2e} |",
+            r.variant, r.setting, r.dofs, r.wall, r.error
+        );
         for e in &r.errors {
             print!(" {e:.2e} |");
         }
         if rates {
-            print!(" {} |", if r.rate.is_finite() { format!("{:.2}", r.rate) } else { "–".into() });
+            print!(
+                " {} |",
+                if r.rate.is_finite() {
+                    format!("{:.2}", r.rate)
+                } else {
+                    "–".into()
+                }
+            );
         }
-        let mark = |p: bool| if p { "**yes**" } else if r.converged { "" } else { "failed: not converged or not steady" };
+        let mark = |p: bool| {
+            if p {
+                "**yes**"
+            } else if r.converged {
+                ""
+            } else {
+                "failed: not converged or not steady"
+            }
+        };
         if has_alt {
-            println!(" {} | {:.2e} | {} |", mark(r.pareto), r.error_alt, mark(r.pareto_alt));
+            println!(
+                " {} | {:.2e} | {} |",
+                mark(r.pareto),
+                r.error_alt,
+                mark(r.pareto_alt)
+            );
         } else {
             println!(" {} |", mark(r.pareto));
         }
@@ -527,10 +607,17 @@ fn write_outputs(out: &Path, study: &str, title: &str, keys: &[&str], rows: &[Ro
         println!();
         for v in &variants {
             let s = fitted_rate(rows, v);
-            println!("- {v}: fitted slope d log(error) / d log(DOFs) = {s:.2} (rate in h ≈ {:.2})", -2.0 * s);
+            println!(
+                "- {v}: fitted slope d log(error) / d log(DOFs) = {s:.2} (rate in h ≈ {:.2})",
+                -2.0 * s
+            );
         }
     }
-    println!("\nFiles: {}, {}", csv_path.display(), out.join(format!("wp_{study}.png")).display());
+    println!(
+        "\nFiles: {}, {}",
+        csv_path.display(),
+        out.join(format!("wp_{study}.png")).display()
+    );
 }
 
 fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
@@ -554,8 +641,21 @@ fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(
         for &n_r in seq.iter() {
             let n_theta = 16 * n_r;
             eprintln!("  indentation Q{order} {n_r} x {n_theta}");
-            let s = solve(INDENT, "indentation_frictionless", &mesh(n_r, n_theta, order), a.repeats, scratch)?;
-            rows.push(make_row(&format!("Q{order}"), &format!("{n_r}x{n_theta}"), &s, &keys, Norm::Relative, &reference_v));
+            let s = solve(
+                INDENT,
+                "indentation_frictionless",
+                &mesh(n_r, n_theta, order),
+                a.repeats,
+                scratch,
+            )?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &format!("{n_r}x{n_theta}"),
+                &s,
+                &keys,
+                Norm::Relative,
+                &reference_v,
+            ));
         }
     }
     finish(&mut rows, true);
@@ -564,7 +664,15 @@ fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(
         reference.0, reference.1, reference_v["dofs"], reference_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
         reference_v["values"]["contact_half_width_moment"].as_f64().unwrap_or(f64::NAN)
     );
-    write_outputs(&a.out, "indentation", "Static indentation: error vs wall time", &keys, &rows, &note, true);
+    write_outputs(
+        &a.out,
+        "indentation",
+        "Static indentation: error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        true,
+    );
     Ok(())
 }
 
@@ -589,10 +697,27 @@ fn study_steady(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), St
     for order in [2usize, 1] {
         for &(n_r, n_theta) in &seq {
             // Q1 with twice the cells in each direction: the same nodes as Q2.
-            let (nr, nt) = if order == 1 { (2 * n_r, 2 * n_theta) } else { (n_r, n_theta) };
+            let (nr, nt) = if order == 1 {
+                (2 * n_r, 2 * n_theta)
+            } else {
+                (n_r, n_theta)
+            };
             eprintln!("  steady Q{order} {nr} x {nt}");
-            let s = solve(ODEN, "oden_hollow_cylinder", &mesh(nr, nt, order), a.repeats, scratch)?;
-            rows.push(make_row(&format!("Q{order}"), &format!("{nr}x{nt}"), &s, &keys, Norm::Hub { ro: 2.0 }, &reference_v));
+            let s = solve(
+                ODEN,
+                "oden_hollow_cylinder",
+                &mesh(nr, nt, order),
+                a.repeats,
+                scratch,
+            )?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &format!("{nr}x{nt}"),
+                &s,
+                &keys,
+                Norm::Hub { ro: 2.0 },
+                &reference_v,
+            ));
         }
     }
     finish(&mut rows, true);
@@ -603,18 +728,32 @@ fn study_steady(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), St
         reference_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
         reference_v["values"]["hub_torque"].as_f64().unwrap_or(f64::NAN)
     );
-    write_outputs(&a.out, "steady", "Steady mode: error vs wall time", &keys, &rows, &note, true);
+    write_outputs(
+        &a.out,
+        "steady",
+        "Steady mode: error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        true,
+    );
     Ok(())
 }
 
 fn study_transient(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
     let keys = ["hub_force_x", "hub_force_y", "hub_torque"];
     let (mesh, tols): (Vec<String>, Vec<&str>) = if a.smoke {
-        (vec!["mesh.n_r=1".into(), "mesh.n_theta=16".into()], vec!["1e-2"])
+        (
+            vec!["mesh.n_r=1".into(), "mesh.n_theta=16".into()],
+            vec!["1e-2"],
+        )
     } else {
         // n_r = 3: with n_r = 2 (32 or 48 cells around) the frictionless steady reference's load
         // stepping stalls near full penetration (line search fails at load factor ≈ 0.97).
-        (vec!["mesh.n_r=3".into(), "mesh.n_theta=48".into()], vec!["1e-2", "1e-3", "1e-4"])
+        (
+            vec!["mesh.n_r=3".into(), "mesh.n_theta=48".into()],
+            vec!["1e-2", "1e-3", "1e-4"],
+        )
     };
     let mut ref_set = mesh.clone();
     ref_set.push("analysis.mode=\"steady\"".into());
@@ -622,7 +761,11 @@ fn study_transient(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(),
     // Second reference: a tight generalized-α run on the same mesh (its own time-converged
     // steady state; the steady mode differs from it by the difference of the two
     // discretisations, the Eulerian steady one and the Lagrangian transient one).
-    let (tight, tight_steady) = if a.smoke { ("1e-2", "1e-3") } else { ("1e-5", "1e-4") };
+    let (tight, tight_steady) = if a.smoke {
+        ("1e-2", "1e-3")
+    } else {
+        ("1e-5", "1e-4")
+    };
     let mut alt_set = mesh.clone();
     alt_set.extend([
         "time.integrator=\"generalized_alpha\"".to_string(),
@@ -646,7 +789,14 @@ fn study_transient(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(),
             }
             eprintln!("  transient {integrator} error_tol {tol}");
             let s = solve(ROLLING, "rolling_frictionless", &set, a.repeats, scratch)?;
-            let mut row = make_row(integrator, &format!("error_tol={tol}"), &s, &keys, Norm::Hub { ro: 2.0 }, &reference_v);
+            let mut row = make_row(
+                integrator,
+                &format!("error_tol={tol}"),
+                &s,
+                &keys,
+                Norm::Hub { ro: 2.0 },
+                &reference_v,
+            );
             let e = errors(Norm::Hub { ro: 2.0 }, &keys, &row.values, &alt_v);
             row.error_alt = e.iter().cloned().fold(0.0, f64::max);
             rows.push(row);
@@ -662,7 +812,15 @@ fn study_transient(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(),
         alt_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
         alt_v["values"]["hub_torque"].as_f64().unwrap_or(f64::NAN),
     );
-    write_outputs(&a.out, "transient", "Transient integrators: steady hub load error vs wall time", &keys, &rows, &note, false);
+    write_outputs(
+        &a.out,
+        "transient",
+        "Transient integrators: steady hub load error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        false,
+    );
     Ok(())
 }
 
@@ -676,7 +834,11 @@ fn main() {
     let mut cache = RefCache::load(&a.out, a.fresh);
     println!(
         "## Work–precision{} (repeats = {}, {} threads)",
-        if a.smoke { " (smoke: numbers mean nothing)" } else { "" },
+        if a.smoke {
+            " (smoke: numbers mean nothing)"
+        } else {
+            ""
+        },
         a.repeats,
         rayon::current_num_threads()
     );
