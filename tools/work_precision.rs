@@ -454,8 +454,11 @@ fn write_outputs(
     if let Err(e) = std::fs::write(&csv_path, csv) {
         eprintln!("{}: {e}", csv_path.display());
     }
-    // Plots (log10 axes: the helper draws linear axes).
-    let ok = |r: &&Row| r.error.is_finite() && r.error > 0.0 && r.wall.is_finite() && r.wall > 0.0;
+    // Plots (log10 axes: the helper draws linear axes); runs that failed or did not reach
+    // steady rolling are left out.
+    let ok = |r: &&Row| {
+        r.converged && r.error.is_finite() && r.error > 0.0 && r.wall.is_finite() && r.wall > 0.0
+    };
     let mut variants: Vec<String> = Vec::new();
     for r in rows {
         if !variants.contains(&r.variant) {
@@ -504,7 +507,11 @@ fn write_outputs(
     let has_alt = rows.iter().any(|r| r.error_alt.is_finite());
     if has_alt {
         let okalt = |r: &&Row| {
-            r.error_alt.is_finite() && r.error_alt > 0.0 && r.wall.is_finite() && r.wall > 0.0
+            r.converged
+                && r.error_alt.is_finite()
+                && r.error_alt > 0.0
+                && r.wall.is_finite()
+                && r.wall > 0.0
         };
         let mut series: Vec<(String, Vec<(f64, f64)>)> = variants
             .iter()
