@@ -1,0 +1,869 @@
+//! Work–precision suite (a benchmark, not a test): error against wall time and against DOFs.
+//!
+//! ```text
+//! cargo run --release --bin tread-work-precision -- [--smoke] [--repeats N] [--out DIR]
+//!     [--fresh-reference] [--studies indentation,steady,transient]
+//! ```
+//!
+//! Every run goes through `Scene::from_toml_str` (scene text + `--set`-style overrides) and
+//! `tread::app::run`, with the `summary` sink only; the numbers are read from the returned
+//! summary (`dofs`, `wall_time_s`, `results.*`). Wall time is the median of `--repeats` runs
+//! (default 3) of the summary's `wall_time_s`.
+//!
+//! Studies (each writes `OUT/wp_<study>.csv`, `OUT/wp_<study>.png` (log10 error vs log10 wall
+//! time, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (log10 error vs log10
+//! DOFs), and a Markdown table on stdout):
+//!
+//! * `indentation`: `scenarios/indentation_frictionless.toml`, meshes refined together
+//!   (n_theta = 16 n_r), order 2 and order 1. Quantities: `hub_force_y`,
+//!   `contact_half_width_moment`; relative errors against an order-2 run on a much finer mesh.
+//! * `steady`: `scenarios/oden_hollow_cylinder.toml` with `analysis.mode = "steady"`, n_theta
+//!   32..256 with n_r 2..6, order 2 and order 1. Quantities: `hub_force_x`, `hub_force_y`,
+//!   `hub_torque`; errors as in `tread compare`: |ΔFx| / |F|, |ΔFy| / |F|, |ΔT| / (|F| Ro)
+//!   with |F| of the reference.
+//! * `transient`: `scenarios/rolling_frictionless.toml` on a fixed coarse mesh, integrators
+//!   generalized_alpha, bdf, sdirk, central_difference at several `time.error_tol`. Error of the
+//!   extracted steady hub forces and torque (normalised as in `steady`) against the `steady` mode
+//!   on the same mesh: the steady mode is the exact steady state of the same discretisation, so
+//!   this error is the time integration's (plus the steadiness tolerance).
+//!
+//! `error` is the largest of a row's relative errors. A row is on the Pareto front when no other
+//! row of the study has both a smaller-or-equal wall time and a smaller-or-equal error (one of
+//! them strictly). `rate_vs_dofs` is the local slope d log(error) / d log(DOFs) against the
+//! previous mesh of the same variant (for a 2D mesh, the rate in h is −2 × this slope).
+//!
+//! References are cached in `OUT/reference.json`, keyed by an FNV-1a hash of the scene text and
+//! the overrides; `--fresh-reference` recomputes them. `--smoke` runs tiny meshes once each
+//! (a check that the tool works, well under a minute in release; its numbers mean nothing).
+
+use std::path::{Path, PathBuf};
+
+use serde_json::{json, Value};
+use tread::app::RunOptions;
+use tread::io::record::png::line_chart;
+use tread::io::Scene;
+
+const INDENT: &str = include_str!("../scenarios/indentation_frictionless.toml");
+const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
+const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
+
+/// Command-line options.
+struct Args {
+    smoke: bool,
+    repeats: usize,
+    out: PathBuf,
+    fresh: bool,
+    studies: Vec<String>,
+}
+
+fn parse_args() -> Args {
+    let mut a = Args {
+        smoke: false,
+        repeats: 3,
+        out: PathBuf::from("out/work_precision"),
+        fresh: false,
+        studies: vec!["indentation".into(), "steady".into(), "transient".into()],
+    };
+    let mut repeats_given = false;
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let mut i = 0;
+    let usage = "usage: tread-work-precision [--smoke] [--repeats N] [--out DIR] [--fresh-reference] [--studies indentation,steady,transient]";
+    while i < argv.len() {
+        let val = |i: usize| -> String {
+            argv.get(i + 1).cloned().unwrap_or_else(|| {
+                eprintln!("{usage}");
+                std::process::exit(2)
+            })
+        };
+        match argv[i].as_str() {
+            "--smoke" => a.smoke = true,
+            "--fresh-reference" => a.fresh = true,
+            "--repeats" => {
+                a.repeats = val(i).parse().unwrap_or_else(|_| {
+                    eprintln!("--repeats: expected a positive integer");
+                    std::process::exit(2)
+                });
+                repeats_given = true;
+                i += 1;
+            }
+            "--out" => {
+                a.out = PathBuf::from(val(i));
+                i += 1;
+            }
+            "--studies" => {
+                a.studies = val(i).split(',').map(|s| s.trim().to_string()).collect();
+                i += 1;
+            }
+            "-h" | "--help" => {
+                println!("{usage}");
+                std::process::exit(0);
+            }
+            other => {
+                eprintln!("tread-work-precision: unknown argument `{other}`\n{usage}");
+                std::process::exit(2);
+            }
+        }
+        i += 1;
+    }
+    if a.smoke && !repeats_given {
+        a.repeats = 1;
+    }
+    a.repeats = a.repeats.max(1);
+    for s in &a.studies {
+        if !["indentation", "steady", "transient"].contains(&s.as_str()) {
+            eprintln!("--studies: unknown study `{s}` (indentation, steady, transient)");
+            std::process::exit(2);
+        }
+    }
+    a
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// FNV-1a, 64 bit: a hash that stays the same across Rust versions and platforms.
+fn fnv1a(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// One solved case: the summary of the last repeat and the median wall time.
+struct Solved {
+    summary: Value,
+    wall: f64,
+    converged: bool,
+    note: String,
+}
+
+/// Run `text` with `overrides` `repeats` times; `Err` only when the scene is invalid.
+fn solve(
+    text: &str,
+    name: &str,
+    overrides: &[String],
+    repeats: usize,
+    scratch: &Path,
+) -> Result<Solved, String> {
+    let mut set: Vec<String> = overrides.to_vec();
+    set.push("output.sinks=[\"summary\"]".to_string());
+    let scene =
+        Scene::from_toml_str(text, name, &set).map_err(|e| format!("{name} {overrides:?}: {e}"))?;
+    let mut walls = Vec::new();
+    let mut last = (Value::Null, false, String::new());
+    for r in 0..repeats {
+        let opts = RunOptions {
+            out_dir: scratch.join(format!("{}_{}", fnv1a(&format!("{name}{set:?}")), r)),
+            verbose: false,
+            quiet: true,
+        };
+        let t0 = std::time::Instant::now();
+        let res = tread::app::run(&scene, &opts);
+        let outer = t0.elapsed().as_secs_f64();
+        last = match res {
+            Ok(o) => {
+                let conv = o.converged && o.summary["results"]["steady"].as_bool().unwrap_or(true);
+                (o.summary, conv, String::new())
+            }
+            Err(e) => {
+                let s = std::fs::read_to_string(opts.out_dir.join("summary.json"))
+                    .ok()
+                    .and_then(|t| serde_json::from_str(&t).ok())
+                    .unwrap_or(Value::Null);
+                (s, false, e.to_string())
+            }
+        };
+        walls.push(last.0["wall_time_s"].as_f64().unwrap_or(outer));
+        let _ = std::fs::remove_dir_all(&opts.out_dir);
+        if !last.1 {
+            break; // a failed run is not timed again
+        }
+    }
+    if !last.1 && last.2.is_empty() {
+        last.2 = "not converged / not steady".into();
+    }
+    Ok(Solved {
+        summary: last.0,
+        wall: median(walls),
+        converged: last.1,
+        note: last.2,
+    })
+}
+
+/// The reference cache `OUT/reference.json`.
+struct RefCache {
+    path: PathBuf,
+    map: serde_json::Map<String, Value>,
+    fresh: bool,
+    refreshed: Vec<String>,
+}
+
+impl RefCache {
+    fn load(out: &Path, fresh: bool) -> Self {
+        let path = out.join("reference.json");
+        let map = std::fs::read_to_string(&path)
+            .ok()
+            .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+            .and_then(|v| v.as_object().cloned())
+            .unwrap_or_default();
+        RefCache {
+            path,
+            map,
+            fresh,
+            refreshed: Vec::new(),
+        }
+    }
+
+    /// The reference values `keys` of `text` + `overrides`, computed (once per run with
+    /// `--fresh-reference`) when not cached.
+    fn get(
+        &mut self,
+        text: &str,
+        name: &str,
+        overrides: &[String],
+        keys: &[&str],
+        scratch: &Path,
+    ) -> Result<Value, String> {
+        let key = fnv1a(&format!("{text}\n{}", overrides.join("\n")));
+        let cached = self.map.get(&key).cloned();
+        if let Some(v) = cached {
+            if !self.fresh || self.refreshed.contains(&key) {
+                return Ok(v);
+            }
+        }
+        eprintln!("  reference {name} {overrides:?} ...");
+        let s = solve(text, name, overrides, 1, scratch)?;
+        if !s.converged {
+            return Err(format!("reference {name} {overrides:?} failed: {}", s.note));
+        }
+        let mut values = serde_json::Map::new();
+        for k in keys {
+            values.insert(k.to_string(), s.summary["results"][*k].clone());
+        }
+        let v = json!({
+            "scene": name,
+            "overrides": overrides,
+            "dofs": s.summary["dofs"],
+            "wall_time_s": s.wall,
+            "values": values,
+        });
+        self.map.insert(key.clone(), v.clone());
+        self.refreshed.push(key);
+        let _ = std::fs::write(
+            &self.path,
+            serde_json::to_string_pretty(&Value::Object(self.map.clone())).unwrap_or_default(),
+        );
+        Ok(v)
+    }
+}
+
+/// One row of a study.
+struct Row {
+    variant: String,
+    setting: String,
+    dofs: f64,
+    wall: f64,
+    values: Vec<f64>,
+    errors: Vec<f64>,
+    error: f64,
+    rate: f64,
+    pareto: bool,
+    /// Error against a second reference (the transient study: the tightest generalized-α run)
+    /// and the Pareto front for it; NaN / false when the study has none.
+    error_alt: f64,
+    pareto_alt: bool,
+    converged: bool,
+    note: String,
+}
+
+/// How errors are measured in a study.
+#[derive(Clone, Copy)]
+enum Norm {
+    /// |q − q_ref| / |q_ref| per quantity.
+    Relative,
+    /// Hub forces and torque: |ΔFx| / |F|, |ΔFy| / |F|, |ΔT| / (|F| ro), |F| of the reference.
+    Hub { ro: f64 },
+}
+
+fn errors(norm: Norm, keys: &[&str], values: &[f64], reference: &Value) -> Vec<f64> {
+    let r = |k: &str| reference["values"][k].as_f64().unwrap_or(f64::NAN);
+    match norm {
+        Norm::Relative => keys
+            .iter()
+            .zip(values)
+            .map(|(k, v)| (v - r(k)).abs() / r(k).abs())
+            .collect(),
+        Norm::Hub { ro } => {
+            let fmag = r("hub_force_x").hypot(r("hub_force_y"));
+            keys.iter()
+                .zip(values)
+                .map(|(k, v)| {
+                    let scale = if *k == "hub_torque" { fmag * ro } else { fmag };
+                    (v - r(k)).abs() / scale
+                })
+                .collect()
+        }
+    }
+}
+
+fn make_row(
+    variant: &str,
+    setting: &str,
+    s: &Solved,
+    keys: &[&str],
+    norm: Norm,
+    reference: &Value,
+) -> Row {
+    let values: Vec<f64> = keys
+        .iter()
+        .map(|k| s.summary["results"][*k].as_f64().unwrap_or(f64::NAN))
+        .collect();
+    // Kept for a run that did not converge or reach steady rolling (its last state), but such a
+    // row is never on the Pareto front and has no rate.
+    let errs = errors(norm, keys, &values, reference);
+    let error = if errs.iter().all(|e| e.is_finite()) {
+        errs.iter().cloned().fold(0.0, f64::max)
+    } else {
+        f64::NAN
+    };
+    Row {
+        variant: variant.into(),
+        setting: setting.into(),
+        dofs: s.summary["dofs"].as_f64().unwrap_or(f64::NAN),
+        wall: s.wall,
+        values,
+        errors: errs,
+        error,
+        rate: f64::NAN,
+        pareto: false,
+        error_alt: f64::NAN,
+        pareto_alt: false,
+        converged: s.converged,
+        note: s.note.clone(),
+    }
+}
+
+/// Mark the Pareto front (wall time, error) and the local rates against DOFs per variant.
+fn pareto(rows: &[Row], err: impl Fn(&Row) -> f64) -> Vec<bool> {
+    let ok = |r: &Row| r.converged && err(r).is_finite() && r.wall.is_finite() && err(r) > 0.0;
+    (0..rows.len())
+        .map(|i| {
+            let (wi, ei) = (rows[i].wall, err(&rows[i]));
+            ok(&rows[i])
+                && !rows.iter().enumerate().any(|(j, r)| {
+                    j != i && ok(r) && r.wall <= wi && err(r) <= ei && (r.wall < wi || err(r) < ei)
+                })
+        })
+        .collect()
+}
+
+fn finish(rows: &mut [Row], rates: bool) {
+    let ok = |r: &Row| r.converged && r.error.is_finite() && r.wall.is_finite() && r.error > 0.0;
+    let (p, q) = (pareto(rows, |r| r.error), pareto(rows, |r| r.error_alt));
+    for (i, r) in rows.iter_mut().enumerate() {
+        r.pareto = p[i];
+        r.pareto_alt = q[i];
+    }
+    if rates {
+        for i in 1..rows.len() {
+            let (a, b) = (&rows[i - 1], &rows[i]);
+            if a.variant == b.variant && ok(a) && ok(b) && b.dofs != a.dofs {
+                rows[i].rate = (b.error / a.error).ln() / (b.dofs / a.dofs).ln();
+            }
+        }
+    }
+}
+
+/// Least-squares slope of log(error) against log(DOFs) over a variant's rows.
+fn fitted_rate(rows: &[Row], variant: &str) -> f64 {
+    let pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.variant == variant && r.converged && r.error.is_finite() && r.error > 0.0)
+        .map(|r| (r.dofs.ln(), r.error.ln()))
+        .collect();
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+fn write_outputs(
+    out: &Path,
+    study: &str,
+    title: &str,
+    keys: &[&str],
+    rows: &[Row],
+    reference_note: &str,
+    rates: bool,
+) {
+    // CSV
+    let mut csv = String::from("study,variant,setting,dofs,wall_time_s,error");
+    for k in keys {
+        csv.push_str(&format!(",{k}"));
+    }
+    for k in keys {
+        csv.push_str(&format!(",err_{k}"));
+    }
+    csv.push_str(",rate_vs_dofs,pareto,error_alt,pareto_alt,converged,note\n");
+    for r in rows {
+        csv.push_str(&format!(
+            "{study},{},{},{},{:.6e},{:.6e}",
+            r.variant,
+            r.setting.replace(',', ";"),
+            r.dofs,
+            r.wall,
+            r.error
+        ));
+        for v in &r.values {
+            csv.push_str(&format!(",{v:.10e}"));
+        }
+        for e in &r.errors {
+            csv.push_str(&format!(",{e:.6e}"));
+        }
+        csv.push_str(&format!(
+            ",{:.4},{},{:.6e},{},{},\"{}\"\n",
+            r.rate,
+            r.pareto,
+            r.error_alt,
+            r.pareto_alt,
+            r.converged,
+            r.note.replace('"', "'")
+        ));
+    }
+    let csv_path = out.join(format!("wp_{study}.csv"));
+    if let Err(e) = std::fs::write(&csv_path, csv) {
+        eprintln!("{}: {e}", csv_path.display());
+    }
+    // Plots (log10 axes: the helper draws linear axes); runs that failed or did not reach
+    // steady rolling are left out.
+    let ok = |r: &&Row| {
+        r.converged && r.error.is_finite() && r.error > 0.0 && r.wall.is_finite() && r.wall > 0.0
+    };
+    let mut variants: Vec<String> = Vec::new();
+    for r in rows {
+        if !variants.contains(&r.variant) {
+            variants.push(r.variant.clone());
+        }
+    }
+    let per = |x: &dyn Fn(&Row) -> f64| -> Vec<(String, Vec<(f64, f64)>)> {
+        variants
+            .iter()
+            .map(|v| {
+                let mut pts: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| &r.variant == v)
+                    .filter(ok)
+                    .map(|r| (x(r).log10(), r.error.log10()))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                (v.clone(), pts)
+            })
+            .collect()
+    };
+    let mut by_wall = per(&|r: &Row| r.wall);
+    let mut front: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.pareto)
+        .filter(ok)
+        .map(|r| (r.wall.log10(), r.error.log10()))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    by_wall.push(("Pareto front".into(), front));
+    let draw = |name: String, xl: &str, series: &[(String, Vec<(f64, f64)>)]| {
+        let s: Vec<(&str, &[(f64, f64)])> = series
+            .iter()
+            .filter(|(_, p)| !p.is_empty())
+            .map(|(n, p)| (n.as_str(), p.as_slice()))
+            .collect();
+        if s.is_empty() {
+            return;
+        }
+        let path = out.join(name);
+        if let Err(e) = line_chart(&path, title, xl, "log10 relative error", &s) {
+            eprintln!("{}: {e}", path.display());
+        }
+    };
+    draw(format!("wp_{study}.png"), "log10 wall time (s)", &by_wall);
+    let has_alt = rows.iter().any(|r| r.error_alt.is_finite());
+    if has_alt {
+        let okalt = |r: &&Row| {
+            r.converged
+                && r.error_alt.is_finite()
+                && r.error_alt > 0.0
+                && r.wall.is_finite()
+                && r.wall > 0.0
+        };
+        let mut series: Vec<(String, Vec<(f64, f64)>)> = variants
+            .iter()
+            .map(|v| {
+                let mut pts: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| &r.variant == v)
+                    .filter(okalt)
+                    .map(|r| (r.wall.log10(), r.error_alt.log10()))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                (v.clone(), pts)
+            })
+            .collect();
+        let mut front: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.pareto_alt)
+            .map(|r| (r.wall.log10(), r.error_alt.log10()))
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        series.push(("Pareto front".into(), front));
+        draw(
+            format!("wp_{study}_alt.png"),
+            "log10 wall time (s)",
+            &series,
+        );
+    }
+    if rates {
+        draw(
+            format!("wp_{study}_dofs.png"),
+            "log10 DOFs",
+            &per(&|r: &Row| r.dofs),
+        );
+    }
+    // Markdown
+    println!("\n### {title}\n");
+    println!("{reference_note}\n");
+    print!("| variant | setting | DOFs | wall (s) | error |");
+    for k in keys {
+        print!(" err {k} |");
+    }
+    if rates {
+        print!(" rate vs DOFs |");
+    }
+    if has_alt {
+        print!(" Pareto | error alt | Pareto alt |\n");
+    } else {
+        println!(" Pareto |");
+    }
+    print!("|---|---|---|---|---|");
+    if has_alt {
+        print!("---|---|");
+    }
+    for _ in keys {
+        print!("---|");
+    }
+    if rates {
+        print!("---|");
+    }
+    println!("---|");
+    for r in rows {
+        print!(
+            "| {} | {} | {} | {:.3} | {:.2e} |",
+            r.variant, r.setting, r.dofs, r.wall, r.error
+        );
+        for e in &r.errors {
+            print!(" {e:.2e} |");
+        }
+        if rates {
+            print!(
+                " {} |",
+                if r.rate.is_finite() {
+                    format!("{:.2}", r.rate)
+                } else {
+                    "–".into()
+                }
+            );
+        }
+        let mark = |p: bool| {
+            if p {
+                "**yes**"
+            } else if r.converged {
+                ""
+            } else {
+                "failed: not converged or not steady"
+            }
+        };
+        if has_alt {
+            println!(
+                " {} | {:.2e} | {} |",
+                mark(r.pareto),
+                r.error_alt,
+                mark(r.pareto_alt)
+            );
+        } else {
+            println!(" {} |", mark(r.pareto));
+        }
+    }
+    if rates {
+        println!();
+        for v in &variants {
+            let s = fitted_rate(rows, v);
+            println!(
+                "- {v}: fitted slope d log(error) / d log(DOFs) = {s:.2} (rate in h ≈ {:.2})",
+                -2.0 * s
+            );
+        }
+    }
+    println!(
+        "\nFiles: {}, {}",
+        csv_path.display(),
+        out.join(format!("wp_{study}.png")).display()
+    );
+}
+
+fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
+    let keys = ["hub_force_y", "contact_half_width_moment"];
+    let mesh = |n_r: usize, n_theta: usize, order: usize| {
+        vec![
+            format!("mesh.n_r={n_r}"),
+            format!("mesh.n_theta={n_theta}"),
+            format!("mesh.order={order}"),
+        ]
+    };
+    let (seq2, seq1, reference): (Vec<usize>, Vec<usize>, (usize, usize)) = if a.smoke {
+        (vec![1, 2], vec![2], (3, 48))
+    } else {
+        (vec![2, 3, 4, 6, 8], vec![2, 4, 6, 8, 12, 16], (24, 384))
+    };
+    let ref_set = mesh(reference.0, reference.1, 2);
+    let reference_v = cache.get(INDENT, "indentation_frictionless", &ref_set, &keys, scratch)?;
+    let mut rows = Vec::new();
+    for (order, seq) in [(2usize, &seq2), (1, &seq1)] {
+        for &n_r in seq.iter() {
+            let n_theta = 16 * n_r;
+            eprintln!("  indentation Q{order} {n_r} x {n_theta}");
+            let s = solve(
+                INDENT,
+                "indentation_frictionless",
+                &mesh(n_r, n_theta, order),
+                a.repeats,
+                scratch,
+            )?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &format!("{n_r}x{n_theta}"),
+                &s,
+                &keys,
+                Norm::Relative,
+                &reference_v,
+            ));
+        }
+    }
+    finish(&mut rows, true);
+    let note = format!(
+        "Static frictionless indentation (`scenarios/indentation_frictionless.toml`), n_theta = 16 n_r (grading_theta 0.6). Reference: Q2 {}x{} ({} DOFs): hub_force_y = {:.8e}, contact_half_width_moment = {:.8e}. Errors relative.",
+        reference.0, reference.1, reference_v["dofs"], reference_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
+        reference_v["values"]["contact_half_width_moment"].as_f64().unwrap_or(f64::NAN)
+    );
+    write_outputs(
+        &a.out,
+        "indentation",
+        "Static indentation: error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        true,
+    );
+    Ok(())
+}
+
+fn study_steady(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
+    let keys = ["hub_force_x", "hub_force_y", "hub_torque"];
+    let mesh = |n_r: usize, n_theta: usize, order: usize| {
+        vec![
+            "analysis.mode=\"steady\"".to_string(),
+            format!("mesh.n_r={n_r}"),
+            format!("mesh.n_theta={n_theta}"),
+            format!("mesh.order={order}"),
+        ]
+    };
+    let (seq, reference): (Vec<(usize, usize)>, (usize, usize)) = if a.smoke {
+        (vec![(2, 16), (2, 24)], (3, 48))
+    } else {
+        (vec![(2, 32), (3, 64), (4, 128), (6, 256)], (12, 1024))
+    };
+    let ref_set = mesh(reference.0, reference.1, 2);
+    let reference_v = cache.get(ODEN, "oden_hollow_cylinder", &ref_set, &keys, scratch)?;
+    let mut rows = Vec::new();
+    for order in [2usize, 1] {
+        for &(n_r, n_theta) in &seq {
+            // Q1 with twice the cells in each direction: the same nodes as Q2.
+            let (nr, nt) = if order == 1 {
+                (2 * n_r, 2 * n_theta)
+            } else {
+                (n_r, n_theta)
+            };
+            eprintln!("  steady Q{order} {nr} x {nt}");
+            let s = solve(
+                ODEN,
+                "oden_hollow_cylinder",
+                &mesh(nr, nt, order),
+                a.repeats,
+                scratch,
+            )?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &format!("{nr}x{nt}"),
+                &s,
+                &keys,
+                Norm::Hub { ro: 2.0 },
+                &reference_v,
+            ));
+        }
+    }
+    finish(&mut rows, true);
+    let note = format!(
+        "Steady mode on `scenarios/oden_hollow_cylinder.toml` (Coulomb μ = 0.3, 10 rad/s). Q1 meshes have twice the cells of the Q2 ones in each direction (the same nodes). Reference: Q2 {}x{} ({} DOFs): Fx = {:.8e}, Fy = {:.8e}, T = {:.8e}. Errors |ΔFx|/|F|, |ΔFy|/|F|, |ΔT|/(|F| Ro).",
+        reference.0, reference.1, reference_v["dofs"],
+        reference_v["values"]["hub_force_x"].as_f64().unwrap_or(f64::NAN),
+        reference_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
+        reference_v["values"]["hub_torque"].as_f64().unwrap_or(f64::NAN)
+    );
+    write_outputs(
+        &a.out,
+        "steady",
+        "Steady mode: error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        true,
+    );
+    Ok(())
+}
+
+fn study_transient(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
+    let keys = ["hub_force_x", "hub_force_y", "hub_torque"];
+    let (mesh, tols): (Vec<String>, Vec<&str>) = if a.smoke {
+        (
+            vec!["mesh.n_r=1".into(), "mesh.n_theta=16".into()],
+            vec!["1e-2"],
+        )
+    } else {
+        // n_r = 3: with n_r = 2 (32 or 48 cells around) the frictionless steady reference's load
+        // stepping stalls near full penetration (line search fails at load factor ≈ 0.97).
+        (
+            vec!["mesh.n_r=3".into(), "mesh.n_theta=48".into()],
+            vec!["1e-2", "1e-3", "1e-4"],
+        )
+    };
+    let mut ref_set = mesh.clone();
+    ref_set.push("analysis.mode=\"steady\"".into());
+    let reference_v = cache.get(ROLLING, "rolling_frictionless", &ref_set, &keys, scratch)?;
+    // Second reference: a tight generalized-α run on the same mesh (its own time-converged
+    // steady state; the steady mode differs from it by the difference of the two
+    // discretisations, the Eulerian steady one and the Lagrangian transient one).
+    let (tight, tight_steady) = if a.smoke {
+        ("1e-2", "1e-3")
+    } else {
+        ("1e-5", "1e-4")
+    };
+    let mut alt_set = mesh.clone();
+    alt_set.extend([
+        "time.integrator=\"generalized_alpha\"".to_string(),
+        format!("time.error_tol={tol}", tol = tight),
+        format!("time.steady_tol={tight_steady}"),
+    ]);
+    let alt_v = cache
+        .get(ROLLING, "rolling_frictionless", &alt_set, &keys, scratch)
+        .unwrap_or_else(|e| {
+            eprintln!("{e} (error alt left empty)");
+            Value::Null
+        });
+    let mut rows = Vec::new();
+    for integrator in ["generalized_alpha", "bdf", "sdirk", "central_difference"] {
+        for tol in &tols {
+            let mut set = mesh.clone();
+            set.push(format!("time.integrator=\"{integrator}\""));
+            set.push(format!("time.error_tol={tol}"));
+            if integrator == "central_difference" {
+                set.push("time.mass=\"lumped\"".into()); // the scene's consistent mass is an error here
+            }
+            eprintln!("  transient {integrator} error_tol {tol}");
+            let s = solve(ROLLING, "rolling_frictionless", &set, a.repeats, scratch)?;
+            let mut row = make_row(
+                integrator,
+                &format!("error_tol={tol}"),
+                &s,
+                &keys,
+                Norm::Hub { ro: 2.0 },
+                &reference_v,
+            );
+            let e = errors(Norm::Hub { ro: 2.0 }, &keys, &row.values, &alt_v);
+            row.error_alt = e.iter().cloned().fold(0.0, f64::max);
+            rows.push(row);
+        }
+    }
+    finish(&mut rows, false);
+    let note = format!(
+        "Transient integrators on `scenarios/rolling_frictionless.toml`, mesh {:?} (fixed). Reference: the steady mode on the same mesh ({} DOFs): Fx = {:.8e}, Fy = {:.8e}, T = {:.8e}. Errors |ΔFx|/|F|, |ΔFy|/|F|, |ΔT|/(|F| Ro) of the extracted steady state; they include the steadiness tolerance (time.steady_tol = 1e-3) and the difference between the steady and the transient discretisations. `error alt`: the same errors against generalized-α at error_tol = {tight}, steady_tol = {tight_steady} (Fy = {:.8e}, T = {:.8e}): the time-integration error alone.",
+        mesh, reference_v["dofs"],
+        reference_v["values"]["hub_force_x"].as_f64().unwrap_or(f64::NAN),
+        reference_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
+        reference_v["values"]["hub_torque"].as_f64().unwrap_or(f64::NAN),
+        alt_v["values"]["hub_force_y"].as_f64().unwrap_or(f64::NAN),
+        alt_v["values"]["hub_torque"].as_f64().unwrap_or(f64::NAN),
+    );
+    write_outputs(
+        &a.out,
+        "transient",
+        "Transient integrators: steady hub load error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        false,
+    );
+    Ok(())
+}
+
+fn main() {
+    let a = parse_args();
+    if let Err(e) = std::fs::create_dir_all(&a.out) {
+        eprintln!("{}: {e}", a.out.display());
+        std::process::exit(2);
+    }
+    let scratch = std::env::temp_dir().join(format!("tread_wp_{}", std::process::id()));
+    let mut cache = RefCache::load(&a.out, a.fresh);
+    println!(
+        "## Work–precision{} (repeats = {}, {} threads)",
+        if a.smoke {
+            " (smoke: numbers mean nothing)"
+        } else {
+            ""
+        },
+        a.repeats,
+        rayon::current_num_threads()
+    );
+    let mut failed = false;
+    for s in a.studies.clone() {
+        eprintln!("study {s}");
+        let r = match s.as_str() {
+            "indentation" => study_indentation(&a, &mut cache, &scratch),
+            "steady" => study_steady(&a, &mut cache, &scratch),
+            _ => study_transient(&a, &mut cache, &scratch),
+        };
+        if let Err(e) = r {
+            eprintln!("study {s}: {e}");
+            failed = true;
+        }
+    }
+    let _ = std::fs::remove_dir_all(&scratch);
+    if failed {
+        std::process::exit(1);
+    }
+}
