@@ -59,13 +59,20 @@ fn compare(name: &str, text: &str, omega: f64, extra: &[&str]) -> serde_json::Va
 }
 
 fn check(c: &serde_json::Value) {
-    assert_eq!(c["transient_steady"].as_bool(), Some(true), "transient not steady");
+    assert_eq!(
+        c["transient_steady"].as_bool(),
+        Some(true),
+        "transient not steady"
+    );
     let fx = c["hub_force_x_rel_diff"].as_f64().unwrap();
     let fy = c["hub_force_y_rel_diff"].as_f64().unwrap();
     let l2 = c["field_rel_l2"].as_f64().unwrap();
     assert!(fx < 5e-3, "hub force x differs by {fx:.3e} of |F|");
     assert!(fy < 5e-3, "hub force y differs by {fy:.3e} of |F|");
-    assert!(l2 < 1e-2, "referential field differs by {l2:.3e} (relative L2)");
+    assert!(
+        l2 < 1e-2,
+        "referential field differs by {l2:.3e} (relative L2)"
+    );
     assert!(c["speedup"].as_f64().unwrap() > 1.0);
 }
 

@@ -111,8 +111,16 @@ fn steady_without_contact_is_steady_spinning() {
     let kind = tread::app::linear_kind(&sp, &sys);
     let (nopt, sopt) = tread::app::solver_options(&sp, false);
     let mut rep = Default::default();
-    tread::driver::spinning::solve_spinning(&mut sys, sp.motion.omega, kind, nopt, &sopt, &mut rep, &mut ())
-        .unwrap();
+    tread::driver::spinning::solve_spinning(
+        &mut sys,
+        sp.motion.omega,
+        kind,
+        nopt,
+        &sopt,
+        &mut rep,
+        &mut (),
+    )
+    .unwrap();
     let (_, st) = steady_solution(base, &["analysis.mode=\"steady\""]);
     let diff = sys
         .x
@@ -148,7 +156,11 @@ fn frictionless_rolling_is_symmetric_with_zero_torque() {
     );
     assert!(f[1] < -10.0, "the road must carry load: Fy = {}", f[1]);
     assert!((t.x_min + t.x_max).abs() < 1e-3 * (t.x_max - t.x_min));
-    assert!(t.centroid.abs() < 1e-3 * (t.x_max - t.x_min), "centroid {}", t.centroid);
+    assert!(
+        t.centroid.abs() < 1e-3 * (t.x_max - t.x_min),
+        "centroid {}",
+        t.centroid
+    );
     assert!(m.abs() < 1e-6 * f[1].abs() * 2.0, "torque {m}");
     assert!(f[0].abs() < 1e-6 * f[1].abs(), "Fx {}", f[0]);
 }
@@ -169,11 +181,17 @@ fn free_rolling(set: &[&str]) -> (f64, f64, f64, f64) {
         r.torque,
         r.evaluations
     );
-    assert!(t0.abs() > 1e-2 * scale, "the driven scene must need a torque");
+    assert!(
+        t0.abs() > 1e-2 * scale,
+        "the driven scene must need a torque"
+    );
     assert!(r.torque.abs() <= 1e-6 * scale);
     assert!(st.hub_torque().abs() <= 1e-6 * scale);
     let fx = st.sys.hub_reaction().0[0];
-    println!("  free rolling hub force x = {fx:.4e} (mu Fy = {:.4e})", 0.3 * fy);
+    println!(
+        "  free rolling hub force x = {fx:.4e} (mu Fy = {:.4e})",
+        0.3 * fy
+    );
     (t0, r.v0, scale, fx / (0.3 * fy))
 }
 
@@ -191,7 +209,10 @@ fn free_rolling_gives_zero_torque() {
         "time.strain_rate_damping=0",
     ]);
     let r_eff = v0 / 10.0;
-    assert!(r_eff > 1.9 && r_eff < 2.2, "effective rolling radius {r_eff}");
+    assert!(
+        r_eff > 1.9 && r_eff < 2.2,
+        "effective rolling radius {r_eff}"
+    );
     assert!(fx_rel.abs() < 0.05, "Fx / (mu Fy) = {fx_rel}");
     // With strain-rate damping the cylinder has a rolling resistance: at zero hub torque the
     // road must push it, v0 is larger than without damping.
@@ -225,7 +246,10 @@ fn continuation_in_omega_follows_the_branch() {
     .unwrap();
     let branch = out.summary["results"]["branch"].as_array().unwrap().clone();
     assert!(branch.len() >= 4, "{} points", branch.len());
-    let lam: Vec<f64> = branch.iter().map(|p| p["omega"].as_f64().unwrap()).collect();
+    let lam: Vec<f64> = branch
+        .iter()
+        .map(|p| p["omega"].as_f64().unwrap())
+        .collect();
     assert!(lam.windows(2).all(|w| w[1] > w[0]), "{lam:?}");
     assert!(*lam.last().unwrap() >= 25.0);
     // The end point agrees with a direct solve at that ω (same v0/ω ratio).
@@ -272,14 +296,21 @@ fn strain_rate_damping_does_not_act_on_steady_spinning() {
         st.sys.set_reference_force(1.0);
         let mut newton = Newton::new(&st.sys, LinearKind::Lu, Default::default()).unwrap();
         newton.solve(&mut st).unwrap();
-        println!("  eta = {eta}, n_theta = {n_theta}: hub torque {:.3e}", st.hub_torque());
+        println!(
+            "  eta = {eta}, n_theta = {n_theta}: hub torque {:.3e}",
+            st.hub_torque()
+        );
         st.sys.x.clone()
     };
     let mut rel = Vec::new();
     for nt in [24, 48, 96] {
         let (u0, u1) = (solve(0.0, nt), solve(20.0, nt));
         let umax = u0.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let diff = u0.iter().zip(&u1).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let diff = u0
+            .iter()
+            .zip(&u1)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         println!("n_theta = {nt}: max |u| = {umax:.3e}, change with eta = 20 psi s: {diff:.3e} ({:.3e} relative)", diff / umax);
         assert!(umax > 1e-4);
         rel.push(diff / umax);

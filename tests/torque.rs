@@ -119,7 +119,9 @@ fn torque_step_tangent_error(load_control: bool) -> f64 {
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let eq_phi = tr.sys.dofs.eq[iphi] as usize;
     // The φ column must actually couple (a missing block would pass a loose test).
-    let col_phi = (0..n).filter(|&i| i != eq_phi && k[i][eq_phi] != 0.0).count();
+    let col_phi = (0..n)
+        .filter(|&i| i != eq_phi && k[i][eq_phi] != 0.0)
+        .count();
     assert!(col_phi > 10, "φ column has only {col_phi} entries");
     let mut err = 0.0f64;
     let mut e = vec![0.0; n];
@@ -149,7 +151,10 @@ fn torque_step_tangent_error(load_control: bool) -> f64 {
 fn torque_control_tangent_matches_finite_differences() {
     for load in [false, true] {
         let e = torque_step_tangent_error(load);
-        assert!(e < 1e-6, "tangent differs from FD (load control {load}): {e:.3e}");
+        assert!(
+            e < 1e-6,
+            "tangent differs from FD (load control {load}): {e:.3e}"
+        );
     }
 }
 
@@ -176,7 +181,8 @@ fn scene_text(path: &str) -> String {
 }
 
 fn get(r: &serde_json::Value, k: &str) -> f64 {
-    r[k].as_f64().unwrap_or_else(|| panic!("results.{k} missing: {r}"))
+    r[k].as_f64()
+        .unwrap_or_else(|| panic!("results.{k} missing: {r}"))
 }
 
 #[test]
@@ -211,7 +217,10 @@ fn free_rolling_and_braking_reach_steady_torque_balance() {
     // The steady hub speed is reported and sensible (the rolling radius v0/ω of this thick,
     // nearly incompressible layer exceeds Ro, as for rubber-covered rollers: ≈ 2.12 in).
     let rr = get(r, "rolling_radius");
-    assert!(w_free > 0.0 && rr > h && rr < 1.2 * ro, "ω = {w_free}, v0/ω = {rr}");
+    assert!(
+        w_free > 0.0 && rr > h && rr < 1.2 * ro,
+        "ω = {w_free}, v0/ω = {rr}"
+    );
 
     // Braking: T = −10 lbf·in/in (clockwise, against the rotation).
     let s = run_text(&scene_text("scenarios/braking.toml"), "braking", &[]);
@@ -250,10 +259,8 @@ fn free_rolling_and_braking_reach_steady_torque_balance() {
 fn load_control_rolling_carries_the_applied_load() {
     // The frictionless rolling scene under load control: the road height H is a global
     // unknown; the applied hub load P must be carried by the hub at the steady state.
-    let text = scene_text("scenarios/rolling_frictionless.toml").replace(
-        "disp = 0.1 ",
-        "load = 100.0 ",
-    );
+    let text =
+        scene_text("scenarios/rolling_frictionless.toml").replace("disp = 0.1 ", "load = 100.0 ");
     assert!(text.contains("load = 100.0"));
     let s = run_text(
         &text,
@@ -277,7 +284,10 @@ fn load_control_rolling_carries_the_applied_load() {
     assert_eq!(r["steady"], true, "load control: no steady state by t_end");
     let (fy, cy) = (get(r, "hub_force_y"), get(r, "contact_force_y"));
     // The H equation makes ∫ t_n ds0 = P exactly (to the Newton tolerance).
-    assert!((cy - 100.0).abs() < 1e-4 * 100.0, "contact force {cy} vs load 100");
+    assert!(
+        (cy - 100.0).abs() < 1e-4 * 100.0,
+        "contact force {cy} vs load 100"
+    );
     // The hub carries it: F_hub = −F_contact − Σ M a; Σ M a = m a_cm vanishes in steady rolling
     // up to the periodic fluctuation at the passage instants (measured 0.22 %): 1 %.
     assert!(

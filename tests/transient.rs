@@ -463,7 +463,9 @@ fn central_difference_stable_step_includes_damping_and_contact() {
     tr_old.dt_stable = dt_plain;
     let blown = march(&mut tr_old, 0.9 * dt_plain, 2000);
     eprintln!("0.9 × undamped contact-free estimate: {blown:?}");
-    let msg = blown.err().unwrap_or_else(|| panic!("the old estimate did not blow up"));
+    let msg = blown
+        .err()
+        .unwrap_or_else(|| panic!("the old estimate did not blow up"));
     assert!(msg.contains("unstable"), "{msg}");
 }
 
@@ -484,18 +486,29 @@ fn passages_landed_on_are_counted_at_that_step() {
     let mut o = opts(dtheta / omega / 7.0, 0.6);
     o.land_on_passages = true;
     let mut seen = Vec::new();
-    let rep = integrate(&mut tr, &o, newton_opts(), LinearKind::Cholesky, |tr, rep| {
-        seen.push((tr.t, rep.passages))
-    })
+    let rep = integrate(
+        &mut tr,
+        &o,
+        newton_opts(),
+        LinearKind::Cholesky,
+        |tr, rep| seen.push((tr.t, rep.passages)),
+    )
     .unwrap_or_else(|(e, _)| panic!("{e}"));
-    assert!(rep.passage_log.len() >= 3, "{} passages", rep.passage_log.len());
+    assert!(
+        rep.passage_log.len() >= 3,
+        "{} passages",
+        rep.passage_log.len()
+    );
     for (t, n) in &seen {
         let expected = rep
             .passage_log
             .iter()
             .filter(|r| r[0] <= t * (1.0 + 1e-9))
             .count();
-        assert_eq!(*n, expected, "at t = {t}: {n} passages counted, {expected} passed");
+        assert_eq!(
+            *n, expected,
+            "at t = {t}: {n} passages counted, {expected} passed"
+        );
     }
     // Every passage was landed on by a step (and logged at that step's time).
     for r in &rep.passage_log {

@@ -81,10 +81,16 @@ fn main() {
                     .unwrap_or_default()
             }
         };
-        let branch = summary["results"]["branch"].as_array().cloned().unwrap_or_default();
+        let branch = summary["results"]["branch"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
         let steps: Vec<&serde_json::Value> = branch.iter().skip(1).collect();
         let get = |k: &str| -> Vec<f64> {
-            steps.iter().map(|p| p[k].as_f64().unwrap_or(f64::NAN)).collect()
+            steps
+                .iter()
+                .map(|p| p[k].as_f64().unwrap_or(f64::NAN))
+                .collect()
         };
         let (w, f, it) = (get("wall_time_s"), get("factor_solve_s"), get("iterations"));
         let ratio: Vec<f64> = w.iter().zip(&f).map(|(a, b)| a / b).collect();

@@ -50,7 +50,8 @@ fn contact_block_time(set: &[&str], repeats: usize) -> (f64, f64) {
         }
     };
     let mut rep = Default::default();
-    if let Err(e) = tread::driver::steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()) {
+    if let Err(e) = tread::driver::steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ())
+    {
         eprintln!("steady solve failed: {e}");
         std::process::exit(1);
     }
@@ -120,9 +121,16 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mut repeats = 7usize;
     if let Some(i) = args.iter().position(|a| a == "--repeats") {
-        repeats = args.get(i + 1).and_then(|v| v.parse().ok()).unwrap_or(7).max(1);
+        repeats = args
+            .get(i + 1)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(7)
+            .max(1);
     }
-    if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(1).build_global() {
+    if let Err(e) = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+    {
         eprintln!("warning: {e}");
     }
     let steady = ["analysis.mode=\"steady\""];

@@ -18,7 +18,6 @@
 //!
 //!    With the `png` sink, `OUT/contact_compare.png` draws t_n and t_T along x1 from both.
 
-
 use super::steady_run;
 use crate::app::{self, AppError, RunOptions, RunOutcome};
 use crate::element::QuadRule;
@@ -71,7 +70,11 @@ fn read_field(path: &Path, n_nodes: usize, per_ring: usize) -> Result<Vec<f64>, 
 }
 
 /// Field differences on the referential mesh of `scene`: (relative L2, max |Δu|, max |u_s|).
-pub fn field_difference(scene: &Scene, u_t: &[f64], u_s: &[f64]) -> Result<(f64, f64, f64), AppError> {
+pub fn field_difference(
+    scene: &Scene,
+    u_t: &[f64],
+    u_s: &[f64],
+) -> Result<(f64, f64, f64), AppError> {
     let sys = crate::driver::SolidSystem::new(app::build_model(scene)?, "hub");
     let n = sys.model.mesh.n_nodes();
     let mut xd = sys.x.clone();
@@ -100,7 +103,11 @@ pub fn field_difference(scene: &Scene, u_t: &[f64], u_s: &[f64]) -> Result<(f64,
         .map(|k| (node(u_t, k) - node(u_s, k)).norm())
         .fold(0.0, f64::max);
     let max_s = (0..n).map(|k| node(u_s, k).norm()).fold(0.0, f64::max);
-    let rel = if den > 0.0 { (num / den).sqrt() } else { f64::NAN };
+    let rel = if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        f64::NAN
+    };
     Ok((rel, max_d, max_s))
 }
 
@@ -163,8 +170,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let u_s = read_field(&st_opts.out_dir.join("steady_field.csv"), n, per_ring)
         .map_err(|e| AppError::Unsupported(format!("compare: steady field: {e}")))?;
     let (rel_l2, max_d, max_s) = field_difference(scene, &u_t, &u_s)?;
-    let (fxt, fyt, tqt) = (f(ts, "hub_force_x"), f(ts, "hub_force_y"), f(ts, "hub_torque"));
-    let (fxs, fys, tqs) = (f(ss, "hub_force_x"), f(ss, "hub_force_y"), f(ss, "hub_torque"));
+    let (fxt, fyt, tqt) = (
+        f(ts, "hub_force_x"),
+        f(ts, "hub_force_y"),
+        f(ts, "hub_torque"),
+    );
+    let (fxs, fys, tqs) = (
+        f(ss, "hub_force_x"),
+        f(ss, "hub_force_y"),
+        f(ss, "hub_torque"),
+    );
     let fmag = fxs.hypot(fys).max(f64::MIN_POSITIVE);
     let (wt, ws) = (
         ts["wall_time_s"].as_f64().unwrap_or(f64::NAN),
@@ -209,19 +224,46 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     let c = &summary["results"]["compare"];
     let g = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
-    let pair = |name: &str, a: f64, b: f64| vec![name.to_string(), a.to_string(), b.to_string(), (a - b).abs().to_string()];
+    let pair = |name: &str, a: f64, b: f64| {
+        vec![
+            name.to_string(),
+            a.to_string(),
+            b.to_string(),
+            (a - b).abs().to_string(),
+        ]
+    };
     let rows = vec![
         pair("hub_force_x", fxt, fxs),
         pair("hub_force_y", fyt, fys),
         pair("hub_torque", tqt, tqs),
-        pair("contact_x_min", g("contact_x_min_transient"), g("contact_x_min_steady")),
-        pair("contact_x_max", g("contact_x_max_transient"), g("contact_x_max_steady")),
-        pair("max_pressure", g("max_pressure_transient"), g("max_pressure_steady")),
+        pair(
+            "contact_x_min",
+            g("contact_x_min_transient"),
+            g("contact_x_min_steady"),
+        ),
+        pair(
+            "contact_x_max",
+            g("contact_x_max_transient"),
+            g("contact_x_max_steady"),
+        ),
+        pair(
+            "max_pressure",
+            g("max_pressure_transient"),
+            g("max_pressure_steady"),
+        ),
         pair("wall_time_s", wt, ws),
     ];
-    write_text_csv(&opts.out_dir.join("compare.csv"), &["quantity", "transient", "steady", "abs_diff"], &rows)?;
+    write_text_csv(
+        &opts.out_dir.join("compare.csv"),
+        &["quantity", "transient", "steady", "abs_diff"],
+        &rows,
+    )?;
     if scene.output.has(Sink::Png) {
-        contact_plot(&tr_opts.out_dir, &st_opts.out_dir, &opts.out_dir.join("contact_compare.png"));
+        contact_plot(
+            &tr_opts.out_dir,
+            &st_opts.out_dir,
+            &opts.out_dir.join("contact_compare.png"),
+        );
     }
     let headline = vec![
         format!(

@@ -231,26 +231,30 @@ pub fn solve_torque(
 ) -> Result<TorqueSolve, SolveError> {
     let mut out = TorqueSolve::default();
     let mut saved = Vec::new();
-    let mut eval = |st: &mut SteadyRolling, v0: f64, out: &mut TorqueSolve| -> Result<f64, SolveError> {
-        st.sys.save_state(&mut saved);
-        st.set_v0(v0);
-        match newton.solve(st) {
-            Ok(r) => {
-                out.newton_iterations += r.iterations;
-                out.evaluations += 1;
-                let t = st.hub_torque() - target;
-                out.history.push((v0, t + target));
-                Ok(t)
+    let mut eval =
+        |st: &mut SteadyRolling, v0: f64, out: &mut TorqueSolve| -> Result<f64, SolveError> {
+            st.sys.save_state(&mut saved);
+            st.set_v0(v0);
+            match newton.solve(st) {
+                Ok(r) => {
+                    out.newton_iterations += r.iterations;
+                    out.evaluations += 1;
+                    let t = st.hub_torque() - target;
+                    out.history.push((v0, t + target));
+                    Ok(t)
+                }
+                Err(e) => {
+                    st.sys.restore_state(&saved);
+                    Err(e)
+                }
             }
-            Err(e) => {
-                st.sys.restore_state(&saved);
-                Err(e)
-            }
-        }
-    };
+        };
     let omega = st.omega();
     // Velocity scale for the first secant step: 1e-3 of the rolling speed.
-    let vs = (omega * st.ro).abs().max(st.v0().abs()).max(f64::MIN_POSITIVE);
+    let vs = (omega * st.ro)
+        .abs()
+        .max(st.v0().abs())
+        .max(f64::MIN_POSITIVE);
     let mut a = st.v0();
     let mut fa = eval(st, a, &mut out)?;
     if fa.abs() <= tol * torque_scale {
@@ -271,7 +275,11 @@ pub fn solve_torque(
         if fa * fb < 0.0 {
             bracket = Some((a, fa, b, fb));
         }
-        let mut c = if fb != fa { b - fb * (b - a) / (fb - fa) } else { b + 1e-3 * vs };
+        let mut c = if fb != fa {
+            b - fb * (b - a) / (fb - fa)
+        } else {
+            b + 1e-3 * vs
+        };
         if let Some((lo, flo, hi, fhi)) = bracket {
             let (l, h) = (lo.min(hi), lo.max(hi));
             if !(c > l && c < h) {

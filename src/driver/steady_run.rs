@@ -303,9 +303,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         match res {
             Ok(r) => {
                 if record::interrupted() {
-                    solve = Err(SolveError::Interrupted {
-                        at: st.parameter(),
-                    });
+                    solve = Err(SolveError::Interrupted { at: st.parameter() });
                 }
                 cont = Some(r);
             }
@@ -322,7 +320,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let tot = ContactModel::totals(&samples);
     let (f, m) = st.sys.hub_reaction();
     let steps = report.steps.iter().filter(|s| s.converged).count()
-        + cont.as_ref().map_or(0, |c| c.points.len().saturating_sub(1));
+        + cont
+            .as_ref()
+            .map_or(0, |c| c.points.len().saturating_sub(1));
     let mut results = serde_json::json!({
         "steady": converged,
         "time_to_steady": 0.0,
@@ -356,8 +356,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "factorizations": c.factorizations,
         });
     }
-    let friction = st.sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
-    let damping = st.sys.contact.as_ref().is_some_and(|c| c.normal.has_damping());
+    let friction = st
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.friction.is_active());
+    let damping = st
+        .sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.normal.has_damping());
     let mut summary = serde_json::json!({
         "scene": scene.scene.name,
         "mode": mode,
@@ -443,14 +451,26 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "Steady branch: hub loads",
                 &label,
                 "hub force / torque (per unit thickness)",
-                &[("hub_force_x", &fx), ("hub_force_y", &fy), ("hub_torque", &tq)],
+                &[
+                    ("hub_force_x", &fx),
+                    ("hub_force_y", &fy),
+                    ("hub_torque", &tq),
+                ],
             ) {
                 eprintln!("tread: warning: branch.png: {e}");
             }
         }
         if !samples.is_empty() {
-            let tn: Vec<(f64, f64)> = samples.iter().filter(|s| s.t_n > 0.0).map(|s| (s.x1, s.t_n)).collect();
-            let tt: Vec<(f64, f64)> = samples.iter().filter(|s| s.t_n > 0.0).map(|s| (s.x1, s.t_t)).collect();
+            let tn: Vec<(f64, f64)> = samples
+                .iter()
+                .filter(|s| s.t_n > 0.0)
+                .map(|s| (s.x1, s.t_n))
+                .collect();
+            let tt: Vec<(f64, f64)> = samples
+                .iter()
+                .filter(|s| s.t_n > 0.0)
+                .map(|s| (s.x1, s.t_t))
+                .collect();
             if !tn.is_empty() {
                 if let Err(e) = record::png::line_chart(
                     &dir.join("contact.png"),

@@ -106,7 +106,13 @@ impl SolidSystem {
             self.ref_norms[2] = f;
         }
         // The hub-angle equation (torque control) is a moment balance: force × outer radius.
-        let ro = self.model.mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
+        let ro = self
+            .model
+            .mesh
+            .nodes
+            .iter()
+            .map(|x| x.norm())
+            .fold(0.0, f64::max);
         self.ref_norms[3] = f * ro;
     }
 
@@ -118,8 +124,7 @@ impl SolidSystem {
         let mesh = &self.model.mesh;
         let hub: Vec<u32> = mesh.node_set("hub").to_vec();
         let n_global = self.dofs.n_global + 1;
-        let mut dofs =
-            DofMap::with_globals(mesh, self.model.dofs_per_cell(), &hub, n_global);
+        let mut dofs = DofMap::with_globals(mesh, self.model.dofs_per_cell(), &hub, n_global);
         let iphi = dofs.global(n_global - 1);
         let mut blocks = vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())];
         if let Some(c) = &self.contact {

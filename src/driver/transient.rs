@@ -657,7 +657,8 @@ impl Transient {
                             let (mut col, mut row) = (0.0, 0.0);
                             for b in (0..nn).filter(|&b| is_hub[nodes[b] as usize]) {
                                 let t = hub_t(b);
-                                col += loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
+                                col +=
+                                    loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
                                 row += t[0] * loc.k[(2 * b) * nd + i]
                                     + t[1] * loc.k[(2 * b + 1) * nd + i];
                             }
@@ -782,7 +783,10 @@ impl Transient {
                 let mesh = &self.sys.model.mesh;
                 for n in 0..mesh.n_nodes() {
                     let xr = mesh.nodes[n];
-                    let rigid = [cs * xr[0] - sn * xr[1] - xr[0], sn * xr[0] + cs * xr[1] - xr[1]];
+                    let rigid = [
+                        cs * xr[0] - sn * xr[1] - xr[0],
+                        sn * xr[0] + cs * xr[1] - xr[1],
+                    ];
                     for (i, r) in rigid.iter().enumerate() {
                         let d = 2 * n + i;
                         let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.a1[d] - self.an[d]);
@@ -1320,9 +1324,10 @@ pub fn integrate(
                 if let Some(m) = &mut monitor {
                     // Hub angle on [t0, t1]: prescribed, or the cubic Hermite interpolant of
                     // (φ, φ̇) at the two ends under torque control.
-                    let hermite = tr.hub_angle.as_ref().map(|h| {
-                        (u0[h.iphi], v0[h.iphi], tr.un[h.iphi], tr.vn[h.iphi])
-                    });
+                    let hermite = tr
+                        .hub_angle
+                        .as_ref()
+                        .map(|h| (u0[h.iphi], v0[h.iphi], tr.un[h.iphi], tr.vn[h.iphi]));
                     let (t1, kin) = (tr.t, &tr.kin);
                     let phi_at = |t: f64| match hermite {
                         Some((p0, w0, p1, w1)) => {

@@ -1436,8 +1436,20 @@ impl Scene {
             Some(solver),
             Some(output),
         ) = (
-            info, geometry, mesh, material, analysis, motion, road, contact, friction, stick_slip,
-            time, continuation, solver, output,
+            info,
+            geometry,
+            mesh,
+            material,
+            analysis,
+            motion,
+            road,
+            contact,
+            friction,
+            stick_slip,
+            time,
+            continuation,
+            solver,
+            output,
         )
         else {
             // Unreachable in practice: every `None` above records an issue.
@@ -3107,7 +3119,10 @@ fn validate_continuation(
     if !(c.target.is_finite() && c.target >= 0.0) {
         out.push(issue(
             "continuation.target",
-            format!("final parameter value must be finite and >= 0, got {}", c.target),
+            format!(
+                "final parameter value must be finite and >= 0, got {}",
+                c.target
+            ),
         ));
     }
     if !positive(c.ds) {
@@ -3119,14 +3134,20 @@ fn validate_continuation(
     if !(c.ds_max.is_finite() && c.ds_max >= c.ds) {
         out.push(issue(
             "continuation.ds_max",
-            format!("largest arc length must be >= ds = {}, got {}", c.ds, c.ds_max),
+            format!(
+                "largest arc length must be >= ds = {}, got {}",
+                c.ds, c.ds_max
+            ),
         ));
     }
     if c.max_steps < 1 {
         out.push(issue("continuation.max_steps", "must be >= 1, got 0"));
     }
     if c.desired_iterations < 1 {
-        out.push(issue("continuation.desired_iterations", "must be >= 1, got 0"));
+        out.push(issue(
+            "continuation.desired_iterations",
+            "must be >= 1, got 0",
+        ));
     }
     if mode != Some(Mode::Steady) {
         return;
@@ -5188,7 +5209,10 @@ mesh.n_r = 4
     fn torque_control_scenes_parse() {
         let f = load(FREE_ROLLING).unwrap_or_else(|e| panic!("{e}"));
         let b = load(BRAKING).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!((f.scene.name.as_str(), b.scene.name.as_str()), ("free_rolling", "braking"));
+        assert_eq!(
+            (f.scene.name.as_str(), b.scene.name.as_str()),
+            ("free_rolling", "braking")
+        );
         for s in [&f, &b] {
             assert_eq!(s.analysis.mode, Mode::Transient);
             assert_eq!(s.motion.control, Control::Torque);
@@ -5204,8 +5228,24 @@ mesh.n_r = 4
         assert_eq!((b.motion.torque, b.motion.ramp), (-10.0, 0.2));
         // The two scenes differ only in the torque, its ramp and the naming.
         assert_eq!(
-            (&f.geometry, &f.mesh, &f.material, &f.road, &f.contact, &f.friction, &f.time),
-            (&b.geometry, &b.mesh, &b.material, &b.road, &b.contact, &b.friction, &b.time)
+            (
+                &f.geometry,
+                &f.mesh,
+                &f.material,
+                &f.road,
+                &f.contact,
+                &f.friction,
+                &f.time
+            ),
+            (
+                &b.geometry,
+                &b.mesh,
+                &b.material,
+                &b.road,
+                &b.contact,
+                &b.friction,
+                &b.time
+            )
         );
         // Defaults: speed control, no inertia, no torque.
         let s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
@@ -5253,7 +5293,11 @@ mesh.n_r = 4
         assert!(e.0[0].message.contains("speed"), "{e}");
         let text = FREE_ROLLING.replace("torque = 0.0 ", "torque = \"none\" ");
         let e = errors(&text);
-        assert_only(&e, "motion.torque", Some(line_of(&text, "torque = \"none\"")));
+        assert_only(
+            &e,
+            "motion.torque",
+            Some(line_of(&text, "torque = \"none\"")),
+        );
         let e = errors_with(BRAKING, &["motion.torque=nan"]);
         assert_only(&e, "motion.torque", None);
     }

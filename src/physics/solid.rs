@@ -637,8 +637,7 @@ impl SolidModel {
                 if steady_visc.is_some() {
                     for i in 0..2 {
                         for kl in 0..4 {
-                            gb[i][kl] =
-                                g[a][0] * b_v[(v(i, 0), kl)] + g[a][1] * b_v[(v(i, 1), kl)];
+                            gb[i][kl] = g[a][0] * b_v[(v(i, 0), kl)] + g[a][1] * b_v[(v(i, 1), kl)];
                         }
                     }
                 }

@@ -452,7 +452,12 @@ impl Continuation {
                 });
             } else if sign.is_finite() && prev_sign.is_finite() && sign * prev_sign < 0.0 {
                 kind = PointKind::Bifurcation;
-                let l = interpolate_zero(lam_n, lam, prev_sign * prev_logdet.exp().min(1e300), sign * logdet.exp().min(1e300));
+                let l = interpolate_zero(
+                    lam_n,
+                    lam,
+                    prev_sign * prev_logdet.exp().min(1e300),
+                    sign * logdet.exp().min(1e300),
+                );
                 rep.special.push(SpecialPoint {
                     kind,
                     lambda: l,
@@ -522,7 +527,8 @@ impl Continuation {
                     return Err(SolveError::ContinuationCycles { lambda: lam });
                 }
             }
-            if (lam - self.opts.target) * self.opts.direction >= 0.0 && kind != PointKind::LimitPoint
+            if (lam - self.opts.target) * self.opts.direction >= 0.0
+                && kind != PointKind::LimitPoint
                 && dl * self.opts.direction > 0.0
             {
                 rep.stop_reason = format!("target lambda = {} reached", self.opts.target);
@@ -836,7 +842,10 @@ mod tests {
             .unwrap();
         // Every point is on the curve.
         for (p, x) in rep.points.iter().zip(&xs) {
-            assert!((x.powi(3) - 3.0 * x - p.lambda).abs() < 1e-9, "off the curve");
+            assert!(
+                (x.powi(3) - 3.0 * x - p.lambda).abs() < 1e-9,
+                "off the curve"
+            );
         }
         let limits: Vec<f64> = rep
             .special
@@ -845,8 +854,16 @@ mod tests {
             .map(|s| s.lambda)
             .collect();
         assert_eq!(limits.len(), 2, "{:?}", rep.special);
-        assert!((limits[0] - 2.0).abs() < 0.01, "first limit at {}", limits[0]);
-        assert!((limits[1] + 2.0).abs() < 0.01, "second limit at {}", limits[1]);
+        assert!(
+            (limits[0] - 2.0).abs() < 0.01,
+            "first limit at {}",
+            limits[0]
+        );
+        assert!(
+            (limits[1] + 2.0).abs() < 0.01,
+            "second limit at {}",
+            limits[1]
+        );
         assert!(sys.lam >= 10.0 && sys.x > 2.0);
         // det K = 3x² − 3 changes sign at both limit points (and these are not bifurcations).
         assert!(rep.special.iter().all(|s| s.kind != PointKind::Bifurcation));

@@ -771,9 +771,16 @@ pub fn integrate_first_order(
             let snap1 = tr.snapshot_light();
             if let Some(m) = &mut monitor {
                 if tr.t >= ramps_done
-                    && m.check(&tr, t_prev, &u0, &v0, &snap0, &snap1, opts.steady_tol, &|t| {
-                        tr.kin.phi(t)
-                    })
+                    && m.check(
+                        &tr,
+                        t_prev,
+                        &u0,
+                        &v0,
+                        &snap0,
+                        &snap1,
+                        opts.steady_tol,
+                        &|t| tr.kin.phi(t),
+                    )
                     && !rep.steady
                 {
                     rep.steady = true;
