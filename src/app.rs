@@ -20,6 +20,7 @@ use crate::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use crate::driver::indentation;
 use crate::driver::spinning;
 use crate::driver::system::Loading;
+use crate::driver::tables;
 use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
 use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
@@ -461,38 +462,9 @@ fn write_solid_csv(sys: &SolidSystem, report: &StepReport, dir: &Path) -> Result
         )?;
     }
     if sys.contact.is_some() {
-        let samples = sys.contact_samples();
-        write_csv(
-            &dir.join("contact.csv"),
-            &[
-                "theta",
-                "x1",
-                "x2",
-                "penetration",
-                "t_n",
-                "t_t",
-                "slip_velocity",
-                "ds0",
-            ],
-            samples
-                .iter()
-                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
-        )?;
+        tables::write_contact_csv(&dir.join("contact.csv"), &sys.contact_samples())?;
     }
-    let m = &sys.model.mesh;
-    write_csv(
-        &dir.join("nodes.csv"),
-        &["node", "X1", "X2", "u1", "u2"],
-        (0..m.n_nodes()).map(|n| {
-            vec![
-                n as f64,
-                m.nodes[n][0],
-                m.nodes[n][1],
-                sys.x[2 * n],
-                sys.x[2 * n + 1],
-            ]
-        }),
-    )?;
+    tables::write_nodes_csv(&dir.join("nodes.csv"), &sys.model.mesh, &sys.x)?;
     let mut rows = Vec::new();
     for (s, st) in report.steps.iter().enumerate() {
         for r in &st.table {

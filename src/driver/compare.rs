@@ -58,13 +58,18 @@ fn read_field(path: &Path, n_nodes: usize, per_ring: usize) -> Result<Vec<f64>, 
     };
     let (ir, ip, iu1, iu2) = (col("ring")?, col("pos")?, col("u1")?, col("u2")?);
     let mut u = vec![0.0; 2 * n_nodes];
-    for r in &rows {
-        let n = r[ir] as usize * per_ring + r[ip] as usize;
+    for (k, r) in rows.iter().enumerate() {
+        let (Some(ring), Some(pos), Some(u1), Some(u2)) =
+            (r.get(ir), r.get(ip), r.get(iu1), r.get(iu2))
+        else {
+            return Err(format!("{} row {}: too few columns", path.display(), k + 2));
+        };
+        let n = *ring as usize * per_ring + *pos as usize;
         if n >= n_nodes {
             return Err(format!("{}: node {n} out of range", path.display()));
         }
-        u[2 * n] = r[iu1];
-        u[2 * n + 1] = r[iu2];
+        u[2 * n] = *u1;
+        u[2 * n + 1] = *u2;
     }
     Ok(u)
 }
@@ -303,7 +308,11 @@ fn contact_plot(tr: &Path, st: &Path, out: &Path) {
         let ix = h.iter().position(|c| c == "x1")?;
         let in_ = h.iter().position(|c| c == "t_n")?;
         let it = h.iter().position(|c| c == "t_t")?;
-        let mut rows: Vec<&Vec<f64>> = rows.iter().filter(|r| r[in_] > 0.0).collect();
+        let width = ix.max(in_).max(it);
+        let mut rows: Vec<&Vec<f64>> = rows
+            .iter()
+            .filter(|r| r.len() > width && r[in_] > 0.0)
+            .collect();
         rows.sort_by(|a, b| a[ix].total_cmp(&b[ix]));
         Some((
             rows.iter().map(|r| (r[ix], r[in_])).collect(),

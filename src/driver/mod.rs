@@ -8,6 +8,7 @@ pub mod steady;
 pub mod steady_run;
 pub mod stick_slip_run;
 pub mod system;
+pub mod tables;
 pub mod transient;
 pub mod transient_run;
 

@@ -19,6 +19,7 @@
 use super::spinning;
 use super::steady::{press, SteadyParameter, SteadyRolling};
 use super::system::{Loading, SolidSystem};
+use super::tables;
 use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
@@ -518,52 +519,10 @@ pub fn write_steady_csv(
     dir: &std::path::Path,
 ) -> Result<(), crate::io::output::OutputError> {
     let mesh = &sys.model.mesh;
-    if let Some(rl) = mesh.rings {
-        write_csv(
-            &dir.join("steady_field.csv"),
-            &["ring", "pos", "X1", "X2", "u1", "u2"],
-            (0..mesh.n_nodes()).map(|n| {
-                vec![
-                    (n / rl.per_ring) as f64,
-                    (n % rl.per_ring) as f64,
-                    mesh.nodes[n][0],
-                    mesh.nodes[n][1],
-                    sys.x[2 * n],
-                    sys.x[2 * n + 1],
-                ]
-            }),
-        )?;
-    }
+    tables::write_referential_field_csv(&dir.join("steady_field.csv"), mesh, &sys.x)?;
     let samples = sys.contact_samples();
     if !samples.is_empty() {
-        write_csv(
-            &dir.join("contact.csv"),
-            &[
-                "theta",
-                "x1",
-                "x2",
-                "penetration",
-                "t_n",
-                "t_t",
-                "slip_velocity",
-                "ds0",
-            ],
-            samples
-                .iter()
-                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
-        )?;
+        tables::write_contact_csv(&dir.join("contact.csv"), &samples)?;
     }
-    write_csv(
-        &dir.join("nodes.csv"),
-        &["node", "X1", "X2", "u1", "u2"],
-        (0..mesh.n_nodes()).map(|n| {
-            vec![
-                n as f64,
-                mesh.nodes[n][0],
-                mesh.nodes[n][1],
-                sys.x[2 * n],
-                sys.x[2 * n + 1],
-            ]
-        }),
-    )
+    tables::write_nodes_csv(&dir.join("nodes.csv"), mesh, &sys.x)
 }

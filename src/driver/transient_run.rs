@@ -22,6 +22,7 @@
 
 use super::frame::nodal_stress_at;
 use super::system::SolidSystem;
+use super::tables;
 use super::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use super::transient::{
     integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
@@ -317,40 +318,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             ],
             rep.passage_log.iter().map(|r| r.to_vec()),
         )?;
-        write_csv(
-            &opts.out_dir.join("contact.csv"),
-            &[
-                "theta",
-                "x1",
-                "x2",
-                "penetration",
-                "t_n",
-                "t_t",
-                "slip_velocity",
-                "ds0",
-            ],
-            samples
-                .iter()
-                .map(|s| vec![s.theta, s.x1, s.x2, s.delta, s.t_n, s.t_t, s.w, s.ds0]),
-        )?;
-        if let Some(rl) = tr.sys.model.mesh.rings {
-            if let Some(field) = tr.steady_field.as_ref() {
-                let mesh = &tr.sys.model.mesh;
-                write_csv(
-                    &opts.out_dir.join("steady_field.csv"),
-                    &["ring", "pos", "X1", "X2", "u1", "u2"],
-                    (0..mesh.n_nodes()).map(|n| {
-                        vec![
-                            (n / rl.per_ring) as f64,
-                            (n % rl.per_ring) as f64,
-                            mesh.nodes[n][0],
-                            mesh.nodes[n][1],
-                            field[2 * n],
-                            field[2 * n + 1],
-                        ]
-                    }),
-                )?;
-            }
+        tables::write_contact_csv(&opts.out_dir.join("contact.csv"), &samples)?;
+        if let Some(field) = tr.steady_field.as_ref() {
+            tables::write_referential_field_csv(
+                &opts.out_dir.join("steady_field.csv"),
+                &tr.sys.model.mesh,
+                field,
+            )?;
         }
     }
     let headline = vec![format!(

@@ -178,6 +178,8 @@ pub struct Continuation {
     a: Vec<f64>,
     b: Vec<f64>,
     tu: Vec<f64>,
+    /// Tangent of the previous point (orientation of the new one).
+    prev_tu: Vec<f64>,
     du: Vec<f64>,
     c: Vec<f64>,
     z: Vec<f64>,
@@ -218,6 +220,7 @@ impl Continuation {
             a: vec![0.0; n],
             b: vec![0.0; n],
             tu: vec![0.0; n],
+            prev_tu: vec![0.0; n],
             du: vec![0.0; n],
             c,
             z: vec![0.0; n],
@@ -416,15 +419,14 @@ impl Continuation {
             let lam = sys.parameter();
             let dl = lam - lam_n;
             // The increment in equation numbering is carried by du.
-            let dx = self.du.clone();
             // Old tangent projected on the chord of the step (for the limit-point estimate).
-            let p0 = self.sdot(&self.tu, tangent_l, &dx, dl) / ds;
+            let p0 = self.sdot(&self.tu, tangent_l, &self.du, dl) / ds;
             // New tangent at the converged point, oriented along the previous one.
-            let old_tu = self.tu.clone();
+            self.prev_tu.copy_from_slice(&self.tu);
             let (mut ntl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
             rep.factorizations += 1;
             rep.assemblies += 3;
-            if self.sdot(&self.tu, ntl, &old_tu, tangent_l) < 0.0 {
+            if self.sdot(&self.tu, ntl, &self.prev_tu, tangent_l) < 0.0 {
                 ntl = -ntl;
                 self.tu.iter_mut().for_each(|t| *t = -*t);
             }
@@ -435,7 +437,7 @@ impl Continuation {
                     kind,
                     lambda: {
                         // λ as a graph over the chord: slopes dλ/dσ = t_λ / (t · e).
-                        let p1 = self.sdot(&self.tu, ntl, &dx, dl) / ds;
+                        let p1 = self.sdot(&self.tu, ntl, &self.du, dl) / ds;
                         limit_estimate(lam_n, lam, tangent_l / p0, ntl / p1, ds)
                     },
                     step,
@@ -586,8 +588,7 @@ impl Continuation {
                     *d -= a;
                 }
                 dl -= last_dlam;
-                let neg: Vec<f64> = self.a.iter().map(|v| -v).collect();
-                sys.update(1.0, &neg);
+                sys.update(-1.0, &self.a);
                 sys.set_parameter(lam_n + dl);
                 it -= 1;
                 continue;
