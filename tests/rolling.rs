@@ -1,32 +1,15 @@
 //! Transient rolling on the road until steady, through the program's driver.
 
-use tread::app::{run, RunOptions};
-use tread::io::Scene;
-
-fn run_scene(path: &str, name: &str, set: &[&str]) -> serde_json::Value {
-    let text = std::fs::read_to_string(format!("{}/{path}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scene = Scene::from_toml_str(&text, path, &set).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("tread-rolling-{}-{name}", std::process::id()));
-    let o = run(
-        &scene,
-        &RunOptions {
-            out_dir: out.clone(),
-            verbose: false,
-            quiet: true,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    assert!(out.join("steady_field.csv").exists() && out.join("passages.csv").exists());
-    o.summary
-}
+#[path = "common/fixtures.rs"]
+mod fixtures;
+use fixtures::*;
 
 #[test]
 fn frictionless_rolling_reaches_a_symmetric_steady_state() {
     // Slow rolling (ω = 2 rad/s) of a coarse cylinder, no normal damping; the transient is damped
     // by the objective Green-strain-rate viscosity (η = 1 psi·s, ηω/G = 1 %).
-    let s = run_scene(
-        "scenarios/rolling_frictionless.toml",
+    let s = run_rolling(
+        &scene_text("scenarios/rolling_frictionless.toml"),
         "frictionless",
         &[
             "mesh.n_theta=32",

@@ -1,40 +1,20 @@
 //! Torque control of the hub in the transient mode: consistent tangent of a time step with the
 //! hub angle as an unknown, free rolling and braking to steady state, and load control.
 
-use tread::app::{run, RunOptions};
+#[path = "common/fixtures.rs"]
+mod fixtures;
+use fixtures::*;
+
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::{GenAlpha, Kinematics, Ramp, Scheme, Transient};
 use tread::driver::SolidSystem;
-use tread::io::Scene;
-use tread::material::NeoHookean;
-use tread::mesh::{annulus, AnnulusSpec};
-use tread::physics::{PressureMode, SolidModel};
 use tread::solver::NonlinearSystem;
-
-fn model(n_r: usize, n_theta: usize) -> SolidModel {
-    let mut mesh = annulus(&AnnulusSpec {
-        ri: 1.0,
-        ro: 2.0,
-        n_r,
-        n_theta,
-        degree: 2,
-        grading_r: 1.0,
-        grading_theta: 0.0,
-    });
-    mesh.make_isoparametric();
-    SolidModel::new(
-        mesh,
-        NeoHookean::new(200.0, 1800.0).into(),
-        0.027,
-        PressureMode::None,
-    )
-}
 
 /// Max |K − K_fd| / max |K| of a generalized-α step under torque control (optionally also
 /// under load control: both global unknowns φ and H).
 fn torque_step_tangent_error(load_control: bool) -> f64 {
-    let mut m = model(2, 16);
+    let mut m = neo_hookean_annulus(2, 16);
     m.strain_rate_damping = 2.0;
     let normal = NormalCompliance::new(2.0e4, 1.0, 5.0, 0.0);
     let cm = ContactModel::new(
@@ -158,28 +138,6 @@ fn torque_control_tangent_matches_finite_differences() {
     }
 }
 
-fn run_text(text: &str, name: &str, set: &[&str]) -> serde_json::Value {
-    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scene = Scene::from_toml_str(text, name, &set).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("tread-torque-{}-{name}", std::process::id()));
-    let o = run(
-        &scene,
-        &RunOptions {
-            out_dir: out.clone(),
-            verbose: false,
-            quiet: true,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    assert!(out.join("steady_field.csv").exists() && out.join("passages.csv").exists());
-    let _ = std::fs::remove_dir_all(&out);
-    o.summary
-}
-
-fn scene_text(path: &str) -> String {
-    std::fs::read_to_string(format!("{}/{path}", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
-
 fn get(r: &serde_json::Value, k: &str) -> f64 {
     r[k].as_f64()
         .unwrap_or_else(|| panic!("results.{k} missing: {r}"))
@@ -188,7 +146,7 @@ fn get(r: &serde_json::Value, k: &str) -> f64 {
 #[test]
 fn free_rolling_and_braking_reach_steady_torque_balance() {
     // Free rolling: zero hub torque. The hub finds its own speed from the road speed.
-    let s = run_text(&scene_text("scenarios/free_rolling.toml"), "free", &[]);
+    let s = run_rolling(&scene_text("scenarios/free_rolling.toml"), "free", &[]);
     let r = &s["results"];
     eprintln!("free rolling: {}", serde_json::to_string_pretty(r).unwrap());
     assert_eq!(r["steady"], true, "free rolling: no steady state by t_end");
@@ -223,7 +181,7 @@ fn free_rolling_and_braking_reach_steady_torque_balance() {
     );
 
     // Braking: T = −10 lbf·in/in (clockwise, against the rotation).
-    let s = run_text(&scene_text("scenarios/braking.toml"), "braking", &[]);
+    let s = run_rolling(&scene_text("scenarios/braking.toml"), "braking", &[]);
     let r = &s["results"];
     eprintln!("braking: {}", serde_json::to_string_pretty(r).unwrap());
     assert_eq!(r["steady"], true, "braking: no steady state by t_end");
@@ -262,7 +220,7 @@ fn load_control_rolling_carries_the_applied_load() {
     let text =
         scene_text("scenarios/rolling_frictionless.toml").replace("disp = 0.1 ", "load = 100.0 ");
     assert!(text.contains("load = 100.0"));
-    let s = run_text(
+    let s = run_rolling(
         &text,
         "load",
         &[

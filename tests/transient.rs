@@ -1,55 +1,17 @@
 //! Transient Lagrangian model: tangent of a time step, objectivity of rigid spinning, observed
 //! orders of the integrators, spin-up to the steady spinning state.
 
+#[path = "common/fixtures.rs"]
+mod fixtures;
+use fixtures::*;
+
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::spinning::solve_spinning;
-use tread::driver::transient::{
-    integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient,
-};
+use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
 use tread::driver::SolidSystem;
-use tread::material::NeoHookean;
-use tread::mesh::{annulus, AnnulusSpec};
-use tread::physics::{PressureMode, SolidModel};
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NewtonOptions, NonlinearSystem};
-
-const RHO: f64 = 0.027;
-
-fn model(n_r: usize, n_theta: usize) -> SolidModel {
-    let mut mesh = annulus(&AnnulusSpec {
-        ri: 1.0,
-        ro: 2.0,
-        n_r,
-        n_theta,
-        degree: 2,
-        grading_r: 1.0,
-        grading_theta: 0.0,
-    });
-    mesh.make_isoparametric();
-    SolidModel::new(
-        mesh,
-        NeoHookean::new(200.0, 1800.0).into(),
-        RHO,
-        PressureMode::None,
-    )
-}
-
-fn spin(omega: f64, ramp: f64) -> Kinematics {
-    Kinematics {
-        omega: Ramp {
-            target: omega,
-            time: ramp,
-        },
-        disp: None,
-        h_touch: 2.0,
-        load: None,
-        v0: Ramp {
-            target: 0.0,
-            time: 0.0,
-        },
-    }
-}
 
 fn opts(dt: f64, t_end: f64) -> TimeOptions {
     TimeOptions {
@@ -78,7 +40,7 @@ fn newton_opts() -> NewtonOptions {
 #[test]
 fn time_step_tangent_matches_finite_differences() {
     // Contact with normal damping and friction, mid-step state, generalized-α (ρ∞ = 0.7).
-    let mut m = model(2, 16);
+    let mut m = neo_hookean_annulus(2, 16);
     m.strain_rate_damping = 2.0;
     let normal = NormalCompliance::new(2.0e4, 1.0, 5.0, 0.0);
     let cm = ContactModel::new(
@@ -91,7 +53,7 @@ fn time_step_tangent_matches_finite_differences() {
         None,
     );
     let sys = SolidSystem::with_contact(m, cm);
-    let mut kin = spin(10.0, 0.0);
+    let mut kin = spin_kinematics(10.0, 0.0);
     kin.disp = Some(Ramp {
         target: 0.05,
         time: 0.0,
@@ -171,12 +133,12 @@ fn rigid_spin_run(
     let omega = 20.0;
     let period = 2.0 * std::f64::consts::PI / omega;
     let dt = period / steps_per_rev as f64;
-    let mut m = model(2, 32);
+    let mut m = neo_hookean_annulus(2, 32);
     m.strain_rate_damping = damping;
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
         Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
-        spin(omega, 0.0),
+        spin_kinematics(omega, 0.0),
         lumped,
     );
     tr.start_rigid_spin(omega, LinearKind::Cholesky, discrete_start.then_some(dt))
@@ -261,9 +223,9 @@ fn rigid_spinning_is_objective_and_conserves_energy() {
 /// u at t_end of a spin-up from rest (ramp to 20 rad/s over 0.03 s, no contact).
 fn spin_up(scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
     let mut tr = Transient::new(
-        SolidSystem::new(model(2, 16), "hub"),
+        SolidSystem::new(neo_hookean_annulus(2, 16), "hub"),
         scheme,
-        spin(20.0, 0.03),
+        spin_kinematics(20.0, 0.03),
         matches!(scheme, Scheme::CentralDifference),
     );
     integrate(
@@ -325,9 +287,9 @@ fn integrators_converge_at_their_order() {
 fn spin_up_reproduces_steady_spinning() {
     let omega = 20.0;
     let mut tr = Transient::new(
-        SolidSystem::new(model(2, 32), "hub"),
+        SolidSystem::new(neo_hookean_annulus(2, 32), "hub"),
         Scheme::GeneralizedAlpha(GenAlpha::new(0.0)),
-        spin(omega, 0.3),
+        spin_kinematics(omega, 0.3),
         false,
     );
     let o = opts(2e-3, 0.4);
@@ -346,14 +308,14 @@ fn spin_up_reproduces_steady_spinning() {
     };
     // (a) the discrete Lagrangian rigid-spin equilibrium, (b) the θ-referential steady spinning.
     let mut eq = Transient::new(
-        SolidSystem::new(model(2, 32), "hub"),
+        SolidSystem::new(neo_hookean_annulus(2, 32), "hub"),
         Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
-        spin(omega, 0.0),
+        spin_kinematics(omega, 0.0),
         false,
     );
     eq.start_rigid_spin(omega, LinearKind::Cholesky, None)
         .unwrap();
-    let mut st = SolidSystem::new(model(2, 32), "hub");
+    let mut st = SolidSystem::new(neo_hookean_annulus(2, 32), "hub");
     let mut rep = StepReport::default();
     solve_spinning(
         &mut st,
@@ -410,7 +372,7 @@ fn spin_up_reproduces_steady_spinning() {
 #[test]
 fn central_difference_stable_step_includes_damping_and_contact() {
     let build = |damping: f64, c_n: f64| {
-        let mut m = model(2, 16);
+        let mut m = neo_hookean_annulus(2, 16);
         m.strain_rate_damping = damping;
         let normal = NormalCompliance::new(c_n, 1.0, 0.0, 0.0);
         let cm = ContactModel::new(
@@ -422,7 +384,7 @@ fn central_difference_stable_step_includes_damping_and_contact() {
             FacetRule::Lobatto(4),
             None,
         );
-        let mut kin = spin(0.0, 0.0);
+        let mut kin = spin_kinematics(0.0, 0.0);
         kin.disp = Some(Ramp {
             target: 0.02,
             time: 0.0,
@@ -475,9 +437,9 @@ fn central_difference_stable_step_includes_damping_and_contact() {
 fn passages_landed_on_are_counted_at_that_step() {
     let omega = 20.0;
     let mut tr = Transient::new(
-        SolidSystem::new(model(2, 16), "hub"),
+        SolidSystem::new(neo_hookean_annulus(2, 16), "hub"),
         Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
-        spin(omega, 0.0),
+        spin_kinematics(omega, 0.0),
         true,
     );
     tr.start_rigid_spin(omega, LinearKind::Cholesky, None)

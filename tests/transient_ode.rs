@@ -3,56 +3,19 @@
 //! right-hand side, convergence against the tolerance (observed orders), objectivity of rigid
 //! spinning, clean failures.
 
+#[path = "common/fixtures.rs"]
+mod fixtures;
+use fixtures::*;
+
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::ode_first_order::{
     integrate_first_order, FirstOrder, OdeMethod, OdeTolerances,
 };
-use tread::driver::transient::{
-    GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
-};
+use tread::driver::transient::{GenAlpha, Ramp, Scheme, TimeOptions, Transient, TransientReport};
 use tread::driver::SolidSystem;
-use tread::material::NeoHookean;
-use tread::mesh::{annulus, AnnulusSpec};
-use tread::physics::{PressureMode, SolidModel};
+use tread::physics::PressureMode;
 use tread::solver::{LinearKind, SolveError};
-
-const RHO: f64 = 0.027;
-
-fn model(n_r: usize, n_theta: usize) -> SolidModel {
-    let mut mesh = annulus(&AnnulusSpec {
-        ri: 1.0,
-        ro: 2.0,
-        n_r,
-        n_theta,
-        degree: 2,
-        grading_r: 1.0,
-        grading_theta: 0.0,
-    });
-    mesh.make_isoparametric();
-    SolidModel::new(
-        mesh,
-        NeoHookean::new(200.0, 1800.0).into(),
-        RHO,
-        PressureMode::None,
-    )
-}
-
-fn spin(omega: f64, ramp: f64) -> Kinematics {
-    Kinematics {
-        omega: Ramp {
-            target: omega,
-            time: ramp,
-        },
-        disp: None,
-        h_touch: 2.0,
-        load: None,
-        v0: Ramp {
-            target: 0.0,
-            time: 0.0,
-        },
-    }
-}
 
 fn opts(dt: f64, t_end: f64) -> TimeOptions {
     TimeOptions {
@@ -88,7 +51,7 @@ fn first_order_jacobian_matches_finite_differences() {
     // Contact with normal damping and Coulomb friction, strain-rate damping, a rotated and
     // perturbed state with rigid-rotation velocities plus a perturbation, t inside the ramps (so
     // the hub's prescribed motion and the road move).
-    let mut m = model(2, 16);
+    let mut m = neo_hookean_annulus(2, 16);
     m.strain_rate_damping = 2.0;
     let normal = NormalCompliance::new(2.0e4, 1.0, 5.0, 0.0);
     let cm = ContactModel::new(
@@ -101,7 +64,7 @@ fn first_order_jacobian_matches_finite_differences() {
         None,
     );
     let sys = SolidSystem::with_contact(m, cm);
-    let mut kin = spin(10.0, 0.02);
+    let mut kin = spin_kinematics(10.0, 0.02);
     kin.disp = Some(Ramp {
         target: 0.08,
         time: 0.02,
@@ -201,12 +164,12 @@ fn spin_up(method: OdeMethod, rtol: f64, t_end: f64) -> (Vec<f64>, TransientRepo
     // Strain-rate damping as in the scenes (η = 1): without any damping the high mesh modes sit
     // on the imaginary axis, where BDF of order 3–5 is not stable, and diffsol's error control
     // then holds its step near the period of the highest mode (see the rigid-spin test).
-    let mut m = model(2, 16);
+    let mut m = neo_hookean_annulus(2, 16);
     m.strain_rate_damping = 1.0;
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
         placeholder(),
-        spin(20.0, 0.03),
+        spin_kinematics(20.0, 0.03),
         false,
     );
     let rep = integrate_first_order(&mut tr, method, &opts(1e-5, t_end), tol(rtol), |_, _| {})
@@ -318,7 +281,7 @@ fn rigid_spinning_with_bdf_is_objective() {
     // does not change (to the integrator's tolerance) and the energy is conserved.
     let omega = 20.0;
     let period = 2.0 * std::f64::consts::PI / omega;
-    let mut m = model(2, 32);
+    let mut m = neo_hookean_annulus(2, 32);
     // Strain-rate damping (η = 1, as in the scenes) does not act on a rigid rotation (Ė = 0) but
     // damps the high mesh modes: undamped (η = 0) the same run passes with 16× more steps
     // (20935 for 3 revolutions, max strain change 8e-5), because BDF of order 3–5 is unstable
@@ -328,7 +291,7 @@ fn rigid_spinning_with_bdf_is_objective() {
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
         placeholder(),
-        spin(omega, 0.0),
+        spin_kinematics(omega, 0.0),
         false,
     );
     tr.start_rigid_spin(omega, LinearKind::Lu, None)
@@ -373,9 +336,9 @@ fn failures_are_errors_not_panics() {
     // (a) A minimum step far above what the error control needs: diffsol gives up; the driver's
     // state is the last accepted step (here the start).
     let mut tr = Transient::new(
-        SolidSystem::new(model(1, 8), "hub"),
+        SolidSystem::new(neo_hookean_annulus(1, 8), "hub"),
         placeholder(),
-        spin(20.0, 0.03),
+        spin_kinematics(20.0, 0.03),
         false,
     );
     let mut o = opts(1e-2, 0.04);
@@ -394,12 +357,12 @@ fn failures_are_errors_not_panics() {
         Ok(r) => panic!("expected a failure, got {} steps", r.steps),
     }
     // (b) Cell pressures (exact incompressibility) make the system differential-algebraic.
-    let mut m = model(1, 8);
+    let mut m = neo_hookean_annulus(1, 8);
     m.pressure = PressureMode::Exact { p0: 0.0 };
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
         placeholder(),
-        spin(20.0, 0.03),
+        spin_kinematics(20.0, 0.03),
         false,
     );
     let res = integrate_first_order(
@@ -424,9 +387,9 @@ fn failures_are_errors_not_panics() {
 fn rotating_rigid_spin_is_an_exact_solution_of_the_first_order_system() {
     let omega = 20.0;
     let mut tr = Transient::new(
-        SolidSystem::new(model(2, 32), "hub"),
+        SolidSystem::new(neo_hookean_annulus(2, 32), "hub"),
         placeholder(),
-        spin(omega, 0.0),
+        spin_kinematics(omega, 0.0),
         false,
     );
     tr.start_rigid_spin(omega, LinearKind::Cholesky, None)

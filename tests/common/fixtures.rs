@@ -1,0 +1,77 @@
+#![allow(dead_code)]
+//! Fixtures shared by the transient, diffsol, torque and rolling tests.
+
+use tread::app::{run, RunOptions};
+use tread::driver::transient::{Kinematics, Ramp};
+use tread::io::Scene;
+use tread::material::NeoHookean;
+use tread::mesh::{annulus, AnnulusSpec};
+use tread::physics::{PressureMode, SolidModel};
+
+/// Density of the paper-like cylinder (lbf·s²/in⁴).
+pub const RHO: f64 = 0.027;
+
+/// Isoparametric Q2 annulus Ri = 1, Ro = 2, uniform, compressible neo-Hookean (μ = 200,
+/// λ = 1800), ρ = [`RHO`].
+pub fn neo_hookean_annulus(n_r: usize, n_theta: usize) -> SolidModel {
+    let mut mesh = annulus(&AnnulusSpec {
+        ri: 1.0,
+        ro: 2.0,
+        n_r,
+        n_theta,
+        degree: 2,
+        grading_r: 1.0,
+        grading_theta: 0.0,
+    });
+    mesh.make_isoparametric();
+    SolidModel::new(
+        mesh,
+        NeoHookean::new(200.0, 1800.0).into(),
+        RHO,
+        PressureMode::None,
+    )
+}
+
+/// Spin-up to `omega` over `ramp` seconds, no road.
+pub fn spin_kinematics(omega: f64, ramp: f64) -> Kinematics {
+    Kinematics {
+        omega: Ramp {
+            target: omega,
+            time: ramp,
+        },
+        disp: None,
+        h_touch: 2.0,
+        load: None,
+        v0: Ramp {
+            target: 0.0,
+            time: 0.0,
+        },
+    }
+}
+
+/// A scene file of the repository, as text.
+pub fn scene_text(path: &str) -> String {
+    let full = format!("{}/{path}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read_to_string(&full).unwrap_or_else(|e| panic!("{full}: {e}"))
+}
+
+/// Run a transient rolling scene (text with `--set` overrides) through the program's driver
+/// into a temporary directory; it must write `steady_field.csv` and `passages.csv`. Returns
+/// summary.json.
+pub fn run_rolling(text: &str, name: &str, set: &[&str]) -> serde_json::Value {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let scene = Scene::from_toml_str(text, name, &set).unwrap_or_else(|e| panic!("{e}"));
+    let out = std::env::temp_dir().join(format!("tread-rolling-{}-{name}", std::process::id()));
+    let o = run(
+        &scene,
+        &RunOptions {
+            out_dir: out.clone(),
+            verbose: false,
+            quiet: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(out.join("steady_field.csv").exists() && out.join("passages.csv").exists());
+    let _ = std::fs::remove_dir_all(&out);
+    o.summary
+}
