@@ -14,6 +14,11 @@
 //!   then odd ones: each thread walks contiguous memory), or, when no such cut exists (tiny or
 //!   unstructured meshes), coloured so that elements of one colour share no node. The result is
 //!   independent of the thread count up to summation order.
+//! * The assembly also accumulates, per equation, the sum of the magnitudes of the element
+//!   contributions, [`Assembler::scale`] (q_i = Σ_e |r_e,i|: the "force flux" through equation
+//!   i). It is the physical force scale of Newton's convergence test (see
+//!   [`crate::solver::newton`]): it is large wherever forces are transmitted, even where they
+//!   balance, and it follows the current state (no memory of an earlier, larger residual).
 
 pub mod qp;
 
@@ -282,6 +287,8 @@ pub struct Assembler {
     pub blocks: Vec<Block>,
     pub values: Vec<f64>,
     pub residual: Vec<f64>,
+    /// Σ_e |r_e,i| per equation (same numbering as `residual`), accumulated with it.
+    pub scale: Vec<f64>,
     pub parallel: bool,
 }
 
@@ -378,6 +385,7 @@ impl Assembler {
             blocks,
             values: vec![0.0; nnz],
             residual: vec![0.0; n],
+            scale: vec![0.0; n],
             parallel: true,
         }
     }
@@ -400,9 +408,10 @@ impl Assembler {
             .map_or(0, Vec::len)
     }
 
-    /// Zero the residual (and the matrix values).
+    /// Zero the residual and its scale (and the matrix values).
     pub fn zero(&mut self, with_matrix: bool) {
         self.residual.fill(0.0);
+        self.scale.fill(0.0);
         if with_matrix {
             self.values.fill(0.0);
         }
@@ -428,6 +437,7 @@ impl Assembler {
             return;
         };
         let res = SharedMut::new(&mut self.residual);
+        let sc = SharedMut::new(&mut self.scale);
         let val = SharedMut::new(&mut self.values);
         let work = |e: usize, loc: &mut LocalSystem| {
             let el = block.element(e);
@@ -442,6 +452,7 @@ impl Assembler {
                     let q = dofs.eq[d as usize];
                     if q != FIXED {
                         *res.get_mut(q as usize) += loc.r[a];
+                        *sc.get_mut(q as usize) += loc.r[a].abs();
                     }
                 }
                 if with_matrix {

@@ -43,18 +43,13 @@ pub fn solve_indentation(
     report: &mut StepReport,
     rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
-    // Reference force for the convergence test: the hub load, or a Hertz-like estimate
-    // c_n · DISP · √(2 Ro DISP) for displacement control.
-    let fref = match sys.loading {
-        Loading::Load { load } => load,
-        Loading::Indent { h_touch, disp } => sys
-            .contact
-            .as_ref()
-            .map(|c| c.normal.c_n * disp.powf(c.normal.m_n) * (2.0 * h_touch * disp).sqrt())
-            .unwrap_or(1.0),
-        Loading::Spin { .. } => 1.0,
+    // Floor of the convergence reference: the hub load, or the penalty/body force scale for
+    // displacement control (h_touch = Ro).
+    let ro = match sys.loading {
+        Loading::Indent { h_touch, .. } => h_touch,
+        _ => 0.0,
     };
-    sys.set_reference_force(fref.abs().max(f64::MIN_POSITIVE));
+    sys.set_reference_force(sys.contact_force_scale(ro));
     let mut newton = Newton::new(sys, kind, newton_opts)?;
     solve_load_steps(sys, &mut newton, step_opts, report, rec)
 }

@@ -27,7 +27,7 @@
 //!    ratio: the creep stays put while the speed changes).
 
 use super::system::{Loading, SolidSystem};
-use crate::contact::{ContactModel, SlipKinematics};
+use crate::contact::SlipKinematics;
 use crate::io::record::Recorder;
 use crate::solver::continuation::ParametricSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
@@ -117,6 +117,12 @@ impl NonlinearSystem for SteadyRolling {
     fn reference_norms(&self) -> Vec<f64> {
         self.sys.reference_norms()
     }
+    fn force_scale(&self) -> &[f64] {
+        self.sys.force_scale()
+    }
+    fn state_norm(&self) -> Option<f64> {
+        self.sys.state_norm()
+    }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.sys.pattern()
     }
@@ -174,20 +180,6 @@ impl ParametricSystem for SteadyRolling {
     }
 }
 
-/// Reference force for the convergence tests: c_n DISP^m √(2 Ro DISP) (a Hertz-like patch
-/// force), or the hub load.
-pub fn reference_force(contact: &ContactModel, loading: &Loading, ro: f64) -> f64 {
-    match *loading {
-        Loading::Load { load } => load,
-        Loading::Indent { disp, .. } => {
-            contact.normal.c_n * disp.powf(contact.normal.m_n) * (2.0 * ro * disp).sqrt()
-        }
-        Loading::Spin { .. } => 1.0,
-    }
-    .abs()
-    .max(f64::MIN_POSITIVE)
-}
-
 /// Step 1: bring the road in at the current ω and v0 by load stepping.
 pub fn press(
     st: &mut SteadyRolling,
@@ -199,8 +191,8 @@ pub fn press(
     rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     st.sys.loading = loading;
-    if let Some(c) = &st.sys.contact {
-        let f = reference_force(c, &loading, st.ro);
+    if st.sys.contact.is_some() {
+        let f = st.sys.contact_force_scale(st.ro);
         st.sys.set_reference_force(f);
     }
     let mut newton = Newton::new(&st.sys, kind, newton_opts)?;
@@ -308,5 +300,6 @@ pub fn solve_torque(
     Err(SolveError::NotConverged {
         iterations: out.evaluations,
         residual: fb.abs() / torque_scale.max(f64::MIN_POSITIVE),
+        stagnation: None,
     })
 }

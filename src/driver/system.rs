@@ -116,6 +116,34 @@ impl SolidSystem {
         self.ref_norms[3] = f * ro;
     }
 
+    /// Floor of the displacement field's convergence reference for a contact loading (see
+    /// [`crate::solver::newton`]): the hub load under load control; under displacement
+    /// control the series combination F_c F_b / (F_c + F_b) of the penalty-limited force
+    /// F_c = c_n DISP^m_n √(2 Ro DISP) (a Hertz-like patch on a rigid body: the soft-penalty
+    /// limit) and the body-limited force F_b = G DISP (G the small-strain shear modulus: the
+    /// stiff-penalty limit), so that a huge c_n cannot inflate it past the physical force.
+    /// 1 for a spin loading. `ro`: outer radius.
+    pub fn contact_force_scale(&self, ro: f64) -> f64 {
+        let f = match self.loading {
+            Loading::Load { load } => load.abs(),
+            Loading::Indent { disp, .. } => {
+                let disp = disp.abs();
+                let g = self.model.material.small_strain_shear_modulus().abs();
+                let fb = g * disp;
+                let fc = self.contact.as_ref().map_or(fb, |c| {
+                    c.normal.c_n.abs() * disp.powf(c.normal.m_n) * (2.0 * ro * disp).sqrt()
+                });
+                if fc + fb > 0.0 {
+                    fc * fb / (fc + fb)
+                } else {
+                    0.0
+                }
+            }
+            Loading::Spin { .. } => 1.0,
+        };
+        f.max(f64::MIN_POSITIVE)
+    }
+
     /// Torque control: add the hub rotation angle φ as the last global unknown (field 3,
     /// "phi") and a block coupling φ with every dof of the cells that touch the hub (the hub
     /// nodes stay fixed dofs whose values follow x = Q(φ) X). Rebuilds the dof map and the
@@ -153,6 +181,20 @@ impl SolidSystem {
         self.x.push(0.0);
         self.x_prev.push(0.0);
         (iphi, block)
+    }
+
+    /// ‖(X + u, other unknowns)‖: the state with the nodes' reference positions added to their
+    /// displacements (the round-off scale of the state, see
+    /// [`NonlinearSystem::state_norm`]).
+    pub fn position_norm(&self) -> f64 {
+        let n_u = self.dofs.n_u.min(self.x.len());
+        let pos: f64 = self.x[..n_u]
+            .chunks_exact(2)
+            .zip(&self.model.mesh.nodes)
+            .map(|(u, x)| (x[0] + u[0]).powi(2) + (x[1] + u[1]).powi(2))
+            .sum();
+        let rest: f64 = self.x[n_u..].iter().map(|v| v * v).sum();
+        (pos + rest).sqrt()
     }
 
     /// Norm of the residual at the current state (assembles the residual only).
@@ -244,6 +286,12 @@ impl NonlinearSystem for SolidSystem {
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.ref_norms.clone()
+    }
+    fn force_scale(&self) -> &[f64] {
+        &self.asm.scale
+    }
+    fn state_norm(&self) -> Option<f64> {
+        Some(self.position_norm())
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         (&self.asm.col_ptr, &self.asm.row_idx)

@@ -709,8 +709,12 @@ impl Transient {
                         loc.k[nd * (nd + 1) + nd] = st[base + 2 * MAX_LOCAL + 1];
                     }
                 });
-                sys.asm.residual[h.eq] +=
-                    h.inertia * self.aa[h.iphi] - fs * h.torque.value(self.t_eval);
+                let (inertia, torque) = (
+                    h.inertia * self.aa[h.iphi],
+                    fs * h.torque.value(self.t_eval),
+                );
+                sys.asm.residual[h.eq] += inertia - torque;
+                sys.asm.scale[h.eq] += inertia.abs() + torque.abs();
                 if with_matrix && h.diag_slot != usize::MAX {
                     sys.asm.values[h.diag_slot] += h.inertia * cm;
                 }
@@ -722,8 +726,15 @@ impl Transient {
             }
         }
         if prev != 0.0 {
-            for (r, f) in sys.asm.residual.iter_mut().zip(&self.fprev) {
+            for ((r, q), f) in sys
+                .asm
+                .residual
+                .iter_mut()
+                .zip(sys.asm.scale.iter_mut())
+                .zip(&self.fprev)
+            {
                 *r += prev * f;
+                *q += (prev * f).abs();
             }
         }
         ok && sys.asm.residual.iter().all(|r| r.is_finite())
@@ -955,6 +966,12 @@ impl NonlinearSystem for Transient {
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.sys.reference_norms()
+    }
+    fn force_scale(&self) -> &[f64] {
+        self.sys.force_scale()
+    }
+    fn state_norm(&self) -> Option<f64> {
+        self.sys.state_norm()
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.sys.pattern()
@@ -1441,6 +1458,12 @@ impl NonlinearSystem for RigidSpin<'_> {
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.tr.sys.reference_norms()
+    }
+    fn force_scale(&self) -> &[f64] {
+        self.tr.sys.force_scale()
+    }
+    fn state_norm(&self) -> Option<f64> {
+        self.tr.sys.state_norm()
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.tr.sys.pattern()

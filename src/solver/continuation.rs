@@ -50,7 +50,7 @@
 //!   branch table ([`BranchPoint::det_sign`], [`BranchPoint::test_function`]).
 
 use super::linear::{LinearKind, SparseSolver};
-use super::newton::{NonlinearSystem, SolveError};
+use super::newton::{convergence_reference, NonlinearSystem, SolveError};
 use std::time::Instant;
 
 /// A nonlinear system with a scalar parameter λ.
@@ -251,19 +251,23 @@ impl Continuation {
         ok1 && ok2 && self.r_lambda.iter().all(|v| v.is_finite())
     }
 
+    /// The corrector's convergence test, the same as Newton's ([`crate::solver::newton`]):
+    /// ‖R_f‖ ≤ tol · max(‖q_f‖, floor_f) for every field, with q the force scale at the
+    /// current evaluation. Returns (converged, largest ‖R_f‖ / ref_f).
     fn converged<S: ParametricSystem>(&self, sys: &S) -> (bool, f64) {
-        let fields = sys.fields();
-        let nf = self.refs.len().max(1);
+        let refs = convergence_reference(sys, &self.refs);
+        let nf = refs.len().max(1);
         let mut norms = vec![0.0; nf];
-        for (r, &f) in sys.residual().iter().zip(fields) {
+        for (r, &f) in sys.residual().iter().zip(sys.fields()) {
             let f = (f as usize).min(nf - 1);
             norms[f] += r * r;
         }
-        let mut worst: f64 = 0.0;
-        for (n2, r) in norms.iter().zip(&self.refs) {
-            let rel = n2.sqrt() / r.max(f64::MIN_POSITIVE);
-            worst = worst.max(if *r > 0.0 || *n2 > 0.0 { rel } else { 0.0 });
-        }
+        let worst = norms
+            .iter()
+            .zip(&refs)
+            .map(|(n2, r)| n2.sqrt() / r)
+            // NaN-propagating maximum: a non-finite residual is never "converged".
+            .fold(0.0, |a: f64, b| if b > a || b.is_nan() { b } else { a });
         (worst <= self.opts.tol, worst)
     }
 
@@ -661,6 +665,7 @@ impl Continuation {
                     return Err(SolveError::NotConverged {
                         iterations: it,
                         residual: worst,
+                        stagnation: None,
                     });
                 }
                 num / den
@@ -709,6 +714,7 @@ impl Continuation {
         Err(SolveError::NotConverged {
             iterations: self.opts.max_iterations,
             residual: worst,
+            stagnation: None,
         })
     }
 }

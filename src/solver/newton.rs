@@ -22,8 +22,24 @@ pub trait NonlinearSystem {
     /// Field index of each equation (0 = displacement, 1 = pressure, ...).
     fn fields(&self) -> &[u8];
     fn field_names(&self) -> &'static [&'static str];
-    /// Reference norms per field, used as floors when the first residual is tiny.
+    /// Reference norms per field: floors of the convergence reference (see the module docs),
+    /// for fields or states whose [`Self::force_scale`] vanishes. They must be physical force
+    /// scales of the problem (a load, a weight), never estimates that grow with a penalty.
     fn reference_norms(&self) -> Vec<f64>;
+    /// Per-equation force scale at the last evaluation, numbered like [`Self::residual`]:
+    /// q_i = Σ_e |r_e,i|, the sum of the magnitudes of the element contributions to equation
+    /// i. Empty (the default) when the system has none: the reference is then
+    /// [`Self::reference_norms`] alone.
+    fn force_scale(&self) -> &[f64] {
+        &[]
+    }
+    /// Norm of the state as the residual sees it, for the increment (round-off) criterion;
+    /// `None` (the default): the 2-norm of the saved state. A displacement state should
+    /// count the reference positions, ‖X + u‖: a gap computed from positions of size |X|
+    /// cannot resolve a correction much below ε |X|.
+    fn state_norm(&self) -> Option<f64> {
+        None
+    }
     /// CSC pattern of the tangent (full, both triangles).
     fn pattern(&self) -> (&[usize], &[usize]);
     /// Evaluate the residual (and tangent values) at the current state. Returns `false` if the
@@ -41,10 +57,14 @@ pub trait NonlinearSystem {
 pub enum SolveError {
     #[error("linear solver: {0}")]
     Linear(#[from] LinearError),
-    #[error(
-        "Newton did not converge in {iterations} iterations (relative residual {residual:.3e})"
-    )]
-    NotConverged { iterations: usize, residual: f64 },
+    /// `residual`: the largest ‖R_f‖ / ref_f over the fields (the convergence test asks for
+    /// ≤ tol); `stagnation`: what the iterations looked like (Newton's own failures).
+    #[error("{}", not_converged_text(*.iterations, *.residual, .stagnation.as_ref()))]
+    NotConverged {
+        iterations: usize,
+        residual: f64,
+        stagnation: Option<Stagnation>,
+    },
     #[error("line search failed: no step length ≥ {min_alpha} reduced the residual (relative residual {residual:.3e})")]
     LineSearch { min_alpha: f64, residual: f64 },
     #[error("initial state is inadmissible (J ≤ 0 or non-finite residual)")]
@@ -76,6 +96,52 @@ pub enum SolveError {
         cutbacks: usize,
         last: Box<SolveError>,
     },
+}
+
+/// How a Newton solve that ran out of iterations behaved: the evidence that tells a residual
+/// stuck at its round-off floor from a tangent that does not predict the residual.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stagnation {
+    /// ‖R‖ / ‖R⁰‖ (all fields) at the last iterate.
+    pub reduction: f64,
+    /// Iterations whose Newton step the line search shortened (α < 1).
+    pub damped: usize,
+    /// ‖Δx‖ / ‖x‖ of the last step taken.
+    pub last_increment: f64,
+    /// Estimate of the condition number of the tangent at the last iterate (NaN if the
+    /// estimate failed).
+    pub condition: f64,
+}
+
+fn not_converged_text(iterations: usize, residual: f64, st: Option<&Stagnation>) -> String {
+    let head = format!(
+        "Newton did not converge in {iterations} iterations (residual {residual:.3e} × its convergence reference)"
+    );
+    let Some(st) = st else {
+        return head;
+    };
+    let round_off = f64::EPSILON * st.condition;
+    let cond = if st.condition.is_finite() {
+        format!("{:.1e}", st.condition)
+    } else {
+        "unavailable".to_string()
+    };
+    if 2 * st.damped >= iterations && st.reduction > 1e-3 {
+        format!(
+            "{head}: the line search shortened {} of the {iterations} steps and the residual fell only to {:.3e} of its first value, with steps ‖Δx‖/‖x‖ = {:.1e} far above the round-off level ε·cond = {round_off:.1e} (condition estimate {cond}): the tangent does not predict the residual (a strongly nonlinear or ill-conditioned problem, not a round-off floor); smaller load or time steps or a better-posed model are needed",
+            st.damped, st.reduction, st.last_increment
+        )
+    } else if st.last_increment <= 1e3 * round_off {
+        format!(
+            "{head}: the steps stagnated at the round-off level of the state (‖Δx‖/‖x‖ = {:.1e}, ε·cond = {round_off:.1e}, condition estimate {cond}): the residual is at its round-off floor and the tolerance is below what this conditioning allows",
+            st.last_increment
+        )
+    } else {
+        format!(
+            "{head}: residual reduced to {:.3e} of its first value, {} of {iterations} steps shortened by the line search, last step ‖Δx‖/‖x‖ = {:.1e}, condition estimate {cond}",
+            st.reduction, st.damped, st.last_increment
+        )
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -111,6 +177,9 @@ pub struct IterationRecord {
     pub residual_rel: Vec<f64>,
     /// ‖R_f‖ per field.
     pub residual_abs: Vec<f64>,
+    /// The convergence reference ref_f per field at this iterate (converged when
+    /// ‖R_f‖ ≤ tol · ref_f for every f).
+    pub reference: Vec<f64>,
     /// ‖Δx‖ of the step taken after this residual (0 for the last row).
     pub increment_norm: f64,
     pub alpha: f64,
@@ -182,7 +251,7 @@ impl Newton {
     /// (the caller restores a saved state if it wants to retry).
     pub fn solve<S: NonlinearSystem>(&mut self, sys: &mut S) -> Result<NewtonReport, SolveError> {
         let mut rep = NewtonReport::default();
-        let refs = sys.reference_norms();
+        let floors = sys.reference_norms();
         if !sys.evaluate(true) {
             return Err(SolveError::InadmissibleStart);
         }
@@ -191,39 +260,38 @@ impl Newton {
         if norms.iter().any(|v| !v.is_finite()) {
             return Err(SolveError::InadmissibleStart);
         }
-        let first: Vec<f64> = norms
-            .iter()
-            .zip(&refs)
-            .map(|(n, r)| n.max(*r).max(f64::MIN_POSITIVE))
-            .collect();
+        let mut refs = convergence_reference(sys, &floors);
         let first_raw = norms.clone();
         let names = sys.field_names();
         if self.opts.verbose {
             let cols: Vec<String> = names
                 .iter()
-                .map(|n| format!("{:>12}", format!("|R_{n}|/R0")))
+                .map(|n| format!("{:>12}", format!("|R_{n}|/ref")))
                 .collect();
             eprintln!("    iter {} {:>12} {:>6}", cols.join(" "), "|dx|", "alpha");
         }
         let total_norm = |n: &[f64]| n.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let (mut damped, mut last_increment) = (0, f64::NAN);
         for it in 0..=self.opts.max_iterations {
             let rel: Vec<f64> = norms
                 .iter()
                 .zip(&first_raw)
                 .map(|(n, f)| if *f > 0.0 { n / f } else { 0.0 })
                 .collect();
-            let converged = norms
+            let worst = norms
                 .iter()
-                .zip(&first)
-                .all(|(n, f)| *n <= self.opts.tol * f);
+                .zip(&refs)
+                .map(|(n, r)| n / r)
+                .fold(0.0, f64::max);
             let mut rec = IterationRecord {
                 iteration: it,
                 residual_rel: rel,
                 residual_abs: norms.clone(),
+                reference: refs.clone(),
                 increment_norm: 0.0,
                 alpha: 0.0,
             };
-            if converged {
+            if worst <= self.opts.tol {
                 self.print_row(&rec);
                 rep.table.push(rec);
                 rep.iterations = it;
@@ -232,14 +300,16 @@ impl Newton {
             if it == self.opts.max_iterations {
                 self.print_row(&rec);
                 rep.table.push(rec);
-                let worst = norms
-                    .iter()
-                    .zip(&first)
-                    .map(|(n, f)| n / f)
-                    .fold(0.0, f64::max);
+                let stagnation = Stagnation {
+                    reduction: total_norm(&norms) / total_norm(&first_raw).max(f64::MIN_POSITIVE),
+                    damped,
+                    last_increment,
+                    condition: self.condition_estimate(sys).unwrap_or(f64::NAN),
+                };
                 return Err(SolveError::NotConverged {
                     iterations: it,
                     residual: worst,
+                    stagnation: Some(stagnation),
                 });
             }
             // Newton direction.
@@ -254,7 +324,10 @@ impl Newton {
             sys.save_state(&mut self.saved);
             // Increment criterion: a step at the round-off level of the state means the residual
             // has reached its floor (it can no longer decrease): accept and stop.
-            let xnorm = self.saved.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let xnorm = sys
+                .state_norm()
+                .unwrap_or_else(|| self.saved.iter().map(|v| v * v).sum::<f64>().sqrt());
+            last_increment = rec.increment_norm / xnorm.max(f64::MIN_POSITIVE);
             if rec.increment_norm <= self.opts.increment_tol * xnorm.max(f64::MIN_POSITIVE) {
                 sys.update(1.0, &self.dx);
                 sys.evaluate(true);
@@ -283,8 +356,10 @@ impl Newton {
                         // Tangent at the accepted point for the next iteration.
                         sys.evaluate(true);
                         rep.assemblies += 1;
+                        damped += 1;
                     }
                     norms = trial;
+                    refs = convergence_reference(sys, &floors);
                     break;
                 }
                 // Accept a full step that is admissible when the line search is off.
@@ -307,12 +382,61 @@ impl Newton {
         unreachable_guard()
     }
 
+    /// Estimate of the condition number |λ|max / |λ|min of the tangent at the current
+    /// evaluation (10 power iterations with K, 10 inverse iterations with its factorization):
+    /// an order of magnitude for the diagnostics of a failed solve. `None` if the tangent cannot
+    /// be factorized.
+    fn condition_estimate<S: NonlinearSystem>(&mut self, sys: &S) -> Option<f64> {
+        self.solver.factorize(sys.matrix_values()).ok()?;
+        let (cp, ri) = sys.pattern();
+        let vals = sys.matrix_values();
+        let n = sys.n_eq();
+        if n == 0 {
+            return None;
+        }
+        let start = |x: &mut Vec<f64>| {
+            x.clear();
+            x.extend((0..n).map(|i| 1.0 + 0.5 * ((i as f64) * 0.618_033_988_749_895).fract()));
+        };
+        let normalise = |x: &mut [f64]| {
+            let nx = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if nx > 0.0 && nx.is_finite() {
+                x.iter_mut().for_each(|v| *v /= nx);
+            }
+            nx
+        };
+        let (mut x, mut y) = (Vec::with_capacity(n), vec![0.0; n]);
+        start(&mut x);
+        normalise(&mut x);
+        let mut lmax = 0.0;
+        for _ in 0..10 {
+            y.fill(0.0);
+            for j in 0..n {
+                for p in cp[j]..cp[j + 1] {
+                    y[ri[p]] += vals[p] * x[j];
+                }
+            }
+            lmax = normalise(&mut y);
+            std::mem::swap(&mut x, &mut y);
+        }
+        start(&mut x);
+        normalise(&mut x);
+        let mut inv = 0.0;
+        for _ in 0..10 {
+            self.solver.solve_in_place(&mut x).ok()?;
+            inv = normalise(&mut x);
+        }
+        let c = lmax * inv;
+        c.is_finite().then_some(c)
+    }
+
     fn print_row(&self, rec: &IterationRecord) {
         if self.opts.verbose {
             let cols: Vec<String> = rec
-                .residual_rel
+                .residual_abs
                 .iter()
-                .map(|v| format!("{v:>12.3e}"))
+                .zip(&rec.reference)
+                .map(|(n, r)| format!("{:>12.3e}", n / r))
                 .collect();
             eprintln!(
                 "    {:>4} {} {:>12.3e} {:>6.3}",
@@ -325,11 +449,33 @@ impl Newton {
     }
 }
 
+/// The convergence reference per field at the system's last evaluation:
+/// ref_f = max(‖q_f‖, floor_f), with q the system's [`NonlinearSystem::force_scale`] and
+/// floor_f its [`NonlinearSystem::reference_norms`] (`floors`).
+pub fn convergence_reference<S: NonlinearSystem>(sys: &S, floors: &[f64]) -> Vec<f64> {
+    let nf = sys.field_names().len();
+    let mut q = vec![0.0; nf];
+    for (v, &f) in sys.force_scale().iter().zip(sys.fields()) {
+        if let Some(qf) = q.get_mut(f as usize) {
+            *qf += v * v;
+        }
+    }
+    q.iter()
+        .enumerate()
+        .map(|(f, v)| {
+            v.sqrt()
+                .max(floors.get(f).copied().unwrap_or(0.0))
+                .max(f64::MIN_POSITIVE)
+        })
+        .collect()
+}
+
 #[inline]
 fn unreachable_guard() -> Result<NewtonReport, SolveError> {
     // The loop above returns on its last iteration; this keeps the function total without a panic.
     Err(SolveError::NotConverged {
         iterations: 0,
         residual: f64::NAN,
+        stagnation: None,
     })
 }
