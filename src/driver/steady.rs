@@ -120,8 +120,8 @@ impl NonlinearSystem for SteadyRolling {
     fn force_scale(&self) -> &[f64] {
         self.sys.force_scale()
     }
-    fn state_norm(&self) -> Option<f64> {
-        self.sys.state_norm()
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        self.sys.state_magnitudes(out)
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.sys.pattern()

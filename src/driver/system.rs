@@ -183,20 +183,6 @@ impl SolidSystem {
         (iphi, block)
     }
 
-    /// ‖(X + u, other unknowns)‖: the state with the nodes' reference positions added to their
-    /// displacements (the round-off scale of the state, see
-    /// [`NonlinearSystem::state_norm`]).
-    pub fn position_norm(&self) -> f64 {
-        let n_u = self.dofs.n_u.min(self.x.len());
-        let pos: f64 = self.x[..n_u]
-            .chunks_exact(2)
-            .zip(&self.model.mesh.nodes)
-            .map(|(u, x)| (x[0] + u[0]).powi(2) + (x[1] + u[1]).powi(2))
-            .sum();
-        let rest: f64 = self.x[n_u..].iter().map(|v| v * v).sum();
-        (pos + rest).sqrt()
-    }
-
     /// Norm of the residual at the current state (assembles the residual only).
     pub fn residual_norm(&mut self) -> f64 {
         self.evaluate(false);
@@ -290,8 +276,22 @@ impl NonlinearSystem for SolidSystem {
     fn force_scale(&self) -> &[f64] {
         &self.asm.scale
     }
-    fn state_norm(&self) -> Option<f64> {
-        Some(self.position_norm())
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(self.dofs.n_eq, 0.0);
+        let n_u = self.dofs.n_u;
+        for (d, &e) in self.dofs.eq.iter().enumerate() {
+            if e == FIXED {
+                continue;
+            }
+            out[e as usize] = if d < n_u {
+                let n = d / 2;
+                let p = self.model.mesh.nodes[n] + Vec2::new(self.x[2 * n], self.x[2 * n + 1]);
+                p.norm()
+            } else {
+                self.x[d].abs()
+            };
+        }
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         (&self.asm.col_ptr, &self.asm.row_idx)

@@ -970,8 +970,8 @@ impl NonlinearSystem for Transient {
     fn force_scale(&self) -> &[f64] {
         self.sys.force_scale()
     }
-    fn state_norm(&self) -> Option<f64> {
-        self.sys.state_norm()
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        self.sys.state_magnitudes(out)
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.sys.pattern()
@@ -1462,8 +1462,8 @@ impl NonlinearSystem for RigidSpin<'_> {
     fn force_scale(&self) -> &[f64] {
         self.tr.sys.force_scale()
     }
-    fn state_norm(&self) -> Option<f64> {
-        self.tr.sys.state_norm()
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        self.tr.sys.state_magnitudes(out)
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
         self.tr.sys.pattern()

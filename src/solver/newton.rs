@@ -33,12 +33,14 @@ pub trait NonlinearSystem {
     fn force_scale(&self) -> &[f64] {
         &[]
     }
-    /// Norm of the state as the residual sees it, for the increment (round-off) criterion;
-    /// `None` (the default): the 2-norm of the saved state. A displacement state should
-    /// count the reference positions, ‖X + u‖: a gap computed from positions of size |X|
-    /// cannot resolve a correction much below ε |X|.
-    fn state_norm(&self) -> Option<f64> {
-        None
+    /// Magnitudes m_j of the values the unknowns are added to, one per equation (numbering of
+    /// [`Self::residual`]): the residual is computed from values of this size, so it is
+    /// uncertain by about ε Σ_j |K_ij| m_j (its round-off floor), and a correction below
+    /// ε m_j cannot be resolved. For a displacement that is the node's distance from the
+    /// origin |X + u|, not |u|: a gap is computed from positions. Leave `out` empty (the
+    /// default) for no round-off floor; the increment criterion then uses the saved state.
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        out.clear();
     }
     /// CSC pattern of the tangent (full, both triangles).
     fn pattern(&self) -> (&[usize], &[usize]);
@@ -177,9 +179,11 @@ pub struct IterationRecord {
     pub residual_rel: Vec<f64>,
     /// ‖R_f‖ per field.
     pub residual_abs: Vec<f64>,
-    /// The convergence reference ref_f per field at this iterate (converged when
-    /// ‖R_f‖ ≤ tol · ref_f for every f).
+    /// The convergence reference ref_f = max(‖q_f‖, floor_f) per field at this iterate.
     pub reference: Vec<f64>,
+    /// The residual's round-off floor ε ‖(|K| m)_f‖ per field at this iterate (converged when
+    /// ‖R_f‖ ≤ max(tol · ref_f, round_off_f) for every f).
+    pub round_off: Vec<f64>,
     /// ‖Δx‖ of the step taken after this residual (0 for the last row).
     pub increment_norm: f64,
     pub alpha: f64,
@@ -199,6 +203,9 @@ pub struct Newton {
     solver: SparseSolver,
     dx: Vec<f64>,
     saved: Vec<f64>,
+    /// State magnitudes m_j and the per-equation round-off estimate ε Σ_j |K_ij| m_j.
+    mag: Vec<f64>,
+    noise: Vec<f64>,
 }
 
 impl Newton {
@@ -216,6 +223,8 @@ impl Newton {
             solver,
             dx: vec![0.0; sys.n_eq()],
             saved: Vec::new(),
+            mag: Vec::new(),
+            noise: Vec::new(),
         })
     }
 
@@ -247,6 +256,34 @@ impl Newton {
         n
     }
 
+    /// Round-off floor of the residual per field at the current evaluation (which must hold
+    /// the tangent): ‖ε Σ_j |K_ij| m_j‖ over the equations of each field, with m the system's
+    /// [`NonlinearSystem::state_magnitudes`] (zero when it gives none).
+    fn round_off<S: NonlinearSystem>(&mut self, sys: &S) -> Vec<f64> {
+        let mut out = vec![0.0; sys.field_names().len()];
+        sys.state_magnitudes(&mut self.mag);
+        let n = sys.n_eq();
+        if self.mag.len() != n {
+            return out;
+        }
+        let (cp, ri) = sys.pattern();
+        let vals = sys.matrix_values();
+        self.noise.clear();
+        self.noise.resize(n, 0.0);
+        for (j, m) in self.mag.iter().enumerate() {
+            for p in cp[j]..cp[j + 1] {
+                self.noise[ri[p]] += vals[p].abs() * m;
+            }
+        }
+        for (v, &f) in self.noise.iter().zip(sys.fields()) {
+            if let Some(o) = out.get_mut(f as usize) {
+                *o += v * v;
+            }
+        }
+        out.iter_mut().for_each(|v| *v = f64::EPSILON * v.sqrt());
+        out
+    }
+
     /// Solve from the system's current state. On error the state is left at the last iterate
     /// (the caller restores a saved state if it wants to retry).
     pub fn solve<S: NonlinearSystem>(&mut self, sys: &mut S) -> Result<NewtonReport, SolveError> {
@@ -261,6 +298,7 @@ impl Newton {
             return Err(SolveError::InadmissibleStart);
         }
         let mut refs = convergence_reference(sys, &floors);
+        let mut noise = self.round_off(sys);
         let first_raw = norms.clone();
         let names = sys.field_names();
         if self.opts.verbose {
@@ -278,9 +316,16 @@ impl Newton {
                 .zip(&first_raw)
                 .map(|(n, f)| if *f > 0.0 { n / f } else { 0.0 })
                 .collect();
+            // Effective reference: the physical one, or the round-off floor over tol when that
+            // is larger (a tolerance below what the arithmetic can resolve).
+            let eff: Vec<f64> = refs
+                .iter()
+                .zip(&noise)
+                .map(|(r, n)| r.max(n / self.opts.tol))
+                .collect();
             let worst = norms
                 .iter()
-                .zip(&refs)
+                .zip(&eff)
                 .map(|(n, r)| n / r)
                 .fold(0.0, f64::max);
             let mut rec = IterationRecord {
@@ -288,6 +333,7 @@ impl Newton {
                 residual_rel: rel,
                 residual_abs: norms.clone(),
                 reference: refs.clone(),
+                round_off: noise.clone(),
                 increment_norm: 0.0,
                 alpha: 0.0,
             };
@@ -324,9 +370,11 @@ impl Newton {
             sys.save_state(&mut self.saved);
             // Increment criterion: a step at the round-off level of the state means the residual
             // has reached its floor (it can no longer decrease): accept and stop.
-            let xnorm = sys
-                .state_norm()
-                .unwrap_or_else(|| self.saved.iter().map(|v| v * v).sum::<f64>().sqrt());
+            let xnorm = if self.mag.is_empty() {
+                self.saved.iter().map(|v| v * v).sum::<f64>().sqrt()
+            } else {
+                self.mag.iter().map(|v| v * v).sum::<f64>().sqrt()
+            };
             last_increment = rec.increment_norm / xnorm.max(f64::MIN_POSITIVE);
             if rec.increment_norm <= self.opts.increment_tol * xnorm.max(f64::MIN_POSITIVE) {
                 sys.update(1.0, &self.dx);
@@ -360,6 +408,7 @@ impl Newton {
                     }
                     norms = trial;
                     refs = convergence_reference(sys, &floors);
+                    noise = self.round_off(sys);
                     break;
                 }
                 // Accept a full step that is admissible when the line search is off.
@@ -432,11 +481,12 @@ impl Newton {
 
     fn print_row(&self, rec: &IterationRecord) {
         if self.opts.verbose {
+            let tol = self.opts.tol;
             let cols: Vec<String> = rec
                 .residual_abs
                 .iter()
-                .zip(&rec.reference)
-                .map(|(n, r)| format!("{:>12.3e}", n / r))
+                .zip(rec.reference.iter().zip(&rec.round_off))
+                .map(|(n, (r, o))| format!("{:>12.3e}", n / r.max(o / tol)))
                 .collect();
             eprintln!(
                 "    {:>4} {} {:>12.3e} {:>6.3}",
