@@ -251,7 +251,8 @@ impl Continuation {
         ok1 && ok2 && self.r_lambda.iter().all(|v| v.is_finite())
     }
 
-    /// The corrector's convergence test, the same as Newton's ([`crate::solver::newton`]):
+    /// The corrector's convergence test, Newton's ([`crate::solver::newton`]) without the
+    /// round-off bound (the corrector evaluates the residual without the tangent):
     /// ‖R_f‖ ≤ tol · max(‖q_f‖, floor_f) for every field, with q the force scale at the
     /// current evaluation. Returns (converged, largest ‖R_f‖ / ref_f).
     fn converged<S: ParametricSystem>(&self, sys: &S) -> (bool, f64) {
