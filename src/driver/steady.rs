@@ -26,6 +26,7 @@
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
 
+use super::steady_recovery::Recovery;
 use super::system::{Loading, SolidSystem};
 use crate::contact::{ContactModel, SlipKinematics};
 use crate::io::record::Recorder;
@@ -53,6 +54,8 @@ pub struct SteadyRolling {
     pub v0_per_omega: f64,
     /// Outer radius (H = ro − disp).
     pub ro: f64,
+    /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
+    pub recovery: Option<Recovery>,
 }
 
 impl SteadyRolling {
@@ -64,6 +67,7 @@ impl SteadyRolling {
             param: SteadyParameter::Omega,
             v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
             ro,
+            recovery: None,
         };
         s.set_omega(omega, v0);
         s
@@ -71,6 +75,11 @@ impl SteadyRolling {
 
     pub fn omega(&self) -> f64 {
         self.sys.model.omega2.max(0.0).sqrt()
+    }
+
+    /// ω with its sign (as set by [`Self::set_omega`]).
+    pub fn omega_signed(&self) -> f64 {
+        self.sys.model.steady_omega.unwrap_or_else(|| self.omega())
     }
 
     pub fn v0(&self) -> f64 {
