@@ -638,11 +638,20 @@ fn walk(
                 if in_a_row > step_opts.max_cutbacks || ds < DS_MIN {
                     st.sys.restore_state(&x_k);
                     set_parameter(st, t, leg.parameter, leg.value(s));
+                    let why = if ds < DS_MIN {
+                        // Steps shrank to nothing while the ones before converged: the branch
+                        // ends here (a fold, e.g. where a contact point's traction jumps).
+                        format!(
+                            "no solution found beyond it (steps down to Δs = {DS_MIN:e} failed)"
+                        )
+                    } else {
+                        format!("{in_a_row} cut-backs in a row")
+                    };
                     return Ok((
                         lr,
                         Some(format!(
-                            "{} leg gave up at {:.6e} (on the way from {:.6e} to {:.6e}) after \
-                             {in_a_row} cut-backs in a row: {e}",
+                            "{} leg stopped at {:.8e} on the way from {:.6e} to {:.6e}, {why}; \
+                             last failure: {e}",
                             leg.parameter,
                             leg.value(s),
                             leg.from,
