@@ -18,7 +18,17 @@
 //! # Procedure
 //!
 //! 1. At the scene's ω (and v0), the road is brought in by load stepping (displacement control:
-//!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state.
+//!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state. If that
+//!    fails, [`super::steady_recovery`] tries homotopies (κ, ε, ω from benign values to the
+//!    scene's) before giving up; what it did is kept in [`SteadyRolling::recovery`].
+//!
+//!    Known hard case, measured: with normal damping and `l_n = 0` the traction of a point
+//!    entering the patch (δ̇ > 0) jumps from 0 to b_n δ̇ at first contact. The discrete steady
+//!    branch then consists of pieces that end in non-smooth folds, with gaps in between where
+//!    no steady solution exists (`oden_hollow_cylinder`, 3 × 64: none found for ω in
+//!    (37.8495, 38.586) rad/s; κ/G = 1e4 lies in a gap (1.362e6, 2.092e6) psi of the κ path).
+//!    No recovery can solve a target in a gap; `l_n > 0` (damping vanishing at first contact)
+//!    or `b_n = 0` removes the gaps.
 //! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
 //!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
 //!    Newton solve from the previous state.

@@ -8,7 +8,10 @@
 //! `contact_half_width_moment`) for the final state, plus `omega`, `v0`, `penetration`, and,
 //! with continuation, `branch` (one row per converged point, as `branch.csv`),
 //! `special_points` (limit and bifurcation points with their estimated parameter) and
-//! `continuation` (stop reason, counts).
+//! `continuation` (stop reason, counts). `solver.recovery` is null, or the
+//! [`super::steady_recovery::Recovery`] report when the press-in failed and recoveries were
+//! tried (then a line `tread: recovered: …` or `tread: the steady solve failed …` goes to
+//! stderr); `results.steps` counts the steps of a successful recovery too.
 //!
 //! Files: `steady_field.csv` (same format as the transient mode's, see
 //! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
