@@ -24,11 +24,13 @@
 //!
 //!    Known hard case, measured: with normal damping and `l_n = 0` the traction of a point
 //!    entering the patch (δ̇ > 0) jumps from 0 to b_n δ̇ at first contact. The discrete steady
-//!    branch then consists of pieces that end in non-smooth folds, with gaps in between where
-//!    no steady solution exists (`oden_hollow_cylinder`, 3 × 64: none found for ω in
-//!    (37.8495, 38.586) rad/s; κ/G = 1e4 lies in a gap (1.362e6, 2.092e6) psi of the κ path).
-//!    No recovery can solve a target in a gap; `l_n > 0` (damping vanishing at first contact)
-//!    or `b_n = 0` removes the gaps.
+//!    branch then consists of pieces that end in non-smooth folds, with gaps in between that
+//!    none of the pieces found reaches (`oden_hollow_cylinder`, 3 × 64: stepping ω up stops
+//!    at 37.8495 rad/s, stepping down from 38.71 stops at 38.586, so ω = 38 has no solution on
+//!    either piece; κ/G = 1e4 likewise lies between 1.362e6 and 2.092e6 psi on the κ path).
+//!    A recovery cannot solve a target in such a gap; `l_n > 0` (damping vanishing at first
+//!    contact) or `b_n = 0` closes them (the direct solves at 38 rad/s and κ/G = 1e4 then
+//!    converge).
 //! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
 //!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
 //!    Newton solve from the previous state.
