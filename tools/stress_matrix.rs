@@ -545,8 +545,12 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
                 // The steady mode's first solve failed and a homotopy found the solution.
                 row.outcome = "recovered";
                 row.message = format!(
-                    "recovery: {strategy}, {} steps after the failed direct solve (cutbacks {})",
+                    "recovery: {strategy} in {} steps after the failed direct solve ({} attempts, \
+                     cutbacks {} in all)",
                     o.summary["results"]["steps"].as_u64().unwrap_or(0),
+                    o.summary["solver"]["recovery"]["attempts"]
+                        .as_array()
+                        .map_or(0, |a| a.len()),
                     count_key(&o.summary, &["solver", "cutbacks"])
                 );
             } else if cut > 0 {

@@ -11,7 +11,8 @@
 //! `continuation` (stop reason, counts). `solver.recovery` is null, or the
 //! [`super::steady_recovery::Recovery`] report when the press-in failed and recoveries were
 //! tried (then a line `tread: recovered: …` or `tread: the steady solve failed …` goes to
-//! stderr); `results.steps` counts the steps of a successful recovery too.
+//! stderr); after a successful recovery `results.steps` counts its steps (press at the benign
+//! values and homotopy steps) instead of the failed press's.
 //!
 //! Files: `steady_field.csv` (same format as the transient mode's, see
 //! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
@@ -368,15 +369,17 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let samples = st.sys.contact_samples();
     let tot = ContactModel::totals(&samples);
     let (f, m) = st.sys.hub_reaction();
-    let recovery_steps = st.recovery.as_ref().map_or(0, |r| {
-        r.attempts
-            .iter()
-            .filter(|a| a.succeeded)
-            .map(|a| a.steps())
-            .sum::<usize>()
-    });
-    let steps = report.steps.iter().filter(|s| s.converged).count()
-        + recovery_steps
+    // Steps of the path to the first solution: the press's, or those of the recovery that
+    // found it (the failed press's steps are not on that path).
+    let first_steps = match st
+        .recovery
+        .as_ref()
+        .and_then(|r| r.attempts.iter().find(|a| a.succeeded))
+    {
+        Some(a) => a.steps(),
+        None => report.steps.iter().filter(|s| s.converged).count(),
+    };
+    let steps = first_steps
         + cont
             .as_ref()
             .map_or(0, |c| c.points.len().saturating_sub(1));
