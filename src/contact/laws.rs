@@ -740,7 +740,7 @@ mod tests {
         for k in 1..100 {
             let r = w * k as f64 / 100.0;
             let (v, d) = c.apply(r);
-            assert!(v >= prev && v <= r && d >= 0.0 && d <= 4.0 / 3.0 + 1e-12);
+            assert!(v >= prev && v <= r && (0.0..=4.0 / 3.0 + 1e-12).contains(&d));
             assert!(r - v <= 4.0 * w / 27.0 + 1e-12);
             prev = v;
         }
