@@ -16,7 +16,7 @@
 //! [`AppError::Interrupted`] (exit status 130).
 
 use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
-use crate::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+use crate::contact::{Clamp, ContactModel, FacetRule, Friction, NormalCompliance};
 use crate::driver::indentation;
 use crate::driver::spinning;
 use crate::driver::system::Loading;
@@ -25,7 +25,8 @@ use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
 use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
 use crate::io::scene::{
-    ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode, Scene, Sink,
+    ClampKind, ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode,
+    Scene, Sink, DEFAULT_CLAMP_WIDTH_OVER_G,
 };
 use crate::material::{
     Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
@@ -174,7 +175,15 @@ pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, 
             "mode \"static\" needs the [road] and [contact] sections".into(),
         ));
     };
-    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n);
+    let clamp = match cs.clamp {
+        ClampKind::Hard => Clamp::Hard,
+        ClampKind::Smooth => Clamp::Smooth {
+            width: cs.clamp_width.unwrap_or_else(|| {
+                DEFAULT_CLAMP_WIDTH_OVER_G * model.material.small_strain_shear_modulus()
+            }),
+        },
+    };
+    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
     let friction = match scene.friction.params() {
         None => {
             return Err(AppError::Unsupported(

@@ -319,3 +319,231 @@ fn strain_rate_damping_does_not_act_on_steady_spinning() {
     assert!(rel[1] < rel[0] / 4.0 && rel[2] < rel[1] / 4.0, "{rel:?}");
     assert!(rel[2] < 1e-3, "{rel:?}");
 }
+
+/// Scene overrides of `oden_hollow_cylinder.toml` in steady mode at `omega` with the sweep's
+/// ratio v0 / ω = 1.9666667 in and the smooth quadratic compliance (m_n = 2) of
+/// `oden_steady_sweep.toml`.
+fn steady_at(omega: f64) -> Vec<String> {
+    vec![
+        "analysis.mode=\"steady\"".into(),
+        format!("motion.omega={omega}"),
+        format!("road.v0={}", 19.666667 / 10.0 * omega),
+        "contact.m_n=2".into(),
+        "contact.c_n=2e6".into(),
+    ]
+}
+
+/// The direct press (the steady solve before recoveries existed) of a scene: Ok or not.
+fn direct_press_converges(sc: &Scene) -> bool {
+    use tread::driver::steady::press;
+    use tread::driver::system::Loading;
+    let mut st = steady_run::build_steady(sc).unwrap();
+    let (nopt, sopt) = tread::app::solver_options(sc, false);
+    let kind = tread::app::linear_kind(sc, &st.sys);
+    let loading = Loading::Indent {
+        h_touch: sc.geometry.ro,
+        disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
+    };
+    press(
+        &mut st,
+        loading,
+        kind,
+        nopt,
+        &sopt,
+        &mut Default::default(),
+        &mut (),
+    )
+    .is_ok()
+}
+
+/// Relative residual of the scene's own equations at the state of `st` (a fresh system of the
+/// scene, so the parameters are exactly the scene's, with the state copied in).
+fn scene_residual(sc: &Scene, st: &SteadyRolling) -> f64 {
+    use tread::solver::stepping::LoadedSystem;
+    let loading = tread::driver::system::Loading::Indent {
+        h_touch: sc.geometry.ro,
+        disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
+    };
+    let mut fresh = steady_run::build_steady(sc).unwrap();
+    fresh.sys.loading = loading;
+    fresh.sys.set_load(1.0);
+    fresh.sys.x.copy_from_slice(&st.sys.x);
+    assert!(fresh.evaluate(false));
+    let r = fresh.residual().iter().map(|v| v * v).sum::<f64>().sqrt();
+    let c = fresh.sys.contact.as_ref().unwrap();
+    r / tread::driver::steady::reference_force(c, &loading, sc.geometry.ro)
+}
+
+#[test]
+fn failed_press_is_recovered_by_omega_stepping_and_matches_continuation() {
+    use tread::driver::steady_recovery::Strategy;
+    use tread::solver::continuation::{
+        BranchPoint, Continuation, ContinuationOptions, ParametricSystem,
+    };
+    // At 46 rad/s (just below the limit point at 46.7 rad/s) the press-in at fixed ω fails;
+    // pressing in at ω = 0 and stepping ω up reaches the branch.
+    let set = steady_at(46.0);
+    let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
+    let sc = scene(ODEN, &set);
+    assert!(
+        !direct_press_converges(&sc),
+        "the direct press at 46 rad/s converged: this test no longer tests a recovery"
+    );
+    let (_, st) = steady_solution(ODEN, &set);
+    let r = st.recovery.as_ref().expect("a recovery report");
+    println!("{}", r.message);
+    assert_eq!(r.strategy, Some(Strategy::OmegaStepping));
+    assert!(r.direct_error.contains("line search"), "{}", r.direct_error);
+    let res = scene_residual(&sc, &st);
+    println!("relative residual of the scene's equations at the recovered state: {res:.3e}");
+    assert!(res < 1e-8, "{res:e}");
+
+    // Reference: arc-length continuation in ω from 10 rad/s (the sweep scene's start) to the
+    // first point past 46 rad/s, then Newton at exactly 46 rad/s from there.
+    let set10 = steady_at(10.0);
+    let set10: Vec<&str> = set10.iter().map(|s| s.as_str()).collect();
+    let (sc10, mut cst) = steady_solution(ODEN, &set10);
+    assert!(cst.recovery.is_none());
+    let u_norm = cst.sys.x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    // The sweep's settings (`oden_steady_sweep.toml`: target 60 rad/s, ds 0.02 .. 0.05),
+    // stopped at the first point past 46 rad/s.
+    let copts = ContinuationOptions {
+        target: 60.0,
+        direction: 1.0,
+        ds0: 0.02,
+        ds_min: 2e-6,
+        ds_max: 0.05,
+        x_scale: u_norm,
+        lambda_scale: 50.0,
+        max_steps: 200,
+        max_iterations: 15,
+        desired_iterations: 4,
+        max_cutbacks: 10,
+        tol: 1e-8,
+        test_function: false,
+        verbose: false,
+    };
+    let mut cont = Continuation::new(&cst, LinearKind::Lu, copts).unwrap();
+    let rep = cont
+        .run(&mut cst, &mut |_, p: &BranchPoint| p.lambda < 46.0)
+        .unwrap();
+    let last = cst.parameter();
+    println!(
+        "continuation: {} ({} points), last omega {last}",
+        rep.stop_reason,
+        rep.points.len()
+    );
+    assert!((46.0..46.7).contains(&last), "{last}");
+    cst.set_parameter(46.0);
+    let (nopt, _) = tread::app::solver_options(&sc10, false);
+    let mut newton = Newton::new(&cst.sys, LinearKind::Lu, nopt).unwrap();
+    newton.solve(&mut cst).unwrap();
+    assert_eq!(cst.omega(), 46.0);
+
+    let umax = cst.sys.x.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let du = cst
+        .sys
+        .x
+        .iter()
+        .zip(&st.sys.x)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let (fr, mr) = st.sys.hub_reaction();
+    let (fc, mc) = cst.sys.hub_reaction();
+    let df = (fr - fc).norm() / fc.norm();
+    let dm = (mr - mc).abs() / (fc.norm() * 2.0);
+    println!(
+        "recovered vs continued at 46 rad/s: max |du| / max |u| = {:.3e}, |dF| / |F| = {df:.3e}, |dM| / (|F| Ro) = {dm:.3e}",
+        du / umax
+    );
+    assert!(du <= 1e-8 * umax && df <= 1e-8 && dm <= 1e-8);
+}
+
+/// Run a steady scene through `tread::app::run` into a fresh directory; the summary and
+/// whether the run succeeded.
+fn run_steady(set: &[&str], tag: &str) -> (serde_json::Value, bool) {
+    let mut set: Vec<&str> = set.to_vec();
+    set.push("output.sinks=[\"summary\"]");
+    let sc = scene(ODEN, &set);
+    let dir = std::env::temp_dir().join(format!("tread_steady_{tag}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let opts = tread::app::RunOptions {
+        out_dir: dir.clone(),
+        verbose: false,
+        quiet: true,
+    };
+    let ok = tread::app::run(&sc, &opts).is_ok();
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    (serde_json::from_str(&text).unwrap(), ok)
+}
+
+#[test]
+fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
+    // κ/G = 1e5 (compressible Mooney–Rivlin) and ε = 1e-5 v0 near free rolling: the direct
+    // press fails; a homotopy from κ = 100 G (resp. ε = 1e-3 v0) down to the scene's value
+    // reaches a state that solves the scene's own equations.
+    for (set, strategy) in [
+        (
+            vec!["analysis.mode=\"steady\"", "material.kappa=2e7"],
+            "kappa_homotopy",
+        ),
+        (
+            vec![
+                "analysis.mode=\"steady\"",
+                "road.v0=21",
+                "friction.eps=2.1e-4",
+            ],
+            "eps_homotopy",
+        ),
+    ] {
+        let sc = scene(ODEN, &set);
+        assert!(
+            !direct_press_converges(&sc),
+            "{set:?}: the direct press converged, nothing to recover"
+        );
+        let (sc, st) = steady_solution(ODEN, &set);
+        let r = st.recovery.as_ref().expect("a recovery report");
+        println!("{set:?}: {}", r.message);
+        assert_eq!(r.strategy.map(|s| s.to_string()).as_deref(), Some(strategy));
+        let res = scene_residual(&sc, &st);
+        assert!(res < 1e-8, "{set:?}: residual {res:e}");
+        // The hub load has the magnitude of the benign scene's (Fy = −98.5 lbf/in at
+        // κ/G = 100; a stiffer κ raises it: −104.1 at 1e3, −111.7 at 1e5, −118.2 at 1e6).
+        let fy = st.sys.hub_reaction().0[1];
+        assert!((-125.0..-80.0).contains(&fy), "{set:?}: Fy = {fy}");
+        // Logged in summary.json (solver.recovery) with the strategy and its steps.
+        let tag = strategy.to_string();
+        let (summary, ok) = run_steady(&set, &tag);
+        assert!(ok && summary["converged"] == true);
+        let rec = &summary["solver"]["recovery"];
+        assert_eq!(rec["strategy"], strategy, "{rec}");
+        let legs = rec["attempts"][0]["legs"].as_array().unwrap();
+        assert!(legs[0]["steps"].as_u64().unwrap() >= 2, "{rec}");
+        assert!(rec["message"].as_str().unwrap().contains(strategy));
+    }
+}
+
+#[test]
+fn a_target_in_a_gap_of_the_branch_fails_with_every_attempt_logged() {
+    // oden_hollow_cylinder (m_n = 1, b_n = 5, l_n = 0) at 38 rad/s: the normal traction of a
+    // point entering the patch jumps from 0 to b_n δ̇ > 0, and the branch in ω has a gap from
+    // 37.8495 to 38.586 rad/s (pieces end there in non-smooth folds). No strategy can find a
+    // solution; the run must fail with the direct error and log what it tried.
+    let v0 = format!("road.v0={}", 38.0 * 1.966667);
+    let (summary, ok) = run_steady(&["analysis.mode=\"steady\"", "motion.omega=38", &v0], "gap");
+    assert!(!ok);
+    assert_eq!(summary["converged"], false);
+    let rec = &summary["solver"]["recovery"];
+    assert!(rec["strategy"].is_null(), "{rec}");
+    let attempts = rec["attempts"].as_array().unwrap();
+    assert_eq!(attempts[0]["strategy"], "omega_stepping", "{rec}");
+    assert_eq!(attempts[0]["succeeded"], false);
+    let reached = attempts[0]["legs"][0]["reached"].as_f64().unwrap();
+    println!("omega stepping stopped at {reached} rad/s");
+    assert!((37.8..38.0).contains(&reached), "{reached}");
+    assert!(summary["error"]
+        .as_str()
+        .unwrap()
+        .contains("load stepping gave up"));
+}

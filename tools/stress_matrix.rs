@@ -24,7 +24,8 @@
 //! | `extreme` | all three | all | a deep indentation, c_n = 1e12, κ = 1e10, ω = 0, ε = 1e-12, a 1 × 8 mesh, undamped runs |
 //!
 //! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
-//! `solver.cutbacks` or `results.rejected_steps` > 0), `failed` with a class from the typed
+//! `solver.cutbacks` or `results.rejected_steps` > 0, or with a steady-mode recovery strategy in
+//! `solver.recovery.strategy`), `failed` with a class from the typed
 //! error (`newton_not_converged`, `line_search`, `inadmissible`, `explicit_unstable`,
 //! `continuation`, `integrator`, `linear_solver`, `invalid_input`, `output`, `other`), or
 //! `panic` (a bug). A wrapped error (load stepping or time-step halving that gave up) is classed
@@ -534,9 +535,24 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         Ok(Ok(o)) => {
             let cut = count_key(&o.summary, &["solver", "cutbacks"])
                 + count_key(&o.summary, &["results", "rejected_steps"]);
+            let strategy = o.summary["solver"]["recovery"]["strategy"]
+                .as_str()
+                .map(String::from);
             if !o.converged {
                 row.class = "not_converged_flag".into();
                 row.message = "run returned Ok with converged = false".into();
+            } else if let Some(strategy) = strategy {
+                // The steady mode's first solve failed and a homotopy found the solution.
+                row.outcome = "recovered";
+                row.message = format!(
+                    "recovery: {strategy} in {} steps after the failed direct solve ({} attempts, \
+                     cutbacks {} in all)",
+                    o.summary["results"]["steps"].as_u64().unwrap_or(0),
+                    o.summary["solver"]["recovery"]["attempts"]
+                        .as_array()
+                        .map_or(0, |a| a.len()),
+                    count_key(&o.summary, &["solver", "cutbacks"])
+                );
             } else if cut > 0 {
                 row.outcome = "recovered";
                 row.message = format!(
@@ -653,7 +669,8 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
         total_wall
     );
     md += "\nOutcomes: `converged` = Ok with no cut-back and no rejected step; `recovered` = Ok with \
-`solver.cutbacks` or `results.rejected_steps` > 0 (for `bdf` and `sdirk` the rejected steps are \
+`solver.cutbacks` or `results.rejected_steps` > 0, or after a steady-mode recovery strategy \
+(`solver.recovery.strategy`: the direct press failed, a homotopy in κ, ε or ω found the solution) (for `bdf` and `sdirk` the rejected steps are \
 diffsol's error-control rejections, part of the normal step-size control); `failed` = a typed \
 error, classed by its innermost cause (a load stepping or step halving that gave up is classed by \
 the last Newton failure). `converged` means the solver's own criterion was met, not that the answer \

@@ -24,7 +24,10 @@
 //! t_n = c_n δ^{m_n} + b_n δ^{l_n} δ̇   for δ > 0,  clamped at t_n ≥ 0 (no adhesion);
 //! t_n = 0 for δ ≤ 0. With m_n = 1 and c_n = 1/ε this is the exterior penalty. Where the clamp is
 //! active (raw t_n ≤ 0, only possible with damping and a receding body δ̇ < 0), the traction and
-//! both derivatives are zero.
+//! both derivatives are zero. The clamp is max(0, ·) by default ([`Clamp::Hard`], the project's
+//! convention); [`Clamp::Smooth`] replaces it by a C¹ cubic ramp of a given width (scene key
+//! `contact.clamp = "smooth"`, `contact.clamp_width`), to study the kink it puts inside a
+//! damped contact patch.
 //!
 //! # Friction (paper Fig. 7 and §4)
 //!
@@ -112,6 +115,53 @@ pub struct NormalValue {
     pub d_rate: f64,
 }
 
+/// How the normal traction is kept non-negative (no adhesion): t_n = clamp(r) of the raw value
+/// r = c_n δ^{m_n} + b_n δ^{l_n} δ̇ (δ > 0).
+///
+/// | variant  | clamp(r)                                                  | smoothness |
+/// |----------|-----------------------------------------------------------|------------|
+/// | `Hard`   | max(0, r)                                                 | C⁰ (kink at r = 0) |
+/// | `Smooth` | 0 for r ≤ 0; r² (2w − r) / w² for 0 < r < w; r for r ≥ w  | C¹         |
+///
+/// The smooth ramp (width w, a traction) is the cubic that matches 0 and the raw law with
+/// their slopes at both ends of [0, w]: it is monotone, 0 ≤ clamp(r) ≤ r, and differs from the
+/// hard clamp only where 0 < r < w (by at most 4w/27, at r = w/3). Unlike a softplus
+/// w ln(1 + e^{r/w}) it adds no traction where r ≤ 0 (no spurious push where the raw law is
+/// negative, and no new jump at δ = 0), and it leaves the law exact once r ≥ w. Note that for
+/// m_n = 1 without damping (r = c_n δ) it also rounds the kink of the penalty at δ = 0 over
+/// δ < w / c_n. The project's default is `Hard` (DESIGN.md §3); `Smooth` is an option to study
+/// the effect of the kink.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Clamp {
+    /// t_n = max(0, r).
+    #[default]
+    Hard,
+    /// The C¹ cubic ramp of width `width` (traction units, > 0).
+    Smooth { width: f64 },
+}
+
+impl Clamp {
+    /// clamp(r) and d clamp / dr.
+    #[inline]
+    pub fn apply(&self, r: f64) -> (f64, f64) {
+        if r <= 0.0 {
+            return (0.0, 0.0);
+        }
+        match *self {
+            Clamp::Hard => (r, 1.0),
+            Clamp::Smooth { width: w } => {
+                if r >= w {
+                    (r, 1.0)
+                } else {
+                    let w2 = w * w;
+                    (r * r * (2.0 * w - r) / w2, r * (4.0 * w - 3.0 * r) / w2)
+                }
+            }
+        }
+    }
+}
+
 /// Normal compliance with optional damping: t_n = c_n δ^{m_n} + b_n δ^{l_n} δ̇, clamped at 0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NormalCompliance {
@@ -123,12 +173,27 @@ pub struct NormalCompliance {
     pub b_n: f64,
     /// Damping exponent l_n ≥ 0.
     pub l_n: f64,
+    /// The no-adhesion clamp (hard by default).
+    #[serde(default)]
+    pub clamp: Clamp,
 }
 
 impl NormalCompliance {
-    /// A law with the given parameters.
+    /// A law with the given parameters and the hard clamp.
     pub fn new(c_n: f64, m_n: f64, b_n: f64, l_n: f64) -> Self {
-        Self { c_n, m_n, b_n, l_n }
+        Self {
+            c_n,
+            m_n,
+            b_n,
+            l_n,
+            clamp: Clamp::Hard,
+        }
+    }
+
+    /// The same law with another clamp.
+    pub fn with_clamp(mut self, clamp: Clamp) -> Self {
+        self.clamp = clamp;
+        self
     }
 
     /// The exterior penalty t_n = c_n δ (m_n = 1, no damping).
@@ -148,12 +213,17 @@ impl NormalCompliance {
         check("c_n", self.c_n, self.c_n > 0.0, "must be > 0")?;
         check("m_n", self.m_n, self.m_n >= 1.0, "must be >= 1")?;
         check("b_n", self.b_n, self.b_n >= 0.0, "must be >= 0")?;
-        check("l_n", self.l_n, self.l_n >= 0.0, "must be >= 0")
+        check("l_n", self.l_n, self.l_n >= 0.0, "must be >= 0")?;
+        match self.clamp {
+            Clamp::Hard => Ok(()),
+            Clamp::Smooth { width } => check("clamp_width", width, width > 0.0, "must be > 0"),
+        }
     }
 
     /// Normal traction and its derivatives at penetration `delta` (δ) and rate `delta_dot` (δ̇).
     ///
-    /// Zero for δ ≤ 0 and wherever the raw value c_n δ^{m_n} + b_n δ^{l_n} δ̇ is ≤ 0 (clamp).
+    /// Zero for δ ≤ 0 and wherever the raw value c_n δ^{m_n} + b_n δ^{l_n} δ̇ is ≤ 0 (clamp);
+    /// with [`Clamp::Smooth`] the raw value is passed through the C¹ ramp.
     #[inline]
     pub fn eval(&self, delta: f64, delta_dot: f64) -> NormalValue {
         if delta <= 0.0 {
@@ -171,6 +241,14 @@ impl NormalCompliance {
         }
         if t <= 0.0 {
             return NormalValue::default();
+        }
+        if let Clamp::Smooth { .. } = self.clamp {
+            let (c, dc) = self.clamp.apply(t);
+            return NormalValue {
+                t: c,
+                d_delta: dc * d_delta,
+                d_rate: dc * d_rate,
+            };
         }
         NormalValue { t, d_delta, d_rate }
     }
@@ -421,6 +499,18 @@ impl Friction {
         }
     }
 
+    /// Set the regularisation velocity ε (no effect for frictionless contact). Used by the
+    /// steady solver's ε-homotopy, which walks ε down from a benign value to the scene's.
+    pub fn set_eps(&mut self, eps: f64) {
+        match self {
+            Friction::None => {}
+            Friction::CoulombTanh(l) => l.eps = eps,
+            Friction::CoulombLinear(l) => l.eps = eps,
+            Friction::RateDependent(l) => l.eps = eps,
+            Friction::OdenMartins(l) => l.eps = eps,
+        }
+    }
+
     /// Check the parameters: coefficients ≥ 0, ε > 0, v_s > 0, m_T ≥ 1, all finite.
     pub fn validate(&self) -> Result<(), LawError> {
         const POS: &str = "must be > 0";
@@ -593,6 +683,82 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn smooth_clamp_derivatives_match_finite_differences() {
+        // Raw values r = c δ^m + b δ^l δ̇ on both sides of 0 and of the width w, so that
+        // points in the ramp (0 < r < w) and on the exact law (r ≥ w) are all checked.
+        let w = 10.0;
+        let mut in_ramp = 0;
+        for m_n in [1.0, 2.0] {
+            for (b_n, l_n) in [(0.0, 0.0), (5.0, 0.0), (500.0, 1.0)] {
+                let law = NormalCompliance::new(2e4, m_n, b_n, l_n)
+                    .with_clamp(Clamp::Smooth { width: w });
+                for delta in [1e-5, 1e-4, 3e-4, 1e-3, 5e-3, 0.02] {
+                    for rate in [-3.0, -1.0, -0.3, -0.05, 0.0, 0.2, 2.0] {
+                        let v = law.eval(delta, rate);
+                        if v.t == 0.0 {
+                            assert_eq!(v, NormalValue::default());
+                            continue;
+                        }
+                        let hard = NormalCompliance::new(2e4, m_n, b_n, l_n).eval(delta, rate);
+                        if hard.t < w {
+                            in_ramp += 1;
+                        }
+                        let tag =
+                            format!("m_n={m_n} b_n={b_n} l_n={l_n} delta={delta:e} rate={rate}");
+                        let hd = 1e-6 * delta;
+                        let fd_d = cd(|d| law.eval(d, rate).t, delta, hd);
+                        let noise = 1e-14 * v.t.abs().max(w) / hd;
+                        assert_close(&format!("d_delta {tag}"), v.d_delta, fd_d, 1e-5, noise);
+                        let hr = 1e-7 * rate.abs().max(1.0);
+                        let fd_r = cd(|r| law.eval(delta, r).t, rate, hr);
+                        let noise = 1e-14 * v.t.abs().max(w) / hr;
+                        assert_close(&format!("d_rate {tag}"), v.d_rate, fd_r, 1e-5, noise);
+                    }
+                }
+            }
+        }
+        assert!(in_ramp >= 10, "only {in_ramp} samples in the ramp");
+    }
+
+    #[test]
+    fn smooth_clamp_is_c1_and_exact_outside_its_width() {
+        let w = 4.0;
+        let c = Clamp::Smooth { width: w };
+        // C¹ at both ends of the ramp: value and slope continuous.
+        let (v0, d0) = c.apply(1e-12);
+        assert!(v0.abs() < 1e-20 && d0.abs() < 1e-11, "{v0} {d0}");
+        let (vm, dm) = c.apply(w * (1.0 - 1e-12));
+        let (vp, dp) = c.apply(w * (1.0 + 1e-12));
+        assert!((vm - vp).abs() < 1e-10 && (dm - dp).abs() < 1e-10);
+        // Exact law outside [0, w], below it and monotone inside.
+        assert_eq!(c.apply(-1.0), (0.0, 0.0));
+        assert_eq!(c.apply(7.5), (7.5, 1.0));
+        let mut prev = 0.0;
+        for k in 1..100 {
+            let r = w * k as f64 / 100.0;
+            let (v, d) = c.apply(r);
+            assert!(v >= prev && v <= r && (0.0..=4.0 / 3.0 + 1e-12).contains(&d));
+            assert!(r - v <= 4.0 * w / 27.0 + 1e-12);
+            prev = v;
+        }
+        // The hard clamp is the default and leaves the law untouched.
+        let law = NormalCompliance::new(100.0, 1.0, 50.0, 0.0);
+        assert_eq!(law.clamp, Clamp::Hard);
+        assert_eq!(law.eval(0.01, 0.1).t, 100.0 * 0.01 + 50.0 * 0.1);
+        let smooth = law.with_clamp(Clamp::Smooth { width: 2.0 });
+        // raw = 100·0.01 + 50·(−0.01) = 0.5 < w: rounded, below the raw value
+        let (h, s) = (law.eval(0.01, -0.01).t, smooth.eval(0.01, -0.01).t);
+        assert!((h - 0.5).abs() < 1e-12 && s > 0.0 && s < h, "{h} {s}");
+        assert!(smooth.validate().is_ok());
+        let bad = law.with_clamp(Clamp::Smooth { width: 0.0 });
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("clamp_width"));
     }
 
     #[test]
@@ -769,6 +935,13 @@ mod tests {
         let bad = Friction::OdenMartins(OdenMartins::new(1.0, 0.5, 1.0));
         assert!(bad.validate().unwrap_err().to_string().contains("m_t"));
         assert!(Friction::None.validate().is_ok());
+        for mut law in laws(0.1) {
+            law.set_eps(3e-4);
+            assert_eq!(law.eps(), Some(3e-4), "{law:?}");
+        }
+        let mut none = Friction::None;
+        none.set_eps(1.0);
+        assert_eq!(none.eps(), None);
     }
 
     #[test]

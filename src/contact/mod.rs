@@ -15,4 +15,4 @@ pub mod laws;
 pub mod stick_slip;
 
 pub use facet::{ContactModel, ContactSample, ContactTotals, FacetRule, SlipKinematics};
-pub use laws::{Friction, FrictionLaw, NormalCompliance};
+pub use laws::{Clamp, Friction, FrictionLaw, NormalCompliance};

@@ -5,6 +5,7 @@ pub mod frame;
 pub mod indentation;
 pub mod spinning;
 pub mod steady;
+pub mod steady_recovery;
 pub mod steady_run;
 pub mod stick_slip_run;
 pub mod system;

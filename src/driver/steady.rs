@@ -18,7 +18,19 @@
 //! # Procedure
 //!
 //! 1. At the scene's ω (and v0), the road is brought in by load stepping (displacement control:
-//!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state.
+//!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state. If that
+//!    fails, [`super::steady_recovery`] tries homotopies (κ, ε, ω from benign values to the
+//!    scene's) before giving up; what it did is kept in [`SteadyRolling::recovery`].
+//!
+//!    Known hard case, measured: with normal damping and `l_n = 0` the traction of a point
+//!    entering the patch (δ̇ > 0) jumps from 0 to b_n δ̇ at first contact. The discrete steady
+//!    branch then consists of pieces that end in non-smooth folds, with gaps in between that
+//!    none of the pieces found reaches (`oden_hollow_cylinder`, 3 × 64: stepping ω up stops
+//!    at 37.8495 rad/s, stepping down from 38.71 stops at 38.586, so ω = 38 has no solution on
+//!    either piece; κ/G = 1e4 likewise lies between 1.362e6 and 2.092e6 psi on the κ path).
+//!    A recovery cannot solve a target in such a gap; `l_n > 0` (damping vanishing at first
+//!    contact) or `b_n = 0` closes them (the direct solves at 38 rad/s and κ/G = 1e4 then
+//!    converge).
 //! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
 //!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
 //!    Newton solve from the previous state.
@@ -26,6 +38,7 @@
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
 
+use super::steady_recovery::Recovery;
 use super::system::{Loading, SolidSystem};
 use crate::contact::SlipKinematics;
 use crate::io::record::Recorder;
@@ -53,6 +66,8 @@ pub struct SteadyRolling {
     pub v0_per_omega: f64,
     /// Outer radius (H = ro − disp).
     pub ro: f64,
+    /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
+    pub recovery: Option<Recovery>,
 }
 
 impl SteadyRolling {
@@ -64,6 +79,7 @@ impl SteadyRolling {
             param: SteadyParameter::Omega,
             v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
             ro,
+            recovery: None,
         };
         s.set_omega(omega, v0);
         s
@@ -71,6 +87,11 @@ impl SteadyRolling {
 
     pub fn omega(&self) -> f64 {
         self.sys.model.omega2.max(0.0).sqrt()
+    }
+
+    /// ω with its sign (as set by [`Self::set_omega`]).
+    pub fn omega_signed(&self) -> f64 {
+        self.sys.model.steady_omega.unwrap_or_else(|| self.omega())
     }
 
     pub fn v0(&self) -> f64 {

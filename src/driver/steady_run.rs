@@ -8,7 +8,11 @@
 //! `contact_half_width_moment`) for the final state, plus `omega`, `v0`, `penetration`, and,
 //! with continuation, `branch` (one row per converged point, as `branch.csv`),
 //! `special_points` (limit and bifurcation points with their estimated parameter) and
-//! `continuation` (stop reason, counts).
+//! `continuation` (stop reason, counts). `solver.recovery` is null, or the
+//! [`super::steady_recovery::Recovery`] report when the press-in failed and recoveries were
+//! tried (then a line `tread: recovered: …` or `tread: the steady solve failed …` goes to
+//! stderr); after a successful recovery `results.steps` counts its steps (press at the benign
+//! values and homotopy steps) instead of the failed press's.
 //!
 //! Files: `steady_field.csv` (same format as the transient mode's, see
 //! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
@@ -18,6 +22,7 @@
 
 use super::spinning;
 use super::steady::{press, SteadyParameter, SteadyRolling};
+use super::steady_recovery;
 use super::system::{Loading, SolidSystem};
 use super::tables;
 use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
@@ -29,7 +34,7 @@ use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
 use crate::solver::stepping::{LoadedSystem, StepReport};
-use crate::solver::{LinearKind, SolveError};
+use crate::solver::{LinearKind, NonlinearSystem, SolveError};
 use std::time::Instant;
 
 /// One row of the branch table.
@@ -183,7 +188,9 @@ pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
 }
 
 /// Solve the steady state at the scene's ω and v0 (pressing stage). `report` collects the
-/// load steps.
+/// load steps. When the press fails, the recovery strategies of [`steady_recovery`] are tried;
+/// what they did is left in `st.recovery` (also when they failed, and then the press's error is
+/// returned).
 pub fn solve_steady(
     scene: &Scene,
     st: &mut SteadyRolling,
@@ -212,7 +219,42 @@ pub fn solve_steady(
             disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
         },
     };
-    press(st, loading, kind, newton_opts, &step_opts, report, rec)
+    let mut x_init = Vec::new();
+    st.sys.save_state(&mut x_init);
+    st.recovery = None;
+    match press(
+        st,
+        loading,
+        kind,
+        newton_opts.clone(),
+        &step_opts,
+        report,
+        rec,
+    ) {
+        Ok(()) => Ok(()),
+        Err(SolveError::Interrupted { at }) => Err(SolveError::Interrupted { at }),
+        Err(e) => {
+            // The press-in path at the scene's ω failed: try the homotopies of
+            // `steady_recovery` before giving up (their counts go into `report`).
+            let r = steady_recovery::recover(
+                st,
+                loading,
+                kind,
+                &newton_opts,
+                &step_opts,
+                &x_init,
+                &e,
+                report,
+            )?;
+            let ok = r.succeeded();
+            st.recovery = Some(r);
+            if ok {
+                Ok(())
+            } else {
+                Err(e)
+            }
+        }
+    }
 }
 
 /// The warnings of a steady run of this scene (none so far: the steady residual has every
@@ -249,6 +291,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut report = StepReport::default();
     let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, &mut recorders);
     let t_first = t0.elapsed().as_secs_f64();
+    if let Some(r) = &st.recovery {
+        if r.succeeded() {
+            eprintln!("tread: recovered: {}", r.message);
+        } else {
+            eprintln!("tread: {}", r.message);
+        }
+    }
     let mut cont: Option<ContinuationReport> = None;
     let mut rows: Vec<BranchRow> = Vec::new();
     if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
@@ -320,7 +369,17 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let samples = st.sys.contact_samples();
     let tot = ContactModel::totals(&samples);
     let (f, m) = st.sys.hub_reaction();
-    let steps = report.steps.iter().filter(|s| s.converged).count()
+    // Steps of the path to the first solution: the press's, or those of the recovery that
+    // found it (the failed press's steps are not on that path).
+    let first_steps = match st
+        .recovery
+        .as_ref()
+        .and_then(|r| r.attempts.iter().find(|a| a.succeeded))
+    {
+        Some(a) => a.steps(),
+        None => report.steps.iter().filter(|s| s.converged).count(),
+    };
+    let steps = first_steps
         + cont
             .as_ref()
             .map_or(0, |c| c.points.len().saturating_sub(1));
@@ -395,6 +454,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "load_steps": report.steps.iter().filter(|s| s.converged).count(),
             "cutbacks": report.cutbacks,
             "threads": rayon::current_num_threads(),
+            "recovery": st.recovery.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
         },
         "version": env!("CARGO_PKG_VERSION"),
     });

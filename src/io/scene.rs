@@ -270,6 +270,19 @@ keyword_enum! {
 }
 
 keyword_enum! {
+    /// No-adhesion clamp of the normal traction (`[contact] clamp`), see
+    /// [`crate::contact::Clamp`].
+    #[derive(Default)]
+    ClampKind, "contact clamp" {
+        /// `t_n = max(0, raw)` (the project's convention, DESIGN.md §3).
+        #[default]
+        Hard => "hard",
+        /// A C¹ cubic ramp of width `clamp_width` instead of the kink at raw = 0.
+        Smooth => "smooth",
+    }
+}
+
+keyword_enum! {
     /// Friction law (`[friction] law`).
     #[derive(Default)]
     FrictionLawName, "friction law" {
@@ -782,7 +795,18 @@ pub struct ContactSpec {
     /// Quadrature points per boundary edge, `MIN_CONTACT_POINTS..=MAX_CONTACT_POINTS`.
     #[serde(default = "default_contact_points")]
     pub points: usize,
+    /// No-adhesion clamp of t_n: `hard` (max(0, ·), the default) or `smooth` (C¹ ramp).
+    #[serde(default)]
+    pub clamp: ClampKind,
+    /// Width of the smooth clamp (traction, > 0; only with `clamp = "smooth"`). Default:
+    /// [`DEFAULT_CLAMP_WIDTH_OVER_G`] × the material's small-strain shear modulus G.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clamp_width: Option<f64>,
 }
+
+/// Default `[contact] clamp_width` as a fraction of the shear modulus G (10 psi for the rubber
+/// scenes, a few per cent of their peak contact pressure).
+pub const DEFAULT_CLAMP_WIDTH_OVER_G: f64 = 0.05;
 
 /// Default of `[contact] m_n`.
 pub const DEFAULT_M_N: f64 = 1.0;
@@ -1696,6 +1720,8 @@ static SCHEMA: &[SectionSchema] = &[
             opt("l_n", Kind::Float),
             opt("quadrature", Kind::Keyword(ContactQuadrature::NAMES)),
             opt("points", Kind::UInt),
+            opt("clamp", Kind::Keyword(ClampKind::NAMES)),
+            opt("clamp_width", Kind::Float),
         ],
     },
     SectionSchema {
@@ -2677,6 +2703,20 @@ fn validate_contact(c: &ContactSpec, mode: Option<Mode>, out: &mut Vec<Issue>) {
             "contact.l_n",
             format!("normal damping exponent must be >= 0, got {}", c.l_n),
         ));
+    }
+    match (c.clamp, c.clamp_width) {
+        (ClampKind::Hard, Some(w)) => out.push(issue(
+            "contact.clamp_width",
+            format!(
+                "`clamp_width` = {w} is only used by the smooth clamp: set contact.clamp = \
+                 \"smooth\" or remove clamp_width"
+            ),
+        )),
+        (ClampKind::Smooth, Some(w)) if !positive(w) => out.push(issue(
+            "contact.clamp_width",
+            format!("smooth clamp width must be > 0 (a traction), got {w}"),
+        )),
+        _ => {}
     }
     if !(MIN_CONTACT_POINTS..=MAX_CONTACT_POINTS).contains(&c.points) {
         out.push(issue(
@@ -4304,6 +4344,8 @@ mesh.n_r = 4
             l_n: 0.0,
             quadrature: ContactQuadrature::Gauss,
             points: 4,
+            clamp: ClampKind::Smooth,
+            clamp_width: Some(10.0),
         }
     }
 
@@ -4405,7 +4447,9 @@ mesh.n_r = 4
                 b_n: 0.0,
                 l_n: 0.0,
                 quadrature: ContactQuadrature::Lobatto,
-                points: 4
+                points: 4,
+                clamp: ClampKind::Hard,
+                clamp_width: None
             })
         );
         // c_n = 1000 G / (Ro − Ri).
@@ -4521,7 +4565,9 @@ mesh.n_r = 4
                 b_n: 0.0,
                 l_n: 0.0,
                 quadrature: ContactQuadrature::Lobatto,
-                points: DEFAULT_CONTACT_POINTS
+                points: DEFAULT_CONTACT_POINTS,
+                clamp: ClampKind::Hard,
+                clamp_width: None
             })
         );
         // No [friction] at all: law none.
@@ -4618,6 +4664,43 @@ mesh.n_r = 4
             );
         }
         assert!(load(&replace_line(FRICTIONLESS, "m_n", "m_n = 1.5")).is_ok());
+    }
+
+    #[test]
+    fn contact_clamp_keys_are_validated() {
+        // Default: the hard clamp, no width.
+        let sc = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!((c.clamp, c.clamp_width), (ClampKind::Hard, None));
+        // Smooth with and without a width.
+        let text = replace_line(FRICTIONLESS, "points", "points = 4\nclamp = \"smooth\"");
+        let sc = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!((c.clamp, c.clamp_width), (ClampKind::Smooth, None));
+        let sc = load_with(&text, &["contact.clamp_width=25"]).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!(c.clamp_width, Some(25.0));
+        // A misspelt clamp names the key and the allowed values.
+        let bad = replace_line(FRICTIONLESS, "points", "points = 4\nclamp = \"soft\"");
+        let e = errors(&bad);
+        assert_only(&e, "contact.clamp", Some(line_of(&bad, "clamp")));
+        assert!(
+            e.0[0].message.contains("\"hard\"") && e.0[0].message.contains("\"smooth\""),
+            "{e}"
+        );
+        // A width must be positive and is only allowed with the smooth clamp.
+        for w in ["0", "-3"] {
+            let e = errors_with(&text, &[&format!("contact.clamp_width={w}")]);
+            assert!(e.has_key("contact.clamp_width"), "{e}");
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+        let e = errors_with(FRICTIONLESS, &["contact.clamp_width=5"]);
+        assert!(e.has_key("contact.clamp_width"), "{e}");
+        assert!(e.0[0].message.contains("smooth"), "{e}");
+        // The printed scene keeps the choice (round trip).
+        let sc = load_with(&text, &["contact.clamp_width=25"]).unwrap_or_else(|e| panic!("{e}"));
+        let back = load(&sc.to_toml_string()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back.contact, sc.contact);
     }
 
     #[test]
@@ -5151,7 +5234,9 @@ mesh.n_r = 4
                 b_n: 5.0,
                 l_n: 0.0,
                 quadrature: ContactQuadrature::Lobatto,
-                points: 4
+                points: 4,
+                clamp: ClampKind::Hard,
+                clamp_width: None
             })
         );
         assert_eq!(

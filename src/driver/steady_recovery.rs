@@ -1,0 +1,738 @@
+//! Recovery of a failed steady solve: when pressing the road in at the scene's ω (load stepping
+//! with cut-back, [`super::steady::press`]) fails, the steady mode does not give up at once but
+//! tries homotopies that start from a benign version of the scene and walk one parameter at a
+//! time to the scene's value, each step a Newton solve from the previous solution.
+//!
+//! # Why
+//!
+//! The press-in path at a fixed ω is a path in the penetration, not in ω: near the critical
+//! speed it is not monotone (ω = 38 rad/s fails on `oden_hollow_cylinder` where 30 and 42 work),
+//! although the branch in ω through the same point is regular. A stiff volumetric response
+//! (κ/G ≥ 1e4) or a small friction regularisation (ε ≤ 1e-5 v0 near free rolling, where a stick
+//! zone forms) makes the Newton basin of the press steps too small. In each case the solution
+//! exists and is reachable along another path.
+//!
+//! # Strategies (tried in this order, each only when it applies)
+//!
+//! | strategy          | benign start                     | leg(s) to the scene's value        | applies when          |
+//! |-------------------|----------------------------------|------------------------------------|-----------------------|
+//! | `kappa_homotopy`  | κ_b = 100 G                      | κ: κ_b → κ, geometric steps        | κ > κ_b               |
+//! | `eps_homotopy`    | ε_b = 1e-3 v_ref                 | ε: ε_b → ε, geometric steps        | friction on, ε < ε_b  |
+//! | `omega_stepping`  | ω = 0 (and v0 = 0)               | ω: 0 → ω, v0 = (v0/ω) ω, linear    | ω ≠ 0                 |
+//! | `combined`        | all of the above that apply      | κ, then ω, then ε                  | two or more apply     |
+//!
+//! G is the small-strain shear modulus, v_ref = max(|v0|, |ω| Ro). κ is the bulk modulus of the
+//! compressible Mooney–Rivlin law or the penalty κ of the perturbed incompressible one (the
+//! neo-Hookean λ is not walked). Every attempt starts from the undeformed state: the road is
+//! pressed in (same load stepping as the direct solve) at the benign values, then each leg
+//! walks its homotopy coordinate s ∈ [0, 1] (value = from + s (to − from), or
+//! from (to/from)^s for geometric steps): initial Δs = 1/4, ×1.5 after a solve in ≤ 4
+//! iterations, halved after a failure (at most `[solver] max_cutbacks` times in a row); the
+//! predictor is the secant through the last two solutions (a failed secant predictor is
+//! retried once from the last solution before Δs is halved). The last step lands exactly on
+//! the scene's value, so the recovered state solves the scene's equations to the scene's
+//! tolerance: it is the same solution a successful direct solve would give (when the branch
+//! is unique there).
+//!
+//! An attempt that fails restores the scene's parameters; when every attempt fails the state
+//! is put back where the direct solve left it and the direct solve's error stands. What
+//! happened is returned as a [`Recovery`] (the steady driver writes it to `summary.json` as
+//! `solver.recovery` and prints one line to stderr).
+
+use super::steady::{press, SteadyRolling};
+use super::system::Loading;
+use crate::io::record;
+use crate::material::Material;
+use crate::physics::PressureMode;
+use crate::solver::stepping::{StepOptions, StepReport};
+use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
+use std::time::Instant;
+
+/// κ_b / G: the bulk modulus the κ-homotopy starts from (the scenes' nearly incompressible
+/// κ/G = 100 presses in without trouble).
+pub const KAPPA_BENIGN_OVER_G: f64 = 100.0;
+/// ε_b / v_ref: the regularisation the ε-homotopy starts from.
+pub const EPS_BENIGN_OVER_V: f64 = 1e-3;
+/// Initial homotopy step Δs of a leg.
+const DS0: f64 = 0.25;
+/// Smallest Δs before a leg gives up.
+const DS_MIN: f64 = 1e-6;
+/// Steps per leg before it gives up.
+const MAX_LEG_STEPS: usize = 400;
+
+/// A parameter a homotopy walks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HomotopyParameter {
+    /// Angular speed ω, with the road speed v0 = (v0/ω)_scene · ω.
+    Omega,
+    /// Bulk modulus κ (compressible Mooney–Rivlin) or penalty κ (perturbed incompressible).
+    Kappa,
+    /// Friction regularisation velocity ε.
+    Eps,
+}
+
+impl std::fmt::Display for HomotopyParameter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            HomotopyParameter::Omega => "omega",
+            HomotopyParameter::Kappa => "kappa",
+            HomotopyParameter::Eps => "eps",
+        })
+    }
+}
+
+/// How a leg spaces its values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Spacing {
+    /// value = from + s (to − from).
+    Linear,
+    /// value = from (to / from)^s (both > 0).
+    Geometric,
+}
+
+/// A recovery strategy (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Strategy {
+    KappaHomotopy,
+    EpsHomotopy,
+    OmegaStepping,
+    Combined,
+}
+
+impl std::fmt::Display for Strategy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Strategy::KappaHomotopy => "kappa_homotopy",
+            Strategy::EpsHomotopy => "eps_homotopy",
+            Strategy::OmegaStepping => "omega_stepping",
+            Strategy::Combined => "combined",
+        })
+    }
+}
+
+/// One homotopy leg: `parameter` from `from` to `to`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leg {
+    pub parameter: HomotopyParameter,
+    pub from: f64,
+    pub to: f64,
+    pub spacing: Spacing,
+}
+
+impl Leg {
+    /// The parameter value at homotopy coordinate `s` ∈ [0, 1] (exactly `to` at s = 1).
+    pub fn value(&self, s: f64) -> f64 {
+        if s >= 1.0 {
+            return self.to;
+        }
+        match self.spacing {
+            Spacing::Linear => self.from + s * (self.to - self.from),
+            Spacing::Geometric => self.from * (self.to / self.from).powf(s),
+        }
+    }
+}
+
+/// The scene's values of the parameters a homotopy can walk, captured before any change.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Targets {
+    pub omega: f64,
+    pub v0: f64,
+    /// κ when the material has one that [`HomotopyParameter::Kappa`] walks.
+    pub kappa: Option<f64>,
+    /// ε when friction is active.
+    pub eps: Option<f64>,
+    /// Small-strain shear modulus G.
+    pub shear_modulus: f64,
+    pub ro: f64,
+}
+
+impl Targets {
+    pub fn of(st: &SteadyRolling) -> Self {
+        let eps = st
+            .sys
+            .contact
+            .as_ref()
+            .filter(|c| c.friction.is_active())
+            .and_then(|c| c.friction.eps());
+        Self {
+            omega: st.omega_signed(),
+            v0: st.v0(),
+            kappa: kappa_of(st),
+            eps,
+            shear_modulus: st.sys.model.material.small_strain_shear_modulus(),
+            ro: st.ro,
+        }
+    }
+
+    /// The strategies that apply, in the order they are tried, with their legs.
+    pub fn strategies(&self) -> Vec<(Strategy, Vec<Leg>)> {
+        let kappa_leg = self.kappa.and_then(|k| {
+            let kb = KAPPA_BENIGN_OVER_G * self.shear_modulus;
+            (kb > 0.0 && k > kb).then_some(Leg {
+                parameter: HomotopyParameter::Kappa,
+                from: kb,
+                to: k,
+                spacing: Spacing::Geometric,
+            })
+        });
+        let v_ref = self.v0.abs().max(self.omega.abs() * self.ro);
+        let eps_leg = self.eps.and_then(|e| {
+            let eb = EPS_BENIGN_OVER_V * v_ref;
+            (e > 0.0 && e < eb).then_some(Leg {
+                parameter: HomotopyParameter::Eps,
+                from: eb,
+                to: e,
+                spacing: Spacing::Geometric,
+            })
+        });
+        let omega_leg = (self.omega != 0.0).then_some(Leg {
+            parameter: HomotopyParameter::Omega,
+            from: 0.0,
+            to: self.omega,
+            spacing: Spacing::Linear,
+        });
+        let mut out = Vec::new();
+        if let Some(l) = kappa_leg {
+            out.push((Strategy::KappaHomotopy, vec![l]));
+        }
+        if let Some(l) = eps_leg {
+            out.push((Strategy::EpsHomotopy, vec![l]));
+        }
+        if let Some(l) = omega_leg {
+            out.push((Strategy::OmegaStepping, vec![l]));
+        }
+        // κ first (at ω = 0 it is a static problem), then ω, then ε (friction only acts once
+        // the body rolls).
+        let all: Vec<Leg> = [kappa_leg, omega_leg, eps_leg]
+            .into_iter()
+            .flatten()
+            .collect();
+        if all.len() >= 2 {
+            out.push((Strategy::Combined, all));
+        }
+        out
+    }
+}
+
+fn kappa_of(st: &SteadyRolling) -> Option<f64> {
+    match (st.sys.model.pressure, st.sys.model.material) {
+        (PressureMode::Perturbed { kappa, .. }, _) => Some(kappa),
+        (PressureMode::None, Material::MooneyRivlin(m)) => Some(m.kappa),
+        _ => None,
+    }
+}
+
+/// Set one parameter of `st` (ω also sets v0 = (v0/ω)_scene · ω, exactly the scene's v0 at the
+/// scene's ω).
+pub fn set_parameter(st: &mut SteadyRolling, t: &Targets, p: HomotopyParameter, value: f64) {
+    match p {
+        HomotopyParameter::Omega => {
+            let v0 = if value == t.omega {
+                t.v0
+            } else if t.omega != 0.0 {
+                t.v0 / t.omega * value
+            } else {
+                t.v0
+            };
+            st.set_omega(value, v0);
+        }
+        HomotopyParameter::Kappa => {
+            if let PressureMode::Perturbed { kappa, .. } = &mut st.sys.model.pressure {
+                *kappa = value;
+            } else if let Material::MooneyRivlin(m) = &mut st.sys.model.material {
+                m.kappa = value;
+            }
+        }
+        HomotopyParameter::Eps => {
+            if let Some(c) = &mut st.sys.contact {
+                c.friction.set_eps(value);
+            }
+        }
+    }
+}
+
+/// Put every walkable parameter back to the scene's value.
+pub fn restore_targets(st: &mut SteadyRolling, t: &Targets) {
+    set_parameter(st, t, HomotopyParameter::Omega, t.omega);
+    if let Some(k) = t.kappa {
+        set_parameter(st, t, HomotopyParameter::Kappa, k);
+    }
+    if let Some(e) = t.eps {
+        set_parameter(st, t, HomotopyParameter::Eps, e);
+    }
+}
+
+/// What one leg did.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct LegReport {
+    pub parameter: HomotopyParameter,
+    pub spacing: Spacing,
+    pub from: f64,
+    pub to: f64,
+    /// Converged steps.
+    pub steps: usize,
+    /// Halvings of Δs (failed steps, secant retries not counted).
+    pub cutbacks: usize,
+    pub newton_iterations: usize,
+    /// Last converged value (= `to` when the leg succeeded).
+    pub reached: f64,
+}
+
+/// One attempt of a strategy.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Attempt {
+    pub strategy: Strategy,
+    pub succeeded: bool,
+    /// Why it failed.
+    pub error: Option<String>,
+    /// Converged load steps and cut-backs of the press at the benign values.
+    pub press_steps: usize,
+    pub press_cutbacks: usize,
+    pub legs: Vec<LegReport>,
+    pub newton_iterations: usize,
+    pub wall_time_s: f64,
+}
+
+impl Attempt {
+    /// Converged steps (press and legs).
+    pub fn steps(&self) -> usize {
+        self.press_steps + self.legs.iter().map(|l| l.steps).sum::<usize>()
+    }
+    /// Cut-backs (press and legs).
+    pub fn cutbacks(&self) -> usize {
+        self.press_cutbacks + self.legs.iter().map(|l| l.cutbacks).sum::<usize>()
+    }
+}
+
+/// What the recovery did (`summary.json`: `solver.recovery`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Recovery {
+    /// The failure of the direct solve that started the recovery.
+    pub direct_error: String,
+    /// The strategy that succeeded (`None`: every attempt failed).
+    pub strategy: Option<Strategy>,
+    /// Every strategy tried, in order.
+    pub attempts: Vec<Attempt>,
+    /// Newton iterations over all attempts.
+    pub newton_iterations: usize,
+    /// Cut-backs over all attempts.
+    pub cutbacks: usize,
+    pub wall_time_s: f64,
+    /// One line for a person (printed to stderr by the driver).
+    pub message: String,
+}
+
+impl Recovery {
+    pub fn succeeded(&self) -> bool {
+        self.strategy.is_some()
+    }
+
+    fn describe(&self) -> String {
+        let Some(ok) = self.attempts.iter().find(|a| a.succeeded) else {
+            let tried: Vec<String> = self
+                .attempts
+                .iter()
+                .map(|a| {
+                    format!(
+                        "{} ({})",
+                        a.strategy,
+                        a.error.as_deref().unwrap_or("no error recorded")
+                    )
+                })
+                .collect();
+            return if tried.is_empty() {
+                format!(
+                    "the steady solve failed ({}) and no recovery strategy applies",
+                    self.direct_error
+                )
+            } else {
+                format!(
+                    "the steady solve failed ({}); recovery failed too: {}",
+                    self.direct_error,
+                    tried.join("; ")
+                )
+            };
+        };
+        let legs: Vec<String> = ok
+            .legs
+            .iter()
+            .map(|l| {
+                format!(
+                    "{} from {:.6e} to {:.6e} in {} steps ({} cut-backs)",
+                    l.parameter, l.from, l.to, l.steps, l.cutbacks
+                )
+            })
+            .collect();
+        let before: Vec<String> = self
+            .attempts
+            .iter()
+            .filter(|a| !a.succeeded)
+            .map(|a| a.strategy.to_string())
+            .collect();
+        format!(
+            "the direct steady solve failed ({}); recovered by {}: pressed in at the benign \
+             values in {} load steps, then {}{}; {} Newton iterations in {:.2} s",
+            self.direct_error,
+            ok.strategy,
+            ok.press_steps,
+            legs.join(", then "),
+            if before.is_empty() {
+                String::new()
+            } else {
+                format!(" (tried first, failed: {})", before.join(", "))
+            },
+            self.newton_iterations,
+            self.wall_time_s
+        )
+    }
+}
+
+/// Try the strategies of [`Targets::strategies`] after the direct solve failed with
+/// `direct_error`. `x_init` is the state the direct solve started from. On success the state
+/// of `st` is the steady solution at the scene's parameters; otherwise it is restored to what
+/// the direct solve left. The counts of the attempts are added to `report` (iterations,
+/// cut-backs). Only an interrupt (Ctrl-C) is returned as an error.
+#[allow(clippy::too_many_arguments)]
+pub fn recover(
+    st: &mut SteadyRolling,
+    loading: Loading,
+    kind: LinearKind,
+    newton_opts: &NewtonOptions,
+    step_opts: &StepOptions,
+    x_init: &[f64],
+    direct_error: &SolveError,
+    report: &mut StepReport,
+) -> Result<Recovery, SolveError> {
+    let t0 = Instant::now();
+    let targets = Targets::of(st);
+    let mut x_fail = Vec::new();
+    st.sys.save_state(&mut x_fail);
+    let mut rec = Recovery {
+        direct_error: direct_error.to_string(),
+        strategy: None,
+        attempts: Vec::new(),
+        newton_iterations: 0,
+        cutbacks: 0,
+        wall_time_s: 0.0,
+        message: String::new(),
+    };
+    for (strategy, legs) in targets.strategies() {
+        if step_opts.verbose {
+            eprintln!("  steady recovery: trying {strategy}");
+        }
+        let res = attempt(
+            st,
+            &targets,
+            strategy,
+            &legs,
+            loading,
+            kind,
+            newton_opts,
+            step_opts,
+            x_init,
+        );
+        let a = match res {
+            Ok(a) | Err(AttemptError::Failed(a)) => a,
+            Err(AttemptError::Interrupted(at)) => {
+                st.sys.restore_state(&x_fail);
+                restore_targets(st, &targets);
+                return Err(SolveError::Interrupted { at });
+            }
+        };
+        rec.newton_iterations += a.newton_iterations;
+        rec.cutbacks += a.cutbacks();
+        report.total_iterations += a.newton_iterations;
+        report.cutbacks += a.cutbacks();
+        let ok = a.succeeded;
+        rec.attempts.push(a);
+        if ok {
+            rec.strategy = Some(strategy);
+            break;
+        }
+        restore_targets(st, &targets);
+    }
+    if !rec.succeeded() {
+        st.sys.restore_state(&x_fail);
+        st.sys.x_prev.copy_from_slice(&x_fail);
+        restore_targets(st, &targets);
+        // Leave the system evaluated at the restored state (reactions, samples).
+        st.sys.evaluate(false);
+    }
+    rec.wall_time_s = t0.elapsed().as_secs_f64();
+    rec.message = rec.describe();
+    Ok(rec)
+}
+
+enum AttemptError {
+    /// The attempt failed (its report says where).
+    Failed(Attempt),
+    /// Ctrl-C at the given homotopy coordinate or load factor.
+    Interrupted(f64),
+}
+
+#[allow(clippy::too_many_arguments)]
+fn attempt(
+    st: &mut SteadyRolling,
+    t: &Targets,
+    strategy: Strategy,
+    legs: &[Leg],
+    loading: Loading,
+    kind: LinearKind,
+    newton_opts: &NewtonOptions,
+    step_opts: &StepOptions,
+    x_init: &[f64],
+) -> Result<Attempt, AttemptError> {
+    let t0 = Instant::now();
+    let mut a = Attempt {
+        strategy,
+        succeeded: false,
+        error: None,
+        press_steps: 0,
+        press_cutbacks: 0,
+        legs: Vec::new(),
+        newton_iterations: 0,
+        wall_time_s: 0.0,
+    };
+    st.sys.restore_state(x_init);
+    st.sys.x_prev.copy_from_slice(x_init);
+    st.sys.lambda = 0.0;
+    st.sys.lambda_prev = 0.0;
+    for l in legs {
+        set_parameter(st, t, l.parameter, l.from);
+    }
+    let mut prep = StepReport::default();
+    let pressed = press(
+        st,
+        loading,
+        kind,
+        newton_opts.clone(),
+        step_opts,
+        &mut prep,
+        &mut (),
+    );
+    a.press_steps = prep.steps.iter().filter(|s| s.converged).count();
+    a.press_cutbacks = prep.cutbacks;
+    a.newton_iterations += prep.total_iterations;
+    match pressed {
+        Ok(()) => {}
+        Err(SolveError::Interrupted { at }) => return Err(AttemptError::Interrupted(at)),
+        Err(e) => {
+            a.error = Some(format!("press at the benign values: {e}"));
+            a.wall_time_s = t0.elapsed().as_secs_f64();
+            return Err(AttemptError::Failed(a));
+        }
+    }
+    let mut newton = match Newton::new(st, LinearKind::Lu, newton_opts.clone()) {
+        Ok(n) => n,
+        Err(e) => {
+            a.error = Some(e.to_string());
+            return Err(AttemptError::Failed(a));
+        }
+    };
+    for leg in legs {
+        let (lr, err) = walk(st, t, leg, &mut newton, step_opts)?;
+        a.newton_iterations += lr.newton_iterations;
+        a.legs.push(lr);
+        if let Some(e) = err {
+            a.error = Some(e);
+            a.wall_time_s = t0.elapsed().as_secs_f64();
+            return Err(AttemptError::Failed(a));
+        }
+    }
+    a.succeeded = true;
+    a.wall_time_s = t0.elapsed().as_secs_f64();
+    Ok(a)
+}
+
+/// Walk one leg from s = 0 (the current, converged state) to s = 1. Returns the leg's report
+/// and, when it gave up, why (the state is then the last converged one).
+fn walk(
+    st: &mut SteadyRolling,
+    t: &Targets,
+    leg: &Leg,
+    newton: &mut Newton,
+    step_opts: &StepOptions,
+) -> Result<(LegReport, Option<String>), AttemptError> {
+    let mut lr = LegReport {
+        parameter: leg.parameter,
+        spacing: leg.spacing,
+        from: leg.from,
+        to: leg.to,
+        steps: 0,
+        cutbacks: 0,
+        newton_iterations: 0,
+        reached: leg.from,
+    };
+    let (mut s, mut ds) = (0.0f64, DS0);
+    let mut x_k = Vec::new();
+    st.sys.save_state(&mut x_k);
+    let mut x_km1 = x_k.clone();
+    let mut s_km1 = f64::NAN;
+    let mut secant = true;
+    let mut in_a_row = 0;
+    while s < 1.0 {
+        if record::interrupted() {
+            st.sys.restore_state(&x_k);
+            set_parameter(st, t, leg.parameter, leg.value(s));
+            return Err(AttemptError::Interrupted(s));
+        }
+        if lr.steps >= MAX_LEG_STEPS {
+            return Ok((
+                lr,
+                Some(format!(
+                    "{} leg: {MAX_LEG_STEPS} steps without reaching {:.6e} (at {:.6e})",
+                    leg.parameter,
+                    leg.to,
+                    leg.value(s)
+                )),
+            ));
+        }
+        let ds_try = ds.min(1.0 - s);
+        let s_new = if ds_try >= 1.0 - s { 1.0 } else { s + ds_try };
+        st.sys.restore_state(&x_k);
+        let use_secant = secant && s_km1.is_finite();
+        if use_secant {
+            // Secant predictor through the last two solutions (linear in s).
+            let r = (s_new - s) / (s - s_km1);
+            for ((x, a), b) in st.sys.x.iter_mut().zip(&x_k).zip(&x_km1) {
+                *x = a + r * (a - b);
+            }
+        }
+        let value = leg.value(s_new);
+        set_parameter(st, t, leg.parameter, value);
+        if step_opts.verbose {
+            eprintln!(
+                "  steady recovery: {} = {value:.6e} (s = {s_new:.4}{})",
+                leg.parameter,
+                if use_secant { ", secant predictor" } else { "" }
+            );
+        }
+        match newton.solve(st) {
+            Ok(r) => {
+                lr.newton_iterations += r.iterations;
+                lr.steps += 1;
+                lr.reached = value;
+                std::mem::swap(&mut x_km1, &mut x_k);
+                st.sys.save_state(&mut x_k);
+                s_km1 = s;
+                s = s_new;
+                secant = true;
+                in_a_row = 0;
+                if r.iterations <= 4 {
+                    ds *= 1.5;
+                }
+            }
+            Err(e) => {
+                if use_secant {
+                    // Retry the same step from the last solution before cutting it.
+                    secant = false;
+                    continue;
+                }
+                secant = true;
+                lr.cutbacks += 1;
+                in_a_row += 1;
+                ds = 0.5 * ds_try;
+                if in_a_row > step_opts.max_cutbacks || ds < DS_MIN {
+                    st.sys.restore_state(&x_k);
+                    set_parameter(st, t, leg.parameter, leg.value(s));
+                    let why = if ds < DS_MIN {
+                        // Steps shrank to nothing while the ones before converged: the branch
+                        // ends here (a fold, e.g. where a contact point's traction jumps).
+                        format!(
+                            "no solution found beyond it (steps down to Δs = {DS_MIN:e} failed)"
+                        )
+                    } else {
+                        format!("{in_a_row} cut-backs in a row")
+                    };
+                    return Ok((
+                        lr,
+                        Some(format!(
+                            "{} leg stopped at {:.8e} on the way from {:.6e} to {:.6e}, {why}; \
+                             last failure: {e}",
+                            leg.parameter,
+                            leg.value(s),
+                            leg.from,
+                            leg.to
+                        )),
+                    ));
+                }
+            }
+        }
+    }
+    Ok((lr, None))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn targets(omega: f64, kappa: Option<f64>, eps: Option<f64>) -> Targets {
+        Targets {
+            omega,
+            v0: omega * 1.9,
+            kappa,
+            eps,
+            shear_modulus: 200.0,
+            ro: 2.0,
+        }
+    }
+
+    #[test]
+    fn strategies_apply_only_where_the_scene_is_stiff() {
+        let names =
+            |t: &Targets| -> Vec<Strategy> { t.strategies().into_iter().map(|(s, _)| s).collect() };
+        // The benign scene (κ = 100 G, ε = 0.7 % v0): only ω stepping.
+        let t = targets(38.0, Some(2e4), Some(0.5));
+        assert_eq!(names(&t), vec![Strategy::OmegaStepping]);
+        // Static scene (ω = 0) with a benign material: nothing applies.
+        assert!(names(&targets(0.0, Some(2e4), None)).is_empty());
+        // Stiff κ and small ε: each alone, then ω, then all three combined.
+        let t = targets(10.0, Some(2e6), Some(1e-5));
+        assert_eq!(
+            names(&t),
+            vec![
+                Strategy::KappaHomotopy,
+                Strategy::EpsHomotopy,
+                Strategy::OmegaStepping,
+                Strategy::Combined
+            ]
+        );
+        let comb = &t.strategies()[3].1;
+        let order: Vec<HomotopyParameter> = comb.iter().map(|l| l.parameter).collect();
+        assert_eq!(
+            order,
+            vec![
+                HomotopyParameter::Kappa,
+                HomotopyParameter::Omega,
+                HomotopyParameter::Eps
+            ]
+        );
+        assert_eq!(comb[0].from, 100.0 * 200.0);
+        // v_ref = max(|v0|, |ω| Ro) = 20
+        assert!((comb[2].from - 1e-3 * 20.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn legs_end_exactly_on_the_target() {
+        let g = Leg {
+            parameter: HomotopyParameter::Kappa,
+            from: 2e4,
+            to: 2e8,
+            spacing: Spacing::Geometric,
+        };
+        assert_eq!(g.value(0.0), 2e4);
+        assert!((g.value(0.5) - 2e6).abs() < 1e-6);
+        assert_eq!(g.value(1.0), 2e8);
+        let l = Leg {
+            parameter: HomotopyParameter::Omega,
+            from: 0.0,
+            to: 38.0,
+            spacing: Spacing::Linear,
+        };
+        assert_eq!(l.value(0.25), 9.5);
+        assert_eq!(l.value(1.0), 38.0);
+    }
+}
