@@ -10,9 +10,9 @@
 //! summary (`dofs`, `wall_time_s`, `results.*`). Wall time is the median of `--repeats` runs
 //! (default 3) of the summary's `wall_time_s`.
 //!
-//! Studies (each writes `OUT/wp_<study>.csv`, `OUT/wp_<study>.png` (log10 error vs log10 wall
-//! time, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (log10 error vs log10
-//! DOFs), and a Markdown table on stdout):
+//! Studies (each writes `OUT/wp_<study>.csv`, `OUT/wp_<study>.png` (error vs wall time on
+//! log–log axes, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (error vs
+//! DOFs, log–log), and a Markdown table on stdout):
 //!
 //! * `indentation`: `scenarios/indentation_frictionless.toml`, meshes refined together
 //!   (n_theta = 16 n_r), order 2 and order 1. Quantities: `hub_force_y`,
@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 use tread::app::RunOptions;
-use tread::io::record::png::line_chart;
+use tread::io::record::png::{chart, Axis};
 use tread::io::Scene;
 
 const INDENT: &str = include_str!("../scenarios/indentation_frictionless.toml");
@@ -454,8 +454,7 @@ fn write_outputs(
     if let Err(e) = std::fs::write(&csv_path, csv) {
         eprintln!("{}: {e}", csv_path.display());
     }
-    // Plots (log10 axes: the helper draws linear axes); runs that failed or did not reach
-    // steady rolling are left out.
+    // Log–log plots; runs that failed or did not reach steady rolling are left out.
     let ok = |r: &&Row| {
         r.converged && r.error.is_finite() && r.error > 0.0 && r.wall.is_finite() && r.wall > 0.0
     };
@@ -473,7 +472,7 @@ fn write_outputs(
                     .iter()
                     .filter(|r| &r.variant == v)
                     .filter(ok)
-                    .map(|r| (x(r).log10(), r.error.log10()))
+                    .map(|r| (x(r), r.error))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                 (v.clone(), pts)
@@ -485,11 +484,11 @@ fn write_outputs(
         .iter()
         .filter(|r| r.pareto)
         .filter(ok)
-        .map(|r| (r.wall.log10(), r.error.log10()))
+        .map(|r| (r.wall, r.error))
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
     by_wall.push(("Pareto front".into(), front));
-    let draw = |name: String, xl: &str, series: &[(String, Vec<(f64, f64)>)]| {
+    let draw = |name: String, title: &str, xl: &str, series: &[(String, Vec<(f64, f64)>)]| {
         let s: Vec<(&str, &[(f64, f64)])> = series
             .iter()
             .filter(|(_, p)| !p.is_empty())
@@ -499,11 +498,22 @@ fn write_outputs(
             return;
         }
         let path = out.join(name);
-        if let Err(e) = line_chart(&path, title, xl, "log10 relative error", &s) {
-            eprintln!("{}: {e}", path.display());
+        match chart(
+            &path,
+            title,
+            Axis::log10(xl),
+            Axis::log10("relative error"),
+            &s,
+        ) {
+            Ok(notes) => {
+                for n in notes {
+                    eprintln!("{}: {n}", path.display());
+                }
+            }
+            Err(e) => eprintln!("{}: {e}", path.display()),
         }
     };
-    draw(format!("wp_{study}.png"), "log10 wall time (s)", &by_wall);
+    draw(format!("wp_{study}.png"), title, "wall time (s)", &by_wall);
     let has_alt = rows.iter().any(|r| r.error_alt.is_finite());
     if has_alt {
         let okalt = |r: &&Row| {
@@ -520,7 +530,7 @@ fn write_outputs(
                     .iter()
                     .filter(|r| &r.variant == v)
                     .filter(okalt)
-                    .map(|r| (r.wall.log10(), r.error_alt.log10()))
+                    .map(|r| (r.wall, r.error_alt))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                 (v.clone(), pts)
@@ -529,20 +539,22 @@ fn write_outputs(
         let mut front: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.pareto_alt)
-            .map(|r| (r.wall.log10(), r.error_alt.log10()))
+            .map(|r| (r.wall, r.error_alt))
             .collect();
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         series.push(("Pareto front".into(), front));
         draw(
             format!("wp_{study}_alt.png"),
-            "log10 wall time (s)",
+            &format!("{title} (error alt)"),
+            "wall time (s)",
             &series,
         );
     }
     if rates {
         draw(
             format!("wp_{study}_dofs.png"),
-            "log10 DOFs",
+            &title.replacen("vs wall time", "vs DOFs", 1),
+            "DOFs",
             &per(&|r: &Row| r.dofs),
         );
     }
