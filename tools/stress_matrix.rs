@@ -1140,7 +1140,7 @@ mod tests {
     /// Newton is cut to one iteration so that load stepping gives up.
     #[test]
     fn tiny_matrix_end_to_end() {
-        let cases = vec![
+        let cases = [
             case(
                 "invalid",
                 "mesh.n_r=0",

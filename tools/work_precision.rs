@@ -588,7 +588,7 @@ fn write_outputs(
         print!(" rate vs DOFs |");
     }
     if has_alt {
-        print!(" Pareto | error alt | Pareto alt |\n");
+        println!(" Pareto | error alt | Pareto alt |");
     } else {
         println!(" Pareto |");
     }
