@@ -1,18 +1,18 @@
 //! The `tread` binary: runs scenes, writes summary.json, rejects malformed scenes with the key
 //! named and a non-zero exit, never panics.
 
-use std::path::PathBuf;
+#[path = "common/tempdir.rs"]
+mod tempdir;
+
 use std::process::Command;
+use tempdir::TestDir;
 
 fn tread() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tread"))
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tread-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> TestDir {
+    TestDir::new("cli", name)
 }
 
 const GOOD: &str = r#"

@@ -8,6 +8,10 @@
 //! 20 rad/s the gap is larger (forces 1–2 %, field 2–4 %) and not explained yet: see the
 //! closing note of issue 5.
 
+#[path = "common/tempdir.rs"]
+mod tempdir;
+
+use tempdir::TestDir;
 use tread::app::RunOptions;
 use tread::io::Scene;
 
@@ -24,15 +28,11 @@ fn compare(name: &str, text: &str, omega: f64, extra: &[&str]) -> serde_json::Va
     ];
     set.extend(extra.iter().map(|s| s.to_string()));
     let scene = Scene::from_toml_str(text, name, &set).unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!(
-        "tread_compare_{name}_{}_{}",
-        omega as u32,
-        std::process::id()
-    ));
+    let dir = TestDir::new("compare", &format!("{name}-{}", omega as u32));
     let out = tread::driver::compare::run(
         &scene,
         &RunOptions {
-            out_dir: dir.clone(),
+            out_dir: dir.to_path_buf(),
             verbose: false,
             quiet: true,
         },
@@ -40,7 +40,6 @@ fn compare(name: &str, text: &str, omega: f64, extra: &[&str]) -> serde_json::Va
     .unwrap_or_else(|e| panic!("compare {name} at {omega}: {e}"));
     let c = out.summary["results"]["compare"].clone();
     assert!(dir.join("compare.csv").exists());
-    let _ = std::fs::remove_dir_all(&dir);
     println!(
         "{name} omega = {omega}: Fx {:.4e} / {:.4e}, Fy {:.4e} / {:.4e}, torque {:.4e} / {:.4e} (transient / steady); rel diffs Fx {:.3e}, Fy {:.3e}; field rel L2 {:.3e}; wall {:.2} s / {:.3} s",
         c["hub_force_x_transient"].as_f64().unwrap(),

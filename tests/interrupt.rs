@@ -4,21 +4,21 @@
 //! up to its last completed chunk and a CSV complete up to its last row. Also `tread replay`.
 
 mod logread;
+#[path = "common/tempdir.rs"]
+mod tempdir;
 
 use logread::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
+use tempdir::TestDir;
 
 fn tread() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tread"))
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tread-int-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> TestDir {
+    TestDir::new("int", name)
 }
 
 /// Static frictionless indentation from 40 initial load steps: on this mesh most contact Newton

@@ -4,9 +4,12 @@
 //! and truncated files stay readable up to their last complete chunk.
 
 mod logread;
+#[path = "common/tempdir.rs"]
+mod tempdir;
 
 use logread::*;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempdir::TestDir;
 use tread::app::{self, RunOptions};
 use tread::driver::frame::SolidFrame;
 use tread::io::record::mcap::McapSink;
@@ -16,11 +19,8 @@ use tread::io::record::{
 };
 use tread::io::Scene;
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("tread-logs-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> TestDir {
+    TestDir::new("logs", name)
 }
 
 const STATIC: &str = r#"
@@ -62,7 +62,7 @@ fn static_run_every_output_reads_back() {
     let o = app::run(
         &scene,
         &RunOptions {
-            out_dir: dir.clone(),
+            out_dir: dir.to_path_buf(),
             verbose: false,
             quiet: true,
         },

@@ -2,6 +2,9 @@
 //! normal damping and strain-rate damping; no contact = steady spinning exactly; frictionless
 //! rolling symmetric with zero torque; free rolling solves torque = 0; continuation in ω.
 
+#[path = "common/tempdir.rs"]
+mod tempdir;
+
 use tread::assembly::FIXED;
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
@@ -234,11 +237,11 @@ fn continuation_in_omega_follows_the_branch() {
             "output.sinks=[\"summary\",\"csv\"]",
         ],
     );
-    let dir = std::env::temp_dir().join(format!("tread_steady_cont_{}", std::process::id()));
+    let dir = tempdir::TestDir::new("steady", "continuation");
     let out = tread::app::run(
         &sc,
         &tread::app::RunOptions {
-            out_dir: dir.clone(),
+            out_dir: dir.to_path_buf(),
             verbose: false,
             quiet: true,
         },
@@ -268,7 +271,6 @@ fn continuation_in_omega_follows_the_branch() {
     println!("omega {w_end}: Fy continuation {fy_cont:.8e}, direct {fy_direct:.8e}");
     assert!((fy_cont - fy_direct).abs() < 1e-6 * fy_direct.abs());
     assert!(dir.join("branch.csv").exists());
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]

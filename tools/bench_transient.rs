@@ -42,8 +42,8 @@
 //! ```
 //!
 //! Writes Markdown tables and a recommendation to stdout, and
-//! `DIR/transient_work_precision_{a,b}.csv` and `.png` (log–log error vs wall time, plotters;
-//! default `DIR = out/bench`).
+//! `DIR/transient_work_precision_{a,b}.csv` and `.png` (log–log error vs wall time with decade
+//! ticks from `png::AxisLayout`; default `DIR = out/bench`).
 
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -55,6 +55,7 @@ use tread::driver::transient::{
     integrate, GenAlpha, Scheme, TimeOptions, Transient, TransientReport,
 };
 use tread::driver::SolidSystem;
+use tread::io::record::png::{self, AxisLayout, Scale};
 use tread::io::scene::{DEFAULT_ERROR_TOL, DEFAULT_RHO_INF, DEFAULT_STEADY_TOL};
 use tread::io::Scene;
 use tread::solver::{LinearKind, NewtonOptions};
@@ -914,9 +915,6 @@ fn write_rows_csv(path: &Path, part: Part, rows: &[Row], dt_stable: f64) -> Resu
     tread::io::output::write_csv(path, &header, data).map_err(|e| e.to_string())
 }
 
-/// The crate's embedded font (plotters' ab_glyph text needs a registered font; headless).
-static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-
 fn series_color(s: &str) -> RGBColor {
     if s.contains("ρ∞=1.0") {
         RGBColor(31, 119, 180)
@@ -948,25 +946,16 @@ fn write_png(path: &Path, title: &str, rows: &[Row], repeats: usize) -> Result<(
             None => series.push((name, vec![p])),
         }
     }
-    let decades = |lo: f64, hi: f64| {
-        if lo.is_finite() && hi.is_finite() {
-            let (a, b) = (lo.log10().floor(), hi.log10().ceil());
-            (10f64.powf(a), 10f64.powf(b.max(a + 1.0)))
-        } else {
-            (0.1, 10.0)
+    // Log–log: the points in log10 coordinates on decade axes.
+    for (_, pts) in series.iter_mut() {
+        for p in pts.iter_mut() {
+            *p = (p.0.log10(), p.1.log10());
         }
-    };
+    }
     let pts = || series.iter().flat_map(|(_, p)| p.iter());
-    let (x0, x1) = decades(
-        pts().map(|p| p.0).fold(f64::INFINITY, f64::min),
-        pts().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max),
-    );
-    let (y0, y1) = decades(
-        pts().map(|p| p.1).fold(f64::INFINITY, f64::min),
-        pts().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max),
-    );
-    plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-        .map_err(|_| "the embedded font is invalid".to_string())?;
+    let xa = AxisLayout::new(Scale::Log10, pts().map(|p| p.0));
+    let ya = AxisLayout::new(Scale::Log10, pts().map(|p| p.1));
+    png::register_font()?;
     let e = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let root = BitMapBackend::new(path, (960, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
@@ -975,20 +964,14 @@ fn write_png(path: &Path, title: &str, rows: &[Row], repeats: usize) -> Result<(
         .margin(14)
         .x_label_area_size(48)
         .y_label_area_size(80)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+        .build_cartesian_2d(xa.clone(), ya.clone())
         .map_err(|x| e(&x))?;
     chart
         .configure_mesh()
         .x_desc(format!("wall time [s] (median of {repeats})"))
         .y_desc("relative error vs reference")
-        .x_label_formatter(&|v| {
-            if (0.01..1000.0).contains(v) {
-                format!("{}", (v * 100.0).round() / 100.0)
-            } else {
-                format!("{v:.0e}")
-            }
-        })
-        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .x_label_formatter(&|v| xa.label(*v, false))
+        .y_label_formatter(&|v| ya.label(*v, false))
         .draw()
         .map_err(|x| e(&x))?;
     for (name, p) in &series {

@@ -486,25 +486,110 @@ fn dir_name(factor: &str) -> String {
         .collect()
 }
 
+/// `text` without the lines that set one of `keys` (`key = …`, any indentation).
+fn drop_keys(text: &str, keys: &[&str]) -> String {
+    if keys.is_empty() {
+        return text.to_string();
+    }
+    text.lines()
+        .filter(|l| {
+            let t = l.trim_start();
+            !keys.iter().any(|k| {
+                t.strip_prefix(k)
+                    .is_some_and(|r| r.trim_start().starts_with('='))
+            })
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// What one case's run returned, before it is classified.
+enum RunResult {
+    /// `app::run` returned `Ok` with this `converged` flag and summary.
+    Finished {
+        converged: bool,
+        summary: serde_json::Value,
+    },
+    /// The scene was rejected or the run returned a typed error, already classed.
+    Failed {
+        class: &'static str,
+        message: String,
+    },
+    /// The run panicked (a bug), with the panic message.
+    Panicked(String),
+}
+
+/// Outcome (`converged`, `recovered`, `failed`, `panic`), failure class and message of a case.
+#[derive(Debug, PartialEq)]
+struct Outcome {
+    outcome: &'static str,
+    class: String,
+    message: String,
+}
+
+/// The outcome of a run: `converged` when Ok with no cut-back and no rejected step,
+/// `recovered` when Ok with `solver.cutbacks` or `results.rejected_steps` > 0, `failed` with
+/// the error's class, `panic`.
+fn classify(r: &RunResult) -> Outcome {
+    let out = |outcome, class: &str, message: String| Outcome {
+        outcome,
+        class: class.to_string(),
+        message,
+    };
+    match r {
+        RunResult::Finished { converged, summary } => {
+            let cutbacks = count_key(summary, &["solver", "cutbacks"]);
+            let rejected = count_key(summary, &["results", "rejected_steps"]);
+            if !converged {
+                out(
+                    "failed",
+                    "not_converged_flag",
+                    "run returned Ok with converged = false".into(),
+                )
+            } else if let Some(strategy) = summary["solver"]["recovery"]["strategy"].as_str() {
+                // The steady mode's first solve failed and a homotopy found the solution.
+                out(
+                    "recovered",
+                    "",
+                    format!(
+                        "recovery: {strategy} in {} steps after the failed direct solve ({} attempts, \
+                         cutbacks {cutbacks} in all)",
+                        summary["results"]["steps"].as_u64().unwrap_or(0),
+                        summary["solver"]["recovery"]["attempts"]
+                            .as_array()
+                            .map_or(0, |a| a.len()),
+                    ),
+                )
+            } else if cutbacks + rejected > 0 {
+                out(
+                    "recovered",
+                    "",
+                    format!("cutbacks {cutbacks}, rejected steps {rejected}"),
+                )
+            } else {
+                out("converged", "", String::new())
+            }
+        }
+        RunResult::Failed { class, message } => out("failed", class, one_line(message)),
+        RunResult::Panicked(message) => out("panic", "panic", one_line(message)),
+    }
+}
+
+/// The message of a caught panic (`panic!` with a literal or a formatted string).
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "panic with a non-string payload".into())
+}
+
 fn run_case(i: usize, c: &Case, out: &Path) -> Row {
     let dir: PathBuf =
         out.join("cases")
             .join(format!("{i:03}_{}_{}", dir_name(c.factor), c.base.mode()));
     let _ = std::fs::remove_dir_all(&dir);
-    let mut text = c.base.text().to_string();
-    if !c.drop_keys.is_empty() {
-        text = text
-            .lines()
-            .filter(|l| {
-                let t = l.trim_start();
-                !c.drop_keys.iter().any(|k| {
-                    t.strip_prefix(k)
-                        .is_some_and(|r| r.trim_start().starts_with('='))
-                })
-            })
-            .collect::<Vec<_>>()
-            .join("\n");
-    }
+    let text = drop_keys(c.base.text(), &c.drop_keys);
     let mut set = c.base.overrides();
     set.extend(c.set.iter().cloned());
     let mut row = Row {
@@ -512,7 +597,7 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         value: c.value.clone(),
         scene: c.base.file().to_string(),
         mode: c.base.mode().to_string(),
-        outcome: "failed",
+        outcome: "",
         class: String::new(),
         message: String::new(),
         wall: 0.0,
@@ -521,64 +606,37 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
     };
     let t0 = Instant::now();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        let scene = Scene::from_toml_str(&text, c.base.file(), &set)
-            .map_err(|e| ("invalid_input", e.to_string()))?;
+        let scene = match Scene::from_toml_str(&text, c.base.file(), &set) {
+            Ok(s) => s,
+            Err(e) => {
+                return RunResult::Failed {
+                    class: "invalid_input",
+                    message: e.to_string(),
+                }
+            }
+        };
         let opts = RunOptions {
             out_dir: dir.clone(),
             verbose: false,
             quiet: true,
         };
-        tread::app::run(&scene, &opts).map_err(|e| (app_class(&e), e.to_string()))
-    }));
+        match tread::app::run(&scene, &opts) {
+            Ok(o) => RunResult::Finished {
+                converged: o.converged,
+                summary: o.summary,
+            },
+            Err(e) => RunResult::Failed {
+                class: app_class(&e),
+                message: e.to_string(),
+            },
+        }
+    }))
+    .unwrap_or_else(|payload| RunResult::Panicked(panic_message(payload.as_ref())));
     row.wall = t0.elapsed().as_secs_f64();
-    match result {
-        Ok(Ok(o)) => {
-            let cut = count_key(&o.summary, &["solver", "cutbacks"])
-                + count_key(&o.summary, &["results", "rejected_steps"]);
-            let strategy = o.summary["solver"]["recovery"]["strategy"]
-                .as_str()
-                .map(String::from);
-            if !o.converged {
-                row.class = "not_converged_flag".into();
-                row.message = "run returned Ok with converged = false".into();
-            } else if let Some(strategy) = strategy {
-                // The steady mode's first solve failed and a homotopy found the solution.
-                row.outcome = "recovered";
-                row.message = format!(
-                    "recovery: {strategy} in {} steps after the failed direct solve ({} attempts, \
-                     cutbacks {} in all)",
-                    o.summary["results"]["steps"].as_u64().unwrap_or(0),
-                    o.summary["solver"]["recovery"]["attempts"]
-                        .as_array()
-                        .map_or(0, |a| a.len()),
-                    count_key(&o.summary, &["solver", "cutbacks"])
-                );
-            } else if cut > 0 {
-                row.outcome = "recovered";
-                row.message = format!(
-                    "cutbacks {}, rejected steps {}",
-                    count_key(&o.summary, &["solver", "cutbacks"]),
-                    count_key(&o.summary, &["results", "rejected_steps"])
-                );
-            } else {
-                row.outcome = "converged";
-            }
-        }
-        Ok(Err((class, msg))) => {
-            row.class = class.to_string();
-            row.message = one_line(&msg);
-        }
-        Err(payload) => {
-            row.outcome = "panic";
-            row.class = "panic".into();
-            let msg = payload
-                .downcast_ref::<String>()
-                .cloned()
-                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
-                .unwrap_or_else(|| "panic with a non-string payload".into());
-            row.message = one_line(&msg);
-        }
-    }
+    let o = classify(&result);
+    row.outcome = o.outcome;
+    row.class = o.class;
+    row.message = o.message;
     row.nan = scan_outputs(&dir);
     // Newton iterations from the summary (also written by a failed run).
     row.newton = std::fs::read_to_string(dir.join("summary.json"))
@@ -744,5 +802,430 @@ fn main() {
     let nans = rows.iter().filter(|r| r.nan > 0).count();
     if smoke && (panics > 0 || nans > 0) {
         std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+#[path = "../tests/common/tempdir.rs"]
+mod tempdir;
+
+#[cfg(test)]
+mod tests {
+    use super::tempdir::TestDir;
+    use super::*;
+    use serde_json::json;
+    use tread::io::output::OutputError;
+    use tread::solver::LinearError;
+
+    fn finished(converged: bool, summary: serde_json::Value) -> Outcome {
+        classify(&RunResult::Finished { converged, summary })
+    }
+
+    #[test]
+    fn ok_runs_are_converged_or_recovered_from_the_summary() {
+        let clean = json!({"solver": {"cutbacks": 0}, "results": {"rejected_steps": 0}});
+        let o = finished(true, clean.clone());
+        assert_eq!((o.outcome, o.class.as_str()), ("converged", ""));
+        // Missing counters count as zero.
+        assert_eq!(finished(true, json!({})).outcome, "converged");
+        let o = finished(true, json!({"solver": {"cutbacks": 2}}));
+        assert_eq!((o.outcome, o.class.as_str()), ("recovered", ""));
+        assert_eq!(o.message, "cutbacks 2, rejected steps 0");
+        let o = finished(true, json!({"results": {"rejected_steps": 1}}));
+        assert_eq!(o.outcome, "recovered");
+        assert_eq!(o.message, "cutbacks 0, rejected steps 1");
+        // A steady solve saved by a recovery homotopy (no cut-backs needed) is recovered.
+        let o = finished(
+            true,
+            json!({"solver": {"cutbacks": 0, "recovery": {"strategy": "omega_stepping",
+                "attempts": [{}, {}]}}, "results": {"steps": 7}}),
+        );
+        assert_eq!(o.outcome, "recovered");
+        assert!(
+            o.message.contains("omega_stepping in 7 steps"),
+            "{}",
+            o.message
+        );
+        assert!(o.message.contains("2 attempts"), "{}", o.message);
+        // A null strategy (recovery tried and failed, run still Ok) is not a recovery.
+        let o = finished(true, json!({"solver": {"recovery": {"strategy": null}}}));
+        assert_eq!(o.outcome, "converged");
+        // Ok with converged = false is a failure, whatever the counters say.
+        let o = finished(false, clean);
+        assert_eq!(
+            (o.outcome, o.class.as_str()),
+            ("failed", "not_converged_flag")
+        );
+    }
+
+    #[test]
+    fn errors_and_panics_are_failed_with_their_class() {
+        let o = classify(&RunResult::Failed {
+            class: "line_search",
+            message: "line search failed\nsecond line".into(),
+        });
+        assert_eq!(o.outcome, "failed");
+        assert_eq!(o.class, "line_search");
+        assert_eq!(o.message, "line search failed second line");
+        let o = classify(&RunResult::Panicked("index out of bounds".into()));
+        assert_eq!((o.outcome, o.class.as_str()), ("panic", "panic"));
+        // Panic payloads: a literal, a formatted string, anything else.
+        let msg = |f: fn()| {
+            let p = std::panic::catch_unwind(f).unwrap_err();
+            panic_message(p.as_ref())
+        };
+        // (The default hook prints these three panics into the test's captured output.)
+        let literal = msg(|| panic!("literal"));
+        let formatted = msg(|| panic!("formatted {}", 42));
+        let other = msg(|| std::panic::panic_any(7u32));
+        assert_eq!(literal, "literal");
+        assert_eq!(formatted, "formatted 42");
+        assert_eq!(other, "panic with a non-string payload");
+    }
+
+    #[test]
+    fn typed_errors_map_to_their_class_innermost_first() {
+        let cases: Vec<(SolveError, &str)> = vec![
+            (SolveError::Linear(LinearError::Singular), "linear_solver"),
+            (
+                SolveError::NotConverged {
+                    iterations: 25,
+                    residual: 1e-3,
+                    stagnation: None,
+                },
+                "newton_not_converged",
+            ),
+            (
+                SolveError::LineSearch {
+                    min_alpha: 1.0 / 64.0,
+                    residual: 0.5,
+                },
+                "line_search",
+            ),
+            (SolveError::InadmissibleStart, "inadmissible"),
+            (
+                SolveError::ExplicitUnstable {
+                    t: 0.1,
+                    dt: 1e-2,
+                    dt_stable: 1e-4,
+                },
+                "explicit_unstable",
+            ),
+            (SolveError::Interrupted { at: 0.5 }, "interrupted"),
+            (
+                SolveError::Integrator {
+                    t: 0.1,
+                    message: "step size too small".into(),
+                },
+                "integrator",
+            ),
+            (
+                SolveError::ContinuationCycles { lambda: 40.0 },
+                "continuation",
+            ),
+            (
+                SolveError::ContinuationReversed { lambda: 40.0 },
+                "continuation",
+            ),
+            (
+                SolveError::ContinuationStalled {
+                    lambda: 45.7,
+                    cutbacks: 8,
+                    last: Box::new(SolveError::LineSearch {
+                        min_alpha: 0.1,
+                        residual: 1.0,
+                    }),
+                },
+                "continuation",
+            ),
+            // Load stepping that gave up: the class of the last Newton failure, nested or not.
+            (
+                SolveError::TooManyCutbacks {
+                    lambda: 0.3,
+                    cutbacks: 10,
+                    last: Box::new(SolveError::LineSearch {
+                        min_alpha: 0.1,
+                        residual: 1.0,
+                    }),
+                },
+                "line_search",
+            ),
+            (
+                SolveError::TooManyCutbacks {
+                    lambda: 0.3,
+                    cutbacks: 10,
+                    last: Box::new(SolveError::TooManyCutbacks {
+                        lambda: 0.2,
+                        cutbacks: 3,
+                        last: Box::new(SolveError::InadmissibleStart),
+                    }),
+                },
+                "inadmissible",
+            ),
+        ];
+        for (e, class) in cases {
+            assert_eq!(solve_class(&e), class, "{e}");
+            let app = AppError::Solve(e, PathBuf::from("out"));
+            assert_eq!(app_class(&app), class);
+        }
+        assert_eq!(
+            app_class(&AppError::Unsupported("m_n".into())),
+            "invalid_input"
+        );
+        let io = OutputError {
+            path: PathBuf::from("x.csv"),
+            source: std::io::Error::other("disk full"),
+        };
+        assert_eq!(app_class(&AppError::Output(io)), "output");
+        assert_eq!(
+            app_class(&AppError::Interrupted(PathBuf::from("out"))),
+            "interrupted"
+        );
+    }
+
+    #[test]
+    fn nonfinite_tokens_are_counted_in_summary_and_csv_only() {
+        assert_eq!(count_nonfinite("1.0,NaN,-inf,+Infinity,nan"), 4);
+        // Words that merely contain the letters are not numbers.
+        assert_eq!(count_nonfinite("info,nano,infinite_loop,finance,1e-3"), 0);
+        let dir = TestDir::new("stress-test", "scan");
+        std::fs::write(dir.join("clean.csv"), "t,x\n0.0,1.5e-3\n1.0,2.0\n").unwrap();
+        assert_eq!(scan_outputs(&dir), 0);
+        // A NaN planted in a CSV, an inf in summary.json: both found.
+        std::fs::write(dir.join("history.csv"), "t,x\n0.0,1.0\n1.0,NaN\n").unwrap();
+        assert_eq!(scan_outputs(&dir), 1);
+        std::fs::write(dir.join("summary.json"), "{\"residual\": inf}").unwrap();
+        assert_eq!(scan_outputs(&dir), 2);
+        // Other files are not scanned.
+        std::fs::write(dir.join("notes.txt"), "NaN NaN").unwrap();
+        assert_eq!(scan_outputs(&dir), 2);
+        // A missing directory (a case that wrote nothing) has nothing to scan.
+        assert_eq!(scan_outputs(&dir.join("missing")), 0);
+    }
+
+    #[test]
+    fn drop_keys_removes_only_the_named_keys() {
+        let text = "[material]\nkappa = 2e4\n  kappa=3\nkappa_x = 1\nmu = 2\n";
+        assert_eq!(
+            drop_keys(text, &["kappa"]),
+            "[material]\nkappa_x = 1\nmu = 2"
+        );
+        assert_eq!(drop_keys(text, &[]), text);
+    }
+
+    fn row(factor: &str, value: &str, outcome: &'static str, class: &str, message: &str) -> Row {
+        Row {
+            factor: factor.into(),
+            value: value.into(),
+            scene: "oden_hollow_cylinder".into(),
+            mode: "steady".into(),
+            outcome,
+            class: class.into(),
+            message: message.into(),
+            wall: 0.25,
+            nan: 0,
+            newton: 12,
+        }
+    }
+
+    /// Fields of one CSV line (RFC 4180 quoting, no embedded newlines).
+    fn csv_fields(line: &str) -> Vec<String> {
+        let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+        let mut chars = line.chars().peekable();
+        while let Some(ch) = chars.next() {
+            match ch {
+                '"' if quoted && chars.peek() == Some(&'"') => {
+                    cur.push('"');
+                    chars.next();
+                }
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+                _ => cur.push(ch),
+            }
+        }
+        fields.push(cur);
+        fields
+    }
+
+    /// The `| name | n |` rows of the Markdown table under `header`.
+    fn md_counts(md: &str, header: &str) -> Vec<(String, usize)> {
+        let lines: Vec<&str> = md.lines().collect();
+        let start = lines.iter().position(|l| *l == header).unwrap() + 2;
+        lines[start..]
+            .iter()
+            .take_while(|l| l.starts_with('|'))
+            .map(|l| {
+                let c: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+                (c[0].to_string(), c[1].parse().unwrap())
+            })
+            .collect()
+    }
+
+    /// Rows of the CSV, the Markdown counts per outcome and class and its case table agree.
+    fn check_reports(dir: &Path, n_rows: usize) {
+        let csv = std::fs::read_to_string(dir.join("stress_matrix.csv")).unwrap();
+        let md = std::fs::read_to_string(dir.join("stress_matrix.md")).unwrap();
+        let mut lines = csv.lines();
+        let header = csv_fields(lines.next().unwrap());
+        assert_eq!(
+            header,
+            [
+                "factor",
+                "value",
+                "scene",
+                "mode",
+                "outcome",
+                "class",
+                "message",
+                "wall_time_s",
+                "nan_in_outputs",
+                "newton_iterations"
+            ]
+        );
+        let rows: Vec<Vec<String>> = lines.map(csv_fields).collect();
+        assert_eq!(rows.len(), n_rows);
+        assert!(rows.iter().all(|r| r.len() == header.len()), "{rows:?}");
+        let count = |col: usize, v: &str| rows.iter().filter(|r| r[col] == v).count();
+        let outcomes = md_counts(&md, "| outcome | cases |");
+        assert_eq!(outcomes.len(), 4);
+        for (o, n) in &outcomes {
+            assert_eq!(*n, count(4, o), "outcome {o}");
+        }
+        assert_eq!(outcomes.iter().map(|(_, n)| n).sum::<usize>(), n_rows);
+        let classes = md_counts(&md, "| failure class | cases |");
+        let mut csv_classes: Vec<&str> = rows
+            .iter()
+            .map(|r| r[5].as_str())
+            .filter(|c| !c.is_empty())
+            .collect();
+        csv_classes.sort();
+        csv_classes.dedup();
+        assert_eq!(
+            classes.iter().map(|(c, _)| c.as_str()).collect::<Vec<_>>(),
+            csv_classes
+        );
+        for (c, n) in &classes {
+            assert_eq!(*n, count(5, c), "class {c}");
+        }
+        // One Markdown row per case (pipes in values are escaped).
+        let table = md
+            .lines()
+            .skip_while(|l| !l.starts_with("| factor |"))
+            .skip(2)
+            .take_while(|l| l.starts_with('|'))
+            .count();
+        assert_eq!(table, n_rows);
+        let nan_cases = rows.iter().filter(|r| r[8] != "0").count();
+        assert!(
+            md.contains(&format!(
+                "{n_rows} cases, {nan_cases} with NaN/inf text in their outputs"
+            )),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn markdown_counts_equal_the_csv_rows() {
+        let mut nan_row = row("extreme", "c_n=1e12", "converged", "", "");
+        nan_row.nan = 3;
+        let rows = vec![
+            row("omega", "10", "converged", "", ""),
+            row("omega", "60", "failed", "line_search", "line search failed"),
+            // A comma and quotes in the value and message: one CSV row still.
+            row(
+                "omega (continuation)",
+                "10 -> 60, m_n=2",
+                "failed",
+                "continuation",
+                "gave up at \"45.7\", after 8 cut-backs",
+            ),
+            row("dt", "0.1", "recovered", "", "cutbacks 2, rejected steps 0"),
+            row("kappa_over_G", "a|b", "failed", "line_search", "x | y"),
+            row(
+                "extreme",
+                "eps=1e-12",
+                "panic",
+                "panic",
+                "index out of bounds",
+            ),
+            nan_row,
+        ];
+        let dir = TestDir::new("stress-test", "reports");
+        let md = write_reports(&rows, &dir, 1.5).unwrap();
+        assert_eq!(
+            md,
+            std::fs::read_to_string(dir.join("stress_matrix.md")).unwrap()
+        );
+        check_reports(&dir, rows.len());
+        let classes = md_counts(&md, "| failure class | cases |");
+        assert_eq!(
+            classes,
+            [
+                ("continuation".to_string(), 1),
+                ("line_search".to_string(), 2),
+                ("panic".to_string(), 1)
+            ]
+        );
+    }
+
+    /// A few cases through the library path (scene text + overrides → `app::run` → outcome,
+    /// NaN scan, reports): an invalid scene, a static solve that converges, and one whose
+    /// Newton is cut to one iteration so that load stepping gives up.
+    #[test]
+    fn tiny_matrix_end_to_end() {
+        let cases = [
+            case(
+                "invalid",
+                "mesh.n_r=0",
+                Base::Static,
+                &["mesh.n_r=0".into()],
+            ),
+            case(
+                "c_n_over_G_h",
+                1e3,
+                Base::Static,
+                &[
+                    "contact.c_n=2e5".into(),
+                    "mesh.n_r=2".into(),
+                    "mesh.n_theta=32".into(),
+                ],
+            ),
+            case(
+                "solver",
+                "max_iterations=1",
+                Base::Static,
+                &[
+                    "mesh.n_r=2".into(),
+                    "mesh.n_theta=32".into(),
+                    "solver.max_iterations=1".into(),
+                    "solver.max_cutbacks=1".into(),
+                ],
+            ),
+        ];
+        let dir = TestDir::new("stress-test", "e2e");
+        let rows: Vec<Row> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| run_case(i, c, &dir))
+            .collect();
+        let got: Vec<(&str, &str)> = rows.iter().map(|r| (r.outcome, r.class.as_str())).collect();
+        assert_eq!(
+            got,
+            [
+                ("failed", "invalid_input"),
+                ("converged", ""),
+                ("failed", "newton_not_converged")
+            ],
+            "{:?}",
+            rows.iter().map(|r| &r.message).collect::<Vec<_>>()
+        );
+        assert!(rows[0].message.contains("n_r"), "{}", rows[0].message);
+        assert!(rows[1].newton > 0);
+        assert!(rows.iter().all(|r| r.nan == 0));
+        assert!(dir
+            .join("cases/001_c_n_over_G_h_static/summary.json")
+            .exists());
+        write_reports(&rows, &dir, 0.0).unwrap();
+        check_reports(&dir, rows.len());
     }
 }

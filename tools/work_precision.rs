@@ -10,9 +10,9 @@
 //! summary (`dofs`, `wall_time_s`, `results.*`). Wall time is the median of `--repeats` runs
 //! (default 3) of the summary's `wall_time_s`.
 //!
-//! Studies (each writes `OUT/wp_<study>.csv`, `OUT/wp_<study>.png` (log10 error vs log10 wall
-//! time, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (log10 error vs log10
-//! DOFs), and a Markdown table on stdout):
+//! Studies (each writes `OUT/wp_<study>.csv`, `OUT/wp_<study>.png` (error vs wall time on
+//! log–log axes, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (error vs
+//! DOFs, log–log), and a Markdown table on stdout):
 //!
 //! * `indentation`: `scenarios/indentation_frictionless.toml`, meshes refined together
 //!   (n_theta = 16 n_r), order 2 and order 1. Quantities: `hub_force_y`,
@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 use tread::app::RunOptions;
-use tread::io::record::png::line_chart;
+use tread::io::record::png::{chart, Axis};
 use tread::io::Scene;
 
 const INDENT: &str = include_str!("../scenarios/indentation_frictionless.toml");
@@ -237,37 +237,56 @@ impl RefCache {
         keys: &[&str],
         scratch: &Path,
     ) -> Result<Value, String> {
-        let key = fnv1a(&format!("{text}\n{}", overrides.join("\n")));
-        let cached = self.map.get(&key).cloned();
-        if let Some(v) = cached {
+        self.get_with(text, overrides, || {
+            eprintln!("  reference {name} {overrides:?} ...");
+            let s = solve(text, name, overrides, 1, scratch)?;
+            if !s.converged {
+                return Err(format!("reference {name} {overrides:?} failed: {}", s.note));
+            }
+            let mut values = serde_json::Map::new();
+            for k in keys {
+                values.insert(k.to_string(), s.summary["results"][*k].clone());
+            }
+            Ok(json!({
+                "scene": name,
+                "overrides": overrides,
+                "dofs": s.summary["dofs"],
+                "wall_time_s": s.wall,
+                "values": values,
+            }))
+        })
+    }
+
+    /// The entry of `text` + `overrides`: the cached one, unless `--fresh-reference` and not
+    /// yet recomputed in this run; otherwise `compute`'s, stored and written to the file.
+    fn get_with(
+        &mut self,
+        text: &str,
+        overrides: &[String],
+        compute: impl FnOnce() -> Result<Value, String>,
+    ) -> Result<Value, String> {
+        let key = reference_key(text, overrides);
+        if let Some(v) = self.map.get(&key) {
             if !self.fresh || self.refreshed.contains(&key) {
-                return Ok(v);
+                return Ok(v.clone());
             }
         }
-        eprintln!("  reference {name} {overrides:?} ...");
-        let s = solve(text, name, overrides, 1, scratch)?;
-        if !s.converged {
-            return Err(format!("reference {name} {overrides:?} failed: {}", s.note));
-        }
-        let mut values = serde_json::Map::new();
-        for k in keys {
-            values.insert(k.to_string(), s.summary["results"][*k].clone());
-        }
-        let v = json!({
-            "scene": name,
-            "overrides": overrides,
-            "dofs": s.summary["dofs"],
-            "wall_time_s": s.wall,
-            "values": values,
-        });
+        let v = compute()?;
         self.map.insert(key.clone(), v.clone());
         self.refreshed.push(key);
-        let _ = std::fs::write(
-            &self.path,
-            serde_json::to_string_pretty(&Value::Object(self.map.clone())).unwrap_or_default(),
-        );
+        let text = serde_json::to_string_pretty(&Value::Object(self.map.clone()))
+            .map_err(|e| e.to_string())
+            .and_then(|t| std::fs::write(&self.path, t).map_err(|e| e.to_string()));
+        if let Err(e) = text {
+            eprintln!("{}: {e} (the reference is not cached)", self.path.display());
+        }
         Ok(v)
     }
+}
+
+/// The cache key of a reference: FNV-1a of the scene text and its overrides, one per line.
+fn reference_key(text: &str, overrides: &[String]) -> String {
+    fnv1a(&format!("{text}\n{}", overrides.join("\n")))
 }
 
 /// One row of a study.
@@ -454,8 +473,7 @@ fn write_outputs(
     if let Err(e) = std::fs::write(&csv_path, csv) {
         eprintln!("{}: {e}", csv_path.display());
     }
-    // Plots (log10 axes: the helper draws linear axes); runs that failed or did not reach
-    // steady rolling are left out.
+    // Log–log plots; runs that failed or did not reach steady rolling are left out.
     let ok = |r: &&Row| {
         r.converged && r.error.is_finite() && r.error > 0.0 && r.wall.is_finite() && r.wall > 0.0
     };
@@ -473,7 +491,7 @@ fn write_outputs(
                     .iter()
                     .filter(|r| &r.variant == v)
                     .filter(ok)
-                    .map(|r| (x(r).log10(), r.error.log10()))
+                    .map(|r| (x(r), r.error))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                 (v.clone(), pts)
@@ -485,11 +503,11 @@ fn write_outputs(
         .iter()
         .filter(|r| r.pareto)
         .filter(ok)
-        .map(|r| (r.wall.log10(), r.error.log10()))
+        .map(|r| (r.wall, r.error))
         .collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0));
     by_wall.push(("Pareto front".into(), front));
-    let draw = |name: String, xl: &str, series: &[(String, Vec<(f64, f64)>)]| {
+    let draw = |name: String, title: &str, xl: &str, series: &[(String, Vec<(f64, f64)>)]| {
         let s: Vec<(&str, &[(f64, f64)])> = series
             .iter()
             .filter(|(_, p)| !p.is_empty())
@@ -499,11 +517,22 @@ fn write_outputs(
             return;
         }
         let path = out.join(name);
-        if let Err(e) = line_chart(&path, title, xl, "log10 relative error", &s) {
-            eprintln!("{}: {e}", path.display());
+        match chart(
+            &path,
+            title,
+            Axis::log10(xl),
+            Axis::log10("relative error"),
+            &s,
+        ) {
+            Ok(notes) => {
+                for n in notes {
+                    eprintln!("{}: {n}", path.display());
+                }
+            }
+            Err(e) => eprintln!("{}: {e}", path.display()),
         }
     };
-    draw(format!("wp_{study}.png"), "log10 wall time (s)", &by_wall);
+    draw(format!("wp_{study}.png"), title, "wall time (s)", &by_wall);
     let has_alt = rows.iter().any(|r| r.error_alt.is_finite());
     if has_alt {
         let okalt = |r: &&Row| {
@@ -520,7 +549,7 @@ fn write_outputs(
                     .iter()
                     .filter(|r| &r.variant == v)
                     .filter(okalt)
-                    .map(|r| (r.wall.log10(), r.error_alt.log10()))
+                    .map(|r| (r.wall, r.error_alt))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
                 (v.clone(), pts)
@@ -529,20 +558,22 @@ fn write_outputs(
         let mut front: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.pareto_alt)
-            .map(|r| (r.wall.log10(), r.error_alt.log10()))
+            .map(|r| (r.wall, r.error_alt))
             .collect();
         front.sort_by(|a, b| a.0.total_cmp(&b.0));
         series.push(("Pareto front".into(), front));
         draw(
             format!("wp_{study}_alt.png"),
-            "log10 wall time (s)",
+            &format!("{title} (error alt)"),
+            "wall time (s)",
             &series,
         );
     }
     if rates {
         draw(
             format!("wp_{study}_dofs.png"),
-            "log10 DOFs",
+            &title.replacen("vs wall time", "vs DOFs", 1),
+            "DOFs",
             &per(&|r: &Row| r.dofs),
         );
     }
@@ -557,7 +588,7 @@ fn write_outputs(
         print!(" rate vs DOFs |");
     }
     if has_alt {
-        print!(" Pareto | error alt | Pareto alt |\n");
+        println!(" Pareto | error alt | Pareto alt |");
     } else {
         println!(" Pareto |");
     }
@@ -865,5 +896,294 @@ fn main() {
     let _ = std::fs::remove_dir_all(&scratch);
     if failed {
         std::process::exit(1);
+    }
+}
+
+#[cfg(test)]
+#[path = "../tests/common/tempdir.rs"]
+mod tempdir;
+
+#[cfg(test)]
+mod tests {
+    use super::tempdir::TestDir;
+    use super::*;
+    use std::cell::Cell;
+
+    fn row(variant: &str, dofs: f64, wall: f64, error: f64, converged: bool) -> Row {
+        Row {
+            variant: variant.into(),
+            setting: String::new(),
+            dofs,
+            wall,
+            values: Vec::new(),
+            errors: vec![error],
+            error,
+            rate: f64::NAN,
+            pareto: false,
+            error_alt: f64::NAN,
+            pareto_alt: false,
+            converged,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn pareto_front_of_constructed_rows() {
+        let rows = vec![
+            row("a", 1.0, 1.0, 1e-2, true),      // 0: front
+            row("a", 1.0, 2.0, 1e-3, true),      // 1: front (tied with 4)
+            row("a", 1.0, 2.0, 1e-2, true),      // 2: dominated by 0 (slower, same error) and 1
+            row("b", 1.0, 0.5, 1e-1, true),      // 3: front (fastest usable)
+            row("b", 1.0, 2.0, 1e-3, true),      // 4: front (tied with 1: neither dominates)
+            row("b", 1.0, 0.1, 1e-6, false),     // 5: not converged: never on it, dominates nothing
+            row("b", 1.0, 0.2, 0.0, true),       // 6: zero error (no reference?): left out
+            row("b", 1.0, f64::NAN, 1e-9, true), // 7: no wall time: left out
+            row("b", 1.0, 3.0, 1e-3, true),      // 8: dominated by 1 and 4 (slower, same error)
+        ];
+        let front = pareto(&rows, |r| r.error);
+        assert_eq!(
+            front,
+            [true, true, false, true, true, false, false, false, false]
+        );
+        // The same marking through `finish`, and for the alternative error.
+        let mut rows = rows;
+        for r in rows.iter_mut() {
+            r.error_alt = r.error;
+        }
+        rows[3].error_alt = 1e-4; // now dominates 0, 1, 2, 4 and 8 on the alternative error
+        finish(&mut rows, false);
+        let marked: Vec<bool> = rows.iter().map(|r| r.pareto).collect();
+        assert_eq!(marked, front);
+        let alt: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].pareto_alt).collect();
+        assert_eq!(alt, [3]);
+    }
+
+    #[test]
+    fn rate_vs_dofs_recovers_a_power_law() {
+        // error = C DOFs^p: Q2 with p = -1.5, Q1 with p = -0.5.
+        let mut rows: Vec<Row> = [100.0, 400.0, 1600.0, 6400.0]
+            .iter()
+            .map(|&n| row("Q2", n, 1.0, 3.0 * f64::powf(n, -1.5), true))
+            .chain(
+                [100.0, 400.0, 1600.0]
+                    .iter()
+                    .map(|&n| row("Q1", n, 1.0, 2.0 * f64::powf(n, -0.5), true)),
+            )
+            .collect();
+        finish(&mut rows, true);
+        let rates: Vec<f64> = rows.iter().map(|r| r.rate).collect();
+        assert!(rates[0].is_nan(), "first mesh of a variant has no rate");
+        for r in &rates[1..4] {
+            assert!((r + 1.5).abs() < 1e-12, "{rates:?}");
+        }
+        assert!(rates[4].is_nan(), "no rate across variants: {rates:?}");
+        for r in &rates[5..7] {
+            assert!((r + 0.5).abs() < 1e-12, "{rates:?}");
+        }
+        assert!((fitted_rate(&rows, "Q2") + 1.5).abs() < 1e-12);
+        assert!((fitted_rate(&rows, "Q1") + 0.5).abs() < 1e-12);
+        assert!(fitted_rate(&rows, "Q3").is_nan());
+
+        // A failed run in the middle: no rate for it nor for the next mesh, and the fit skips it.
+        let mut rows: Vec<Row> = [100.0, 400.0, 1600.0, 6400.0]
+            .iter()
+            .map(|&n| row("Q2", n, 1.0, 3.0 * f64::powf(n, -1.5), true))
+            .collect();
+        rows[1].converged = false;
+        rows[1].error = 1.0;
+        finish(&mut rows, true);
+        assert!(rows[1].rate.is_nan() && rows[2].rate.is_nan());
+        assert!((rows[3].rate + 1.5).abs() < 1e-12);
+        assert!((fitted_rate(&rows, "Q2") + 1.5).abs() < 1e-12);
+        // Without rates (the transient study) none is computed.
+        finish(&mut rows, false);
+        assert!(rows[3].rate.is_finite()); // left as it was
+        let mut fresh: Vec<Row> = [100.0, 400.0]
+            .iter()
+            .map(|&n| row("Q2", n, 1.0, 1.0 / n, true))
+            .collect();
+        finish(&mut fresh, false);
+        assert!(fresh.iter().all(|r| r.rate.is_nan()));
+    }
+
+    #[test]
+    fn errors_relative_and_hub_normalised() {
+        let reference = json!({"values": {"a": 2.0, "hub_force_x": 3.0, "hub_force_y": -4.0,
+                                          "hub_torque": 10.0}});
+        let e = errors(Norm::Relative, &["a"], &[2.5], &reference);
+        assert_eq!(e, [0.25]);
+        // |F| = 5, Ro = 2: ΔFx / 5, ΔFy / 5, ΔT / 10.
+        let e = errors(
+            Norm::Hub { ro: 2.0 },
+            &["hub_force_x", "hub_force_y", "hub_torque"],
+            &[3.5, -5.0, 9.0],
+            &reference,
+        );
+        assert_eq!(e, [0.1, 0.2, 0.1]);
+        // No reference value: NaN, never 0.
+        let e = errors(Norm::Relative, &["b"], &[1.0], &reference);
+        assert!(e[0].is_nan());
+    }
+
+    #[test]
+    fn reference_key_is_stable() {
+        // FNV-1a 64 test vectors: the key must not depend on the Rust version or platform.
+        assert_eq!(fnv1a(""), "cbf29ce484222325");
+        assert_eq!(fnv1a("a"), "af63dc4c8601ec8c");
+        assert_eq!(fnv1a("foobar"), "85944171f73967e8");
+        let set = vec!["mesh.n_r=3".to_string(), "mesh.n_theta=48".to_string()];
+        let k = reference_key("[mesh]\nn_r = 2\n", &set);
+        assert_eq!(k, fnv1a("[mesh]\nn_r = 2\n\nmesh.n_r=3\nmesh.n_theta=48"));
+        assert_eq!(k, reference_key("[mesh]\nn_r = 2\n", &set.clone()));
+        // A different override, order or text is a different reference.
+        let swapped = vec![set[1].clone(), set[0].clone()];
+        assert_ne!(k, reference_key("[mesh]\nn_r = 2\n", &swapped));
+        assert_ne!(k, reference_key("[mesh]\nn_r = 2\n", &set[..1]));
+        assert_ne!(k, reference_key("[mesh]\nn_r = 3\n", &set));
+    }
+
+    #[test]
+    fn reference_cache_reuses_and_refreshes() {
+        let dir = TestDir::new("wp-test", "cache");
+        let set = vec!["mesh.n_r=3".to_string()];
+        let calls = Cell::new(0);
+        let compute = |v: f64| {
+            let calls = &calls;
+            move || {
+                calls.set(calls.get() + 1);
+                Ok(json!({"values": {"q": v}}))
+            }
+        };
+        // First run: computed once, written to OUT/reference.json, then served from memory.
+        let mut cache = RefCache::load(&dir, false);
+        let v = cache.get_with("scene", &set, compute(1.0)).unwrap();
+        assert_eq!(v["values"]["q"], 1.0);
+        assert_eq!(calls.get(), 1);
+        let file: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("reference.json")).unwrap())
+                .unwrap();
+        assert_eq!(file[reference_key("scene", &set)]["values"]["q"], 1.0);
+        cache.get_with("scene", &set, compute(2.0)).unwrap();
+        assert_eq!(calls.get(), 1);
+        // Another reference is computed on its own.
+        cache.get_with("scene", &[], compute(3.0)).unwrap();
+        assert_eq!(calls.get(), 2);
+
+        // Second run: both read from the file, nothing recomputed.
+        let mut cache = RefCache::load(&dir, false);
+        let v = cache.get_with("scene", &set, compute(9.0)).unwrap();
+        assert_eq!((v["values"]["q"].as_f64(), calls.get()), (Some(1.0), 2));
+        assert!(cache.refreshed.is_empty());
+
+        // --fresh-reference: recomputed once per run, the file updated, the other entry kept.
+        let mut cache = RefCache::load(&dir, true);
+        let v = cache.get_with("scene", &set, compute(4.0)).unwrap();
+        assert_eq!((v["values"]["q"].as_f64(), calls.get()), (Some(4.0), 3));
+        let v = cache.get_with("scene", &set, compute(5.0)).unwrap();
+        assert_eq!((v["values"]["q"].as_f64(), calls.get()), (Some(4.0), 3));
+        let cache = RefCache::load(&dir, false);
+        assert_eq!(cache.map[&reference_key("scene", &set)]["values"]["q"], 4.0);
+        assert_eq!(cache.map[&reference_key("scene", &[])]["values"]["q"], 3.0);
+
+        // A failed computation is an error and caches nothing.
+        let mut cache = RefCache::load(&dir, false);
+        let e = cache
+            .get_with("other", &set, || Err("reference failed".into()))
+            .unwrap_err();
+        assert_eq!(e, "reference failed");
+        assert!(!cache.map.contains_key(&reference_key("other", &set)));
+    }
+
+    /// Fields of one CSV line (double-quoted fields may hold commas).
+    fn csv_fields(line: &str) -> Vec<String> {
+        let (mut fields, mut cur, mut quoted) = (Vec::new(), String::new(), false);
+        for ch in line.chars() {
+            match ch {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields.push(std::mem::take(&mut cur)),
+                _ => cur.push(ch),
+            }
+        }
+        fields.push(cur);
+        fields
+    }
+
+    /// The smoke indentation study through `tread::app::run`: CSV columns and rows, plots, the
+    /// cached reference reused by a second run and recomputed with `--fresh-reference`.
+    #[test]
+    fn indentation_study_end_to_end() {
+        let dir = TestDir::new("wp-test", "study");
+        let scratch = dir.join("scratch");
+        let args = |fresh: bool| Args {
+            smoke: true,
+            repeats: 1,
+            out: dir.to_path_buf(),
+            fresh,
+            studies: vec!["indentation".into()],
+        };
+        let mut cache = RefCache::load(&dir, false);
+        study_indentation(&args(false), &mut cache, &scratch).unwrap();
+        assert_eq!(cache.refreshed.len(), 1, "the reference is computed once");
+        let csv = std::fs::read_to_string(dir.join("wp_indentation.csv")).unwrap();
+        let mut lines = csv.lines();
+        let header = csv_fields(lines.next().unwrap());
+        assert_eq!(
+            header,
+            [
+                "study",
+                "variant",
+                "setting",
+                "dofs",
+                "wall_time_s",
+                "error",
+                "hub_force_y",
+                "contact_half_width_moment",
+                "err_hub_force_y",
+                "err_contact_half_width_moment",
+                "rate_vs_dofs",
+                "pareto",
+                "error_alt",
+                "pareto_alt",
+                "converged",
+                "note"
+            ]
+        );
+        let rows: Vec<Vec<String>> = lines.map(csv_fields).collect();
+        // Smoke: Q2 at n_r = 1, 2 and Q1 at n_r = 2.
+        let variants: Vec<(&str, &str)> = rows
+            .iter()
+            .map(|r| (r[1].as_str(), r[2].as_str()))
+            .collect();
+        assert_eq!(variants, [("Q2", "1x16"), ("Q2", "2x32"), ("Q1", "2x32")]);
+        for r in &rows {
+            assert_eq!(r.len(), header.len(), "{r:?}");
+            assert_eq!(r[14], "true", "{r:?}");
+            let err: f64 = r[5].parse().unwrap();
+            assert!(err.is_finite() && err > 0.0, "{r:?}");
+            let dofs: f64 = r[3].parse().unwrap();
+            assert!(dofs > 0.0);
+        }
+        assert!(rows.iter().any(|r| r[11] == "true"), "no Pareto point");
+        let rate: f64 = rows[1][10].parse().unwrap();
+        assert!(rate < 0.0, "Q2 error must fall with refinement: {rate}");
+        for png in ["wp_indentation.png", "wp_indentation_dofs.png"] {
+            assert!(
+                std::fs::metadata(dir.join(png)).unwrap().len() > 1000,
+                "{png}"
+            );
+        }
+        // Each run's output directory is removed after it (`main` removes `scratch` itself).
+        let left = std::fs::read_dir(&scratch).map_or(0, |d| d.count());
+        assert_eq!(left, 0, "scratch runs left in {}", scratch.display());
+
+        // Second run: the reference comes from OUT/reference.json.
+        let mut cache = RefCache::load(&dir, false);
+        assert_eq!(cache.map.len(), 1);
+        study_indentation(&args(false), &mut cache, &scratch).unwrap();
+        assert!(cache.refreshed.is_empty(), "the reference was recomputed");
+        // --fresh-reference recomputes it.
+        let mut cache = RefCache::load(&dir, true);
+        study_indentation(&args(true), &mut cache, &scratch).unwrap();
+        assert_eq!(cache.refreshed.len(), 1);
     }
 }

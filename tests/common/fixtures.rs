@@ -1,5 +1,6 @@
 #![allow(dead_code)]
-//! Fixtures shared by the transient, diffsol, torque and rolling tests.
+//! Fixtures shared by the transient, diffsol, torque and rolling tests (and, as
+//! `fixtures::tempdir`, the scratch-directory guard of `tempdir.rs`).
 
 use tread::app::{run, RunOptions};
 use tread::driver::transient::{Kinematics, Ramp};
@@ -7,6 +8,10 @@ use tread::io::Scene;
 use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};
+
+#[path = "tempdir.rs"]
+pub mod tempdir;
+use tempdir::TestDir;
 
 /// Density of the paper-like cylinder (lbf·s²/in⁴).
 pub const RHO: f64 = 0.027;
@@ -61,17 +66,16 @@ pub fn scene_text(path: &str) -> String {
 pub fn run_rolling(text: &str, name: &str, set: &[&str]) -> serde_json::Value {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
     let scene = Scene::from_toml_str(text, name, &set).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("tread-rolling-{}-{name}", std::process::id()));
+    let out = TestDir::new("rolling", name);
     let o = run(
         &scene,
         &RunOptions {
-            out_dir: out.clone(),
+            out_dir: out.to_path_buf(),
             verbose: false,
             quiet: true,
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));
     assert!(out.join("steady_field.csv").exists() && out.join("passages.csv").exists());
-    let _ = std::fs::remove_dir_all(&out);
     o.summary
 }

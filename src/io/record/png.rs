@@ -13,6 +13,10 @@
 
 use super::{ContinuationPoint, RecordError, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::contact::ContactSample;
+use plotters::coord::ranged1d::{
+    BoldPoints, DefaultFormatting, KeyPointHint, LightPoints, ValueFormatter,
+};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -96,6 +100,176 @@ fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// How an axis maps data values to the plot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scale {
+    /// The value itself.
+    Linear,
+    /// log10 of the value: only positive values can be shown.
+    Log10,
+}
+
+impl Scale {
+    /// The plot coordinate of `v`, or `None` when `v` cannot be shown on this axis (not finite,
+    /// or not positive on a log axis).
+    pub fn to_plot(self, v: f64) -> Option<f64> {
+        match self {
+            Scale::Linear => v.is_finite().then_some(v),
+            Scale::Log10 => (v.is_finite() && v > 0.0).then(|| v.log10()),
+        }
+    }
+}
+
+/// One axis of a chart: its label and scale.
+#[derive(Clone, Copy, Debug)]
+pub struct Axis<'a> {
+    pub label: &'a str,
+    pub scale: Scale,
+}
+
+impl<'a> Axis<'a> {
+    pub fn linear(label: &'a str) -> Self {
+        Axis {
+            label,
+            scale: Scale::Linear,
+        }
+    }
+    pub fn log10(label: &'a str) -> Self {
+        Axis {
+            label,
+            scale: Scale::Log10,
+        }
+    }
+}
+
+/// Bold (labelled) tick marks plotters draws by default on each axis, and light grid lines.
+const BOLD_TICKS: usize = 11;
+const LIGHT_TICKS: usize = 10 * BOLD_TICKS;
+/// A log axis spanning more decades than this labels every second (third, …) decade only.
+const MAX_DECADE_LABELS: f64 = 10.0;
+
+/// Range, major (labelled) ticks and minor ticks (light grid lines) of one axis, all in plot
+/// coordinates (log10 of the value on a log axis).
+///
+/// A linear axis is what plotters draws by default: the data range padded by 5 % and plotters'
+/// own "nice" key points. A log axis spans whole decades, from the decade at or below the
+/// smallest value to the one at or above the largest (at least one decade); the majors are the
+/// decades (every k-th when there are more than ten), the minors 2…9 × each decade, or the
+/// skipped decades.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AxisLayout {
+    pub scale: Scale,
+    pub lo: f64,
+    pub hi: f64,
+    pub major: Vec<f64>,
+    pub minor: Vec<f64>,
+}
+
+impl AxisLayout {
+    /// The layout for plot coordinates `vals` (already mapped by [`Scale::to_plot`]).
+    pub fn new(scale: Scale, vals: impl Iterator<Item = f64>) -> Self {
+        match scale {
+            Scale::Linear => {
+                let (lo, hi) = range(vals);
+                let c = RangedCoordf64::from(lo..hi);
+                AxisLayout {
+                    scale,
+                    lo,
+                    hi,
+                    major: c.key_points(BoldPoints(BOLD_TICKS)),
+                    minor: c.key_points(LightPoints::new(BOLD_TICKS, LIGHT_TICKS)),
+                }
+            }
+            Scale::Log10 => {
+                let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                for v in vals.filter(|v| v.is_finite()) {
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+                if !lo.is_finite() {
+                    (lo, hi) = (0.0, 1.0);
+                }
+                // A value within rounding of a decade belongs to it (log10(1e-3) = -2.9999…).
+                let snap = |x: f64| {
+                    if (x - x.round()).abs() < 1e-9 {
+                        x.round()
+                    } else {
+                        x
+                    }
+                };
+                let a = snap(lo).floor();
+                let b = snap(hi).ceil().max(a + 1.0);
+                let step = ((b - a) / MAX_DECADE_LABELS).ceil().max(1.0);
+                let decades: Vec<f64> = (0..=(b - a) as i64).map(|k| a + k as f64).collect();
+                let major: Vec<f64> = decades
+                    .iter()
+                    .copied()
+                    .filter(|d| d.rem_euclid(step) == 0.0)
+                    .collect();
+                let minor: Vec<f64> = if step == 1.0 {
+                    decades[..decades.len() - 1]
+                        .iter()
+                        .flat_map(|d| (2..10).map(move |m| d + (m as f64).log10()))
+                        .collect()
+                } else {
+                    decades
+                        .iter()
+                        .copied()
+                        .filter(|d| d.rem_euclid(step) != 0.0)
+                        .collect()
+                };
+                AxisLayout {
+                    scale,
+                    lo: a,
+                    hi: b,
+                    major,
+                    minor,
+                }
+            }
+        }
+    }
+
+    /// The tick label at plot coordinate `v`: `1e-3` for a decade of a log axis; on a linear
+    /// axis plotters' default format (`sci = false`) or `{:.3e}` (`sci = true`).
+    pub fn label(&self, v: f64, sci: bool) -> String {
+        match self.scale {
+            Scale::Log10 if (v - v.round()).abs() < 1e-9 => format!("1e{}", v.round() as i64),
+            Scale::Log10 => format!("{:.1e}", 10f64.powf(v)),
+            Scale::Linear if sci => format!("{v:.3e}"),
+            Scale::Linear => <RangedCoordf64 as ValueFormatter<f64>>::format(&v),
+        }
+    }
+}
+
+/// The layout is the plotters coordinate of its axis: its range, mapped linearly to pixels,
+/// with its own ticks.
+impl Ranged for AxisLayout {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        RangedCoordf64::from(self.lo..self.hi).map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        if hint.weight().allow_light_points() {
+            self.minor.clone()
+        } else {
+            self.major.clone()
+        }
+    }
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.lo..self.hi
+    }
+}
+
+/// Register the embedded font as `sans-serif` (once per process); for tools that draw their
+/// own charts with plotters.
+pub fn register_font() -> Result<(), String> {
+    ensure_font()
+}
+
 const COLORS: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
@@ -105,7 +279,7 @@ const COLORS: [RGBColor; 6] = [
     RGBColor(23, 190, 207),
 ];
 
-/// A line chart of named series (each drawn with markers) to `path`.
+/// A line chart of named series (each drawn with markers) to `path`, both axes linear.
 pub fn line_chart(
     path: &Path,
     title: &str,
@@ -113,10 +287,75 @@ pub fn line_chart(
     y_label: &str,
     series: &[(&str, &[(f64, f64)])],
 ) -> Result<(), String> {
+    chart(
+        path,
+        title,
+        Axis::linear(x_label),
+        Axis::linear(y_label),
+        series,
+    )
+    .map(|_| ())
+}
+
+/// Each series mapped to plot coordinates, and a note per series that lost points (not finite,
+/// or not positive on a log axis).
+type Mapped<'s> = (Vec<(&'s str, Vec<(f64, f64)>)>, Vec<String>);
+
+fn map_series<'s>(x: Axis, y: Axis, series: &[(&'s str, &[(f64, f64)])]) -> Mapped<'s> {
+    let mut notes = Vec::new();
+    let mapped = series
+        .iter()
+        .map(|(name, s)| {
+            let pts: Vec<(f64, f64)> = s
+                .iter()
+                .filter_map(|&(a, b)| Some((x.scale.to_plot(a)?, y.scale.to_plot(b)?)))
+                .collect();
+            if pts.len() < s.len() {
+                let log = |a: Axis, c: char| {
+                    (a.scale == Scale::Log10).then(|| format!(", or ≤ 0 on the log {c} axis"))
+                };
+                notes.push(format!(
+                    "series `{name}`: {} of {} points left out (not finite{})",
+                    s.len() - pts.len(),
+                    s.len(),
+                    [log(x, 'x'), log(y, 'y')]
+                        .into_iter()
+                        .flatten()
+                        .collect::<String>()
+                ));
+            }
+            (*name, pts)
+        })
+        .collect();
+    (mapped, notes)
+}
+
+/// A line chart of named series (each drawn with markers) to `path`, each axis linear or log10.
+/// On a log axis the ticks are decades labelled `1e-3`, with light grid lines at 2…9 × each
+/// decade.
+///
+/// Points that cannot be shown (non-finite, or ≤ 0 on a log axis) are left out; the returned
+/// notes name each series that lost points and how many. With a log axis and no point left,
+/// nothing is drawn and the result is an error.
+pub fn chart(
+    path: &Path,
+    title: &str,
+    x: Axis,
+    y: Axis,
+    series: &[(&str, &[(f64, f64)])],
+) -> Result<Vec<String>, String> {
+    let (mapped, notes) = map_series(x, y, series);
+    let any = mapped.iter().any(|(_, p)| !p.is_empty());
+    if !any && (x.scale == Scale::Log10 || y.scale == Scale::Log10) {
+        return Err(format!(
+            "nothing to draw: no point with positive values on the log axes ({})",
+            notes.join("; ")
+        ));
+    }
     ensure_font()?;
-    let pts = || series.iter().flat_map(|(_, s)| s.iter());
-    let (x0, x1) = range(pts().map(|p| p.0));
-    let (y0, y1) = range(pts().map(|p| p.1));
+    let pts = || mapped.iter().flat_map(|(_, s)| s.iter());
+    let xa = AxisLayout::new(x.scale, pts().map(|p| p.0));
+    let ya = AxisLayout::new(y.scale, pts().map(|p| p.1));
     let root = BitMapBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let mut chart = ChartBuilder::on(&root)
@@ -124,16 +363,17 @@ pub fn line_chart(
         .margin(12)
         .x_label_area_size(45)
         .y_label_area_size(90)
-        .build_cartesian_2d(x0..x1, y0..y1)
+        .build_cartesian_2d(xa.clone(), ya.clone())
         .map_err(|e| e.to_string())?;
     chart
         .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .y_label_formatter(&|v| format!("{v:.3e}"))
+        .x_desc(x.label)
+        .y_desc(y.label)
+        .x_label_formatter(&|v| xa.label(*v, false))
+        .y_label_formatter(&|v| ya.label(*v, true))
         .draw()
         .map_err(|e| e.to_string())?;
-    for (k, (name, s)) in series.iter().enumerate() {
+    for (k, (name, s)) in mapped.iter().enumerate() {
         let c = COLORS[k % COLORS.len()];
         chart
             .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
@@ -152,7 +392,8 @@ pub fn line_chart(
         .border_style(BLACK)
         .draw()
         .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
+    root.present().map_err(|e| e.to_string())?;
+    Ok(notes)
 }
 
 impl Recorder for PngSink {
@@ -293,5 +534,121 @@ impl Recorder for PngSink {
             );
         }
         errors
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn log_layout(lo: f64, hi: f64) -> AxisLayout {
+        AxisLayout::new(
+            Scale::Log10,
+            [lo, hi].into_iter().filter_map(|v| Scale::Log10.to_plot(v)),
+        )
+    }
+
+    #[test]
+    fn log_axis_spans_the_enclosing_decades() {
+        let a = log_layout(3e-4, 2e1);
+        assert_eq!((a.lo, a.hi), (-4.0, 2.0));
+        assert_eq!(a.major, vec![-4.0, -3.0, -2.0, -1.0, 0.0, 1.0, 2.0]);
+        let labels: Vec<String> = a.major.iter().map(|v| a.label(*v, true)).collect();
+        assert_eq!(
+            labels,
+            ["1e-4", "1e-3", "1e-2", "1e-1", "1e0", "1e1", "1e2"]
+        );
+        // Minor ticks: 2…9 × each of the six decades, strictly inside the range.
+        assert_eq!(a.minor.len(), 6 * 8);
+        assert!((a.minor[0] - 2e-4f64.log10()).abs() < 1e-12);
+        assert!((a.minor[47] - 9e1f64.log10()).abs() < 1e-12);
+        assert!(a.minor.iter().all(|m| *m > a.lo && *m < a.hi));
+    }
+
+    #[test]
+    fn log_axis_on_exact_decades_and_single_values() {
+        // log10(1e-3) is not exactly -3 in floating point: it must still be the bottom decade.
+        let a = log_layout(1e-3, 1e-1);
+        assert_eq!((a.lo, a.hi), (-3.0, -1.0));
+        // One value: at least one decade.
+        let a = log_layout(5e-3, 5e-3);
+        assert_eq!((a.lo, a.hi), (-3.0, -2.0));
+        let a = log_layout(1e-2, 1e-2);
+        assert_eq!((a.lo, a.hi), (-2.0, -1.0));
+        assert_eq!(a.major, vec![-2.0, -1.0]);
+    }
+
+    #[test]
+    fn log_axis_over_many_decades_labels_every_other_decade() {
+        let a = log_layout(1e-16, 1e2);
+        assert_eq!((a.lo, a.hi), (-16.0, 2.0));
+        assert!(a.major.len() <= 11, "{:?}", a.major);
+        assert!(a.major.iter().all(|d| d.rem_euclid(2.0) == 0.0));
+        assert_eq!(a.major.first(), Some(&-16.0));
+        assert_eq!(a.major.last(), Some(&2.0));
+        // The skipped decades are the minor ticks.
+        assert_eq!(a.minor.len(), 9);
+        assert!(a.minor.iter().all(|d| d.rem_euclid(2.0) == 1.0));
+    }
+
+    #[test]
+    fn linear_axis_is_plotters_default() {
+        let vals = [-3.0, 0.5, 7.0];
+        let a = AxisLayout::new(Scale::Linear, vals.iter().copied());
+        assert_eq!((a.lo, a.hi), range(vals.iter().copied()));
+        assert_eq!((a.lo, a.hi), (-3.5, 7.5));
+        let c = RangedCoordf64::from(a.lo..a.hi);
+        assert_eq!(a.major, c.key_points(BoldPoints(11)));
+        assert!(a.major.contains(&0.0) && a.major.contains(&5.0));
+        assert_eq!(a.label(5.0, false), "5.0");
+        assert_eq!(a.label(5.0, true), "5.000e0");
+        for v in [-2.0, 0.0, 1e-300, 4.5] {
+            assert_eq!(Scale::Linear.to_plot(v), Some(v));
+        }
+        assert_eq!(Scale::Linear.to_plot(f64::NAN), None);
+    }
+
+    #[test]
+    fn log_scale_refuses_non_positive_values() {
+        assert_eq!(Scale::Log10.to_plot(1e3), Some(3.0));
+        for v in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(Scale::Log10.to_plot(v), None, "{v}");
+        }
+        let s: &[(f64, f64)] = &[(1.0, 1e-2), (2.0, 0.0), (3.0, -1e-3), (4.0, 1e-4)];
+        let (m, notes) = map_series(Axis::log10("x"), Axis::log10("y"), &[("err", s)]);
+        assert_eq!(m[0].1.len(), 2);
+        assert_eq!(notes.len(), 1);
+        assert!(
+            notes[0].contains("`err`") && notes[0].contains("2 of 4"),
+            "{notes:?}"
+        );
+        // A linear y axis keeps the same points.
+        let (m, notes) = map_series(Axis::linear("x"), Axis::linear("y"), &[("err", s)]);
+        assert_eq!(m[0].1.len(), 4);
+        assert!(notes.is_empty());
+    }
+
+    #[test]
+    fn chart_draws_log_axes_and_refuses_an_empty_log_chart() {
+        let dir = std::env::temp_dir().join(format!("tread-png-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let ok = dir.join("loglog.png");
+        let s: &[(f64, f64)] = &[(0.01, 3e-4), (0.1, 2e-2), (1.0, 0.0), (2.0, 2e1)];
+        let notes = chart(
+            &ok,
+            "t",
+            Axis::log10("wall"),
+            Axis::log10("error"),
+            &[("a", s)],
+        )
+        .unwrap();
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(std::fs::metadata(&ok).unwrap().len() > 1000);
+        let bad = dir.join("empty.png");
+        let z: &[(f64, f64)] = &[(1.0, 0.0), (2.0, -1.0)];
+        let e = chart(&bad, "t", Axis::linear("x"), Axis::log10("y"), &[("z", z)]).unwrap_err();
+        assert!(e.contains("nothing to draw"), "{e}");
+        assert!(!bad.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
