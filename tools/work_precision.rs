@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --bin tread-work-precision -- [--smoke] [--repeats N] [--out DIR]
-//!     [--fresh-reference] [--studies indentation,steady,transient]
+//!     [--fresh-reference] [--studies spinning,indentation,steady,transient]
 //! ```
 //!
 //! Every run goes through `Scene::from_toml_str` (scene text + `--set`-style overrides) and
@@ -14,6 +14,11 @@
 //! log–log axes, the Pareto front as its own series) and `OUT/wp_<study>_dofs.png` (error vs
 //! DOFs, log–log), and a Markdown table on stdout):
 //!
+//! * `spinning`: `scenarios/spinning_neo_hookean.toml` at the speed that grows the outer radius
+//!   by 5 % (finite strain), order 2 and order 1 meshes. Quantities: `u_r_outer`,
+//!   `sigma_r_inner`; errors relative to the **exact** axisymmetric solution, computed
+//!   independently of the library by shooting on the radial ODE (`tests/common/reference.rs`,
+//!   the reference the spinning tests use).
 //! * `indentation`: `scenarios/indentation_frictionless.toml`, meshes refined together
 //!   (n_theta = 16 n_r), order 2 and order 1. Quantities: `hub_force_y`,
 //!   `contact_half_width_moment`; relative errors against an order-2 run on a much finer mesh.
@@ -43,6 +48,7 @@ use tread::app::RunOptions;
 use tread::io::record::png::{chart, Axis};
 use tread::io::Scene;
 
+const SPIN: &str = include_str!("../scenarios/spinning_neo_hookean.toml");
 const INDENT: &str = include_str!("../scenarios/indentation_frictionless.toml");
 const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
@@ -62,12 +68,17 @@ fn parse_args() -> Args {
         repeats: 3,
         out: PathBuf::from("out/work_precision"),
         fresh: false,
-        studies: vec!["indentation".into(), "steady".into(), "transient".into()],
+        studies: vec![
+            "spinning".into(),
+            "indentation".into(),
+            "steady".into(),
+            "transient".into(),
+        ],
     };
     let mut repeats_given = false;
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
-    let usage = "usage: tread-work-precision [--smoke] [--repeats N] [--out DIR] [--fresh-reference] [--studies indentation,steady,transient]";
+    let usage = "usage: tread-work-precision [--smoke] [--repeats N] [--out DIR] [--fresh-reference] [--studies spinning,indentation,steady,transient]";
     while i < argv.len() {
         let val = |i: usize| -> String {
             argv.get(i + 1).cloned().unwrap_or_else(|| {
@@ -110,8 +121,8 @@ fn parse_args() -> Args {
     }
     a.repeats = a.repeats.max(1);
     for s in &a.studies {
-        if !["indentation", "steady", "transient"].contains(&s.as_str()) {
-            eprintln!("--studies: unknown study `{s}` (indentation, steady, transient)");
+        if !["spinning", "indentation", "steady", "transient"].contains(&s.as_str()) {
+            eprintln!("--studies: unknown study `{s}` (spinning, indentation, steady, transient)");
             std::process::exit(2);
         }
     }
@@ -658,6 +669,75 @@ fn write_outputs(
     );
 }
 
+/// The exact axisymmetric spinning solution (independent of the library: shooting on the radial
+/// ODE, the reference of `tests/spinning.rs`).
+#[allow(dead_code)]
+#[path = "../tests/common/reference.rs"]
+mod reference;
+
+fn study_spinning(a: &Args, scratch: &Path) -> Result<(), String> {
+    let keys = ["u_r_outer", "sigma_r_inner"];
+    let (ri, ro, lambda, mu, rho) = (1.0, 2.0, 1800.0, 200.0, 0.027);
+    // The speed at which the outer radius grows by 5 % (as in tests/spinning.rs).
+    let omega = reference::neo_hookean_omega_for_growth(ri, ro, lambda, mu, rho, 0.05)?;
+    let exact = reference::neo_hookean_radial(ri, ro, lambda, mu, rho, omega)?;
+    let reference_v = json!({"values": {
+        "u_r_outer": exact.u(ro),
+        "sigma_r_inner": exact.sigma_r(ri),
+    }});
+    let set = |n_r: usize, order: usize| {
+        vec![
+            format!("motion.omega={omega:.15e}"),
+            format!("mesh.n_r={n_r}"),
+            format!("mesh.n_theta={}", (8 * n_r).max(8)),
+            format!("mesh.order={order}"),
+        ]
+    };
+    let (seq2, seq1): (Vec<usize>, Vec<usize>) = if a.smoke {
+        (vec![1, 2], vec![2])
+    } else {
+        (vec![1, 2, 4, 8, 12], vec![2, 4, 8, 16, 24])
+    };
+    let mut rows = Vec::new();
+    for (order, seq) in [(2usize, &seq2), (1, &seq1)] {
+        for &n_r in seq.iter() {
+            eprintln!("  spinning Q{order} n_r = {n_r}");
+            let s = solve(
+                SPIN,
+                "spinning_neo_hookean",
+                &set(n_r, order),
+                a.repeats,
+                scratch,
+            )?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &format!("{n_r}x{}", (8 * n_r).max(8)),
+                &s,
+                &keys,
+                Norm::Relative,
+                &reference_v,
+            ));
+        }
+    }
+    finish(&mut rows, true);
+    let note = format!(
+        "Spinning neo-Hookean annulus (`scenarios/spinning_neo_hookean.toml`, lambda = {lambda}, mu = {mu}) at omega = {omega:.6} rad/s (outer radius +5 %), n_theta = 8 n_r. Reference: the exact axisymmetric solution by shooting on the radial ODE ({} RK4 steps): u_r(Ro) = {:.10e}, sigma_r(Ri) = {:.10e}. Errors relative.",
+        reference::DEFAULT_RADIAL_STEPS,
+        exact.u(ro),
+        exact.sigma_r(ri)
+    );
+    write_outputs(
+        &a.out,
+        "spinning",
+        "Spinning annulus (exact solution): error vs wall time",
+        &keys,
+        &rows,
+        &note,
+        true,
+    );
+    Ok(())
+}
+
 fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(), String> {
     let keys = ["hub_force_y", "contact_half_width_moment"];
     let mesh = |n_r: usize, n_theta: usize, order: usize| {
@@ -884,6 +964,7 @@ fn main() {
     for s in a.studies.clone() {
         eprintln!("study {s}");
         let r = match s.as_str() {
+            "spinning" => study_spinning(&a, &scratch),
             "indentation" => study_indentation(&a, &mut cache, &scratch),
             "steady" => study_steady(&a, &mut cache, &scratch),
             _ => study_transient(&a, &mut cache, &scratch),
@@ -1106,6 +1187,33 @@ mod tests {
         }
         fields.push(cur);
         fields
+    }
+
+    /// The spinning study against the exact radial solution: Q2 errors fall under refinement
+    /// and u_r(Ro) is the exact 5 % growth within the discretisation error.
+    #[test]
+    fn spinning_study_measures_error_against_the_exact_solution() {
+        let dir = TestDir::new("wp-test", "spinning");
+        let args = Args {
+            smoke: true,
+            repeats: 1,
+            out: dir.to_path_buf(),
+            fresh: false,
+            studies: vec!["spinning".into()],
+        };
+        study_spinning(&args, &dir.join("scratch")).unwrap();
+        let csv = std::fs::read_to_string(dir.join("wp_spinning.csv")).unwrap();
+        let rows: Vec<Vec<String>> = csv.lines().skip(1).map(csv_fields).collect();
+        assert_eq!(rows.len(), 3, "{csv}");
+        let col = |r: &Vec<String>, i: usize| r[i].parse::<f64>().unwrap();
+        // Columns: 6 u_r_outer, 8 err_u_r_outer, 9 err_sigma_r_inner, 14 converged.
+        for r in &rows {
+            assert_eq!(r[14], "true", "{r:?}");
+            // u_r(Ro) = 0.05 Ro = 0.1 exactly by the choice of omega.
+            assert!((col(r, 6) - 0.1).abs() < 1e-2, "{r:?}");
+        }
+        assert!(col(&rows[1], 8) < col(&rows[0], 8) / 4.0, "{rows:?}");
+        assert!(col(&rows[1], 9) < col(&rows[0], 9), "{rows:?}");
     }
 
     /// The smoke indentation study through `tread::app::run`: CSV columns and rows, plots, the
