@@ -497,6 +497,59 @@ impl Assembler {
         }
     }
 
+    /// As [`Self::add_block`] for a block whose elements may have more than [`MAX_LOCAL`]
+    /// dofs: `kernel(element, r, k)` fills the zeroed residual `r` (nd) and row-major matrix
+    /// `k` (nd²) of the element. Elements are evaluated in parallel batches (when the
+    /// assembler is parallel) and scattered serially.
+    pub fn add_block_large<K>(&mut self, b: usize, dofs: &DofMap, with_matrix: bool, kernel: K)
+    where
+        K: Fn(usize, &mut [f64], &mut [f64]) + Sync,
+    {
+        let Some(block) = self.blocks.get(b) else {
+            return;
+        };
+        let n_el = block.len();
+        const BATCH: usize = 256;
+        let eval = |e: usize| {
+            let nd = block.element(e).len();
+            let mut r = vec![0.0; nd];
+            let mut k = if with_matrix {
+                vec![0.0; nd * nd]
+            } else {
+                Vec::new()
+            };
+            kernel(e, &mut r, &mut k);
+            (r, k)
+        };
+        let mut start = 0;
+        while start < n_el {
+            let end = (start + BATCH).min(n_el);
+            let local: Vec<(Vec<f64>, Vec<f64>)> = if self.parallel {
+                (start..end).into_par_iter().map(eval).collect()
+            } else {
+                (start..end).map(eval).collect()
+            };
+            for (e, (r, k)) in (start..end).zip(local) {
+                let el = block.element(e);
+                for (a, &d) in el.iter().enumerate() {
+                    let q = dofs.eq[d as usize];
+                    if q != FIXED {
+                        self.residual[q as usize] += r[a];
+                    }
+                }
+                if with_matrix {
+                    let s = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
+                    for (slot, &kv) in s.iter().zip(&k) {
+                        if *slot != u32::MAX {
+                            self.values[*slot as usize] += kv;
+                        }
+                    }
+                }
+            }
+            start = end;
+        }
+    }
+
     /// y = A x with the assembled values (used by checks and tests).
     pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
         y.fill(0.0);

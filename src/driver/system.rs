@@ -9,7 +9,7 @@ use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::io::record::{Recorder, StepInfo};
 use crate::math::Vec2;
-use crate::physics::SolidModel;
+use crate::physics::{RingDerivative, SolidModel};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 
@@ -42,6 +42,21 @@ pub struct SolidSystem {
     ref_norms: Vec<f64>,
     /// Contact facets integrated per assembly (sum, count) for reporting.
     pub facet_visits: (usize, usize),
+    /// Steady mode: strain-rate damping on the nodal velocities ω ∂θχ
+    /// ([`Self::enable_steady_viscosity`]).
+    pub steady_visc: Option<SteadyViscosity>,
+}
+
+/// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
+/// ring-difference operator and, per cell, the extended element (the cell's nodes, then the
+/// other nodes of their ring stencils) assembled as one block of the system.
+#[derive(Clone, Debug)]
+pub struct SteadyViscosity {
+    pub ring: RingDerivative,
+    /// Index of the extended-element block in the assembler.
+    pub block: usize,
+    /// Per cell and local node: (index of the stencil node in the extended element, weight).
+    stencil: Vec<Vec<[(u16, f64); crate::physics::ring_derivative::WIDTH]>>,
 }
 
 impl SolidSystem {
@@ -91,6 +106,7 @@ impl SolidSystem {
             omega2_target: 0.0,
             ref_norms: vec![0.0, 1e-3 * area, h_ref, 0.0],
             facet_visits: (0, 0),
+            steady_visc: None,
         }
     }
 
@@ -183,6 +199,123 @@ impl SolidSystem {
         (iphi, block)
     }
 
+    /// Steady (θ-referential) mode with strain-rate damping: assemble the damping on the
+    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// v_a = ω (t_a + (∂θu)_a) with ring differences ([`RingDerivative`]), as the transient mode
+    /// does with its nodal velocities. Each cell's damping forces then depend on the nodes of
+    /// its ring stencils (two positions beyond the cell on each side), assembled as an extra
+    /// block with the exact tangent. Active in [`NonlinearSystem::evaluate`] and
+    /// [`Self::hub_reaction`] while `model.steady_omega` is set. No effect without damping or
+    /// without a ring-structured mesh (the steady mode always has one).
+    pub fn enable_steady_viscosity(&mut self) {
+        use crate::physics::ring_derivative::WIDTH;
+        if self.steady_visc.is_some() || self.model.strain_rate_damping <= 0.0 {
+            return;
+        }
+        let Some(ring) = RingDerivative::new(&self.model.mesh) else {
+            return;
+        };
+        let mesh = &self.model.mesh;
+        let (mut list, mut off) = (Vec::new(), vec![0]);
+        let mut stencil = Vec::with_capacity(mesh.n_cells());
+        for c in 0..mesh.n_cells() {
+            let nodes = mesh.cell_nodes(c);
+            let mut ext: Vec<u32> = nodes.to_vec();
+            for &a in nodes {
+                for &(b, _) in &ring.stencils[a as usize] {
+                    if !ext.contains(&b) {
+                        ext.push(b);
+                    }
+                }
+            }
+            let st: Vec<[(u16, f64); WIDTH]> = nodes
+                .iter()
+                .map(|&a| {
+                    let mut s = [(0u16, 0.0); WIDTH];
+                    for (k, &(b, w)) in ring.stencils[a as usize].iter().enumerate() {
+                        let i = ext.iter().position(|&e| e == b).unwrap_or(0);
+                        s[k] = (i as u16, w);
+                    }
+                    s
+                })
+                .collect();
+            stencil.push(st);
+            for &n in &ext {
+                list.push(2 * n);
+                list.push(2 * n + 1);
+            }
+            off.push(list.len());
+        }
+        let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
+            .asm
+            .blocks
+            .iter()
+            .map(|b| (b.dofs.clone(), b.offsets.clone()))
+            .collect();
+        let block = lists.len();
+        lists.push((list, off));
+        let parallel = self.asm.parallel;
+        self.asm = Assembler::with_blocks(&self.dofs, lists);
+        self.asm.parallel = parallel;
+        self.steady_visc = Some(SteadyViscosity {
+            ring,
+            block,
+            stencil,
+        });
+    }
+
+    /// Nodal velocities ω ∂θχ of the steady mode's damping at the current state (full-length
+    /// vector), or `None` when that damping is not active.
+    fn steady_velocities(&self) -> Option<(Vec<f64>, f64)> {
+        let (sv, om) = (self.steady_visc.as_ref()?, self.model.steady_omega?);
+        if self.model.strain_rate_damping <= 0.0 {
+            return None;
+        }
+        let mut vel = vec![0.0; self.x.len()];
+        sv.ring.velocities(&self.model.mesh, &self.x, om, &mut vel);
+        Some((vel, om))
+    }
+
+    /// Assemble the steady damping block (residual and, with `with_matrix`, the tangent).
+    fn add_steady_viscosity(&mut self, with_matrix: bool) {
+        let Some((vel, om)) = self.steady_velocities() else {
+            return;
+        };
+        let Some(sv) = &self.steady_visc else {
+            return;
+        };
+        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
+        self.asm
+            .add_block_large(sv.block, dofs, with_matrix, |c, r, k| {
+                let nu = 2 * model.mesh.cell_nodes(c).len();
+                let nd = r.len();
+                let mut rv = [0.0; 18];
+                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
+                model.cell_viscous_split(c, dofs, x, &vel, with_matrix, &mut rv, &mut ax, &mut av);
+                r[..nu].copy_from_slice(&rv[..nu]);
+                if !with_matrix {
+                    return;
+                }
+                for i in 0..nu {
+                    for j in 0..nu {
+                        k[i * nd + j] += ax[i * nu + j];
+                    }
+                    // v_{a,comp} = ω (t_a + Σ_b w_b u_{b,comp}).
+                    for (a, st) in sv.stencil[c].iter().enumerate() {
+                        for comp in 0..2 {
+                            let dv = av[i * nu + 2 * a + comp];
+                            if dv == 0.0 {
+                                continue;
+                            }
+                            for &(e, w) in st {
+                                k[i * nd + 2 * e as usize + comp] += dv * om * w;
+                            }
+                        }
+                    }
+                }
+            });
+    }
+
     /// Norm of the residual at the current state (assembles the residual only).
     pub fn residual_norm(&mut self) -> f64 {
         self.evaluate(false);
@@ -224,6 +357,7 @@ impl SolidSystem {
         let mut force = Vec2::zeros();
         let mut moment = 0.0;
         let mut loc = Box::new(LocalSystem::new(0));
+        let steady_vel = self.steady_velocities();
         for c in 0..self.model.mesh.n_cells() {
             let nodes = self.model.mesh.cell_nodes(c);
             if !nodes.iter().any(|&n| is_hub[n as usize]) {
@@ -232,6 +366,17 @@ impl SolidSystem {
             let nd = self.dofs.cell(c).len();
             loc.clear(nd);
             self.model.cell_residual(c, &self.dofs, &self.x, &mut loc);
+            if let Some((vel, _)) = &steady_vel {
+                // The steady damping forces are part of what the hub transmits.
+                let mut rv = [0.0; 18];
+                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
+                self.model.cell_viscous_split(
+                    c, &self.dofs, &self.x, vel, false, &mut rv, &mut ax, &mut av,
+                );
+                for (a, v) in rv.iter().enumerate().take(2 * nodes.len()) {
+                    loc.r[a] += v;
+                }
+            }
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
                 if is_hub[n] && self.dofs.eq[2 * n] == FIXED {
@@ -300,6 +445,7 @@ impl NonlinearSystem for SolidSystem {
         let ok = self
             .model
             .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        self.add_steady_viscosity(with_matrix);
         if let Some(c) = &self.contact {
             c.reset_visited();
             let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);

@@ -1021,6 +1021,14 @@ pub struct SteadyMonitor {
     /// One row per passage: t, changes (field, force, torque), hub force x, y, torque, hub
     /// speed ω, change of ω.
     pub log: Vec<[f64; 9]>,
+    /// Time average of the hub force x, y and torque between the last two passages (the hub
+    /// loads of a steady state vary periodically within a passage as nodes enter and leave
+    /// the patch — by several per cent of |F| on coarse meshes — so the average over a
+    /// passage, not the value at the passage instant, is the steady load).
+    pub passage_mean: Option<[f64; 3]>,
+    /// ∫ (hub force x, y, torque) dt since `acc_t0`, the time of the last passage.
+    acc: [f64; 3],
+    acc_t0: Option<f64>,
     below_once: bool,
 }
 
@@ -1039,6 +1047,9 @@ impl SteadyMonitor {
             passages: 0,
             field: Vec::new(),
             log: Vec::new(),
+            passage_mean: None,
+            acc: [0.0; 3],
+            acc_t0: None,
             below_once: false,
         })
     }
@@ -1063,11 +1074,27 @@ impl SteadyMonitor {
     ) -> bool {
         let q = phi_at(tr.t) / self.dtheta;
         let k1 = (q + 1e-9 * q.abs().max(1.0)).floor() as i64;
+        // Hub loads linear in time within the step, for the passage average.
+        let loads = |s: &Snapshot| [s.hub_force_x, s.hub_force_y, s.hub_torque];
+        let (l0, l1) = (loads(snap0), loads(snap1));
+        let integral = |a: f64, b: f64| {
+            let h = tr.t - t0;
+            let at = |t: f64| {
+                let s = if h > 0.0 { (t - t0) / h } else { 1.0 };
+                [0, 1, 2].map(|i| l0[i] + s * (l1[i] - l0[i]))
+            };
+            let (fa, fb) = (at(a), at(b));
+            [0, 1, 2].map(|i| 0.5 * (fa[i] + fb[i]) * (b - a))
+        };
         if self.last_k == i64::MIN {
             self.last_k = k1;
             return false;
         }
         if k1 <= self.last_k {
+            if self.acc_t0.is_some() {
+                let d = integral(t0, tr.t);
+                (0..3).for_each(|i| self.acc[i] += d[i]);
+            }
             return false;
         }
         self.last_k = k1;
@@ -1083,6 +1110,15 @@ impl SteadyMonitor {
             }
         }
         let ts = 0.5 * (lo + hi);
+        if let Some(tp) = self.acc_t0 {
+            let d = integral(t0, ts);
+            (0..3).for_each(|i| self.acc[i] += d[i]);
+            if ts > tp {
+                self.passage_mean = Some(self.acc.map(|v| v / (ts - tp)));
+            }
+        }
+        self.acc = integral(ts, tr.t);
+        self.acc_t0 = Some(ts);
         let h = tr.t - t0;
         let s = if h > 0.0 { (ts - t0) / h } else { 1.0 };
         // Cubic Hermite basis on [0, 1].
@@ -1184,6 +1220,9 @@ pub struct TransientReport {
     pub last_change: [f64; 4],
     /// Node-passage log (see [`SteadyMonitor::log`]).
     pub passage_log: Vec<[f64; 9]>,
+    /// Hub force x, y and torque averaged over the last node passage
+    /// ([`SteadyMonitor::passage_mean`]).
+    pub passage_mean: Option<[f64; 3]>,
     pub history: Vec<Snapshot>,
 }
 
@@ -1416,6 +1455,7 @@ pub fn integrate(
             tr.steady_field = Some(m.field.clone());
         }
         rep.passage_log = m.log.clone();
+        rep.passage_mean = m.passage_mean;
     }
     rep.history.push(tr.snapshot());
     Ok(rep)

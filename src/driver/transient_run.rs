@@ -5,7 +5,10 @@
 //! the end of the run: at the steady passage when stopping at steady; the prescribed ω under
 //! speed control, the computed one under torque control), `applied_torque`, `rolling_radius` =
 //! v0 / ω, `contact_moment` (moment of the contact tractions about the hub centre),
-//! `steady_change_omega`), `passages.csv` (per node passage: changes of the referential field,
+//! `steady_change_omega`, `hub_force_x_passage_mean`, `hub_force_y_passage_mean`,
+//! `hub_torque_passage_mean`: the hub loads averaged over the last node passage, see
+//! [`crate::driver::transient::SteadyMonitor::passage_mean`]; null before two passages),
+//! `passages.csv` (per node passage: changes of the referential field,
 //! hub force, torque and hub speed, and the hub force, torque and speed), `contact.csv`
 //! (final tractions) and `steady_field.csv` (the referential field extracted at the last node
 //! passage, see [`crate::driver::transient::SteadyMonitor`]).
@@ -243,6 +246,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "hub_force_x": f[0],
         "hub_force_y": f[1],
         "hub_torque": m,
+        "hub_force_x_passage_mean": rep.passage_mean.map(|p| p[0]),
+        "hub_force_y_passage_mean": rep.passage_mean.map(|p| p[1]),
+        "hub_torque_passage_mean": rep.passage_mean.map(|p| p[2]),
         "contact_x_min": tot.x_min,
         "contact_x_max": tot.x_max,
         "max_pressure": tot.max_pressure,

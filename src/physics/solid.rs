@@ -57,9 +57,11 @@ pub struct SolidModel {
     /// active when a velocity field is passed to [`Self::cell_system_viscous`]).
     pub strain_rate_damping: f64,
     /// Steady rolling at this ω (θ-referential mode): the strain-rate damping acts on the
-    /// material rate Ė = sym(Fᵀ ∇v), v = ω ∂θχ, evaluated on the referential mesh (needs the
-    /// second derivatives of the shape functions; see [`Self::cell_system`]). `None` in the
-    /// transient mode, where the velocity is an independent field.
+    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// ω ∂θχ (ring differences, [`crate::physics::RingDerivative`]). That term couples a cell
+    /// with its ring neighbours, so it is not part of the cell kernels: the steady system
+    /// ([`crate::driver::SolidSystem`]) assembles it with [`Self::cell_viscous_split`]. `None`
+    /// in the transient mode, where the velocity is an independent field.
     pub steady_omega: Option<f64>,
     q1: ShapeTable<4>,
     q2: ShapeTable<9>,
@@ -227,6 +229,60 @@ impl SolidModel {
         self.cell_kernel(c, dofs, x, loc, with_k, visc);
     }
 
+    /// The strain-rate damping part alone of cell `c` at state `x` with nodal velocities
+    /// `vel` (full vectors): its residual `r` and, with `with_k`, its derivatives with respect
+    /// to the cell's nodal displacements (`ax`) and nodal velocities (`av`), row-major
+    /// 2N × 2N over the cell's displacement dofs. Obtained as differences of
+    /// [`Self::cell_system_viscous`] evaluations (the same quadrature), so that every other
+    /// term (elastic, inertia, pressure) cancels exactly. Used by the steady mode, whose
+    /// velocities are functions of the displacements of neighbouring cells too.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_viscous_split(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        vel: &[f64],
+        with_k: bool,
+        r: &mut [f64],
+        ax: &mut [f64],
+        av: &mut [f64],
+    ) {
+        let nu = 2 * self.mesh.cell_nodes(c).len();
+        let nd = dofs.cell(c).len();
+        let mut l0 = Box::new(LocalSystem::new(nd));
+        let mut l1 = Box::new(LocalSystem::new(nd));
+        self.cell_kernel(c, dofs, x, &mut l0, with_k, None);
+        if self.strain_rate_damping > 0.0 {
+            self.cell_kernel(c, dofs, x, &mut l1, with_k, Some((vel, 0.0)));
+        } else {
+            l1.r[..nd].copy_from_slice(&l0.r[..nd]);
+            l1.k[..nd * nd].copy_from_slice(&l0.k[..nd * nd]);
+        }
+        for i in 0..nu {
+            r[i] = l1.r[i] - l0.r[i];
+        }
+        if !with_k {
+            return;
+        }
+        for i in 0..nu {
+            for j in 0..nu {
+                ax[i * nu + j] = l1.k[i * nd + j] - l0.k[i * nd + j];
+            }
+        }
+        if self.strain_rate_damping > 0.0 {
+            l0.clear(nd);
+            self.cell_kernel(c, dofs, x, &mut l0, true, Some((vel, 1.0)));
+            for i in 0..nu {
+                for j in 0..nu {
+                    av[i * nu + j] = l0.k[i * nd + j] - l1.k[i * nd + j];
+                }
+            }
+        } else {
+            av[..nu * nu].iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+
     /// Strain energy ∫ W(∇u) dV of the whole mesh at state `x` (displacement part only).
     pub fn strain_energy(&self, dofs: &DofMap, x: &[f64]) -> f64 {
         let mut e = 0.0;
@@ -351,48 +407,6 @@ impl SolidModel {
         })
     }
 
-    /// ∇(∂θN_a) = (∇∇N_a) t + Wᵀ ∇N_a at point `q` (t = (−X2, X1), W = ∇t), with the
-    /// Hessian of N_a from the isoparametric map: ∇∇N = J⁻ᵀ (∂²N/∂ξ² − Σ_m ∂N/∂X_m ∂²X_m/∂ξ²)
-    /// J⁻¹. For exact polar cells the map's second derivatives are those of the nodal
-    /// interpolant (the program uses isoparametric cells).
-    fn theta_gradients<const N: usize>(
-        &self,
-        c: usize,
-        tab: &ShapeTable<N>,
-        q: usize,
-        g: &[[f64; 2]; N],
-        x: &Vec2,
-        out: &mut [[f64; 2]; N],
-    ) -> Option<()> {
-        let (_, jac) = self.map(c, tab.points[q].0, tab.points[q].1, &tab.n[q], &tab.dn[q]);
-        let inv = jac.try_inverse()?;
-        let nodes = self.mesh.cell_nodes(c);
-        // ∂²X_m/∂ξ_k∂ξ_l as (ξξ, ξη, ηη) per component m.
-        let mut d2x = [[0.0; 3]; 2];
-        for a in 0..N {
-            let p = self.mesh.nodes[nodes[a] as usize];
-            for k in 0..3 {
-                d2x[0][k] += p[0] * tab.d2n[q][a][k];
-                d2x[1][k] += p[1] * tab.d2n[q][a][k];
-            }
-        }
-        let t = Vec2::new(-x[1], x[0]);
-        for a in 0..N {
-            let d = tab.d2n[q][a];
-            let r = [
-                d[0] - g[a][0] * d2x[0][0] - g[a][1] * d2x[1][0],
-                d[1] - g[a][0] * d2x[0][1] - g[a][1] * d2x[1][1],
-                d[2] - g[a][0] * d2x[0][2] - g[a][1] * d2x[1][2],
-            ];
-            let rm = Mat2::new(r[0], r[1], r[1], r[2]);
-            let hess = inv.transpose() * rm * inv;
-            let ht = hess * t;
-            // Wᵀ ∇N = (∂N/∂X2, −∂N/∂X1).
-            out[a] = [ht[0] + g[a][1], ht[1] - g[a][0]];
-        }
-        Some(())
-    }
-
     #[inline]
     fn grad_u<const N: usize>(u: &[f64], g: &[[f64; 2]; N]) -> Mat2 {
         let mut h = Mat2::zeros();
@@ -493,9 +507,6 @@ impl SolidModel {
         // Kup for condensation (perturbed): 18 × 3.
         let mut kup = [[0.0f64; 3]; 18];
         let mut g = [[0.0; 2]; N];
-        // Steady viscosity: ∇(∂θN_a) and the tangent of P_v with respect to ∇v.
-        let mut gth = [[0.0; 2]; N];
-        let mut b_v = Tangent::zeros();
         for q in 0..tab.len() {
             let Some(pg) = self.point(c, tab, q, &mut g) else {
                 self.inverted.store(true, Ordering::Relaxed);
@@ -534,44 +545,6 @@ impl SolidModel {
                             for i in 0..2 {
                                 for j in 0..2 {
                                     a_t[(v(i, j), v(k, l))] += dp[(i, j)];
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            // Steady (θ-referential) strain-rate damping: ∇v = ω (W + Σ_a u_a ⊗ ∇(∂θN_a)).
-            let steady_visc = match self.steady_omega {
-                Some(om) if visc.is_none() && self.strain_rate_damping > 0.0 => Some(om),
-                _ => None,
-            };
-            if let Some(om) = steady_visc {
-                let Some(()) = self.theta_gradients(c, tab, q, &g, &pg.x, &mut gth) else {
-                    self.inverted.store(true, Ordering::Relaxed);
-                    return;
-                };
-                let eta = self.strain_rate_damping;
-                let f = Mat2::identity() + h;
-                let mut fd = Mat2::new(0.0, -1.0, 1.0, 0.0);
-                fd += Self::grad_u(u, &gth);
-                fd *= om;
-                let sv = (fd.transpose() * f + f.transpose() * fd) * (0.5 * eta);
-                p_st += f * sv;
-                if with_k {
-                    for k in 0..2 {
-                        for l in 0..2 {
-                            let mut e = Mat2::zeros();
-                            e[(k, l)] = 1.0;
-                            // Through F (gradient g_b): same structure as the material tangent.
-                            let ds = (fd.transpose() * e + e.transpose() * fd) * (0.5 * eta);
-                            let dp = e * sv + f * ds;
-                            // Through ∇v (gradient ω ∂θ-gradient of N_b): kept apart.
-                            let dsv = (e.transpose() * f + f.transpose() * e) * (0.5 * eta * om);
-                            let dpv = f * dsv;
-                            for i in 0..2 {
-                                for j in 0..2 {
-                                    a_t[(v(i, j), v(k, l))] += dp[(i, j)];
-                                    b_v[(v(i, j), v(k, l))] = dpv[(i, j)];
                                 }
                             }
                         }
@@ -633,24 +606,13 @@ impl SolidModel {
                         ga[i][kl] = g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)];
                     }
                 }
-                let mut gb = [[0.0; 4]; 2];
-                if steady_visc.is_some() {
-                    for i in 0..2 {
-                        for kl in 0..4 {
-                            gb[i][kl] = g[a][0] * b_v[(v(i, 0), kl)] + g[a][1] * b_v[(v(i, 1), kl)];
-                        }
-                    }
-                }
                 for b in 0..N {
                     let tb = t[0] * g[b][0] + t[1] * g[b][1];
                     let inertia = rw2 * ta * tb * w;
                     for i in 0..2 {
                         let row = (2 * a + i) * nd;
                         for k in 0..2 {
-                            let mut val = ga[i][v(k, 0)] * g[b][0] + ga[i][v(k, 1)] * g[b][1];
-                            if steady_visc.is_some() {
-                                val += gb[i][v(k, 0)] * gth[b][0] + gb[i][v(k, 1)] * gth[b][1];
-                            }
+                            let val = ga[i][v(k, 0)] * g[b][0] + ga[i][v(k, 1)] * g[b][1];
                             let mut kv = val * w;
                             if i == k {
                                 kv -= inertia;

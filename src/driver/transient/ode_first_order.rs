@@ -825,6 +825,7 @@ pub fn integrate_first_order(
             tr.steady_field = Some(m.field.clone());
         }
         rep.passage_log = m.log.clone();
+        rep.passage_mean = m.passage_mean;
     }
     rep.history.push(tr.snapshot());
     if rep.dt_min_used == f64::INFINITY {
