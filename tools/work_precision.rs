@@ -678,6 +678,36 @@ fn write_outputs(
     );
 }
 
+/// Rows of a mesh study: for every (order, n_r) of `seqs`, the scene (`text`, `name`) with the
+/// overrides and the setting label of `mesh(n_r, order)`, errors relative to `reference`.
+fn mesh_sequence(
+    a: &Args,
+    (text, name): (&str, &str),
+    seqs: &[(usize, &[usize])],
+    mesh: impl Fn(usize, usize) -> (Vec<String>, String),
+    keys: &[&str],
+    reference: &Value,
+    scratch: &Path,
+) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for &(order, seq) in seqs {
+        for &n_r in seq {
+            let (set, setting) = mesh(n_r, order);
+            eprintln!("  {name} Q{order} {setting}");
+            let s = solve(text, name, &set, a.repeats, scratch)?;
+            rows.push(make_row(
+                &format!("Q{order}"),
+                &setting,
+                &s,
+                keys,
+                Norm::Relative,
+                reference,
+            ));
+        }
+    }
+    Ok(rows)
+}
+
 /// The exact axisymmetric spinning solution (independent of the library: shooting on the radial
 /// ODE, the reference of `tests/spinning.rs`).
 #[allow(dead_code)]
@@ -707,27 +737,15 @@ fn study_spinning(a: &Args, scratch: &Path) -> Result<(), String> {
     } else {
         (vec![1, 2, 4, 8, 12], vec![2, 4, 8, 16, 24])
     };
-    let mut rows = Vec::new();
-    for (order, seq) in [(2usize, &seq2), (1, &seq1)] {
-        for &n_r in seq.iter() {
-            eprintln!("  spinning Q{order} n_r = {n_r}");
-            let s = solve(
-                SPIN,
-                "spinning_neo_hookean",
-                &set(n_r, order),
-                a.repeats,
-                scratch,
-            )?;
-            rows.push(make_row(
-                &format!("Q{order}"),
-                &format!("{n_r}x{}", (8 * n_r).max(8)),
-                &s,
-                &keys,
-                Norm::Relative,
-                &reference_v,
-            ));
-        }
-    }
+    let mut rows = mesh_sequence(
+        a,
+        (SPIN, "spinning_neo_hookean"),
+        &[(2, &seq2), (1, &seq1)],
+        |n_r, order| (set(n_r, order), format!("{n_r}x{}", (8 * n_r).max(8))),
+        &keys,
+        &reference_v,
+        scratch,
+    )?;
     finish(&mut rows, true);
     let note = format!(
         "Spinning neo-Hookean annulus (`scenarios/spinning_neo_hookean.toml`, lambda = {lambda}, mu = {mu}) at omega = {omega:.6} rad/s (outer radius +5 %), n_theta = 8 n_r. Reference: the exact axisymmetric solution by shooting on the radial ODE ({} RK4 steps): u_r(Ro) = {:.10e}, sigma_r(Ri) = {:.10e}. Errors relative.",
@@ -763,28 +781,15 @@ fn study_indentation(a: &Args, cache: &mut RefCache, scratch: &Path) -> Result<(
     };
     let ref_set = mesh(reference.0, reference.1, 2);
     let reference_v = cache.get(INDENT, "indentation_frictionless", &ref_set, &keys, scratch)?;
-    let mut rows = Vec::new();
-    for (order, seq) in [(2usize, &seq2), (1, &seq1)] {
-        for &n_r in seq.iter() {
-            let n_theta = 16 * n_r;
-            eprintln!("  indentation Q{order} {n_r} x {n_theta}");
-            let s = solve(
-                INDENT,
-                "indentation_frictionless",
-                &mesh(n_r, n_theta, order),
-                a.repeats,
-                scratch,
-            )?;
-            rows.push(make_row(
-                &format!("Q{order}"),
-                &format!("{n_r}x{n_theta}"),
-                &s,
-                &keys,
-                Norm::Relative,
-                &reference_v,
-            ));
-        }
-    }
+    let mut rows = mesh_sequence(
+        a,
+        (INDENT, "indentation_frictionless"),
+        &[(2, &seq2), (1, &seq1)],
+        |n_r, order| (mesh(n_r, 16 * n_r, order), format!("{n_r}x{}", 16 * n_r)),
+        &keys,
+        &reference_v,
+        scratch,
+    )?;
     finish(&mut rows, true);
     let note = format!(
         "Static frictionless indentation (`scenarios/indentation_frictionless.toml`), n_theta = 16 n_r (grading_theta 0.6). Reference: Q2 {}x{} ({} DOFs): hub_force_y = {:.8e}, contact_half_width_moment = {:.8e}. Errors relative.",
