@@ -14,6 +14,10 @@
 //! cargo run --release --bin tread-bench-log -- [--repeats R] [--n-theta N] [--steps S] [--out DIR]
 //! ```
 
+#[path = "common.rs"]
+mod common;
+use common::median;
+
 use std::path::PathBuf;
 use std::time::Instant;
 use tread::app::build_system;
@@ -22,11 +26,6 @@ use tread::io::record::{self, Recorder, Recorders, RunMeta, StepInfo};
 use tread::io::Scene;
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NewtonOptions};
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 fn scene(n_theta: usize, steps: usize) -> Result<Scene, String> {
     let text = format!(

@@ -14,17 +14,16 @@
 //!
 //! Writes a Markdown table to stdout and `DIR/bench_newton.csv` (default `out/bench`).
 
+#[path = "common.rs"]
+mod common;
+use common::median;
+
 use std::time::Instant;
 use tread::driver::SolidSystem;
 use tread::material::{Material, NeoHookean};
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, NonlinearSystem, SparseSolver};
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 fn peak_rss_mb() -> f64 {
     std::fs::read_to_string("/proc/self/status")

@@ -13,20 +13,15 @@
 //!    transient `error_tol` 1e-3 and 1e-4: the transient's difference from the steady solution
 //!    and both wall times.
 
+#[path = "common.rs"]
+mod common;
+use common::median;
+
 use tread::app::RunOptions;
 use tread::io::Scene;
 
 const SWEEP: &str = include_str!("../scenarios/oden_steady_sweep.toml");
 const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

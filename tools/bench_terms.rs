@@ -15,6 +15,10 @@
 //!
 //! Medians of `--repeats` (default 7) runs, interleaved; one thread (reproducible).
 
+#[path = "common.rs"]
+mod common;
+use common::median;
+
 use std::time::Instant;
 use tread::app::RunOptions;
 use tread::io::Scene;
@@ -22,11 +26,6 @@ use tread::solver::NonlinearSystem;
 
 const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 const INDENT: &str = include_str!("../scenarios/indentation_friction.toml");
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 fn scene(text: &str, set: &[&str]) -> Scene {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();

@@ -45,6 +45,10 @@
 //! `DIR/transient_work_precision_{a,b}.csv` and `.png` (log–log error vs wall time with decade
 //! ticks from `png::AxisLayout`; default `DIR = out/bench`).
 
+#[path = "common.rs"]
+mod common;
+use common::{fnv1a, median};
+
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -496,11 +500,6 @@ fn extract(tr: &Transient, rep: &TransientReport, part: Part) -> [f64; 4] {
     [f[0], f[1], m, half_width(tr, &tr.un, &tr.vn)]
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
 fn run_repeated(
     scene: &Scene,
     case: &Case,
@@ -549,16 +548,6 @@ fn physics_key(scene: &Scene) -> String {
         }
         _ => SCENE_TEXT.to_string(),
     }
-}
-
-/// FNV-1a hash (64 bits, hex): part of the cache key.
-fn fnv1a(s: &str) -> String {
-    let mut h: u64 = 0xcbf29ce484222325;
-    for b in s.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    format!("{h:016x}")
 }
 
 struct ReferenceCache {

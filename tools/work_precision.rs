@@ -41,6 +41,10 @@
 //! the overrides; `--fresh-reference` recomputes them. `--smoke` runs tiny meshes once each
 //! (a check that the tool works, well under a minute in release; its numbers mean nothing).
 
+#[path = "common.rs"]
+mod common;
+use common::{fnv1a, median};
+
 use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
@@ -127,30 +131,6 @@ fn parse_args() -> Args {
         }
     }
     a
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-/// FNV-1a, 64 bit: a hash that stays the same across Rust versions and platforms.
-fn fnv1a(text: &str) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    format!("{h:016x}")
 }
 
 /// One solved case: the summary of the last repeat and the median wall time.
