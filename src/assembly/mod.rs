@@ -290,6 +290,8 @@ pub struct Assembler {
     /// Σ_e |r_e,i| per equation (same numbering as `residual`), accumulated with it.
     pub scale: Vec<f64>,
     pub parallel: bool,
+    /// Scratch of [`Self::add_block_large`] (element residuals and matrices of one batch).
+    large_scratch: Vec<f64>,
 }
 
 impl Assembler {
@@ -387,6 +389,7 @@ impl Assembler {
             residual: vec![0.0; n],
             scale: vec![0.0; n],
             parallel: true,
+            large_scratch: Vec::new(),
         }
     }
 
@@ -499,47 +502,58 @@ impl Assembler {
 
     /// As [`Self::add_block`] for a block whose elements may have more than [`MAX_LOCAL`]
     /// dofs: `kernel(element, r, k)` fills the zeroed residual `r` (nd) and row-major matrix
-    /// `k` (nd²) of the element. Elements are evaluated in parallel batches (when the
-    /// assembler is parallel) and scattered serially.
+    /// `k` (nd², empty without `with_matrix`) of the element. Elements are evaluated in
+    /// parallel batches (when the assembler is parallel) into a scratch buffer kept by the
+    /// assembler (allocated on the first call only) and scattered serially, adding to the
+    /// residual, its force-flux scale and the matrix values.
     pub fn add_block_large<K>(&mut self, b: usize, dofs: &DofMap, with_matrix: bool, kernel: K)
     where
         K: Fn(usize, &mut [f64], &mut [f64]) + Sync,
     {
+        const BATCH: usize = 256;
+        let mut buf = std::mem::take(&mut self.large_scratch);
         let Some(block) = self.blocks.get(b) else {
+            self.large_scratch = buf;
             return;
         };
         let n_el = block.len();
-        const BATCH: usize = 256;
-        let eval = |e: usize| {
-            let nd = block.element(e).len();
-            let mut r = vec![0.0; nd];
-            let mut k = if with_matrix {
-                vec![0.0; nd * nd]
-            } else {
-                Vec::new()
-            };
-            kernel(e, &mut r, &mut k);
-            (r, k)
-        };
+        let max_nd = (0..n_el).map(|e| block.element(e).len()).max().unwrap_or(0);
+        let stride = max_nd + if with_matrix { max_nd * max_nd } else { 0 };
+        if buf.len() < BATCH * stride {
+            buf.resize(BATCH * stride, 0.0);
+        }
         let mut start = 0;
         while start < n_el {
             let end = (start + BATCH).min(n_el);
-            let local: Vec<(Vec<f64>, Vec<f64>)> = if self.parallel {
-                (start..end).into_par_iter().map(eval).collect()
-            } else {
-                (start..end).map(eval).collect()
+            let batch = &mut buf[..(end - start) * stride];
+            let eval = |(i, s): (usize, &mut [f64])| {
+                let e = start + i;
+                let nd = block.element(e).len();
+                let (r, k) = s.split_at_mut(max_nd);
+                let r = &mut r[..nd];
+                let k = &mut k[..if with_matrix { nd * nd } else { 0 }];
+                r.fill(0.0);
+                k.fill(0.0);
+                kernel(e, r, k);
             };
-            for (e, (r, k)) in (start..end).zip(local) {
+            if self.parallel {
+                batch.par_chunks_mut(stride).enumerate().for_each(eval);
+            } else {
+                batch.chunks_mut(stride).enumerate().for_each(eval);
+            }
+            for (e, s) in (start..end).zip(batch.chunks(stride)) {
                 let el = block.element(e);
+                let nd = el.len();
                 for (a, &d) in el.iter().enumerate() {
                     let q = dofs.eq[d as usize];
                     if q != FIXED {
-                        self.residual[q as usize] += r[a];
+                        self.residual[q as usize] += s[a];
+                        self.scale[q as usize] += s[a].abs();
                     }
                 }
                 if with_matrix {
-                    let s = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                    for (slot, &kv) in s.iter().zip(&k) {
+                    let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
+                    for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + nd * nd]) {
                         if *slot != u32::MAX {
                             self.values[*slot as usize] += kv;
                         }
@@ -548,6 +562,7 @@ impl Assembler {
             }
             start = end;
         }
+        self.large_scratch = buf;
     }
 
     /// y = A x with the assembled values (used by checks and tests).

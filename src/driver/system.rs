@@ -57,6 +57,8 @@ pub struct SteadyViscosity {
     pub block: usize,
     /// Per cell and local node: (index of the stencil node in the extended element, weight).
     stencil: Vec<Vec<[(u16, f64); crate::physics::ring_derivative::WIDTH]>>,
+    /// Nodal velocities of the current evaluation (full length; reused, not reallocated).
+    vel: Vec<f64>,
 }
 
 impl SolidSystem {
@@ -122,14 +124,7 @@ impl SolidSystem {
             self.ref_norms[2] = f;
         }
         // The hub-angle equation (torque control) is a moment balance: force × outer radius.
-        let ro = self
-            .model
-            .mesh
-            .nodes
-            .iter()
-            .map(|x| x.norm())
-            .fold(0.0, f64::max);
-        self.ref_norms[3] = f * ro;
+        self.ref_norms[3] = f * self.model.mesh.outer_radius();
     }
 
     /// Floor of the displacement field's convergence reference for a contact loading (see
@@ -258,6 +253,7 @@ impl SolidSystem {
         self.asm = Assembler::with_blocks(&self.dofs, lists);
         self.asm.parallel = parallel;
         self.steady_visc = Some(SteadyViscosity {
+            vel: vec![0.0; self.x.len()],
             ring,
             block,
             stencil,
@@ -278,12 +274,16 @@ impl SolidSystem {
 
     /// Assemble the steady damping block (residual and, with `with_matrix`, the tangent).
     fn add_steady_viscosity(&mut self, with_matrix: bool) {
-        let Some((vel, om)) = self.steady_velocities() else {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
             return;
         };
-        let Some(sv) = &self.steady_visc else {
+        if self.model.strain_rate_damping <= 0.0 {
             return;
-        };
+        }
+        sv.ring
+            .velocities(&self.model.mesh, &self.x, om, &mut sv.vel);
+        let sv = &*sv;
+        let vel = &sv.vel;
         let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
         self.asm
             .add_block_large(sv.block, dofs, with_matrix, |c, r, k| {

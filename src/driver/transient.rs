@@ -1175,7 +1175,7 @@ impl SteadyMonitor {
                 .max(f64::MIN_POSITIVE);
             let df = (snap.hub_force_x - ps.hub_force_x).hypot(snap.hub_force_y - ps.hub_force_y)
                 / fscale;
-            let tscale = fscale * mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max);
+            let tscale = fscale * mesh.outer_radius();
             let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
             // Hub speed (varies under torque control; 0 change under speed control).
             let dw = (snap.omega - ps.omega).abs() / snap.omega.abs().max(f64::MIN_POSITIVE);
@@ -1244,14 +1244,7 @@ pub fn integrate(
     };
     // Reference force: weight-like scale ρ |Ω| ω² Ro + hub load.
     let area = super::system::domain_area(&tr.sys.model);
-    let ro = tr
-        .sys
-        .model
-        .mesh
-        .nodes
-        .iter()
-        .map(|x| x.norm())
-        .fold(0.0, f64::max);
+    let ro = tr.sys.model.mesh.outer_radius();
     let fref = tr.sys.model.rho * area * (tr.kin.omega.target.powi(2) * ro).max(1.0)
         + tr.kin.load.map_or(0.0, |l| l.target.abs());
     tr.sys.set_reference_force(fref);

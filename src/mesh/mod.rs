@@ -92,6 +92,11 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Largest distance of a node from the axis (the outer radius of the annulus).
+    pub fn outer_radius(&self) -> f64 {
+        self.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max)
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.nodes.len()
     }
