@@ -1,7 +1,7 @@
 //! Regression summaries: every scene under `scenarios/` is re-run on its own (small) mesh with one
 //! thread and its `summary.json` compared, number by number, with the one committed in
 //! `tests/regression/` (see its README). Wall times, thread counts and the version are not
-//! compared; every other number must agree to 1e-9 relative (with an absolute floor of 1e-10 of
+//! compared; every other number must agree to 1e-9 relative (with an absolute floor of 1e-13 of
 //! the largest number of the same summary's `results`, for quantities that are round-off noise
 //! around zero, e.g. the hub torque of a spinning annulus). Strings, booleans and nulls must be
 //! equal, and the key sets must match.
@@ -108,7 +108,7 @@ fn check(scene: &str, extra: &[&str], reference: &str) {
         )
     });
     let got: Value = serde_json::from_str(&text).expect("summary.json parses");
-    let floor = 1e-10 * want.get("results").map_or(0.0, max_abs);
+    let floor = 1e-13 * want.get("results").map_or(0.0, max_abs);
     let mut diffs = Vec::new();
     compare("", &want, &got, floor, &mut diffs);
     assert!(
