@@ -241,9 +241,10 @@ pub fn render_array(ctx: &ScriptContext, part: &ArrayPart, k: usize, n_parts: us
     let logs = ctx.root.join("slurm").join("logs");
     format!(
         r#"#!/bin/bash
-# tread sweep `{name}`: Slurm job array, part {part_no} of {n_parts}, {n_tasks} task(s) for runs {first_run}..{last_run}
-# of {n_runs}, {pack} run(s) per task. Written by `tread sweep run --backend slurm`; submitting
-# it again is safe: runs already done are skipped. Each run writes {root}/runs/NNNN/.
+# tread sweep `{name}`: Slurm job array, part {part_no} of {n_parts}.
+# {n_tasks} array task(s), {pack} run(s) each, for runs {first_run}..{last_run} of {n_runs}; each run writes
+# {root}/runs/NNNN/. Written by `tread sweep run --backend slurm`; submitting it again is
+# safe: runs already done are skipped.
 #SBATCH --job-name=tread-{name}
 #SBATCH --array={array}
 {resources}#SBATCH --output={logs}/%x-%A_%a.out
@@ -292,9 +293,9 @@ pub fn render_collect(ctx: &ScriptContext) -> String {
     let logs = ctx.root.join("slurm").join("logs");
     format!(
         r#"#!/bin/bash
-# tread sweep `{name}`: collect the table ({root}/results.csv) and the plots once the array
-# job(s) have ended. Submitted with --dependency=afterany:<array job ids>: afterany, so that it
-# also runs when some runs failed or were cancelled.
+# tread sweep `{name}`: collect the table ({root}/results.csv) and the plots.
+# Submitted with --dependency=afterany:<array job ids>: afterany, so that it also runs when
+# some runs failed or were cancelled (with afterok it would stay pending forever).
 #SBATCH --job-name=tread-{name}-collect
 {resources}#SBATCH --output={logs}/%x-%j.out
 
