@@ -6,8 +6,10 @@
 //! 2. **Overhead of the local backend per run**: N runs of a scene taking about `--seconds`
 //!    each, once as bare `tread run` processes one after the other, once as `tread sweep run
 //!    -j 1` (plan + queued marks + one run-one supervisor per run + status files + collect).
-//!    Overhead per run = (T_sweep − T_bare) / N, also as a fraction of the mean bare run.
-//!    The two are alternated `--repeat` times and the medians reported (the machine is shared).
+//!    Overhead per run = (T_sweep − T_bare) / N, also as a fraction of the bare time, in wall
+//!    time and in CPU time (user + system of every process, from getrusage: robust against
+//!    other load on a shared machine). The two are alternated `--repeat` times; medians of the
+//!    per-round figures are reported, and each round.
 //!    A second pass with tiny runs (≈ 20 ms) shows the absolute cost per run.
 //!
 //! Everything with `--threads 1`. Usage:
@@ -26,10 +28,23 @@ fn tread_exe() -> PathBuf {
     me.with_file_name("tread")
 }
 
-fn run(cmd: &mut Command) -> f64 {
+/// User + system CPU time of the waited-for children (and their waited-for descendants), s.
+fn children_cpu() -> f64 {
+    // SAFETY: getrusage fills the struct it is given.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    unsafe {
+        libc::getrusage(libc::RUSAGE_CHILDREN, &mut u);
+    }
+    let tv = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    tv(u.ru_utime) + tv(u.ru_stime)
+}
+
+/// Run a command; (wall time, CPU time of it and its descendants).
+fn run(cmd: &mut Command) -> (f64, f64) {
+    let c0 = children_cpu();
     let t0 = Instant::now();
     let o = cmd.output().expect("spawn");
-    let dt = t0.elapsed().as_secs_f64();
+    let dt = (t0.elapsed().as_secs_f64(), children_cpu() - c0);
     if !o.status.success() {
         panic!(
             "{:?} failed: {}\n{}",
@@ -63,8 +78,17 @@ omega = 20.0
 sinks = ["summary"]
 "#;
 
-/// Bare runs vs the local backend for `n` runs with the given extra overrides.
-fn overhead(dir: &Path, exe: &Path, n: usize, fixed: &[(&str, &str)], repeat: usize) -> (f64, f64) {
+/// Per round: (bare wall, sweep wall, bare CPU, sweep CPU).
+type Round = (f64, f64, f64, f64);
+
+/// Bare runs vs the local backend for `n` runs with the given extra overrides, `repeat` rounds.
+fn overhead(
+    dir: &Path,
+    exe: &Path,
+    n: usize,
+    fixed: &[(&str, &str)],
+    repeat: usize,
+) -> Vec<Round> {
     std::fs::write(dir.join("spin.toml"), SPIN).unwrap();
     let omegas: Vec<String> = (0..n).map(|i| format!("{:.1}", 10.0 + i as f64)).collect();
     let mut spec = format!(
@@ -81,11 +105,10 @@ fn overhead(dir: &Path, exe: &Path, n: usize, fixed: &[(&str, &str)], repeat: us
     spec += "[outputs]\nsinks = [\"summary\"]\n";
     let spec_path = dir.join("bench.toml");
     std::fs::write(&spec_path, spec).unwrap();
-    let mut bare = Vec::new();
-    let mut swept = Vec::new();
+    let mut rounds = Vec::new();
     for r in 0..repeat {
         let bare_dir = dir.join(format!("bare{r}"));
-        let mut t = 0.0;
+        let mut t = (0.0, 0.0);
         for (i, w) in omegas.iter().enumerate() {
             let mut c = Command::new(exe);
             c.args(["--threads", "1", "-q", "run"])
@@ -97,20 +120,22 @@ fn overhead(dir: &Path, exe: &Path, n: usize, fixed: &[(&str, &str)], repeat: us
                 c.args(["--set", &format!("{k}={v}")]);
             }
             c.args(["--set", "output.sinks=[\"summary\"]"]);
-            t += run(&mut c);
+            let (w, cpu) = run(&mut c);
+            t.0 += w;
+            t.1 += cpu;
         }
-        bare.push(t);
         let root = dir.join(format!("sweep{r}"));
         let mut c = Command::new(exe);
         c.args(["--threads", "1", "-q", "sweep", "run"])
             .arg(&spec_path)
             .args(["-j", "1", "--out"])
             .arg(&root);
-        swept.push(run(&mut c));
+        let (w, cpu) = run(&mut c);
+        rounds.push((t.0, w, t.1, cpu));
         let _ = std::fs::remove_dir_all(&bare_dir);
         let _ = std::fs::remove_dir_all(&root);
     }
-    (common::median(bare), common::median(swept))
+    rounds
 }
 
 fn main() {
@@ -144,7 +169,7 @@ fn main() {
     for _ in 0..3 {
         let mut c = Command::new(&exe);
         c.args(["--threads", "1", "sweep", "plan"]).arg(&spec_path);
-        cli.push(run(&mut c));
+        cli.push(run(&mut c).0);
     }
     let s = tread::sweep::Spec::load(&spec_path).unwrap();
     let t0 = Instant::now();
@@ -165,7 +190,11 @@ fn main() {
         vec![
             (
                 "long",
-                vec![("mesh.n_r", "6"), ("mesh.n_theta", "128"), ("solver.load_steps", "20")],
+                vec![
+                    ("mesh.n_r", "8"),
+                    ("mesh.n_theta", "192"),
+                    ("solver.load_steps", "20"),
+                ],
             ),
             ("tiny", vec![]),
         ]
@@ -173,13 +202,26 @@ fn main() {
     for (name, fixed) in cases {
         let dir = out.join(name);
         std::fs::create_dir_all(&dir).unwrap();
-        let (bare, swept) = overhead(&dir, &exe, n, &fixed, repeat);
-        let per_bare = bare / n as f64;
-        let per_over = (swept - bare) / n as f64;
+        let rounds = overhead(&dir, &exe, n, &fixed, repeat);
+        let nf = n as f64;
+        let med = |f: &dyn Fn(&Round) -> f64| common::median(rounds.iter().map(f).collect());
+        let per_bare = med(&|r| r.0 / nf);
+        let over_wall = med(&|r| (r.1 - r.0) / nf);
+        let over_wall_rel = med(&|r| (r.1 - r.0) / r.0);
+        let over_cpu = med(&|r| (r.3 - r.2) / nf);
+        let over_cpu_rel = med(&|r| (r.3 - r.2) / r.2);
         println!(
-            "overhead ({name} runs, {n} runs, median of {repeat}): bare {bare:.3} s ({per_bare:.3} s/run), sweep -j 1 {swept:.3} s; overhead {:.1} ms/run = {:.2} % of a run",
-            per_over * 1e3,
-            100.0 * per_over / per_bare
+            "overhead ({name} runs: {n} runs, {per_bare:.3} s wall per bare run; medians over {repeat} rounds): wall {:.1} ms/run = {:.2} %, CPU {:.1} ms/run = {:.2} %",
+            over_wall * 1e3,
+            100.0 * over_wall_rel,
+            over_cpu * 1e3,
+            100.0 * over_cpu_rel
         );
+        for (k, r) in rounds.iter().enumerate() {
+            println!(
+                "  round {k}: bare {:.3} s wall / {:.3} s CPU, sweep -j 1 {:.3} s wall / {:.3} s CPU",
+                r.0, r.2, r.1, r.3
+            );
+        }
     }
 }
