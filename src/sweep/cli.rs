@@ -349,19 +349,27 @@ fn run_sweep(a: RunArgs, threads: Option<usize>, quiet: bool) -> Result<ExitCode
                     ExitCode::SUCCESS
                 });
             }
-            // The collect job has written the table; report from the folders.
+            // The collect job has written the table; report from the folders. Collect here
+            // when it did not, or when runs lost their process (their table row changed).
+            let csv = root.join("results.csv");
+            if r.lost_runs > 0 || !csv.exists() {
+                if r.lost_runs > 0 {
+                    eprintln!(
+                        "tread: {} run(s) were still marked running after their jobs ended: recorded as killed",
+                        r.lost_runs
+                    );
+                } else {
+                    eprintln!(
+                        "tread: warning: the collect job wrote no table (see {}); collecting here",
+                        root.join("slurm").join("logs").display()
+                    );
+                }
+                let t = collect_and_report(&s, &root)?;
+                return Ok(final_code(&t));
+            }
             let t = collect::gather(&s, &root);
             print!("{}", render_status(&s, &t));
-            let csv = root.join("results.csv");
-            if csv.exists() {
-                println!("table: {}", csv.display());
-            } else {
-                eprintln!(
-                    "tread: warning: the collect job wrote no table (see {}); collecting here",
-                    root.join("slurm").join("logs").display()
-                );
-                collect_and_report(&s, &root)?;
-            }
+            println!("table: {}", csv.display());
             Ok(final_code(&t))
         }
     }

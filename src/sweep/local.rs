@@ -193,7 +193,7 @@ pub fn run_local(spec: &Spec, root: &Path, opts: &LocalOptions) -> Result<LocalR
                 match status::read(&run_dir(spec, root, i)) {
                     Ok(Some(s)) if s.state == State::Done => {}
                     Ok(Some(s)) if s.state == State::Killed && stopping => {}
-                    Ok(Some(s)) => {
+                    Ok(Some(s)) if s.state.is_final() => {
                         failed += 1;
                         let err = s.error.unwrap_or_default();
                         let first = err.lines().next().unwrap_or("").to_string();
@@ -201,13 +201,15 @@ pub fn run_local(spec: &Spec, root: &Path, opts: &LocalOptions) -> Result<LocalR
                             eprintln!("tread: run {} {}: {first}", spec.run_name(i), s.state)
                         });
                     }
-                    Ok(None) | Err(_) => {
+                    // No final state: run-one stopped before running (e.g. the run is being
+                    // run elsewhere); its own message says why.
+                    _ => {
                         failed += 1;
                         let log = run_dir(spec, root, i).join("run-one.log");
                         let msg = std::fs::read_to_string(&log).unwrap_or_default();
                         pb.suspend(|| {
                             eprintln!(
-                                "tread: run {}: no status recorded: {}",
+                                "tread: run {}: not run: {}",
                                 spec.run_name(i),
                                 msg.trim()
                             )

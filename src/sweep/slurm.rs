@@ -334,6 +334,8 @@ pub struct SlurmReport {
     pub submitted_runs: usize,
     /// Polling stopped by Ctrl-C (the jobs keep running).
     pub detached: bool,
+    /// Runs found `running` after the jobs ended, recorded as killed.
+    pub lost_runs: usize,
     pub wall_time_s: f64,
 }
 
@@ -411,6 +413,30 @@ fn ended_runs(spec: &Spec, root: &Path) -> (usize, usize) {
         }
     }
     (ended, failed)
+}
+
+/// After the jobs have left the queue: a run still `running` lost its process without
+/// recording an end (SIGKILL after the time limit's grace, a node failure); record it as killed.
+/// Returns how many were marked.
+pub fn mark_lost_runs(spec: &Spec, root: &Path) -> usize {
+    let mut n = 0;
+    for i in 0..spec.n_runs() {
+        let dir = super::run_one::run_dir(spec, root, i);
+        if let Ok(Some(mut s)) = status::read(&dir) {
+            if s.state == State::Running {
+                s.state = State::Killed;
+                s.error = Some(
+                    "its Slurm job ended without the run recording an end (killed with SIGKILL, e.g. after the time limit's grace, or a node failure; see slurm/logs/)"
+                        .into(),
+                );
+                s.finished_at.get_or_insert_with(status::now);
+                if status::write(&dir, &s).is_ok() {
+                    n += 1;
+                }
+            }
+        }
+    }
+    n
 }
 
 /// Write the scripts and (unless dry run) submit and poll.
@@ -575,6 +601,9 @@ pub fn run_slurm(spec: &Spec, root: &Path, opts: &SlurmOptions) -> Result<SlurmR
         }
     }
     pb.finish_and_clear();
+    if !report.detached {
+        report.lost_runs = mark_lost_runs(spec, root);
+    }
     report.wall_time_s = t0.elapsed().as_secs_f64();
     Ok(report)
 }

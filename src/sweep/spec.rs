@@ -209,12 +209,11 @@ fn tidy(x: f64) -> f64 {
     format!("{x:.14e}").parse().unwrap_or(x)
 }
 
-struct Walker<'a> {
+struct Walker {
     errors: Vec<String>,
-    _src: &'a str,
 }
 
-impl Walker<'_> {
+impl Walker {
     fn err(&mut self, key: &str, msg: impl std::fmt::Display) {
         self.errors.push(format!("key `{key}`: {msg}"));
     }
@@ -541,10 +540,7 @@ impl Spec {
             source: source.clone(),
             errors: vec![format!("TOML syntax: {}", e.to_string().trim_end())],
         })?;
-        let mut w = Walker {
-            errors: Vec::new(),
-            _src: text,
-        };
+        let mut w = Walker { errors: Vec::new() };
         w.unknown_keys(
             &doc,
             "",
