@@ -67,6 +67,11 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Parameter sweeps: many runs of one scene (plan, run on a local pool or Slurm, collect).
+    Sweep {
+        #[command(subcommand)]
+        command: tread::sweep::cli::SweepCommand,
+    },
     /// Open a log (.rrd or .mcap) in the Rerun viewer, or convert an .mcap to .rrd (--to).
     Replay {
         /// The log: run.rrd or run.mcap from an output directory.
@@ -215,6 +220,9 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Some(Command::Sweep { command }) => {
+            tread::sweep::cli::main(command, cli.threads, cli.quiet)
+        }
         Some(Command::Replay { log, to }) => match tread::io::replay::replay(&log, to.as_deref()) {
             Ok(msg) => {
                 println!("{msg}");
