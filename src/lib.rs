@@ -11,6 +11,7 @@
 //! parallel assembler, [`physics`] element kernels, [`solver`] Newton, load stepping and sparse
 //! direct solvers, [`driver`] analyses, [`io`] scenes and outputs, [`app`] the `tread` program.
 
+pub mod adapt;
 pub mod app;
 pub mod assembly;
 pub mod contact;
