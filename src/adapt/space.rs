@@ -102,16 +102,18 @@ pub enum SpaceError {
     MixedLagrange(usize, usize),
     #[error(transparent)]
     Constraint(#[from] ConstraintError),
+    #[error("linear solve failed: {0}")]
+    Solve(String),
 }
 
 impl Space {
     /// Build the space on the leaves of `tree` (degrees from the cells), with Dirichlet data
-    /// `g(x, comp)` on the whole boundary.
+    /// `g(x, comp)` on the whole boundary, or none (`None`: every boundary dof free).
     pub fn new(
         tree: &Quadtree,
         basis: Basis1d,
         n_comp: usize,
-        g: &dyn Fn([f64; 2], usize) -> f64,
+        g: Option<&dyn Fn([f64; 2], usize) -> f64>,
     ) -> Result<Self, SpaceError> {
         let leaves = tree.leaves();
         let degree: Vec<usize> = leaves
@@ -265,6 +267,7 @@ impl Space {
         let to_x = |i: i64, j: i64| [tree.to_x(i, 0), tree.to_x(j, 1)];
         let (gq, gw) = gauss_legendre(12);
         for (k, &c) in leaves.iter().enumerate() {
+            let Some(g) = g else { break };
             let cell = &tree.cells[c as usize];
             let s = size_of_level(cell.level);
             let p = degree[k];
