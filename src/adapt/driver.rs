@@ -13,7 +13,9 @@
 //!
 //! Every step is timed separately; the exact error is evaluated outside the timed steps.
 
-use super::estimate::{Context, Equilibrated, Estimate, Estimator, ExplicitResidual, Interpolation, Recovery};
+use super::estimate::{
+    Context, Equilibrated, Estimate, Estimator, ExplicitResidual, Interpolation, Recovery,
+};
 use super::poisson::{assemble, energy_error_sq, solve_cg, solve_direct, Exact};
 use super::quadtree::Quadtree;
 use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
@@ -36,7 +38,9 @@ pub fn mark(est: &Estimate, marking: Marking) -> Vec<usize> {
     match marking {
         Marking::Maximum(theta) => {
             let m = eta.iter().copied().fold(0.0, f64::max);
-            (0..eta.len()).filter(|&k| eta[k] >= theta * m && eta[k] > 0.0).collect()
+            (0..eta.len())
+                .filter(|&k| eta[k] >= theta * m && eta[k] > 0.0)
+                .collect()
         }
         Marking::Dorfler(theta) => {
             let mut idx: Vec<usize> = (0..eta.len()).collect();
@@ -194,7 +198,9 @@ pub fn transfer(
                     v[(i, mm)] = b[mm];
                 }
             }
-            let vi = v.try_inverse().unwrap_or_else(|| DMatrix::zeros(p + 1, p + 1));
+            let vi = v
+                .try_inverse()
+                .unwrap_or_else(|| DMatrix::zeros(p + 1, p + 1));
             (t, vi)
         })
         .collect();
@@ -345,7 +351,10 @@ pub fn run(
         }
         let t_solve = t0.elapsed().as_secs_f64();
         let te = Instant::now();
-        let error = energy_error_sq(&space, &tree, &x, problem).iter().sum::<f64>().sqrt();
+        let error = energy_error_sq(&space, &tree, &x, problem)
+            .iter()
+            .sum::<f64>()
+            .sqrt();
         t_excluded += te.elapsed().as_secs_f64();
         let ctx = Context {
             tree: &tree,
@@ -398,7 +407,12 @@ pub fn run(
             step,
             n_eq: space.n_eq(),
             n_cells: space.leaves.len(),
-            max_level: space.leaves.iter().map(|&c| tree.cells[c as usize].level).max().unwrap_or(0),
+            max_level: space
+                .leaves
+                .iter()
+                .map(|&c| tree.cells[c as usize].level)
+                .max()
+                .unwrap_or(0),
             max_degree: space.degree.iter().copied().max().unwrap_or(1),
             error,
             rel_error,
@@ -420,7 +434,15 @@ pub fn run(
         // 4. Refine.
         let t0 = Instant::now();
         let old_tree = tree.clone();
-        refine(&mut tree, &space, &x, &marked, opts.strategy, opts.max_degree, opts.hp_decay);
+        refine(
+            &mut tree,
+            &space,
+            &x,
+            &marked,
+            opts.strategy,
+            opts.max_degree,
+            opts.hp_decay,
+        );
         let new_space = Space::new(&tree, opts.basis, 1, Some(&g))?;
         rec.t_refine = t0.elapsed().as_secs_f64();
         // 5. Transfer.

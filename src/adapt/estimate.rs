@@ -155,7 +155,9 @@ impl Estimator for ExplicitResidual {
             for (i, &xi) in gx.iter().enumerate() {
                 for (j, &eta) in gx.iter().enumerate() {
                     let nl = shape_second(space.basis, p, h, xi, eta, &mut d2);
-                    let lap: f64 = (0..nl).map(|a| (d2[a][0] + d2[a][2]) * ctx.x[dofs[a] as usize]).sum();
+                    let lap: f64 = (0..nl)
+                        .map(|a| (d2[a][0] + d2[a][2]) * ctx.x[dofs[a] as usize])
+                        .sum();
                     let r = (ctx.f)(tree.map_point(c, xi, eta)) + lap;
                     r2 += gw[i] * gw[j] * 0.25 * h * h * r * r;
                 }
@@ -421,13 +423,20 @@ impl Estimator for Equilibrated {
             })
             .collect();
         // Local Neumann problems in Q_{p+2}, vertex function 0 removed (gauge).
-        let mut mats: Vec<Option<(nalgebra::Cholesky<f64, nalgebra::Dyn>, DMatrix<f64>, DMatrix<f64>)>> =
-            (0..=pmax).map(|_| None).collect();
+        let mut mats: Vec<
+            Option<(
+                nalgebra::Cholesky<f64, nalgebra::Dyn>,
+                DMatrix<f64>,
+                DMatrix<f64>,
+            )>,
+        > = (0..=pmax).map(|_| None).collect();
         for p in 1..=pmax {
             if space.degree.contains(&p) {
                 let q = (p + 2).min(crate::element::hierarchical::MAX_DEGREE);
                 let (kqq, kqp) = local_matrices(space.basis, p, q);
-                let red = kqq.view((1, 1), (kqq.nrows() - 1, kqq.ncols() - 1)).into_owned();
+                let red = kqq
+                    .view((1, 1), (kqq.nrows() - 1, kqq.ncols() - 1))
+                    .into_owned();
                 if let Some(ch) = red.clone().cholesky() {
                     mats[p] = Some((ch, kqq, kqp));
                 }
@@ -462,7 +471,9 @@ impl Estimator for Equilibrated {
         let mut sq = vec![0.0; nc];
         for k in 0..nc {
             let p = space.degree[k];
-            let Some((ch, kqq, kqp)) = &mats[p] else { continue };
+            let Some((ch, kqq, kqp)) = &mats[p] else {
+                continue;
+            };
             let c = space.leaves[k];
             let h = tree.h(c);
             let q = qdeg(p);
@@ -473,7 +484,8 @@ impl Estimator for Equilibrated {
                 let (gx, gw) = gauss_legendre(q + 1);
                 for (i, &xi) in gx.iter().enumerate() {
                     for (j, &eta) in gx.iter().enumerate() {
-                        let nl = shape_values(Basis1d::Hierarchical, q, h, xi, eta, &mut n, &mut dn);
+                        let nl =
+                            shape_values(Basis1d::Hierarchical, q, h, xi, eta, &mut n, &mut dn);
                         let fx = (ctx.f)(tree.map_point(c, xi, eta));
                         let w = gw[i] * gw[j] * 0.25 * h * h;
                         for a in 0..nl {
@@ -494,9 +506,16 @@ impl Estimator for Equilibrated {
 
 /// f vanishes at the cell centre and corners (cheap test to skip the load integral).
 fn is_zero_source(ctx: &Context, tree: &Quadtree, c: u32, _q: usize) -> bool {
-    [(0.0, 0.0), (-1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (0.3, -0.7)]
-        .iter()
-        .all(|&(a, b)| (ctx.f)(tree.map_point(c, a, b)) == 0.0)
+    [
+        (0.0, 0.0),
+        (-1.0, -1.0),
+        (1.0, 1.0),
+        (-1.0, 1.0),
+        (1.0, -1.0),
+        (0.3, -0.7),
+    ]
+    .iter()
+    .all(|&(a, b)| (ctx.f)(tree.map_point(c, a, b)) == 0.0)
 }
 
 /// The recovered gradient: a continuous Lagrange field of degree min(p, 2) per component.
@@ -522,13 +541,17 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
         let cell = &tree.cells[c as usize];
         let s = super::quadtree::size_of_level(cell.level);
         for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            vpatch.entry((cell.ix + i * s, cell.iy + j * s)).or_default().push(k);
+            vpatch
+                .entry((cell.ix + i * s, cell.iy + j * s))
+                .or_default()
+                .push(k);
         }
     }
     // Hanging vertices are not vertices of the coarse cell: add coarse cells touching them.
     let (gx, _) = gauss_legendre(p);
     let ncoef = if p == 1 { 3 } else { 6 };
-    let mono = |d: [f64; 2]| -> [f64; 6] { [1.0, d[0], d[1], d[0] * d[0], d[0] * d[1], d[1] * d[1]] };
+    let mono =
+        |d: [f64; 2]| -> [f64; 6] { [1.0, d[0], d[1], d[0] * d[0], d[0] * d[1], d[1] * d[1]] };
     // Patch polynomial (per component) of every vertex.
     let mut poly: HashMap<(i64, i64), ([f64; 6], [f64; 6], f64)> = HashMap::new();
     let mut samples: Vec<([f64; 2], [f64; 2])> = Vec::new();
@@ -545,10 +568,60 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
         }
         set.sort_unstable();
         set.dedup();
+        // Grow the patch (by its neighbours across sides) until the least-squares fit is
+        // unique: enough samples, not all on too few lines.
         let mut grow = 0;
-        loop {
-            if set.len() * gx.len() * gx.len() > ncoef || grow >= 2 {
-                break;
+        let (px, py, hs) = loop {
+            samples.clear();
+            let mut hs: f64 = 0.0;
+            for &k in &set {
+                let c = space.leaves[k];
+                hs = hs.max(tree.h(c));
+                for &a in &gx {
+                    for &b in &gx {
+                        let (_, g) = ctx.space.eval(tree, ctx.x, k, 0, a, b);
+                        samples.push((tree.map_point(c, a, b), g));
+                    }
+                }
+            }
+            let m = samples.len();
+            let mut fit = None;
+            if m >= ncoef {
+                let mut a = DMatrix::<f64>::zeros(m, ncoef);
+                let mut bxy = DMatrix::<f64>::zeros(m, 2);
+                for (i, (x, g)) in samples.iter().enumerate() {
+                    let mv = mono([(x[0] - z[0]) / hs, (x[1] - z[1]) / hs]);
+                    for j in 0..ncoef {
+                        a[(i, j)] = mv[j];
+                    }
+                    bxy[(i, 0)] = g[0];
+                    bxy[(i, 1)] = g[1];
+                }
+                let svd = a.svd(true, true);
+                let smax = svd.singular_values.max();
+                let smin = svd.singular_values.min();
+                if smin > 1e-8 * smax {
+                    if let Ok(cxy) = svd.solve(&bxy, 1e-12 * smax) {
+                        let mut px = [0.0; 6];
+                        let mut py = [0.0; 6];
+                        for j in 0..ncoef {
+                            px[j] = cxy[(j, 0)];
+                            py[j] = cxy[(j, 1)];
+                        }
+                        fit = Some((px, py, hs));
+                    }
+                }
+            }
+            if let Some(f) = fit {
+                break f;
+            }
+            if grow >= 4 {
+                // Degenerate patch: constant fit.
+                let mut px = [0.0; 6];
+                let mut py = [0.0; 6];
+                px[0] = samples.iter().map(|s| s.1[0]).sum::<f64>() / m.max(1) as f64;
+                py[0] = samples.iter().map(|s| s.1[1]).sum::<f64>() / m.max(1) as f64;
+                break (px, py, hs.max(1e-300));
             }
             let mut more = set.clone();
             for &k in &set {
@@ -566,51 +639,7 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
             more.dedup();
             set = more;
             grow += 1;
-        }
-        samples.clear();
-        let mut hs: f64 = 0.0;
-        for &k in &set {
-            let c = space.leaves[k];
-            hs = hs.max(tree.h(c));
-            for &a in &gx {
-                for &b in &gx {
-                    let (_, g) = ctx.space.eval(tree, ctx.x, k, 0, a, b);
-                    samples.push((tree.map_point(c, a, b), g));
-                }
-            }
-        }
-        let m = samples.len();
-        let mut a = DMatrix::<f64>::zeros(m, ncoef);
-        let mut bx = DVector::<f64>::zeros(m);
-        let mut by = DVector::<f64>::zeros(m);
-        for (i, (x, g)) in samples.iter().enumerate() {
-            let mv = mono([(x[0] - z[0]) / hs, (x[1] - z[1]) / hs]);
-            for j in 0..ncoef {
-                a[(i, j)] = mv[j];
-            }
-            bx[i] = g[0];
-            by[i] = g[1];
-        }
-        let ata = a.transpose() * &a;
-        let (cx, cy) = match ata.clone().cholesky() {
-            Some(ch) => (ch.solve(&(a.transpose() * bx)), ch.solve(&(a.transpose() * by))),
-            None => {
-                // Degenerate patch: constant fit.
-                let mx = samples.iter().map(|s| s.1[0]).sum::<f64>() / m as f64;
-                let my = samples.iter().map(|s| s.1[1]).sum::<f64>() / m as f64;
-                let mut cx = DVector::zeros(ncoef);
-                let mut cy = DVector::zeros(ncoef);
-                cx[0] = mx;
-                cy[0] = my;
-                (cx, cy)
-            }
         };
-        let mut px = [0.0; 6];
-        let mut py = [0.0; 6];
-        for j in 0..ncoef {
-            px[j] = cx[j];
-            py[j] = cy[j];
-        }
         poly.insert((vi, vj), (px, py, hs));
     }
     let eval_poly = |key: (i64, i64), x: [f64; 2]| -> [f64; 2] {
@@ -651,7 +680,8 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
                     for (vi, vj) in verts {
                         let on = (i >= 2 || i == vi) && (j >= 2 || j == vj);
                         if on {
-                            let g = eval_poly((cell.ix + vi as i64 * s, cell.iy + vj as i64 * s), x);
+                            let g =
+                                eval_poly((cell.ix + vi as i64 * s, cell.iy + vj as i64 * s), x);
                             acc[e][0] += g[0];
                             acc[e][1] += g[1];
                             acc[e][2] += 1.0;
@@ -699,7 +729,12 @@ impl Estimator for Recovery {
                         let (_, gh) = space.eval(tree, ctx.x, k, 0, xi, eta);
                         let rx = rec.space.eval(tree, &rec.g[0], k, 0, xi, eta).0;
                         let ry = rec.space.eval(tree, &rec.g[1], k, 0, xi, eta).0;
-                        e += gw[i] * gw[j] * 0.25 * h * h * ((rx - gh[0]).powi(2) + (ry - gh[1]).powi(2));
+                        e += gw[i]
+                            * gw[j]
+                            * 0.25
+                            * h
+                            * h
+                            * ((rx - gh[0]).powi(2) + (ry - gh[1]).powi(2));
                     }
                 }
                 e
@@ -761,14 +796,19 @@ impl Estimator for Interpolation {
                     for (j, &eta) in gx.iter().enumerate() {
                         // ∂_x^p G_x and ∂_y^p G_y.
                         let (ax, ay) = if p == 1 {
-                            let nl = shape_values(Basis1d::Lagrange, rp, h, xi, eta, &mut n, &mut dn);
-                            let ax: f64 = (0..nl).map(|a| dn[a][0] * rec.g[0][dx[a] as usize]).sum();
-                            let ay: f64 = (0..nl).map(|a| dn[a][1] * rec.g[1][dx[a] as usize]).sum();
+                            let nl =
+                                shape_values(Basis1d::Lagrange, rp, h, xi, eta, &mut n, &mut dn);
+                            let ax: f64 =
+                                (0..nl).map(|a| dn[a][0] * rec.g[0][dx[a] as usize]).sum();
+                            let ay: f64 =
+                                (0..nl).map(|a| dn[a][1] * rec.g[1][dx[a] as usize]).sum();
                             (ax, ay)
                         } else {
                             let nl = shape_second(Basis1d::Lagrange, rp, h, xi, eta, &mut d2);
-                            let ax: f64 = (0..nl).map(|a| d2[a][0] * rec.g[0][dx[a] as usize]).sum();
-                            let ay: f64 = (0..nl).map(|a| d2[a][2] * rec.g[1][dx[a] as usize]).sum();
+                            let ax: f64 =
+                                (0..nl).map(|a| d2[a][0] * rec.g[0][dx[a] as usize]).sum();
+                            let ay: f64 =
+                                (0..nl).map(|a| d2[a][2] * rec.g[1][dx[a] as usize]).sum();
                             (ax, ay)
                         };
                         s += gw[i] * gw[j] * 0.25 * h * h * (ax * ax + ay * ay);

@@ -251,7 +251,7 @@ pub fn energy_error_sq(space: &Space, tree: &Quadtree, x: &[f64], problem: &dyn 
                 let s = sing.unwrap_or([0.0; 2]);
                 let sref = [2.0 * (s[0] - x0) / h - 1.0, 2.0 * (s[1] - y0) / h - 1.0];
                 let mut out = Vec::new();
-                for _ in 0..12 {
+                for _ in 0..30 {
                     let mut next = Vec::new();
                     for (cx, cy, hw) in subs.drain(..) {
                         let near = (sref[0] - cx).abs() <= hw + 1e-12

@@ -397,8 +397,8 @@ impl Space {
     }
 }
 
-/// Largest number of scalar functions of one cell (degree 8).
-pub const MAX_LOCAL_SCALAR: usize = 81;
+/// Largest number of scalar functions of one cell (degree 10).
+pub const MAX_LOCAL_SCALAR: usize = 121;
 
 /// Values and physical gradients of the tensor basis of degree p at (ξ, η) on a square of side
 /// h (∂x = (2/h) ∂ξ).

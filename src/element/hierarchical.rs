@@ -16,7 +16,7 @@
 //!   (−1)^k φ_k(s).
 
 /// Largest polynomial degree of a hierarchical cell (local error problems use up to this too).
-pub const MAX_DEGREE: usize = 8;
+pub const MAX_DEGREE: usize = 10;
 /// Largest number of 1D functions.
 pub const MAX_1D: usize = MAX_DEGREE + 1;
 
