@@ -12,6 +12,7 @@
 //! direct solvers, [`driver`] analyses, [`io`] scenes and outputs, [`app`] the `tread` program,
 //! [`sweep`] parameter sweeps over many runs (local process pool or Slurm job array).
 
+pub mod adapt;
 pub mod app;
 pub mod assembly;
 pub mod contact;

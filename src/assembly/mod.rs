@@ -20,6 +20,7 @@
 //!   [`crate::solver::newton`]): it is large wherever forces are transmitted, even where they
 //!   balance, and it follows the current state (no memory of an earlier, larger residual).
 
+pub mod constraints;
 pub mod qp;
 
 use crate::mesh::Mesh;

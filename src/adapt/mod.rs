@@ -1,0 +1,12 @@
+//! Adaptive finite elements on quadtree meshes: the space with hanging-node and
+//! degree-transition constraints, the Poisson model problem, a posteriori error estimators,
+//! marking, refinement and solution transfer.
+//!
+//! The adapt loop is five named steps (see [`driver`]): **solve → estimate → mark → refine →
+//! transfer**.
+
+pub mod driver;
+pub mod estimate;
+pub mod poisson;
+pub mod quadtree;
+pub mod space;
