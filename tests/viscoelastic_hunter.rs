@@ -22,7 +22,11 @@ fn gauss_legendre_is_exact_for_polynomials() {
     let (x, w) = gauss_legendre(8);
     for k in 0..16 {
         let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k)).sum();
-        let exact = if k % 2 == 0 { 2.0 / (k + 1) as f64 } else { 0.0 };
+        let exact = if k % 2 == 0 {
+            2.0 / (k + 1) as f64
+        } else {
+            0.0
+        };
         assert!((q - exact).abs() < 1e-14, "x^{k}: {q} vs {exact}");
     }
 }
@@ -36,7 +40,11 @@ fn elastic_limits_are_hertz() {
     for (v, j) in [(0.0, pb.j_inf()), (f64::INFINITY, pb.j0())] {
         let s = pb.solve(v, 12).expect("solves");
         let (a, p0) = pb.hertz(j);
-        assert!((s.half_width - a).abs() < 1e-10 * a, "V = {v}: {} vs {a}", s.half_width);
+        assert!(
+            (s.half_width - a).abs() < 1e-10 * a,
+            "V = {v}: {} vs {a}",
+            s.half_width
+        );
         assert!(s.centre.abs() < 1e-12 * a && s.resistance.abs() < 1e-12);
         for t in [-0.9, -0.3, 0.0, 0.5, 0.95] {
             let p = s.pressure(t * a);
@@ -70,13 +78,18 @@ fn resistance_curve_converges_and_peaks() {
     let (a0, _) = pb.hertz(pb.j_inf());
     println!("  V τc/a∞    μ_r = M/(P R)   x_up/a∞    x_down/a∞   c/a∞");
     let mut curve = Vec::new();
-    for lam in [0.03, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 30.0] {
+    for lam in [
+        0.03, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 30.0,
+    ] {
         let v = lam * a0 / pb.tau_c();
         let s = pb.solve(v, 40).expect("solves");
         let s12 = pb.solve(v, 24).expect("solves");
         let d_mu = (s.resistance - s12.resistance).abs() / s.resistance.abs();
         let d_l = (s.half_width - s12.half_width).abs() / s.half_width;
-        assert!(d_mu < 1e-4 && d_l < 1e-6, "λ = {lam}: Δμ {d_mu:.1e}, ΔL {d_l:.1e}");
+        assert!(
+            d_mu < 1e-4 && d_l < 1e-6,
+            "λ = {lam}: Δμ {d_mu:.1e}, ΔL {d_l:.1e}"
+        );
         // Load: ∫ p dx by the trapezoidal rule on a fine grid.
         let (x0, x1) = s.edges();
         let n = 20000;
@@ -93,7 +106,11 @@ fn resistance_curve_converges_and_peaks() {
         }
         assert!((load - pb.load).abs() < 1e-4 * pb.load, "{load}");
         let mu_q = moment / (pb.load * pb.radius);
-        assert!((mu_q - s.resistance).abs() < 1e-4 * s.resistance.abs(), "{mu_q} vs {}", s.resistance);
+        assert!(
+            (mu_q - s.resistance).abs() < 1e-4 * s.resistance.abs(),
+            "{mu_q} vs {}",
+            s.resistance
+        );
         // Upstream shift (material enters at x < 0) and resistance opposing the motion.
         assert!(s.centre < 0.0 && s.resistance < 0.0);
         println!(
@@ -105,10 +122,14 @@ fn resistance_curve_converges_and_peaks() {
         );
         curve.push((lam, -s.resistance));
     }
-    let (i_max, _) = curve
-        .iter()
-        .enumerate()
-        .fold((0, 0.0), |(im, m), (i, c)| if c.1 > m { (i, c.1) } else { (im, m) });
-    assert!(i_max > 0 && i_max + 1 < curve.len(), "peak not inside the range: {curve:?}");
+    let (i_max, _) =
+        curve.iter().enumerate().fold(
+            (0, 0.0),
+            |(im, m), (i, c)| if c.1 > m { (i, c.1) } else { (im, m) },
+        );
+    assert!(
+        i_max > 0 && i_max + 1 < curve.len(),
+        "peak not inside the range: {curve:?}"
+    );
     assert!(curve[0].1 < 0.5 * curve[i_max].1 && curve[curve.len() - 1].1 < 0.5 * curve[i_max].1);
 }

@@ -9,7 +9,7 @@ use fixtures::*;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
 use tread::driver::SolidSystem;
-use tread::material::{Viscoelastic, ViscoModel};
+use tread::material::{ViscoModel, Viscoelastic};
 use tread::physics::SolidModel;
 use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};
 
@@ -50,11 +50,27 @@ fn time_step_tangent_with_history_matches_finite_differences() {
     for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
         let m = visco_annulus(2, 12, model);
         let normal = NormalCompliance::new(2.0e4, 1.0, 5.0, 0.0);
-        let cm = ContactModel::new(&m.mesh, 1.95, 3.0, normal, Friction::None, FacetRule::Lobatto(4), None);
+        let cm = ContactModel::new(
+            &m.mesh,
+            1.95,
+            3.0,
+            normal,
+            Friction::None,
+            FacetRule::Lobatto(4),
+            None,
+        );
         let sys = SolidSystem::with_contact(m, cm);
         let mut kin = spin_kinematics(10.0, 0.0);
-        kin.disp = Some(Ramp { target: 0.05, time: 0.0 });
-        let mut tr = Transient::new(sys, Scheme::GeneralizedAlpha(GenAlpha::new(0.7)), kin, false);
+        kin.disp = Some(Ramp {
+            target: 0.05,
+            time: 0.0,
+        });
+        let mut tr = Transient::new(
+            sys,
+            Scheme::GeneralizedAlpha(GenAlpha::new(0.7)),
+            kin,
+            false,
+        );
         // A committed history with stress in it: commit a smooth deformation over a step.
         let nn = tr.sys.model.mesh.n_nodes();
         let mut x0 = tr.sys.x.clone();
@@ -103,7 +119,10 @@ fn time_step_tangent_with_history_matches_finite_differences() {
         }
         // Assembly only reads the history.
         assert_eq!(saved, tr.sys.model.history.data);
-        eprintln!("{model:?}: time-step tangent with history: max|K − K_fd|/max|K| = {:.2e}", err / kmax);
+        eprintln!(
+            "{model:?}: time-step tangent with history: max|K − K_fd|/max|K| = {:.2e}",
+            err / kmax
+        );
         assert!(err / kmax < 1e-6, "{model:?}: {:.3e}", err / kmax);
     }
 }
@@ -123,7 +142,12 @@ fn history_is_committed_only_on_convergence() {
     let mut failing = Newton::new(
         &tr.sys,
         LinearKind::Cholesky,
-        NewtonOptions { tol: 1e-300, max_iterations: 1, line_search: false, ..Default::default() },
+        NewtonOptions {
+            tol: 1e-300,
+            max_iterations: 1,
+            line_search: false,
+            ..Default::default()
+        },
     )
     .unwrap();
     let mut good = Newton::new(&tr.sys, LinearKind::Cholesky, newton_opts()).unwrap();
@@ -131,7 +155,10 @@ fn history_is_committed_only_on_convergence() {
         tr.step(&mut good, 1e-3).unwrap();
     }
     let before = tr.sys.model.history.data.clone();
-    assert!(before.iter().any(|v| v.abs() > 1e-6), "no history after spin-up steps");
+    assert!(
+        before.iter().any(|v| v.abs() > 1e-6),
+        "no history after spin-up steps"
+    );
     let t = tr.t;
     assert!(tr.step(&mut failing, 1e-3).is_err());
     assert_eq!(tr.sys.model.history.data, before);
@@ -160,8 +187,14 @@ fn spin_up(scheme: Scheme, model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
         spin_kinematics(20.0, 0.03),
         matches!(scheme, Scheme::CentralDifference),
     );
-    integrate(&mut tr, &opts(dt, t_end), newton_opts(), LinearKind::Cholesky, |_, _| {})
-        .unwrap_or_else(|(e, _)| panic!("{e}"));
+    integrate(
+        &mut tr,
+        &opts(dt, t_end),
+        newton_opts(),
+        LinearKind::Cholesky,
+        |_, _| {},
+    )
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
     tr.un.clone()
 }
 
@@ -171,8 +204,16 @@ fn integrators_keep_their_order_with_history() {
     let mut table = Vec::new();
     for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
         for (name, scheme, dt0) in [
-            ("generalized-α ρ∞=1", Scheme::GeneralizedAlpha(GenAlpha::new(1.0)), 1e-3),
-            ("generalized-α ρ∞=0.8", Scheme::GeneralizedAlpha(GenAlpha::new(0.8)), 1e-3),
+            (
+                "generalized-α ρ∞=1",
+                Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+                1e-3,
+            ),
+            (
+                "generalized-α ρ∞=0.8",
+                Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+                1e-3,
+            ),
             ("central difference", Scheme::CentralDifference, 1e-4),
         ] {
             let reference = spin_up(scheme, model, dt0 / 32.0, t_end);
@@ -181,17 +222,27 @@ fn integrators_keep_their_order_with_history() {
                 .iter()
                 .map(|f| {
                     let u = spin_up(scheme, model, dt0 / f, t_end);
-                    u.iter().zip(&reference).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt()
+                    u.iter()
+                        .zip(&reference)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt()
                         / norm
                 })
                 .collect();
             let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
-            eprintln!("{model:?}, {name}: relative errors {:?}, observed orders {orders:.2?}", errs.iter().map(|e| format!("{e:.2e}")).collect::<Vec<_>>());
+            eprintln!(
+                "{model:?}, {name}: relative errors {:?}, observed orders {orders:.2?}",
+                errs.iter().map(|e| format!("{e:.2e}")).collect::<Vec<_>>()
+            );
             table.push((model, name, orders));
         }
     }
     for (model, name, orders) in table {
         let p = *orders.last().unwrap();
-        assert!((p - 2.0).abs() < 0.3, "{model:?}, {name}: observed order {p:.2}, expected 2");
+        assert!(
+            (p - 2.0).abs() < 0.3,
+            "{model:?}, {name}: observed order {p:.2}, expected 2"
+        );
     }
 }

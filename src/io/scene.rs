@@ -5258,6 +5258,11 @@ mesh.n_r = 4
                 c2: Some(1.0),
                 kappa: Some(1.0),
                 formulation: Some(Formulation::Exact),
+                viscoelastic: Some(ViscoelasticSpec {
+                    model: "multiplicative".into(),
+                    gamma: 2.0,
+                    prony: vec![[0.5, 0.1], [0.5, 1.0]],
+                }),
             },
         );
         check("analysis", &Analysis { mode: Mode::Static });
@@ -6070,5 +6075,75 @@ mesh.n_r = 4
             ..road
         };
         assert!((late.v0_at(0.25, &m) - 10.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn viscoelastic_subtable_is_parsed_and_checked() {
+        let base = r#"
+[scene]
+name = "v"
+[geometry]
+ri = 1.0
+ro = 2.0
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[material.viscoelastic]
+model = "convolution"
+gamma = 200.0
+prony = [[0.7, 0.01], [0.3, 1]]
+[analysis]
+mode = "transient"
+[motion]
+omega = 10.0
+[time]
+dt = 1e-3
+t_end = 0.1
+"#;
+        let s = Scene::from_toml_str(base, "v.toml", &[]).unwrap_or_else(|e| panic!("{e}"));
+        let ve = s.material.viscoelastic.clone().expect("parsed");
+        assert_eq!(ve.prony, vec![[0.7, 0.01], [0.3, 1.0]]);
+        let law = ve.build().expect("valid");
+        assert_eq!(law.model, crate::material::ViscoModel::Convolution);
+        assert_eq!(law.prony(), &[(0.7, 0.01), (0.3, 1.0)]);
+        // Every problem at once, each with its key and line.
+        let bad = base
+            .replace("model = \"convolution\"", "model = \"maxwell\"\ncolour = 1")
+            .replace("gamma = 200.0", "gamma = \"big\"")
+            .replace(
+                "prony = [[0.7, 0.01], [0.3, 1]]",
+                "prony = [[0.7], [0.3, 1]]",
+            );
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("invalid");
+        for key in [
+            "material.viscoelastic.model",
+            "material.viscoelastic.colour",
+            "material.viscoelastic.gamma",
+            "material.viscoelastic.prony",
+        ] {
+            assert!(e.has_key(key), "{key} not reported: {e}");
+        }
+        let text = e.to_string();
+        assert!(
+            text.contains("maxwell") && text.contains("\"multiplicative\""),
+            "{text}"
+        );
+        // Values checked by the law: a non-positive relaxation time, a negative gamma.
+        let bad = base.replace("[0.3, 1]]", "[0.3, 0.0]]");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("tau = 0");
+        let err = e
+            .find("material.viscoelastic.prony")
+            .unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("tau > 0"), "{}", err.message);
+        assert_eq!(err.line, Some(15));
+        let bad = base.replace("gamma = 200.0", "gamma = -1.0");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("gamma < 0");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
+        // Missing keys.
+        let bad = base.replace("gamma = 200.0\n", "");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("missing");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
     }
 }

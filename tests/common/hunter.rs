@@ -66,10 +66,7 @@ pub struct HunterSolution {
 impl HunterSolution {
     /// Upstream (x < 0, where material enters) and downstream contact edges.
     pub fn edges(&self) -> (f64, f64) {
-        (
-            self.centre - self.half_width,
-            self.centre + self.half_width,
-        )
+        (self.centre - self.half_width, self.centre + self.half_width)
     }
 
     /// Contact pressure at x.
@@ -128,7 +125,13 @@ pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// Composite Gauss–Legendre of `f` on [a, b] with `panels` panels of the given rule.
-fn composite(f: impl Fn(f64) -> f64, a: f64, b: f64, panels: usize, rule: &(Vec<f64>, Vec<f64>)) -> f64 {
+fn composite(
+    f: impl Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    panels: usize,
+    rule: &(Vec<f64>, Vec<f64>),
+) -> f64 {
     let hp = (b - a) / panels as f64;
     let mut s = 0.0;
     for p in 0..panels {
@@ -233,7 +236,8 @@ impl HunterProblem {
             if v > 0.0 && lambda.is_finite() {
                 Self::memory(t, lambda, n, &rule, &mut mem);
             } else {
-                mem.iter_mut().for_each(|x| *x = if v == 0.0 { 0.0 } else { 0.0 });
+                mem.iter_mut()
+                    .for_each(|x| *x = if v == 0.0 { 0.0 } else { 0.0 });
             }
             for k in 1..=n {
                 // (1/2) [J0 T_k + ΔJ M_k] a_k; at V = 0 the memory has fully acted: J∞ T_k.
