@@ -246,3 +246,46 @@ fn integrators_keep_their_order_with_history() {
         );
     }
 }
+
+/// The viscoelastic scene rolls to a steady state, the steady field is extracted, the summary
+/// says the history term is on, and the hysteresis shows: the hub needs a driving torque (the
+/// road is frictionless, so the torque is the moment of the contact pressure) and the contact
+/// patch shifts upstream (material enters it from x1 < 0).
+#[test]
+fn viscoelastic_scene_rolls_to_steady_state() {
+    let s = run_rolling(
+        &scene_text("scenarios/viscoelastic_rolling.toml"),
+        "viscoelastic_rolling",
+        &[],
+    );
+    assert_eq!(s["terms"]["history"], true, "{}", s["terms"]);
+    let r = &s["results"];
+    assert_eq!(r["steady"], true, "{r}");
+    let torque = r["hub_torque_passage_mean"].as_f64().unwrap();
+    let load = -r["hub_force_y_passage_mean"].as_f64().unwrap();
+    let (x0, x1) = (
+        r["contact_x_min"].as_f64().unwrap(),
+        r["contact_x_max"].as_f64().unwrap(),
+    );
+    let mu = torque / (load * 2.0);
+    eprintln!("viscoelastic rolling: T/(P Ro) = {mu:.4}, contact [{x0:.3}, {x1:.3}]");
+    assert!(mu > 0.005, "{mu}");
+    assert!(-x0 > x1 + 0.01, "contact not shifted upstream: [{x0}, {x1}]");
+}
+
+/// Modes and integrators without a history path refuse a viscoelastic material with a clear
+/// error instead of silently dropping the overstress.
+#[test]
+fn unsupported_modes_refuse_viscoelastic_materials() {
+    let text = scene_text("scenarios/viscoelastic_rolling.toml");
+    for (set, needle) in [
+        (vec!["time.integrator=bdf"], "time.integrator"),
+        (vec!["time.integrator=sdirk"], "time.integrator"),
+    ] {
+        let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        let scene = tread::io::Scene::from_toml_str(&text, "v", &set).unwrap();
+        let e = tread::app::build_model(&scene).err().expect("refused");
+        let msg = e.to_string();
+        assert!(msg.contains("material.viscoelastic") && msg.contains(needle), "{msg}");
+    }
+}
