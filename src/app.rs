@@ -251,12 +251,43 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
     // Isoparametric cells: nodes on the exact circles, rigid motions represented exactly
     // (objectivity; see `Mesh::make_isoparametric`).
     mesh.make_isoparametric();
-    Ok(SolidModel::new(
-        mesh,
-        material,
-        scene.material.rho,
-        pressure,
-    ))
+    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    if let Some(vs) = &scene.material.viscoelastic {
+        let ve = vs
+            .build()
+            .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
+        check_viscoelastic_mode(scene)?;
+        model.set_viscoelastic(ve);
+    }
+    Ok(model)
+}
+
+/// The modes and integrators that carry a viscoelastic history so far: the transient mode with
+/// generalized-α or central difference (history committed per accepted step). The ODE
+/// integrators (BDF, SDIRK) would need the internal variables in their state vector; the
+/// static, spinning and steady modes would need the relaxed limit or the streamline
+/// integration.
+fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
+    if scene.analysis.mode != Mode::Transient {
+        return Err(AppError::Unsupported(format!(
+            "material.viscoelastic: mode \"{}\" does not support viscoelastic materials yet \
+             (use mode = \"transient\")",
+            scene.analysis.mode
+        )));
+    }
+    if let Some(ts) = &scene.time {
+        if matches!(
+            ts.integrator,
+            crate::io::scene::IntegratorName::Bdf | crate::io::scene::IntegratorName::Sdirk
+        ) {
+            return Err(AppError::Unsupported(format!(
+                "material.viscoelastic: time.integrator = \"{}\" does not carry a \
+                 viscoelastic history; use \"generalized_alpha\" or \"central_difference\"",
+                ts.integrator
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Linear solver for a scene's system: Cholesky for symmetric positive problems, LU for the

@@ -26,7 +26,7 @@ pub mod qp;
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
-pub use qp::QpData;
+pub use qp::{QpData, QpHistory};
 
 /// Marker of a fixed (Dirichlet) dof in [`DofMap::eq`].
 pub const FIXED: u32 = u32::MAX;

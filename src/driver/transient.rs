@@ -778,7 +778,12 @@ impl Transient {
                     self.sys.x[d] = self.un[d] + dt * self.vn[d] + 0.5 * dt * dt * self.an[d];
                 }
                 self.prescribe(t1);
-                let rep = newton.solve(self)?;
+                // Viscoelastic history: the kernels evaluate the overstress over this step
+                // from the committed state; it is committed only once Newton has converged.
+                self.sys.model.history_dt = dt;
+                let rep = newton.solve(self);
+                self.sys.model.history_dt = 0.0;
+                let rep = rep?;
                 self.newmark(&ga);
                 // Local error relative to the deformation: the displacement from the rigidly
                 // rotated reference Q(φ_{n+1}) X (the step increment, used before, is dominated
@@ -809,6 +814,8 @@ impl Transient {
                 let nd = (2 * mesh.n_nodes()).max(1) as f64;
                 let floor = 1e-3 * self.wall;
                 let err = (num / nd).sqrt() / (den / nd).sqrt().max(floor);
+                let (dofs, x) = (&self.sys.dofs, &self.sys.x);
+                self.sys.model.commit_history(dofs, x, dt);
                 self.commit(t1);
                 Ok((err, rep.iterations))
             }
@@ -846,6 +853,8 @@ impl Transient {
                 }
                 self.v1.copy_from_slice(&self.vn);
                 self.a1.copy_from_slice(&self.an);
+                let (dofs, x) = (&self.sys.dofs, &self.sys.x);
+                self.sys.model.commit_history(dofs, x, dt);
                 let x = self.sys.x.clone();
                 self.un.copy_from_slice(&x);
                 self.t = t1;
@@ -1571,6 +1580,9 @@ impl Transient {
             h.frozen = true;
         }
         let mut res = Ok(());
+        // Steady spinning keeps every strain constant in time: a viscoelastic material is fully
+        // relaxed (an infinitely long step), and its history starts relaxed at that state.
+        self.sys.model.history_dt = f64::INFINITY;
         for s in 1..=steps {
             let omega2 = ca * s as f64 / steps as f64;
             let mut rs = RigidSpin { tr: self, omega2 };
@@ -1579,10 +1591,13 @@ impl Transient {
                 break;
             }
         }
+        self.sys.model.history_dt = 0.0;
         if let Some(h) = &mut self.hub_angle {
             h.frozen = false;
         }
         res?;
+        let (dofs, x) = (&self.sys.dofs, &self.sys.x);
+        self.sys.model.commit_history(dofs, x, f64::INFINITY);
         let n_u = self.sys.dofs.n_u;
         self.un.copy_from_slice(&self.sys.x);
         for d in (0..n_u).step_by(2) {

@@ -284,7 +284,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "normal_damping": damping,
             "strain_rate_damping": tr.sys.model.strain_rate_damping > 0.0,
             "inertia": true,
-            "history": false,
+            "history": tr.sys.model.viscoelastic.is_some(),
             "pressure": tr.sys.dofs.per_cell > 0,
             "contact_facets_per_iteration": tr.sys.mean_facets_per_assembly(),
         },

@@ -13,6 +13,9 @@
 //! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
 //! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
+//! [material.viscoelastic]  model = "convolution" | "multiplicative", gamma, prony = [[g, tau], ...]
+//!             (optional: a Prony-series overstress on the elastic law; `gamma` in stress
+//!             units, `g` dimensionless, `tau` in time units; see `material::viscoelastic`)
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
 //!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
@@ -479,6 +482,41 @@ pub struct MaterialSpec {
     /// Incompressibility formulation (mooney_rivlin_incompressible only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub formulation: Option<Formulation>,
+    /// `[material.viscoelastic]`: a viscoelastic overstress on the elastic law (any model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viscoelastic: Option<ViscoelasticSpec>,
+}
+
+/// `[material.viscoelastic]`: `S = ∂W/∂E + S_v` with the Prony kernel
+/// `k(s) = Σ g_i exp(−s/τ_i)`; see [`crate::material::viscoelastic`] for both models.
+/// Units: `gamma` is a stress (the scene's stress unit), `g` dimensionless, `tau` a time (the
+/// scene's time unit). At small strain the overstress adds the shear relaxation modulus
+/// `(gamma/2) k(t)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViscoelasticSpec {
+    /// `"convolution"` (the linear convolution on the Green strain rate) or `"multiplicative"`
+    /// (the thermodynamically consistent finite-strain model).
+    pub model: String,
+    /// Stress scale γ (stress units), >= 0.
+    pub gamma: f64,
+    /// Prony terms `[[g_i, tau_i], ...]` (g dimensionless >= 0, tau > 0 in time units), 1 to 8.
+    pub prony: Vec<[f64; 2]>,
+}
+
+impl ViscoelasticSpec {
+    /// The law, or the message explaining what is wrong.
+    pub fn build(&self) -> Result<crate::material::Viscoelastic, String> {
+        let model = crate::material::ViscoModel::from_name(&self.model).ok_or_else(|| {
+            format!(
+                "unknown model \"{}\"; expected one of {}",
+                self.model,
+                quoted_list(crate::material::ViscoModel::NAMES)
+            )
+        })?;
+        let prony: Vec<(f64, f64)> = self.prony.iter().map(|p| (p[0], p[1])).collect();
+        crate::material::Viscoelastic::new(model, self.gamma, &prony).map_err(|e| e.to_string())
+    }
 }
 
 /// Resolved material parameters, one variant per model.
@@ -1613,8 +1651,13 @@ enum Kind {
     Keyword(&'static [&'static str]),
     /// An array of keywords (no duplicates).
     KeywordList(&'static [&'static str]),
+    /// A sub-table with its own keys (`[material.viscoelastic]`).
+    Table(&'static [FieldSchema]),
+    /// An array of `[number, number]` pairs (Prony terms).
+    FloatPairs,
 }
 
+#[derive(Debug)]
 struct FieldSchema {
     key: &'static str,
     kind: Kind,
@@ -1642,6 +1685,13 @@ const fn opt(key: &'static str, kind: Kind) -> FieldSchema {
         required: false,
     }
 }
+
+/// Keys of `[material.viscoelastic]`.
+static VISCOELASTIC_FIELDS: &[FieldSchema] = &[
+    req("model", Kind::Keyword(crate::material::ViscoModel::NAMES)),
+    req("gamma", Kind::Float),
+    req("prony", Kind::FloatPairs),
+];
 
 static SCHEMA: &[SectionSchema] = &[
     SectionSchema {
@@ -1681,6 +1731,7 @@ static SCHEMA: &[SectionSchema] = &[
             opt("c2", Kind::Float),
             opt("kappa", Kind::Float),
             opt("formulation", Kind::Keyword(Formulation::NAMES)),
+            opt("viscoelastic", Kind::Table(VISCOELASTIC_FIELDS)),
         ],
     },
     SectionSchema {
@@ -1878,6 +1929,25 @@ fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
             }
         }
         (Kind::Bool, toml::Value::Boolean(_)) => true,
+        (Kind::Table(_), toml::Value::Table(_)) => true,
+        (Kind::FloatPairs, toml::Value::Array(items)) => {
+            for item in items {
+                let pair = item.as_array().filter(|a| a.len() == 2).and_then(|a| {
+                    let num = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
+                    Some((num(&a[0])?, num(&a[1])?))
+                });
+                match pair {
+                    Some((a, b)) if a.is_finite() && b.is_finite() => {}
+                    _ => {
+                        return Err(format!(
+                            "expected an array of [number, number] pairs, found an entry {}",
+                            describe_value(item)
+                        ))
+                    }
+                }
+            }
+            true
+        }
         (Kind::Str, toml::Value::String(_)) => true,
         (Kind::Keyword(names), toml::Value::String(s)) => {
             if names.contains(&s.as_str()) {
@@ -1921,6 +1991,8 @@ fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
             Kind::UInt => "a non-negative integer".to_string(),
             Kind::Bool => "a boolean (true or false)".to_string(),
             Kind::Str => "a string".to_string(),
+            Kind::Table(_) => "a table".to_string(),
+            Kind::FloatPairs => "an array of [number, number] pairs".to_string(),
             Kind::Keyword(names) => format!("a string, one of {}", quoted_list(names)),
             Kind::KeywordList(names) => {
                 format!("an array of strings from {}", quoted_list(names))
@@ -2083,11 +2155,46 @@ impl Ctx<'_> {
                         dotted,
                         format!("unknown key; keys of [{sec_name}] are {}", sec.key_list()),
                     ),
-                    Some(field) => match check_kind(field.kind, value) {
-                        Ok(()) => {
+                    Some(field) => match (check_kind(field.kind, value), field.kind, value) {
+                        (Ok(()), Kind::Table(sub), toml::Value::Table(t)) => {
+                            // A sub-table: its keys are checked like a section's; it is kept
+                            // only when all of them are valid.
+                            let before = self.issues.len();
+                            for (k, v) in t {
+                                match sub.iter().find(|f| f.key == k) {
+                                    None => self.push(
+                                        format!("{dotted}.{k}"),
+                                        format!(
+                                            "unknown key; keys of [{dotted}] are {}",
+                                            sub.iter()
+                                                .map(|f| f.key)
+                                                .collect::<Vec<_>>()
+                                                .join(", ")
+                                        ),
+                                    ),
+                                    Some(f) => {
+                                        if let Err(msg) = check_kind(f.kind, v) {
+                                            self.push(format!("{dotted}.{k}"), msg);
+                                        }
+                                    }
+                                }
+                            }
+                            for f in sub.iter().filter(|f| f.required) {
+                                if !t.contains_key(f.key) {
+                                    self.push(
+                                        format!("{dotted}.{}", f.key),
+                                        "required key is missing",
+                                    );
+                                }
+                            }
+                            if self.issues.len() == before {
+                                clean_table.insert(key.clone(), value.clone());
+                            }
+                        }
+                        (Ok(()), _, _) => {
                             clean_table.insert(key.clone(), value.clone());
                         }
-                        Err(msg) => self.push(dotted, msg),
+                        (Err(msg), _, _) => self.push(dotted, msg),
                     },
                 }
             }
@@ -2394,6 +2501,18 @@ fn validate_mesh(m: &MeshSpec, out: &mut Vec<Issue>) {
 }
 
 fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
+    if let Some(ve) = &m.viscoelastic {
+        if let Err(msg) = ve.build() {
+            let key = if crate::material::ViscoModel::from_name(&ve.model).is_none() {
+                "model"
+            } else if msg.starts_with("gamma") {
+                "gamma"
+            } else {
+                "prony"
+            };
+            out.push(issue(format!("material.viscoelastic.{key}"), msg));
+        }
+    }
     let model = m.model;
     if !positive(m.rho) {
         out.push(issue(
@@ -4214,6 +4333,11 @@ linear = "qr"
             c2: Some(1.0),
             kappa: Some(1.0),
             formulation: Some(Formulation::Exact),
+            viscoelastic: Some(ViscoelasticSpec {
+                model: "convolution".into(),
+                gamma: 1.0,
+                prony: vec![[1.0, 1.0]],
+            }),
         };
         let info = SceneInfo {
             name: "a".into(),
@@ -5134,6 +5258,11 @@ mesh.n_r = 4
                 c2: Some(1.0),
                 kappa: Some(1.0),
                 formulation: Some(Formulation::Exact),
+                viscoelastic: Some(ViscoelasticSpec {
+                    model: "multiplicative".into(),
+                    gamma: 2.0,
+                    prony: vec![[0.5, 0.1], [0.5, 1.0]],
+                }),
             },
         );
         check("analysis", &Analysis { mode: Mode::Static });
@@ -5946,5 +6075,75 @@ mesh.n_r = 4
             ..road
         };
         assert!((late.v0_at(0.25, &m) - 10.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn viscoelastic_subtable_is_parsed_and_checked() {
+        let base = r#"
+[scene]
+name = "v"
+[geometry]
+ri = 1.0
+ro = 2.0
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[material.viscoelastic]
+model = "convolution"
+gamma = 200.0
+prony = [[0.7, 0.01], [0.3, 1]]
+[analysis]
+mode = "transient"
+[motion]
+omega = 10.0
+[time]
+dt = 1e-3
+t_end = 0.1
+"#;
+        let s = Scene::from_toml_str(base, "v.toml", &[]).unwrap_or_else(|e| panic!("{e}"));
+        let ve = s.material.viscoelastic.clone().expect("parsed");
+        assert_eq!(ve.prony, vec![[0.7, 0.01], [0.3, 1.0]]);
+        let law = ve.build().expect("valid");
+        assert_eq!(law.model, crate::material::ViscoModel::Convolution);
+        assert_eq!(law.prony(), &[(0.7, 0.01), (0.3, 1.0)]);
+        // Every problem at once, each with its key and line.
+        let bad = base
+            .replace("model = \"convolution\"", "model = \"maxwell\"\ncolour = 1")
+            .replace("gamma = 200.0", "gamma = \"big\"")
+            .replace(
+                "prony = [[0.7, 0.01], [0.3, 1]]",
+                "prony = [[0.7], [0.3, 1]]",
+            );
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("invalid");
+        for key in [
+            "material.viscoelastic.model",
+            "material.viscoelastic.colour",
+            "material.viscoelastic.gamma",
+            "material.viscoelastic.prony",
+        ] {
+            assert!(e.has_key(key), "{key} not reported: {e}");
+        }
+        let text = e.to_string();
+        assert!(
+            text.contains("maxwell") && text.contains("\"multiplicative\""),
+            "{text}"
+        );
+        // Values checked by the law: a non-positive relaxation time, a negative gamma.
+        let bad = base.replace("[0.3, 1]]", "[0.3, 0.0]]");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("tau = 0");
+        let err = e
+            .find("material.viscoelastic.prony")
+            .unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("tau > 0"), "{}", err.message);
+        assert_eq!(err.line, Some(15));
+        let bad = base.replace("gamma = 200.0", "gamma = -1.0");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("gamma < 0");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
+        // Missing keys.
+        let bad = base.replace("gamma = 200.0\n", "");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("missing");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
     }
 }

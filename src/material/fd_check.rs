@@ -18,8 +18,19 @@
 //! - `tangent_rel_err = |A − A_fd| / |A|`.
 //!
 //! An inadmissible state (`J ≤ 0`) or any non-finite value gives `+∞` errors (never `NaN`).
+//!
+//! # Stateful laws
+//!
+//! [`check_stateful`] checks a [`Constitutive`] law over one step: given the committed state
+//! and `Δt`, the end-of-step stress `P(∇u)` is a function of the end-of-step `∇u` alone, and its
+//! algorithmic tangent is compared with the same stencil applied to that function (each
+//! stencil evaluation starts again from the committed state; the new states are discarded).
+//! The stress error compares `P` with and without the tangent flag and, when the law has a
+//! free energy, with the derivative of `ψ(∇u, state)` at the internal state frozen at the
+//! end-of-step value (`P = ∂ψ/∂F` at fixed internal variables). [`SplitMix`] is the small
+//! deterministic generator the property tests draw random strains, states and steps from.
 
-use super::Hyperelastic;
+use super::{Constitutive, Hyperelastic};
 use crate::math::{det_identity_plus_minus_one, flatten, v, Mat2, Tangent};
 
 /// Relative errors of a material's stress and tangent against finite differences.
@@ -100,6 +111,88 @@ pub fn check_material<M: Hyperelastic + ?Sized>(m: &M, grad_u: &Mat2) -> FdRepor
     FdReport {
         stress_rel_err: finite_ratio(stress_err, stress_scale),
         tangent_rel_err: finite_ratio((a - a_fd).norm(), a_norm),
+    }
+}
+
+/// Checks the end-of-step stress and algorithmic tangent of a stateful law at `grad_u`, from
+/// the committed state `old` over a step `dt` (see the module docs).
+pub fn check_stateful<M: Constitutive + ?Sized>(
+    m: &M,
+    grad_u: &Mat2,
+    old: &[f64],
+    dt: f64,
+) -> FdReport {
+    let inadmissible = FdReport {
+        stress_rel_err: f64::INFINITY,
+        tangent_rel_err: f64::INFINITY,
+    };
+    let j = 1.0 + det_identity_plus_minus_one(grad_u);
+    let f_norm = (Mat2::identity() + grad_u).norm();
+    if !(j > 0.0 && f_norm.is_finite()) || old.len() != m.n_state() {
+        return inadmissible;
+    }
+    let h = BASE_STEP * (j / f_norm).min(1.0);
+    let mut new = vec![0.0; old.len()];
+    let mut scratch = vec![0.0; old.len()];
+    let (p, _) = m.update(grad_u, old, dt, &mut new, false);
+    let (p_st, a) = m.update(grad_u, old, dt, &mut scratch, true);
+    let mut stress_err = (p_st - p).norm();
+    let state_err = new
+        .iter()
+        .zip(&scratch)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let mut a_fd = Tangent::zeros();
+    let mut p_fd = Mat2::zeros();
+    let has_energy = m.free_energy(grad_u, &new).is_some();
+    for k in 0..2 {
+        for l in 0..2 {
+            let e = unit(k, l);
+            let dp = flatten(&central4(
+                |g| m.update(g, old, dt, &mut scratch.clone(), false).0,
+                grad_u,
+                &e,
+                h,
+            ));
+            a_fd.set_column(v(k, l), &dp);
+            if has_energy {
+                p_fd[(k, l)] = central4(
+                    |g| m.free_energy(g, &new).unwrap_or(f64::NAN),
+                    grad_u,
+                    &e,
+                    h,
+                );
+            }
+        }
+    }
+    let a_norm = a.norm();
+    let stress_scale = p.norm().max(a_norm * h);
+    if has_energy {
+        stress_err = stress_err.max((p - p_fd).norm());
+    }
+    if state_err > 0.0 {
+        stress_err = f64::INFINITY;
+    }
+    FdReport {
+        stress_rel_err: finite_ratio(stress_err, stress_scale),
+        tangent_rel_err: finite_ratio((a - a_fd).norm(), a_norm),
+    }
+}
+
+/// SplitMix64: a small deterministic generator for property tests (uniform in [0, 1)).
+#[derive(Clone, Debug)]
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    /// Next uniform value in [0, 1).
+    #[allow(clippy::should_implement_trait)]
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
@@ -202,5 +295,79 @@ mod tests {
         assert!(tangent_asymmetry(&a) > 0.5);
         assert_eq!(tangent_asymmetry(&Tangent::zeros()), 0.0);
         assert_eq!(tangent_asymmetry(&Tangent::repeat(f64::NAN)), f64::INFINITY);
+    }
+
+    /// An overstress law whose tangent drops the history-dependent part `dF S_v`: the stateful
+    /// check must flag it once the state carries stress, and pass the correct law.
+    struct DropsGeometric(crate::material::ViscoelasticMaterial);
+
+    impl Constitutive for DropsGeometric {
+        fn n_state(&self) -> usize {
+            self.0.n_state()
+        }
+        fn update(
+            &self,
+            g: &Mat2,
+            old: &[f64],
+            dt: f64,
+            new: &mut [f64],
+            with_tangent: bool,
+        ) -> (Mat2, Tangent) {
+            let (p, mut a) = self.0.update(g, old, dt, new, with_tangent);
+            if with_tangent {
+                // Remove e_kL S_v: recover S_v = F⁻¹ (P − P_elastic).
+                let f = Mat2::identity() + g;
+                let pe = self.0.elastic.stress(g);
+                let sv = f.try_inverse().unwrap() * (p - pe);
+                for k in 0..2 {
+                    for l in 0..2 {
+                        for jj in 0..2 {
+                            a[(v(k, jj), v(k, l))] -= sv[(l, jj)];
+                        }
+                    }
+                }
+            }
+            (p, a)
+        }
+        fn free_energy(&self, _g: &Mat2, _s: &[f64]) -> Option<f64> {
+            None
+        }
+    }
+
+    #[test]
+    fn stateful_check_detects_a_missing_history_term() {
+        use crate::material::{ViscoModel, Viscoelastic, ViscoelasticMaterial};
+        let visco = Viscoelastic::new(ViscoModel::Convolution, 2.0, &[(1.0, 0.5)]).unwrap();
+        let m = ViscoelasticMaterial {
+            elastic: NeoHookean::new(1.0, 3.0).into(),
+            visco,
+        };
+        // A state with stress in it: one step to GRAD.
+        let mut s1 = vec![0.0; 6];
+        m.update(&GRAD, &[0.0; 6], 0.1, &mut s1, false);
+        let good = check_stateful(&m, &(GRAD * 0.5), &s1, 0.2);
+        assert!(
+            good.stress_rel_err < 1e-9 && good.tangent_rel_err < 1e-8,
+            "{good:?}"
+        );
+        let bad = check_stateful(&DropsGeometric(m), &(GRAD * 0.5), &s1, 0.2);
+        assert!(bad.tangent_rel_err > 1e-3, "{bad:?}");
+        // Elastic laws are stateless constitutive laws and pass the same check.
+        let e = check_stateful(&NeoHookean::new(1.0, 3.0), &GRAD, &[], 0.3);
+        assert!(e.stress_rel_err < 1e-9 && e.tangent_rel_err < 1e-9, "{e:?}");
+        // A state of the wrong length is reported, not a panic.
+        assert_eq!(
+            check_stateful(&m, &GRAD, &[0.0; 3], 0.1).tangent_rel_err,
+            f64::INFINITY
+        );
+    }
+
+    #[test]
+    fn splitmix_is_uniform_enough() {
+        let mut r = SplitMix(1);
+        let xs: Vec<f64> = (0..10000).map(|_| r.next()).collect();
+        assert!(xs.iter().all(|x| (0.0..1.0).contains(x)));
+        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
     }
 }

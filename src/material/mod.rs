@@ -31,18 +31,29 @@
 //!
 //! [`Material`] is the closed set of laws used by the element kernels (static dispatch by
 //! `match`); [`fd_check`] holds the finite-difference checker every law passes.
+//!
+//! # State
+//!
+//! [`Constitutive`] is the material interface with state in and state out: the committed
+//! history of a quadrature point, the step `Δt` and the end-of-step `∇u` go in; the end-of-step
+//! stress, its algorithmic tangent and the new history come out. Every [`Hyperelastic`] law is
+//! a `Constitutive` with no state (`n_state() = 0`, `Δt` ignored), so elastic materials carry
+//! no history and pay nothing. [`viscoelastic`] holds the stateful laws (a hyperelastic law
+//! plus a Prony-series overstress).
 
 pub mod fd_check;
 pub mod incompressible;
 pub mod invariants;
 pub mod mooney_rivlin;
 pub mod neo_hookean;
+pub mod viscoelastic;
 
-pub use fd_check::{check_material, tangent_asymmetry, FdReport};
+pub use fd_check::{check_material, check_stateful, tangent_asymmetry, FdReport, SplitMix};
 pub use incompressible::{pressure_stress_tangent, MooneyRivlinIncompressible};
 pub use invariants::{dcof_df, InvariantDerivs, Kinematics};
 pub use mooney_rivlin::MooneyRivlin;
 pub use neo_hookean::NeoHookean;
+pub use viscoelastic::{ViscoModel, Viscoelastic, ViscoelasticMaterial};
 
 use crate::math::{Mat2, Tangent};
 
@@ -54,6 +65,52 @@ pub trait Hyperelastic: Send + Sync {
     fn stress(&self, grad_u: &Mat2) -> Mat2;
     /// P and the tangent A = dP/dF (flattening of math.rs).
     fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent);
+}
+
+/// A material with state in and state out (see the module docs).
+pub trait Constitutive: Send + Sync {
+    /// History values per quadrature point (0: no history).
+    fn n_state(&self) -> usize;
+    /// End-of-step first Piola–Kirchhoff stress at `grad_u`, from the committed state `old` over
+    /// a step `dt ≥ 0`, and with `with_tangent` the algorithmic tangent `∂P/∂F` (zeros
+    /// otherwise). The new state is written to `new` (`old` and `new` have `n_state()` values).
+    /// `dt = 0` at the committed `grad_u` returns the committed stress and state.
+    fn update(
+        &self,
+        grad_u: &Mat2,
+        old: &[f64],
+        dt: f64,
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> (Mat2, Tangent);
+    /// Helmholtz free energy per unit reference volume at `grad_u` with the internal state
+    /// frozen at `state`, if the law has one (then `P = ∂ψ/∂F` at fixed state).
+    fn free_energy(&self, grad_u: &Mat2, state: &[f64]) -> Option<f64>;
+}
+
+impl<M: Hyperelastic> Constitutive for M {
+    #[inline]
+    fn n_state(&self) -> usize {
+        0
+    }
+    #[inline]
+    fn update(
+        &self,
+        grad_u: &Mat2,
+        _old: &[f64],
+        _dt: f64,
+        _new: &mut [f64],
+        with_tangent: bool,
+    ) -> (Mat2, Tangent) {
+        if with_tangent {
+            self.stress_tangent(grad_u)
+        } else {
+            (self.stress(grad_u), Tangent::zeros())
+        }
+    }
+    fn free_energy(&self, grad_u: &Mat2, _state: &[f64]) -> Option<f64> {
+        Some(self.energy(grad_u))
+    }
 }
 
 /// The closed set of hyperelastic laws, dispatched by `match` in hot loops.

@@ -22,10 +22,18 @@
 //!   tends to the exact constraint.
 //!
 //! Cauchy stress: σ = P Fᵀ / J. Forces are per unit thickness (plane strain).
+//!
+//! **Viscoelastic history.** With [`SolidModel::viscoelastic`] set, the stress at each
+//! quadrature point is `P = ∂W/∂F + P_v`, the overstress `P_v` of
+//! [`crate::material::viscoelastic`] evaluated from the committed state of that point
+//! ([`SolidModel::history`]) over the step [`SolidModel::history_dt`] (0 outside a time step:
+//! the committed stress). Assembly never writes the history; the driver calls
+//! [`SolidModel::commit_history`] once a step has converged (old state in, new state out).
 
-use crate::assembly::{Assembler, DofMap, LocalSystem};
+use crate::assembly::{Assembler, DofMap, LocalSystem, QpHistory};
 use crate::element::{Lagrange2D, ShapeTable, Q1, Q2};
-use crate::material::{Hyperelastic, Material};
+use crate::material::viscoelastic::MAX_STATE;
+use crate::material::{Hyperelastic, Material, Viscoelastic};
 use crate::math::{cofactor, det_identity_plus_minus_one, v, Mat2, Tangent, Vec2};
 use crate::mesh::{CellGeometry, Mesh};
 use nalgebra::{Matrix3, Vector3};
@@ -63,6 +71,12 @@ pub struct SolidModel {
     /// ([`crate::driver::SolidSystem`]) assembles it with [`Self::cell_viscous_split`]. `None`
     /// in the transient mode, where the velocity is an independent field.
     pub steady_omega: Option<f64>,
+    /// Viscoelastic overstress (`None`: elastic, no history).
+    pub viscoelastic: Option<Viscoelastic>,
+    /// Committed history at the quadrature points (empty when elastic).
+    pub history: QpHistory,
+    /// Step length over which the kernels evaluate the overstress (0: committed state).
+    pub history_dt: f64,
     q1: ShapeTable<4>,
     q2: ShapeTable<9>,
     /// Set by a kernel that met J ≤ 0 at a quadrature point.
@@ -100,6 +114,9 @@ impl SolidModel {
             body_force: None,
             strain_rate_damping: 0.0,
             steady_omega: None,
+            viscoelastic: None,
+            history: QpHistory::none(),
+            history_dt: 0.0,
             q1: ShapeTable::gauss::<Q1>(2),
             q2: ShapeTable::gauss::<Q2>(3),
             inverted: AtomicBool::new(false),
@@ -524,6 +541,13 @@ impl SolidModel {
             } else {
                 (self.material.stress(&h), Tangent::zeros())
             };
+            if let Some(ve) = &self.viscoelastic {
+                let mut new = [0.0; MAX_STATE];
+                let old = self.history.point(c, q);
+                let (pv, av) = ve.overstress(&h, old, self.history_dt, &mut new, with_k);
+                p_st += pv;
+                a_t += av;
+            }
             if let Some((_, kv)) = visc {
                 // Viscous stress on the Green-strain rate (objective).
                 let eta = self.strain_rate_damping;
@@ -730,5 +754,65 @@ impl SolidModel {
             grad_u: h,
             jac,
         })
+    }
+}
+
+// Viscoelastic history: allocation and commit (the kernels only read it).
+impl SolidModel {
+    /// Make the material viscoelastic: allocate the history of every quadrature point of the
+    /// kernels' Gauss rules, at the undisturbed reference state.
+    pub fn set_viscoelastic(&mut self, ve: Viscoelastic) {
+        let init = vec![0.0; ve.n_state()];
+        let per_cell = (0..self.mesh.n_cells()).map(|c| match self.mesh.degree[c] {
+            1 => self.q1.len(),
+            _ => self.q2.len(),
+        });
+        self.history = QpHistory::new(per_cell, &init);
+        self.viscoelastic = Some(ve);
+    }
+
+    /// Replace the committed history by the state at the end of a step of length `dt` that
+    /// ended at the full state `x` (call once the step has converged). No-op when elastic.
+    pub fn commit_history(&mut self, dofs: &DofMap, x: &[f64], dt: f64) {
+        let Some(ve) = self.viscoelastic else {
+            return;
+        };
+        let mut hist = std::mem::take(&mut self.history);
+        for c in 0..self.mesh.n_cells() {
+            match self.mesh.degree[c] {
+                1 => self.commit_cell::<4>(&self.q1, &ve, c, dofs, x, dt, &mut hist),
+                _ => self.commit_cell::<9>(&self.q2, &ve, c, dofs, x, dt, &mut hist),
+            }
+        }
+        self.history = hist;
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn commit_cell<const N: usize>(
+        &self,
+        tab: &ShapeTable<N>,
+        ve: &Viscoelastic,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        dt: f64,
+        hist: &mut QpHistory,
+    ) {
+        let cd = dofs.cell(c);
+        let mut u = [0.0; 18];
+        for a in 0..2 * N {
+            u[a] = x[cd[a] as usize];
+        }
+        let mut g = [[0.0; 2]; N];
+        let mut new = [0.0; MAX_STATE];
+        let n = hist.n_state;
+        for q in 0..tab.len() {
+            if self.point(c, tab, q, &mut g).is_none() {
+                continue;
+            }
+            let h = Self::grad_u(&u[..2 * N], &g);
+            ve.overstress(&h, hist.point(c, q), dt, &mut new[..n], false);
+            hist.point_mut(c, q).copy_from_slice(&new[..n]);
+        }
     }
 }

@@ -1,0 +1,581 @@
+//! Viscoelastic overstress laws with a Prony kernel and internal variables at quadrature points.
+//!
+//! A viscoelastic material is a hyperelastic law ([`super::Material`], the *equilibrium* or
+//! fully relaxed response) plus a rate-dependent overstress `S_v` (second Piola–Kirchhoff), so
+//! that the first Piola–Kirchhoff stress is `P = ∂W/∂F + F S_v`. The overstress relaxes with the
+//! Prony kernel
+//!
+//! ```text
+//! k(s) = Σ_i g_i exp(−s/τ_i),      s ≥ 0
+//! ```
+//!
+//! **Units.** `g_i` are dimensionless weights, `τ_i` are times (the scene's time unit, e.g. s),
+//! and `γ` is a stress (the scene's stress unit, e.g. psi). At small strain both models below add
+//! a shear relaxation modulus `ΔG(t) = (γ/2) k(t)` (and no bulk relaxation: `λ_v = 0`) to the
+//! elastic law, so a standard linear solid with `G(t) = G_∞ + G_1 exp(−t/τ)` is the elastic law
+//! with `G = G_∞` plus `γ = 2 G_1`, `prony = [[1, τ]]`.
+//!
+//! # Models ([`ViscoModel`])
+//!
+//! **`Convolution`** — the linear viscoelastic perturbation of a hyperelastic law,
+//!
+//! ```text
+//! S = ∂W/∂E + γ ∫_{−∞}^t k(t − s) Ė(s) ds = ∂W/∂E + γ Σ_i Q_i,     Q̇_i + Q_i/τ_i = g_i Ė,
+//! ```
+//!
+//! `E = (C − I)/2` the Green strain (in-plane; `E33 = 0` in plane strain). For `E` linear in
+//! time over a step `[t_n, t_n + Δt]` the ODE is integrated exactly:
+//!
+//! ```text
+//! Q_i^{n+1} = a_i Q_i^n + g_i φ_i (E^{n+1} − E^n),   a_i = exp(−Δt/τ_i),   φ_i = (1 − a_i) τ_i/Δt
+//! ```
+//!
+//! (`φ_i → 1` as `Δt → 0`: the instantaneous response `γ k(0) ΔE`; `φ_i → 0` as `Δt → ∞`). This
+//! model has no free energy; at finite strain in a spinning body it can create energy (the
+//! rotation of `F` enters `S_v` only through `E`, but `P = F S_v` with a lagged `S_v` does work
+//! on a rigid rotation superposed on a strained state).
+//!
+//! **`Multiplicative`** — a thermodynamically consistent finite-strain model: per Prony term a
+//! Sidoroff split `F = F_e F_v`, viscous right Cauchy–Green tensor `C_v = F_vᵀ F_v` and a
+//! compressible neo-Hookean non-equilibrium energy on `C_e = F_v⁻ᵀ C F_v⁻¹`,
+//!
+//! ```text
+//! ψ_i = μ_i/2 (tr(C C_v⁻¹) − 3 − ln det(C C_v⁻¹)),   μ_i = γ g_i / 2,
+//! S_i = 2 ∂ψ_i/∂C = μ_i (C_v⁻¹ − C⁻¹),
+//! ```
+//!
+//! with the Reese–Govindjee (1998) evolution `−½ (L_v b_e) b_e⁻¹ = 𝒱⁻¹ : τ_i` for an isotropic
+//! viscosity `𝒱⁻¹ = 𝕀/(2η_i)`, `η_i = μ_i τ_i`. Pulled back to the reference configuration this
+//! is the *linear* law `Ċ_v = (C − C_v)/τ_i`. The dissipation
+//!
+//! ```text
+//! D_i = −∂ψ_i/∂C_v : Ċ_v = μ_i/(2τ_i) tr(A G A G) ≥ 0,    A = C − C_v,  G = C_v⁻¹ (SPD)
+//! ```
+//!
+//! is non-negative for every path. The state stores `E_v = (C_v − I)/2` (so that small strains
+//! keep full precision); it obeys `Ė_v = (E − E_v)/τ_i`, integrated exactly for `E` linear over the
+//! step: `E_v^{n+1} = a E_v^n + (φ − a) E^n + (1 − φ) E^{n+1}` (a non-negative combination, so
+//! `C_v` stays positive definite). In plane strain `C_v33 = 1` for all time (it starts at 1 and
+//! `C33 = 1`), so the state is in-plane. Linearised, `Q_i = 2μ_i (E − E_v)` obeys exactly the
+//! convolution model's ODE: both models agree at small strain.
+//!
+//! # State layout
+//!
+//! `3 (1 + n)` values per quadrature point for `n` Prony terms: the Green strain `E^n` of the
+//! committed state (`[E11, E22, E12]`), then per term `[Q11, Q22, Q12]` (convolution) or
+//! `[Ev11, Ev22, Ev12]` (multiplicative). The initial state (all zeros) is the undisturbed,
+//! stress-free reference. Elastic materials have no state at all.
+//!
+//! The update is a pure function: the start-of-step state, the step `Δt` and the end-of-step
+//! `∇u` go in; the end-of-step overstress, its algorithmic tangent `∂P_v/∂F` and the new state
+//! come out. The caller decides whether to keep the new state (only on convergence).
+
+use super::Constitutive;
+use super::Material;
+use crate::math::{det_identity_plus_minus_one, v, Mat2, Tangent};
+
+/// Largest number of Prony terms (the state is kept in fixed-size stack buffers).
+pub const MAX_PRONY: usize = 8;
+
+/// Largest number of state values per quadrature point.
+pub const MAX_STATE: usize = 3 * (1 + MAX_PRONY);
+
+/// Which viscoelastic model (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViscoModel {
+    /// The linear convolution on the Green strain rate (the perturbation of a hyperelastic law).
+    Convolution,
+    /// The multiplicative (Sidoroff / Reese–Govindjee) finite-strain model.
+    Multiplicative,
+}
+
+impl ViscoModel {
+    /// Scene names of the models.
+    pub const NAMES: &'static [&'static str] = &["convolution", "multiplicative"];
+
+    /// The model with scene name `s`.
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "convolution" => Some(Self::Convolution),
+            "multiplicative" => Some(Self::Multiplicative),
+            _ => None,
+        }
+    }
+
+    /// Scene name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Convolution => "convolution",
+            Self::Multiplicative => "multiplicative",
+        }
+    }
+}
+
+/// Error building a [`Viscoelastic`] law from user parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ViscoError {
+    /// No Prony term, or more than [`MAX_PRONY`].
+    TermCount(usize),
+    /// `g_i` not finite or negative, or `τ_i` not finite and positive (term index, g, τ).
+    BadTerm(usize, f64, f64),
+    /// `γ` not finite or negative.
+    BadGamma(f64),
+}
+
+impl std::fmt::Display for ViscoError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::TermCount(n) => write!(f, "needs between 1 and {MAX_PRONY} Prony terms, got {n}"),
+            Self::BadTerm(i, g, t) => write!(
+                f,
+                "Prony term {i} = [{g}, {t}]: needs g >= 0 (finite) and tau > 0 (finite)"
+            ),
+            Self::BadGamma(g) => write!(f, "gamma = {g}: needs a finite value >= 0"),
+        }
+    }
+}
+
+/// The viscous overstress of a viscoelastic material: model, `γ` and the Prony series.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Viscoelastic {
+    pub model: ViscoModel,
+    /// Stress scale `γ` (stress units).
+    pub gamma: f64,
+    /// `(g_i, τ_i)`, the first `n` entries used.
+    terms: [(f64, f64); MAX_PRONY],
+    n: usize,
+}
+
+/// Symmetric 2×2 tensor from `[a11, a22, a12]`.
+#[inline(always)]
+fn sym(s: &[f64]) -> Mat2 {
+    Mat2::new(s[0], s[2], s[2], s[1])
+}
+
+#[inline(always)]
+fn store(m: &Mat2, out: &mut [f64]) {
+    out[0] = m[(0, 0)];
+    out[1] = m[(1, 1)];
+    out[2] = 0.5 * (m[(0, 1)] + m[(1, 0)]);
+}
+
+/// Green strain `E = (H + Hᵀ + HᵀH)/2` from `H = ∇u` (no cancellation at small strain).
+#[inline(always)]
+pub fn green_strain(h: &Mat2) -> Mat2 {
+    (h + h.transpose() + h.transpose() * h) * 0.5
+}
+
+/// `(a, φ)` of the exponential integrator for `h = Δt/τ ≥ 0`: `a = e^{−h}`,
+/// `φ = (1 − e^{−h})/h` (→ 1 as h → 0).
+#[inline(always)]
+pub fn exp_weights(h: f64) -> (f64, f64) {
+    let a = (-h).exp();
+    let phi = if h < 1e-8 {
+        1.0 - 0.5 * h
+    } else {
+        -(-h).exp_m1() / h
+    };
+    (a, phi)
+}
+
+/// `∂E/∂F_kL = ½(e_kLᵀ F + Fᵀ e_kL)` for the unit tensor `e_kL`.
+#[inline(always)]
+fn de_df(f: &Mat2, k: usize, l: usize) -> Mat2 {
+    let mut e = Mat2::zeros();
+    e[(k, l)] = 1.0;
+    (e.transpose() * f + f.transpose() * e) * 0.5
+}
+
+impl Viscoelastic {
+    /// A law with the given model, `γ` and Prony terms `(g_i, τ_i)`; checks the parameters.
+    pub fn new(model: ViscoModel, gamma: f64, prony: &[(f64, f64)]) -> Result<Self, ViscoError> {
+        if prony.is_empty() || prony.len() > MAX_PRONY {
+            return Err(ViscoError::TermCount(prony.len()));
+        }
+        if !(gamma.is_finite() && gamma >= 0.0) {
+            return Err(ViscoError::BadGamma(gamma));
+        }
+        let mut terms = [(0.0, 1.0); MAX_PRONY];
+        for (i, &(g, tau)) in prony.iter().enumerate() {
+            if !(g.is_finite() && g >= 0.0 && tau.is_finite() && tau > 0.0) {
+                return Err(ViscoError::BadTerm(i, g, tau));
+            }
+            terms[i] = (g, tau);
+        }
+        Ok(Self {
+            model,
+            gamma,
+            terms,
+            n: prony.len(),
+        })
+    }
+
+    /// The Prony terms `(g_i, τ_i)`.
+    pub fn prony(&self) -> &[(f64, f64)] {
+        &self.terms[..self.n]
+    }
+
+    /// The kernel `k(s) = Σ g_i exp(−s/τ_i)`.
+    pub fn kernel(&self, s: f64) -> f64 {
+        self.prony().iter().map(|(g, t)| g * (-s / t).exp()).sum()
+    }
+
+    /// Instantaneous extra shear modulus `γ k(0) / 2` of the small-strain limit.
+    pub fn instantaneous_shear_modulus(&self) -> f64 {
+        0.5 * self.gamma * self.kernel(0.0)
+    }
+
+    /// State values per quadrature point.
+    pub fn n_state(&self) -> usize {
+        3 * (1 + self.n)
+    }
+
+    /// End-of-step overstress `P_v = F S_v` at `∇u = h`, from the committed state `old` over a
+    /// step `dt ≥ 0`; the new state goes to `new` (same length as `old`). With `with_tangent`,
+    /// also `∂P_v/∂F` (the algorithmic tangent; zeros otherwise).
+    pub fn overstress(
+        &self,
+        h: &Mat2,
+        old: &[f64],
+        dt: f64,
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> (Mat2, Tangent) {
+        let f = Mat2::identity() + h;
+        let e1 = green_strain(h);
+        let e0 = sym(&old[0..3]);
+        store(&e1, &mut new[0..3]);
+        let mut a_t = Tangent::zeros();
+        let de: [Mat2; 4] = if with_tangent {
+            [
+                de_df(&f, 0, 0),
+                de_df(&f, 0, 1),
+                de_df(&f, 1, 0),
+                de_df(&f, 1, 1),
+            ]
+        } else {
+            [Mat2::zeros(); 4]
+        };
+        let mut s_v = Mat2::zeros();
+        match self.model {
+            ViscoModel::Convolution => {
+                // S_v = γ Σ Q_i; ∂S_v/∂E = γ Σ g_i φ_i (identity on symmetric tensors).
+                let mut c_tan = 0.0;
+                let de_step = e1 - e0;
+                for (i, &(g, tau)) in self.prony().iter().enumerate() {
+                    let (a, phi) = exp_weights(dt / tau);
+                    let q = sym(&old[3 + 3 * i..6 + 3 * i]) * a + de_step * (g * phi);
+                    store(&q, &mut new[3 + 3 * i..6 + 3 * i]);
+                    s_v += q;
+                    c_tan += g * phi;
+                }
+                s_v *= self.gamma;
+                if with_tangent {
+                    c_tan *= self.gamma;
+                    for kl in 0..4 {
+                        let (k, l) = (kl / 2, kl % 2);
+                        let mut e = Mat2::zeros();
+                        e[(k, l)] = 1.0;
+                        let dp = e * s_v + f * de[kl] * c_tan;
+                        for i in 0..2 {
+                            for j in 0..2 {
+                                a_t[(v(i, j), kl)] = dp[(i, j)];
+                            }
+                        }
+                    }
+                }
+            }
+            ViscoModel::Multiplicative => {
+                let jm1 = det_identity_plus_minus_one(h);
+                if jm1 <= -1.0 || !jm1.is_finite() {
+                    return (Mat2::repeat(f64::INFINITY), Tangent::repeat(f64::INFINITY));
+                }
+                let c = f.transpose() * f;
+                let c_inv = c.try_inverse().unwrap_or(Mat2::repeat(f64::INFINITY));
+                let mut dsv = [Mat2::zeros(); 4];
+                for (i, &(g, tau)) in self.prony().iter().enumerate() {
+                    let mu = 0.5 * self.gamma * g;
+                    let (a, phi) = exp_weights(dt / tau);
+                    let ev0 = sym(&old[3 + 3 * i..6 + 3 * i]);
+                    let ev = ev0 * a + e0 * (phi - a) + e1 * (1.0 - phi);
+                    store(&ev, &mut new[3 + 3 * i..6 + 3 * i]);
+                    let cv = Mat2::identity() + ev * 2.0;
+                    let Some(gi) = cv.try_inverse() else {
+                        return (Mat2::repeat(f64::INFINITY), Tangent::repeat(f64::INFINITY));
+                    };
+                    // S_i = μ (C_v⁻¹ − C⁻¹) = 2μ C_v⁻¹ (E − E_v) C⁻¹, symmetrised.
+                    let si = gi * (e1 - ev) * c_inv * (2.0 * mu);
+                    s_v += (si + si.transpose()) * 0.5;
+                    if with_tangent {
+                        // dS_i = μ [−(1 − φ) G dC G + C⁻¹ dC C⁻¹], dC = 2 dE.
+                        for kl in 0..4 {
+                            let dc = de[kl] * 2.0;
+                            dsv[kl] += (c_inv * dc * c_inv - gi * dc * gi * (1.0 - phi)) * mu;
+                        }
+                    }
+                }
+                if with_tangent {
+                    for kl in 0..4 {
+                        let (k, l) = (kl / 2, kl % 2);
+                        let mut e = Mat2::zeros();
+                        e[(k, l)] = 1.0;
+                        let dp = e * s_v + f * dsv[kl];
+                        for i in 0..2 {
+                            for j in 0..2 {
+                                a_t[(v(i, j), kl)] = dp[(i, j)];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        (f * s_v, a_t)
+    }
+
+    /// Non-equilibrium free energy `Σ ψ_i` at `∇u = h` with the internal state `state`
+    /// (multiplicative model; `None` for the convolution model, which has none).
+    pub fn free_energy(&self, h: &Mat2, state: &[f64]) -> Option<f64> {
+        if self.model != ViscoModel::Multiplicative {
+            return None;
+        }
+        let f = Mat2::identity() + h;
+        let c = f.transpose() * f;
+        let mut psi = 0.0;
+        for (i, &(g, _)) in self.prony().iter().enumerate() {
+            let mu = 0.5 * self.gamma * g;
+            let cv = Mat2::identity() + sym(&state[3 + 3 * i..6 + 3 * i]) * 2.0;
+            let gi = cv.try_inverse()?;
+            let ce = c * gi;
+            let det = ce.determinant();
+            if !(det > 0.0) {
+                return Some(f64::INFINITY);
+            }
+            psi += 0.5 * mu * (ce.trace() - 2.0 - det.ln());
+        }
+        Some(psi)
+    }
+
+    /// Dissipation rate `D = Σ μ_i/(2τ_i) tr(A G A G)` of the multiplicative model at `∇u = h`
+    /// with internal state `state` (`None` for the convolution model).
+    pub fn dissipation_rate(&self, h: &Mat2, state: &[f64]) -> Option<f64> {
+        if self.model != ViscoModel::Multiplicative {
+            return None;
+        }
+        let e = green_strain(h);
+        let mut d = 0.0;
+        for (i, &(g, tau)) in self.prony().iter().enumerate() {
+            let mu = 0.5 * self.gamma * g;
+            let ev = sym(&state[3 + 3 * i..6 + 3 * i]);
+            let gi = (Mat2::identity() + ev * 2.0).try_inverse()?;
+            let a = (e - ev) * 2.0;
+            let agag = a * gi * a * gi;
+            d += mu / (2.0 * tau) * agag.trace();
+        }
+        Some(d)
+    }
+}
+
+/// An elastic law with a viscoelastic overstress: `P = ∂W/∂F + F S_v`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViscoelasticMaterial {
+    pub elastic: Material,
+    pub visco: Viscoelastic,
+}
+
+impl Constitutive for ViscoelasticMaterial {
+    fn n_state(&self) -> usize {
+        self.visco.n_state()
+    }
+
+    fn update(
+        &self,
+        grad_u: &Mat2,
+        old: &[f64],
+        dt: f64,
+        new: &mut [f64],
+        with_tangent: bool,
+    ) -> (Mat2, Tangent) {
+        use super::Hyperelastic;
+        let (mut p, mut a) = if with_tangent {
+            self.elastic.stress_tangent(grad_u)
+        } else {
+            (self.elastic.stress(grad_u), Tangent::zeros())
+        };
+        let (pv, av) = self.visco.overstress(grad_u, old, dt, new, with_tangent);
+        p += pv;
+        a += av;
+        (p, a)
+    }
+
+    fn free_energy(&self, grad_u: &Mat2, state: &[f64]) -> Option<f64> {
+        use super::Hyperelastic;
+        let psi = self.visco.free_energy(grad_u, state)?;
+        Some(self.elastic.energy(grad_u) + psi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::fd_check::{check_stateful, SplitMix};
+    use crate::material::{MooneyRivlin, MooneyRivlinIncompressible, NeoHookean};
+
+    fn laws() -> Vec<ViscoelasticMaterial> {
+        let prony = [(0.6, 0.05), (0.3, 1.3), (0.1, 20.0)];
+        let mut out = Vec::new();
+        for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+            let visco = Viscoelastic::new(model, 3.0, &prony).unwrap();
+            for elastic in [
+                Material::from(NeoHookean::new(1.5, 4.0)),
+                Material::from(MooneyRivlin::new(0.8, 0.2, 20.0)),
+                Material::from(MooneyRivlinIncompressible::new(0.8, 0.2)),
+            ] {
+                out.push(ViscoelasticMaterial { elastic, visco });
+            }
+        }
+        out
+    }
+
+    /// Random admissible `∇u` with |∇u| up to `scale` and `J ∈ (0.5, 2)`.
+    fn random_grad(rng: &mut SplitMix, scale: f64) -> Mat2 {
+        loop {
+            let h = Mat2::from_fn(|_, _| scale * (2.0 * rng.next() - 1.0));
+            let j = 1.0 + det_identity_plus_minus_one(&h);
+            if j > 0.5 && j < 2.0 {
+                return h;
+            }
+        }
+    }
+
+    /// Random history: a few random steps from the reference.
+    fn random_state(m: &ViscoelasticMaterial, rng: &mut SplitMix) -> Vec<f64> {
+        let n = m.n_state();
+        let mut s = vec![0.0; n];
+        let mut s1 = vec![0.0; n];
+        for _ in 0..3 {
+            let h = random_grad(rng, 0.4);
+            let dt = 0.5 * rng.next();
+            m.update(&h, &s, dt, &mut s1, false);
+            s.copy_from_slice(&s1);
+        }
+        s
+    }
+
+    #[test]
+    fn tangent_with_history_matches_finite_differences() {
+        let mut rng = SplitMix(7);
+        let mut worst = 0.0_f64;
+        for m in laws() {
+            for _ in 0..40 {
+                let old = random_state(&m, &mut rng);
+                let h = random_grad(&mut rng, 0.5);
+                let dt = [0.0, 1e-3, 0.1, 2.0, 100.0][(rng.next() * 5.0) as usize % 5];
+                let r = check_stateful(&m, &h, &old, dt);
+                assert!(
+                    r.stress_rel_err < 1e-6 && r.tangent_rel_err < 1e-6,
+                    "{m:?} at {h}, dt {dt}: {r:?}"
+                );
+                worst = worst.max(r.tangent_rel_err).max(r.stress_rel_err);
+            }
+        }
+        println!("viscoelastic FD with history: worst rel err {worst:.2e}");
+    }
+
+    #[test]
+    fn zero_step_keeps_the_state_and_step_is_exact_for_linear_strain() {
+        // Δt = 0: the committed state is returned unchanged (the stress of a committed state).
+        let mut rng = SplitMix(3);
+        for m in laws() {
+            let old = random_state(&m, &mut rng);
+            let h = Mat2::new(old[0], old[2], old[2], old[1]);
+            // ∇u with Green strain E^n: the symmetric square root of C = I + 2E, minus I.
+            let c = Mat2::identity() + h * 2.0;
+            let eig = c.symmetric_eigen();
+            let u = eig.eigenvectors
+                * Mat2::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
+                * eig.eigenvectors.transpose();
+            let mut new = vec![0.0; m.n_state()];
+            m.update(&(u - Mat2::identity()), &old, 0.0, &mut new, false);
+            for (a, b) in old.iter().zip(&new) {
+                assert!((a - b).abs() < 1e-12, "{old:?} vs {new:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_step_equals_many_steps_for_a_linear_strain_path() {
+        // The exponential integrator is exact for E linear in time, so one step of Δt and
+        // 64 steps of Δt/64 along the same path in E agree to round-off (both models: the
+        // multiplicative model's evolution is linear in (E, E_v)).
+        for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+            let ve = Viscoelastic::new(model, 2.0, &[(0.7, 0.3), (0.3, 3.0)]).unwrap();
+            let n = ve.n_state();
+            let e_end = Mat2::new(0.2, 0.05, 0.05, -0.1);
+            // A ∇u whose Green strain is t E_end: H = sqrt(I + 2 t E) − I.
+            let grad = |t: f64| {
+                let c = Mat2::identity() + e_end * (2.0 * t);
+                let eig = c.symmetric_eigen();
+                eig.eigenvectors
+                    * Mat2::from_diagonal(&eig.eigenvalues.map(f64::sqrt))
+                    * eig.eigenvectors.transpose()
+                    - Mat2::identity()
+            };
+            let (mut s1, mut tmp) = (vec![0.0; n], vec![0.0; n]);
+            let (p1, _) = ve.overstress(&grad(1.0), &vec![0.0; n], 0.8, &mut s1, false);
+            let mut s = vec![0.0; n];
+            let mut p = Mat2::zeros();
+            for k in 1..=64 {
+                p = ve
+                    .overstress(&grad(k as f64 / 64.0), &s, 0.8 / 64.0, &mut tmp, false)
+                    .0;
+                s.copy_from_slice(&tmp);
+            }
+            assert!(
+                (p - p1).norm() < 1e-12 * p1.norm(),
+                "{model:?}: {p} vs {p1}"
+            );
+        }
+    }
+
+    #[test]
+    fn parameter_errors() {
+        let c = ViscoModel::Convolution;
+        assert_eq!(
+            Viscoelastic::new(c, 1.0, &[]),
+            Err(ViscoError::TermCount(0))
+        );
+        assert_eq!(
+            Viscoelastic::new(c, 1.0, &[(1.0, 0.0)]),
+            Err(ViscoError::BadTerm(0, 1.0, 0.0))
+        );
+        assert!(Viscoelastic::new(c, -1.0, &[(1.0, 1.0)]).is_err());
+        assert!(Viscoelastic::new(c, 1.0, &[(f64::NAN, 1.0)]).is_err());
+        assert!(Viscoelastic::new(c, 1.0, &[(1.0, 1.0); 9]).is_err());
+        assert_eq!(
+            ViscoModel::from_name("multiplicative"),
+            Some(ViscoModel::Multiplicative)
+        );
+        assert_eq!(ViscoModel::from_name("maxwell"), None);
+    }
+
+    #[test]
+    fn small_strain_models_agree() {
+        // Both models linearise to the same overstress (γ/2) k ⋆ 2ε̇.
+        let prony = [(0.5, 0.2), (0.5, 2.0)];
+        let a = Viscoelastic::new(ViscoModel::Convolution, 4.0, &prony).unwrap();
+        let b = Viscoelastic::new(ViscoModel::Multiplicative, 4.0, &prony).unwrap();
+        let n = a.n_state();
+        let (mut sa, mut sb, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut worst = 0.0_f64;
+        for k in 1..=50 {
+            let s = k as f64 * 0.1;
+            let h = Mat2::new(s.sin(), 0.3 * s.cos(), -0.2 * s, 0.5 * (2.0 * s).sin()) * 1e-7;
+            let (pa, _) = a.overstress(&h, &sa, 0.1, &mut t, false);
+            sa.copy_from_slice(&t);
+            let (pb, _) = b.overstress(&h, &sb, 0.1, &mut t, false);
+            sb.copy_from_slice(&t);
+            worst = worst.max((pa - pb).norm() / pa.norm());
+        }
+        assert!(worst < 1e-5, "{worst}");
+    }
+}

@@ -1,0 +1,291 @@
+//! Viscoelastic history in the transient mode: the time-step tangent with history against
+//! finite differences, the history committed only on convergence, the integrators' orders with
+//! a viscoelastic material, and rolling to a steady state with extraction.
+
+#[path = "common/fixtures.rs"]
+mod fixtures;
+use fixtures::*;
+
+use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
+use tread::driver::SolidSystem;
+use tread::material::{ViscoModel, Viscoelastic};
+use tread::physics::SolidModel;
+use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};
+
+fn opts(dt: f64, t_end: f64) -> TimeOptions {
+    TimeOptions {
+        dt,
+        dt_min: dt,
+        dt_max: dt,
+        t_end,
+        adaptive: false,
+        error_tol: 1e-4,
+        steady_tol: 1e-12,
+        stop_at_steady: false,
+        max_steps: 1_000_000,
+        lumped: false,
+        land_on_passages: false,
+    }
+}
+
+fn newton_opts() -> NewtonOptions {
+    NewtonOptions {
+        tol: 1e-11,
+        max_iterations: 20,
+        ..Default::default()
+    }
+}
+
+/// Neo-Hookean annulus (G∞ = 200) with a two-term overstress (instantaneous extra shear
+/// modulus 150) of the given model.
+fn visco_annulus(n_r: usize, n_theta: usize, model: ViscoModel) -> SolidModel {
+    let mut m = neo_hookean_annulus(n_r, n_theta);
+    m.set_viscoelastic(Viscoelastic::new(model, 300.0, &[(0.6, 0.004), (0.4, 0.05)]).unwrap());
+    m
+}
+
+#[test]
+fn time_step_tangent_with_history_matches_finite_differences() {
+    for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+        let m = visco_annulus(2, 12, model);
+        let normal = NormalCompliance::new(2.0e4, 1.0, 5.0, 0.0);
+        let cm = ContactModel::new(
+            &m.mesh,
+            1.95,
+            3.0,
+            normal,
+            Friction::None,
+            FacetRule::Lobatto(4),
+            None,
+        );
+        let sys = SolidSystem::with_contact(m, cm);
+        let mut kin = spin_kinematics(10.0, 0.0);
+        kin.disp = Some(Ramp {
+            target: 0.05,
+            time: 0.0,
+        });
+        let mut tr = Transient::new(
+            sys,
+            Scheme::GeneralizedAlpha(GenAlpha::new(0.7)),
+            kin,
+            false,
+        );
+        // A committed history with stress in it: commit a smooth deformation over a step.
+        let nn = tr.sys.model.mesh.n_nodes();
+        let mut x0 = tr.sys.x.clone();
+        for n in 0..nn {
+            let p = tr.sys.model.mesh.nodes[n];
+            x0[2 * n] = 0.02 * p[1].sin() * p.norm();
+            x0[2 * n + 1] = -0.03 * p[0].cos();
+        }
+        let dofs = tr.sys.dofs.clone();
+        tr.sys.model.commit_history(&dofs, &x0, 0.003);
+        assert!(tr.sys.model.history.data.iter().any(|v| v.abs() > 1e-3));
+        tr.un.copy_from_slice(&x0);
+        for n in 0..nn {
+            let x = tr.sys.model.mesh.nodes[n];
+            tr.vn[2 * n] = -10.0 * x[1];
+            tr.vn[2 * n + 1] = 10.0 * x[0];
+        }
+        tr.dt = 1e-3;
+        tr.sys.model.history_dt = 1e-3;
+        for n in 0..nn {
+            let x = tr.sys.model.mesh.nodes[n];
+            tr.sys.x[2 * n] = x0[2 * n] + 1e-2 * x[1].sin();
+            tr.sys.x[2 * n + 1] = x0[2 * n + 1] + 1e-2 * x[0].cos();
+        }
+        let saved = tr.sys.model.history.data.clone();
+        assert!(tr.evaluate(true));
+        let k = tr.sys.asm.to_dense();
+        let n = tr.n_eq();
+        let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut err = 0.0f64;
+        let mut e = vec![0.0; n];
+        let h = 1e-7;
+        for j in 0..n {
+            e.fill(0.0);
+            e[j] = h;
+            tr.update(1.0, &e);
+            assert!(tr.evaluate(false));
+            let rp = tr.residual().to_vec();
+            tr.update(-2.0, &e);
+            assert!(tr.evaluate(false));
+            let rm = tr.residual().to_vec();
+            tr.update(1.0, &e);
+            for i in 0..n {
+                err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
+            }
+        }
+        // Assembly only reads the history.
+        assert_eq!(saved, tr.sys.model.history.data);
+        eprintln!(
+            "{model:?}: time-step tangent with history: max|K − K_fd|/max|K| = {:.2e}",
+            err / kmax
+        );
+        assert!(err / kmax < 1e-6, "{model:?}: {:.3e}", err / kmax);
+    }
+}
+
+#[test]
+fn history_is_committed_only_on_convergence() {
+    let m = visco_annulus(2, 12, ViscoModel::Convolution);
+    let mut tr = Transient::new(
+        SolidSystem::new(m, "hub"),
+        Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+        spin_kinematics(20.0, 0.02),
+        false,
+    );
+    let dofs = tr.sys.dofs.clone();
+    // A step whose Newton cannot converge (one iteration, unreachable tolerance) fails and
+    // leaves the committed history (and the time) untouched.
+    let mut failing = Newton::new(
+        &tr.sys,
+        LinearKind::Cholesky,
+        NewtonOptions {
+            tol: 1e-300,
+            max_iterations: 1,
+            line_search: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let mut good = Newton::new(&tr.sys, LinearKind::Cholesky, newton_opts()).unwrap();
+    for _ in 0..5 {
+        tr.step(&mut good, 1e-3).unwrap();
+    }
+    let before = tr.sys.model.history.data.clone();
+    assert!(
+        before.iter().any(|v| v.abs() > 1e-6),
+        "no history after spin-up steps"
+    );
+    let t = tr.t;
+    assert!(tr.step(&mut failing, 1e-3).is_err());
+    assert_eq!(tr.sys.model.history.data, before);
+    assert_eq!(tr.sys.model.history_dt, 0.0);
+    assert_eq!(tr.t, t);
+    // A converged step changes it, and equals a recomputation from the committed state.
+    let x_before = tr.un.clone();
+    tr.step(&mut good, 1e-3).unwrap();
+    assert_ne!(tr.sys.model.history.data, before);
+    let mut check = tr.sys.model.history.clone();
+    check.data.copy_from_slice(&before);
+    std::mem::swap(&mut tr.sys.model.history, &mut check);
+    let x1 = tr.un.clone();
+    tr.sys.model.commit_history(&dofs, &x1, 1e-3);
+    std::mem::swap(&mut tr.sys.model.history, &mut check);
+    assert_eq!(check.data, tr.sys.model.history.data);
+    assert_ne!(x_before, x1);
+}
+
+/// u at t_end of a spin-up from rest with a viscoelastic material (relaxation times 4 ms and
+/// 50 ms, comparable to the 30 ms ramp).
+fn spin_up(scheme: Scheme, model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
+    let mut tr = Transient::new(
+        SolidSystem::new(visco_annulus(2, 16, model), "hub"),
+        scheme,
+        spin_kinematics(20.0, 0.03),
+        matches!(scheme, Scheme::CentralDifference),
+    );
+    integrate(
+        &mut tr,
+        &opts(dt, t_end),
+        newton_opts(),
+        LinearKind::Cholesky,
+        |_, _| {},
+    )
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
+    tr.un.clone()
+}
+
+#[test]
+fn integrators_keep_their_order_with_history() {
+    let t_end = 0.04;
+    let mut table = Vec::new();
+    for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+        for (name, scheme, dt0) in [
+            (
+                "generalized-α ρ∞=1",
+                Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+                1e-3,
+            ),
+            (
+                "generalized-α ρ∞=0.8",
+                Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+                1e-3,
+            ),
+            ("central difference", Scheme::CentralDifference, 1e-4),
+        ] {
+            let reference = spin_up(scheme, model, dt0 / 32.0, t_end);
+            let norm = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let errs: Vec<f64> = [1.0, 2.0, 4.0]
+                .iter()
+                .map(|f| {
+                    let u = spin_up(scheme, model, dt0 / f, t_end);
+                    u.iter()
+                        .zip(&reference)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt()
+                        / norm
+                })
+                .collect();
+            let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+            eprintln!(
+                "{model:?}, {name}: relative errors {:?}, observed orders {orders:.2?}",
+                errs.iter().map(|e| format!("{e:.2e}")).collect::<Vec<_>>()
+            );
+            table.push((model, name, orders));
+        }
+    }
+    for (model, name, orders) in table {
+        let p = *orders.last().unwrap();
+        assert!(
+            (p - 2.0).abs() < 0.3,
+            "{model:?}, {name}: observed order {p:.2}, expected 2"
+        );
+    }
+}
+
+/// The viscoelastic scene rolls to a steady state, the steady field is extracted, the summary
+/// says the history term is on, and the hysteresis shows: the hub needs a driving torque (the
+/// road is frictionless, so the torque is the moment of the contact pressure) and the contact
+/// patch shifts upstream (material enters it from x1 < 0).
+#[test]
+fn viscoelastic_scene_rolls_to_steady_state() {
+    let s = run_rolling(
+        &scene_text("scenarios/viscoelastic_rolling.toml"),
+        "viscoelastic_rolling",
+        &[],
+    );
+    assert_eq!(s["terms"]["history"], true, "{}", s["terms"]);
+    let r = &s["results"];
+    assert_eq!(r["steady"], true, "{r}");
+    let torque = r["hub_torque_passage_mean"].as_f64().unwrap();
+    let load = -r["hub_force_y_passage_mean"].as_f64().unwrap();
+    let (x0, x1) = (
+        r["contact_x_min"].as_f64().unwrap(),
+        r["contact_x_max"].as_f64().unwrap(),
+    );
+    let mu = torque / (load * 2.0);
+    eprintln!("viscoelastic rolling: T/(P Ro) = {mu:.4}, contact [{x0:.3}, {x1:.3}]");
+    assert!(mu > 0.005, "{mu}");
+    assert!(-x0 > x1 + 0.01, "contact not shifted upstream: [{x0}, {x1}]");
+}
+
+/// Modes and integrators without a history path refuse a viscoelastic material with a clear
+/// error instead of silently dropping the overstress.
+#[test]
+fn unsupported_modes_refuse_viscoelastic_materials() {
+    let text = scene_text("scenarios/viscoelastic_rolling.toml");
+    for (set, needle) in [
+        (vec!["time.integrator=bdf"], "time.integrator"),
+        (vec!["time.integrator=sdirk"], "time.integrator"),
+    ] {
+        let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        let scene = tread::io::Scene::from_toml_str(&text, "v", &set).unwrap();
+        let e = tread::app::build_model(&scene).err().expect("refused");
+        let msg = e.to_string();
+        assert!(msg.contains("material.viscoelastic") && msg.contains(needle), "{msg}");
+    }
+}
