@@ -363,7 +363,7 @@ fn refine_crossing(
     let (mut b, mut fb) = (omegas[k], fk[k]);
     let mut side = 0i32;
     for _ in 0..40 {
-        if (b - a).abs() <= 1e-9 * b {
+        if (b - a).abs() <= 1e-7 * b {
             break;
         }
         let c = (a * fb - b * fa) / (fb - fa);

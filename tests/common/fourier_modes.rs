@@ -34,7 +34,7 @@
 //! W = c1 (J^(−2/3) I1 − 3) + c2 (J^(−4/3) I2 − 3) + κ/2 (J − 1)², I1 = |F|² + 1,
 //! I2 = |F|² + J², written here from that formula.
 
-use super::reference::{radial_solution, RadialSolution};
+use super::reference::{radial_solution_with_steps, RadialSolution};
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// Hyper-dual number a + b ε1 + c ε2 + d ε1ε2 (ε1² = ε2² = 0): exact first and second
@@ -320,30 +320,34 @@ impl FourierModes {
 
     /// Smallest eigenvalue of the mode-n matrix at ω divided by its largest |eigenvalue|.
     pub fn lambda_min(&self, n: usize, omega: f64) -> Result<f64, String> {
-        let base = radial_solution(self.ri, self.ro, self.rho, omega, |l1, l2| {
-            self.mat.principal(l1, l2)
-        })?;
+        // 4000 RK4 steps: the shooting's truncation error is far below the eigenvalue tolerance.
+        let base =
+            radial_solution_with_steps(self.ri, self.ro, self.rho, omega, 4000, |l1, l2| {
+                self.mat.principal(l1, l2)
+            })?;
         let e = SymmetricEigen::new(self.matrix(&base, n, omega)).eigenvalues;
         let lmin = e.iter().cloned().fold(f64::INFINITY, f64::min);
         let lmax = e.iter().map(|v| v.abs()).fold(0.0, f64::max);
         Ok(lmin / lmax)
     }
 
-    /// First crossing speed of mode n in (0, omega_max], scanning with `samples` intervals and
-    /// refining by Illinois regula falsi to 1e-10 relative.
+    /// First crossing speed of mode n in (omega_lo, omega_max] (λ_min must be positive at
+    /// omega_lo), scanning with `samples` intervals and refining by Illinois regula falsi to
+    /// 1e-10 relative.
     pub fn crossing(
         &self,
         n: usize,
+        omega_lo: f64,
         omega_max: f64,
         samples: usize,
     ) -> Result<Option<f64>, String> {
-        let mut a = omega_max / samples as f64;
+        let mut a = omega_lo;
         let mut fa = self.lambda_min(n, a)?;
         if fa <= 0.0 {
-            return Ok(Some(a));
+            return Err(format!("mode {n} is already unstable at {omega_lo} rad/s"));
         }
-        for k in 2..=samples {
-            let b0 = omega_max * k as f64 / samples as f64;
+        for k in 1..=samples {
+            let b0 = omega_lo + (omega_max - omega_lo) * k as f64 / samples as f64;
             let fb0 = self.lambda_min(n, b0)?;
             if fb0 > 0.0 {
                 a = b0;
