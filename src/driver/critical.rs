@@ -751,30 +751,29 @@ fn rolling_critical(
     let mut states: Vec<Vec<f64>> = Vec::new();
     let mut sig: Vec<f64> = Vec::new();
     let mut om: Vec<f64> = Vec::new();
-    for k in 0..=samples {
-        let w = w0 + dw * k as f64;
+    // March in ω; where Newton fails, halve the step from the last converged speed (down to
+    // dw / 512) to approach the end of the branch, and double it again after two successes.
+    let (mut w, mut step, mut ok_run) = (w0, dw, 0usize);
+    while w <= omega_max * (1.0 + 1e-12) {
         if let Err(e) = solve_at(st, &mut newton, w) {
-            // Retry in four sub-steps from the last converged speed before giving up.
-            let mut ok = false;
-            if let Some(x) = states.last() {
-                st.restore_state(x);
-                let wl = *om.last().unwrap_or(&w0);
-                ok = (1..=4)
-                    .all(|i| solve_at(st, &mut newton, wl + (w - wl) * i as f64 / 4.0).is_ok());
+            let Some(x) = states.last() else {
+                return Err(solve_err(e, format!("steady state at {w} rad/s")));
+            };
+            st.restore_state(x);
+            let wl = *om.last().unwrap_or(&w0);
+            if step > dw / 512.0 {
+                step *= 0.5;
+                ok_run = 0;
+                w = wl + step;
+                continue;
             }
-            if !ok {
-                report.branch_end = Some(format!(
-                    "Newton did not converge at {w:.4} rad/s ({e}); the sweep stops at {:.4} rad/s",
-                    om.last().copied().unwrap_or(w0)
-                ));
-                if let Some(x) = states.last() {
-                    st.restore_state(x);
-                }
-                break;
-            }
+            report.branch_end = Some(format!(
+                "Newton did not converge at {w:.6} rad/s ({e}); the steady branch ends between {wl:.6} and {w:.6} rad/s"
+            ));
+            break;
         }
         let (s, neg) = probe
-            .probe(st, 12)
+            .probe(st, 30)
             .map_err(|e| AppError::Unsupported(format!("critical: {e}")))?;
         let (f, _) = st.sys.hub_reaction();
         report.sweep.push(SweepRow {
@@ -793,8 +792,50 @@ fn rolling_critical(
         states.push(x);
         sig.push(s);
         om.push(w);
+        ok_run += 1;
+        if ok_run >= 2 && step < dw {
+            step = (2.0 * step).min(dw);
+            ok_run = 0;
+        }
+        w += step;
     }
     let s_ref = sig.first().copied().unwrap_or(f64::NAN);
+    // Symmetric tangent (no friction, no damping): a change of the inertia between two
+    // speeds brackets a crossing; located by bisection on the negative-eigenvalue count.
+    for k in 1..sig.len() {
+        let (Some(na), Some(nb)) = (
+            report.sweep[k - 1].negative_eigenvalues,
+            report.sweep[k].negative_eigenvalues,
+        ) else {
+            continue;
+        };
+        if na == nb {
+            continue;
+        }
+        let (mut a, mut b) = (om[k - 1], om[k]);
+        let mut n_upper = report.sweep[k].n_dominant;
+        for _ in 0..14 {
+            let c = 0.5 * (a + b);
+            st.restore_state(&states[k - 1]);
+            if solve_at(st, &mut newton, c).is_err() {
+                break;
+            }
+            let Ok((_, nc)) = probe.probe(st, 30) else {
+                break;
+            };
+            if nc == Some(na) {
+                a = c;
+            } else {
+                b = c;
+                n_upper = dominant_wave_number(st, &probe.v);
+            }
+        }
+        report.crossings.push(Crossing {
+            n: n_upper,
+            omega: 0.5 * (a + b),
+        });
+    }
+
     // Local minima of σ_min (interior, or a sign change of the inertia) refined by
     // golden-section search.
     for k in 1..sig.len().saturating_sub(1) {
@@ -805,7 +846,7 @@ fn rolling_critical(
             (Some(a), Some(b)) => a != b,
             _ => false,
         };
-        if !(sig[k] <= sig[k - 1] && sig[k] <= sig[k + 1]) && !inertia_jump {
+        if !(sig[k] <= sig[k - 1] && sig[k] <= sig[k + 1]) || inertia_jump {
             continue;
         }
         let (mut a, mut b) = (om[k - 1], om[k + 1]);
@@ -860,6 +901,7 @@ fn rolling_critical(
     if let Some(x) = states.last() {
         st.restore_state(x);
     }
+    report.crossings.sort_by(|a, b| a.omega.total_cmp(&b.omega));
     if let Some(c) = report.crossings.first() {
         report.omega_crit = Some(c.omega);
         report.n_star = Some(c.n);
