@@ -61,6 +61,33 @@ enum Command {
         #[arg(short, long)]
         verbose: bool,
     },
+    /// Critical speeds of the steady operator (standing waves): OUT/critical.json with
+    /// `omega_crit` (rad/s), `n_star` and the crossing speed of every wave number (spinning
+    /// scene, or any scene with --no-contact) or the singular points along the steady branch
+    /// (rolling scene), plus OUT/crossings.csv (and OUT/sweep.csv for a rolling scene).
+    Critical {
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>_critical/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Largest wave number (default: all the mesh resolves, n_theta / 2).
+        #[arg(long)]
+        n_max: Option<usize>,
+        /// Upper end of the speed search, rad/s (default: 2 × (rolling: 1.6 ×) the Rayleigh
+        /// estimate 0.955 sqrt(G / rho) / Ro).
+        #[arg(long)]
+        omega_max: Option<f64>,
+        /// Speeds sampled before the crossings are refined.
+        #[arg(long, default_value_t = 48)]
+        samples: usize,
+        /// Ignore the scene's road: the spinning cylinder.
+        #[arg(long)]
+        no_contact: bool,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(short, long)]
+        verbose: bool,
+    },
     /// Validate a scene and print it with every default filled in.
     Check {
         scene: PathBuf,
@@ -201,6 +228,48 @@ fn main() -> ExitCode {
             verbose,
         }) => match load(&scene, &set) {
             Ok(s) => run_with(s, out, verbose, cli.quiet, true),
+            Err(e) => {
+                eprintln!("tread: invalid scene:\n{e}");
+                ExitCode::from(2)
+            }
+        },
+        Some(Command::Critical {
+            scene,
+            out,
+            n_max,
+            omega_max,
+            samples,
+            no_contact,
+            set,
+            verbose,
+        }) => match load(&scene, &set) {
+            Ok(s) => {
+                let opts = tread::driver::critical::CriticalOptions {
+                    n_max,
+                    omega_max,
+                    samples,
+                    no_contact,
+                    verbose,
+                };
+                let dir = out.unwrap_or_else(|| {
+                    app::default_out_dir(&s).with_file_name(format!("{}_critical", s.scene.name))
+                });
+                match tread::driver::critical::run(&s, &opts)
+                    .and_then(|r| tread::driver::critical::write(&r, &dir).map(|()| r))
+                {
+                    Ok(r) => {
+                        if !cli.quiet {
+                            println!("{}", tread::driver::critical::headline(&r));
+                        }
+                        println!("results written to {}", dir.join("critical.json").display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("tread: error: {e}");
+                        ExitCode::from(e.exit_code())
+                    }
+                }
+            }
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{e}");
                 ExitCode::from(2)

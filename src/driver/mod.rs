@@ -1,6 +1,7 @@
 //! Drivers: build a model from a scene, run an analysis, collect results.
 
 pub mod compare;
+pub mod critical;
 pub mod frame;
 pub mod indentation;
 pub mod spinning;

@@ -1,1 +1,2 @@
+pub mod fourier_modes;
 pub mod reference;
