@@ -9,8 +9,9 @@ Meshes (all .msh 4.1, physical groups: 1D "hub" and "contact", 2D regions):
   built-in generator (radii uniform, angles -pi/2 + 2 pi k / 16). The annulus is cut into
   4 sectors x 2 layers, each a transfinite surface, so that every cell edge lies on a geometric
   line or circle arc and Gmsh puts the mid-side nodes of order 2 at the mid-radius / mid-angle
-  (as the generator does). Only the cell centres are moved onto (r_mid, theta_mid) before
-  writing: Gmsh places them by blending the edge nodes. 2D group "annulus".
+  (as the generator does). Before writing, every node is snapped onto the generator's polar
+  grid (Gmsh's arcs are within ~1e-9 of it; the cell centres are blends of the edge nodes).
+  2D group "annulus".
 * scenarios/two_layer.msh: a soft tread (ri_t = 1.6 .. ro = 2) over a stiffer core
   (ri = 0.5 .. 1.6), unstructured 9-node quadrilaterals, 2D groups "core" and "tread".
 * scenarios/footprint_refined.msh: the annulus ri = 1, ro = 2 with unstructured 9-node
@@ -65,20 +66,18 @@ def structured_annulus(path, order, binary=False, ri=1.0, ro=2.0, n_r=2, n_theta
     gmsh.model.mesh.generate(2)
     if order == 2:
         gmsh.model.mesh.setOrder(2)
-        # Cell centres at the polar centre (r_mid, theta_mid), as the generator puts them.
-        etype = gmsh.model.mesh.getElementType("Quadrangle", 2)
-        _, enodes = gmsh.model.mesh.getElementsByType(etype)
-        for e in range(len(enodes) // 9):
-            tags = enodes[9 * e:9 * e + 9]
-            xs = [gmsh.model.mesh.getNode(t)[0] for t in tags[:4]]
-            r = [math.hypot(x[0], x[1]) for x in xs]
-            th = [math.atan2(x[1], x[0]) for x in xs]
-            # Mean angle of the corners, robust across the +-pi cut.
-            sx = sum(math.cos(t) for t in th)
-            sy = sum(math.sin(t) for t in th)
-            tm = math.atan2(sy, sx)
-            rm = 0.5 * (min(r) + max(r))
-            gmsh.model.mesh.setNode(int(tags[8]), [rm * math.cos(tm), rm * math.sin(tm), 0.0], [])
+    # Snap every node onto the generator's polar grid (radii ri + (ro - ri) i / (order n_r),
+    # angles -pi/2 + 2 pi k / (order n_theta)): Gmsh's transfinite arcs put nodes within ~1e-9 of
+    # it, and it places the cell centres by blending the edge nodes.
+    tags, xyz, _ = gmsh.model.mesh.getNodes()
+    dr = (ro - ri) / (order * n_r)
+    dt = 2 * math.pi / (order * n_theta)
+    for k, tag in enumerate(tags):
+        x, y = xyz[3 * k], xyz[3 * k + 1]
+        i = round((math.hypot(x, y) - ri) / dr)
+        l = round((math.atan2(y, x) + math.pi / 2) / dt)
+        r, t = ri + dr * i, -math.pi / 2 + dt * l
+        gmsh.model.mesh.setNode(int(tag), [r * math.cos(t), r * math.sin(t), 0.0], [])
     gmsh.option.setNumber("Mesh.Binary", 1 if binary else 0)
     gmsh.write(path)
     gmsh.finalize()
@@ -130,7 +129,7 @@ def two_layer(path, ri=0.5, rm=1.6, ro=2.0, h_core=0.6, h_tread=0.3):
     gmsh.finalize()
 
 
-def footprint_refined(path, ri=1.0, ro=2.0, h_fine=0.06, h_coarse=0.4, order=2):
+def footprint_refined(path, ri=1.0, ro=2.0, h_fine=0.08, h_coarse=0.5, order=2):
     """Annulus refined toward the contact patch at the bottom (theta = -pi/2)."""
     init("footprint")
     occ = gmsh.model.occ
@@ -160,8 +159,8 @@ def footprint_refined(path, ri=1.0, ro=2.0, h_fine=0.06, h_coarse=0.4, order=2):
     f.setNumber(2, "InField", 1)
     f.setNumber(2, "SizeMin", h_fine)
     f.setNumber(2, "SizeMax", h_coarse)
-    f.setNumber(2, "DistMin", 0.35)
-    f.setNumber(2, "DistMax", 2.0)
+    f.setNumber(2, "DistMin", 0.3)
+    f.setNumber(2, "DistMax", 1.5)
     f.setAsBackgroundMesh(2)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
@@ -177,6 +176,23 @@ def footprint_refined(path, ri=1.0, ro=2.0, h_fine=0.06, h_coarse=0.4, order=2):
     gmsh.finalize()
 
 
+def triangles(path):
+    """A small triangle mesh of the annulus (for the importer's error test: not quadrilaterals)."""
+    init("triangles")
+    occ = gmsh.model.occ
+    ring, _ = occ.cut([(2, occ.addDisk(0, 0, 0, 2, 2))], [(2, occ.addDisk(0, 0, 0, 1, 1))])
+    occ.synchronize()
+    surf = [s for _, s in ring]
+    curves = sorted({abs(t) for _, t in gmsh.model.getBoundary([(2, s) for s in surf], oriented=False)})
+    gmsh.model.addPhysicalGroup(1, curves[:1], name="hub")
+    gmsh.model.addPhysicalGroup(1, curves[1:], name="contact")
+    gmsh.model.addPhysicalGroup(2, surf, name="rubber")
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.8)
+    gmsh.model.mesh.generate(2)
+    gmsh.write(path)
+    gmsh.finalize()
+
+
 def main():
     tests = os.path.join(ROOT, "tests", "gmsh_data")
     scen = os.path.join(ROOT, "scenarios")
@@ -184,6 +200,7 @@ def main():
     structured_annulus(os.path.join(tests, "annulus_q1.msh"), 1)
     structured_annulus(os.path.join(tests, "annulus_q2.msh"), 2)
     structured_annulus(os.path.join(tests, "annulus_q2_binary.msh"), 2, binary=True)
+    triangles(os.path.join(tests, "triangles.msh"))
     two_layer(os.path.join(scen, "two_layer.msh"))
     footprint_refined(os.path.join(scen, "footprint_refined.msh"))
     return 0

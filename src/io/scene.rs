@@ -2219,7 +2219,10 @@ impl Ctx<'_> {
             let toml::Value::Table(mut t) = item else {
                 self.push(
                     format!("material[{i}]"),
-                    format!("expected a table ([[material]]), found {}", describe_value(&item)),
+                    format!(
+                        "expected a table ([[material]]), found {}",
+                        describe_value(&item)
+                    ),
                 );
                 continue;
             };
@@ -2600,7 +2603,10 @@ fn validate_mesh_file(
     match &m.file {
         Some(f) => {
             if f.trim().is_empty() {
-                out.push(issue("mesh.file", "must name a .msh file, got an empty string"));
+                out.push(issue(
+                    "mesh.file",
+                    "must name a .msh file, got an empty string",
+                ));
             }
             for key in ["n_r", "n_theta", "order", "grading_r", "grading_theta"] {
                 if table_has(doc, "mesh", key) {

@@ -101,6 +101,31 @@ impl PointLocator {
     }
 }
 
+impl PointLocator {
+    /// As [`Self::locate`], but always returns a cell: when no cell holds `x` within
+    /// [`EXTRAPOLATION`], the cell whose reference point is innermost, with (ξ, η) clamped to
+    /// [-1, 1]² (or cell 0 at its centre for an empty bucket). For points known to lie in the
+    /// domain up to round-off (rotated mesh nodes).
+    pub fn locate_nearest(&self, mesh: &Mesh, x: Vec2) -> (usize, f64, f64) {
+        if let Some(r) = self.locate(mesh, x) {
+            return r;
+        }
+        let (i, j) = bucket_of(self.lo, self.h, self.nx, self.ny, x);
+        let b = i + self.nx * j;
+        let mut best = (f64::INFINITY, 0, 0.0, 0.0);
+        for &c in &self.cells[self.start[b]..self.start[b + 1]] {
+            let c = c as usize;
+            if let Some((xi, eta)) = inverse_map(mesh, c, x) {
+                let d = xi.abs().max(eta.abs());
+                if d < best.0 {
+                    best = (d, c, xi.clamp(-1.0, 1.0), eta.clamp(-1.0, 1.0));
+                }
+            }
+        }
+        (best.1, best.2, best.3)
+    }
+}
+
 fn bucket_of(lo: Vec2, h: Vec2, nx: usize, ny: usize, x: Vec2) -> (usize, usize) {
     let f = |v: f64, n: usize| -> usize {
         if v.is_finite() && v > 0.0 {

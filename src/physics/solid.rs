@@ -152,7 +152,10 @@ impl SolidModel {
     /// Reference pressure of cell `c` (0 for a compressible model).
     #[inline]
     pub fn p0_of(&self, c: usize) -> f64 {
-        match (self.pressure, self.region_materials.get(self.mesh.regions[c] as usize)) {
+        match (
+            self.pressure,
+            self.region_materials.get(self.mesh.regions[c] as usize),
+        ) {
             (PressureMode::None, _) => 0.0,
             (_, Some(r)) => r.p0,
             _ => self.p0(),
