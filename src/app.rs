@@ -126,7 +126,14 @@ pub fn default_out_dir(scene: &Scene) -> PathBuf {
 
 /// Material law and pressure treatment of a scene.
 pub fn build_material(scene: &Scene) -> Result<(Material, PressureMode), AppError> {
-    let params = scene.material.params().ok_or_else(|| {
+    build_material_spec(&scene.material)
+}
+
+/// Material law and pressure treatment of one `[material]` (or `[[material]]` entry).
+pub fn build_material_spec(
+    spec: &crate::io::scene::MaterialSpec,
+) -> Result<(Material, PressureMode), AppError> {
+    let params = spec.params().ok_or_else(|| {
         AppError::Unsupported(
             "material: a parameter required by `material.model` is missing".into(),
         )
@@ -239,6 +246,9 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
             ms.order
         )));
     }
+    if let Some(file) = &ms.file {
+        return build_model_from_file(scene, file, material, pressure);
+    }
     let mut mesh = annulus(&AnnulusSpec {
         ri: scene.geometry.ri,
         ro: scene.geometry.ro,
@@ -288,6 +298,70 @@ fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
         }
     }
     Ok(())
+}
+
+/// The model of a scene whose mesh is a Gmsh file (`[mesh] file`), with a material per region
+/// when the scene has `[[material]]`.
+fn build_model_from_file(
+    scene: &Scene,
+    file: &str,
+    material: Material,
+    pressure: PressureMode,
+) -> Result<SolidModel, AppError> {
+    use crate::io::scene::{DEFAULT_CONTACT_GROUP, DEFAULT_HUB_GROUP};
+    use crate::mesh::gmsh::{read_msh, GmshGroups, MeshError};
+    let ms = &scene.mesh;
+    let groups = GmshGroups {
+        hub: ms.hub.clone().unwrap_or_else(|| DEFAULT_HUB_GROUP.into()),
+        contact: ms
+            .contact
+            .clone()
+            .unwrap_or_else(|| DEFAULT_CONTACT_GROUP.into()),
+        regions: scene.regions.iter().map(|r| r.region.clone()).collect(),
+    };
+    let bad = |message: String| {
+        AppError::Unsupported(
+            MeshError {
+                file: file.to_string(),
+                message,
+            }
+            .to_string(),
+        )
+    };
+    let mesh = read_msh(Path::new(file), &groups).map_err(|e| bad(e.message))?;
+    if !matches!(pressure, PressureMode::None) && mesh.degree.iter().any(|&p| p != 2) {
+        return Err(bad(
+            "incompressible materials need 9-node quadrilaterals (Q2 displacements with P1 \
+             pressures); the file has 4-node ones"
+                .into(),
+        ));
+    }
+    // The road is placed from geometry.ro (first touch at H = ro): the mesh must reach it.
+    let ro = mesh.outer_radius();
+    let ro_scene = scene.geometry.ro;
+    if (ro - ro_scene).abs() > 1e-6 * ro_scene.abs().max(f64::MIN_POSITIVE) {
+        return Err(bad(format!(
+            "the mesh's outer radius (largest |X| of a node) is {ro}, but geometry.ro = {ro_scene}"
+        )));
+    }
+    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    if !scene.regions.is_empty() {
+        let mut regions = Vec::new();
+        for r in &scene.regions {
+            let (m, p) = build_material_spec(&r.material)?;
+            let p0 = match p {
+                PressureMode::Exact { p0 } | PressureMode::Perturbed { p0, .. } => p0,
+                PressureMode::None => 0.0,
+            };
+            regions.push(crate::physics::solid::RegionMaterial {
+                material: m,
+                rho: r.material.rho,
+                p0,
+            });
+        }
+        model.set_region_materials(regions);
+    }
+    Ok(model)
 }
 
 /// Linear solver for a scene's system: Cholesky for symmetric positive problems, LU for the

@@ -1,5 +1,6 @@
 //! The contact element: integration of normal compliance and friction over the outer facets
-//! of the mesh (side ξ = +1 of the outer layer of cells).
+//! of the mesh (the facet set `outer`: side ξ = +1 of the outer layer of cells of the generated
+//! annulus, any side of any cell in a mesh read from a file).
 //!
 //! Residual contribution (R = internal − external, the contact traction being external):
 //!
@@ -203,9 +204,10 @@ impl ContactModel {
         }
     }
 
-    /// Local node indices of side ξ = +1 of a degree-p cell, in η order.
-    fn side_nodes(p: usize) -> impl Iterator<Item = usize> {
-        (0..=p).map(move |j| p + (p + 1) * j)
+    /// Local node indices of facet `f` of a degree-p cell, in the order of the facet parameter.
+    fn side_nodes(f: &Facet, p: usize) -> impl Iterator<Item = usize> {
+        let ln = f.local_nodes(p);
+        (0..=p).map(move |j| ln[j])
     }
 
     /// Dof lists of the contact elements (full numbering): facet node dofs, then the road
@@ -217,7 +219,7 @@ impl ContactModel {
             let c = f.cell as usize;
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
-            for a in Self::side_nodes(p) {
+            for a in Self::side_nodes(f, p) {
                 list.push(2 * nodes[a]);
                 list.push(2 * nodes[a] + 1);
             }
@@ -247,22 +249,25 @@ impl ContactModel {
     }
 
     /// Reference position, reference length weight and angle at facet point `q`.
+    #[allow(clippy::too_many_arguments)]
     fn facet_point(
         &self,
         mesh: &Mesh,
-        c: usize,
+        f: &Facet,
         q: usize,
         n: &[f64; 3],
         dn: &[f64; 3],
         p: usize,
     ) -> FacetPoint {
-        let eta = self.pts[q];
-        let (x, t) = if let Some((x, jac)) = mesh.geometry[c].polar_map(1.0, eta) {
-            (x, Vec2::new(jac[(0, 1)], jac[(1, 1)]))
+        let c = f.cell as usize;
+        let (xi, eta) = f.ref_point(self.pts[q]);
+        let (x, t) = if let Some((x, jac)) = mesh.geometry[c].polar_map(xi, eta) {
+            let k = f.tangent_column();
+            (x, Vec2::new(jac[(0, k)], jac[(1, k)]))
         } else {
             let nodes = mesh.cell_nodes(c);
             let (mut x, mut t) = (Vec2::zeros(), Vec2::zeros());
-            for (j, a) in Self::side_nodes(p).enumerate() {
+            for (j, a) in Self::side_nodes(f, p).enumerate() {
                 let xa = mesh.nodes[nodes[a] as usize];
                 x += xa * n[j];
                 t += xa * dn[j];
@@ -282,17 +287,19 @@ impl ContactModel {
     }
 
     /// Whether a facet can touch the road (see module docs).
-    fn can_touch(&self, mesh: &Mesh, c: usize, x: &[f64], h: f64) -> bool {
+    fn can_touch(&self, mesh: &Mesh, f: &Facet, x: &[f64], h: f64) -> bool {
+        let c = f.cell as usize;
         let p = mesh.degree[c] as usize;
         let nodes = mesh.cell_nodes(c);
         let pos = |a: usize| {
             let n = nodes[a] as usize;
             mesh.nodes[n] + Vec2::new(x[2 * n], x[2 * n + 1])
         };
-        let first = pos(p);
-        let last = pos(p + (p + 1) * p);
+        let ln = f.local_nodes(p);
+        let first = pos(ln[0]);
+        let last = pos(ln[p]);
         let margin = 0.1 * (last - first).norm();
-        Self::side_nodes(p).any(|a| pos(a)[1] < -h + margin)
+        Self::side_nodes(f, p).any(|a| pos(a)[1] < -h + margin)
     }
 
     /// Displacement and velocity at facet point `q` of cell `c` (see [`SlipKinematics`] for
@@ -379,19 +386,19 @@ impl ContactModel {
             // R_H = P − ∫ t_n ds0: the load enters once, through the first contact element.
             loc.r[ih] += self.load.unwrap_or(0.0);
         }
-        if !self.can_touch(mesh, c, x, h) {
+        if !self.can_touch(mesh, &f, x, h) {
             return;
         }
         self.visited.fetch_add(1, Ordering::Relaxed);
         let nodes = mesh.cell_nodes(c);
-        let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+        let side = f.local_nodes(p);
         let nd = loc.nd;
         let friction = self.friction.is_active();
         let (kx, kv, dynamic) = self.kinematics.factors();
         let damping = dynamic && self.normal.has_damping();
         for q in 0..self.pts.len() {
             let (nv, dv) = lagrange_1d(p, self.pts[q]);
-            let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+            let fp = self.facet_point(mesh, &f, q, &nv, &dv, p);
             let (u, vel) = self.point_motion(nodes, &side, nn, &nv, &fp, x, aux);
             let xc = fp.x + u;
             let delta = -h - xc[1];
@@ -463,11 +470,11 @@ impl ContactModel {
             let c = f.cell as usize;
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
-            let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+            let side = f.local_nodes(p);
             let mut m = [[0.0f64; 3]; 3];
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
-                let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+                let fp = self.facet_point(mesh, f, q, &nv, &dv, p);
                 for a in 0..=p {
                     for b in 0..=p {
                         m[a][b] += nv[a] * nv[b] * fp.ds0;
@@ -498,10 +505,10 @@ impl ContactModel {
             let c = f.cell as usize;
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
-            let side: [usize; 3] = [p, p + (p + 1), p + 2 * (p + 1)];
+            let side = f.local_nodes(p);
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
-                let fp = self.facet_point(mesh, c, q, &nv, &dv, p);
+                let fp = self.facet_point(mesh, f, q, &nv, &dv, p);
                 let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, &fp, x, aux);
                 let xc = fp.x + u;
                 let delta = -h - xc[1];

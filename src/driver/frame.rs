@@ -100,21 +100,21 @@ pub fn nodal_stress_at(sys: &SolidSystem, x: &[f64]) -> Vec<[f64; 3]> {
 pub fn energy(sys: &SolidSystem) -> Energy {
     let model = &sys.model;
     let rule = QuadRule::gauss_2d(3);
-    let w0 = model.material.energy(&Mat2::zeros());
     let omega2 = model.omega2.max(0.0);
     let mut e = Energy::default();
     for c in 0..model.mesh.n_cells() {
+        let w0 = model.material_of(c).energy(&Mat2::zeros());
         for (pt, w) in rule.points.iter().zip(&rule.weights) {
             if let Some(pv) = model.point_values(c, &sys.dofs, &sys.x, pt.0, pt.1) {
                 let dv = pv.jac.determinant() * w;
-                let wv = model.material.energy(&pv.grad_u) - w0;
+                let wv = model.material_of(c).energy(&pv.grad_u) - w0;
                 if wv.is_finite() {
                     e.strain += wv * dv;
                 }
                 if omega2 > 0.0 {
                     let t = Vec2::new(-pv.x[1], pv.x[0]);
                     let v = (Mat2::identity() + pv.grad_u) * t;
-                    e.kinetic += 0.5 * model.rho * omega2 * v.norm_squared() * dv;
+                    e.kinetic += 0.5 * model.rho_of(c) * omega2 * v.norm_squared() * dv;
                 }
             }
         }

@@ -13,6 +13,7 @@ use super::system::SolidSystem;
 use crate::element::gauss_1d;
 use crate::io::record::Recorder;
 use crate::math::{Mat2, Vec2};
+use crate::mesh::Facet;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 
@@ -48,19 +49,18 @@ fn polar_components(x: &Vec2, s: &Mat2) -> (f64, f64, f64) {
     )
 }
 
-/// Average of (u_r, σ_r, σ_θ) along the cell side ξ = `xi` of the cells `cells`.
-fn side_average(
-    sys: &SolidSystem,
-    cells: impl Iterator<Item = usize>,
-    xi: f64,
-    nq: usize,
-) -> (f64, f64, f64, f64) {
+/// Average of (u_r, σ_r, σ_θ) along the facets `facets` (any mesh: the facet sets `hub` and
+/// `outer`).
+fn side_average(sys: &SolidSystem, facets: &[Facet], nq: usize) -> (f64, f64, f64, f64) {
     let (pts, ws) = gauss_1d(nq);
     let (mut len, mut ur, mut sr, mut st) = (0.0, 0.0, 0.0, 0.0);
-    for c in cells {
-        for (eta, w) in pts.iter().zip(&ws) {
-            if let Some(pv) = sys.model.point_values(c, &sys.dofs, &sys.x, xi, *eta) {
-                let ds = Vec2::new(pv.jac[(0, 1)], pv.jac[(1, 1)]).norm() * w;
+    for f in facets {
+        let c = f.cell as usize;
+        let k = f.tangent_column();
+        for (s, w) in pts.iter().zip(&ws) {
+            let (xi, eta) = f.ref_point(*s);
+            if let Some(pv) = sys.model.point_values(c, &sys.dofs, &sys.x, xi, eta) {
+                let ds = Vec2::new(pv.jac[(0, k)], pv.jac[(1, k)]).norm() * w;
                 let (a, b, _) = polar_components(&pv.x, &pv.sigma);
                 len += ds;
                 ur += pv.u.dot(&(pv.x / pv.x.norm())) * ds;
@@ -73,14 +73,12 @@ fn side_average(
 }
 
 pub fn results(sys: &SolidSystem) -> SpinningResults {
-    let Some(rl) = sys.model.mesh.rings else {
+    let mesh = &sys.model.mesh;
+    if mesh.facet_set("hub").is_empty() || mesh.facet_set("outer").is_empty() {
         return SpinningResults::default();
-    };
-    let nt = rl.n_theta;
-    let inner = 0..nt;
-    let outer = (rl.n_r - 1) * nt..rl.n_r * nt;
-    let (_, _, sri, sti) = side_average(sys, inner, -1.0, 4);
-    let (_, uro, sro, sto) = side_average(sys, outer, 1.0, 4);
+    }
+    let (_, _, sri, sti) = side_average(sys, mesh.facet_set("hub"), 4);
+    let (_, uro, sro, sto) = side_average(sys, mesh.facet_set("outer"), 4);
     let max_u = (0..sys.model.mesh.n_nodes())
         .map(|n| Vec2::new(sys.x[2 * n], sys.x[2 * n + 1]).norm())
         .fold(0.0, f64::max);

@@ -173,6 +173,16 @@ pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
 pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
     let mut model = build_model(scene)?;
     model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
+    if model.strain_rate_damping > 0.0 && model.mesh.rings.is_none() {
+        // The steady damping's velocity ω ∂θχ comes from differences along node rings.
+        return Err(AppError::Unsupported(format!(
+            "time.strain_rate_damping = {} in the steady mode needs a ring-structured mesh (the \
+             generated annulus): the steady velocity field is built from differences along node \
+             rings; this mesh (mesh.file) has none. Set time.strain_rate_damping = 0 or use the \
+             generated mesh",
+            model.strain_rate_damping
+        )));
+    }
     let sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;

@@ -25,6 +25,14 @@
 //!   from the two bracketing steps). Rolling is steady when that field, the hub forces and the
 //!   torque change by less than `steady_tol` (relative) over two consecutive passages (and
 //!   the hub speed, which varies under torque control).
+//!   On a mesh without rings (read from a file) the referential field is interpolated instead:
+//!   at the passage angle φ = kΔθ (Δθ = 2π / number of contact facets, at least 8 per turn),
+//!   referential node Y_j sees the material point X* = Q(−φ) Y_j, located in the reference
+//!   mesh ([`crate::mesh::locate`]) and evaluated with its cell's shape functions:
+//!   χ(Y_j) = X* + u(X*). The isoparametric cells reproduce the rigid rotation in u exactly, so
+//!   the interpolation error is that of the elastic part only. On such a mesh the discretisation
+//!   itself rotates through the contact patch, so the passage-to-passage changes do not go to
+//!   zero but to the level of the discretisation error.
 //! * Torque control ([`Transient::enable_torque_control`]): the hub angle φ is a global unknown
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
@@ -1018,8 +1026,11 @@ impl NonlinearSystem for Transient {
 /// Steady-state monitor: the referential field at node passages.
 pub struct SteadyMonitor {
     pub dtheta: f64,
+    /// Ring structure used for re-indexing (0 and 0 when the field is interpolated).
     pub rings: usize,
     pub per_ring: usize,
+    /// Point location for meshes without rings (the field is interpolated).
+    locator: Option<crate::mesh::locate::PointLocator>,
     last_k: i64,
     prev: Option<(Vec<f64>, Snapshot)>,
     /// Relative changes at the last passage: (field, force, torque).
@@ -1043,13 +1054,23 @@ pub struct SteadyMonitor {
 
 impl SteadyMonitor {
     pub fn new(sys: &SolidSystem) -> Option<Self> {
-        let rl = sys.model.mesh.rings?;
+        let mesh = &sys.model.mesh;
         // The mesh repeats itself every cell, not every node (Q2: vertex and mid-side nodes
-        // alternate), so the passages are taken every p node steps = one cell.
+        // alternate), so the passages are taken every p node steps = one cell. Without rings:
+        // about one passage per contact facet.
+        let (dtheta, rings, per_ring, locator) = match mesh.rings {
+            Some(rl) => (2.0 * PI / rl.n_theta as f64, rl.rings, rl.per_ring, None),
+            None => {
+                let n = mesh.facet_set("outer").len().max(8);
+                let loc = crate::mesh::locate::PointLocator::new(mesh);
+                (2.0 * PI / n as f64, 0, 0, Some(loc))
+            }
+        };
         Some(Self {
-            dtheta: 2.0 * PI / rl.n_theta as f64,
-            rings: rl.rings,
-            per_ring: rl.per_ring,
+            dtheta,
+            rings,
+            per_ring,
+            locator,
             last_k: i64::MIN,
             prev: None,
             last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::INFINITY),
@@ -1138,8 +1159,34 @@ impl SteadyMonitor {
         let mesh = &tr.sys.model.mesh;
         let per = self.per_ring;
         let mut field = vec![0.0; 2 * mesh.n_nodes()];
-        let kk = (k1 * (per / (2.0 * PI / self.dtheta).round() as usize) as i64)
-            .rem_euclid(per as i64) as usize;
+        if let Some(loc) = &self.locator {
+            // Interpolation: χ(Y_j) = X* + u(X*) with X* = Q(−φ) Y_j.
+            let n2 = 2 * mesh.n_nodes();
+            let u_ts: Vec<f64> = (0..n2)
+                .map(|i| h00 * u0[i] + h10 * h * v0[i] + h01 * tr.un[i] + h11 * h * tr.vn[i])
+                .collect();
+            let (sn, cs) = target.sin_cos();
+            let mut nv = [0.0; 9];
+            for (j, y) in mesh.nodes.iter().enumerate() {
+                let xs = crate::math::Vec2::new(cs * y[0] + sn * y[1], -sn * y[0] + cs * y[1]);
+                let (c, xi, eta) = loc.locate_nearest(mesh, xs);
+                crate::mesh::locate::shape_values(mesh, c, xi, eta, &mut nv);
+                let mut u = crate::math::Vec2::zeros();
+                for (a, &n) in mesh.cell_nodes(c).iter().enumerate() {
+                    let n = n as usize;
+                    u += crate::math::Vec2::new(u_ts[2 * n], u_ts[2 * n + 1]) * nv[a];
+                }
+                let chi = xs + u;
+                field[2 * j] = chi[0] - y[0];
+                field[2 * j + 1] = chi[1] - y[1];
+            }
+        }
+        let kk = if per > 0 {
+            (k1 * (per / (2.0 * PI / self.dtheta).round() as usize) as i64).rem_euclid(per as i64)
+                as usize
+        } else {
+            0
+        };
         for m in 0..self.rings {
             for l in 0..per {
                 let i = m * per + l;

@@ -11,11 +11,14 @@
 //! [scene]     name, description = "", units = "in-lbf-s"
 //! [geometry]  ri, ro
 //! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
+//!             | file = "tyre.msh", hub = "hub", contact = "contact"   (a Gmsh .msh 4.1 mesh)
 //! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
 //!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
 //! [material.viscoelastic]  model = "convolution" | "multiplicative", gamma, prony = [[g, tau], ...]
 //!             (optional: a Prony-series overstress on the elastic law; `gamma` in stress
 //!             units, `g` dimensionless, `tau` in time units; see `material::viscoelastic`)
+//! [[material]] region = "<2D physical group of mesh.file>", then the keys of [material]
+//!             (one per region; instead of a single [material])
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
 //!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
@@ -397,6 +400,19 @@ pub struct Scene {
     pub solver: SolverSpec,
     #[serde(default)]
     pub output: OutputSpec,
+    /// `[[material]]`: one material per mesh region (a 2D physical group of `mesh.file`), in the
+    /// file's order. Empty for a scene with a single `[material]`; otherwise `material` holds the
+    /// first region's material (for scales such as the shear wave speed).
+    #[serde(skip)]
+    pub regions: Vec<RegionMaterial>,
+}
+
+/// One `[[material]]` entry: the material of a mesh region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionMaterial {
+    /// Name of a 2D physical group of the mesh file.
+    pub region: String,
+    pub material: MaterialSpec,
 }
 
 /// `[scene]`.
@@ -440,7 +456,22 @@ pub struct MeshSpec {
     pub grading_r: f64,
     /// Fraction in [0, 1) of circumferential refinement toward θ = −π/2 (the road); 0 = uniform.
     pub grading_theta: f64,
+    /// A Gmsh `.msh` 4.1 mesh instead of the generated annulus (relative paths are relative to
+    /// the scene file). Then `n_r`, `n_theta`, `order`, `grading_r`, `grading_theta` are not used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// 1D physical group of `file` bonded to the hub (default "hub").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hub: Option<String>,
+    /// 1D physical group of `file` where contact with the road can happen (default "contact").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<String>,
 }
+
+/// Default `[mesh] hub` group name.
+pub const DEFAULT_HUB_GROUP: &str = "hub";
+/// Default `[mesh] contact` group name.
+pub const DEFAULT_CONTACT_GROUP: &str = "contact";
 
 impl Default for MeshSpec {
     fn default() -> Self {
@@ -450,6 +481,9 @@ impl Default for MeshSpec {
             order: 2,
             grading_r: 1.0,
             grading_theta: 0.0,
+            file: None,
+            hub: None,
+            contact: None,
         }
     }
 }
@@ -1375,6 +1409,9 @@ impl Scene {
         };
 
         ctx.apply_overrides(&mut doc, overrides);
+        // `[[material]]`: the first entry goes through the `[material]` path (its errors name
+        // `material.<key>`), the others are checked here (`material[<region>].<key>`).
+        let region_tables = ctx.take_region_materials(&mut doc);
         let clean = ctx.check_schema(&doc);
 
         let info: Option<SceneInfo> = ctx.required_section(&clean, "scene");
@@ -1394,6 +1431,10 @@ impl Scene {
         let output: Option<OutputSpec> = ctx.optional_section(&clean, "output");
 
         let mut out = Vec::new();
+        let mut regions = ctx.region_materials(&region_tables, &mut out);
+        if let Some(m) = &mesh {
+            validate_mesh_file(m, &region_tables, &doc, &mut out);
+        }
         if let Some(s) = &info {
             validate_info(s, &mut out);
         }
@@ -1465,7 +1506,9 @@ impl Scene {
             validate_mode_sections(mode, &used, &mut out);
         }
         if let (Some(m), Some(Some(t))) = (&mesh, &time) {
-            validate_steady_extraction(mode, m, t, &mut out);
+            if m.file.is_none() {
+                validate_steady_extraction(mode, m, t, &mut out);
+            }
         }
         if let Some(s) = &solver {
             validate_solver(s, &mut out);
@@ -1523,6 +1566,13 @@ impl Scene {
             }]));
         };
         material.resolve();
+        if let (Some(first), Some((name, _))) = (regions.first_mut(), region_tables.first()) {
+            // The first region's material is `material` itself.
+            *first = RegionMaterial {
+                region: name.clone(),
+                material: material.clone(),
+            };
+        }
         if let Some(t) = time.as_mut() {
             if !time_mass_given {
                 t.mass = t.effective_mass();
@@ -1543,6 +1593,7 @@ impl Scene {
             continuation,
             solver,
             output,
+            regions,
         })
     }
 
@@ -1550,7 +1601,15 @@ impl Scene {
     pub fn from_path(path: &Path, overrides: &[String]) -> Result<Scene, SceneErrors> {
         let name = path.display().to_string();
         match std::fs::read_to_string(path) {
-            Ok(text) => Scene::from_toml_str(&text, &name, overrides),
+            Ok(text) => Scene::from_toml_str(&text, &name, overrides).map(|mut s| {
+                // A relative mesh file is relative to the scene file.
+                if let (Some(f), Some(dir)) = (&s.mesh.file, path.parent()) {
+                    if Path::new(f).is_relative() && !dir.as_os_str().is_empty() {
+                        s.mesh.file = Some(dir.join(f).display().to_string());
+                    }
+                }
+                s
+            }),
             Err(e) => Err(SceneErrors(vec![SceneError {
                 key: String::new(),
                 line: None,
@@ -1623,9 +1682,31 @@ impl Scene {
 
     /// The resolved scene (defaults filled) as TOML, for `tread check`. Parses back to `self`.
     pub fn to_toml_string(&self) -> String {
+        if !self.regions.is_empty() {
+            return self.to_toml_string_regions();
+        }
         match toml::to_string_pretty(self) {
             Ok(s) => s,
             // Only possible for non-finite floats in a scene built in code.
+            Err(e) => format!("# cannot write scene as TOML: {e}\n"),
+        }
+    }
+
+    /// [`Self::to_toml_string`] of a scene with `[[material]]` regions.
+    fn to_toml_string_regions(&self) -> String {
+        let table = toml::Table::try_from(self).and_then(|mut t| {
+            let mut arr = Vec::new();
+            for r in &self.regions {
+                let mut m = toml::Table::try_from(&r.material)?;
+                m.insert("region".into(), toml::Value::String(r.region.clone()));
+                arr.push(toml::Value::Table(m));
+            }
+            t.insert("material".into(), toml::Value::Array(arr));
+            Ok(t)
+        });
+        match table.map(|t| toml::to_string_pretty(&t)) {
+            Ok(Ok(s)) => s,
+            Ok(Err(e)) => format!("# cannot write scene as TOML: {e}\n"),
             Err(e) => format!("# cannot write scene as TOML: {e}\n"),
         }
     }
@@ -1717,6 +1798,9 @@ static SCHEMA: &[SectionSchema] = &[
             opt("order", Kind::UInt),
             opt("grading_r", Kind::Float),
             opt("grading_theta", Kind::Float),
+            opt("file", Kind::Str),
+            opt("hub", Kind::Str),
+            opt("contact", Kind::Str),
         ],
     },
     SectionSchema {
@@ -2229,6 +2313,159 @@ impl Ctx<'_> {
         clean
     }
 
+    /// Take `[[material]]` out of the document: returns (region, table) per entry and puts the
+    /// first entry back as `[material]`. Entries that are not tables or lack a string `region`
+    /// are reported and dropped.
+    fn take_region_materials(&mut self, doc: &mut toml::Table) -> Vec<(String, toml::Table)> {
+        let Some(toml::Value::Array(items)) = doc.get("material").cloned() else {
+            return Vec::new();
+        };
+        doc.remove("material");
+        let mut out: Vec<(String, toml::Table)> = Vec::new();
+        for (i, item) in items.into_iter().enumerate() {
+            let toml::Value::Table(mut t) = item else {
+                self.push(
+                    format!("material[{i}]"),
+                    format!(
+                        "expected a table ([[material]]), found {}",
+                        describe_value(&item)
+                    ),
+                );
+                continue;
+            };
+            let region = match t.remove("region") {
+                Some(toml::Value::String(s)) if !s.is_empty() => s,
+                Some(v) => {
+                    self.push(
+                        format!("material[{i}].region"),
+                        format!("expected a non-empty string, found {}", describe_value(&v)),
+                    );
+                    continue;
+                }
+                None => {
+                    self.push(
+                        format!("material[{i}].region"),
+                        "required key is missing: each [[material]] names its mesh region \
+                         (a 2D physical group of mesh.file)",
+                    );
+                    continue;
+                }
+            };
+            if out.iter().any(|(r, _)| *r == region) {
+                self.push(
+                    format!("material[{region}]"),
+                    "region given twice in [[material]]",
+                );
+                continue;
+            }
+            out.push((region, t));
+        }
+        match out.first() {
+            Some((_, t)) => {
+                doc.insert("material".into(), toml::Value::Table(t.clone()));
+            }
+            None => {
+                // Nothing usable: report the section as missing through the schema pass.
+            }
+        }
+        out
+    }
+
+    /// Check and deserialize the `[[material]]` entries after the first (which is `[material]`);
+    /// returns one placeholder per entry (the first is filled in by the caller).
+    fn region_materials(
+        &mut self,
+        tables: &[(String, toml::Table)],
+        out: &mut Vec<Issue>,
+    ) -> Vec<RegionMaterial> {
+        let mut regions = Vec::new();
+        let Some(schema) = section_schema("material") else {
+            return regions;
+        };
+        for (k, (region, table)) in tables.iter().enumerate() {
+            let prefix = format!("material[{region}]");
+            if k == 0 {
+                regions.push(RegionMaterial {
+                    region: region.clone(),
+                    material: MaterialSpec {
+                        model: MaterialModel::NeoHookean,
+                        rho: 0.0,
+                        mu: None,
+                        lambda: None,
+                        c1: None,
+                        c2: None,
+                        kappa: None,
+                        formulation: None,
+                    },
+                });
+                continue;
+            }
+            let mut clean = toml::Table::new();
+            let mut complete = true;
+            for (key, value) in table {
+                match schema.field(key) {
+                    None => self.push(
+                        format!("{prefix}.{key}"),
+                        format!(
+                            "unknown key; keys of [[material]] are region, {}",
+                            schema.key_list()
+                        ),
+                    ),
+                    Some(field) => match check_kind(field.kind, value) {
+                        Ok(()) => {
+                            clean.insert(key.clone(), value.clone());
+                        }
+                        Err(msg) => {
+                            complete = false;
+                            self.push(format!("{prefix}.{key}"), msg);
+                        }
+                    },
+                }
+            }
+            for field in schema.fields.iter().filter(|f| f.required) {
+                if !table.contains_key(field.key) {
+                    complete = false;
+                    self.push(format!("{prefix}.{}", field.key), "required key is missing");
+                }
+            }
+            if !complete {
+                continue;
+            }
+            let Some(mut spec) =
+                self.deserialize_section::<MaterialSpec>(&toml::Value::Table(clean), &prefix)
+            else {
+                continue;
+            };
+            let mut issues = Vec::new();
+            validate_material(&spec, &mut issues);
+            for mut i in issues {
+                if let Some(rest) = i.key.strip_prefix("material.") {
+                    i.key = format!("{prefix}.{rest}");
+                }
+                out.push(i);
+            }
+            spec.resolve();
+            regions.push(RegionMaterial {
+                region: region.clone(),
+                material: spec,
+            });
+        }
+        let incompressible: Vec<bool> = tables
+            .iter()
+            .map(|(_, t)| {
+                matches!(t.get("model"), Some(toml::Value::String(m)) if m == "mooney_rivlin_incompressible")
+            })
+            .collect();
+        if incompressible.iter().any(|&b| b) && !incompressible.iter().all(|&b| b) {
+            out.push(issue(
+                "material",
+                "[[material]] regions mix incompressible and compressible models: the pressure \
+                 field is common to the whole mesh, use one kind",
+            ));
+        }
+        regions
+    }
+
     /// Deserialize a required section; `None` if absent or incomplete (already reported).
     fn required_section<T: DeserializeOwned>(
         &mut self,
@@ -2459,6 +2696,60 @@ fn validate_geometry(g: &Geometry, out: &mut Vec<Issue>) {
             "geometry.ro",
             format!("outer radius must be > 0, got {}", g.ro),
         ));
+    }
+}
+
+/// `[mesh] file` and its companions: the group names only with a file, the generator's keys
+/// not with one, `[[material]]` only with one.
+fn validate_mesh_file(
+    m: &MeshSpec,
+    regions: &[(String, toml::Table)],
+    doc: &toml::Table,
+    out: &mut Vec<Issue>,
+) {
+    match &m.file {
+        Some(f) => {
+            if f.trim().is_empty() {
+                out.push(issue(
+                    "mesh.file",
+                    "must name a .msh file, got an empty string",
+                ));
+            }
+            for key in ["n_r", "n_theta", "order", "grading_r", "grading_theta"] {
+                if table_has(doc, "mesh", key) {
+                    out.push(issue(
+                        format!("mesh.{key}"),
+                        "not used with mesh.file (the mesh comes from the file); remove it",
+                    ));
+                }
+            }
+            for (key, v) in [("hub", &m.hub), ("contact", &m.contact)] {
+                if v.as_deref().is_some_and(|s| s.trim().is_empty()) {
+                    out.push(issue(
+                        format!("mesh.{key}"),
+                        "must name a 1D physical group of mesh.file, got an empty string",
+                    ));
+                }
+            }
+        }
+        None => {
+            for (key, v) in [("hub", &m.hub), ("contact", &m.contact)] {
+                if v.is_some() {
+                    out.push(issue(
+                        format!("mesh.{key}"),
+                        "names a physical group of a mesh file: only with mesh.file",
+                    ));
+                }
+            }
+            if !regions.is_empty() {
+                out.push(issue_near(
+                    "material",
+                    "[[material]] (a material per mesh region) needs a mesh file with regions \
+                     (mesh.file); use a single [material] with the generated annulus",
+                    "mesh",
+                ));
+            }
+        }
     }
 }
 

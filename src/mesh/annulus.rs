@@ -159,6 +159,8 @@ pub fn annulus(spec: &AnnulusSpec) -> Mesh {
             n_theta,
             degree: p,
         }),
+        regions: vec![0; n_cells],
+        region_names: vec!["all".to_string()],
     }
 }
 

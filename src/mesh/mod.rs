@@ -4,9 +4,17 @@
 //! different degree can coexist: p-refinement), a per-cell geometry map, named node sets and
 //! named facet sets. The structured annulus generator ([`annulus`]) numbers nodes ring by ring,
 //! so that each ring of nodes — and each ring of quadrature points — is a closed streamline of
-//! the spinning body (see [`RingLayout`]).
+//! the spinning body (see [`RingLayout`]). Meshes read from Gmsh files ([`gmsh`]) have no ring
+//! structure (`rings == None`): every code path that needs rings has a fallback or says so.
+//!
+//! Regions: each cell carries a region index ([`Mesh::regions`], names in
+//! [`Mesh::region_names`]); the material of a cell is that of its region. Named boundaries are
+//! the facet sets (`hub`: bonded to the rigid hub, `outer`: where contact can happen) and the
+//! node sets of their nodes.
 
 pub mod annulus;
+pub mod gmsh;
+pub mod locate;
 
 use crate::math::{Mat2, Vec2};
 use std::collections::BTreeMap;
@@ -76,6 +84,44 @@ pub struct Facet {
     pub side: u8,
 }
 
+impl Facet {
+    /// Local (tensor-order) nodes of this side of a degree-`p` cell, in the order of the side's
+    /// parameter s (η on sides 0 and 1, ξ on sides 2 and 3); the first `p + 1` entries are used.
+    #[inline]
+    pub fn local_nodes(&self, p: usize) -> [usize; 3] {
+        let m = p + 1;
+        let mut out = [0; 3];
+        for (k, o) in out.iter_mut().enumerate().take(m) {
+            *o = match self.side {
+                0 => m * k,
+                1 => p + m * k,
+                2 => k,
+                _ => k + m * p,
+            };
+        }
+        out
+    }
+    /// Reference point (ξ, η) of the side at parameter s ∈ [-1, 1].
+    #[inline]
+    pub fn ref_point(&self, s: f64) -> (f64, f64) {
+        match self.side {
+            0 => (-1.0, s),
+            1 => (1.0, s),
+            2 => (s, -1.0),
+            _ => (s, 1.0),
+        }
+    }
+    /// Column of dX/d(ξ, η) tangent to the side: 1 (∂X/∂η) on sides 0 and 1, 0 on 2 and 3.
+    #[inline]
+    pub fn tangent_column(&self) -> usize {
+        if self.side < 2 {
+            1
+        } else {
+            0
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub nodes: Vec<Vec2>,
@@ -89,6 +135,10 @@ pub struct Mesh {
     pub node_sets: BTreeMap<String, Vec<u32>>,
     pub facet_sets: BTreeMap<String, Vec<Facet>>,
     pub rings: Option<RingLayout>,
+    /// Region index of each cell (into `region_names`).
+    pub regions: Vec<u16>,
+    /// Region names; the generator's single region is `"all"`.
+    pub region_names: Vec<String>,
 }
 
 impl Mesh {

@@ -53,10 +53,25 @@ pub enum PressureMode {
 /// Body force per unit reference volume as a function of X (manufactured solutions).
 pub type BodyForce = Box<dyn Fn(Vec2) -> Vec2 + Send + Sync>;
 
-pub struct SolidModel {
-    pub mesh: Mesh,
+/// Material and density of one mesh region (see [`SolidModel::set_region_materials`]).
+#[derive(Clone, Debug)]
+pub struct RegionMaterial {
     pub material: Material,
     pub rho: f64,
+    /// Reference pressure of an incompressible law (0 otherwise): the unconstrained W is not
+    /// stress free at F = I, p0 = ½ tr ∂W/∂F(I) makes it so.
+    pub p0: f64,
+}
+
+pub struct SolidModel {
+    pub mesh: Mesh,
+    /// The material of every cell when `region_materials` is empty; otherwise the first
+    /// region's (used only for scales such as the small-strain shear modulus).
+    pub material: Material,
+    pub rho: f64,
+    /// Material per mesh region (cell c uses `region_materials[mesh.regions[c]]`); empty: one
+    /// material (`material`, `rho`) everywhere.
+    pub region_materials: Vec<RegionMaterial>,
     /// ω² (rad²/s²).
     pub omega2: f64,
     pub pressure: PressureMode,
@@ -109,6 +124,7 @@ impl SolidModel {
             mesh,
             material,
             rho,
+            region_materials: Vec::new(),
             omega2: 0.0,
             pressure,
             body_force: None,
@@ -120,6 +136,46 @@ impl SolidModel {
             q1: ShapeTable::gauss::<Q1>(2),
             q2: ShapeTable::gauss::<Q2>(3),
             inverted: AtomicBool::new(false),
+        }
+    }
+
+    /// One material per mesh region. The pressure treatment (`pressure`) is common to all
+    /// regions; each region's reference pressure p0 comes with its material.
+    pub fn set_region_materials(&mut self, regions: Vec<RegionMaterial>) {
+        if let Some(r) = regions.first() {
+            self.material = r.material;
+            self.rho = r.rho;
+        }
+        self.region_materials = regions;
+    }
+
+    /// Material of cell `c`.
+    #[inline]
+    pub fn material_of(&self, c: usize) -> &Material {
+        self.region_materials
+            .get(self.mesh.regions[c] as usize)
+            .map_or(&self.material, |r| &r.material)
+    }
+
+    /// Density of cell `c`.
+    #[inline]
+    pub fn rho_of(&self, c: usize) -> f64 {
+        match self.region_materials.get(self.mesh.regions[c] as usize) {
+            Some(r) => r.rho,
+            None => self.rho,
+        }
+    }
+
+    /// Reference pressure of cell `c` (0 for a compressible model).
+    #[inline]
+    pub fn p0_of(&self, c: usize) -> f64 {
+        match (
+            self.pressure,
+            self.region_materials.get(self.mesh.regions[c] as usize),
+        ) {
+            (PressureMode::None, _) => 0.0,
+            (_, Some(r)) => r.p0,
+            _ => self.p0(),
         }
     }
 
@@ -144,7 +200,7 @@ impl SolidModel {
         let mut x = vec![0.0; dofs.n_full()];
         if dofs.per_cell == 3 {
             for c in 0..self.mesh.n_cells() {
-                x[dofs.n_u + 3 * c] = self.p0();
+                x[dofs.n_u + 3 * c] = self.p0_of(c);
             }
         }
         x
@@ -188,7 +244,7 @@ impl SolidModel {
         for k in 0..tab.len() {
             let (xi, eta) = tab.points[k];
             let (_, jac) = self.map(c, xi, eta, &tab.n[k], &tab.dn[k]);
-            let w = tab.weights[k] * jac.determinant() * self.rho;
+            let w = tab.weights[k] * jac.determinant() * self.rho_of(c);
             for a in 0..N {
                 for b in 0..N {
                     out[a * N + b] += tab.n[k][a] * tab.n[k][b] * w;
@@ -308,8 +364,10 @@ impl SolidModel {
             for (i, xi) in pts.iter().enumerate() {
                 for (j, eta) in pts.iter().enumerate() {
                     if let Some(pv) = self.point_values(c, dofs, x, *xi, *eta) {
-                        e +=
-                            self.material.energy(&pv.grad_u) * ws[i] * ws[j] * pv.jac.determinant();
+                        e += self.material_of(c).energy(&pv.grad_u)
+                            * ws[i]
+                            * ws[j]
+                            * pv.jac.determinant();
                     }
                 }
             }
@@ -500,8 +558,8 @@ impl SolidModel {
                 );
                 (true, true, 0.0)
             }
-            PressureMode::Perturbed { kappa, p0 } => {
-                match self.perturbed_pressure::<N>(c, tab, u, kappa, p0) {
+            PressureMode::Perturbed { kappa, .. } => {
+                match self.perturbed_pressure::<N>(c, tab, u, kappa, self.p0_of(c)) {
                     Some((p, mi)) => {
                         pc = p;
                         minv = mi;
@@ -520,7 +578,8 @@ impl SolidModel {
             (Vec2::zeros(), 1.0)
         };
         let dcof = crate::material::invariants::dcof_df();
-        let rw2 = self.rho * self.omega2;
+        let rw2 = self.rho_of(c) * self.omega2;
+        let material = self.material_of(c);
         // Kup for condensation (perturbed): 18 × 3.
         let mut kup = [[0.0f64; 3]; 18];
         let mut g = [[0.0; 2]; N];
@@ -537,9 +596,9 @@ impl SolidModel {
             }
             let w = pg.w;
             let (mut p_st, mut a_t) = if with_k {
-                self.material.stress_tangent(&h)
+                material.stress_tangent(&h)
             } else {
-                (self.material.stress(&h), Tangent::zeros())
+                (material.stress(&h), Tangent::zeros())
             };
             if let Some(ve) = &self.viscoelastic {
                 let mut new = [0.0; MAX_STATE];
@@ -720,7 +779,7 @@ impl SolidModel {
         for a in 0..N {
             disp += Vec2::new(u[2 * a], u[2 * a + 1]) * tab.n[0][a];
         }
-        let mut p_st = self.material.stress(&h);
+        let mut p_st = self.material_of(c).stress(&h);
         let f = Mat2::identity() + h;
         let pcoef = match self.pressure {
             PressureMode::None => None,
@@ -729,7 +788,8 @@ impl SolidModel {
                 x[cd[nu + 1] as usize],
                 x[cd[nu + 2] as usize],
             )),
-            PressureMode::Perturbed { kappa, p0 } => {
+            PressureMode::Perturbed { kappa, .. } => {
+                let p0 = self.p0_of(c);
                 let rule = if N == 9 {
                     &self.q2 as &dyn std::any::Any
                 } else {
