@@ -2396,6 +2396,7 @@ impl Ctx<'_> {
                         c2: None,
                         kappa: None,
                         formulation: None,
+                        viscoelastic: None,
                     },
                 });
                 continue;
