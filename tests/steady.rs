@@ -460,7 +460,14 @@ fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
     // reaches a state that solves the scene's own equations.
     for (set, strategy) in [
         (
-            vec!["analysis.mode=\"steady\"", "material.kappa=2e8"],
+            // With the non-smooth damping l_n = 0 (the scene's smooth l_n = 1 law lets the
+            // direct press converge at this κ).
+            vec![
+                "analysis.mode=\"steady\"",
+                "material.kappa=2e8",
+                "contact.b_n=5",
+                "contact.l_n=0",
+            ],
             "kappa_homotopy",
         ),
         (
@@ -504,12 +511,22 @@ fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
 
 #[test]
 fn a_target_the_strategies_cannot_reach_fails_with_every_attempt_logged() {
-    // oden_hollow_cylinder (m_n = 1, b_n = 5, l_n = 0) at 42 rad/s, close to the critical
+    // oden_hollow_cylinder with b_n = 5 psi·s/in, l_n = 0 (m_n = 1) at 42 rad/s, close to the critical
     // speed: the direct press fails, and so do the strategies (ω stepping stops short of 42).
     // (Before the steady strain-rate damping used nodal velocities, 38 rad/s was such a case.)
     // The run must fail with the direct error and log what it tried.
+    // The scene's damping is now the smooth l_n = 1 law; the non-smooth l_n = 0 law is set here.
     let v0 = format!("road.v0={}", 42.0 * 1.966667);
-    let (summary, ok) = run_steady(&["analysis.mode=\"steady\"", "motion.omega=42", &v0], "gap");
+    let (summary, ok) = run_steady(
+        &[
+            "analysis.mode=\"steady\"",
+            "motion.omega=42",
+            &v0,
+            "contact.b_n=5",
+            "contact.l_n=0",
+        ],
+        "gap",
+    );
     assert!(!ok);
     assert_eq!(summary["converged"], false);
     let rec = &summary["solver"]["recovery"];
@@ -524,4 +541,26 @@ fn a_target_the_strategies_cannot_reach_fails_with_every_attempt_logged() {
         .as_str()
         .unwrap()
         .contains("load stepping gave up"));
+}
+
+#[test]
+fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
+    // The default scene (m_n = 1, damping b_n δ δ̇ with l_n = 1, vanishing at first contact)
+    // on its own mesh, at every ω = 1, 2, …, 60 rad/s with the scene's ratio v0 / ω: the press
+    // alone (no recovery strategy) converges, through the critical speed (≈ 41 rad/s). With
+    // l_n = 0 it fails at 42 rad/s (see the test above).
+    let mut failed = Vec::new();
+    for w in 1..=60 {
+        let omega = w as f64;
+        let set = [
+            "analysis.mode=\"steady\"".to_string(),
+            format!("motion.omega={omega}"),
+            format!("road.v0={}", 19.666667 / 10.0 * omega),
+        ];
+        let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
+        if !direct_press_converges(&scene(ODEN, &set)) {
+            failed.push(w);
+        }
+    }
+    assert!(failed.is_empty(), "direct steady solve failed at ω = {failed:?} rad/s");
 }
