@@ -36,8 +36,20 @@ fn steady_solution(text: &str, set: &[&str]) -> (Scene, SteadyRolling) {
 /// max |K − K_fd| / max |K| of a steady rolling system.
 fn fd_error(sys: &mut SolidSystem) -> f64 {
     assert!(sys.evaluate(true));
-    let k = sys.asm.to_dense();
+    let mut k = sys.asm.to_dense();
     let n = sys.n_eq();
+    // The exact Jacobian is the assembled matrix plus the remainder operator (the damping's
+    // velocity couplings beyond the cell, see `SolidSystem::enable_steady_viscosity`).
+    let (mut ej, mut cj) = (vec![0.0; n], vec![0.0; n]);
+    for j in 0..n {
+        ej.fill(0.0);
+        ej[j] = 1.0;
+        if sys.jacobian_remainder(&ej, &mut cj) {
+            for i in 0..n {
+                k[i][j] += cj[i];
+            }
+        }
+    }
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut err = 0.0f64;
     let mut e = vec![0.0; n];
@@ -55,7 +67,15 @@ fn fd_error(sys: &mut SolidSystem) -> f64 {
         let rm = res(sys);
         sys.update(1.0, &e);
         for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
+            let d = ((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs();
+            if d > err && std::env::var_os("FD_DEBUG").is_some() {
+                eprintln!(
+                    "i {i} j {j}: fd {} k {}",
+                    (rp[i] - rm[i]) / (2.0 * h),
+                    k[i][j]
+                );
+            }
+            err = err.max(d);
         }
     }
     err / kmax
@@ -65,15 +85,24 @@ fn fd_error(sys: &mut SolidSystem) -> f64 {
 fn steady_tangent_matches_finite_differences() {
     // Isoparametric Q2 annulus pressed 0.15 into the road, spinning, with Coulomb friction
     // (tanh), normal damping and strain-rate damping: every term of the steady residual.
-    for (load, eta) in [(None, 0.0), (None, 3.0), (Some(40.0), 3.0)] {
+    // The velocities are the lumped-L2 projection of ω ∂θχ_h (any mesh): also on a graded
+    // (non-uniform) circumferential mesh and on Q1 cells. The exact Jacobian is the assembled
+    // matrix plus the remainder operator.
+    for (load, eta, grading, degree) in [
+        (None, 0.0, 0.0, 2),
+        (None, 3.0, 0.0, 2),
+        (Some(40.0), 3.0, 0.0, 2),
+        (None, 3.0, 0.6, 2),
+        (Some(40.0), 3.0, 0.6, 1),
+    ] {
         let mut mesh = annulus(&AnnulusSpec {
             ri: 1.0,
             ro: 2.0,
             n_r: 2,
-            n_theta: 12,
-            degree: 2,
+            n_theta: if degree == 1 { 24 } else { 12 },
+            degree,
             grading_r: 1.0,
-            grading_theta: 0.0,
+            grading_theta: grading,
         });
         mesh.make_isoparametric();
         let mat: Material = MooneyRivlin::new(80.0, 20.0, 4000.0).into();
@@ -99,7 +128,14 @@ fn steady_tangent_matches_finite_differences() {
             }
         }
         let e = fd_error(&mut st.sys);
-        println!("load = {load:?}, eta = {eta}: max |K - K_fd| / max |K| = {e:.3e}");
+        println!(
+            "load = {load:?}, eta = {eta}, grading {grading}, Q{degree}: max |K - K_fd| / max |K| = {e:.3e}"
+        );
+        // With damping the remainder is not empty (the check covers it).
+        let n = st.sys.n_eq();
+        let (ones, mut out) = (vec![1.0; n], vec![0.0; n]);
+        let has = st.sys.jacobian_remainder(&ones, &mut out);
+        assert_eq!(has, eta > 0.0);
         assert!(e < 1e-6, "steady tangent vs finite differences: {e:.3e}");
     }
 }
@@ -460,7 +496,14 @@ fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
     // reaches a state that solves the scene's own equations.
     for (set, strategy) in [
         (
-            vec!["analysis.mode=\"steady\"", "material.kappa=2e8"],
+            // With the non-smooth damping l_n = 0 (the scene's smooth l_n = 1 law lets the
+            // direct press converge at this κ).
+            vec![
+                "analysis.mode=\"steady\"",
+                "material.kappa=2e8",
+                "contact.b_n=5",
+                "contact.l_n=0",
+            ],
             "kappa_homotopy",
         ),
         (
@@ -504,12 +547,22 @@ fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
 
 #[test]
 fn a_target_the_strategies_cannot_reach_fails_with_every_attempt_logged() {
-    // oden_hollow_cylinder (m_n = 1, b_n = 5, l_n = 0) at 42 rad/s, close to the critical
+    // oden_hollow_cylinder with b_n = 5 psi·s/in, l_n = 0 (m_n = 1) at 42 rad/s, close to the critical
     // speed: the direct press fails, and so do the strategies (ω stepping stops short of 42).
     // (Before the steady strain-rate damping used nodal velocities, 38 rad/s was such a case.)
     // The run must fail with the direct error and log what it tried.
+    // The scene's damping is now the smooth l_n = 1 law; the non-smooth l_n = 0 law is set here.
     let v0 = format!("road.v0={}", 42.0 * 1.966667);
-    let (summary, ok) = run_steady(&["analysis.mode=\"steady\"", "motion.omega=42", &v0], "gap");
+    let (summary, ok) = run_steady(
+        &[
+            "analysis.mode=\"steady\"",
+            "motion.omega=42",
+            &v0,
+            "contact.b_n=5",
+            "contact.l_n=0",
+        ],
+        "gap",
+    );
     assert!(!ok);
     assert_eq!(summary["converged"], false);
     let rec = &summary["solver"]["recovery"];
@@ -524,4 +577,29 @@ fn a_target_the_strategies_cannot_reach_fails_with_every_attempt_logged() {
         .as_str()
         .unwrap()
         .contains("load stepping gave up"));
+}
+
+#[test]
+fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
+    // The default scene (m_n = 1, damping b_n δ δ̇ with l_n = 1, vanishing at first contact)
+    // on its own mesh, at every ω = 1, 2, …, 60 rad/s with the scene's ratio v0 / ω: the press
+    // alone (no recovery strategy) converges, through the critical speed (≈ 41 rad/s). With
+    // l_n = 0 it fails at 42 rad/s (see the test above).
+    let mut failed = Vec::new();
+    for w in 1..=60 {
+        let omega = w as f64;
+        let set = [
+            "analysis.mode=\"steady\"".to_string(),
+            format!("motion.omega={omega}"),
+            format!("road.v0={}", 19.666667 / 10.0 * omega),
+        ];
+        let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
+        if !direct_press_converges(&scene(ODEN, &set)) {
+            failed.push(w);
+        }
+    }
+    assert!(
+        failed.is_empty(),
+        "direct steady solve failed at ω = {failed:?} rad/s"
+    );
 }
