@@ -45,6 +45,10 @@ enum Command {
         /// Print the Newton convergence table of every load step.
         #[arg(short, long)]
         verbose: bool,
+        /// Steady mode: write the tangent at the converged state to PATH (MatrixMarket
+        /// coordinate real general) and the right-hand side -R to <stem>_rhs.mtx beside it.
+        #[arg(long, value_name = "PATH")]
+        dump_matrix: Option<PathBuf>,
     },
     /// Run a rolling scene in both modes (transient until steady, then steady) and compare
     /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png,
@@ -84,7 +88,7 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
 }
 
 fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {
-    run_with(scene, out, verbose, quiet, false)
+    run_with(scene, out, verbose, quiet, false, None)
 }
 
 fn run_with(
@@ -93,6 +97,7 @@ fn run_with(
     verbose: bool,
     quiet: bool,
     compare: bool,
+    dump_matrix: Option<&Path>,
 ) -> ExitCode {
     let out_dir = out.unwrap_or_else(|| {
         let d = app::default_out_dir(&scene);
@@ -116,6 +121,8 @@ fn run_with(
     };
     let result = if compare {
         tread::driver::compare::run(&scene, &opts)
+    } else if let Some(p) = dump_matrix {
+        tread::driver::steady_run::run_with_dump(&scene, &opts, Some(p))
     } else {
         app::run(&scene, &opts)
     };
@@ -170,18 +177,29 @@ fn main() -> ExitCode {
             mut set,
             mode,
             verbose,
+            dump_matrix,
         }) => {
             if let Some(m) = mode {
                 set.push(format!("analysis.mode=\"{m}\""));
             }
             match load(&scene, &set) {
+                Ok(s)
+                    if dump_matrix.is_some()
+                        && s.analysis.mode != tread::io::scene::Mode::Steady =>
+                {
+                    eprintln!(
+                        "tread: --dump-matrix writes the steady tangent: it needs analysis mode \"steady\" (--mode steady), not \"{}\"",
+                        s.analysis.mode
+                    );
+                    ExitCode::from(2)
+                }
                 Ok(s) => {
                     if threads == 0 && s.solver.threads > 0 {
                         let _ = rayon::ThreadPoolBuilder::new()
                             .num_threads(s.solver.threads)
                             .build_global();
                     }
-                    run_scene(s, out, verbose, cli.quiet)
+                    run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
                 }
                 Err(e) => {
                     eprintln!("tread: invalid scene:\n{e}");
@@ -195,7 +213,7 @@ fn main() -> ExitCode {
             set,
             verbose,
         }) => match load(&scene, &set) {
-            Ok(s) => run_with(s, out, verbose, cli.quiet, true),
+            Ok(s) => run_with(s, out, verbose, cli.quiet, true, None),
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{e}");
                 ExitCode::from(2)

@@ -33,8 +33,10 @@ use crate::io::scene::{ContinuationParameter, Scene, Sink};
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
+use crate::solver::linear::{write_matrix_market, write_vector_market};
 use crate::solver::stepping::{LoadedSystem, StepReport};
 use crate::solver::{LinearKind, NonlinearSystem, SolveError};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// One row of the branch table.
@@ -264,6 +266,49 @@ pub fn warnings(_scene: &Scene) -> Vec<String> {
 }
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    run_with_dump(scene, opts, None)
+}
+
+/// The MatrixMarket files written by `--dump-matrix PATH`: the tangent at PATH and the
+/// right-hand side −R next to it (`<stem>_rhs.mtx`).
+pub fn dump_paths(path: &Path) -> (PathBuf, PathBuf) {
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "steady".into(), |s| s.to_string_lossy().into_owned());
+    let rhs = path.with_file_name(format!("{stem}_rhs.mtx"));
+    (path.to_path_buf(), rhs)
+}
+
+/// Write the steady tangent dR/dx (MatrixMarket coordinate real general) and the right-hand
+/// side −R (array) at the current state: after a converged solve, the matrix of the next
+/// Newton iteration. Unknowns in the system's order (displacements, then any hub/road
+/// unknowns).
+pub fn dump_tangent(st: &mut SteadyRolling, path: &Path) -> Result<(PathBuf, PathBuf), AppError> {
+    st.sys.evaluate(true);
+    let (a, b) = dump_paths(path);
+    let (cp, ri) = st.sys.pattern();
+    let rhs: Vec<f64> = st.sys.residual().iter().map(|r| -r).collect();
+    let io = |p: &Path, e: std::io::Error| {
+        AppError::Output(crate::io::output::OutputError {
+            path: p.to_path_buf(),
+            source: e,
+        })
+    };
+    if let Some(d) = a.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| io(d, e))?;
+    }
+    write_matrix_market(&a, st.sys.n_eq(), cp, ri, st.sys.matrix_values())
+        .map_err(|e| io(&a, e))?;
+    write_vector_market(&b, &rhs).map_err(|e| io(&b, e))?;
+    Ok((a, b))
+}
+
+/// [`run`], and with `dump` = Some(PATH) the converged tangent written by [`dump_tangent`].
+pub fn run_with_dump(
+    scene: &Scene,
+    opts: &RunOptions,
+    dump: Option<&Path>,
+) -> Result<RunOutcome, AppError> {
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let mut warn = warnings(scene);
@@ -366,6 +411,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     }
     let wall = t0.elapsed().as_secs_f64();
     let converged = solve.is_ok();
+    let mut dumped = None;
+    if let (Some(p), true) = (dump, converged) {
+        dumped = Some(dump_tangent(&mut st, p)?);
+    }
     let samples = st.sys.contact_samples();
     let tot = ContactModel::totals(&samples);
     let (f, m) = st.sys.hub_reaction();
@@ -549,6 +598,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "steady at omega = {:.6} rad/s, v0 = {:.6}: hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}], max pressure = {:.4e}",
         st.omega(), st.v0(), f[0], f[1], m, tot.x_min, tot.x_max, tot.max_pressure
     )];
+    if let Some((a, b)) = &dumped {
+        headline.push(format!(
+            "steady tangent written to {} (right-hand side -R: {})",
+            a.display(),
+            b.display()
+        ));
+    }
     if let Some(c) = &cont {
         headline.push(format!(
             "continuation: {} steps ({}), {} special points{}",
