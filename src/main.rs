@@ -6,7 +6,8 @@ use std::process::ExitCode;
 use tread::app::{self, RunOptions};
 use tread::io::Scene;
 
-/// The scene run by `tread` without arguments (also `cargo run --release`).
+/// The scene run by `tread` without arguments (also `cargo run --release`): it is run in both
+/// modes and compared, as `tread compare` does.
 const DEFAULT_SCENE: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 const DEFAULT_SCENE_NAME: &str = "scenarios/oden_hollow_cylinder.toml (embedded)";
 
@@ -87,10 +88,6 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
     Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
 }
 
-fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {
-    run_with(scene, out, verbose, quiet, false, None)
-}
-
 fn run_with(
     scene: Scene,
     out: Option<PathBuf>,
@@ -128,7 +125,15 @@ fn run_with(
     };
     match result {
         Ok(o) => {
-            if !quiet {
+            if !quiet && compare {
+                println!(
+                    "compared the transient and steady modes: dofs = {}",
+                    o.summary["dofs"]
+                );
+                for line in &o.headline {
+                    println!("{line}");
+                }
+            } else if !quiet {
                 println!(
                     "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
                     o.summary["dofs"],
@@ -165,7 +170,7 @@ fn main() -> ExitCode {
     }
     match cli.command {
         None => match Scene::from_toml_str(DEFAULT_SCENE, DEFAULT_SCENE_NAME, &[]) {
-            Ok(scene) => run_scene(scene, None, false, cli.quiet),
+            Ok(scene) => run_with(scene, None, false, cli.quiet, true, None),
             Err(e) => {
                 eprintln!("tread: error in the embedded default scene:\n{e}");
                 ExitCode::from(2)
