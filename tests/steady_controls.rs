@@ -51,12 +51,11 @@ fn free_rolling_and_given_torque_from_the_scene_file() {
     let r = &s["results"];
     let c = &r["control"];
     let (t, tol) = (f(&r["hub_torque"]), f(&c["torque_tolerance"]));
-    // Tolerance: TORQUE_RTOL |F_y| Ro.
+    // Tolerance: TORQUE_RTOL |F_y| Ro with F_y of the press-in state (within a few per cent of
+    // the final F_y).
     let fy = f(&r["hub_force_y"]);
-    assert!(
-        (tol - steady_run::TORQUE_RTOL * fy.abs() * 2.0).abs() < 1e-3 * tol,
-        "{tol} {fy}"
-    );
+    let ratio = tol / (steady_run::TORQUE_RTOL * fy.abs() * 2.0);
+    assert!((0.9..1.1).contains(&ratio), "{tol} {fy}");
     assert!(t.abs() <= tol, "free rolling torque {t} > tolerance {tol}");
     // Not vacuous: at the scene's road.v0 the torque was far from zero.
     let t0 = f(&c["history"][0][1]);

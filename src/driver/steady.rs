@@ -36,7 +36,10 @@
 //!    converge).
 //! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
 //!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
-//!    Newton solve from the previous state.
+//!    Newton solve from the previous state. Given creep: free rolling first (v0_free, rolling
+//!    radius R_e = v0_free / ω), then the creep ξ = (v0 − ω R_e) / (ω R_e) = v0 / v0_free − 1 is
+//!    reached by natural-parameter steps ([`step_parameter`], [`SteadyParameter::Creep`]). The
+//!    scene selects these with `motion.control` (see `steady_run::apply_control`).
 //! 3. Optionally, Riks–Crisfield continuation ([`crate::solver::continuation`]) in ω, the hub
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).

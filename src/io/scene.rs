@@ -16,6 +16,7 @@
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
 //!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
+//!             control = "speed" | "torque" | "free_rolling" | "creep", torque, creep (steady)
 //! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
 //! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
 //!                                                             (static, transient)
