@@ -6,7 +6,8 @@ use std::process::ExitCode;
 use tread::app::{self, RunOptions};
 use tread::io::Scene;
 
-/// The scene run by `tread` without arguments (also `cargo run --release`).
+/// The scene run by `tread` without arguments (also `cargo run --release`): it is run in both
+/// modes and compared, as `tread compare` does.
 const DEFAULT_SCENE: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 const DEFAULT_SCENE_NAME: &str = "scenarios/oden_hollow_cylinder.toml (embedded)";
 
@@ -45,6 +46,10 @@ enum Command {
         /// Print the Newton convergence table of every load step.
         #[arg(short, long)]
         verbose: bool,
+        /// Steady mode: write the tangent at the converged state to PATH (MatrixMarket
+        /// coordinate real general) and the right-hand side -R to <stem>_rhs.mtx beside it.
+        #[arg(long, value_name = "PATH")]
+        dump_matrix: Option<PathBuf>,
     },
     /// Run a rolling scene in both modes (transient until steady, then steady) and compare
     /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png,
@@ -115,16 +120,13 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
     Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
 }
 
-fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {
-    run_with(scene, out, verbose, quiet, false)
-}
-
 fn run_with(
     scene: Scene,
     out: Option<PathBuf>,
     verbose: bool,
     quiet: bool,
     compare: bool,
+    dump_matrix: Option<&Path>,
 ) -> ExitCode {
     let out_dir = out.unwrap_or_else(|| {
         let d = app::default_out_dir(&scene);
@@ -148,12 +150,22 @@ fn run_with(
     };
     let result = if compare {
         tread::driver::compare::run(&scene, &opts)
+    } else if let Some(p) = dump_matrix {
+        tread::driver::steady_run::run_with_dump(&scene, &opts, Some(p))
     } else {
         app::run(&scene, &opts)
     };
     match result {
         Ok(o) => {
-            if !quiet {
+            if !quiet && compare {
+                println!(
+                    "compared the transient and steady modes: dofs = {}",
+                    o.summary["dofs"]
+                );
+                for line in &o.headline {
+                    println!("{line}");
+                }
+            } else if !quiet {
                 println!(
                     "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
                     o.summary["dofs"],
@@ -190,7 +202,7 @@ fn main() -> ExitCode {
     }
     match cli.command {
         None => match Scene::from_toml_str(DEFAULT_SCENE, DEFAULT_SCENE_NAME, &[]) {
-            Ok(scene) => run_scene(scene, None, false, cli.quiet),
+            Ok(scene) => run_with(scene, None, false, cli.quiet, true, None),
             Err(e) => {
                 eprintln!("tread: error in the embedded default scene:\n{e}");
                 ExitCode::from(2)
@@ -202,18 +214,29 @@ fn main() -> ExitCode {
             mut set,
             mode,
             verbose,
+            dump_matrix,
         }) => {
             if let Some(m) = mode {
                 set.push(format!("analysis.mode=\"{m}\""));
             }
             match load(&scene, &set) {
+                Ok(s)
+                    if dump_matrix.is_some()
+                        && s.analysis.mode != tread::io::scene::Mode::Steady =>
+                {
+                    eprintln!(
+                        "tread: --dump-matrix writes the steady tangent: it needs analysis mode \"steady\" (--mode steady), not \"{}\"",
+                        s.analysis.mode
+                    );
+                    ExitCode::from(2)
+                }
                 Ok(s) => {
                     if threads == 0 && s.solver.threads > 0 {
                         let _ = rayon::ThreadPoolBuilder::new()
                             .num_threads(s.solver.threads)
                             .build_global();
                     }
-                    run_scene(s, out, verbose, cli.quiet)
+                    run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
                 }
                 Err(e) => {
                     eprintln!("tread: invalid scene:\n{e}");
@@ -227,7 +250,7 @@ fn main() -> ExitCode {
             set,
             verbose,
         }) => match load(&scene, &set) {
-            Ok(s) => run_with(s, out, verbose, cli.quiet, true),
+            Ok(s) => run_with(s, out, verbose, cli.quiet, true, None),
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{e}");
                 ExitCode::from(2)

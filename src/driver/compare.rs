@@ -286,7 +286,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             &opts.out_dir.join("contact_compare.png"),
         );
     }
-    let headline = vec![
+    let mut headline = comparison_table(&rows);
+    headline.extend([
         format!(
             "hub force transient ({fxt:.5e}, {fyt:.5e}) vs steady ({fxs:.5e}, {fys:.5e}): relative differences {:.3e}, {:.3e}; torque {tqt:.5e} vs {tqs:.5e}",
             g("hub_force_x_rel_diff"), g("hub_force_y_rel_diff")
@@ -295,13 +296,48 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "referential field: relative L2 difference {rel_l2:.3e}, max |du| = {max_d:.3e}; wall time transient {wt:.3} s, steady {ws:.3} s (speed-up {:.1})",
             wt / ws
         ),
-    ];
+        format!(
+            "files: {} (summary.json, compare.csv{}), transient run in {}, steady run in {}",
+            opts.out_dir.display(),
+            if scene.output.has(Sink::Png) {
+                ", contact_compare.png"
+            } else {
+                ""
+            },
+            tr_opts.out_dir.display(),
+            st_opts.out_dir.display()
+        ),
+    ]);
     Ok(RunOutcome {
         summary,
         out_dir: opts.out_dir.clone(),
         converged: tr.converged && st.converged,
         headline,
     })
+}
+
+/// The rows of `compare.csv` as an aligned text table (quantity, transient, steady, |diff|).
+fn comparison_table(rows: &[Vec<String>]) -> Vec<String> {
+    let num = |v: &str| {
+        v.parse::<f64>()
+            .map_or_else(|_| v.to_string(), |x| format!("{x:.6e}"))
+    };
+    let mut out = vec![format!(
+        "{:<16} {:>14} {:>14} {:>14}",
+        "quantity", "transient", "steady", "|difference|"
+    )];
+    for r in rows {
+        if r.len() == 4 {
+            out.push(format!(
+                "{:<16} {:>14} {:>14} {:>14}",
+                r[0],
+                num(&r[1]),
+                num(&r[2]),
+                num(&r[3])
+            ));
+        }
+    }
+    out
 }
 
 fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<(), OutputError> {

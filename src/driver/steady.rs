@@ -41,7 +41,10 @@
 //!    converge).
 //! 2. Free rolling / given torque ([`solve_torque`]): the road speed v0 is adjusted by a
 //!    safeguarded secant iteration until the hub torque equals the target; each evaluation is a
-//!    Newton solve from the previous state.
+//!    Newton solve from the previous state. Given creep: free rolling first (v0_free, rolling
+//!    radius R_e = v0_free / ω), then the creep ξ = (v0 − ω R_e) / (ω R_e) = v0 / v0_free − 1 is
+//!    reached by natural-parameter steps ([`step_parameter`], [`SteadyParameter::Creep`]). The
+//!    scene selects these with `motion.control` (see `steady_run::apply_control`).
 //! 3. Optionally, Riks–Crisfield continuation ([`crate::solver::continuation`]) in ω, the hub
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
@@ -64,6 +67,8 @@ pub enum SteadyParameter {
     Load,
     /// Penetration DISP = Ro − H (displacement control).
     Disp,
+    /// Creep ξ = v0 / v0_free − 1 at fixed ω ([`SteadyRolling::v0_free`] must be set).
+    Creep,
 }
 
 /// A [`SolidSystem`] in steady rolling with one of its data as the parameter λ.
@@ -76,6 +81,9 @@ pub struct SteadyRolling {
     pub ro: f64,
     /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
     pub recovery: Option<Recovery>,
+    /// Free-rolling road speed at the current ω (zero hub torque), once solved for
+    /// ([`solve_torque`] with target 0); the reference of the creep. NaN until then.
+    pub v0_free: f64,
 }
 
 impl SteadyRolling {
@@ -88,6 +96,7 @@ impl SteadyRolling {
             v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
             ro,
             recovery: None,
+            v0_free: f64::NAN,
         };
         s.set_omega(omega, v0);
         s.sys.enable_steady_viscosity();
@@ -131,6 +140,17 @@ impl SteadyRolling {
     /// Penetration DISP = Ro − H at the current state.
     pub fn penetration(&self) -> f64 {
         self.ro - self.sys.road_height().unwrap_or(self.ro)
+    }
+
+    /// Creep ξ = (v0 − ω R_e) / (ω R_e) = v0 / v0_free − 1, with the free-rolling radius
+    /// R_e = v0_free / ω; NaN before free rolling has been solved for.
+    pub fn creep(&self) -> f64 {
+        self.v0() / self.v0_free - 1.0
+    }
+
+    /// Effective rolling radius R_e = v0_free / ω (NaN before free rolling was solved for).
+    pub fn rolling_radius(&self) -> f64 {
+        self.v0_free / self.omega_signed()
     }
 }
 
@@ -190,6 +210,7 @@ impl ParametricSystem for SteadyRolling {
                 .and_then(|c| c.load)
                 .unwrap_or(0.0),
             SteadyParameter::Disp => self.ro - self.sys.contact.as_ref().map_or(self.ro, |c| c.h),
+            SteadyParameter::Creep => self.creep(),
         }
     }
     fn set_parameter(&mut self, lambda: f64) {
@@ -208,6 +229,10 @@ impl ParametricSystem for SteadyRolling {
                 if let Some(c) = &mut self.sys.contact {
                     c.h = ro - lambda;
                 }
+            }
+            SteadyParameter::Creep => {
+                let v0 = (1.0 + lambda) * self.v0_free;
+                self.set_v0(v0);
             }
         }
     }
@@ -335,4 +360,50 @@ pub fn solve_torque(
         residual: fb.abs() / torque_scale.max(f64::MIN_POSITIVE),
         stagnation: None,
     })
+}
+
+/// Move the parameter of `st` (its [`SteadyRolling::param`]) from its current value to `target`
+/// by natural-parameter steps: a Newton solve from the previous state at each step; a failed
+/// step restores the state and halves the step (at most `max_cutbacks` times in a row); a
+/// converged step lets the next one grow by 1.5 up to the whole remaining distance. Returns the
+/// Newton iterations spent.
+pub fn step_parameter(
+    st: &mut SteadyRolling,
+    target: f64,
+    newton: &mut Newton,
+    max_cutbacks: usize,
+) -> Result<usize, SolveError> {
+    let mut lambda = st.parameter();
+    let mut step = target - lambda;
+    let mut iterations = 0;
+    let mut cutbacks = 0;
+    let mut saved = Vec::new();
+    while lambda != target {
+        let next = if (target - lambda).abs() <= step.abs() {
+            target
+        } else {
+            lambda + step
+        };
+        st.sys.save_state(&mut saved);
+        st.set_parameter(next);
+        match newton.solve(st) {
+            Ok(r) => {
+                iterations += r.iterations;
+                lambda = next;
+                cutbacks = 0;
+                step *= 1.5;
+            }
+            Err(SolveError::Interrupted { at }) => return Err(SolveError::Interrupted { at }),
+            Err(e) => {
+                st.sys.restore_state(&saved);
+                st.set_parameter(lambda);
+                cutbacks += 1;
+                if cutbacks > max_cutbacks {
+                    return Err(e);
+                }
+                step *= 0.5;
+            }
+        }
+    }
+    Ok(iterations)
 }

@@ -21,7 +21,7 @@
 //! [0, 1]), then one per continuation point (time = 1 + step).
 
 use super::spinning;
-use super::steady::{press, SteadyParameter, SteadyRolling};
+use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
 use super::steady_recovery;
 use super::system::{Loading, SolidSystem};
 use super::tables;
@@ -29,12 +29,14 @@ use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, 
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
-use crate::io::scene::{ContinuationParameter, Scene, Sink};
+use crate::io::scene::{ContinuationParameter, Control, Scene, Sink};
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
+use crate::solver::linear::{write_matrix_market, write_vector_market};
 use crate::solver::stepping::{LoadedSystem, StepReport};
-use crate::solver::{LinearKind, NonlinearSystem, SolveError};
+use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// One row of the branch table.
@@ -61,10 +63,12 @@ pub struct BranchRow {
     pub kind: PointKind,
     pub wall_time_s: f64,
     pub factor_solve_s: f64,
+    /// Creep ξ = v0 / v0_free − 1 (NaN, an empty CSV field, without a free-rolling reference).
+    pub creep: f64,
 }
 
 impl BranchRow {
-    pub const HEADER: [&'static str; 19] = [
+    pub const HEADER: [&'static str; 20] = [
         "step",
         "lambda",
         "omega",
@@ -84,6 +88,7 @@ impl BranchRow {
         "kind",
         "wall_time_s",
         "factor_solve_s",
+        "creep",
     ];
 
     fn values(&self) -> Vec<f64> {
@@ -113,6 +118,7 @@ impl BranchRow {
             kind,
             self.wall_time_s,
             self.factor_solve_s,
+            self.creep,
         ]
     }
 }
@@ -140,7 +146,87 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
         kind: p.kind,
         wall_time_s: p.wall_time_s,
         factor_solve_s: p.factor_solve_s,
+        creep: st.creep(),
     }
+}
+
+/// Continuation in the creep: natural-parameter steps Δξ = ds · |target − start| from the
+/// current creep to `opts.target` (the creep–force curve is single-valued in ξ), each a Newton
+/// solve from the previous point with step halving on failure ([`step_parameter`]). `observe`
+/// sees every converged point (return false to stop). On failure the points so far are left in
+/// `partial`.
+fn creep_sweep(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    opts: &ContinuationOptions,
+    partial: &mut Option<ContinuationReport>,
+    observe: &mut dyn FnMut(&SteadyRolling, &BranchPoint) -> bool,
+) -> Result<ContinuationReport, SolveError> {
+    use crate::solver::continuation::ParametricSystem;
+    let (newton_opts, _) = crate::app::solver_options(scene, opts.verbose);
+    let mut newton = Newton::new(st, LinearKind::Lu, newton_opts)?;
+    let start = st.parameter();
+    let span = opts.target - start;
+    let dxi = (opts.ds0 * span.abs()).max(f64::MIN_POSITIVE);
+    let n = ((span.abs() / dxi).ceil() as usize).clamp(1, opts.max_steps.max(1));
+    let mut rep = ContinuationReport::default();
+    let point = |step: usize, lambda: f64, iterations: usize, wall: f64| BranchPoint {
+        step,
+        lambda,
+        kind: if step == 0 {
+            PointKind::Start
+        } else {
+            PointKind::Regular
+        },
+        iterations,
+        cutbacks: 0,
+        ds: if step == 0 {
+            0.0
+        } else {
+            span.abs() / n as f64
+        },
+        dlambda_ds: f64::NAN,
+        det_sign: f64::NAN,
+        log_abs_det: f64::NAN,
+        negative_eigenvalues: f64::NAN,
+        test_function: f64::NAN,
+        wall_time_s: wall,
+        factor_solve_s: f64::NAN,
+    };
+    let p0 = point(0, start, 0, 0.0);
+    let go_on = observe(st, &p0);
+    rep.points.push(p0);
+    if !go_on {
+        rep.stop_reason = "stopped by the observer".into();
+        return Ok(rep);
+    }
+    for k in 1..=n {
+        let xi = if k == n {
+            opts.target
+        } else {
+            start + span * k as f64 / n as f64
+        };
+        let t = Instant::now();
+        match step_parameter(st, xi, &mut newton, opts.max_cutbacks) {
+            Ok(it) => {
+                rep.total_iterations += it;
+                let p = point(k, st.parameter(), it, t.elapsed().as_secs_f64());
+                let go_on = observe(st, &p);
+                rep.points.push(p);
+                if !go_on {
+                    rep.stop_reason = "stopped by the observer".into();
+                    return Ok(rep);
+                }
+            }
+            Err(e) => {
+                rep.stop_reason = format!("the Newton solve failed at creep {xi:.6e}: {e}");
+                *partial = Some(rep);
+                return Err(e);
+            }
+        }
+    }
+    rep.stop_reason = "target reached".into();
+    Ok(rep)
 }
 
 /// Half the peak-to-peak radial displacement of the outer-ring nodes whose reference angle is
@@ -267,6 +353,88 @@ pub fn solve_steady(
     }
 }
 
+/// Relative tolerance of the torque and free-rolling controls: converged when
+/// |T − T_target| ≤ `TORQUE_RTOL` · |F_y| · Ro (hub vertical force times outer radius).
+pub const TORQUE_RTOL: f64 = 1e-7;
+
+/// What the rolling control (`motion.control`) did after the press-in.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct ControlReport {
+    /// `speed`, `torque`, `free_rolling` or `creep`.
+    pub control: String,
+    /// Target hub torque (torque and free rolling; 0 for creep's free-rolling stage).
+    pub target_torque: f64,
+    /// Torque tolerance (absolute): `TORQUE_RTOL` · |F_y| · Ro at the press-in state.
+    pub torque_tolerance: f64,
+    /// Free-rolling road speed v0_free and rolling radius R_e = v0_free / ω (free rolling and
+    /// creep; NaN otherwise).
+    pub v0_free: f64,
+    pub rolling_radius: f64,
+    /// Creep ξ = v0 / v0_free − 1 of the final state (NaN without a free-rolling reference).
+    pub creep: f64,
+    /// Steady solves (one Newton solve per trial v0) and their Newton iterations.
+    pub evaluations: usize,
+    pub newton_iterations: usize,
+    /// (v0, hub torque) of every trial of the secant iteration.
+    pub history: Vec<(f64, f64)>,
+}
+
+/// Apply the scene's rolling control after the press-in at `road.v0`:
+/// - `speed`: nothing (v0 = `road.v0`);
+/// - `torque` / `free_rolling`: v0 solved for hub torque = `motion.torque` / 0
+///   ([`solve_torque`], tolerance [`TORQUE_RTOL`]);
+/// - `creep`: free rolling first (v0_free, R_e), then v0 = (1 + ξ) v0_free reached by
+///   natural-parameter steps in ξ ([`step_parameter`]).
+pub fn apply_control(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    verbose: bool,
+) -> Result<ControlReport, SolveError> {
+    let control = scene.motion.control;
+    let mut rep = ControlReport {
+        control: control.as_str().to_string(),
+        v0_free: f64::NAN,
+        rolling_radius: f64::NAN,
+        creep: f64::NAN,
+        ..Default::default()
+    };
+    let target = match control {
+        Control::Speed => return Ok(rep),
+        Control::Torque => scene.motion.torque,
+        Control::FreeRolling | Control::Creep => 0.0,
+    };
+    rep.target_torque = target;
+    let kind = LinearKind::Lu;
+    let (newton_opts, _) = crate::app::solver_options(scene, verbose);
+    let mut newton = Newton::new(st, kind, newton_opts)?;
+    let scale = st.sys.hub_reaction().0[1].abs() * st.ro;
+    let scale = if scale > 0.0 { scale } else { 1.0 };
+    rep.torque_tolerance = TORQUE_RTOL * scale;
+    let ts = solve_torque(st, target, scale, TORQUE_RTOL, &mut newton, 40)?;
+    rep.evaluations = ts.evaluations;
+    rep.newton_iterations = ts.newton_iterations;
+    rep.history = ts.history;
+    if matches!(control, Control::FreeRolling | Control::Creep) {
+        st.v0_free = st.v0();
+        rep.v0_free = st.v0_free;
+        rep.rolling_radius = st.rolling_radius();
+    }
+    if control == Control::Creep && scene.motion.creep != 0.0 {
+        let param = st.param;
+        st.param = SteadyParameter::Creep;
+        let r = step_parameter(
+            st,
+            scene.motion.creep,
+            &mut newton,
+            scene.solver.max_cutbacks,
+        );
+        st.param = param;
+        rep.newton_iterations += r?;
+    }
+    rep.creep = st.creep();
+    Ok(rep)
+}
+
 /// The warnings of a steady run of this scene (none so far: the steady residual has every
 /// term of the transient model).
 pub fn warnings(_scene: &Scene) -> Vec<String> {
@@ -274,6 +442,49 @@ pub fn warnings(_scene: &Scene) -> Vec<String> {
 }
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    run_with_dump(scene, opts, None)
+}
+
+/// The MatrixMarket files written by `--dump-matrix PATH`: the tangent at PATH and the
+/// right-hand side −R next to it (`<stem>_rhs.mtx`).
+pub fn dump_paths(path: &Path) -> (PathBuf, PathBuf) {
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "steady".into(), |s| s.to_string_lossy().into_owned());
+    let rhs = path.with_file_name(format!("{stem}_rhs.mtx"));
+    (path.to_path_buf(), rhs)
+}
+
+/// Write the steady tangent dR/dx (MatrixMarket coordinate real general) and the right-hand
+/// side −R (array) at the current state: after a converged solve, the matrix of the next
+/// Newton iteration. Unknowns in the system's order (displacements, then any hub/road
+/// unknowns).
+pub fn dump_tangent(st: &mut SteadyRolling, path: &Path) -> Result<(PathBuf, PathBuf), AppError> {
+    st.sys.evaluate(true);
+    let (a, b) = dump_paths(path);
+    let (cp, ri) = st.sys.pattern();
+    let rhs: Vec<f64> = st.sys.residual().iter().map(|r| -r).collect();
+    let io = |p: &Path, e: std::io::Error| {
+        AppError::Output(crate::io::output::OutputError {
+            path: p.to_path_buf(),
+            source: e,
+        })
+    };
+    if let Some(d) = a.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| io(d, e))?;
+    }
+    write_matrix_market(&a, st.sys.n_eq(), cp, ri, st.sys.matrix_values())
+        .map_err(|e| io(&a, e))?;
+    write_vector_market(&b, &rhs).map_err(|e| io(&b, e))?;
+    Ok((a, b))
+}
+
+/// [`run`], and with `dump` = Some(PATH) the converged tangent written by [`dump_tangent`].
+pub fn run_with_dump(
+    scene: &Scene,
+    opts: &RunOptions,
+    dump: Option<&Path>,
+) -> Result<RunOutcome, AppError> {
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let mut warn = warnings(scene);
@@ -299,7 +510,28 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
     });
     let mut report = StepReport::default();
+    if scene.motion.control != Control::Speed {
+        let friction = st
+            .sys
+            .contact
+            .as_ref()
+            .is_some_and(|c| c.friction.is_active());
+        if !friction {
+            return Err(AppError::Unsupported(format!(
+                "motion.control = \"{}\" adjusts the road speed to the hub torque: it needs a \
+                 road, contact and friction ([friction] law other than \"none\")",
+                scene.motion.control
+            )));
+        }
+    }
     let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, &mut recorders);
+    let mut control_report: Option<ControlReport> = None;
+    if solve.is_ok() && scene.motion.control != Control::Speed {
+        match apply_control(scene, &mut st, opts.verbose) {
+            Ok(r) => control_report = Some(r),
+            Err(e) => solve = Err(e),
+        }
+    }
     let t_first = t0.elapsed().as_secs_f64();
     if let Some(r) = &st.recovery {
         if r.succeeded() {
@@ -315,6 +547,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             ContinuationParameter::Omega => SteadyParameter::Omega,
             ContinuationParameter::Load => SteadyParameter::Load,
             ContinuationParameter::Disp => SteadyParameter::Disp,
+            ContinuationParameter::Creep => SteadyParameter::Creep,
         };
         use crate::solver::continuation::ParametricSystem;
         let start = st.parameter();
@@ -340,9 +573,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         };
         let n0 = report.steps.len() as u64;
         let mut partial = None;
-        let res = Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
+        let sweep = st.param == SteadyParameter::Creep;
+        let res = if sweep {
             let rec: &mut dyn Recorder = &mut recorders;
-            let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
+            creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
                 rows.push(branch_row(s, p));
                 let info = StepInfo {
                     index: n0 + p.step as u64,
@@ -356,10 +590,29 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     s.sys.record_step(&info, rec);
                 }
                 !record::interrupted()
-            });
-            partial = c.partial.take();
-            r
-        });
+            })
+        } else {
+            Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
+                let rec: &mut dyn Recorder = &mut recorders;
+                let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
+                    rows.push(branch_row(s, p));
+                    let info = StepInfo {
+                        index: n0 + p.step as u64,
+                        time: 1.0 + p.step as f64,
+                        dt: if p.step == 0 { 0.0 } else { 1.0 },
+                        newton_iterations: p.iterations,
+                        residual: 0.0,
+                        is_final: false,
+                    };
+                    if p.step > 0 {
+                        s.sys.record_step(&info, rec);
+                    }
+                    !record::interrupted()
+                });
+                partial = c.partial.take();
+                r
+            })
+        };
         match res {
             Ok(r) => {
                 if record::interrupted() {
@@ -376,6 +629,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     }
     let wall = t0.elapsed().as_secs_f64();
     let converged = solve.is_ok();
+    let mut dumped = None;
+    if let (Some(p), true) = (dump, converged) {
+        dumped = Some(dump_tangent(&mut st, p)?);
+    }
     let samples = st.sys.contact_samples();
     let tot = ContactModel::totals(&samples);
     let (f, m) = st.sys.hub_reaction();
@@ -412,6 +669,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "contact_centroid": tot.centroid,
         "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
         "wall_time_first_solution_s": t_first,
+        "creep": st.creep(),
+        "control": control_report.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
     });
     if let Some(c) = &cont {
         results["branch"] = serde_json::to_value(&rows).unwrap_or_default();
@@ -440,7 +699,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "scene": scene.scene.name,
         "mode": mode,
         "dofs": st.sys.n_dofs(),
-        "newton_iterations": report.total_iterations + cont.as_ref().map_or(0, |c| c.total_iterations),
+        "newton_iterations": report.total_iterations + cont.as_ref().map_or(0, |c| c.total_iterations) + control_report.as_ref().map_or(0, |c| c.newton_iterations),
         "wall_time_s": wall,
         "converged": converged,
         "error": solve.as_ref().err().map(|e| e.to_string()),
@@ -509,6 +768,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 .filter(|p| p.0.is_finite() && p.1.is_finite())
                 .collect()
         };
+        if rows.len() > 1 && st.param == SteadyParameter::Creep {
+            creep_plots(scene, &rows, dir);
+        }
         if rows.len() > 1 {
             let fy = pts(&|r| r.hub_force_y);
             let fx = pts(&|r| r.hub_force_x);
@@ -559,6 +821,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "steady at omega = {:.6} rad/s, v0 = {:.6}: hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}], max pressure = {:.4e}",
         st.omega(), st.v0(), f[0], f[1], m, tot.x_min, tot.x_max, tot.max_pressure
     )];
+    if let Some((a, b)) = &dumped {
+        headline.push(format!(
+            "steady tangent written to {} (right-hand side -R: {})",
+            a.display(),
+            b.display()
+        ));
+    }
     if let Some(c) = &cont {
         headline.push(format!(
             "continuation: {} steps ({}), {} special points{}",
@@ -580,6 +849,49 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }),
         Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
         Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
+    }
+}
+
+/// `creep_force.png` (hub F_x against the creep, with the Coulomb limits ±μ|F_y|) and
+/// `creep_torque.png` (hub torque against the creep). Failures are warnings.
+fn creep_plots(scene: &Scene, rows: &[BranchRow], dir: &Path) {
+    let units = &scene.scene.units;
+    // The sliding coefficient at large slip: Coulomb μ, or μ_k of the rate-dependent law.
+    let mu = scene
+        .friction
+        .mu
+        .or(scene.friction.mu_k)
+        .unwrap_or(f64::NAN);
+    let pts = |g: &dyn Fn(&BranchRow) -> f64| -> Vec<(f64, f64)> {
+        rows.iter()
+            .map(|r| (r.creep, g(r)))
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect()
+    };
+    let fx = pts(&|r| r.hub_force_x);
+    let hi = pts(&|r| mu * r.hub_force_y.abs());
+    let lo = pts(&|r| -mu * r.hub_force_y.abs());
+    let tq = pts(&|r| r.hub_torque);
+    let force_label = format!("hub force F_x (force per unit thickness; units {units})");
+    let torque_label = format!("hub torque (force x length per unit thickness; units {units})");
+    let x_label = "creep xi = v0 / v0_free - 1 (dimensionless)";
+    if let Err(e) = record::png::line_chart(
+        &dir.join("creep_force.png"),
+        "Creep-force curve (steady rolling)",
+        x_label,
+        &force_label,
+        &[("F_x", &fx), ("+mu |F_y|", &hi), ("-mu |F_y|", &lo)],
+    ) {
+        eprintln!("tread: warning: creep_force.png: {e}");
+    }
+    if let Err(e) = record::png::line_chart(
+        &dir.join("creep_torque.png"),
+        "Hub torque against creep (steady rolling)",
+        x_label,
+        &torque_label,
+        &[("hub torque", &tq)],
+    ) {
+        eprintln!("tread: warning: creep_torque.png: {e}");
     }
 }
 

@@ -357,7 +357,8 @@ pub fn kinematics(scene: &Scene) -> Kinematics {
     let ramp = road.map_or(0.0, |r| r.ramp);
     let omega_ramp = match scene.motion.control {
         Control::Speed => scene.motion.ramp,
-        Control::Torque => 0.0,
+        // (free rolling and creep control are steady-mode controls, rejected by validation)
+        Control::Torque | Control::FreeRolling | Control::Creep => 0.0,
     };
     Kinematics {
         omega: Ramp {

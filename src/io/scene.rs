@@ -22,6 +22,7 @@
 //! [analysis]  mode = "spinning" | "static" | "stick_slip" | "transient"
 //! [motion]    omega, ramp = 0                                 (spinning, transient)
 //!             control = "speed" | "torque", hub_inertia, torque = 0   (transient)
+//!             control = "speed" | "torque" | "free_rolling" | "creep", torque, creep (steady)
 //! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
 //! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
 //!                                                             (static, transient)
@@ -213,6 +214,9 @@ keyword_enum! {
         Load => "load",
         /// Penetration DISP = Ro − H (needs `road.disp`).
         Disp => "disp",
+        /// Creep ξ (see `motion.control = "creep"`; needs `motion.control = "creep"` or
+        /// `"free_rolling"`): v0 = (1 + ξ) v0_free at fixed ω, from braking to driving.
+        Creep => "creep",
     }
 }
 
@@ -236,16 +240,26 @@ keyword_enum! {
 }
 
 keyword_enum! {
-    /// How the hub rotation is driven (`[motion] control`, transient mode).
+    /// How the hub rotation is driven (`[motion] control`).
     #[derive(Default)]
     Control, "hub control" {
         #[default]
         /// Prescribed hub angular speed ω(t) = omega · S(t / ramp).
         Speed => "speed",
-        /// Prescribed hub torque T(t) = torque · S(t / ramp) on a hub of rotational inertia
-        /// `hub_inertia`; the hub angle is an unknown. The hub and body start in rigid spin at
-        /// `omega`; the road speed drives the rolling and the hub finds its own ω.
+        /// Prescribed hub torque. Transient: T(t) = torque · S(t / ramp) on a hub of rotational
+        /// inertia `hub_inertia`; the hub angle is an unknown. The hub and body start in rigid
+        /// spin at `omega`; the road speed drives the rolling and the hub finds its own ω.
+        /// Steady: ω stays `omega` and the road speed v0 is solved for so that the hub torque
+        /// equals `torque` (`road.v0` is the first guess; no `hub_inertia`).
         Torque => "torque",
+        /// Steady only: free rolling, i.e. torque control with `torque = 0`: v0 is solved for
+        /// so that the hub torque vanishes (`road.v0` is the first guess).
+        FreeRolling => "free_rolling",
+        /// Steady only: given creep ξ = `creep` = (v0 − ω R_e) / (ω R_e), where R_e = v0_free / ω
+        /// is the effective rolling radius of free rolling at the scene's ω and load (found
+        /// first, as with `free_rolling`). ξ > 0: the road runs faster than the free-rolling
+        /// speed; ξ < 0: slower.
+        Creep => "creep",
     }
 }
 
@@ -702,6 +716,9 @@ pub struct Motion {
     /// (force·length per unit thickness, e.g. lbf·in/in), ramped in over `ramp`; 0 = free
     /// rolling. Only with torque control.
     pub torque: f64,
+    /// Creep ξ = (v0 − ω R_e) / (ω R_e) with R_e the free-rolling radius (dimensionless,
+    /// > −1). Only with `control = "creep"` (steady mode).
+    pub creep: f64,
 }
 
 impl Default for Motion {
@@ -712,6 +729,7 @@ impl Default for Motion {
             control: Control::Speed,
             hub_inertia: 0.0,
             torque: 0.0,
+            creep: 0.0,
         }
     }
 }
@@ -1492,7 +1510,13 @@ impl Scene {
             validate_time(t, time_mass_given, &mut out);
         }
         if let Some(Some(c)) = &continuation {
-            validate_continuation(c, mode, road.as_ref().and_then(|r| r.as_ref()), &mut out);
+            validate_continuation(
+                c,
+                mode,
+                road.as_ref().and_then(|r| r.as_ref()),
+                motion.as_ref().map(|m| m.control),
+                &mut out,
+            );
         }
         if let Some(mode) = mode {
             let used = SectionsGiven {
@@ -1651,7 +1675,13 @@ impl Scene {
             validate_steady_extraction(mode, &self.mesh, t, &mut out);
         }
         if let Some(c) = &self.continuation {
-            validate_continuation(c, mode, self.road.as_ref(), &mut out);
+            validate_continuation(
+                c,
+                mode,
+                self.road.as_ref(),
+                Some(self.motion.control),
+                &mut out,
+            );
         }
         let used = SectionsGiven {
             road: self.road.is_some(),
@@ -1832,6 +1862,7 @@ static SCHEMA: &[SectionSchema] = &[
             opt("control", Kind::Keyword(Control::NAMES)),
             opt("hub_inertia", Kind::Float),
             opt("torque", Kind::Float),
+            opt("creep", Kind::Float),
         ],
     },
     SectionSchema {
@@ -2963,13 +2994,58 @@ fn validate_motion_control(
             format!("hub torque must be finite, got {}", m.torque),
         ));
     }
+    if !(m.creep.is_finite() && m.creep > -1.0) {
+        out.push(issue(
+            "motion.creep",
+            format!("creep must be finite and > -1 (v0 > 0), got {}", m.creep),
+        ));
+    } else if m.creep != 0.0 && m.control != Control::Creep {
+        out.push(issue(
+            "motion.creep",
+            "only used with control = \"creep\" (steady mode)",
+        ));
+    }
     match m.control {
+        Control::Torque if mode == Some(Mode::Steady) => {
+            if m.hub_inertia != 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "not used in steady mode (the hub turns at the constant omega; the road \
+                     speed is solved for the torque)",
+                ));
+            }
+        }
+        Control::FreeRolling | Control::Creep => {
+            if let Some(mode) = mode.filter(|m| *m != Mode::Steady) {
+                out.push(issue(
+                    "motion.control",
+                    format!(
+                        "control = \"{}\" is only available in analysis mode \"steady\", not \
+                         \"{mode}\" (in \"transient\", free rolling is control = \"torque\" \
+                         with torque = 0)",
+                        m.control
+                    ),
+                ));
+            }
+            if m.hub_inertia != 0.0 {
+                out.push(issue(
+                    "motion.hub_inertia",
+                    "only used with control = \"torque\" in transient mode",
+                ));
+            }
+            if m.torque != 0.0 {
+                out.push(issue(
+                    "motion.torque",
+                    "only used with control = \"torque\" (free rolling has zero torque)",
+                ));
+            }
+        }
         Control::Torque => {
             if let Some(mode) = mode.filter(|m| *m != Mode::Transient) {
                 out.push(issue(
                     "motion.control",
                     format!(
-                        "torque control is only available in analysis mode \"transient\", not \"{mode}\""
+                        "torque control is only available in analysis modes \"transient\" and \"steady\", not \"{mode}\""
                     ),
                 ));
             }
@@ -3565,9 +3641,29 @@ fn validate_continuation(
     c: &ContinuationSpec,
     mode: Option<Mode>,
     road: Option<&RoadSpec>,
+    control: Option<Control>,
     out: &mut Vec<Issue>,
 ) {
-    if !(c.target.is_finite() && c.target >= 0.0) {
+    if c.parameter == ContinuationParameter::Creep {
+        if !(c.target.is_finite() && c.target > -1.0) {
+            out.push(issue(
+                "continuation.target",
+                format!(
+                    "final creep must be finite and > -1 (v0 > 0), got {}",
+                    c.target
+                ),
+            ));
+        }
+        if mode == Some(Mode::Steady)
+            && !matches!(control, None | Some(Control::Creep | Control::FreeRolling))
+        {
+            out.push(issue(
+                "continuation.parameter",
+                "parameter \"creep\" is measured from free rolling: it needs motion.control = \
+                 \"creep\" or \"free_rolling\"",
+            ));
+        }
+    } else if !(c.target.is_finite() && c.target >= 0.0) {
         out.push(issue(
             "continuation.target",
             format!(

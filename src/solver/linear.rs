@@ -79,9 +79,15 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
 };
+use faer::sparse::linalg::lu::supernodal::{
+    factorize_supernodal_numeric_lu, factorize_supernodal_numeric_lu_scratch,
+    factorize_supernodal_symbolic_lu, factorize_supernodal_symbolic_lu_scratch, SupernodalLu,
+    SymbolicSupernodalLu,
+};
 use faer::sparse::linalg::lu::{
     factorize_symbolic_lu, LuRef, LuSymbolicParams, NumericLu, SymbolicLu,
 };
+use faer::sparse::linalg::{amd, qr};
 use faer::sparse::linalg::{LuError, SupernodalThreshold};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
@@ -97,6 +103,26 @@ pub enum LinearKind {
     Cholesky,
     /// Sparse LU with partial (row) pivoting and a COLAMD column ordering (general matrices).
     Lu,
+}
+
+/// Fill-reducing column ordering of the sparse LU ([`LinearKind::Lu`]).
+///
+/// faer's partial-pivoting LU computes its symbolic structure from the column elimination tree
+/// of AᵀA, which bounds the factors for any row pivoting; the column ordering decides the fill.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LuOrdering {
+    /// faer's own `factorize_symbolic_lu`: COLAMD on the columns of A (an ordering made for
+    /// the Cholesky factor of AᵀA). The default: measured on the steady tangent of the rolling
+    /// cylinder (16k DOFs), fill nnz(L+U)/nnz(A) = 10.7 against 48.8 with [`LuOrdering::Amd`],
+    /// and a numeric factorization 8× faster (`tread-bench-lu`).
+    #[default]
+    Colamd,
+    /// AMD on the pattern of A + Aᵀ (`faer::sparse::linalg::amd::order`), the ordering a
+    /// symmetric-pattern solver would use; then faer's supernodal symbolic and numeric LU with
+    /// that column permutation. Finite-element tangents are structurally symmetric, so this
+    /// ordering sees the mesh graph directly; but faer's partial-pivoting LU takes its
+    /// structure from AᵀA, whose fill this ordering does not minimise (see `Colamd`).
+    Amd,
 }
 
 /// Errors of the sparse direct solver.
@@ -362,9 +388,187 @@ struct LuState {
     det: LbltDet,
 }
 
+/// LU with a column ordering computed here ([`LuOrdering::Amd`]): faer's supernodal symbolic
+/// and numeric LU driven directly (its `factorize_symbolic_lu` always uses COLAMD).
+struct LuCustomState {
+    symbolic: SymbolicSupernodalLu<usize>,
+    col_fwd: Vec<usize>,
+    col_inv: Vec<usize>,
+    row_fwd: Vec<usize>,
+    row_inv: Vec<usize>,
+    numeric: SupernodalLu<usize, f64>,
+    /// Pattern of Aᵀ (the numeric LU reads the rows of A through it).
+    at_pattern: SymbolicSparseColMat<usize>,
+    /// `at_values[q] = values[at_src[q]]`.
+    at_src: Vec<usize>,
+    at_values: Vec<f64>,
+    det: LbltDet,
+}
+
+impl LuCustomState {
+    fn new(pattern: &SymbolicSparseColMat<usize>) -> Result<Self, LinearError> {
+        let n = pattern.ncols();
+        let nnz = pattern.row_idx().len();
+        let (at_cp, at_ri, at_src) = transpose_pattern(n, pattern.col_ptr(), pattern.row_idx());
+        let at_pattern = SymbolicSparseColMat::new_checked(n, n, at_cp, None, at_ri);
+        let mut col_fwd = vec![0usize; n];
+        let mut col_inv = vec![0usize; n];
+        {
+            let mut mem =
+                MemBuffer::try_new(amd::order_scratch::<usize>(n, nnz)).map_err(map_faer_err)?;
+            amd::order(
+                &mut col_fwd,
+                &mut col_inv,
+                pattern.as_ref(),
+                amd::Control::default(),
+                MemStack::new(&mut mem),
+            )
+            .map_err(map_faer_err)?;
+        }
+        let perm = faer::perm::PermRef::new_checked(&col_fwd, &col_inv, n);
+        let mut etree = vec![0usize; n];
+        let mut post = vec![0usize; n];
+        let mut col_counts = vec![0usize; n];
+        let mut min_col = vec![0usize; n];
+        let req = StackReq::any_of(&[
+            qr::col_etree_scratch::<usize>(n, n),
+            qr::postorder_scratch::<usize>(n),
+            qr::column_counts_aat_scratch::<usize>(n, n),
+            factorize_supernodal_symbolic_lu_scratch::<usize>(n, n),
+        ]);
+        let mut mem = MemBuffer::try_new(req).map_err(map_faer_err)?;
+        // The same steps as faer's `factorize_symbolic_lu`, with our column permutation.
+        let et = qr::col_etree(
+            pattern.as_ref(),
+            Some(perm),
+            &mut etree,
+            MemStack::new(&mut mem),
+        );
+        qr::postorder(&mut post, et, MemStack::new(&mut mem));
+        qr::column_counts_ata(
+            &mut col_counts,
+            &mut min_col,
+            at_pattern.as_ref(),
+            Some(perm),
+            et,
+            &post,
+            MemStack::new(&mut mem),
+        );
+        let symbolic = factorize_supernodal_symbolic_lu(
+            pattern.as_ref(),
+            Some(perm),
+            &min_col,
+            et,
+            &col_counts,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map_err(map_faer_err)?;
+        let det = LbltDet::new(pattern)?;
+        Ok(Self {
+            symbolic,
+            col_fwd,
+            col_inv,
+            row_fwd: vec![0; n],
+            row_inv: vec![0; n],
+            numeric: SupernodalLu::new(),
+            at_pattern,
+            at_src,
+            at_values: vec![0.0; nnz],
+            det,
+        })
+    }
+}
+
+/// CSC pattern of Aᵀ and, for each of its entries, the position of the same entry in A's
+/// values.
+fn transpose_pattern(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let nnz = row_idx.len();
+    let mut at_cp = vec![0usize; n + 1];
+    for &i in row_idx {
+        at_cp[i + 1] += 1;
+    }
+    for i in 0..n {
+        at_cp[i + 1] += at_cp[i];
+    }
+    let mut next = at_cp.clone();
+    let mut at_ri = vec![0usize; nnz];
+    let mut src = vec![0usize; nnz];
+    for j in 0..n {
+        for k in col_ptr[j]..col_ptr[j + 1] {
+            let i = row_idx[k];
+            at_ri[next[i]] = j;
+            src[next[i]] = k;
+            next[i] += 1;
+        }
+    }
+    (at_cp, at_ri, src)
+}
+
+/// Stored entries (values, including the explicit zeros of supernodes) of faer's supernodal LU
+/// factors, read from the `l_col_ptr_for_val` / `ut_col_ptr_for_val` arrays of its `Debug`
+/// output (faer 0.24 has no accessor for them). Formats the whole L value array on the way:
+/// seconds for large factors, so for benchmarks only.
+fn supernodal_entries(lu: &impl std::fmt::Debug) -> Option<usize> {
+    use std::fmt::Write;
+    struct Scan {
+        tail: String,
+        field: Option<usize>,
+        last: String,
+        found: [Option<usize>; 2],
+    }
+    const KEYS: [&str; 2] = ["l_col_ptr_for_val: [", "ut_col_ptr_for_val: ["];
+    impl Write for Scan {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            for c in s.chars() {
+                if let Some(f) = self.field {
+                    match c {
+                        ']' => {
+                            self.found[f] = self.last.trim().parse().ok();
+                            self.field = None;
+                            if self.found.iter().all(|v| v.is_some()) {
+                                return Err(std::fmt::Error);
+                            }
+                        }
+                        ',' => self.last.clear(),
+                        _ => self.last.push(c),
+                    }
+                    continue;
+                }
+                self.tail.push(c);
+                if self.tail.len() > 64 {
+                    self.tail.drain(..32);
+                }
+                if c == '[' {
+                    for (f, k) in KEYS.iter().enumerate() {
+                        if self.tail.ends_with(k) && !(f == 0 && self.tail.ends_with(KEYS[1])) {
+                            self.field = Some(f);
+                            self.last.clear();
+                        }
+                    }
+                }
+            }
+            Ok(())
+        }
+    }
+    let mut scan = Scan {
+        tail: String::new(),
+        field: None,
+        last: String::new(),
+        found: [None, None],
+    };
+    let _ = write!(scan, "{lu:?}");
+    Some(scan.found[0]? + scan.found[1]?)
+}
+
 enum Backend {
     Cholesky(Box<CholeskyState>),
     Lu(Box<LuState>),
+    LuCustom(Box<LuCustomState>),
 }
 
 impl Backend {
@@ -379,6 +583,17 @@ impl Backend {
                 .symbolic
                 .factorize_numeric_lu_scratch::<f64>(par, Default::default())
                 .or(st.symbolic.solve_in_place_scratch::<f64>(1, par)),
+            Backend::LuCustom(st) => factorize_supernodal_numeric_lu_scratch::<usize, f64>(
+                &st.symbolic,
+                Default::default(),
+            )
+            .or(
+                faer::sparse::linalg::lu::supernodal::solve_in_place_scratch::<usize, f64>(
+                    st.col_fwd.len(),
+                    1,
+                    par,
+                ),
+            ),
         }
     }
 }
@@ -542,16 +757,44 @@ impl SparseSolver {
         row_idx: &[usize],
         kind: LinearKind,
     ) -> Result<Self, LinearError> {
-        Self::with_threshold(n, col_ptr, row_idx, kind, SupernodalThreshold::AUTO)
+        Self::build(
+            n,
+            col_ptr,
+            row_idx,
+            kind,
+            SupernodalThreshold::AUTO,
+            LuOrdering::default(),
+        )
     }
 
-    /// As [`SparseSolver::new`], with faer's simplicial/supernodal switch forced (tests).
-    fn with_threshold(
+    /// As [`SparseSolver::new`], with the LU column ordering chosen (no effect for Cholesky,
+    /// which always uses AMD).
+    pub fn with_lu_ordering(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        kind: LinearKind,
+        ordering: LuOrdering,
+    ) -> Result<Self, LinearError> {
+        Self::build(
+            n,
+            col_ptr,
+            row_idx,
+            kind,
+            SupernodalThreshold::AUTO,
+            ordering,
+        )
+    }
+
+    /// As [`SparseSolver::with_lu_ordering`], with faer's simplicial/supernodal switch forced
+    /// (tests; the AMD-ordered LU is always supernodal and ignores it).
+    fn build(
         n: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
         kind: LinearKind,
         threshold: SupernodalThreshold,
+        ordering: LuOrdering,
     ) -> Result<Self, LinearError> {
         validate_pattern(n, col_ptr, row_idx)?;
         let pattern =
@@ -577,6 +820,9 @@ impl SparseSolver {
                     diag_pos,
                     factor_nnz,
                 }))
+            }
+            LinearKind::Lu if ordering == LuOrdering::Amd => {
+                Backend::LuCustom(Box::new(LuCustomState::new(&pattern)?))
             }
             LinearKind::Lu => {
                 let params = LuSymbolicParams {
@@ -717,6 +963,40 @@ impl SparseSolver {
                     self.lu_determinant(values);
                 }
             }
+            Backend::LuCustom(st) => {
+                for (v, &k) in st.at_values.iter_mut().zip(&st.at_src) {
+                    *v = values[k];
+                }
+                let at = SparseColMatRef::new(st.at_pattern.as_ref(), &st.at_values);
+                let col_perm = faer::perm::PermRef::new_checked(&st.col_fwd, &st.col_inv, self.n);
+                let res = factorize_supernodal_numeric_lu(
+                    &mut st.row_fwd,
+                    &mut st.row_inv,
+                    &mut st.numeric,
+                    a,
+                    at,
+                    col_perm,
+                    &st.symbolic,
+                    par,
+                    MemStack::new(&mut self.mem),
+                    Default::default(),
+                );
+                match res {
+                    Ok(()) => {}
+                    Err(LuError::SymbolicSingular { .. }) => {
+                        self.status = Status::Singular;
+                        return Err(LinearError::Singular);
+                    }
+                    Err(LuError::Generic(e)) => {
+                        let msg = format!("numeric LU failed: {e:?}");
+                        self.status = Status::Other(msg.clone());
+                        return Err(LinearError::Symbolic(msg));
+                    }
+                }
+                if self.track_det {
+                    self.lu_determinant(values);
+                }
+            }
         }
         self.status = Status::Ready;
         Ok(())
@@ -726,12 +1006,14 @@ impl SparseSolver {
     /// A failure here (only the symbolic analysis of the delayed ordering can fail) leaves the
     /// determinant unavailable; the LU factorization itself is unaffected.
     fn lu_determinant(&mut self, values: &[f64]) {
-        let Backend::Lu(st) = &mut self.backend else {
-            return;
+        let det = match &mut self.backend {
+            Backend::Lu(st) => &mut st.det,
+            Backend::LuCustom(st) => &mut st.det,
+            Backend::Cholesky(_) => return,
         };
         // Always sequential: faer's parallel dense Bunch–Kaufman on the many small supernodes
         // measured 10x slower than sequential (+1.0 s instead of +0.1 s at n = 100k).
-        if let Ok(Some((sign, log, neg))) = st.det.compute(
+        if let Ok(Some((sign, log, neg))) = det.compute(
             &self.pattern,
             values,
             Par::Seq,
@@ -787,6 +1069,12 @@ impl SparseSolver {
                     stack,
                 );
             }
+            Backend::LuCustom(st) => {
+                let row_perm = faer::perm::PermRef::new_checked(&st.row_fwd, &st.row_inv, n);
+                let col_perm = faer::perm::PermRef::new_checked(&st.col_fwd, &st.col_inv, n);
+                st.numeric
+                    .solve_in_place_with_conj(row_perm, col_perm, Conj::No, x, par, stack);
+            }
         }
         if rhs.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -824,8 +1112,70 @@ impl SparseSolver {
         match &self.backend {
             Backend::Cholesky(st) => st.factor_nnz,
             Backend::Lu(st) => (2 * st.det.l_nnz).saturating_sub(self.n),
+            Backend::LuCustom(st) => (2 * st.det.l_nnz).saturating_sub(self.n),
         }
     }
+
+    /// The LU column ordering in use (`None` for Cholesky).
+    pub fn lu_ordering(&self) -> Option<LuOrdering> {
+        match &self.backend {
+            Backend::Cholesky(_) => None,
+            Backend::Lu(_) => Some(LuOrdering::Colamd),
+            Backend::LuCustom(_) => Some(LuOrdering::Amd),
+        }
+    }
+
+    /// Stored entries of the numeric LU factors L and U of the last factorization (supernodal
+    /// blocks, explicit zeros included), or `None` (Cholesky, no factorization yet, or faer's
+    /// simplicial LU). Costs about as much as formatting the factor values (seconds at 10⁵
+    /// unknowns): for benchmarks, not for the solve loop.
+    pub fn lu_factor_entries(&self) -> Option<usize> {
+        if !matches!(self.status, Status::Ready) {
+            return None;
+        }
+        match &self.backend {
+            Backend::Cholesky(_) => None,
+            Backend::Lu(st) => supernodal_entries(&st.numeric),
+            Backend::LuCustom(st) => supernodal_entries(&st.numeric),
+        }
+    }
+}
+
+/// Write a square CSC matrix as MatrixMarket `coordinate real general` (1-based indices,
+/// one entry per stored value, explicit zeros included so the pattern is the solver's).
+pub fn write_matrix_market(
+    path: &std::path::Path,
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    values: &[f64],
+) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "%%MatrixMarket matrix coordinate real general")?;
+    writeln!(
+        w,
+        "% written by tread: steady tangent dR/dx at the converged state"
+    )?;
+    writeln!(w, "{n} {n} {}", values.len())?;
+    for j in 0..n {
+        for k in col_ptr[j]..col_ptr[j + 1] {
+            writeln!(w, "{} {} {:.17e}", row_idx[k] + 1, j + 1, values[k])?;
+        }
+    }
+    w.flush()
+}
+
+/// Write a vector as MatrixMarket `array real general` (one column).
+pub fn write_vector_market(path: &std::path::Path, v: &[f64]) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "%%MatrixMarket matrix array real general")?;
+    writeln!(w, "{} 1", v.len())?;
+    for x in v {
+        writeln!(w, "{x:.17e}")?;
+    }
+    w.flush()
 }
 
 /// Build the pattern and values of a 2D 9-point-stencil matrix on an `n_side` x `n_side` grid
@@ -1043,16 +1393,30 @@ mod tests {
         a
     }
 
-    const THRESHOLDS: [SupernodalThreshold; 3] = [
-        SupernodalThreshold::AUTO,
-        SupernodalThreshold::FORCE_SIMPLICIAL,
-        SupernodalThreshold::FORCE_SUPERNODAL,
+    /// faer's COLAMD LU (automatic, simplicial, supernodal) and the AMD-ordered LU.
+    const THRESHOLDS: [(SupernodalThreshold, LuOrdering); 4] = [
+        (SupernodalThreshold::AUTO, LuOrdering::Colamd),
+        (SupernodalThreshold::FORCE_SIMPLICIAL, LuOrdering::Colamd),
+        (SupernodalThreshold::FORCE_SUPERNODAL, LuOrdering::Colamd),
+        (SupernodalThreshold::AUTO, LuOrdering::Amd),
     ];
+
+    impl SparseSolver {
+        fn with_threshold(
+            n: usize,
+            col_ptr: &[usize],
+            row_idx: &[usize],
+            kind: LinearKind,
+            (th, ord): (SupernodalThreshold, LuOrdering),
+        ) -> Result<Self, LinearError> {
+            Self::build(n, col_ptr, row_idx, kind, th, ord)
+        }
+    }
 
     fn solver(
         a: &[Vec<f64>],
         kind: LinearKind,
-        th: SupernodalThreshold,
+        th: (SupernodalThreshold, LuOrdering),
     ) -> (SparseSolver, Vec<f64>) {
         let (cp, ri, v) = dense_to_csc(a);
         let s = SparseSolver::with_threshold(a.len(), &cp, &ri, kind, th).unwrap();
@@ -1318,7 +1682,7 @@ mod tests {
     fn wrong_rhs_length_and_bad_input() {
         let a = random_spd(10, 0.3, 61);
         for kind in [LinearKind::Cholesky, LinearKind::Lu] {
-            let (mut s, mut v) = solver(&a, kind, SupernodalThreshold::AUTO);
+            let (mut s, mut v) = solver(&a, kind, THRESHOLDS[0]);
             let mut x = vec![1.0; 10];
             // Before any factorization: an error, not a panic.
             assert!(s.solve_in_place(&mut x).is_err());
