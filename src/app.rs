@@ -49,15 +49,27 @@ pub enum AppError {
     Unsupported(String),
     #[error("interrupted: the logs up to the last step are written to {0}")]
     Interrupted(PathBuf),
+    /// A computation other than a Newton solve failed (e.g. the stick-slip integrator).
+    #[error("{0} (partial results written to {1})")]
+    Failed(String, PathBuf),
+    /// The output folder cannot be used (not writable, locked by another run, …).
+    #[error("output folder {0}: {1}")]
+    OutDir(PathBuf, String),
+    /// The scene would need more memory than allowed.
+    #[error("{0}")]
+    TooBig(String),
 }
 
 impl AppError {
-    /// Process exit status: 130 interrupted, 1 solve failed, 2 invalid input or output error.
+    /// Process exit status: 130 interrupted, 1 the computation failed, 2 invalid input (scene,
+    /// flags, a model too large for the memory limit), 3 an output file or folder cannot be
+    /// written.
     pub fn exit_code(&self) -> u8 {
         match self {
             AppError::Interrupted(_) => 130,
-            AppError::Solve(..) => 1,
-            _ => 2,
+            AppError::Solve(..) | AppError::Failed(..) => 1,
+            AppError::Output(_) | AppError::OutDir(..) => 3,
+            AppError::Unsupported(_) | AppError::TooBig(_) => 2,
         }
     }
 }
@@ -82,7 +94,8 @@ pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders
     for sink in &scene.output.sinks {
         match sink {
             Sink::Summary => {}
-            Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), every),
+            // Scalars at every step: decimating them aliases with the node passages.
+            Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), 1),
             Sink::Vtu => r.push(Box::new(record::vtu::VtuSink::new(out_dir)), every),
             Sink::Mcap => r.push(Box::new(record::mcap::McapSink::new(out_dir)), every),
             Sink::Png => r.push(Box::new(record::png::PngSink::new(out_dir)), every),
@@ -610,4 +623,101 @@ fn write_solid_csv(sys: &SolidSystem, report: &StepReport, dir: &Path) -> Result
         ],
         rows.into_iter(),
     )
+}
+
+/// Memory limit for [`check_memory`] set by `--max-memory` (bytes, 0: the machine's available
+/// memory).
+static MAX_MEMORY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Set the memory limit checked by [`check_memory`] (`--max-memory`).
+pub fn set_max_memory(bytes: u64) {
+    MAX_MEMORY.store(bytes, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The memory limit: `--max-memory`, else the available memory of the machine
+/// (`MemAvailable` in /proc/meminfo), else none.
+pub fn memory_limit() -> Option<u64> {
+    let set = MAX_MEMORY.load(std::sync::atomic::Ordering::Relaxed);
+    if set > 0 {
+        return Some(set);
+    }
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb.saturating_mul(1024))
+}
+
+/// Rough peak memory (bytes) of a scene's run, from the mesh size alone (computed in floating
+/// point, so absurd sizes do not overflow): the mesh and state vectors, the sparse pattern and
+/// values of the tangent (every cell couples its 2 (p+1)² displacement dofs and its pressures),
+/// and the sparse L and U factors with 4 n log₂ n entries each (nested-dissection fill of a 2D
+/// mesh: about 31/8 n log₂ n). Stick-slip has no mesh.
+pub fn estimate_memory(scene: &Scene) -> f64 {
+    if scene.analysis.mode == Mode::StickSlip {
+        return 0.0;
+    }
+    let p = scene.mesh.order.max(1) as f64;
+    let (nr, nt) = (scene.mesh.n_r as f64, scene.mesh.n_theta as f64);
+    let nodes = (p * nr + 1.0) * (p * nt);
+    let dofs = 2.0 * nodes;
+    let cells = nr * nt;
+    let nd = 2.0 * (p + 1.0) * (p + 1.0) + 3.0;
+    let nnz = cells * nd * nd;
+    let vectors = 40.0 * dofs * 8.0 + nodes * 64.0;
+    let matrix = nnz * 16.0;
+    let factor = 2.0 * 4.0 * dofs * dofs.max(2.0).log2() * 16.0;
+    vectors + matrix + factor
+}
+
+/// Refuse a scene whose [`estimate_memory`] exceeds [`memory_limit`], before anything is
+/// allocated.
+pub fn check_memory(scene: &Scene) -> Result<(), AppError> {
+    let need = estimate_memory(scene);
+    let Some(limit) = memory_limit() else {
+        return Ok(());
+    };
+    if need.is_finite() && need <= limit as f64 {
+        return Ok(());
+    }
+    let gib = |b: f64| {
+        let g = b / (1024.0 * 1024.0 * 1024.0);
+        if g < 1e4 {
+            format!("{g:.3}")
+        } else {
+            format!("{g:.2e}")
+        }
+    };
+    Err(AppError::TooBig(format!(
+        "the mesh n_r = {}, n_theta = {}, order = {} would need about {} GiB of memory, more than the {} GiB allowed ({}); use a coarser [mesh] or raise --max-memory",
+        scene.mesh.n_r,
+        scene.mesh.n_theta,
+        scene.mesh.order,
+        gib(need),
+        gib(limit as f64),
+        if MAX_MEMORY.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+            "--max-memory"
+        } else {
+            "available memory"
+        }
+    )))
+}
+
+/// Parse a memory size: bytes, or a number with K, M, G or T (powers of 1024), e.g. `2G`.
+pub fn parse_memory(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let (num, mult) = match t.chars().last().map(|c| c.to_ascii_uppercase()) {
+        Some('K') => (&t[..t.len() - 1], 1u64 << 10),
+        Some('M') => (&t[..t.len() - 1], 1 << 20),
+        Some('G') => (&t[..t.len() - 1], 1 << 30),
+        Some('T') => (&t[..t.len() - 1], 1 << 40),
+        _ => (t, 1),
+    };
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("--max-memory {text:?}: expected bytes or a size like 512M, 2G"))?;
+    if !(v.is_finite() && v > 0.0 && v * (mult as f64) < 1.8e19) {
+        return Err(format!("--max-memory {text:?}: must be a positive size"));
+    }
+    Ok((v * mult as f64) as u64)
 }

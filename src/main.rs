@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tread::app::{self, RunOptions};
+use tread::io::output::tidy_numbers;
 use tread::io::Scene;
 
 /// The scene run by `tread` without arguments (also `cargo run --release`): it is run in both
@@ -26,6 +27,10 @@ struct Cli {
     /// No progress bar, minimal output.
     #[arg(short, long, global = true)]
     quiet: bool,
+    /// Refuse scenes whose estimated memory exceeds this size (bytes, or e.g. 512M, 2G;
+    /// default: the machine's available memory).
+    #[arg(long, global = true, value_name = "SIZE")]
+    max_memory: Option<String>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -114,9 +119,24 @@ enum Command {
     },
 }
 
+/// Largest scene file read (a scene is a few kB; this refuses `/dev/zero` and the like).
+const MAX_SCENE_BYTES: u64 = 4 << 20;
+
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
-    let text = std::fs::read_to_string(path)
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
         .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(format!(
+            "cannot read scene {}: larger than {} MiB, not a scene file",
+            path.display(),
+            MAX_SCENE_BYTES >> 20
+        ));
+    }
+    let text = String::from_utf8(bytes)
+        .map_err(|e| format!("cannot read scene {}: not UTF-8 text ({e})", path.display()))?;
     Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
 }
 
@@ -128,6 +148,7 @@ fn run_with(
     compare: bool,
     dump_matrix: Option<&Path>,
 ) -> ExitCode {
+    let started = std::time::Instant::now();
     let out_dir = out.unwrap_or_else(|| {
         let d = app::default_out_dir(&scene);
         if compare {
@@ -143,6 +164,28 @@ fn run_with(
         );
     }
     tread::io::record::install_interrupt_handler();
+    if let Err(e) = app::check_memory(&scene) {
+        eprintln!("tread: error: {e}");
+        return ExitCode::from(e.exit_code());
+    }
+    // The output folder first: an unwritable or busy folder is reported before the solve.
+    let _lock = match tread::io::output::OutDirLock::take(&out_dir) {
+        Ok(l) => {
+            if l.removed > 0 && !quiet {
+                eprintln!(
+                    "tread: removed {} result files of an earlier run from {}",
+                    l.removed,
+                    out_dir.display()
+                );
+            }
+            l
+        }
+        Err(msg) => {
+            let e = app::AppError::OutDir(out_dir.clone(), msg);
+            eprintln!("tread: error: {e}");
+            return ExitCode::from(e.exit_code());
+        }
+    };
     let opts = RunOptions {
         out_dir,
         verbose,
@@ -157,40 +200,71 @@ fn run_with(
     };
     match result {
         Ok(o) => {
-            if !quiet && compare {
-                println!(
-                    "compared the transient and steady modes: dofs = {}",
-                    o.summary["dofs"]
-                );
-                for line in &o.headline {
-                    println!("{line}");
+            if !quiet {
+                if compare {
+                    say(&format!(
+                        "compared the transient and steady modes: dofs = {}",
+                        o.summary["dofs"]
+                    ));
+                } else {
+                    say(&status_line(&o.summary, started.elapsed().as_secs_f64()));
                 }
-            } else if !quiet {
-                println!(
-                    "converged: dofs = {}, Newton iterations = {}, wall time = {:.3} s",
-                    o.summary["dofs"],
-                    o.summary["newton_iterations"],
-                    o.summary["wall_time_s"].as_f64().unwrap_or(0.0)
-                );
                 for line in &o.headline {
-                    println!("{line}");
+                    say(line);
                 }
             }
-            println!(
+            say(&format!(
                 "results written to {}",
                 o.out_dir.join("summary.json").display()
-            );
+            ));
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("tread: error: {e}");
+            eprintln!("tread: error: {}", tidy_numbers(&e.to_string()));
             ExitCode::from(e.exit_code())
         }
     }
 }
 
+/// A line on stdout. A closed or full stdout (`tread … | head`, `> /dev/full`) is not an error
+/// of the run: the results are in the output directory, so the text is dropped silently.
+fn say(line: &str) {
+    use std::io::Write;
+    let mut o = std::io::stdout().lock();
+    let _ = writeln!(o, "{line}").and_then(|()| o.flush());
+}
+
+/// "converged: …" (or "finished: … steady rolling not reached") from a summary.
+fn status_line(summary: &serde_json::Value, wall: f64) -> String {
+    let steady_missed = summary["results"]["steady"] == serde_json::Value::Bool(false);
+    let head = if steady_missed {
+        "finished (steady rolling not reached)"
+    } else {
+        "converged"
+    };
+    let mut parts = Vec::new();
+    if let Some(d) = summary["dofs"].as_u64() {
+        parts.push(format!("dofs = {d}"));
+    }
+    if let Some(n) = summary["newton_iterations"].as_u64() {
+        parts.push(format!("Newton iterations = {n}"));
+    }
+    let wall = summary["wall_time_s"].as_f64().unwrap_or(wall);
+    parts.push(format!("wall time = {wall:.3} s"));
+    format!("{head}: {}", parts.join(", "))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Some(m) = &cli.max_memory {
+        match app::parse_memory(m) {
+            Ok(b) => app::set_max_memory(b),
+            Err(e) => {
+                eprintln!("tread: error: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
     let threads = cli.threads.unwrap_or(0);
     if threads > 0 {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
@@ -239,7 +313,7 @@ fn main() -> ExitCode {
                     run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
                 }
                 Err(e) => {
-                    eprintln!("tread: invalid scene:\n{e}");
+                    eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                     ExitCode::from(2)
                 }
             }
@@ -282,9 +356,12 @@ fn main() -> ExitCode {
                 {
                     Ok(r) => {
                         if !cli.quiet {
-                            println!("{}", tread::driver::critical::headline(&r));
+                            say(&tread::driver::critical::headline(&r));
                         }
-                        println!("results written to {}", dir.join("critical.json").display());
+                        say(&format!(
+                            "results written to {}",
+                            dir.join("critical.json").display()
+                        ));
                         ExitCode::SUCCESS
                     }
                     Err(e) => {
@@ -294,21 +371,21 @@ fn main() -> ExitCode {
                 }
             }
             Err(e) => {
-                eprintln!("tread: invalid scene:\n{e}");
+                eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                 ExitCode::from(2)
             }
         },
         Some(Command::Check { scene, set }) => match load(&scene, &set) {
             Ok(s) => {
-                println!(
+                say(&format!(
                     "# {}: valid; resolved scene with defaults:",
                     scene.display()
-                );
-                print!("{}", s.to_toml_string());
+                ));
+                say(s.to_toml_string().trim_end());
                 ExitCode::SUCCESS
             }
             Err(e) => {
-                eprintln!("tread: invalid scene:\n{e}");
+                eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                 ExitCode::from(2)
             }
         },
@@ -317,7 +394,7 @@ fn main() -> ExitCode {
         }
         Some(Command::Replay { log, to }) => match tread::io::replay::replay(&log, to.as_deref()) {
             Ok(msg) => {
-                println!("{msg}");
+                say(&msg);
                 ExitCode::SUCCESS
             }
             Err(e) => {

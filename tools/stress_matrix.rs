@@ -419,8 +419,10 @@ fn app_class(e: &AppError) -> &'static str {
     match e {
         AppError::Solve(se, _) => solve_class(se),
         AppError::Unsupported(_) => "invalid_input",
-        AppError::Output(_) => "output",
+        AppError::Output(_) | AppError::OutDir(..) => "output",
         AppError::Interrupted(_) => "interrupted",
+        AppError::Failed(..) => "failed",
+        AppError::TooBig(_) => "invalid_input",
     }
 }
 

@@ -578,10 +578,16 @@ pub fn run_with_dump(
             let rec: &mut dyn Recorder = &mut recorders;
             creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
                 rows.push(branch_row(s, p));
+                // Time of a branch point: the continuation parameter (ω, load, DISP), as in
+                // branch.csv; the start point (p.step = 0) is the last load step, already
+                // recorded.
                 let info = StepInfo {
                     index: n0 + p.step as u64,
-                    time: 1.0 + p.step as f64,
-                    dt: if p.step == 0 { 0.0 } else { 1.0 },
+                    time: p.lambda,
+                    dt: match rows.len() {
+                        0 | 1 => 0.0,
+                        n => rows[n - 1].lambda - rows[n - 2].lambda,
+                    },
                     newton_iterations: p.iterations,
                     residual: 0.0,
                     is_final: false,
@@ -732,13 +738,17 @@ pub fn run_with_dump(
     let error = solve.as_ref().err().map(|e| e.to_string());
     let final_info = StepInfo {
         index: steps as u64,
-        time: 1.0 + rows.len().saturating_sub(1) as f64,
+        time: 1.0,
         dt: 0.0,
         newton_iterations: 0,
         residual: 0.0,
         is_final: true,
     };
-    st.sys.record_step(&final_info, &mut recorders);
+    // The final state is already recorded as the last load step or branch point, except when
+    // a recovery homotopy (which records no steps) found it.
+    if recorders.steps_recorded() == 0 || st.recovery.as_ref().is_some_and(|r| r.succeeded()) {
+        st.sys.record_step(&final_info, &mut recorders);
+    }
     for e in recorders.run_finished(&RunEnd {
         converged,
         interrupted,

@@ -142,9 +142,17 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut headline = Vec::new();
     let results = match &res {
         Ok(r) => {
+            let opt = |v: Option<f64>| {
+                v.map_or(
+                    "not measured (fewer than two cycles)".to_string(),
+                    crate::io::output::fmt_num,
+                )
+            };
             headline.push(format!(
-                "period = {:?}, slip amplitude = {:?}, {} steps",
-                r.period, r.amplitude, r.stats.steps
+                "period = {} s, slip amplitude = {}, {} steps",
+                opt(r.period),
+                opt(r.amplitude),
+                r.stats.steps
             ));
             serde_json::json!({
                 "period": r.period,
@@ -204,8 +212,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             converged,
             headline,
         }),
-        Err(e) => Err(AppError::Unsupported(format!(
-            "stick-slip integration failed: {e}"
-        ))),
+        Err(e) => Err(AppError::Failed(
+            format!("stick-slip integration failed: {e}"),
+            opts.out_dir.clone(),
+        )),
     }
 }

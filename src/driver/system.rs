@@ -33,6 +33,9 @@ pub struct SolidSystem {
     pub x: Vec<f64>,
     /// State at the last converged load step (friction history in static analyses).
     pub x_prev: Vec<f64>,
+    /// State at the start of the last accepted load step: after [`LoadedSystem::commit`] the
+    /// static slip w = (x − x_start)/Δτ of that step is still known for the outputs.
+    x_step_start: Vec<f64>,
     pub loading: Loading,
     /// Load factor of the current target and of the last converged step.
     pub lambda: f64,
@@ -104,6 +107,7 @@ impl SolidSystem {
             dofs,
             asm,
             x_prev: x.clone(),
+            x_step_start: x.clone(),
             x,
             loading: Loading::Spin { omega2: 0.0 },
             lambda: 0.0,
@@ -194,6 +198,7 @@ impl SolidSystem {
         self.dofs = dofs;
         self.x.push(0.0);
         self.x_prev.push(0.0);
+        self.x_step_start.push(0.0);
         (iphi, block)
     }
 
@@ -375,12 +380,24 @@ impl SolidSystem {
             .map(|c| c.road_height(&self.dofs, &self.x))
     }
 
-    /// Contact traction samples at the current state.
+    /// Contact traction samples at the current state. In load stepping the slip is that of
+    /// the last accepted step, w = (x − x_start)/Δτ (after the commit x_prev = x, which would
+    /// report w = 0 and no static friction).
     pub fn contact_samples(&self) -> Vec<ContactSample> {
         match &self.contact {
             Some(c) => match (c.has_stencil(), self.steady_velocities()) {
                 (true, Some(vel)) => c.samples(&self.model.mesh, &self.dofs, &self.x, &vel),
-                _ => c.samples(&self.model.mesh, &self.dofs, &self.x, &self.x_prev),
+                _ => {
+                    let aux = match c.kinematics {
+                        SlipKinematics::Static { .. }
+                            if self.x_step_start.len() == self.x.len() =>
+                        {
+                            &self.x_step_start
+                        }
+                        _ => &self.x_prev,
+                    };
+                    c.samples(&self.model.mesh, &self.dofs, &self.x, aux)
+                }
             },
             None => Vec::new(),
         }
@@ -545,8 +562,12 @@ impl LoadedSystem for SolidSystem {
             }
         }
         if let Some(c) = &mut self.contact {
-            // Steady rolling measures velocities by ω ∂θχ, not in the load-stepping time.
-            if !matches!(c.kinematics, SlipKinematics::Steady { .. }) {
+            // Steady rolling measures velocities by ω ∂θχ, not in the load-stepping time. A
+            // restore to the converged λ (λ = λ_prev) keeps the last step's Δτ, with which
+            // the outputs evaluate that step's slip.
+            if !matches!(c.kinematics, SlipKinematics::Steady { .. })
+                && (lambda > self.lambda_prev || self.lambda_prev == 0.0)
+            {
                 c.kinematics = SlipKinematics::Static {
                     dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE),
                 };
@@ -555,6 +576,7 @@ impl LoadedSystem for SolidSystem {
     }
     fn commit(&mut self) {
         self.lambda_prev = self.lambda;
+        self.x_step_start.clone_from(&self.x_prev);
         self.x_prev.copy_from_slice(&self.x);
     }
     fn record_step(&self, info: &StepInfo, rec: &mut dyn Recorder) {

@@ -246,6 +246,8 @@ pub struct Transient {
     fprev: Vec<f64>,
     /// Referential field extracted at the last node passage (2 per referential node).
     pub steady_field: Option<Vec<f64>>,
+    /// Newton convergence table of the last implicit step (for the recorder).
+    pub last_table: Vec<crate::solver::IterationRecord>,
     /// Torque control (hub angle as an unknown); `None`: speed control (φ(t) prescribed).
     pub hub_angle: Option<HubAngle>,
     is_hub: Vec<bool>,
@@ -315,6 +317,7 @@ impl Transient {
             ml,
             fprev: Vec::new(),
             steady_field: None,
+            last_table: Vec::new(),
             hub_angle: None,
             is_hub,
             t_eval: 0.0,
@@ -792,6 +795,7 @@ impl Transient {
                 let rep = newton.solve(self);
                 self.sys.model.history_dt = 0.0;
                 let rep = rep?;
+                self.last_table = rep.table;
                 self.newmark(&ga);
                 // Local error relative to the deformation: the displacement from the rigidly
                 // rotated reference Q(φ_{n+1}) X (the step increment, used before, is dominated
@@ -1280,6 +1284,8 @@ pub struct TransientReport {
     /// ([`SteadyMonitor::passage_mean`]).
     pub passage_mean: Option<[f64; 3]>,
     pub history: Vec<Snapshot>,
+    /// Rejected steps in order: (target time, step size, reason).
+    pub rejections: Vec<(f64, f64, String)>,
 }
 
 /// Integrate until steady (or t_end). `on_step` is called after each accepted step.
@@ -1417,6 +1423,11 @@ pub fn integrate(
                     tr.an.copy_from_slice(&a0);
                     tr.sys.restore_state(&saved);
                     rep.rejected += 1;
+                    rep.rejections.push((
+                        t0 + h,
+                        h,
+                        format!("local error {err:.3e} > 4 × error_tol"),
+                    ));
                     dt = (h * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9))
                         .max(opts.dt_min);
                     continue;
@@ -1487,6 +1498,7 @@ pub fn integrate(
                 tr.an.copy_from_slice(&a0);
                 tr.sys.restore_state(&saved);
                 rep.rejected += 1;
+                rep.rejections.push((t0 + h, h, e.to_string()));
                 dt = h;
                 if dt <= opts.dt_min * (1.0 + 1e-12)
                     || matches!(tr.scheme, Scheme::CentralDifference)

@@ -34,9 +34,11 @@ use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, 
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{
-    self, Energy, HubLoads, Recorder, RunEnd, RunMeta, SteadyReached, StepInfo, StepView,
+    self, Energy, HubLoads, Recorder, RejectedStep, RunEnd, RunMeta, SteadyReached, StepInfo,
+    StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink};
+use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
 use std::time::Instant;
 
@@ -100,8 +102,24 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         );
         // Start: hub and body in rigid spin at omega (no contact yet: the road is at first touch).
         if scene.motion.omega > 0.0 {
-            tr.start_rigid_spin(scene.motion.omega, kind, None)
-                .map_err(|e| AppError::Solve(e, opts.out_dir.clone()))?;
+            if let Err(e) = tr.start_rigid_spin(scene.motion.omega, kind, None) {
+                // Nothing was integrated: the summary says why, so that the folder is not empty.
+                let mut summary = serde_json::json!({
+                    "scene": scene.scene.name,
+                    "mode": scene.analysis.mode.to_string(),
+                    "dofs": tr.sys.n_dofs(),
+                    "newton_iterations": 0,
+                    "wall_time_s": t0.elapsed().as_secs_f64(),
+                    "converged": false,
+                    "error": format!("the initial rigid spin at omega = {} rad/s failed: {e}", crate::io::output::fmt_num(scene.motion.omega)),
+                    "warnings": Vec::<String>::new(),
+                    "results": serde_json::Value::Null,
+                    "version": env!("CARGO_PKG_VERSION"),
+                });
+                sanitize(&mut summary);
+                write_json(&opts.out_dir.join("summary.json"), &summary)?;
+                return Err(AppError::Solve(e, opts.out_dir.clone()));
+            }
         }
     }
     let time_opts = TimeOptions {
@@ -136,14 +154,31 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         time_end: time_opts.t_end,
         revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
     });
-    let (mut t_prev, mut its_prev, mut was_steady) = (0.0, 0usize, false);
+    let (mut t_prev, mut its_prev, mut rejections_seen) = (0.0, 0usize, 0usize);
     let on_step = |tr: &Transient, rep: &TransientReport| {
+        let index = rep.steps.saturating_sub(1) as u64;
+        for (time, dt, reason) in rep.rejections.iter().skip(rejections_seen) {
+            recorders.step_rejected(&RejectedStep {
+                index,
+                time: *time,
+                dt: *dt,
+                reason,
+            });
+        }
+        rejections_seen = rep.rejections.len();
+        record::emit_newton_table(
+            &mut recorders,
+            index,
+            tr.t,
+            &tr.last_table,
+            crate::solver::NonlinearSystem::field_names(tr),
+        );
         let info = StepInfo {
-            index: rep.steps.saturating_sub(1) as u64,
+            index,
             time: tr.t,
             dt: tr.t - t_prev,
             newton_iterations: rep.newton_iterations - its_prev,
-            residual: 0.0,
+            residual: final_residual(&tr.last_table),
             // The integration loop's own end conditions.
             is_final: tr.t >= time_opts.t_end - 1e-12 * time_opts.t_end
                 || rep.steps >= time_opts.max_steps
@@ -151,9 +186,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         };
         t_prev = tr.t;
         its_prev = rep.newton_iterations;
-        let became_steady = rep.steady && !was_steady;
-        was_steady = rep.steady;
-        if !(recorders.wants_view(&info) || became_steady) {
+        if !recorders.wants_view(&info) {
             recorders.step(&info, None);
             return;
         }
@@ -183,24 +216,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             omega: tr.omega_now(),
             scalars: &scalars,
         };
-        let wants = recorders.wants_view(&info);
-        recorders.step(&info, wants.then_some(&view));
-        if became_steady {
-            let results = [
-                ("hub_force_x", snap.hub_force_x),
-                ("hub_force_y", snap.hub_force_y),
-                ("hub_torque", snap.hub_torque),
-                ("revolutions", rep.revolutions),
-            ];
-            recorders.steady_reached(
-                &SteadyReached {
-                    time: tr.t,
-                    change: rep.last_change.iter().copied().fold(0.0, f64::max),
-                    results: &results,
-                },
-                &view,
-            );
-        }
+        recorders.step(&info, Some(&view));
     };
     let res = match ode {
         Some(m) => {
@@ -214,6 +230,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Ok(r) => (r, None),
         Err((e, r)) => (r, Some(e)),
     };
+    if let (true, Some(field)) = (rep.steady, tr.steady_field.as_ref()) {
+        record_steady_field(&tr, &rep, field, &mut recorders);
+    }
     let samples = tr
         .sys
         .contact
@@ -270,6 +289,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         .as_ref()
         .is_some_and(|c| c.normal.has_damping());
     let converged = err.is_none();
+    let mut warnings: Vec<String> = Vec::new();
+    if converged && !rep.steady {
+        warnings.push(format!(
+            "steady rolling was not reached by t = {} s ({} node passages, last relative change {}; steady_tol = {}): the results are those of the last time step",
+            crate::io::output::fmt_num(rep.final_time),
+            rep.passages,
+            crate::io::output::fmt_num(rep.last_change.iter().copied().fold(0.0, f64::max)),
+            crate::io::output::fmt_num(ts.steady_tol),
+        ));
+    }
+    for w in &warnings {
+        eprintln!("tread: warning: {w}");
+    }
     let mut summary = serde_json::json!({
         "scene": scene.scene.name,
         "mode": scene.analysis.mode.to_string(),
@@ -278,6 +310,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "wall_time_s": wall,
         "converged": converged,
         "error": err.as_ref().map(|e| e.to_string()),
+        "warnings": warnings,
         "results": results,
         "terms": {
             "friction": friction,
@@ -333,9 +366,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             )?;
         }
     }
+    let steady_text = match rep.time_to_steady {
+        Some(t) if rep.steady => format!(
+            "steady rolling reached at t = {}",
+            crate::io::output::fmt_num(t)
+        ),
+        _ => "steady rolling NOT reached".to_string(),
+    };
     let headline = vec![format!(
-        "t = {:.4e} s, {:.3} revolutions, {} steps, steady = {} (at t = {:?}); hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}]",
-        rep.final_time, rep.revolutions, rep.steps, rep.steady, rep.time_to_steady, f[0], f[1], m, tot.x_min, tot.x_max
+        "t = {:.4e} s, {:.3} revolutions, {} steps, {steady_text}; hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}]",
+        rep.final_time, rep.revolutions, rep.steps, f[0], f[1], m, tot.x_min, tot.x_max
     )];
     match err {
         None => Ok(RunOutcome {
@@ -347,6 +387,60 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Some(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
         Some(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
     }
+}
+
+/// Send the steady state to the recorder: the referential field extracted at the last node
+/// passage (`steady_field`, displacement u = χ − X of the material point at each reference node,
+/// hub rotation removed) with its nodal stresses, the contact samples and hub loads of the last
+/// step (both spatial, so already steady), and the passage-mean hub loads.
+fn record_steady_field(
+    tr: &Transient,
+    rep: &TransientReport,
+    field: &[f64],
+    recorders: &mut dyn Recorder,
+) {
+    let mut x = tr.un.clone();
+    let n = field.len().min(x.len());
+    x[..n].copy_from_slice(&field[..n]);
+    let stress = nodal_stress_at(&tr.sys, &x);
+    let contact = tr
+        .sys
+        .contact
+        .as_ref()
+        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
+        .unwrap_or_default();
+    let snap = tr.snapshot();
+    let mean = rep
+        .passage_mean
+        .unwrap_or([snap.hub_force_x, snap.hub_force_y, snap.hub_torque]);
+    let view = StepView {
+        mesh: Some(&tr.sys.model.mesh),
+        x: &x,
+        stress: &stress,
+        contact: &contact,
+        hub: Some(HubLoads {
+            force: [mean[0], mean[1]],
+            torque: mean[2],
+        }),
+        energy: None,
+        road_height: tr.sys.road_height(),
+        omega: tr.omega_now(),
+        scalars: &[],
+    };
+    let results = [
+        ("hub_force_x", mean[0]),
+        ("hub_force_y", mean[1]),
+        ("hub_torque", mean[2]),
+        ("revolutions", rep.revolutions),
+    ];
+    recorders.steady_reached(
+        &SteadyReached {
+            time: rep.time_to_steady.unwrap_or(tr.t),
+            change: rep.last_change.iter().copied().fold(0.0, f64::max),
+            results: &results,
+        },
+        &view,
+    );
 }
 
 /// Hub and road kinematics of a transient scene: ω, DISP (or the hub load) and v0 ramped in

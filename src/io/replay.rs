@@ -81,6 +81,9 @@ pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
         return Err(ReplayError::Read(log.to_path_buf(), "no such file".into()));
     }
     let k = kind(log).ok_or_else(|| ReplayError::UnknownType(log.to_path_buf()))?;
+    if k == "mcap" {
+        check_mcap(log)?;
+    }
     match (k, to) {
         ("mcap", Some(to)) => {
             let st = mcap_to_rrd(log, to)?;
@@ -120,6 +123,31 @@ pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
             open(&viewer, log)
         }
     }
+}
+
+/// MCAP files start with these 8 bytes.
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+/// Refuse what is not an MCAP log with at least one readable message (random bytes, an empty
+/// or header-only file), before anything is converted or written.
+pub fn check_mcap(log: &Path) -> Result<u64, ReplayError> {
+    let bad = |m: &str| ReplayError::Read(log.to_path_buf(), m.to_string());
+    let bytes = std::fs::read(log).map_err(|e| bad(&e.to_string()))?;
+    if !bytes.starts_with(MCAP_MAGIC) {
+        return Err(bad("not an MCAP log (no MCAP magic bytes at the start)"));
+    }
+    let stream = mcap::MessageStream::new(&bytes).map_err(|e| bad(&e.to_string()))?;
+    let mut n = 0u64;
+    for m in stream {
+        match m {
+            Ok(_) => n += 1,
+            Err(_) => break,
+        }
+    }
+    if n == 0 {
+        return Err(bad("the MCAP log holds no readable message"));
+    }
+    Ok(n)
 }
 
 fn open(viewer: &Path, file: &Path) -> Result<String, ReplayError> {

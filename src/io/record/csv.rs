@@ -1,8 +1,11 @@
-//! CSV sink: `history.csv`, one row per recorded step: `step, time` and the named series of the
-//! view ([`StepView::series`]: Newton iterations, hub forces and torque, energies, contact
-//! resultants, …; the columns are fixed by the first recorded step). Every row is flushed, so a
-//! killed run leaves a complete file up to its last recorded step. Non-finite values are empty
-//! fields.
+//! CSV sink: `history.csv`, one row per accepted step (not decimated by `[output] every`, which
+//! thins the fields only): `step, time` and the named series of the view
+//! ([`StepView::series`]: Newton iterations, hub forces and torque, energies, contact
+//! resultants, …; the columns are fixed by the first recorded step). Numbers are written by
+//! [`crate::io::output::fmt_num`] (shortest text that reads back to the same value; integers as
+//! integers). Every row is flushed, so a killed run leaves a complete file up to its last
+//! step; a failed write (full disk) truncates the file back to its last complete row.
+//! Non-finite values are empty fields.
 
 use super::{RecordError, Recorder, RunEnd, StepInfo, StepView};
 use std::fs::File;
@@ -15,6 +18,9 @@ pub struct CsvSink {
     columns: Vec<&'static str>,
     error: Option<RecordError>,
     rows: u64,
+    /// Bytes of the header and the complete rows written so far.
+    bytes_ok: u64,
+    line: String,
 }
 
 impl CsvSink {
@@ -26,6 +32,8 @@ impl CsvSink {
             columns: Vec::new(),
             error: None,
             rows: 0,
+            bytes_ok: 0,
+            line: String::new(),
         }
     }
 
@@ -34,29 +42,40 @@ impl CsvSink {
         info: &StepInfo,
         series: &[(&'static str, f64)],
     ) -> std::io::Result<()> {
+        use std::fmt::Write as _;
+        self.line.clear();
         if self.out.is_none() {
-            let mut w = BufWriter::new(File::create(&self.path)?);
+            self.out = Some(BufWriter::new(File::create(&self.path)?));
             self.columns = series.iter().map(|(n, _)| *n).collect();
-            write!(w, "step,time")?;
+            self.line.push_str("step,time");
             for c in &self.columns {
-                write!(w, ",{c}")?;
+                let _ = write!(self.line, ",{c}");
             }
-            writeln!(w)?;
-            self.out = Some(w);
+            self.line.push('\n');
         }
-        let Some(w) = self.out.as_mut() else {
-            return Ok(());
-        };
-        write!(w, "{},{}", info.index, fmt(info.time))?;
+        let _ = write!(self.line, "{},{}", info.index, fmt(info.time));
         for c in &self.columns {
             let v = series
                 .iter()
                 .find(|(n, _)| n == c)
                 .map_or(f64::NAN, |(_, v)| *v);
-            write!(w, ",{}", fmt(v))?;
+            let _ = write!(self.line, ",{}", fmt(v));
         }
-        writeln!(w)?;
-        w.flush()?;
+        self.line.push('\n');
+        let Some(w) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let r = w.write_all(self.line.as_bytes()).and_then(|()| w.flush());
+        if let Err(e) = r {
+            // Drop the partial row (and what is still buffered, which dropping the writer would
+            // try to flush): the file stays a valid table up to its last whole row.
+            if let Some(w) = self.out.take() {
+                let (f, _) = w.into_parts();
+                let _ = f.set_len(self.bytes_ok);
+            }
+            return Err(e);
+        }
+        self.bytes_ok += self.line.len() as u64;
         self.rows += 1;
         Ok(())
     }
@@ -64,8 +83,7 @@ impl CsvSink {
 
 fn fmt(v: f64) -> String {
     if v.is_finite() {
-        // `+ 0.0` turns −0 into 0.
-        format!("{:.12e}", v + 0.0)
+        crate::io::output::fmt_num(v)
     } else {
         String::new()
     }

@@ -170,6 +170,10 @@ pub struct McapSink {
     loops: Vec<Vec<u32>>,
     buf: Vec<u8>,
     ro: f64,
+    /// Accepted steps so far and the time of the last one (the end-of-run log is stamped with
+    /// it, not with 0).
+    steps: u64,
+    last_time: f64,
 }
 
 impl McapSink {
@@ -189,6 +193,8 @@ impl McapSink {
             loops: Vec::new(),
             buf: Vec::new(),
             ro: 1.0,
+            steps: 0,
+            last_time: 0.0,
         }
     }
 
@@ -304,7 +310,9 @@ impl McapSink {
         self.write("/tread/log", time, &msg);
     }
 
-    fn write_view(&mut self, info: &StepInfo, v: &StepView) {
+    /// The channels of a view under `prefix` (`/tread` for steps, `/tread/steady` for the
+    /// steady state, so that it never appears as a step).
+    fn write_view(&mut self, prefix: &str, info: &StepInfo, v: &StepView) {
         let time = info.time;
         if let Some(mesh) = v.mesh {
             let nn = mesh.n_nodes();
@@ -343,7 +351,7 @@ impl McapSink {
                 data.extend_from_slice(&[c[0], c[1], c[2], 255]);
             }
             let cloud = point_cloud(time, &fields, 28, data);
-            self.write("/tread/nodes", time, &cloud);
+            self.write(&format!("{prefix}/nodes"), time, &cloud);
 
             // Scene update: the deformed mesh, its boundary and the road.
             let p3 = |n: usize| {
@@ -409,7 +417,7 @@ impl McapSink {
                     models: Vec::new(),
                 }],
             };
-            self.write("/tread/mesh", time, &update);
+            self.write(&format!("{prefix}/mesh"), time, &update);
         }
         if !v.contact.is_empty() {
             let pmax = v.contact.iter().map(|s| s.t_n).fold(0.0, f64::max);
@@ -449,8 +457,8 @@ impl McapSink {
                 patch.ds0.push(or_zero(s.ds0));
             }
             let cloud = point_cloud(time, &fields, 36, data);
-            self.write("/tread/contact", time, &cloud);
-            self.write("/tread/contact_patch", time, &patch);
+            self.write(&format!("{prefix}/contact"), time, &cloud);
+            self.write(&format!("{prefix}/contact_patch"), time, &patch);
         }
         if let Some(h) = v.hub {
             let msg = TreadHub {
@@ -460,7 +468,7 @@ impl McapSink {
                 force_y: or_zero(h.force[1]),
                 torque: or_zero(h.torque),
             };
-            self.write("/tread/hub", time, &msg);
+            self.write(&format!("{prefix}/hub"), time, &msg);
         }
         if let Some(e) = v.energy {
             let msg = TreadEnergy {
@@ -470,7 +478,7 @@ impl McapSink {
                 kinetic: or_zero(e.kinetic),
                 total: or_zero(e.total()),
             };
-            self.write("/tread/energy", time, &msg);
+            self.write(&format!("{prefix}/energy"), time, &msg);
         }
         for (name, value) in v.series(info) {
             if !value.is_finite() {
@@ -481,7 +489,7 @@ impl McapSink {
                 time,
                 value,
             };
-            self.write(&format!("/tread/series/{name}"), time, &msg);
+            self.write(&format!("{prefix}/series/{name}"), time, &msg);
         }
     }
 }
@@ -609,8 +617,12 @@ impl Recorder for McapSink {
             is_final: info.is_final,
         };
         self.write("/tread/step", info.time, &msg);
+        self.steps = info.index + 1;
+        if info.time.is_finite() {
+            self.last_time = self.last_time.max(info.time);
+        }
         if let Some(v) = view {
-            self.write_view(info, v);
+            self.write_view("/tread", info, v);
             self.close_chunk();
         }
     }
@@ -661,15 +673,16 @@ impl Recorder for McapSink {
             values: s.results.iter().map(|(_, v)| or_zero(*v)).collect(),
         };
         self.write("/tread/steady", s.time, &msg);
+        // Not a step: its own channels, step = the number of accepted steps before it.
         let info = StepInfo {
-            index: 0,
+            index: self.steps,
             time: s.time,
             dt: 0.0,
             newton_iterations: 0,
             residual: s.change,
             is_final: true,
         };
-        self.write_view(&info, view);
+        self.write_view("/tread/steady", &info, view);
         self.close_chunk();
     }
     fn run_finished(&mut self, end: &RunEnd) -> Vec<RecordError> {
@@ -684,7 +697,7 @@ impl Recorder for McapSink {
             } else {
                 fm::log::Level::Error
             };
-            self.log_text(0.0, level, &text);
+            self.log_text(self.last_time, level, &text);
             let summary = end
                 .summary
                 .map(|s| serde_json::to_string(s).unwrap_or_default())

@@ -398,9 +398,16 @@ struct Entry {
 }
 
 /// Fan-out over boxed sinks, each with its own decimation.
+///
+/// It also numbers the steps: every accepted step gets the next index 0, 1, 2, … whatever the
+/// driver passed (a driver chaining load stepping, recovery and continuation cannot skip or
+/// repeat an index), and the Newton iterations and rejections of a step carry the index it will
+/// have.
 #[derive(Default)]
 pub struct Recorders {
     entries: Vec<Entry>,
+    next_index: u64,
+    last_time: Option<f64>,
 }
 
 impl Recorders {
@@ -423,6 +430,23 @@ impl Recorders {
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }
+
+    /// Accepted steps recorded so far.
+    pub fn steps_recorded(&self) -> u64 {
+        self.next_index
+    }
+
+    /// Time of the last recorded step.
+    pub fn last_time(&self) -> Option<f64> {
+        self.last_time
+    }
+
+    fn numbered(&self, info: &StepInfo) -> StepInfo {
+        StepInfo {
+            index: self.next_index,
+            ..*info
+        }
+    }
 }
 
 impl Entry {
@@ -438,22 +462,34 @@ impl Recorder for Recorders {
         }
     }
     fn wants_view(&self, info: &StepInfo) -> bool {
+        let info = &self.numbered(info);
         self.entries
             .iter()
             .any(|e| e.admits(info) && e.sink.wants_view(info))
     }
     fn step(&mut self, info: &StepInfo, view: Option<&StepView>) {
+        let info = &self.numbered(info);
         for e in &mut self.entries {
             let v = if e.admits(info) { view } else { None };
             e.sink.step(info, v);
         }
+        self.next_index += 1;
+        self.last_time = Some(info.time);
     }
     fn step_rejected(&mut self, step: &RejectedStep) {
+        let step = &RejectedStep {
+            index: self.next_index,
+            ..*step
+        };
         for e in &mut self.entries {
             e.sink.step_rejected(step);
         }
     }
     fn newton_iteration(&mut self, it: &NewtonIteration) {
+        let it = &NewtonIteration {
+            step: self.next_index,
+            ..*it
+        };
         for e in &mut self.entries {
             e.sink.newton_iteration(it);
         }

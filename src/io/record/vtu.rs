@@ -7,10 +7,10 @@
 //! data, `displacement` (3 components, z = 0: use ParaView's *Warp By Vector* to see the deformed
 //! body), `max_shear_stress` (the stress measure, see [`super::stress_measure`]) and the nodal
 //! Cauchy stresses `sigma_11`, `sigma_22`, `sigma_12`; cells are VTK_BIQUADRATIC_QUAD (28) for
-//! Q2 and VTK_QUAD (9) for Q1; the field data `TimeValue` is the step's time. Non-finite values
-//! are written as 0.
+//! Q2 and VTK_QUAD (9) for Q1; the field data `TimeValue` is the step's time. Numbers are
+//! written as the shortest text that reads back exactly; non-finite values as `NaN`/`inf`.
 
-use super::{or_zero, RecordError, Recorder, RunEnd, SteadyReached, StepInfo, StepView};
+use super::{RecordError, Recorder, RunEnd, SteadyReached, StepInfo, StepView};
 use crate::mesh::Mesh;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -78,8 +78,9 @@ fn vtk_cell(mesh: &Mesh, c: usize) -> (u8, Vec<u32>) {
     }
 }
 
+/// Round-trip text of a number; NaN stays NaN (ParaView shows it as missing).
 fn num(v: f64) -> String {
-    format!("{:.10e}", or_zero(v))
+    crate::io::output::fmt_num(v)
 }
 
 /// The text of one `.vtu` file.

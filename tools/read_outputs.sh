@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Read every output of two scenes back with independent readers (Python mcap + protobuf,
+# meshio, and `rerun rrd verify` when a run.rrd is written) and check steps, times and the
+# static friction traction. Installs the readers into a venv ($TREAD_READER_VENV, default
+# target/reader-venv). Without network access the check is SKIPPED (exit 0, message says so).
+# Usage: tools/read_outputs.sh [path/to/tread]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+TREAD=${1:-target/release/tread}
+VENV=${TREAD_READER_VENV:-target/reader-venv}
+OUT=target/read_outputs
+RERUN_VERSION=0.36.3
+if [ ! -x "$VENV/bin/python" ] || ! "$VENV/bin/python" -c "import mcap, meshio, google.protobuf" 2>/dev/null; then
+    python3 -m venv "$VENV"
+    if ! "$VENV/bin/pip" install -q --disable-pip-version-check mcap meshio numpy protobuf; then
+        echo "read_outputs: SKIPPED: cannot install the Python readers (no network?); the outputs were NOT checked"
+        exit 0
+    fi
+fi
+rm -rf "$OUT"
+SINKS='output.sinks=["summary","csv","vtu","mcap","png","rerun"]'
+RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$OUT/indentation_friction" \
+    --set mesh.n_r=3 --set mesh.n_theta=48 --set "$SINKS"
+RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/free_rolling.toml --out "$OUT/free_rolling" --set "$SINKS"
+"$VENV/bin/python" tools/read_outputs.py "$OUT/indentation_friction" "$OUT/free_rolling"
+# The .rrd files (only in builds with the `rerun` feature).
+rrds=$(find "$OUT" -name run.rrd)
+if [ -z "$rrds" ]; then
+    echo "read_outputs: no run.rrd (build without the rerun feature): rrd verify SKIPPED"
+    exit 0
+fi
+if ! "$VENV/bin/python" -c "import rerun" 2>/dev/null; then
+    if ! "$VENV/bin/pip" install -q --disable-pip-version-check "rerun-sdk==$RERUN_VERSION"; then
+        echo "read_outputs: SKIPPED: cannot install rerun-sdk==$RERUN_VERSION; the .rrd files were NOT verified"
+        exit 0
+    fi
+fi
+for f in $rrds; do
+    "$VENV/bin/rerun" rrd verify "$f"
+    echo "read_outputs: rrd verify $f: ok"
+done
