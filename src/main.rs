@@ -83,6 +83,9 @@ enum Command {
         /// Largest wave number (default: all the mesh resolves, n_theta / 2).
         #[arg(long)]
         n_max: Option<usize>,
+        /// Smallest wave number of the spinning search (default 1).
+        #[arg(long)]
+        n_min: Option<usize>,
         /// Upper end of the speed search, rad/s (default: 2 × (rolling: 1.6 ×) the Rayleigh
         /// estimate 0.955 sqrt(G / rho) / Ro).
         #[arg(long)]
@@ -334,6 +337,7 @@ fn main() -> ExitCode {
             scene,
             out,
             n_max,
+            n_min,
             omega_max,
             samples,
             no_contact,
@@ -343,6 +347,7 @@ fn main() -> ExitCode {
             Ok(s) => {
                 let opts = tread::driver::critical::CriticalOptions {
                     n_max,
+                    n_min,
                     omega_max,
                     samples,
                     no_contact,

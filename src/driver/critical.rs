@@ -72,6 +72,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 pub struct CriticalOptions {
     /// Largest wave number (default: all the mesh resolves, n_theta / 2).
     pub n_max: Option<usize>,
+    /// Smallest wave number of the spinning search (default 1).
+    pub n_min: Option<usize>,
     /// Upper end of the ω search (default: 2 × the Rayleigh estimate 0.955 √(G/ρ) / Ro, or
     /// 1.6 × it for a rolling scene).
     pub omega_max: Option<f64>,
@@ -86,6 +88,7 @@ impl Default for CriticalOptions {
     fn default() -> Self {
         Self {
             n_max: None,
+            n_min: None,
             omega_max: None,
             samples: 48,
             no_contact: false,
@@ -638,8 +641,12 @@ fn spinning_critical(
         solve_at(st, &mut newton, w)
             .map_err(|e| solve_err(e, format!("spun state at {w} rad/s")))?;
         let rows = sector_rows(st, &rg);
-        let mut fv = vec![(0.0, 0.0); n_max + 1];
-        for (n, f) in fv.iter_mut().enumerate().skip(1) {
+        let mut fv = vec![(f64::INFINITY, f64::INFINITY); n_max + 1];
+        for (n, f) in fv
+            .iter_mut()
+            .enumerate()
+            .skip(opts.n_min.unwrap_or(1).max(1))
+        {
             let (own, alias, d) = bloch_lambda_min(&rows, &rg, n);
             *f = (own, alias);
             report.hermitian_defect = report.hermitian_defect.max(d);
@@ -658,7 +665,8 @@ fn spinning_critical(
         fvals.push(fv);
     }
     // Refine each wave number's first crossing (and its alias's).
-    for n in 1..=n_max {
+    let n_min = opts.n_min.unwrap_or(1).max(1);
+    for n in n_min..=n_max {
         for alias in [false, true] {
             let fk: Vec<f64> = fvals
                 .iter()
