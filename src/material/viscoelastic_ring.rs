@@ -124,6 +124,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)] // dense matrix indexed as in the formulas
     fn periodic_solution_satisfies_the_recurrence_and_its_transpose_is_the_adjoint() {
         let mut rng = SplitMix(5);
         for m in [1, 2, 7, 64] {
