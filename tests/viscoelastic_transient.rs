@@ -270,7 +270,10 @@ fn viscoelastic_scene_rolls_to_steady_state() {
     let mu = torque / (load * 2.0);
     eprintln!("viscoelastic rolling: T/(P Ro) = {mu:.4}, contact [{x0:.3}, {x1:.3}]");
     assert!(mu > 0.005, "{mu}");
-    assert!(-x0 > x1 + 0.01, "contact not shifted upstream: [{x0}, {x1}]");
+    assert!(
+        -x0 > x1 + 0.01,
+        "contact not shifted upstream: [{x0}, {x1}]"
+    );
 }
 
 /// Modes and integrators without a history path refuse a viscoelastic material with a clear
@@ -286,6 +289,9 @@ fn unsupported_modes_refuse_viscoelastic_materials() {
         let scene = tread::io::Scene::from_toml_str(&text, "v", &set).unwrap();
         let e = tread::app::build_model(&scene).err().expect("refused");
         let msg = e.to_string();
-        assert!(msg.contains("material.viscoelastic") && msg.contains(needle), "{msg}");
+        assert!(
+            msg.contains("material.viscoelastic") && msg.contains(needle),
+            "{msg}"
+        );
     }
 }

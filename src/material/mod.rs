@@ -47,6 +47,7 @@ pub mod invariants;
 pub mod mooney_rivlin;
 pub mod neo_hookean;
 pub mod viscoelastic;
+pub mod viscoelastic_ring;
 
 pub use fd_check::{check_material, check_stateful, tangent_asymmetry, FdReport, SplitMix};
 pub use incompressible::{pressure_stress_tangent, MooneyRivlinIncompressible};
