@@ -209,27 +209,39 @@ pub fn transfer(
         let c = new_space.leaves[k];
         let (t, vi) = &inv[p];
         let m = p + 1;
-        // Values at the tensor points (i along ξ).
-        let mut u = DMatrix::<f64>::zeros(m, m);
+        // Values at the tensor points (i along ξ), fixed-size scratch.
+        const M: usize = crate::element::hierarchical::MAX_1D;
+        let mut u = [[0.0f64; M]; M];
         for (i, &xi) in t.iter().enumerate() {
             for (j, &eta) in t.iter().enumerate() {
                 let xp = new_tree.map_point(c, xi, eta);
                 if let Some((oc, oxi, oeta)) = old_tree.locate(xp) {
                     if let Some(&ok) = old_space.leaf_index.get(&oc) {
-                        u[(i, j)] = old_space.eval(old_tree, old_x, ok, 0, oxi, oeta).0;
+                        u[i][j] = old_space.eval(old_tree, old_x, ok, 0, oxi, oeta).0;
                     }
                 }
             }
         }
         // Coefficients C = V⁻¹ U V⁻ᵀ (C[a][b] for function a along ξ, b along η).
-        let coef = vi * u * vi.transpose();
+        let mut tmp = [[0.0f64; M]; M];
+        for a in 0..m {
+            for j in 0..m {
+                tmp[a][j] = (0..m).map(|i| vi[(a, i)] * u[i][j]).sum();
+            }
+        }
+        let mut coef = [[0.0f64; M]; M];
+        for a in 0..m {
+            for b in 0..m {
+                coef[a][b] = (0..m).map(|j| tmp[a][j] * vi[(b, j)]).sum();
+            }
+        }
         let dofs = new_space.dofs(k);
         for jb in 0..m {
             for ia in 0..m {
                 let d = dofs[ia + m * jb] as usize;
                 let e = new_space.constraints.eq[d];
                 if e != u32::MAX {
-                    y[e as usize] = coef[(ia, jb)];
+                    y[e as usize] = coef[ia][jb];
                 }
             }
         }

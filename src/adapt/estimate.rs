@@ -145,11 +145,13 @@ impl Estimator for ExplicitResidual {
         let nc = space.leaves.len();
         let mut sq = vec![0.0; nc];
         let mut d2 = [[0.0; 3]; MAX_LOCAL_SCALAR];
+        let pmax = space.degree.iter().copied().max().unwrap_or(1);
+        let rules: Vec<(Vec<f64>, Vec<f64>)> = (0..=pmax + 2).map(gauss_legendre).collect();
         for (k, s) in sq.iter_mut().enumerate() {
             let c = space.leaves[k];
             let h = tree.h(c);
             let p = space.degree[k];
-            let (gx, gw) = gauss_legendre(p + 2);
+            let (gx, gw) = &rules[p + 2];
             let dofs = space.dofs(k);
             let mut r2 = 0.0;
             for (i, &xi) in gx.iter().enumerate() {
@@ -167,9 +169,9 @@ impl Estimator for ExplicitResidual {
         for f in faces(tree, space) {
             let Some(plus) = f.plus else { continue };
             let p = space.degree[f.minus].max(space.degree[plus]);
-            let (gx, gw) = gauss_legendre(p + 2);
+            let (gx, gw) = &rules[p + 2];
             let mut j2 = 0.0;
-            for (&t, &w) in gx.iter().zip(&gw) {
+            for (&t, &w) in gx.iter().zip(gw) {
                 let x = f.point(t);
                 let gm = grad_at(ctx, f.minus, x);
                 let gp = grad_at(ctx, plus, x);

@@ -11,6 +11,52 @@
 //! carries at most one hanging vertex (its midpoint).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A fast multiplicative hasher for integer keys (the default SipHash dominated mesh building).
+#[derive(Default, Clone, Copy)]
+pub struct FxHasher(u64);
+
+impl Hasher for FxHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    #[inline]
+    fn write_u8(&mut self, i: u8) {
+        self.write_u64(i as u64);
+    }
+    #[inline]
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(i as u64);
+    }
+    #[inline]
+    fn write_i64(&mut self, i: i64) {
+        self.write_u64(i as u64);
+    }
+    #[inline]
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    #[inline]
+    fn finish(&self) -> u64 {
+        // Keys are grid coordinates with many trailing zero bits: fold the high bits down
+        // (splitmix64 finaliser) so the table's low-bit bucket index is well spread.
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+}
+
+/// HashMap with [`FxHasher`].
+pub type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
 
 /// Finest level representable.
 pub const MAX_LEVEL: u32 = 28;
@@ -51,7 +97,7 @@ pub struct Quadtree {
     pub origin: [f64; 2],
     pub h0: f64,
     pub cells: Vec<Cell>,
-    map: HashMap<(u32, i64, i64), u32>,
+    map: FxMap<(u32, i64, i64), u32>,
 }
 
 #[inline]
@@ -66,7 +112,7 @@ impl Quadtree {
             origin,
             h0,
             cells: Vec::new(),
-            map: HashMap::new(),
+            map: FxMap::default(),
         };
         for &(i, j) in coarse {
             t.push(Cell {

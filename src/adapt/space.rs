@@ -19,13 +19,12 @@
 //! * **Dirichlet data** g on the whole boundary: vertices take g(x); the edge modes of a
 //!   boundary edge are the H¹-seminorm projection of g − (vertex part) on the edge.
 
-use super::quadtree::{size_of_level, Across, Quadtree, SIDES};
+use super::quadtree::{size_of_level, Across, FxMap, Quadtree, SIDES};
 use crate::assembly::constraints::{
     ClosedConstraints, CondensedPattern, ConstraintError, Constraints,
 };
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
 use nalgebra::{DMatrix, DVector};
-use std::collections::HashMap;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum Key {
@@ -84,7 +83,7 @@ pub struct Space {
     pub constraints: ClosedConstraints,
     pub pattern: CondensedPattern,
     /// Index in `leaves` of a tree cell.
-    pub leaf_index: HashMap<u32, usize>,
+    pub leaf_index: FxMap<u32, usize>,
     /// Number of hanging-edge constraints stated (diagnostics).
     pub n_hanging: usize,
 }
@@ -132,10 +131,10 @@ impl Space {
                 return Err(SpaceError::MixedLagrange(degree[0], p));
             }
         }
-        let leaf_index: HashMap<u32, usize> =
+        let leaf_index: FxMap<u32, usize> =
             leaves.iter().enumerate().map(|(k, &c)| (c, k)).collect();
         // 1. Nodes.
-        let mut ids: HashMap<Key, u32> = HashMap::new();
+        let mut ids: FxMap<Key, u32> = FxMap::default();
         let mut keys: Vec<Key> = Vec::new();
         let mut cell_nodes = Vec::new();
         let mut node_off = vec![0];
@@ -166,7 +165,7 @@ impl Space {
         }
         let n_nodes = keys.len();
         // 2. Edge degrees (minimum rule).
-        let mut edge_deg: HashMap<(i64, i64, u8), usize> = HashMap::new();
+        let mut edge_deg: FxMap<(i64, i64, u8), usize> = FxMap::default();
         let mut hanging: Vec<(usize, usize, u32)> = Vec::new();
         for (k, &c) in leaves.iter().enumerate() {
             let cell = &tree.cells[c as usize];
