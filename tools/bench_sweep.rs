@@ -82,13 +82,7 @@ sinks = ["summary"]
 type Round = (f64, f64, f64, f64);
 
 /// Bare runs vs the local backend for `n` runs with the given extra overrides, `repeat` rounds.
-fn overhead(
-    dir: &Path,
-    exe: &Path,
-    n: usize,
-    fixed: &[(&str, &str)],
-    repeat: usize,
-) -> Vec<Round> {
+fn overhead(dir: &Path, exe: &Path, n: usize, fixed: &[(&str, &str)], repeat: usize) -> Vec<Round> {
     std::fs::write(dir.join("spin.toml"), SPIN).unwrap();
     let omegas: Vec<String> = (0..n).map(|i| format!("{:.1}", 10.0 + i as f64)).collect();
     let mut spec = format!(

@@ -208,11 +208,7 @@ pub fn run_local(spec: &Spec, root: &Path, opts: &LocalOptions) -> Result<LocalR
                         let log = run_dir(spec, root, i).join("run-one.log");
                         let msg = std::fs::read_to_string(&log).unwrap_or_default();
                         pb.suspend(|| {
-                            eprintln!(
-                                "tread: run {}: not run: {}",
-                                spec.run_name(i),
-                                msg.trim()
-                            )
+                            eprintln!("tread: run {}: not run: {}", spec.run_name(i), msg.trim())
                         });
                     }
                 }

@@ -50,11 +50,7 @@ fn valid_time(t: &str) -> bool {
     if !parts.iter().all(|p| num(p)) {
         return false;
     }
-    match (days.is_some(), parts.len()) {
-        (false, 1..=3) => true,
-        (true, 1..=3) => true,
-        _ => false,
-    }
+    (1..=3).contains(&parts.len())
 }
 
 fn valid_mem(m: &str) -> bool {
@@ -643,5 +639,36 @@ mod tests {
         for m in ["", "G", "4GB", "1.5G", "-1"] {
             assert!(!valid_mem(m), "{m}");
         }
+    }
+
+    #[test]
+    fn runs_left_running_after_the_jobs_ended_are_recorded_killed() {
+        let dir = std::env::temp_dir().join(format!("tread-slurm-lost-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("base.toml"), "[scene]\nname = \"x\"\n").unwrap();
+        let spec = Spec::from_toml_str(
+            "[sweep]\nname = \"t\"\nscene = \"base.toml\"\n[[axis]]\nkey = \"a.b\"\nvalues = [1, 2, 3]\n",
+            &dir.join("spec.toml"),
+        )
+        .unwrap();
+        let root = dir.join("out");
+        let states = [State::Running, State::Done, State::Queued];
+        for (i, st) in states.iter().enumerate() {
+            let run = spec.run(i);
+            let s = status::Status::new(i, *st, spec.overrides(&run), spec.run_fingerprint(&run));
+            status::write(&super::super::run_one::run_dir(&spec, &root, i), &s).unwrap();
+        }
+        assert_eq!(mark_lost_runs(&spec, &root), 1);
+        let read = |i| {
+            status::read(&super::super::run_one::run_dir(&spec, &root, i))
+                .unwrap()
+                .unwrap()
+        };
+        assert_eq!(read(0).state, State::Killed);
+        assert!(read(0).error.unwrap().contains("SIGKILL"));
+        assert_eq!(read(1).state, State::Done);
+        assert_eq!(read(2).state, State::Queued, "never started: stays queued");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
