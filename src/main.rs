@@ -80,7 +80,11 @@ enum Command {
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
-    Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
+    let mut scene =
+        Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())?;
+    // A relative mesh file is relative to the scene file.
+    scene.resolve_paths(path);
+    Ok(scene)
 }
 
 fn run_scene(scene: Scene, out: Option<PathBuf>, verbose: bool, quiet: bool) -> ExitCode {

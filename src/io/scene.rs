@@ -1564,12 +1564,7 @@ impl Scene {
         let name = path.display().to_string();
         match std::fs::read_to_string(path) {
             Ok(text) => Scene::from_toml_str(&text, &name, overrides).map(|mut s| {
-                // A relative mesh file is relative to the scene file.
-                if let (Some(f), Some(dir)) = (&s.mesh.file, path.parent()) {
-                    if Path::new(f).is_relative() && !dir.as_os_str().is_empty() {
-                        s.mesh.file = Some(dir.join(f).display().to_string());
-                    }
-                }
+                s.resolve_paths(path);
                 s
             }),
             Err(e) => Err(SceneErrors(vec![SceneError {
@@ -1578,6 +1573,15 @@ impl Scene {
                 message: format!("cannot read scene file: {e}"),
                 source_name: name,
             }])),
+        }
+    }
+
+    /// Make a relative `mesh.file` relative to the scene file at `scene_path` (as read from disk).
+    pub fn resolve_paths(&mut self, scene_path: &Path) {
+        if let (Some(f), Some(dir)) = (&self.mesh.file, scene_path.parent()) {
+            if Path::new(f).is_relative() && !dir.as_os_str().is_empty() {
+                self.mesh.file = Some(dir.join(f).display().to_string());
+            }
         }
     }
 
