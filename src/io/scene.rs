@@ -4518,7 +4518,15 @@ linear = "qr"
         let cases: Vec<(&str, Vec<String>)> = vec![
             ("scene", keys(&info)),
             ("geometry", keys(&Geometry { ri: 1.0, ro: 2.0 })),
-            ("mesh", keys(&MeshSpec::default())),
+            (
+                "mesh",
+                keys(&MeshSpec {
+                    file: Some("m.msh".into()),
+                    hub: Some("hub".into()),
+                    contact: Some("contact".into()),
+                    ..MeshSpec::default()
+                }),
+            ),
             ("material", keys(&full_material)),
             (
                 "analysis",
@@ -5417,7 +5425,15 @@ mesh.n_r = 4
             },
         );
         check("geometry", &Geometry { ri: 1.0, ro: 2.0 });
-        check("mesh", &MeshSpec::default());
+        check(
+            "mesh",
+            &MeshSpec {
+                file: Some("m.msh".into()),
+                hub: Some("hub".into()),
+                contact: Some("contact".into()),
+                ..MeshSpec::default()
+            },
+        );
         check(
             "material",
             &MaterialSpec {
