@@ -2257,13 +2257,9 @@ impl Ctx<'_> {
             }
             out.push((region, t));
         }
-        match out.first() {
-            Some((_, t)) => {
-                doc.insert("material".into(), toml::Value::Table(t.clone()));
-            }
-            None => {
-                // Nothing usable: report the section as missing through the schema pass.
-            }
+        // Nothing usable: the schema pass reports the section as missing.
+        if let Some((_, t)) = out.first() {
+            doc.insert("material".into(), toml::Value::Table(t.clone()));
         }
         out
     }
