@@ -140,7 +140,11 @@ fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
     }
     let text = String::from_utf8(bytes)
         .map_err(|e| format!("cannot read scene {}: not UTF-8 text ({e})", path.display()))?;
-    Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())
+    let mut scene =
+        Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())?;
+    // A relative mesh file is relative to the scene file.
+    scene.resolve_paths(path);
+    Ok(scene)
 }
 
 fn run_with(

@@ -199,10 +199,12 @@ fn mesh_keys_are_checked() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("mesh.file"), "{err}");
     // A [[material]] entry without `region`, and a bad key in a later entry.
-    let scene = BASE.replace("[material]\n", "[[material]]\n")
-        + "[[material]]\nregion = \"b\"\nmodel = \"neo_hookean\"\nmu = 1.0\nlambda = 1.0\nrho = 1.0\nnu = 3\n";
+    let scene = BASE.replace("[material]\n", "[[material]]\nregion = \"a\"\n")
+        + "[[material]]\nregion = \"b\"\nmodel = \"neo_hookean\"\nmu = 1.0\nlambda = 1.0\nrho = 1.0\nnu = 3\n"
+        + "[[material]]\nmodel = \"neo_hookean\"\nmu = 1.0\nlambda = 1.0\nrho = 1.0\n"
+        + &format!("[mesh]\nfile = \"{}\"\n", data("annulus_q2.msh"));
     let (code, err) = run(d.path(), &scene);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("material[0].region"), "{err}");
+    assert!(err.contains("material[2].region"), "{err}");
     assert!(err.contains("material[b].nu"), "{err}");
 }

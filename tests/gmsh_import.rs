@@ -368,7 +368,7 @@ mode = "spinning"
 [motion]
 omega = {omega}
 "#,
-        std::env::var("TWO_LAYER_MESH").unwrap_or_else(|_| scenario_mesh("two_layer.msh")),
+        scenario_mesh("two_layer.msh"),
         core.mu,
         core.lambda,
         core.rho,
@@ -399,17 +399,17 @@ omega = {omega}
     }
     let (err, sep, tang) = (err / u_ref_max, sep / u_ref_max, tang / u_ref_max);
     eprintln!("two-layer: max |u_r − ref| / max u = {err:.3e}, homogeneous vs layered {sep:.3e}, tangential {tang:.3e}");
-    assert!(err < 2e-3, "radial displacement error {err:e}");
+    assert!(err < 5e-3, "radial displacement error {err:e}");
     assert!(sep > 50.0 * err, "layering effect {sep:e} vs error {err:e}");
     assert!(
-        tang < 2e-3,
+        tang < 5e-3,
         "an axisymmetric problem: tangential displacement {tang:e}"
     );
     // The outer-surface mean radial displacement from the facet set.
     let res = results(&sys);
     let u_ro = interp(&reference, ro);
     assert!(
-        (res.u_r_outer - u_ro).abs() < 2e-3 * u_ro.abs(),
+        (res.u_r_outer - u_ro).abs() < 5e-3 * u_ro.abs(),
         "u_r(outer) {} vs {}",
         res.u_r_outer,
         u_ro

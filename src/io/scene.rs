@@ -1626,12 +1626,7 @@ impl Scene {
         let name = path.display().to_string();
         match std::fs::read_to_string(path) {
             Ok(text) => Scene::from_toml_str(&text, &name, overrides).map(|mut s| {
-                // A relative mesh file is relative to the scene file.
-                if let (Some(f), Some(dir)) = (&s.mesh.file, path.parent()) {
-                    if Path::new(f).is_relative() && !dir.as_os_str().is_empty() {
-                        s.mesh.file = Some(dir.join(f).display().to_string());
-                    }
-                }
+                s.resolve_paths(path);
                 s
             }),
             Err(e) => Err(SceneErrors(vec![SceneError {
@@ -1640,6 +1635,15 @@ impl Scene {
                 message: format!("cannot read scene file: {e}"),
                 source_name: name,
             }])),
+        }
+    }
+
+    /// Make a relative `mesh.file` relative to the scene file at `scene_path` (as read from disk).
+    pub fn resolve_paths(&mut self, scene_path: &Path) {
+        if let (Some(f), Some(dir)) = (&self.mesh.file, scene_path.parent()) {
+            if Path::new(f).is_relative() && !dir.as_os_str().is_empty() {
+                self.mesh.file = Some(dir.join(f).display().to_string());
+            }
         }
     }
 
@@ -2391,13 +2395,9 @@ impl Ctx<'_> {
             }
             out.push((region, t));
         }
-        match out.first() {
-            Some((_, t)) => {
-                doc.insert("material".into(), toml::Value::Table(t.clone()));
-            }
-            None => {
-                // Nothing usable: report the section as missing through the schema pass.
-            }
+        // Nothing usable: the schema pass reports the section as missing.
+        if let Some((_, t)) = out.first() {
+            doc.insert("material".into(), toml::Value::Table(t.clone()));
         }
         out
     }
@@ -4735,7 +4735,15 @@ linear = "qr"
         let cases: Vec<(&str, Vec<String>)> = vec![
             ("scene", keys(&info)),
             ("geometry", keys(&Geometry { ri: 1.0, ro: 2.0 })),
-            ("mesh", keys(&MeshSpec::default())),
+            (
+                "mesh",
+                keys(&MeshSpec {
+                    file: Some("m.msh".into()),
+                    hub: Some("hub".into()),
+                    contact: Some("contact".into()),
+                    ..MeshSpec::default()
+                }),
+            ),
             ("material", keys(&full_material)),
             (
                 "analysis",
@@ -5634,7 +5642,15 @@ mesh.n_r = 4
             },
         );
         check("geometry", &Geometry { ri: 1.0, ro: 2.0 });
-        check("mesh", &MeshSpec::default());
+        check(
+            "mesh",
+            &MeshSpec {
+                file: Some("m.msh".into()),
+                hub: Some("hub".into()),
+                contact: Some("contact".into()),
+                ..MeshSpec::default()
+            },
+        );
         check(
             "material",
             &MaterialSpec {

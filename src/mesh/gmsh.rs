@@ -405,7 +405,7 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
 
 /// First cell with det(dX/dξ) ≤ 0 at a point of a 4 × 4 Gauss rule or at a corner.
 pub fn first_inverted_cell(mesh: &Mesh) -> Option<usize> {
-    let (g, w) = crate::element::gauss_1d(4);
+    let (g, _) = crate::element::gauss_1d(4);
     let mut pts: Vec<(f64, f64)> = Vec::new();
     for &a in &g {
         for &b in &g {
@@ -416,7 +416,6 @@ pub fn first_inverted_cell(mesh: &Mesh) -> Option<usize> {
     let n = pts.len();
     let t1 = ShapeTable::<4>::new::<Q1>(pts.clone(), vec![1.0; n]);
     let t2 = ShapeTable::<9>::new::<Q2>(pts, vec![1.0; n]);
-    let _ = w;
     (0..mesh.n_cells()).find(|&c| {
         let cn = mesh.cell_nodes(c);
         let det = |k: usize| -> f64 {
@@ -435,7 +434,10 @@ pub fn first_inverted_cell(mesh: &Mesh) -> Option<usize> {
             }
             j.determinant()
         };
-        (0..n).any(|k| !(det(k) > 0.0))
+        (0..n).any(|k| {
+            let d = det(k);
+            d <= 0.0 || d.is_nan()
+        })
     })
 }
 
