@@ -94,7 +94,11 @@ fn creep_force_curve_saturates_at_coulomb_limit() {
     let dir = TestDir::new("steady-controls", "creep");
     let sc = scene(
         CREEP,
-        &["continuation.ds=0.1", "output.sinks=[\"summary\", \"csv\"]"],
+        &[
+            "continuation.ds=0.1",
+            "continuation.ds_max=0.1",
+            "output.sinks=[\"summary\", \"csv\"]",
+        ],
     );
     let mu = sc.friction.mu.unwrap_or(f64::NAN);
     let s = run(&sc, &dir);
