@@ -1,8 +1,8 @@
 //! # tread
 //!
 //! Finite-element simulation of rolling contact of a hyperelastic hollow cylinder in plane
-//! strain: a rigid hub, a rubber annulus, a rigid road. See `README.md` for the user's view and
-//! `../shared/DESIGN.md` for the formulation and conventions (spatial frame with the hub centre
+//! strain: a rigid hub, a rubber annulus, a rigid road. See `README.md` for the user's view; the
+//! formulation is stated in each module's docs, the conventions here (spatial frame with the hub centre
 //! at the origin, x1 right, x2 up, counter-clockwise spin ω > 0; forces per unit thickness;
 //! units as the scene declares them).
 //!

@@ -1,4 +1,4 @@
-//! `tread compare` (issue 5): the transient mode run to its steady state and the steady mode on
+//! `tread compare`: the transient mode run to its steady state and the steady mode on
 //! the same scene agree, on a frictionless and a frictional scene at two speeds (5 and 10 rad/s)
 //! below the critical speed (≈ 41 rad/s for this density): hub forces within 0.5 % of |F|,
 //! referential displacement field within 1 % in relative L2, on a 3 × 128 Q2 mesh. The remaining

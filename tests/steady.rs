@@ -1,4 +1,4 @@
-//! Steady θ-referential rolling (issue 5): tangent against finite differences with friction,
+//! Steady θ-referential rolling: tangent against finite differences with friction,
 //! normal damping and strain-rate damping; no contact = steady spinning exactly; frictionless
 //! rolling symmetric with zero torque; free rolling solves torque = 0; continuation in ω.
 

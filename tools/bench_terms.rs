@@ -1,4 +1,4 @@
-//! "Run only the terms a scene needs" (issue 7, item 3), measured (not a test):
+//! "Run only the terms a scene needs" , measured (not a test):
 //!
 //! ```text
 //! cargo run --release --bin tread-bench-terms -- [--repeats N]

@@ -5,7 +5,7 @@
 //! boundary Γ_C by the assembly kernels and, for the stick–slip oscillator of
 //! [`super::stick_slip`], on a single degree of freedom.
 //!
-//! # Sign conventions (fixed by the project, DESIGN.md §2)
+//! # Sign conventions (fixed by the project)
 //!
 //! - Penetration δ = (−H − x2)_+ ≥ 0 (road surface x2 = −H), δ̇ its rate (δ̇ = −ẋ2 when in contact).
 //! - Slip velocity of the body relative to the road: w = ẋ1 − v0 (the paper's w_T = −w).
@@ -129,7 +129,7 @@ pub struct NormalValue {
 /// w ln(1 + e^{r/w}) it adds no traction where r ≤ 0 (no spurious push where the raw law is
 /// negative, and no new jump at δ = 0), and it leaves the law exact once r ≥ w. Note that for
 /// m_n = 1 without damping (r = c_n δ) it also rounds the kink of the penalty at δ = 0 over
-/// δ < w / c_n. The project's default is `Hard` (DESIGN.md §3); `Smooth` is an option to study
+/// δ < w / c_n. The project's default is `Hard`; `Smooth` is an option to study
 /// the effect of the kink.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]

@@ -73,7 +73,7 @@
 //! silently ignored. `[geometry]` and `[material]` are required in every mode; a `stick_slip`
 //! scene carries nominal values that the mode does not use. A `transient` scene that stops at the
 //! steady state (`time.stop_at_steady`) needs a mesh uniform in θ (`mesh.grading_theta = 0`): the
-//! steady-state extraction re-indexes nodes by whole nodal angle steps (DESIGN.md §4).
+//! steady-state extraction re-indexes nodes by whole nodal angle steps.
 //!
 //! # Time (transient mode)
 //!
@@ -92,7 +92,7 @@
 //! retried with half the step, at most `max_cutbacks` times and not below `time.dt_min`;
 //! `load_steps` is not used (the ramps apply the loads in time).
 //!
-//! # Contact and friction conventions (DESIGN.md §2–3)
+//! # Contact and friction conventions
 //!
 //! The road is the line `x2 = −H`; penetration `δ = (−H − x2)_+`; normal traction (per unit
 //! *reference* length of the outer boundary) `t_n = c_n δ^m_n + b_n δ^l_n δ̇`, `δ̇ = −ẋ2`, clamped
@@ -294,7 +294,7 @@ keyword_enum! {
     /// [`crate::contact::Clamp`].
     #[derive(Default)]
     ClampKind, "contact clamp" {
-        /// `t_n = max(0, raw)` (the project's convention, DESIGN.md §3).
+        /// `t_n = max(0, raw)` (the project's convention).
         #[default]
         Hard => "hard",
         /// A C¹ cubic ramp of width `clamp_width` instead of the kink at raw = 0.
@@ -5764,8 +5764,8 @@ mesh.n_r = 4
             Some(ContactSpec {
                 c_n: 2.0e4,
                 m_n: 1.0,
-                b_n: 5.0,
-                l_n: 0.0,
+                b_n: 1000.0,
+                l_n: 1.0,
                 quadrature: ContactQuadrature::Lobatto,
                 points: 4,
                 clamp: ClampKind::Hard,
