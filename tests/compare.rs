@@ -10,8 +10,8 @@
 //! the field, and did not shrink with the mesh: the steady mode took the strain-rate damping's
 //! velocity gradient as the elementwise gradient of ω ∂θχ_h (discontinuous across the radial
 //! cell edges), a discretization that converged to another solution (transient and steady each
-//! converged in n_θ, 1.7 % apart in the field, ~1 % in Fy). It now uses continuous nodal
-//! velocities as the transient mode does ([`tread::physics::ThetaProjection`]); the 20 rad/s tests below check the
+//! converged in n_θ, 1.7 % apart in the field, ~1 % in Fy). It now uses nodal velocities as the
+//! transient mode does ([`tread::physics::RingDerivative`]); the 20 rad/s tests below check the
 //! agreement on a 3 × 96 mesh, with `time.steady_tol = 1e-5` (at the scene's 1e-3 a slowly
 //! decaying torsional oscillation is still there when the run stops: the torque can be off by
 //! 15 % and the field by 2 %) and with the transient loads averaged over the last node passage.

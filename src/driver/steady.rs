@@ -11,16 +11,12 @@
 //! is unsymmetric (LU).
 //!
 //! The transient mode's objective strain-rate damping (`time.strain_rate_damping`, S_v = η Ė)
-//! is in the steady residual too: Ė = sym(Fᵀ ∇v_h) with v_h the interpolant of continuous
-//! nodal velocities v_a = ω (t_a + (∂θu)_a), (∂θu)_a the lumped-L2 projection of ∂θu_h
-//! ([`crate::physics::ThetaProjection`], any mesh of the annulus). The normal damping
-//! (δ̇ = −v2) and the friction slip (w = v1 − v0) use the same nodal velocities, so a node
-//! shared by two facets has one slip velocity. (The elementwise ω ∂θχ_h, discontinuous
-//! across cell edges, made the friction traction jump between ±μp inside the stick zone, and
-//! its elementwise gradient in the damping converged to another solution.) The assembled
-//! tangent keeps the element pattern (the damping's velocity coupling through the cell-local
-//! projection); Newton completes it with the remainder operator
-//! ([`SolidSystem::enable_steady_viscosity`]).
+//! is in the steady residual too, discretized as in the transient mode: Ė = sym(Fᵀ ∇v_h) with
+//! v_h the interpolant of the nodal velocities v_a = ω ∂θχ(X_a), taken by five-point
+//! differences along the node rings ([`crate::physics::RingDerivative`],
+//! [`SolidSystem::enable_steady_viscosity`]). (The elementwise gradient of ω ∂θχ_h, which is
+//! discontinuous across the radial cell edges, converged to a different solution: 1.7 % in the
+//! field and 1 % in the hub force at 20 rad/s on the paper's cylinder, whatever the mesh.)
 //!
 //! # Procedure
 //!
@@ -29,8 +25,7 @@
 //!    fails, [`super::steady_recovery`] tries homotopies (κ, ε, ω from benign values to the
 //!    scene's) before giving up; what it did is kept in [`SteadyRolling::recovery`].
 //!
-//!    Known hard case, measured: with normal damping and `l_n = 0` (the rolling scenes use
-//!    `l_n = 1`, damping that vanishes at first contact) the traction of a point
+//!    Known hard case, measured: with normal damping and `l_n = 0` the traction of a point
 //!    entering the patch (δ̇ > 0) jumps from 0 to b_n δ̇ at first contact. The discrete steady
 //!    branch then consists of pieces that end in non-smooth folds, with gaps in between that
 //!    none of the pieces found reaches (`oden_hollow_cylinder`, 3 × 64: stepping ω up stops

@@ -1,5 +1,4 @@
-//! Nodal θ-derivatives along the node rings of a ring-structured (annulus) mesh (an alternative
-//! to [`super::ThetaProjection`] on ring meshes; no longer used by the steady system), for the
+//! Nodal θ-derivatives along the node rings of a ring-structured (annulus) mesh, for the
 //! strain-rate damping of the steady (θ-referential) mode.
 //!
 //! In steady rolling the material velocity is v = ω ∂θχ. The transient mode's damping acts on

@@ -80,11 +80,11 @@ pub struct SolidModel {
     /// active when a velocity field is passed to [`Self::cell_system_viscous`]).
     pub strain_rate_damping: f64,
     /// Steady rolling at this ω (θ-referential mode): the strain-rate damping acts on the
-    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities ω ∂θχ
-    /// (lumped-L2 projection, [`crate::physics::ThetaProjection`]). Those velocities depend on
-    /// the neighbouring cells, so the steady system ([`crate::driver::SolidSystem`]) assembles
-    /// the cells with [`Self::cell_steady`]. `None` in the transient mode, where the velocity
-    /// is an independent field.
+    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// ω ∂θχ (ring differences, [`crate::physics::RingDerivative`]). That term couples a cell
+    /// with its ring neighbours, so it is not part of the cell kernels: the steady system
+    /// ([`crate::driver::SolidSystem`]) assembles it with [`Self::cell_viscous_split`]. `None`
+    /// in the transient mode, where the velocity is an independent field.
     pub steady_omega: Option<f64>,
     /// Viscoelastic overstress (`None`: elastic, no history).
     pub viscoelastic: Option<Viscoelastic>,
