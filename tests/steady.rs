@@ -36,20 +36,8 @@ fn steady_solution(text: &str, set: &[&str]) -> (Scene, SteadyRolling) {
 /// max |K − K_fd| / max |K| of a steady rolling system.
 fn fd_error(sys: &mut SolidSystem) -> f64 {
     assert!(sys.evaluate(true));
-    let mut k = sys.asm.to_dense();
+    let k = sys.asm.to_dense();
     let n = sys.n_eq();
-    // The exact Jacobian is the assembled matrix plus the remainder operator (the damping's
-    // velocity couplings beyond the cell, see `SolidSystem::enable_steady_viscosity`).
-    let (mut ej, mut cj) = (vec![0.0; n], vec![0.0; n]);
-    for j in 0..n {
-        ej.fill(0.0);
-        ej[j] = 1.0;
-        if sys.jacobian_remainder(&ej, &mut cj) {
-            for i in 0..n {
-                k[i][j] += cj[i];
-            }
-        }
-    }
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut err = 0.0f64;
     let mut e = vec![0.0; n];
@@ -67,15 +55,7 @@ fn fd_error(sys: &mut SolidSystem) -> f64 {
         let rm = res(sys);
         sys.update(1.0, &e);
         for i in 0..n {
-            let d = ((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs();
-            if d > err && std::env::var_os("FD_DEBUG").is_some() {
-                eprintln!(
-                    "i {i} j {j}: fd {} k {}",
-                    (rp[i] - rm[i]) / (2.0 * h),
-                    k[i][j]
-                );
-            }
-            err = err.max(d);
+            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
         }
     }
     err / kmax
@@ -85,24 +65,15 @@ fn fd_error(sys: &mut SolidSystem) -> f64 {
 fn steady_tangent_matches_finite_differences() {
     // Isoparametric Q2 annulus pressed 0.15 into the road, spinning, with Coulomb friction
     // (tanh), normal damping and strain-rate damping: every term of the steady residual.
-    // The velocities are the lumped-L2 projection of ω ∂θχ_h (any mesh): also on a graded
-    // (non-uniform) circumferential mesh and on Q1 cells. The exact Jacobian is the assembled
-    // matrix plus the remainder operator.
-    for (load, eta, grading, degree) in [
-        (None, 0.0, 0.0, 2),
-        (None, 3.0, 0.0, 2),
-        (Some(40.0), 3.0, 0.0, 2),
-        (None, 3.0, 0.6, 2),
-        (Some(40.0), 3.0, 0.6, 1),
-    ] {
+    for (load, eta) in [(None, 0.0), (None, 3.0), (Some(40.0), 3.0)] {
         let mut mesh = annulus(&AnnulusSpec {
             ri: 1.0,
             ro: 2.0,
             n_r: 2,
-            n_theta: if degree == 1 { 24 } else { 12 },
-            degree,
+            n_theta: 12,
+            degree: 2,
             grading_r: 1.0,
-            grading_theta: grading,
+            grading_theta: 0.0,
         });
         mesh.make_isoparametric();
         let mat: Material = MooneyRivlin::new(80.0, 20.0, 4000.0).into();
@@ -128,14 +99,7 @@ fn steady_tangent_matches_finite_differences() {
             }
         }
         let e = fd_error(&mut st.sys);
-        println!(
-            "load = {load:?}, eta = {eta}, grading {grading}, Q{degree}: max |K - K_fd| / max |K| = {e:.3e}"
-        );
-        // With damping the remainder is not empty (the check covers it).
-        let n = st.sys.n_eq();
-        let (ones, mut out) = (vec![1.0; n], vec![0.0; n]);
-        let has = st.sys.jacobian_remainder(&ones, &mut out);
-        assert_eq!(has, eta > 0.0);
+        println!("load = {load:?}, eta = {eta}: max |K - K_fd| / max |K| = {e:.3e}");
         assert!(e < 1e-6, "steady tangent vs finite differences: {e:.3e}");
     }
 }
@@ -598,8 +562,5 @@ fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
             failed.push(w);
         }
     }
-    assert!(
-        failed.is_empty(),
-        "direct steady solve failed at ω = {failed:?} rad/s"
-    );
+    assert!(failed.is_empty(), "direct steady solve failed at ω = {failed:?} rad/s");
 }

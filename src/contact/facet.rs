@@ -119,33 +119,6 @@ impl SlipKinematics {
     }
 }
 
-/// Largest number of nodes of an extended contact element (facet nodes and the nodes their
-/// projected velocities depend on).
-pub const MAX_STENCIL_NODES: usize = 40;
-
-/// The steady mode's contact with continuous nodal velocities v_a = ω (t_a + Σ_b P_ab u_b)
-/// ([`crate::physics::ThetaProjection`]): the velocity at a facet point is Σ_j N_j v_j over the
-/// facet nodes, so the contact element depends on the nodes b of the projection rows of its
-/// facet nodes too (the boundary cells around the facet). Per facet: the extra nodes (after
-/// the facet's own p + 1 in the element's dof list) and the rows (facet node j, local node
-/// index, P_jb).
-#[derive(Clone, Debug, Default)]
-pub struct FacetStencil {
-    extra: Vec<u32>,
-    extra_offsets: Vec<usize>,
-    rows: Vec<(u8, u8, f64)>,
-    row_offsets: Vec<usize>,
-}
-
-impl FacetStencil {
-    fn extra(&self, e: usize) -> &[u32] {
-        &self.extra[self.extra_offsets[e]..self.extra_offsets[e + 1]]
-    }
-    fn rows(&self, e: usize) -> &[(u8, u8, f64)] {
-        &self.rows[self.row_offsets[e]..self.row_offsets[e + 1]]
-    }
-}
-
 /// Contact of the outer facets with the road.
 pub struct ContactModel {
     /// Road height H (hub centre to road); under load control the current value is the global
@@ -160,8 +133,6 @@ pub struct ContactModel {
     pub load: Option<f64>,
     pub kinematics: SlipKinematics,
     pub facets: Vec<Facet>,
-    /// Steady mode with projected nodal velocities ([`Self::enable_nodal_velocity`]).
-    pub stencil: Option<FacetStencil>,
     visited: AtomicUsize,
     pts: Vec<f64>,
     wts: Vec<f64>,
@@ -227,7 +198,6 @@ impl ContactModel {
             load,
             kinematics: SlipKinematics::Static { dtau: 1.0 },
             facets: mesh.facet_set("outer").to_vec(),
-            stencil: None,
             visited: AtomicUsize::new(0),
             pts,
             wts,
@@ -253,71 +223,12 @@ impl ContactModel {
                 list.push(2 * nodes[a]);
                 list.push(2 * nodes[a] + 1);
             }
-            if let Some(st) = &self.stencil {
-                for &n in st.extra(off.len() - 1) {
-                    list.push(2 * n);
-                    list.push(2 * n + 1);
-                }
-            }
             if self.load.is_some() && dofs.n_global > 0 {
                 list.push(dofs.global(0) as u32);
             }
             off.push(list.len());
         }
         (list, off)
-    }
-
-    /// Steady mode: take the velocity of every facet point from the nodal velocities of
-    /// `proj` (passed as `aux` to [`Self::kernel`] and [`Self::samples`]), with the exact
-    /// tangent through the projection rows of the facet nodes. Changes [`Self::element_dofs`]
-    /// (rebuild the assembler). Facets whose stencil would exceed [`MAX_STENCIL_NODES`] are an
-    /// error (a mesh with very high node valence at the boundary).
-    pub fn enable_nodal_velocity(
-        &mut self,
-        mesh: &Mesh,
-        proj: &crate::physics::ThetaProjection,
-    ) -> Result<(), String> {
-        let mut st = FacetStencil {
-            extra_offsets: vec![0],
-            row_offsets: vec![0],
-            ..Default::default()
-        };
-        for f in &self.facets {
-            let c = f.cell as usize;
-            let p = mesh.degree[c] as usize;
-            let nodes = mesh.cell_nodes(c);
-            let own: Vec<u32> = Self::side_nodes(f, p).map(|a| nodes[a]).collect();
-            let mut local = own.clone();
-            for (j, &a) in own.iter().enumerate() {
-                let (cols, w) = proj.row(a as usize);
-                for (&b, &wb) in cols.iter().zip(w) {
-                    let i = match local.iter().position(|&n| n == b) {
-                        Some(i) => i,
-                        None => {
-                            local.push(b);
-                            local.len() - 1
-                        }
-                    };
-                    if local.len() > MAX_STENCIL_NODES {
-                        return Err(format!(
-                            "contact facet of cell {c}: the nodal velocities of its nodes depend on more than {MAX_STENCIL_NODES} nodes"
-                        ));
-                    }
-                    st.rows.push((j as u8, i as u8, wb));
-                }
-            }
-            st.extra.extend_from_slice(&local[own.len()..]);
-            st.extra_offsets.push(st.extra.len());
-            st.row_offsets.push(st.rows.len());
-        }
-        self.stencil = Some(st);
-        Ok(())
-    }
-
-    /// Whether the contact elements are extended by [`Self::enable_nodal_velocity`] (then
-    /// they may exceed the fixed local size of [`LocalSystem`]: use [`Self::kernel_into`]).
-    pub fn has_stencil(&self) -> bool {
-        self.stencil.is_some()
     }
 
     /// Current road height: the global unknown under load control, else `self.h`.
@@ -427,15 +338,6 @@ impl ContactModel {
                 }
                 a
             }
-            SlipKinematics::Steady { .. } if self.stencil.is_some() => {
-                // Projected nodal velocities (aux).
-                let mut a = Vec2::zeros();
-                for j in 0..nn {
-                    let n = nodes[side[j]] as usize;
-                    a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
-                }
-                a
-            }
             SlipKinematics::Steady { omega } => {
                 // ω ∂θχ = ω (dX/dη + du/dη) / (dθ/dη).
                 let mut du = Vec2::zeros();
@@ -461,8 +363,7 @@ impl ContactModel {
 
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
     /// [`Self::element_dofs`]. `x`: current full state; `aux`: the state of the last converged
-    /// load step (static), the velocity field (dynamic) or the nodal velocities (steady with
-    /// [`Self::enable_nodal_velocity`]), see [`SlipKinematics`].
+    /// load step (static) or the velocity field (dynamic), see [`SlipKinematics`].
     #[allow(clippy::too_many_arguments)]
     pub fn kernel(
         &self,
@@ -474,49 +375,16 @@ impl ContactModel {
         loc: &mut LocalSystem,
         with_k: bool,
     ) {
-        let nd = loc.nd;
-        self.kernel_into(
-            mesh,
-            dofs,
-            x,
-            aux,
-            e,
-            &mut loc.r[..nd],
-            &mut loc.k[..nd * nd],
-            with_k,
-        );
-    }
-
-    /// [`Self::kernel`] into a zeroed residual `r` (nd) and row-major matrix `k` (nd², may be
-    /// empty without `with_k`), for elements of any size.
-    #[allow(clippy::too_many_arguments)]
-    pub fn kernel_into(
-        &self,
-        mesh: &Mesh,
-        dofs: &DofMap,
-        x: &[f64],
-        aux: &[f64],
-        e: usize,
-        r: &mut [f64],
-        k: &mut [f64],
-        with_k: bool,
-    ) {
         let f = self.facets[e];
         let c = f.cell as usize;
         let p = mesh.degree[c] as usize;
         let h = self.road_height(dofs, x);
         let has_h = self.load.is_some() && dofs.n_global > 0;
         let nn = p + 1;
-        let steady_stencil = match (&self.stencil, self.kinematics) {
-            (Some(st), SlipKinematics::Steady { omega }) => Some((st.rows(e), omega)),
-            _ => None,
-        };
-        // Local nodes: the facet's, then the stencil's extra nodes.
-        let nl = nn + self.stencil.as_ref().map_or(0, |st| st.extra(e).len());
-        let ih = 2 * nl; // local index of H
+        let ih = 2 * nn; // local index of H
         if has_h && e == 0 {
             // R_H = P − ∫ t_n ds0: the load enters once, through the first contact element.
-            r[ih] += self.load.unwrap_or(0.0);
+            loc.r[ih] += self.load.unwrap_or(0.0);
         }
         if !self.can_touch(mesh, &f, x, h) {
             return;
@@ -524,11 +392,10 @@ impl ContactModel {
         self.visited.fetch_add(1, Ordering::Relaxed);
         let nodes = mesh.cell_nodes(c);
         let side = f.local_nodes(p);
-        let nd = r.len();
+        let nd = loc.nd;
         let friction = self.friction.is_active();
         let (kx, kv, dynamic) = self.kinematics.factors();
         let damping = dynamic && self.normal.has_damping();
-        const M: usize = MAX_STENCIL_NODES;
         for q in 0..self.pts.len() {
             let (nv, dv) = lagrange_1d(p, self.pts[q]);
             let fp = self.facet_point(mesh, &f, q, &nv, &dv, p);
@@ -545,63 +412,51 @@ impl ContactModel {
             }
             let ds = fp.ds0;
             // Derivatives with respect to the unknowns (δ = −H − x2, δ̇ = −v2): with
-            // ∂x/∂u_b = kx N_b and ∂v/∂u_b = cv_b (per component; [`Self::velocity_coefficients`],
-            // or ω Σ_j N_j P_jb through the nodal-velocity projection),
+            // ∂x/∂u_b = kx N_b and ∂v/∂u_b = cv_b ([`Self::velocity_coefficients`]),
             // ∂t_n/∂u_{b,2} = −d_delta kx N_b − d_rate cv_b; ∂/∂H has the kx part only.
-            let mut cv = [0.0; M];
-            let mut nb = [0.0; M];
-            nb[..nn].copy_from_slice(&nv[..nn]);
-            if let Some((rows, omega)) = steady_stencil {
-                for &(j, b, w) in rows {
-                    cv[b as usize] += omega * nv[j as usize] * w;
-                }
-            } else {
-                cv[..nn].copy_from_slice(&self.velocity_coefficients(&nv, &fp, kv)[..nn]);
-            }
+            let cv = self.velocity_coefficients(&nv, &fp, kv);
             let d_rate = if damping { nval.d_rate } else { 0.0 };
-            let mut dtn_du2 = [0.0; M];
-            for b in 0..nl {
-                dtn_du2[b] = -nval.d_delta * kx * nb[b] - d_rate * cv[b];
+            let mut dtn_du2 = [0.0; 3];
+            for b in 0..nn {
+                dtn_du2[b] = -nval.d_delta * kx * nv[b] - d_rate * cv[b];
             }
             let dtn_dh = -nval.d_delta * kx;
-            let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) = (0.0, [0.0; M], [0.0; M], 0.0);
+            let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) = (0.0, [0.0; 3], [0.0; 3], 0.0);
             if friction {
                 let w = vel[0] - self.v0;
                 let fv = self.friction.eval(w, nval.t, delta);
                 tt = fv.t;
-                for b in 0..nl {
+                for b in 0..nn {
                     dtt_du1[b] = fv.d_w * cv[b];
-                    dtt_du2[b] = fv.d_tn * dtn_du2[b] - fv.d_delta * kx * nb[b];
+                    dtt_du2[b] = fv.d_tn * dtn_du2[b] - fv.d_delta * kx * nv[b];
                 }
                 dtt_dh = fv.d_tn * dtn_dh - fv.d_delta * kx;
             }
             for a in 0..nn {
-                r[2 * a] -= nv[a] * tt * ds;
-                r[2 * a + 1] -= nv[a] * nval.t * ds;
+                loc.r[2 * a] -= nv[a] * tt * ds;
+                loc.r[2 * a + 1] -= nv[a] * nval.t * ds;
             }
             if has_h {
-                r[ih] -= nval.t * ds;
+                loc.r[ih] -= nval.t * ds;
             }
             if !with_k {
                 continue;
             }
             for a in 0..nn {
                 let na = nv[a] * ds;
-                for b in 0..nl {
-                    k[(2 * a) * nd + 2 * b] -= na * dtt_du1[b];
-                    k[(2 * a) * nd + 2 * b + 1] -= na * dtt_du2[b];
-                    k[(2 * a + 1) * nd + 2 * b + 1] -= na * dtn_du2[b];
+                for b in 0..nn {
+                    loc.k[(2 * a) * nd + 2 * b] -= na * dtt_du1[b];
+                    loc.k[(2 * a) * nd + 2 * b + 1] -= na * dtt_du2[b];
+                    loc.k[(2 * a + 1) * nd + 2 * b + 1] -= na * dtn_du2[b];
                 }
                 if has_h {
-                    k[(2 * a) * nd + ih] -= na * dtt_dh;
-                    k[(2 * a + 1) * nd + ih] -= na * dtn_dh;
+                    loc.k[(2 * a) * nd + ih] -= na * dtt_dh;
+                    loc.k[(2 * a + 1) * nd + ih] -= na * dtn_dh;
+                    loc.k[ih * nd + 2 * a + 1] -= dtn_du2[a] * ds;
                 }
             }
             if has_h {
-                for b in 0..nl {
-                    k[ih * nd + 2 * b + 1] -= dtn_du2[b] * ds;
-                }
-                k[ih * nd + ih] -= dtn_dh * ds;
+                loc.k[ih * nd + ih] -= dtn_dh * ds;
             }
         }
     }

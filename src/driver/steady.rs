@@ -177,9 +177,6 @@ impl NonlinearSystem for SteadyRolling {
     fn residual(&self) -> &[f64] {
         self.sys.residual()
     }
-    fn jacobian_remainder(&self, dx: &[f64], out: &mut [f64]) -> bool {
-        self.sys.jacobian_remainder(dx, out)
-    }
     fn matrix_values(&self) -> &[f64] {
         self.sys.matrix_values()
     }

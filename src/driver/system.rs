@@ -9,7 +9,7 @@ use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::io::record::{Recorder, StepInfo};
 use crate::math::Vec2;
-use crate::physics::{SolidModel, ThetaProjection};
+use crate::physics::{RingDerivative, SolidModel};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 
@@ -45,26 +45,23 @@ pub struct SolidSystem {
     ref_norms: Vec<f64>,
     /// Contact facets integrated per assembly (sum, count) for reporting.
     pub facet_visits: (usize, usize),
-    /// Steady mode: continuous nodal velocities ω ∂θχ for the strain-rate damping, the normal
-    /// damping and the friction slip ([`Self::enable_steady_viscosity`]).
+    /// Steady mode: strain-rate damping on the nodal velocities ω ∂θχ
+    /// ([`Self::enable_steady_viscosity`]).
     pub steady_visc: Option<SteadyViscosity>,
 }
 
-/// The steady mode's velocity-dependent terms (see [`SolidSystem::enable_steady_viscosity`]):
-/// the lumped-L2 projection of ∂θ onto the nodes and the buffers of its Jacobian remainder.
+/// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
+/// ring-difference operator and, per cell, the extended element (the cell's nodes, then the
+/// other nodes of their ring stencils) assembled as one block of the system.
 #[derive(Clone, Debug)]
 pub struct SteadyViscosity {
-    pub proj: ThetaProjection,
+    pub ring: RingDerivative,
+    /// Index of the extended-element block in the assembler.
+    pub block: usize,
+    /// Per cell and local node: (index of the stencil node in the extended element, weight).
+    stencil: Vec<Vec<[(u16, f64); crate::physics::ring_derivative::WIDTH]>>,
     /// Nodal velocities of the current evaluation (full length; reused, not reallocated).
     vel: Vec<f64>,
-    /// Per cell, ∂R_cell/∂v_cell (row-major, `stride` = (2N)² values) from the last
-    /// evaluation with the matrix: the damping's dependence on the nodal velocities.
-    av: Vec<f64>,
-    stride: usize,
-    /// Whether `av` holds the values of the current state.
-    av_valid: bool,
-    /// Scratch (full length): an increment and its projected velocities.
-    scratch: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
 impl SolidSystem {
@@ -202,169 +199,126 @@ impl SolidSystem {
         (iphi, block)
     }
 
-    /// Steady (θ-referential) mode: every velocity-dependent term (the strain-rate damping on
-    /// Ė = sym(Fᵀ ∇v_h), the normal damping on δ̇ = −v2 and the friction slip w = v1 − v0) uses
-    /// the continuous interpolant v_h of the nodal velocities v_a = ω (t_a + (∂θu)_a) with
-    /// (∂θu)_a the lumped-L2 projection of ∂θu_h ([`ThetaProjection`]; any mesh). The contact
-    /// elements are extended to the nodes their velocities depend on (exact tangent); the cell
-    /// tangent takes the damping's velocity dependence through the cell-local projection (the
-    /// element pattern) and the rest of the exact Jacobian is
-    /// [`NonlinearSystem::jacobian_remainder`]. Active in [`NonlinearSystem::evaluate`],
-    /// [`Self::hub_reaction`] and [`Self::contact_samples`] while `model.steady_omega` is set.
-    /// Rebuilds the assembler when the contact elements change.
+    /// Steady (θ-referential) mode with strain-rate damping: assemble the damping on the
+    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// v_a = ω (t_a + (∂θu)_a) with ring differences ([`RingDerivative`]), as the transient mode
+    /// does with its nodal velocities. Each cell's damping forces then depend on the nodes of
+    /// its ring stencils (two positions beyond the cell on each side), assembled as an extra
+    /// block with the exact tangent. Active in [`NonlinearSystem::evaluate`] and
+    /// [`Self::hub_reaction`] while `model.steady_omega` is set. No effect without damping or
+    /// without a ring-structured mesh (the steady mode always has one).
     pub fn enable_steady_viscosity(&mut self) {
-        if self.steady_visc.is_some() {
+        use crate::physics::ring_derivative::WIDTH;
+        if self.steady_visc.is_some() || self.model.strain_rate_damping <= 0.0 {
             return;
         }
-        let proj = ThetaProjection::new(&self.model);
-        let mesh = &self.model.mesh;
-        if let Some(c) = &mut self.contact {
-            if c.enable_nodal_velocity(mesh, &proj).is_err() {
-                // A boundary stencil too large for the extended element: keep the elementwise
-                // surface derivative for the contact (still consistent within each facet).
-                c.stencil = None;
-            } else {
-                let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
-                    .asm
-                    .blocks
-                    .iter()
-                    .map(|b| (b.dofs.clone(), b.offsets.clone()))
-                    .collect();
-                if lists.len() > 1 {
-                    lists[1] = c.element_dofs(mesh, &self.dofs);
-                }
-                let parallel = self.asm.parallel;
-                self.asm = Assembler::with_blocks(&self.dofs, lists);
-                self.asm.parallel = parallel;
-            }
-        }
-        let max_nodes = (0..mesh.n_cells())
-            .map(|c| mesh.cell_nodes(c).len())
-            .max()
-            .unwrap_or(0);
-        let stride = 4 * max_nodes * max_nodes;
-        let damped = self.model.strain_rate_damping > 0.0;
-        self.steady_visc = Some(SteadyViscosity {
-            vel: vec![0.0; self.x.len()],
-            av: if damped {
-                vec![0.0; stride * mesh.n_cells()]
-            } else {
-                Vec::new()
-            },
-            stride,
-            av_valid: false,
-            scratch: std::cell::RefCell::new((vec![0.0; self.x.len()], vec![0.0; self.x.len()])),
-            proj,
-        });
-    }
-
-    /// Nodal velocities ω ∂θχ of the steady mode at the current state (full-length vector),
-    /// or `None` outside the steady mode.
-    pub fn steady_velocities(&self) -> Option<Vec<f64>> {
-        let (sv, om) = (self.steady_visc.as_ref()?, self.model.steady_omega?);
-        let mut vel = vec![0.0; self.x.len()];
-        sv.proj
-            .velocities(&self.model.mesh.nodes, &self.x, om, &mut vel);
-        Some(vel)
-    }
-
-    /// Assemble the cells in the steady mode: every term of the cell kernel plus the
-    /// strain-rate damping on the projected nodal velocities, its velocity tangent through
-    /// the cell-local projection; keeps ∂R/∂v per cell for the Jacobian remainder.
-    fn assemble_steady_cells(&mut self, with_matrix: bool) -> bool {
-        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
-            return self
-                .model
-                .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        let Some(ring) = RingDerivative::new(&self.model.mesh) else {
+            return;
         };
-        sv.proj
-            .velocities(&self.model.mesh.nodes, &self.x, om, &mut sv.vel);
-        let damped = self.model.strain_rate_damping > 0.0 && !sv.av.is_empty();
-        let stride = sv.stride;
-        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
-        let (vel, proj) = (&sv.vel, &sv.proj);
-        let store = crate::assembly::SharedMut::new(&mut sv.av);
-        model.reset_admissible();
-        self.asm.assemble(dofs, with_matrix, |c, loc| {
-            let mut av = [0.0; 18 * 18];
-            model.cell_steady(c, dofs, x, vel, loc, with_matrix, &mut av);
-            if !(with_matrix && damped) {
-                return;
-            }
-            let n = model.mesh.cell_nodes(c).len();
-            let (nu, nd) = (2 * n, loc.nd);
-            let pl = proj.cell_local(c);
-            // K[i][(b,k)] += Σ_a ∂R_i/∂v_(a,k) ω P^e_ab.
-            for i in 0..nu {
-                for a in 0..n {
-                    for k in 0..2 {
-                        let d = av[i * nu + 2 * a + k] * om;
-                        if d == 0.0 {
-                            continue;
-                        }
-                        for b in 0..n {
-                            loc.k[i * nd + 2 * b + k] += d * pl[a * n + b];
-                        }
-                    }
-                }
-            }
-            // SAFETY: cell c's slice of the store is written by this kernel call only.
-            unsafe {
-                for (j, v) in av[..nu * nu].iter().enumerate() {
-                    *store.get_mut(c * stride + j) = *v;
-                }
-            }
-        });
-        if with_matrix {
-            sv.av_valid = damped;
-        }
-        model.admissible()
-    }
-
-    /// out = (J − K) dx: the part of the exact steady Jacobian J that the assembled matrix K
-    /// leaves out, Σ_e (∂R_e/∂v_e) ω ((P dx)_e − P^e dx_e) (equation numbering). `false`
-    /// (and `out` untouched) when there is none.
-    fn steady_remainder(&self, dx: &[f64], out: &mut [f64]) -> bool {
-        let (Some(sv), Some(om)) = (self.steady_visc.as_ref(), self.model.steady_omega) else {
-            return false;
-        };
-        if !sv.av_valid {
-            return false;
-        }
         let mesh = &self.model.mesh;
-        let mut scratch = sv.scratch.borrow_mut();
-        let (full, pd) = &mut *scratch;
-        full.fill(0.0);
-        self.dofs.scatter_free(dx, full);
-        sv.proj.apply(full, om, pd);
-        out.fill(0.0);
+        let (mut list, mut off) = (Vec::new(), vec![0]);
+        let mut stencil = Vec::with_capacity(mesh.n_cells());
         for c in 0..mesh.n_cells() {
             let nodes = mesh.cell_nodes(c);
-            let n = nodes.len();
-            let nu = 2 * n;
-            let pl = sv.proj.cell_local(c);
-            let mut dv = [0.0; 18];
-            for a in 0..n {
-                for k in 0..2 {
-                    let mut loc = 0.0;
-                    for b in 0..n {
-                        loc += pl[a * n + b] * full[2 * nodes[b] as usize + k];
+            let mut ext: Vec<u32> = nodes.to_vec();
+            for &a in nodes {
+                for &(b, _) in &ring.stencils[a as usize] {
+                    if !ext.contains(&b) {
+                        ext.push(b);
                     }
-                    dv[2 * a + k] = pd[2 * nodes[a] as usize + k] - om * loc;
                 }
             }
-            let av = &sv.av[c * sv.stride..c * sv.stride + nu * nu];
-            let cd = self.dofs.cell(c);
-            for i in 0..nu {
-                let q = self.dofs.eq[cd[i] as usize];
-                if q == FIXED {
-                    continue;
-                }
-                let row = &av[i * nu..(i + 1) * nu];
-                out[q as usize] += row.iter().zip(&dv[..nu]).map(|(a, b)| a * b).sum::<f64>();
+            let st: Vec<[(u16, f64); WIDTH]> = nodes
+                .iter()
+                .map(|&a| {
+                    let mut s = [(0u16, 0.0); WIDTH];
+                    for (k, &(b, w)) in ring.stencils[a as usize].iter().enumerate() {
+                        let i = ext.iter().position(|&e| e == b).unwrap_or(0);
+                        s[k] = (i as u16, w);
+                    }
+                    s
+                })
+                .collect();
+            stencil.push(st);
+            for &n in &ext {
+                list.push(2 * n);
+                list.push(2 * n + 1);
             }
+            off.push(list.len());
         }
-        true
+        let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
+            .asm
+            .blocks
+            .iter()
+            .map(|b| (b.dofs.clone(), b.offsets.clone()))
+            .collect();
+        let block = lists.len();
+        lists.push((list, off));
+        let parallel = self.asm.parallel;
+        self.asm = Assembler::with_blocks(&self.dofs, lists);
+        self.asm.parallel = parallel;
+        self.steady_visc = Some(SteadyViscosity {
+            vel: vec![0.0; self.x.len()],
+            ring,
+            block,
+            stencil,
+        });
+    }
+
+    /// Nodal velocities ω ∂θχ of the steady mode's damping at the current state (full-length
+    /// vector), or `None` when that damping is not active.
+    fn steady_velocities(&self) -> Option<(Vec<f64>, f64)> {
+        let (sv, om) = (self.steady_visc.as_ref()?, self.model.steady_omega?);
+        if self.model.strain_rate_damping <= 0.0 {
+            return None;
+        }
+        let mut vel = vec![0.0; self.x.len()];
+        sv.ring.velocities(&self.model.mesh, &self.x, om, &mut vel);
+        Some((vel, om))
+    }
+
+    /// Assemble the steady damping block (residual and, with `with_matrix`, the tangent).
+    fn add_steady_viscosity(&mut self, with_matrix: bool) {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
+            return;
+        };
+        if self.model.strain_rate_damping <= 0.0 {
+            return;
+        }
+        sv.ring
+            .velocities(&self.model.mesh, &self.x, om, &mut sv.vel);
+        let sv = &*sv;
+        let vel = &sv.vel;
+        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
+        self.asm
+            .add_block_large(sv.block, dofs, with_matrix, |c, r, k| {
+                let nu = 2 * model.mesh.cell_nodes(c).len();
+                let nd = r.len();
+                let mut rv = [0.0; 18];
+                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
+                model.cell_viscous_split(c, dofs, x, &vel, with_matrix, &mut rv, &mut ax, &mut av);
+                r[..nu].copy_from_slice(&rv[..nu]);
+                if !with_matrix {
+                    return;
+                }
+                for i in 0..nu {
+                    for j in 0..nu {
+                        k[i * nd + j] += ax[i * nu + j];
+                    }
+                    // v_{a,comp} = ω (t_a + Σ_b w_b u_{b,comp}).
+                    for (a, st) in sv.stencil[c].iter().enumerate() {
+                        for comp in 0..2 {
+                            let dv = av[i * nu + 2 * a + comp];
+                            if dv == 0.0 {
+                                continue;
+                            }
+                            for &(e, w) in st {
+                                k[i * nd + 2 * e as usize + comp] += dv * om * w;
+                            }
+                        }
+                    }
+                }
+            });
     }
 
     /// Norm of the residual at the current state (assembles the residual only).
@@ -385,20 +339,15 @@ impl SolidSystem {
     /// report w = 0 and no static friction).
     pub fn contact_samples(&self) -> Vec<ContactSample> {
         match &self.contact {
-            Some(c) => match (c.has_stencil(), self.steady_velocities()) {
-                (true, Some(vel)) => c.samples(&self.model.mesh, &self.dofs, &self.x, &vel),
-                _ => {
-                    let aux = match c.kinematics {
-                        SlipKinematics::Static { .. }
-                            if self.x_step_start.len() == self.x.len() =>
-                        {
-                            &self.x_step_start
-                        }
-                        _ => &self.x_prev,
-                    };
-                    c.samples(&self.model.mesh, &self.dofs, &self.x, aux)
-                }
-            },
+            Some(c) => {
+                let aux = match c.kinematics {
+                    SlipKinematics::Static { .. } if self.x_step_start.len() == self.x.len() => {
+                        &self.x_step_start
+                    }
+                    _ => &self.x_prev,
+                };
+                c.samples(&self.model.mesh, &self.dofs, &self.x, aux)
+            }
             None => Vec::new(),
         }
     }
@@ -424,7 +373,6 @@ impl SolidSystem {
         let mut moment = 0.0;
         let mut loc = Box::new(LocalSystem::new(0));
         let steady_vel = self.steady_velocities();
-        let mut av = [0.0; 18 * 18];
         for c in 0..self.model.mesh.n_cells() {
             let nodes = self.model.mesh.cell_nodes(c);
             if !nodes.iter().any(|&n| is_hub[n as usize]) {
@@ -432,12 +380,17 @@ impl SolidSystem {
             }
             let nd = self.dofs.cell(c).len();
             loc.clear(nd);
-            match &steady_vel {
+            self.model.cell_residual(c, &self.dofs, &self.x, &mut loc);
+            if let Some((vel, _)) = &steady_vel {
                 // The steady damping forces are part of what the hub transmits.
-                Some(vel) => self
-                    .model
-                    .cell_steady(c, &self.dofs, &self.x, vel, &mut loc, false, &mut av),
-                None => self.model.cell_residual(c, &self.dofs, &self.x, &mut loc),
+                let mut rv = [0.0; 18];
+                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
+                self.model.cell_viscous_split(
+                    c, &self.dofs, &self.x, vel, false, &mut rv, &mut ax, &mut av,
+                );
+                for (a, v) in rv.iter().enumerate().take(2 * nodes.len()) {
+                    loc.r[a] += v;
+                }
             }
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
@@ -504,21 +457,16 @@ impl NonlinearSystem for SolidSystem {
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        let ok = self.assemble_steady_cells(with_matrix);
+        let ok = self
+            .model
+            .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        self.add_steady_viscosity(with_matrix);
         if let Some(c) = &self.contact {
             c.reset_visited();
             let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);
-            match (&self.steady_visc, c.has_stencil()) {
-                (Some(sv), true) => {
-                    let vel = &sv.vel;
-                    self.asm.add_block_large(1, dofs, with_matrix, |e, r, k| {
-                        c.kernel_into(mesh, dofs, x, vel, e, r, k, with_matrix)
-                    })
-                }
-                _ => self.asm.add_block(1, dofs, with_matrix, |e, loc| {
-                    c.kernel(mesh, dofs, x, xp, e, loc, with_matrix)
-                }),
-            }
+            self.asm.add_block(1, dofs, with_matrix, |e, loc| {
+                c.kernel(mesh, dofs, x, xp, e, loc, with_matrix)
+            });
             self.facet_visits.0 += c.visited_facets();
             self.facet_visits.1 += 1;
         }
@@ -526,9 +474,6 @@ impl NonlinearSystem for SolidSystem {
     }
     fn residual(&self) -> &[f64] {
         &self.asm.residual
-    }
-    fn jacobian_remainder(&self, dx: &[f64], out: &mut [f64]) -> bool {
-        self.steady_remainder(dx, out)
     }
     fn matrix_values(&self) -> &[f64] {
         &self.asm.values

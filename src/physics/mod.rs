@@ -1,10 +1,8 @@
 //! Physical models: the finite-strain solid (internal work, θ-referential inertia, body
 //! force, Q2/P1 pressure terms) assembled on a mesh.
 
-pub mod nodal_velocity;
 pub mod ring_derivative;
 pub mod solid;
 
-pub use nodal_velocity::ThetaProjection;
 pub use ring_derivative::RingDerivative;
 pub use solid::{PointValues, PressureMode, SolidModel};

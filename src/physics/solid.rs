@@ -389,77 +389,9 @@ impl SolidModel {
         with_k: bool,
         visc: Option<(&[f64], f64)>,
     ) {
-        self.cell_kernel_av(c, dofs, x, loc, with_k, visc, None)
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn cell_kernel_av(
-        &self,
-        c: usize,
-        dofs: &DofMap,
-        x: &[f64],
-        loc: &mut LocalSystem,
-        with_k: bool,
-        visc: Option<(&[f64], f64)>,
-        av: Option<&mut [f64]>,
-    ) {
         match self.mesh.degree[c] {
-            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k, visc, av),
-            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k, visc, av),
-        }
-    }
-
-    /// Steady mode: residual and tangent of cell `c` (every term of [`Self::cell_system`])
-    /// plus the strain-rate damping on the given nodal velocities `vel` (full vector), whose
-    /// tangent is split: `loc.k` gets the dependence through F only, `av` (row-major
-    /// 2N × 2N over the cell's displacement dofs, overwritten when `with_k`) the derivative
-    /// with respect to the cell's nodal velocities, ∂R_i/∂v_{b,k}. The damping stress is linear
-    /// in the velocity, so `av` times a velocity increment is exactly the change of the
-    /// damping forces. Without damping `av` is zero.
-    #[allow(clippy::too_many_arguments)]
-    pub fn cell_steady(
-        &self,
-        c: usize,
-        dofs: &DofMap,
-        x: &[f64],
-        vel: &[f64],
-        loc: &mut LocalSystem,
-        with_k: bool,
-        av: &mut [f64],
-    ) {
-        let nu = 2 * self.mesh.cell_nodes(c).len();
-        if with_k {
-            av[..nu * nu].fill(0.0);
-        }
-        if self.strain_rate_damping > 0.0 {
-            self.cell_kernel_av(c, dofs, x, loc, with_k, Some((vel, 0.0)), Some(av));
-        } else {
-            self.cell_kernel_av(c, dofs, x, loc, with_k, None, None);
-        }
-    }
-
-    /// Moments of the θ-derivative on cell `c`: `b[a N + j]` = ∫_e N_a ∂θN_j dV and
-    /// `m[a]` = ∫_e N_a dV (∂θ = t · ∇, t = (−X2, X1)), for [`super::ThetaProjection`].
-    pub(super) fn theta_moments<const N: usize>(
-        &self,
-        c: usize,
-        tab: &ShapeTable<N>,
-        b: &mut [f64],
-        m: &mut [f64],
-    ) {
-        let mut g = [[0.0; 2]; N];
-        for q in 0..tab.len() {
-            let Some(pg) = self.point(c, tab, q, &mut g) else {
-                continue;
-            };
-            let t = Vec2::new(-pg.x[1], pg.x[0]);
-            let nv = &tab.n[q];
-            for a in 0..N {
-                m[a] += nv[a] * pg.w;
-                for j in 0..N {
-                    b[a * N + j] += nv[a] * (t[0] * g[j][0] + t[1] * g[j][1]) * pg.w;
-                }
-            }
+            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k, visc),
+            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k, visc),
         }
     }
 
@@ -598,7 +530,6 @@ impl SolidModel {
         loc: &mut LocalSystem,
         with_k: bool,
         visc: Option<(&[f64], f64)>,
-        mut av: Option<&mut [f64]>,
     ) {
         let cd = dofs.cell(c);
         let nd = cd.len();
@@ -698,41 +629,6 @@ impl SolidModel {
                                 for j in 0..2 {
                                     a_t[(v(i, j), v(k, l))] += dp[(i, j)];
                                 }
-                            }
-                        }
-                    }
-                }
-            }
-            if let (Some(av), true) = (av.as_deref_mut(), with_k) {
-                // ∂P_v/∂Ḟ (P_v = F S_v, S_v = η sym(Ḟᵀ F)), mapped to the nodal velocities:
-                // av[(a,i),(b,k)] += Σ_JL G_aJ ∂P_iJ/∂Ḟ_kL G_bL w.
-                let eta = self.strain_rate_damping;
-                let f = Mat2::identity() + h;
-                let mut a_v = Tangent::zeros();
-                for k in 0..2 {
-                    for l in 0..2 {
-                        let mut e = Mat2::zeros();
-                        e[(k, l)] = 1.0;
-                        let dp = f * ((e.transpose() * f + f.transpose() * e) * (0.5 * eta));
-                        for i in 0..2 {
-                            for j in 0..2 {
-                                a_v[(v(i, j), v(k, l))] = dp[(i, j)];
-                            }
-                        }
-                    }
-                }
-                for a in 0..N {
-                    let mut ga = [[0.0; 4]; 2];
-                    for i in 0..2 {
-                        for kl in 0..4 {
-                            ga[i][kl] = g[a][0] * a_v[(v(i, 0), kl)] + g[a][1] * a_v[(v(i, 1), kl)];
-                        }
-                    }
-                    for b in 0..N {
-                        for i in 0..2 {
-                            for k in 0..2 {
-                                let val = ga[i][v(k, 0)] * g[b][0] + ga[i][v(k, 1)] * g[b][1];
-                                av[(2 * a + i) * nu + 2 * b + k] += val * pg.w;
                             }
                         }
                     }

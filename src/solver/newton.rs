@@ -85,15 +85,6 @@ pub trait NonlinearSystem {
     fn update(&mut self, alpha: f64, dx: &[f64]);
     fn save_state(&self, buf: &mut Vec<f64>);
     fn restore_state(&mut self, buf: &[f64]);
-    /// For a system whose assembled matrix K is only part of its Jacobian J (a sparser
-    /// approximation, e.g. couplings that would add fill to the LU factors): set
-    /// `out` = (J − K) `dx` at the last evaluation with the matrix and return `true`. Newton
-    /// then refines its step by the iteration Δx ← K⁻¹ (−R − (J − K) Δx), which converges to
-    /// J⁻¹(−R) when the remainder is small against K, at the price of one solve with the
-    /// existing factors per sweep. The default: K is the Jacobian.
-    fn jacobian_remainder(&self, _dx: &[f64], _out: &mut [f64]) -> bool {
-        false
-    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -239,9 +230,6 @@ pub struct NewtonReport {
     pub table: Vec<IterationRecord>,
     pub assemblies: usize,
     pub factorizations: usize,
-    /// Extra solves with the factors to refine steps of an approximate tangent
-    /// ([`NonlinearSystem::jacobian_remainder`]).
-    pub refinement_solves: usize,
 }
 
 /// Newton solver owning the sparse factorization (symbolic analysis done once).
@@ -250,8 +238,6 @@ pub struct Newton {
     solver: SparseSolver,
     dx: Vec<f64>,
     saved: Vec<f64>,
-    /// Work vectors of the step refinement.
-    refine: (Vec<f64>, Vec<f64>),
     /// State magnitudes m_j and the per-equation round-off estimate ε Σ_j |K_ij| m_j.
     mag: Vec<f64>,
     noise: Vec<f64>,
@@ -272,7 +258,6 @@ impl Newton {
             solver,
             dx: vec![0.0; sys.n_eq()],
             saved: Vec::new(),
-            refine: (Vec::new(), Vec::new()),
             mag: Vec::new(),
             noise: Vec::new(),
         })
@@ -427,13 +412,6 @@ impl Newton {
                 *d = -r;
             }
             self.solver.solve_in_place(&mut self.dx)?;
-            // Inexact Newton forcing for the refined step: as accurate as the residual is
-            // small (superlinear convergence, at most 1e-2), but no more than the last step
-            // to the tolerance needs (0.1 tol / current), at least 1e-10.
-            let forcing = (0.1 * self.opts.tol / worst.max(f64::MIN_POSITIVE))
-                .max((1e-2 * worst).min(1e-3))
-                .clamp(1e-10, 1e-3);
-            rep.refinement_solves += self.refine_step(sys, forcing)?;
             rec.increment_norm = self.dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let r0 = total_norm(&norms);
             sys.save_state(&mut self.saved);
@@ -498,120 +476,6 @@ impl Newton {
             rep.table.push(rec);
         }
         unreachable_guard()
-    }
-
-    /// Refine the step `dx` = K⁻¹(−R) to J⁻¹(−R) when the system's matrix K leaves out part
-    /// of its Jacobian J = K + C ([`NonlinearSystem::jacobian_remainder`]): GMRES on the
-    /// left-preconditioned system (I + K⁻¹C) Δx = K⁻¹(−R), which needs only C and solves
-    /// with the existing factors (one each per iteration), restarted every 30 iterations,
-    /// until the preconditioned residual is below `tol` of its start. Returns the number of
-    /// extra solves.
-    /// Falls back to the unrefined step if GMRES makes no progress.
-    fn refine_step<S: NonlinearSystem>(&mut self, sys: &S, tol: f64) -> Result<usize, SolveError> {
-        const M: usize = 30;
-        const MAX_RESTARTS: usize = 4;
-        let n = self.dx.len();
-        let (w, _) = &mut self.refine;
-        w.resize(n, 0.0);
-        // Probe: no remainder, nothing to do.
-        if !sys.jacobian_remainder(&self.dx, w) {
-            return Ok(0);
-        }
-        let b = self.dx.clone();
-        let bnorm = norm(&b);
-        if bnorm == 0.0 {
-            return Ok(0);
-        }
-        let mut solves = 0;
-        let mut x = b.clone();
-        let apply =
-            |v: &[f64], out: &mut Vec<f64>, solver: &mut SparseSolver| -> Result<(), SolveError> {
-                // out = v + K⁻¹ C v
-                sys.jacobian_remainder(v, out);
-                solver.solve_in_place(out)?;
-                for (o, vi) in out.iter_mut().zip(v) {
-                    *o += vi;
-                }
-                Ok(())
-            };
-        let mut av = vec![0.0; n];
-        for _ in 0..MAX_RESTARTS {
-            // r = b − A x
-            apply(&x, &mut av, &mut self.solver)?;
-            solves += 1;
-            let r: Vec<f64> = b.iter().zip(&av).map(|(bi, ai)| bi - ai).collect();
-            let beta = norm(&r);
-            if beta <= tol * bnorm || !beta.is_finite() {
-                break;
-            }
-            let mut v: Vec<Vec<f64>> = vec![r.iter().map(|ri| ri / beta).collect()];
-            let mut h = vec![[0.0f64; M + 1]; M];
-            let (mut cs, mut sn) = ([0.0f64; M], [0.0f64; M]);
-            let mut g = [0.0f64; M + 1];
-            g[0] = beta;
-            let mut k_done = 0;
-            for k in 0..M {
-                apply(&v[k], &mut av, &mut self.solver)?;
-                solves += 1;
-                let mut wk = av.clone();
-                for (j, vj) in v.iter().enumerate() {
-                    let hj = dot(&wk, vj);
-                    h[k][j] = hj;
-                    for (wi, vi) in wk.iter_mut().zip(vj) {
-                        *wi -= hj * vi;
-                    }
-                }
-                let hn = norm(&wk);
-                h[k][k + 1] = hn;
-                for j in 0..k {
-                    let t = cs[j] * h[k][j] + sn[j] * h[k][j + 1];
-                    h[k][j + 1] = -sn[j] * h[k][j] + cs[j] * h[k][j + 1];
-                    h[k][j] = t;
-                }
-                let d = (h[k][k] * h[k][k] + h[k][k + 1] * h[k][k + 1]).sqrt();
-                if d == 0.0 || !d.is_finite() {
-                    break;
-                }
-                cs[k] = h[k][k] / d;
-                sn[k] = h[k][k + 1] / d;
-                h[k][k] = d;
-                h[k][k + 1] = 0.0;
-                g[k + 1] = -sn[k] * g[k];
-                g[k] *= cs[k];
-                k_done = k + 1;
-                if std::env::var_os("TREAD_DEBUG_REFINE").is_some() {
-                    eprintln!(
-                        "      gmres {solves}: |r| / |b| = {:.3e}",
-                        g[k + 1].abs() / bnorm
-                    );
-                }
-                if g[k + 1].abs() <= tol * bnorm || hn == 0.0 {
-                    break;
-                }
-                v.push(wk.iter().map(|wi| wi / hn).collect());
-            }
-            // Solve the triangular system and update x.
-            let mut y = [0.0f64; M];
-            for i in (0..k_done).rev() {
-                let mut s = g[i];
-                for j in i + 1..k_done {
-                    s -= h[j][i] * y[j];
-                }
-                y[i] = s / h[i][i];
-            }
-            for (j, yj) in y.iter().enumerate().take(k_done) {
-                for (xi, vi) in x.iter_mut().zip(&v[j]) {
-                    *xi += yj * vi;
-                }
-            }
-            if k_done == 0 || g[k_done].abs() <= tol * bnorm {
-                break;
-            }
-        }
-        if x.iter().all(|v| v.is_finite()) {
-            self.dx.copy_from_slice(&x);
-        }
-        Ok(solves)
     }
 
     /// Estimate of the condition number |λ|max / |λ|min of the tangent at the current
@@ -711,12 +575,4 @@ fn unreachable_guard() -> Result<NewtonReport, SolveError> {
         residual: f64::NAN,
         stagnation: None,
     })
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn norm(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
 }
