@@ -18,7 +18,8 @@
 //! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
 //! `nodes.csv`, `branch.csv` (continuation) and, with the `png` sink, `branch.png` and
 //! `contact.png`. Recorder steps: the load steps of the pressing stage (time = load factor in
-//! [0, 1]), then one per continuation point (time = 1 + step).
+//! [0, 1]), then one per continuation point (time = the continuation parameter, as in
+//! `branch.csv`).
 
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
@@ -602,10 +603,15 @@ pub fn run_with_dump(
                 let rec: &mut dyn Recorder = &mut recorders;
                 let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
                     rows.push(branch_row(s, p));
+                    // Time of a branch point: the continuation parameter (ω, load, DISP), as
+                    // in branch.csv; the start point (p.step = 0) is the last load step.
                     let info = StepInfo {
                         index: n0 + p.step as u64,
-                        time: 1.0 + p.step as f64,
-                        dt: if p.step == 0 { 0.0 } else { 1.0 },
+                        time: p.lambda,
+                        dt: match rows.len() {
+                            0 | 1 => 0.0,
+                            n => rows[n - 1].lambda - rows[n - 2].lambda,
+                        },
                         newton_iterations: p.iterations,
                         residual: 0.0,
                         is_final: false,
