@@ -562,5 +562,8 @@ fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
             failed.push(w);
         }
     }
-    assert!(failed.is_empty(), "direct steady solve failed at ω = {failed:?} rad/s");
+    assert!(
+        failed.is_empty(),
+        "direct steady solve failed at ω = {failed:?} rad/s"
+    );
 }
