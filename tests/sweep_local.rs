@@ -221,7 +221,15 @@ fn ctrl_c_stops_the_local_pool_cleanly_and_the_sweep_resumes() {
 #[test]
 fn run_one_records_killed_on_sigterm_and_checks_its_index() {
     let d = TestDir::new("sweep", "sigterm");
-    let spec = write_spec(&d, SLOW);
+    // Slow enough (400 load steps) that the signal always arrives while the run works; the run
+    // stops at its next step boundary once signalled, so the length costs nothing.
+    let spec = write_spec(
+        &d,
+        &SLOW.replace(
+            "\"solver.load_steps\", values = [20]",
+            "\"solver.load_steps\", values = [400]",
+        ),
+    );
     let root = d.join("out");
     let mut child = tread()
         .args([
