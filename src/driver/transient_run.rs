@@ -292,10 +292,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut warnings: Vec<String> = Vec::new();
     if converged && !rep.steady {
         warnings.push(format!(
-            "steady rolling was not reached by t = {} s ({} node passages, last relative change {}; steady_tol = {}): the results are those of the last time step",
+            "steady rolling was not reached by t = {} s ({} node passages, {}; steady_tol = {}): the results are those of the last time step",
             crate::io::output::fmt_num(rep.final_time),
             rep.passages,
-            crate::io::output::fmt_num(rep.last_change.iter().copied().fold(0.0, f64::max)),
+            match rep.last_change.iter().copied().fold(0.0, f64::max) {
+                c if c.is_finite() => format!("last relative change {}", crate::io::output::fmt_num(c)),
+                _ => "no change over a node passage measured yet".to_string(),
+            },
             crate::io::output::fmt_num(ts.steady_tol),
         ));
     }
