@@ -186,12 +186,7 @@ fn hp_converges_exponentially_in_cube_root_of_n() {
     let mut q2 = AdaptOptions::h(2);
     q2.max_dofs = last.n_eq;
     let rq2 = lshape(&q2);
-    let e_q2 = rq2
-        .iter()
-        .filter(|s| s.n_eq <= last.n_eq)
-        .last()
-        .unwrap()
-        .error;
+    let e_q2 = rq2.iter().rfind(|s| s.n_eq <= last.n_eq).unwrap().error;
     assert!(last.error < 0.5 * e_q2, "hp {} vs Q2 {}", last.error, e_q2);
 }
 

@@ -106,7 +106,7 @@ fn sigint_finishes_every_log_and_exits_130() {
     assert_eq!(s["converged"], false);
     assert_eq!(s["error"], "interrupted");
     let steps = s["solver"]["load_steps"].as_u64().unwrap() as usize;
-    assert!(steps >= 2 && steps < 40, "stopped early: {steps} steps");
+    assert!((2..40).contains(&steps), "stopped early: {steps} steps");
     let lambda = s["solver"]["interrupted_at"].as_f64().unwrap();
 
     let (h, rows) = read_csv(&out.join("history.csv"));
@@ -148,7 +148,7 @@ fn sigkill_leaves_mcap_and_csv_readable() {
     assert_eq!(st.code(), None, "killed by a signal");
     let (h, rows) = read_csv(&out.join("history.csv"));
     let n = rows.len();
-    assert!(n >= 3 && n < 40);
+    assert!((3..40).contains(&n));
     assert_eq!(
         column(&h, &rows, "step"),
         (0..n).map(|k| k as f64).collect::<Vec<_>>()

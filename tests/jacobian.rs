@@ -188,11 +188,10 @@ fn tangent_is_symmetric_without_friction() {
     let mut sys = tiny(2, NeoHookean::new(2.0, 5.0).into(), PressureMode::None);
     assert!(sys.evaluate(true));
     let k = sys.asm.to_dense();
-    let n = k.len();
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    for i in 0..n {
-        for j in 0..n {
-            assert!((k[i][j] - k[j][i]).abs() <= 1e-12 * kmax);
+    for (i, ki) in k.iter().enumerate() {
+        for (j, kj) in k.iter().enumerate() {
+            assert!((ki[j] - kj[i]).abs() <= 1e-12 * kmax);
         }
     }
 }

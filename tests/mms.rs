@@ -63,8 +63,8 @@ fn errors(order: usize, n_r: usize, iso: bool) -> (f64, f64, usize) {
         mesh.make_isoparametric();
     }
     let mat = Material::NeoHookean(NeoHookean::new(1.0, 2.0));
-    let mut model = SolidModel::new(mesh, mat.clone(), 1.0, PressureMode::None);
-    let mb = mat.clone();
+    let mut model = SolidModel::new(mesh, mat, 1.0, PressureMode::None);
+    let mb = mat;
     model.body_force = Some(Box::new(move |x| {
         let (_, at) = mb.stress_tangent(&exact_grad(x));
         let h = exact_hess(x);

@@ -221,17 +221,14 @@ fn bdf_and_sdirk_converge_with_the_tolerance() {
         (OdeMethod::Esdirk34, 2.4),
         (OdeMethod::Bdf, 3.0),
     ] {
-        let mut errs = Vec::new();
-        let mut steps = Vec::new();
+        let mut errs: Vec<f64> = Vec::new();
+        let mut steps: Vec<f64> = Vec::new();
         for &r in &tols {
             let (u, rep) = spin_up(method, r, t_end);
             let e = rel(&u, &reference);
             let p = match (errs.last(), steps.last()) {
                 (Some(&e0), Some(&s0)) => {
-                    format!(
-                        "{:.2}",
-                        -(e / e0 as f64).ln() / (rep.steps as f64 / s0 as f64).ln()
-                    )
+                    format!("{:.2}", -(e / e0).ln() / (rep.steps as f64 / s0).ln())
                 }
                 _ => "-".into(),
             };

@@ -690,7 +690,6 @@ fn mesh_sequence(
 
 /// The exact axisymmetric spinning solution (independent of the library: shooting on the radial
 /// ODE, the reference of `tests/spinning.rs`).
-#[allow(dead_code)]
 #[path = "../tests/common/reference.rs"]
 mod reference;
 

@@ -191,6 +191,17 @@ pub struct Equilibrated;
 
 /// Reference stiffness of the hierarchical basis of degree q (row-major) and the cross
 /// stiffness ∫ ∇ψ_a(q) · ∇φ_b(p) (rows degree q, columns degree p).
+/// Cholesky factor of a local Neumann matrix (gauge removed), with its full matrices K_qq, K_qp.
+type LocalNeumann = (
+    nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+);
+
+/// Per vertex of a recovery patch: the fitted polynomial coefficients of both gradient
+/// components and the patch size h used to scale the monomials.
+type PatchPolynomials = std::collections::HashMap<(i64, i64), ([f64; 6], [f64; 6], f64)>;
+
 fn local_matrices(basis: Basis1d, p: usize, q: usize) -> (DMatrix<f64>, DMatrix<f64>) {
     let (gx, gw) = gauss_legendre(q + 1);
     let nq = (q + 1) * (q + 1);
@@ -315,11 +326,11 @@ impl Estimator for Equilibrated {
         }
         // Per node: b_K^n (cells) and the faces where θ_n does not vanish.
         let mut node_cells: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_theta];
-        for k in 0..nc {
-            for a in 0..4 {
+        for (k, rk) in r.iter().enumerate().take(nc) {
+            for (a, &rka) in rk.iter().enumerate().take(4) {
                 for &(nd, coef) in theta_of(k, a) {
                     let list = &mut node_cells[nd as usize];
-                    let v = coef * r[k][a];
+                    let v = coef * rka;
                     match list.iter_mut().find(|e| e.0 == k) {
                         Some(e) => e.1 += v,
                         None => list.push((k, v)),
@@ -335,12 +346,12 @@ impl Estimator for Equilibrated {
                 for (e, t) in [(0, -1.0), (1, 1.0)] {
                     let (xi, eta) = to_ref(tree, space, f.minus, f.point(t));
                     let hm = hats(xi, eta);
-                    for a in 0..4 {
-                        if hm[a].abs() < 1e-12 {
+                    for (a, &hma) in hm.iter().enumerate().take(4) {
+                        if hma.abs() < 1e-12 {
                             continue;
                         }
                         for &(nd, coef) in theta_of(f.minus, a) {
-                            let v = coef * hm[a];
+                            let v = coef * hma;
                             let ent = match out.iter_mut().find(|x| x.0 == nd) {
                                 Some(x) => x,
                                 None => {
@@ -425,14 +436,8 @@ impl Estimator for Equilibrated {
             })
             .collect();
         // Local Neumann problems in Q_{p+2}, vertex function 0 removed (gauge).
-        let mut mats: Vec<
-            Option<(
-                nalgebra::Cholesky<f64, nalgebra::Dyn>,
-                DMatrix<f64>,
-                DMatrix<f64>,
-            )>,
-        > = (0..=pmax).map(|_| None).collect();
-        for p in 1..=pmax {
+        let mut mats: Vec<Option<LocalNeumann>> = (0..=pmax).map(|_| None).collect();
+        for (p, mat) in mats.iter_mut().enumerate().skip(1) {
             if space.degree.contains(&p) {
                 let q = (p + 2).min(crate::element::hierarchical::MAX_DEGREE);
                 let (kqq, kqp) = local_matrices(space.basis, p, q);
@@ -440,7 +445,7 @@ impl Estimator for Equilibrated {
                     .view((1, 1), (kqq.nrows() - 1, kqq.ncols() - 1))
                     .into_owned();
                 if let Some(ch) = red.clone().cholesky() {
-                    mats[p] = Some((ch, kqq, kqp));
+                    *mat = Some((ch, kqq, kqp));
                 }
             }
         }
@@ -555,7 +560,7 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
     let mono =
         |d: [f64; 2]| -> [f64; 6] { [1.0, d[0], d[1], d[0] * d[0], d[0] * d[1], d[1] * d[1]] };
     // Patch polynomial (per component) of every vertex.
-    let mut poly: HashMap<(i64, i64), ([f64; 6], [f64; 6], f64)> = HashMap::new();
+    let mut poly: PatchPolynomials = HashMap::new();
     let mut samples: Vec<([f64; 2], [f64; 2])> = Vec::new();
     for (&(vi, vj), cells) in &vpatch {
         let z = [tree.to_x(vi, 0), tree.to_x(vj, 1)];

@@ -361,10 +361,10 @@ impl CondensedPattern {
     /// y = A x for the CSC matrix with `values` (both triangles stored).
     pub fn matvec(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
-        for j in 0..self.n {
-            let xj = x[j];
-            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
-                y[self.row_idx[k]] += values[k] * xj;
+        for (j, &xj) in x.iter().enumerate().take(self.n) {
+            let col = self.col_ptr[j]..self.col_ptr[j + 1];
+            for (&i, &v) in self.row_idx[col.clone()].iter().zip(&values[col]) {
+                y[i] += v * xj;
             }
         }
     }
@@ -373,9 +373,10 @@ impl CondensedPattern {
     pub fn diagonal(&self, values: &[f64]) -> Vec<f64> {
         let mut d = vec![0.0; self.n];
         for (j, dj) in d.iter_mut().enumerate() {
-            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
-                if self.row_idx[k] == j {
-                    *dj = values[k];
+            let col = self.col_ptr[j]..self.col_ptr[j + 1];
+            for (&i, &v) in self.row_idx[col.clone()].iter().zip(&values[col]) {
+                if i == j {
+                    *dj = v;
                 }
             }
         }

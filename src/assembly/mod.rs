@@ -168,15 +168,23 @@ impl LocalSystem {
 }
 
 /// A slice that several threads may write to at provably disjoint indices.
+///
+/// It never hands out a reference into the slice (a `&mut T` obtained from `&self` would let
+/// two threads alias one element without the borrow checker seeing it); it only reads and
+/// writes single elements through the raw pointer, so the one obligation left to the caller is
+/// the one the assembler proves from its colouring: no index is touched by two threads at once.
 pub struct SharedMut<'a, T> {
     ptr: *mut T,
     len: usize,
     _marker: std::marker::PhantomData<&'a mut [T]>,
 }
+// SAFETY: `SharedMut` is a `&mut [T]` split across threads; sending or sharing it is sound for
+// `T: Send` because every access goes through the `unsafe` methods below, whose contract
+// forbids concurrent access to one index.
 unsafe impl<T: Send> Send for SharedMut<'_, T> {}
 unsafe impl<T: Send> Sync for SharedMut<'_, T> {}
 
-impl<'a, T> SharedMut<'a, T> {
+impl<'a, T: Copy> SharedMut<'a, T> {
     pub fn new(s: &'a mut [T]) -> Self {
         Self {
             ptr: s.as_mut_ptr(),
@@ -184,12 +192,32 @@ impl<'a, T> SharedMut<'a, T> {
             _marker: std::marker::PhantomData,
         }
     }
+    /// `s[i] = v`.
+    ///
     /// # Safety
-    /// No two threads may access the same index concurrently.
+    /// `i < len`, and no other thread reads or writes index `i` concurrently.
     #[inline(always)]
-    pub unsafe fn get_mut(&self, i: usize) -> &mut T {
+    pub unsafe fn set(&self, i: usize, v: T) {
         debug_assert!(i < self.len);
-        &mut *self.ptr.add(i)
+        // SAFETY: in bounds and exclusive at `i` by the caller's contract; `ptr` is valid for
+        // the lifetime `'a` of the borrowed slice.
+        unsafe { self.ptr.add(i).write(v) }
+    }
+    /// `s[i] += v`.
+    ///
+    /// # Safety
+    /// As for [`SharedMut::set`].
+    #[inline(always)]
+    pub unsafe fn add(&self, i: usize, v: T)
+    where
+        T: std::ops::Add<Output = T>,
+    {
+        debug_assert!(i < self.len);
+        // SAFETY: as in `set`; the read and the write are of the same exclusive element.
+        unsafe {
+            let p = self.ptr.add(i);
+            p.write(p.read() + v);
+        }
     }
 }
 
@@ -455,15 +483,15 @@ impl Assembler {
                 for (a, &d) in el.iter().enumerate() {
                     let q = dofs.eq[d as usize];
                     if q != FIXED {
-                        *res.get_mut(q as usize) += loc.r[a];
-                        *sc.get_mut(q as usize) += loc.r[a].abs();
+                        res.add(q as usize, loc.r[a]);
+                        sc.add(q as usize, loc.r[a].abs());
                     }
                 }
                 if with_matrix {
                     let s = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
                     for (slot, &kv) in s.iter().zip(&loc.k[..nd * nd]) {
                         if *slot != u32::MAX {
-                            *val.get_mut(*slot as usize) += kv;
+                            val.add(*slot as usize, kv);
                         }
                     }
                 }
@@ -569,9 +597,10 @@ impl Assembler {
     /// y = A x with the assembled values (used by checks and tests).
     pub fn matvec(&self, x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
-        for j in 0..self.n {
-            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                y[self.row_idx[p]] += self.values[p] * x[j];
+        for (j, &xj) in x.iter().enumerate().take(self.n) {
+            let col = self.col_ptr[j]..self.col_ptr[j + 1];
+            for (&i, &v) in self.row_idx[col.clone()].iter().zip(&self.values[col]) {
+                y[i] += v * xj;
             }
         }
     }
@@ -579,9 +608,10 @@ impl Assembler {
     /// Dense copy of the assembled matrix (tiny meshes only: tests and FD checks).
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         let mut a = vec![vec![0.0; self.n]; self.n];
-        for j in 0..self.n {
-            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                a[self.row_idx[p]][j] += self.values[p];
+        for (j, w) in self.col_ptr.windows(2).enumerate().take(self.n) {
+            let col = w[0]..w[1];
+            for (&i, &v) in self.row_idx[col.clone()].iter().zip(&self.values[col]) {
+                a[i][j] += v;
             }
         }
         a

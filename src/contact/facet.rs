@@ -364,7 +364,7 @@ impl ContactModel {
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
     /// [`Self::element_dofs`]. `x`: current full state; `aux`: the state of the last converged
     /// load step (static) or the velocity field (dynamic), see [`SlipKinematics`].
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
     pub fn kernel(
         &self,
         mesh: &Mesh,

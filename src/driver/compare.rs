@@ -353,9 +353,12 @@ fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<
     })
 }
 
+/// Points (x1, value) of one curve.
+type Curve = Vec<(f64, f64)>;
+
 /// t_n and t_T along x1 from both modes' `contact.csv` (warnings only on failure).
 fn contact_plot(tr: &Path, st: &Path, out: &Path) {
-    let load = |dir: &Path| -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+    let load = |dir: &Path| -> Option<(Curve, Curve)> {
         let (h, rows) = read_csv(&dir.join("contact.csv")).ok()?;
         let ix = h.iter().position(|c| c == "x1")?;
         let in_ = h.iter().position(|c| c == "t_n")?;

@@ -273,9 +273,9 @@ fn bloch_matrix(rows: &[Vec<(usize, f64)>], rg: &Rings, n: usize) -> (DMatrix<f6
             let rb = [[cb, -sb], [sb, cb]];
             let cls_b = (ring - 1) * rg.deg + pos % rg.deg;
             let (sp, cph) = (nf * (phi_b - phi_a)).sin_cos();
-            for cp in 0..2 {
-                for dp in 0..2 {
-                    let w = ra[c][cp] * v * rb[d][dp];
+            for (cp, &ra_c) in ra[c].iter().enumerate() {
+                for (dp, &rb_d) in rb[d].iter().enumerate() {
+                    let w = ra_c * v * rb_d;
                     if w == 0.0 {
                         continue;
                     }
@@ -455,8 +455,8 @@ fn transpose_pattern(n: usize, cp: &[usize], ri: &[usize]) -> (Vec<usize>, Vec<u
     let mut rt = vec![0usize; ri.len()];
     let mut map = vec![0usize; ri.len()];
     for j in 0..n {
-        for p in cp[j]..cp[j + 1] {
-            let r = ri[p];
+        let col = cp[j]..cp[j + 1];
+        for (p, &r) in col.clone().zip(&ri[col]) {
             let k = next[r];
             next[r] += 1;
             rt[k] = j;
@@ -691,7 +691,7 @@ fn spinning_critical(
             }
         }
     }
-    report.unresolved_crossings.sort_by(|a, b| a.n.cmp(&b.n));
+    report.unresolved_crossings.sort_by_key(|c| c.n);
     let lowest = report
         .crossings
         .iter()
@@ -751,7 +751,8 @@ fn rolling_critical(
     let w0 = st.omega();
     let samples = opts.samples.max(4);
     let dw = (omega_max - w0) / samples as f64;
-    if !(dw > 0.0) {
+    // Also refuses a NaN end (a NaN comparison is false).
+    if dw.is_nan() || dw <= 0.0 {
         return Err(AppError::Unsupported(format!(
             "critical: the search end {omega_max} rad/s must exceed the scene's motion.omega = {w0}"
         )));

@@ -296,7 +296,7 @@ impl SolidSystem {
                 let nd = r.len();
                 let mut rv = [0.0; 18];
                 let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
-                model.cell_viscous_split(c, dofs, x, &vel, with_matrix, &mut rv, &mut ax, &mut av);
+                model.cell_viscous_split(c, dofs, x, vel, with_matrix, &mut rv, &mut ax, &mut av);
                 r[..nu].copy_from_slice(&rv[..nu]);
                 if !with_matrix {
                     return;

@@ -140,6 +140,7 @@ impl<const N: usize> ShapeTable<N> {
 mod tests {
     use super::*;
 
+    #[allow(clippy::needless_range_loop)] // dn[a][dir]: derivative index as in the formulas
     fn partition_and_nodality<E: Lagrange2D, const N: usize>() {
         let mut n = [0.0; N];
         let mut dn = [[0.0; 2]; N];

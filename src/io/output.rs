@@ -192,10 +192,8 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 /// Replace non-finite numbers in a JSON tree by null (JSON has no NaN).
 pub fn sanitize(v: &mut serde_json::Value) {
     match v {
-        serde_json::Value::Number(n) => {
-            if n.as_f64().is_some_and(|x| !x.is_finite()) {
-                *v = serde_json::Value::Null;
-            }
+        serde_json::Value::Number(n) if n.as_f64().is_some_and(|x| !x.is_finite()) => {
+            *v = serde_json::Value::Null;
         }
         serde_json::Value::Array(a) => a.iter_mut().for_each(sanitize),
         serde_json::Value::Object(o) => o.values_mut().for_each(sanitize),

@@ -3709,13 +3709,13 @@ fn validate_continuation(
             "parameter \"disp\" continues in the penetration: it needs displacement control \
              (road.disp)",
         )),
-        (ContinuationParameter::Disp, Some(r)) => {
-            if c.target >= 0.0 && r.disp.is_some_and(|d| c.target == d) {
-                out.push(issue(
-                    "continuation.target",
-                    "target equals the starting penetration road.disp: nothing to continue",
-                ));
-            }
+        (ContinuationParameter::Disp, Some(r))
+            if c.target >= 0.0 && r.disp.is_some_and(|d| c.target == d) =>
+        {
+            out.push(issue(
+                "continuation.target",
+                "target equals the starting penetration road.disp: nothing to continue",
+            ));
         }
         _ => {}
     }

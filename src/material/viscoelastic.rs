@@ -347,7 +347,7 @@ impl Viscoelastic {
             let gi = cv.try_inverse()?;
             let ce = c * gi;
             let det = ce.determinant();
-            if !(det > 0.0) {
+            if det.is_nan() || det <= 0.0 {
                 return Some(f64::INFINITY);
             }
             psi += 0.5 * mu * (ce.trace() - 2.0 - det.ln());

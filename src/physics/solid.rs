@@ -309,7 +309,7 @@ impl SolidModel {
     /// [`Self::cell_system_viscous`] evaluations (the same quadrature), so that every other
     /// term (elastic, inertia, pressure) cancels exactly. Used by the steady mode, whose
     /// velocities are functions of the displacements of neighbouring cells too.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
     pub fn cell_viscous_split(
         &self,
         c: usize,
@@ -390,8 +390,8 @@ impl SolidModel {
         visc: Option<(&[f64], f64)>,
     ) {
         match self.mesh.degree[c] {
-            1 => self.cell_generic::<Q1, 4>(&self.q1, c, dofs, x, loc, with_k, visc),
-            _ => self.cell_generic::<Q2, 9>(&self.q2, c, dofs, x, loc, with_k, visc),
+            1 => self.cell_generic::<4>(&self.q1, c, dofs, x, loc, with_k, visc),
+            _ => self.cell_generic::<9>(&self.q2, c, dofs, x, loc, with_k, visc),
         }
     }
 
@@ -458,6 +458,7 @@ impl SolidModel {
 
     /// Shape gradients with respect to X, the point's position and its weight · det J.
     #[inline]
+    #[allow(clippy::needless_range_loop)] // Index loops spell out the index notation (r_a^i, K_ab^ik) of the kernel.
     fn point<const N: usize>(
         &self,
         c: usize,
@@ -521,7 +522,8 @@ impl SolidModel {
         Some((p, minv))
     }
 
-    fn cell_generic<E: Lagrange2D, const N: usize>(
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)] // Index loops spell out the index notation (r_a^i, K_ab^ik) of the kernel.
+    fn cell_generic<const N: usize>(
         &self,
         tab: &ShapeTable<N>,
         c: usize,

@@ -733,7 +733,9 @@ fn interpolate_zero(l0: f64, l1: f64, g0: f64, g1: f64) -> f64 {
 /// interpolant λ(σ) over the chord of the step (σ ∈ [0, ds]) with end slopes dλ/dσ = t0, t1 of
 /// opposite signs.
 fn limit_estimate(l0: f64, l1: f64, t0: f64, t1: f64, ds: f64) -> f64 {
-    if !(t0 * t1 < 0.0) || ds <= 0.0 {
+    // A NaN product (no sign change known) also keeps l1.
+    let t01 = t0 * t1;
+    if t01.is_nan() || t01 >= 0.0 || ds <= 0.0 {
         return l1;
     }
     // dλ/du of the Hermite cubic (u = s/ds) is A u² + B u + C; its root in (0, 1).

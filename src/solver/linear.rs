@@ -499,8 +499,8 @@ fn transpose_pattern(
     let mut at_ri = vec![0usize; nnz];
     let mut src = vec![0usize; nnz];
     for j in 0..n {
-        for k in col_ptr[j]..col_ptr[j + 1] {
-            let i = row_idx[k];
+        let col = col_ptr[j]..col_ptr[j + 1];
+        for (k, &i) in col.clone().zip(&row_idx[col]) {
             at_ri[next[i]] = j;
             src[next[i]] = k;
             next[i] += 1;

@@ -263,8 +263,8 @@ impl FourierModes {
         let sizes: Vec<f64> = (0..self.n_el).map(|e| q.powi(e as i32)).collect();
         let tot: f64 = sizes.iter().sum();
         let mut r0 = self.ri;
-        for e in 0..self.n_el {
-            let h = sizes[e] / tot * (self.ro - self.ri);
+        for (e, &size) in sizes.iter().enumerate() {
+            let h = size / tot * (self.ro - self.ri);
             for (&xi, &wq) in gx.iter().zip(&gw) {
                 let rr = r0 + 0.5 * (xi + 1.0) * h;
                 let jw = 0.5 * h * wq * rr;

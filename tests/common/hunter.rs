@@ -236,8 +236,7 @@ impl HunterProblem {
             if v > 0.0 && lambda.is_finite() {
                 Self::memory(t, lambda, n, &rule, &mut mem);
             } else {
-                mem.iter_mut()
-                    .for_each(|x| *x = if v == 0.0 { 0.0 } else { 0.0 });
+                mem.fill(0.0);
             }
             for k in 1..=n {
                 // (1/2) [J0 T_k + ΔJ M_k] a_k; at V = 0 the memory has fully acted: J∞ T_k.

@@ -568,8 +568,8 @@ pub fn radial_solution<F: Fn(f64, f64) -> (f64, f64, f64, f64)>(
 /// regula-falsi) method to `|P_R(Ro)| <= 1e-13 min(mu, rho omega^2 Ro^2)`
 /// (`mu` = tangent shear modulus at `F = I`).  If round-off prevents that
 /// tolerance (the iteration stops when the bracket has collapsed to a few
-/// ulps), the best shot is accepted when `|P_R(Ro)| <= max(1e-10 rho omega^2
-/// Ro^2, 64 eps (lambda + 2 mu))`.
+/// ulps), the best shot is accepted when
+/// `|P_R(Ro)| <= max(1e-10 rho omega^2 Ro^2, 64 eps (lambda + 2 mu))`.
 ///
 /// Accuracy: RK4 truncation and interpolation errors are below 1e-13
 /// relative for the default grid at strains up to tens of percent (step
@@ -988,7 +988,7 @@ pub fn neo_hookean_omega_for_growth(
     };
     // Linear estimate: growth is proportional to omega^2.
     let lin1 = linear_annulus(ri, ro, lambda, mu, rho, 1.0).u(ro) / ro;
-    if !(lin1 > 0.0) {
+    if lin1.is_nan() || lin1 <= 0.0 {
         return Err("linear estimate failed".into());
     }
     // Work in x = omega^2: growth(x) is close to linear in x.

@@ -345,10 +345,10 @@ impl<'t> FirstOrder<'t> {
     /// y = M_ff x (assembler pattern).
     fn m_ff_mul(&self, x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
-        for j in 0..self.n {
-            let xj = x[j];
-            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                y[self.row_idx[p]] += self.m_ff[p] * xj;
+        for (j, &xj) in x.iter().enumerate().take(self.n) {
+            let col = self.col_ptr[j]..self.col_ptr[j + 1];
+            for (&i, &m) in self.row_idx[col.clone()].iter().zip(&self.m_ff[col]) {
+                y[i] += m * xj;
             }
         }
     }
@@ -616,6 +616,8 @@ fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
 /// Integrate the transient model with diffsol's `method` until steady (or t_end), with the same
 /// report, steady-state monitor and per-step callback as [`super::integrate`]. Uses from `opts`:
 /// dt (first step), dt_min, t_end, steady_tol, stop_at_steady, max_steps, land_on_passages.
+// The failed run's report rides with its error, once per run: boxing it would buy nothing.
+#[allow(clippy::result_large_err)]
 pub fn integrate_first_order(
     tr: &mut Transient,
     method: OdeMethod,
