@@ -9,7 +9,8 @@
 //! Layout: [`math`] aliases, [`mesh`] structured annulus and mesh data, [`element`] shape
 //! functions and quadrature, [`material`] hyperelastic laws, [`assembly`] dofs / pattern /
 //! parallel assembler, [`physics`] element kernels, [`solver`] Newton, load stepping and sparse
-//! direct solvers, [`driver`] analyses, [`io`] scenes and outputs, [`app`] the `tread` program,
+//! direct solvers, [`driver`] analyses, [`io`] scenes and outputs, [`setup`] scene → model,
+//! options and sinks, [`app`] the `tread` program (dispatch on the analysis mode),
 //! [`sweep`] parameter sweeps over many runs (local process pool or Slurm job array).
 
 pub mod adapt;
@@ -23,5 +24,6 @@ pub mod material;
 pub mod math;
 pub mod mesh;
 pub mod physics;
+pub mod setup;
 pub mod solver;
 pub mod sweep;

@@ -58,9 +58,9 @@
 
 use super::steady::SteadyRolling;
 use super::steady_run::{build_steady, solve_steady};
-use crate::app::AppError;
 use crate::assembly::FIXED;
 use crate::io::Scene;
+use crate::setup::AppError;
 use crate::solver::linear::SparseSolver;
 use crate::solver::stepping::StepReport;
 use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};

@@ -7,13 +7,18 @@
 //! * Strain energy ∫ (W(F) − W(I)) dV and kinetic energy ½ ω² ∫ ρ |F t|² dV (t = (−X2, X1): the
 //!   velocity of steady spin is v = ω ∂θχ = ω F t), with the 3×3 Gauss rule per cell.
 //! * Hub loads: [`SolidSystem::hub_reaction`].
+//!
+//! Every recorder is also the solvers' [`StepObserver`] of a [`SolidSystem`]: an accepted step
+//! goes to [`SolidSystem::record_step`], the Newton table to the recorder's iteration events,
+//! and the interrupt flag answers whether to stop.
 
 use super::SolidSystem;
 use crate::contact::ContactSample;
 use crate::element::QuadRule;
-use crate::io::record::{Energy, HubLoads, StepView};
+use crate::io::record::{self, Energy, HubLoads, Recorder, StepView};
 use crate::material::Hyperelastic;
 use crate::math::{Mat2, Vec2};
+use crate::solver::{IterationRecord, RejectedStep, StepInfo, StepObserver};
 
 /// Owned data of a view; [`SolidFrame::view`] lends it out with the system's state.
 pub struct SolidFrame {
@@ -21,6 +26,40 @@ pub struct SolidFrame {
     pub contact: Vec<ContactSample>,
     pub hub: HubLoads,
     pub energy: Energy,
+}
+
+impl SolidSystem {
+    /// Send the accepted step `info` to the recorder, with a view of the state when the
+    /// recorder wants one.
+    pub fn record_step<R: Recorder + ?Sized>(&self, info: &StepInfo, rec: &mut R) {
+        if rec.wants_view(info) {
+            let frame = SolidFrame::capture(self);
+            rec.step(info, Some(&frame.view(self, &[])));
+        } else {
+            rec.step(info, None);
+        }
+    }
+}
+
+impl<R: Recorder + ?Sized> StepObserver<SolidSystem> for R {
+    fn stop_requested(&self) -> bool {
+        record::interrupted()
+    }
+    fn observe_newton(
+        &mut self,
+        step: u64,
+        time: f64,
+        table: &[IterationRecord],
+        fields: &'static [&'static str],
+    ) {
+        record::emit_newton_table(self, step, time, table, fields);
+    }
+    fn observe_accepted(&mut self, sys: &SolidSystem, info: &StepInfo) {
+        sys.record_step(info, self);
+    }
+    fn observe_rejected(&mut self, step: &RejectedStep) {
+        self.step_rejected(step);
+    }
 }
 
 impl SolidFrame {

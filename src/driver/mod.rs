@@ -7,6 +7,7 @@ pub mod indentation;
 pub mod spinning;
 pub mod steady;
 pub mod steady_recovery;
+pub mod steady_report;
 pub mod steady_run;
 pub mod stick_slip_run;
 pub mod system;

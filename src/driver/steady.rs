@@ -44,7 +44,7 @@
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
 
-use super::steady_recovery::Recovery;
+use super::steady_report::Recovery;
 use super::system::{Loading, SolidSystem};
 use crate::contact::SlipKinematics;
 use crate::io::record::Recorder;

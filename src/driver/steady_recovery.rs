@@ -40,6 +40,9 @@
 //! `solver.recovery` and prints one line to stderr).
 
 use super::steady::{press, SteadyRolling};
+pub use super::steady_report::{
+    Attempt, HomotopyParameter, LegReport, Recovery, Spacing, Strategy,
+};
 use super::system::Loading;
 use crate::io::record;
 use crate::material::Material;
@@ -59,59 +62,6 @@ const DS0: f64 = 0.25;
 const DS_MIN: f64 = 1e-6;
 /// Steps per leg before it gives up.
 const MAX_LEG_STEPS: usize = 400;
-
-/// A parameter a homotopy walks.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum HomotopyParameter {
-    /// Angular speed ω, with the road speed v0 = (v0/ω)_scene · ω.
-    Omega,
-    /// Bulk modulus κ (compressible Mooney–Rivlin) or penalty κ (perturbed incompressible).
-    Kappa,
-    /// Friction regularisation velocity ε.
-    Eps,
-}
-
-impl std::fmt::Display for HomotopyParameter {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            HomotopyParameter::Omega => "omega",
-            HomotopyParameter::Kappa => "kappa",
-            HomotopyParameter::Eps => "eps",
-        })
-    }
-}
-
-/// How a leg spaces its values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Spacing {
-    /// value = from + s (to − from).
-    Linear,
-    /// value = from (to / from)^s (both > 0).
-    Geometric,
-}
-
-/// A recovery strategy (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Strategy {
-    KappaHomotopy,
-    EpsHomotopy,
-    OmegaStepping,
-    Combined,
-}
-
-impl std::fmt::Display for Strategy {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Strategy::KappaHomotopy => "kappa_homotopy",
-            Strategy::EpsHomotopy => "eps_homotopy",
-            Strategy::OmegaStepping => "omega_stepping",
-            Strategy::Combined => "combined",
-        })
-    }
-}
 
 /// One homotopy leg: `parameter` from `from` to `to`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -262,131 +212,6 @@ pub fn restore_targets(st: &mut SteadyRolling, t: &Targets) {
     }
     if let Some(e) = t.eps {
         set_parameter(st, t, HomotopyParameter::Eps, e);
-    }
-}
-
-/// What one leg did.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct LegReport {
-    pub parameter: HomotopyParameter,
-    pub spacing: Spacing,
-    pub from: f64,
-    pub to: f64,
-    /// Converged steps.
-    pub steps: usize,
-    /// Halvings of Δs (failed steps, secant retries not counted).
-    pub cutbacks: usize,
-    pub newton_iterations: usize,
-    /// Last converged value (= `to` when the leg succeeded).
-    pub reached: f64,
-}
-
-/// One attempt of a strategy.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Attempt {
-    pub strategy: Strategy,
-    pub succeeded: bool,
-    /// Why it failed.
-    pub error: Option<String>,
-    /// Converged load steps and cut-backs of the press at the benign values.
-    pub press_steps: usize,
-    pub press_cutbacks: usize,
-    pub legs: Vec<LegReport>,
-    pub newton_iterations: usize,
-    pub wall_time_s: f64,
-}
-
-impl Attempt {
-    /// Converged steps (press and legs).
-    pub fn steps(&self) -> usize {
-        self.press_steps + self.legs.iter().map(|l| l.steps).sum::<usize>()
-    }
-    /// Cut-backs (press and legs).
-    pub fn cutbacks(&self) -> usize {
-        self.press_cutbacks + self.legs.iter().map(|l| l.cutbacks).sum::<usize>()
-    }
-}
-
-/// What the recovery did (`summary.json`: `solver.recovery`).
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct Recovery {
-    /// The failure of the direct solve that started the recovery.
-    pub direct_error: String,
-    /// The strategy that succeeded (`None`: every attempt failed).
-    pub strategy: Option<Strategy>,
-    /// Every strategy tried, in order.
-    pub attempts: Vec<Attempt>,
-    /// Newton iterations over all attempts.
-    pub newton_iterations: usize,
-    /// Cut-backs over all attempts.
-    pub cutbacks: usize,
-    pub wall_time_s: f64,
-    /// One line for a person (printed to stderr by the driver).
-    pub message: String,
-}
-
-impl Recovery {
-    pub fn succeeded(&self) -> bool {
-        self.strategy.is_some()
-    }
-
-    fn describe(&self) -> String {
-        let Some(ok) = self.attempts.iter().find(|a| a.succeeded) else {
-            let tried: Vec<String> = self
-                .attempts
-                .iter()
-                .map(|a| {
-                    format!(
-                        "{} ({})",
-                        a.strategy,
-                        a.error.as_deref().unwrap_or("no error recorded")
-                    )
-                })
-                .collect();
-            return if tried.is_empty() {
-                format!(
-                    "the steady solve failed ({}) and no recovery strategy applies",
-                    self.direct_error
-                )
-            } else {
-                format!(
-                    "the steady solve failed ({}); recovery failed too: {}",
-                    self.direct_error,
-                    tried.join("; ")
-                )
-            };
-        };
-        let legs: Vec<String> = ok
-            .legs
-            .iter()
-            .map(|l| {
-                format!(
-                    "{} from {:.6e} to {:.6e} in {} steps ({} cut-backs)",
-                    l.parameter, l.from, l.to, l.steps, l.cutbacks
-                )
-            })
-            .collect();
-        let before: Vec<String> = self
-            .attempts
-            .iter()
-            .filter(|a| !a.succeeded)
-            .map(|a| a.strategy.to_string())
-            .collect();
-        format!(
-            "the direct steady solve failed ({}); recovered by {}: pressed in at the benign \
-             values in {} load steps, then {}{}; {} Newton iterations in {:.2} s",
-            self.direct_error,
-            ok.strategy,
-            ok.press_steps,
-            legs.join(", then "),
-            if before.is_empty() {
-                String::new()
-            } else {
-                format!(" (tried first, failed: {})", before.join(", "))
-            },
-            self.newton_iterations,
-            self.wall_time_s
-        )
     }
 }
 

@@ -26,16 +26,16 @@ use super::steady::{press, solve_torque, step_parameter, SteadyParameter, Steady
 use super::steady_recovery;
 use super::system::{Loading, SolidSystem};
 use super::tables;
-use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
 use crate::io::scene::{ContinuationParameter, Control, Scene, Sink};
+use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
 use crate::solver::linear::{write_matrix_market, write_vector_market};
-use crate::solver::stepping::{LoadedSystem, StepReport};
+use crate::solver::stepping::StepReport;
 use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -164,7 +164,7 @@ fn creep_sweep(
     observe: &mut dyn FnMut(&SteadyRolling, &BranchPoint) -> bool,
 ) -> Result<ContinuationReport, SolveError> {
     use crate::solver::continuation::ParametricSystem;
-    let (newton_opts, _) = crate::app::solver_options(scene, opts.verbose);
+    let (newton_opts, _) = crate::setup::solver_options(scene, opts.verbose);
     let mut newton = Newton::new(st, LinearKind::Lu, newton_opts)?;
     let start = st.parameter();
     let span = opts.target - start;
@@ -296,7 +296,7 @@ pub fn solve_steady(
     rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     let kind = linear_kind(scene, &st.sys);
-    let (newton_opts, step_opts) = crate::app::solver_options(scene, verbose);
+    let (newton_opts, step_opts) = crate::setup::solver_options(scene, verbose);
     if st.sys.contact.is_none() {
         // No contact: the steady problem is steady spinning.
         return spinning::solve_spinning(
@@ -406,7 +406,7 @@ pub fn apply_control(
     };
     rep.target_torque = target;
     let kind = LinearKind::Lu;
-    let (newton_opts, _) = crate::app::solver_options(scene, verbose);
+    let (newton_opts, _) = crate::setup::solver_options(scene, verbose);
     let mut newton = Newton::new(st, kind, newton_opts)?;
     let scale = st.sys.hub_reaction().0[1].abs() * st.ro;
     let scale = if scale > 0.0 { scale } else { 1.0 };
@@ -490,7 +490,7 @@ pub fn run_with_dump(
     ensure_dir(&opts.out_dir)?;
     let mut warn = warnings(scene);
     let mut st = build_steady(scene)?;
-    let (mut recorders, w) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    let (mut recorders, w) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
     warn.extend(w);
     for w in &warn {
         eprintln!("tread: warning: {w}");

@@ -8,13 +8,13 @@
 //! so `history.csv` (CSV sink), `run.mcap`, `run.rrd` and `series.png` carry the time history.
 //! An interrupt stops the replay at a sample.
 
-use crate::app::{AppError, RunOptions, RunOutcome};
 use crate::contact::laws::{CoulombLinear, CoulombTanh, RateDependent};
 use crate::contact::stick_slip::{closed_form_cycle, simulate, Phase, StickSlipSpec};
 use crate::contact::Friction;
 use crate::io::output::{ensure_dir, sanitize, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::io::scene::{FrictionParams, Scene};
+use crate::setup::{AppError, RunOptions, RunOutcome};
 use std::time::Instant;
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
@@ -62,7 +62,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         output_interval: ss.output_interval.unwrap_or(ss.t_end / 2000.0),
         stick_threshold: StickSlipSpec::suggested_stick_threshold(&friction, ss.belt_speed),
     };
-    let (mut recorders, warnings) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    let (mut recorders, warnings) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
     for w in warnings {
         eprintln!("tread: warning: {w}");
     }

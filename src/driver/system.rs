@@ -4,10 +4,8 @@
 //! ([`Loading`]): ω² for spinning, the road position for indentation, the hub load for load
 //! control.
 
-use super::frame::SolidFrame;
 use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
-use crate::io::record::{Recorder, StepInfo};
 use crate::math::Vec2;
 use crate::physics::{RingDerivative, SolidModel};
 use crate::solver::stepping::LoadedSystem;
@@ -523,13 +521,5 @@ impl LoadedSystem for SolidSystem {
         self.lambda_prev = self.lambda;
         self.x_step_start.clone_from(&self.x_prev);
         self.x_prev.copy_from_slice(&self.x);
-    }
-    fn record_step(&self, info: &StepInfo, rec: &mut dyn Recorder) {
-        if rec.wants_view(info) {
-            let frame = SolidFrame::capture(self);
-            rec.step(info, Some(&frame.view(self, &[])));
-        } else {
-            rec.step(info, None);
-        }
     }
 }

@@ -30,7 +30,6 @@ use super::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTol
 use super::transient::{
     integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
 };
-use crate::app::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{
@@ -38,6 +37,7 @@ use crate::io::record::{
     StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink};
+use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
 use std::time::Instant;
@@ -135,8 +135,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         lumped,
         land_on_passages: true,
     };
-    let (newton_opts, _) = crate::app::solver_options(scene, opts.verbose);
-    let (mut recorders, warnings) = crate::app::build_recorders(scene, &opts.out_dir, opts.quiet);
+    let (newton_opts, _) = crate::setup::solver_options(scene, opts.verbose);
+    let (mut recorders, warnings) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
     for w in warnings {
         eprintln!("tread: warning: {w}");
     }

@@ -1,15 +1,18 @@
 //! Nonlinear and linear solvers: the [`NonlinearSystem`] trait, sparse direct solvers with the
 //! symbolic analysis done once ([`linear`]), Newton with backtracking line search and a
 //! per-iteration convergence table ([`newton`]), load stepping with cut-back ([`stepping`]) and
-//! Riks–Crisfield arc-length continuation ([`continuation`]).
+//! Riks–Crisfield arc-length continuation ([`continuation`]). The solvers report to an
+//! observer of their own ([`observe::StepObserver`]); they depend on nothing above them.
 
 pub mod continuation;
 pub mod linear;
 pub mod newton;
+pub mod observe;
 pub mod stepping;
 
 pub use linear::{LinearError, LinearKind, SparseSolver};
 pub use newton::{
     IterationRecord, Newton, NewtonOptions, NewtonReport, NonlinearSystem, SolveError,
 };
+pub use observe::{RejectedStep, StepInfo, StepObserver};
 pub use stepping::{solve_load_steps, StepOptions, StepReport};

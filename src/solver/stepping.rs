@@ -7,18 +7,13 @@
 
 use super::linear::{LinearError, LinearKind};
 use super::newton::{IterationRecord, Newton, NonlinearSystem, SolveError};
-use crate::io::record::{self, Recorder, RejectedStep, StepInfo};
+use super::observe::{RejectedStep, StepInfo, StepObserver};
 
 /// A system with a scalar load factor.
 pub trait LoadedSystem: NonlinearSystem {
     fn set_load(&mut self, lambda: f64);
     /// Called after a converged step (commit history such as the friction reference state).
     fn commit(&mut self) {}
-    /// Send the accepted step `info` to the recorder, with a view of the state when the
-    /// recorder wants one. The default sends no view.
-    fn record_step(&self, info: &StepInfo, rec: &mut dyn Recorder) {
-        rec.step(info, None);
-    }
 }
 
 #[derive(Clone, Debug)]
@@ -51,20 +46,20 @@ pub fn final_residual(table: &[IterationRecord]) -> f64 {
         .map_or(0.0, |r| r.residual_rel.iter().copied().fold(0.0, f64::max))
 }
 
-/// Drive λ from 0 to 1 (see the module docs); events go to `rec` (pass `&mut ()` for none).
-pub fn solve_load_steps<S: LoadedSystem>(
+/// Drive λ from 0 to 1 (see the module docs); events go to the observer `rec`.
+pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
     sys: &mut S,
     newton: &mut Newton,
     opts: &StepOptions,
     report: &mut StepReport,
-    rec: &mut dyn Recorder,
+    rec: &mut O,
 ) -> Result<(), SolveError> {
     let mut lambda = 0.0;
     let mut dl = 1.0 / opts.initial_steps.max(1) as f64;
     let mut saved = Vec::new();
     let mut index: u64 = 0;
     while lambda < 1.0 {
-        if record::interrupted() {
+        if rec.stop_requested() {
             return Err(SolveError::Interrupted { at: lambda });
         }
         let target = (lambda + dl).min(1.0);
@@ -75,7 +70,7 @@ pub fn solve_load_steps<S: LoadedSystem>(
         }
         match newton.solve(sys) {
             Ok(rep) => {
-                record::emit_newton_table(rec, index, target, &rep.table, sys.field_names());
+                rec.observe_newton(index, target, &rep.table, sys.field_names());
                 let info = StepInfo {
                     index,
                     time: target,
@@ -93,7 +88,7 @@ pub fn solve_load_steps<S: LoadedSystem>(
                 });
                 lambda = target;
                 sys.commit();
-                sys.record_step(&info, rec);
+                rec.observe_accepted(sys, &info);
                 index += 1;
                 if rep.iterations <= 4 {
                     dl *= 1.5;
@@ -111,7 +106,7 @@ pub fn solve_load_steps<S: LoadedSystem>(
             }
             Err(e) => {
                 let reason = e.to_string();
-                rec.step_rejected(&RejectedStep {
+                rec.observe_rejected(&RejectedStep {
                     index,
                     time: target,
                     dt: target - lambda,

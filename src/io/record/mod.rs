@@ -103,6 +103,8 @@ pub use interrupt::{install_interrupt_handler, interrupted, request_interrupt};
 
 use crate::contact::ContactSample;
 use crate::mesh::Mesh;
+/// The step events are the solvers' own ([`crate::solver::observe`]); the recorder receives them.
+pub use crate::solver::observe::{RejectedStep, StepInfo};
 use crate::solver::IterationRecord;
 use std::path::PathBuf;
 
@@ -125,22 +127,6 @@ pub struct RunMeta<'a> {
     pub time_end: f64,
     /// Period of one revolution (2π/ω) when the body spins; for progress.
     pub revolution_period: Option<f64>,
-}
-
-/// An accepted step (cheap: sent for every step).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepInfo {
-    /// 0, 1, 2, … over accepted steps.
-    pub index: u64,
-    /// Simulated time, or the load factor λ in load stepping.
-    pub time: f64,
-    /// Increment of `time` from the previous accepted step.
-    pub dt: f64,
-    pub newton_iterations: usize,
-    /// Largest relative residual (over fields) at the last Newton iteration.
-    pub residual: f64,
-    /// The last step of the run (λ = 1, t = t_end).
-    pub is_final: bool,
 }
 
 /// Resultant the hub exerts on the body: force (x1, x2) and torque about the hub centre
@@ -239,17 +225,6 @@ impl StepView<'_> {
 /// τ = √(((σ11 − σ22)/2)² + σ12²) of `[σ11, σ22, σ12]`.
 pub fn stress_measure(s: [f64; 3]) -> f64 {
     (0.25 * (s[0] - s[1]).powi(2) + s[2] * s[2]).sqrt()
-}
-
-/// A step that failed and will be retried with a smaller increment (or gives up).
-#[derive(Clone, Copy, Debug)]
-pub struct RejectedStep<'a> {
-    /// Index the step would have had.
-    pub index: u64,
-    /// Target time (or load factor) of the failed attempt.
-    pub time: f64,
-    pub dt: f64,
-    pub reason: &'a str,
 }
 
 /// One row of a Newton convergence table.
@@ -371,8 +346,8 @@ pub trait Recorder {
 impl Recorder for () {}
 
 /// Emit the rows of a Newton table as [`Recorder::newton_iteration`] events.
-pub fn emit_newton_table(
-    rec: &mut dyn Recorder,
+pub fn emit_newton_table<R: Recorder + ?Sized>(
+    rec: &mut R,
     step: u64,
     time: f64,
     table: &[IterationRecord],

@@ -1,0 +1,390 @@
+//! From a validated [`Scene`] to what a run needs: the model (mesh, material, pressure
+//! treatment, contact), the solver options, the recorder's sinks, and the run's error and
+//! outcome types shared by every mode. The only translation from scene values to physics
+//! values; it runs nothing.
+//!
+//! Units are the scene's (consistent units, e.g. SI: lengths in m, moduli in Pa, ω in rad/s,
+//! forces per unit thickness); no value is rescaled here. Sign conventions are those of the
+//! physics modules the values are handed to (road at x2 = −H below the hub centre, ω > 0
+//! counter-clockwise).
+
+use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
+use crate::contact::{Clamp, ContactModel, FacetRule, Friction, NormalCompliance};
+use crate::driver::SolidSystem;
+use crate::io::output::OutputError;
+use crate::io::record::{self, Recorders};
+use crate::io::scene::{
+    ClampKind, ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode,
+    Scene, Sink, DEFAULT_CLAMP_WIDTH_OVER_G,
+};
+use crate::material::{
+    Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
+};
+use crate::math::Mat2;
+use crate::mesh::{annulus, AnnulusSpec};
+use crate::physics::{PressureMode, SolidModel};
+use crate::solver::stepping::StepOptions;
+use crate::solver::{LinearKind, NewtonOptions, SolveError};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    #[error("{0}")]
+    Output(#[from] OutputError),
+    #[error("the solve failed: {0} (partial results written to {1})")]
+    Solve(SolveError, PathBuf),
+    #[error("scene: {0}")]
+    Unsupported(String),
+    #[error("interrupted: the logs up to the last step are written to {0}")]
+    Interrupted(PathBuf),
+    /// A computation other than a Newton solve failed (e.g. the stick-slip integrator).
+    #[error("{0} (partial results written to {1})")]
+    Failed(String, PathBuf),
+    /// The output folder cannot be used (not writable, locked by another run, …).
+    #[error("output folder {0}: {1}")]
+    OutDir(PathBuf, String),
+    /// The scene would need more memory than allowed.
+    #[error("{0}")]
+    TooBig(String),
+}
+
+impl AppError {
+    /// Process exit status: 130 interrupted, 1 the computation failed, 2 invalid input (scene,
+    /// flags, a model too large for the memory limit), 3 an output file or folder cannot be
+    /// written.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            AppError::Interrupted(_) => 130,
+            AppError::Solve(..) | AppError::Failed(..) => 1,
+            AppError::Output(_) | AppError::OutDir(..) => 3,
+            AppError::Unsupported(_) | AppError::TooBig(_) => 2,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    pub out_dir: PathBuf,
+    /// Print the Newton convergence table.
+    pub verbose: bool,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// The sinks of `[output] sinks` writing into `out_dir` (each with decimation `[output]
+/// every`), plus the progress bar unless `quiet`. Returns warnings (a sink not available in
+/// this build).
+pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders, Vec<String>) {
+    let mut r = Recorders::new();
+    #[cfg_attr(feature = "rerun", allow(unused_mut))]
+    let mut warnings = Vec::new();
+    let every = scene.output.every;
+    for sink in &scene.output.sinks {
+        match sink {
+            Sink::Summary => {}
+            // Scalars at every step: decimating them aliases with the node passages.
+            Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), 1),
+            Sink::Vtu => r.push(Box::new(record::vtu::VtuSink::new(out_dir)), every),
+            Sink::Mcap => r.push(Box::new(record::mcap::McapSink::new(out_dir)), every),
+            Sink::Png => r.push(Box::new(record::png::PngSink::new(out_dir)), every),
+            #[cfg(feature = "rerun")]
+            Sink::Rerun => r.push(Box::new(record::rrd::RrdSink::new(out_dir)), every),
+            #[cfg(not(feature = "rerun"))]
+            Sink::Rerun => warnings.push(
+                "output sink \"rerun\" skipped: this build has no `rerun` feature".to_string(),
+            ),
+        }
+    }
+    if !quiet {
+        r.push(Box::new(record::progress::Progress::new()), 1);
+    }
+    (r, warnings)
+}
+
+/// Material law and pressure treatment of a scene.
+pub fn build_material(scene: &Scene) -> Result<(Material, PressureMode), AppError> {
+    build_material_spec(&scene.material)
+}
+
+/// Material law and pressure treatment of one `[material]` (or `[[material]]` entry).
+pub fn build_material_spec(
+    spec: &crate::io::scene::MaterialSpec,
+) -> Result<(Material, PressureMode), AppError> {
+    let params = spec.params().ok_or_else(|| {
+        AppError::Unsupported(
+            "material: a parameter required by `material.model` is missing".into(),
+        )
+    })?;
+    Ok(match params {
+        MaterialParams::NeoHookean { mu, lambda } => (
+            Material::NeoHookean(NeoHookean::new(mu, lambda)),
+            PressureMode::None,
+        ),
+        MaterialParams::MooneyRivlin { c1, c2, kappa } => (
+            Material::MooneyRivlin(MooneyRivlin::new(c1, c2, kappa)),
+            PressureMode::None,
+        ),
+        MaterialParams::MooneyRivlinIncompressible {
+            c1,
+            c2,
+            formulation,
+            kappa,
+        } => {
+            let mat = MooneyRivlinIncompressible::new(c1, c2);
+            // The unconstrained W is not stress free at F = I; the reference pressure p0 makes it so.
+            let p0 = 0.5 * mat.stress(&Mat2::zeros()).trace();
+            let mode = match (formulation, kappa) {
+                (Formulation::Perturbed, Some(kappa)) => PressureMode::Perturbed { kappa, p0 },
+                _ => PressureMode::Exact { p0 },
+            };
+            (Material::MooneyRivlinIncompressible(mat), mode)
+        }
+    })
+}
+
+/// Build the solid system (mesh, material, dofs, pattern) of a scene.
+pub fn build_system(scene: &Scene) -> Result<SolidSystem, AppError> {
+    let model = build_model(scene)?;
+    if scene.analysis.mode == Mode::Static {
+        let contact = build_contact(scene, &model)?;
+        return Ok(SolidSystem::with_contact(model, contact));
+    }
+    Ok(SolidSystem::new(model, "hub"))
+}
+
+/// The road contact of a scene (`[road]`, `[contact]`, `[friction]`).
+pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, AppError> {
+    let (Some(road), Some(cs)) = (&scene.road, &scene.contact) else {
+        return Err(AppError::Unsupported(
+            "mode \"static\" needs the [road] and [contact] sections".into(),
+        ));
+    };
+    let clamp = match cs.clamp {
+        ClampKind::Hard => Clamp::Hard,
+        ClampKind::Smooth => Clamp::Smooth {
+            width: cs.clamp_width.unwrap_or_else(|| {
+                DEFAULT_CLAMP_WIDTH_OVER_G * model.material.small_strain_shear_modulus()
+            }),
+        },
+    };
+    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
+    let friction = match scene.friction.params() {
+        None => {
+            return Err(AppError::Unsupported(
+                "friction: a parameter required by `friction.law` is missing".into(),
+            ))
+        }
+        Some(FrictionParams::None) => Friction::None,
+        Some(FrictionParams::CoulombTanh { mu, eps }) => {
+            Friction::CoulombTanh(CoulombTanh::new(mu, eps))
+        }
+        Some(FrictionParams::CoulombLinear { mu, eps }) => {
+            Friction::CoulombLinear(CoulombLinear::new(mu, eps))
+        }
+        Some(FrictionParams::RateDependent {
+            mu_s,
+            mu_k,
+            v_s,
+            eps,
+        }) => Friction::RateDependent(RateDependent::new(mu_s, mu_k, v_s, eps)),
+        Some(FrictionParams::OdenMartins { c_t, m_t, eps }) => {
+            Friction::OdenMartins(OdenMartins::new(c_t, m_t, eps))
+        }
+    };
+    let rule = match cs.quadrature {
+        ContactQuadrature::Gauss => FacetRule::Gauss(cs.points),
+        ContactQuadrature::Lobatto => FacetRule::Lobatto(cs.points),
+    };
+    let ro = scene.geometry.ro;
+    // Load control starts with a small penetration (1e-3 Ro) so that the road-height equation
+    // has a non-zero tangent; displacement control starts at first touch (H = Ro).
+    let (h0, load) = match road.load {
+        Some(_) => (ro * (1.0 - 1e-3), Some(0.0)),
+        None => (ro, None),
+    };
+    Ok(ContactModel::new(
+        &model.mesh,
+        h0,
+        road.v0,
+        normal,
+        friction,
+        rule,
+        load,
+    ))
+}
+
+/// Mesh, material and solid model of a scene.
+pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
+    let ms = &scene.mesh;
+    let (material, pressure) = build_material(scene)?;
+    if !matches!(pressure, PressureMode::None) && ms.order != 2 {
+        return Err(AppError::Unsupported(format!(
+            "mesh.order = {}: incompressible materials need order = 2 (Q2 displacements with P1 pressures)",
+            ms.order
+        )));
+    }
+    if let Some(file) = &ms.file {
+        return build_model_from_file(scene, file, material, pressure);
+    }
+    let mut mesh = annulus(&AnnulusSpec {
+        ri: scene.geometry.ri,
+        ro: scene.geometry.ro,
+        n_r: ms.n_r,
+        n_theta: ms.n_theta,
+        degree: ms.order,
+        grading_r: ms.grading_r,
+        grading_theta: ms.grading_theta,
+    });
+    // Isoparametric cells: nodes on the exact circles, rigid motions represented exactly
+    // (objectivity; see `Mesh::make_isoparametric`).
+    mesh.make_isoparametric();
+    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    if let Some(vs) = &scene.material.viscoelastic {
+        let ve = vs
+            .build()
+            .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
+        check_viscoelastic_mode(scene)?;
+        model.set_viscoelastic(ve);
+    }
+    Ok(model)
+}
+
+/// The modes and integrators that carry a viscoelastic history so far: the transient mode with
+/// generalized-α or central difference (history committed per accepted step). The ODE
+/// integrators (BDF, SDIRK) would need the internal variables in their state vector; the
+/// static, spinning and steady modes would need the relaxed limit or the streamline
+/// integration.
+fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
+    if scene.analysis.mode != Mode::Transient {
+        return Err(AppError::Unsupported(format!(
+            "material.viscoelastic: mode \"{}\" does not support viscoelastic materials yet \
+             (use mode = \"transient\")",
+            scene.analysis.mode
+        )));
+    }
+    if let Some(ts) = &scene.time {
+        if matches!(
+            ts.integrator,
+            crate::io::scene::IntegratorName::Bdf | crate::io::scene::IntegratorName::Sdirk
+        ) {
+            return Err(AppError::Unsupported(format!(
+                "material.viscoelastic: time.integrator = \"{}\" does not carry a \
+                 viscoelastic history; use \"generalized_alpha\" or \"central_difference\"",
+                ts.integrator
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The model of a scene whose mesh is a Gmsh file (`[mesh] file`), with a material per region
+/// when the scene has `[[material]]`.
+fn build_model_from_file(
+    scene: &Scene,
+    file: &str,
+    material: Material,
+    pressure: PressureMode,
+) -> Result<SolidModel, AppError> {
+    use crate::io::scene::{DEFAULT_CONTACT_GROUP, DEFAULT_HUB_GROUP};
+    use crate::mesh::gmsh::{read_msh, GmshGroups, MeshError};
+    let ms = &scene.mesh;
+    let groups = GmshGroups {
+        hub: ms.hub.clone().unwrap_or_else(|| DEFAULT_HUB_GROUP.into()),
+        contact: ms
+            .contact
+            .clone()
+            .unwrap_or_else(|| DEFAULT_CONTACT_GROUP.into()),
+        regions: scene.regions.iter().map(|r| r.region.clone()).collect(),
+    };
+    let bad = |message: String| {
+        AppError::Unsupported(
+            MeshError {
+                file: file.to_string(),
+                message,
+            }
+            .to_string(),
+        )
+    };
+    let mesh = read_msh(Path::new(file), &groups).map_err(|e| bad(e.message))?;
+    if !matches!(pressure, PressureMode::None) && mesh.degree.iter().any(|&p| p != 2) {
+        return Err(bad(
+            "incompressible materials need 9-node quadrilaterals (Q2 displacements with P1 \
+             pressures); the file has 4-node ones"
+                .into(),
+        ));
+    }
+    // The road is placed from geometry.ro (first touch at H = ro): the mesh must reach it.
+    let ro = mesh.outer_radius();
+    let ro_scene = scene.geometry.ro;
+    if (ro - ro_scene).abs() > 1e-6 * ro_scene.abs().max(f64::MIN_POSITIVE) {
+        return Err(bad(format!(
+            "the mesh's outer radius (largest |X| of a node) is {ro}, but geometry.ro = {ro_scene}"
+        )));
+    }
+    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    if !scene.regions.is_empty() {
+        let mut regions = Vec::new();
+        for r in &scene.regions {
+            let (m, p) = build_material_spec(&r.material)?;
+            let p0 = match p {
+                PressureMode::Exact { p0 } | PressureMode::Perturbed { p0, .. } => p0,
+                PressureMode::None => 0.0,
+            };
+            regions.push(crate::physics::solid::RegionMaterial {
+                material: m,
+                rho: r.material.rho,
+                p0,
+            });
+        }
+        model.set_region_materials(regions);
+    }
+    Ok(model)
+}
+
+/// Linear solver for a scene's system: Cholesky for symmetric positive problems, LU for the
+/// exact incompressible saddle point and whenever friction or damping makes the tangent
+/// unsymmetric.
+pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
+    match scene.solver.linear {
+        LinearChoice::Cholesky => LinearKind::Cholesky,
+        LinearChoice::Lu => LinearKind::Lu,
+        LinearChoice::Auto => {
+            let friction = sys
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.friction.is_active() || c.normal.has_damping());
+            if matches!(sys.model.pressure, PressureMode::Exact { .. }) || friction {
+                LinearKind::Lu
+            } else {
+                LinearKind::Cholesky
+            }
+        }
+    }
+}
+
+/// Everything a run produced.
+#[derive(Debug)]
+pub struct RunOutcome {
+    pub summary: serde_json::Value,
+    pub out_dir: PathBuf,
+    pub converged: bool,
+    /// Human-readable result lines for the terminal.
+    pub headline: Vec<String>,
+}
+
+/// Newton and load-stepping options from the scene's `[solver]`.
+pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptions) {
+    let newton_opts = NewtonOptions {
+        tol: scene.solver.tolerance,
+        max_iterations: scene.solver.max_iterations,
+        line_search: scene.solver.line_search,
+        verbose,
+        ..Default::default()
+    };
+    let step_opts = StepOptions {
+        initial_steps: scene.solver.load_steps,
+        max_cutbacks: scene.solver.max_cutbacks,
+        verbose,
+    };
+    (newton_opts, step_opts)
+}
