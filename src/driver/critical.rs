@@ -546,8 +546,33 @@ fn solve_err(e: SolveError, what: String) -> AppError {
     AppError::Unsupported(format!("critical: {what}: {e}"))
 }
 
+/// Check the options a user gives (`tread critical` flags) before any work: a clear error
+/// naming the flag instead of a search over an empty or non-finite range.
+fn check_options(opts: &CriticalOptions) -> Result<(), AppError> {
+    let bad = |m: String| Err(AppError::Unsupported(format!("critical: {m}")));
+    if let Some(w) = opts.omega_max {
+        if !w.is_finite() || w <= 0.0 {
+            return bad(format!(
+                "--omega-max must be a finite speed > 0 (rad/s), got {w}"
+            ));
+        }
+    }
+    if opts.n_max == Some(0) {
+        return bad("--n-max must be at least 1 (wave numbers start at 1)".into());
+    }
+    if let (Some(lo), Some(hi)) = (opts.n_min, opts.n_max) {
+        if lo > hi {
+            return bad(format!(
+                "--n-min {lo} exceeds --n-max {hi}: no wave number to search"
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Locate the critical speeds of a scene (see the module docs).
 pub fn run(scene: &Scene, opts: &CriticalOptions) -> Result<CriticalReport, AppError> {
+    check_options(opts)?;
     let t0 = std::time::Instant::now();
     let mut scene = scene.clone();
     if opts.no_contact {
@@ -626,6 +651,13 @@ fn spinning_critical(
         .n_max
         .unwrap_or(report.n_resolved)
         .min(report.n_resolved);
+    if let Some(lo) = opts.n_min.filter(|&lo| lo > n_max) {
+        return Err(AppError::Unsupported(format!(
+            "critical: --n-min {lo} exceeds the largest wave number searched, {n_max} (the mesh \
+             resolves n <= n_theta / 2 = {})",
+            report.n_resolved
+        )));
+    }
     let samples = opts.samples.max(4);
     // Reference force for Newton: the centrifugal load at omega_max on the undeformed body.
     st.set_omega(omega_max, 0.0);

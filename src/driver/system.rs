@@ -3,6 +3,19 @@
 //! to the rigid hub (u = 0 there). The load factor λ ∈ [0, 1] drives the analysis
 //! ([`Loading`]): ω² for spinning, the road position for indentation, the hub load for load
 //! control.
+//!
+//! The equations solved are R(x) = 0 with
+//!
+//! ```text
+//! R = R_solid(x; ω²) + R_contact(x, x_prev; H or load) [+ steady strain-rate damping]
+//! ```
+//!
+//! R_solid is [`crate::physics::solid`]'s (internal work − ω² B − body force, + pressure
+//! constraints); R_contact is the facets' −∫ t · η ds ([`crate::contact`]). Residuals are
+//! internal minus external forces (per unit thickness); the tangent is ∂R/∂x. The state `x`
+//! holds the full nodal displacements (x1, x2 per node, in the scene's length unit), then the
+//! cell pressures and the global unknowns (e.g. the road height under load control); the hub
+//! nodes are fixed and carry no equation.
 
 use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};

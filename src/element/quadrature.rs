@@ -1,4 +1,8 @@
 //! Gauss–Legendre rules on [-1, 1] and their tensor products on [-1, 1]².
+//!
+//! ∫_{-1}^{1} f(ξ) dξ ≈ Σ_q w_q f(ξ_q), exact for polynomials of degree ≤ 2n − 1 with n
+//! points; the weights sum to 2 (4 on the square). Reference coordinates are dimensionless: a
+//! physical integral takes the Jacobian determinant of the cell map as a factor.
 
 /// Gauss–Legendre points and weights with `n` points (1 ≤ n ≤ 6; larger n is clamped to 6),
 /// exact for polynomials of degree 2n − 1.
