@@ -1,4 +1,18 @@
 //! Drivers: build a model from a scene, run an analysis, collect results.
+//!
+//! * [`system`]: the solid (+ contact) as one nonlinear system R(x) = 0 under a load factor;
+//!   [`frame`] what the recorder sees of it at a step.
+//! * Static, spinning and indentation load stepping ([`spinning`], [`indentation`]), steady
+//!   rolling in the spatial frame ([`steady`], with [`steady_recovery`] when the direct press
+//!   fails, reported as [`steady_report::Recovery`]), time integration ([`transient`]), the
+//!   stick-slip oscillator, critical speeds ([`critical`]) and transient-vs-steady comparison
+//!   ([`compare`]).
+//! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
+//!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
+//!   Imports go one way: `app` → `*_run` → the analyses → `system` → physics and solvers.
+//!
+//! Conventions throughout: forces per unit thickness, ω in rad/s (counter-clockwise > 0), the
+//! road at x2 = −H below the hub centre, units as the scene declares them.
 
 pub mod compare;
 pub mod critical;

@@ -1,5 +1,11 @@
 //! Physical models: the finite-strain solid (internal work, θ-referential inertia, body
 //! force, Q2/P1 pressure terms) assembled on a mesh.
+//!
+//! [`solid`] states the residual R(χ; η) = ∫ P : ∇η dV − ω² ∫ ρ0 ∂θχ · ∂θη dV − ∫ b · η dV
+//! (+ pressure terms) and its tangent, with ∂θ = t · ∇, t = (−X2, X1), the derivative along
+//! reference circles; [`ring_derivative`] the nodal θ-derivatives along the node rings that
+//! the steady mode's strain-rate damping uses (v = ω ∂θχ). Quantities are in the scene's
+//! units, per unit thickness (plane strain).
 
 pub mod ring_derivative;
 pub mod solid;
