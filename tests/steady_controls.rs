@@ -89,6 +89,132 @@ fn free_rolling_and_given_torque_from_the_scene_file() {
 /// decreases monotonically with the creep, passes through zero torque at ξ = 0 (free rolling
 /// by definition of the creep), is nearly odd in ξ, and saturates at the Coulomb limit
 /// ∓μ|F_y| (full sliding) at |ξ| = 0.15.
+#[test]
+fn creep_force_curve_saturates_at_coulomb_limit() {
+    let dir = TestDir::new("steady-controls", "creep");
+    let sc = scene(
+        CREEP,
+        &[
+            "continuation.ds=0.1",
+            "continuation.ds_max=0.1",
+            "output.sinks=[\"summary\", \"csv\"]",
+        ],
+    );
+    let mu = sc.friction.mu.unwrap_or(f64::NAN);
+    let s = run(&sc, &dir);
+    let b = s["results"]["branch"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no branch"))
+        .clone();
+    assert_eq!(b.len(), 11, "points at xi = -0.15, -0.12, ..., 0.15");
+    let xi: Vec<f64> = b.iter().map(|p| f(&p["creep"])).collect();
+    let fx: Vec<f64> = b.iter().map(|p| f(&p["hub_force_x"])).collect();
+    let fy: Vec<f64> = b.iter().map(|p| f(&p["hub_force_y"])).collect();
+    let tq: Vec<f64> = b.iter().map(|p| f(&p["hub_torque"])).collect();
+    assert!((xi[0] + 0.15).abs() < 1e-12 && (xi[10] - 0.15).abs() < 1e-12);
+    // Monotone: F_x decreases as the road speeds up (to a small fraction of μ|F_y|).
+    let lim: Vec<f64> = fy.iter().map(|y| mu * y.abs()).collect();
+    for k in 1..b.len() {
+        assert!(
+            fx[k] <= fx[k - 1] + 1e-3 * lim[k],
+            "F_x not monotone at xi = {}: {} after {}",
+            xi[k],
+            fx[k],
+            fx[k - 1]
+        );
+    }
+    // ξ = 0 is free rolling: zero torque (to the continuation's Newton tolerance).
+    assert!(xi[5].abs() < 1e-12);
+    assert!(
+        tq[5].abs() < 1e-4 * tq[0].abs(),
+        "torque at zero creep {} (ends {})",
+        tq[5],
+        tq[0]
+    );
+    // Coulomb saturation at both ends: the whole patch slides.
+    assert!(
+        (fx[0] - lim[0]).abs() < 0.02 * lim[0],
+        "braking end: F_x = {}, mu |F_y| = {}",
+        fx[0],
+        lim[0]
+    );
+    assert!(
+        (fx[10] + lim[10]).abs() < 0.02 * lim[10],
+        "driving end: F_x = {}, -mu |F_y| = {}",
+        fx[10],
+        -lim[10]
+    );
+    // Nearly odd in ξ, up to the rolling resistance: at free rolling (zero torque) the contact
+    // damping still leaves a small F_x(0), which shifts the curve.
+    assert!(
+        fx[5].abs() < 0.1 * lim[5],
+        "rolling resistance at free rolling {} against mu |F_y| = {}",
+        fx[5],
+        lim[5]
+    );
+    for k in 0..5 {
+        assert!(
+            (fx[k] + fx[10 - k]).abs() < 0.1 * lim[k] + 2.0 * fx[5].abs(),
+            "not odd-ish at |xi| = {}: {} vs {}",
+            xi[10 - k],
+            fx[k],
+            fx[10 - k]
+        );
+    }
+    assert!(dir.join("branch.csv").exists());
+}
+
+/// With the damping law that jumps in at first contact (l_n = 0) the steady residual is
+/// discontinuous where a node crosses the patch edge: the creep continuation cannot pass such a
+/// point. It must stop in bounded time with an error that names the creep reached, keep the
+/// points it found, and never loop on ever smaller steps.
+#[test]
+fn creep_continuation_with_jumping_damping_stops_cleanly() {
+    let dir = TestDir::new("steady-controls", "creep-ln0");
+    let sc = scene(
+        CREEP,
+        &[
+            "contact.l_n=0",
+            "contact.b_n=5",
+            "solver.max_cutbacks=6",
+            "output.sinks=[\"summary\", \"csv\"]",
+        ],
+    );
+    let opts = RunOptions {
+        out_dir: dir.to_path_buf(),
+        verbose: false,
+        quiet: true,
+    };
+    match tread::app::run(&sc, &opts) {
+        Ok(out) => {
+            // Reaching the target is acceptable only if the whole curve is there.
+            let b = out.summary["results"]["branch"]
+                .as_array()
+                .map_or(0, |b| b.len());
+            assert_eq!(b, 51, "a successful run must give the whole curve");
+        }
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(!msg.is_empty());
+            let s: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.join("summary.json"))
+                    .unwrap_or_else(|e| panic!("partial summary.json: {e}")),
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+            let why = s["results"]["continuation"]["stop_reason"]
+                .as_str()
+                .unwrap_or_else(|| panic!("no stop_reason in {s}"));
+            assert!(why.contains("failed at creep"), "{why}");
+            let rows = std::fs::read_to_string(dir.join("branch.csv"))
+                .unwrap_or_else(|e| panic!("branch.csv: {e}"));
+            assert!(
+                rows.lines().count() > 10,
+                "points before the failure are kept"
+            );
+        }
+    }
+}
+
 /// `--dump-matrix`: the tangent and right-hand side as MatrixMarket files, consistent with
 /// the solver's system size and pattern.
 #[test]

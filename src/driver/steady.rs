@@ -356,7 +356,8 @@ pub fn solve_torque(
 
 /// Move the parameter of `st` (its [`SteadyRolling::param`]) from its current value to `target`
 /// by natural-parameter steps: a Newton solve from the previous state at each step; a failed
-/// step restores the state and halves the step (at most `max_cutbacks` times in a row); a
+/// step restores the state and halves the step (at most `max_cutbacks` times in a row, and
+/// never below 2^−max_cutbacks of the requested step, so the walk cannot stall); a
 /// converged step lets the next one grow by 1.5 up to the whole remaining distance. Returns the
 /// Newton iterations spent.
 pub fn step_parameter(
@@ -367,6 +368,10 @@ pub fn step_parameter(
 ) -> Result<usize, SolveError> {
     let mut lambda = st.parameter();
     let mut step = target - lambda;
+    // The smallest step allowed: `max_cutbacks` halvings of the requested one. Without it a
+    // residual that is discontinuous just ahead (a node crossing the patch edge with l_n = 0
+    // damping) alternates tiny successes (step × 1.5) and failures (step × 0.5) without end.
+    let min_step = step.abs() * 0.5f64.powi(max_cutbacks.min(60) as i32);
     let mut iterations = 0;
     let mut cutbacks = 0;
     let mut saved = Vec::new();
@@ -390,7 +395,7 @@ pub fn step_parameter(
                 st.sys.restore_state(&saved);
                 st.set_parameter(lambda);
                 cutbacks += 1;
-                if cutbacks > max_cutbacks {
+                if cutbacks > max_cutbacks || (0.5 * step).abs() < min_step {
                     return Err(e);
                 }
                 step *= 0.5;
