@@ -94,6 +94,7 @@ impl SteadyRolling {
             v0_free: f64::NAN,
         };
         s.set_omega(omega, v0);
+        s.sys.enable_steady_slip();
         s.sys.enable_steady_viscosity();
         s
     }
