@@ -105,7 +105,9 @@ pub enum SlipKinematics {
     /// Steady rolling on the referential (spatial) mesh (DESIGN §5): the unknown is the motion
     /// χ(r, θ) = X + u, the velocity is v = ω ∂θχ, differentiated along the facet
     /// (∂θ = (d/dη) / (dθ/dη), θ the polar angle of the reference facet point), so
-    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used.
+    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used. With
+    /// [`ContactModel::steady_slip`] set, ∂θu1 in w comes from nodal derivatives instead
+    /// (continuous across facets, [`super::steady_slip`]).
     Steady { omega: f64 },
 }
 
