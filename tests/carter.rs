@@ -213,3 +213,78 @@ fn steady_tractive_rolling_matches_carter() {
         2.0 * c / a
     );
 }
+
+/// The steady slip is single-valued at the facet ends: with Lobatto points (which include the
+/// facet end points) the two facets that share a node report the same slip there, while the
+/// facet-wise derivative ∂θu_h gives two different one-sided values.
+#[test]
+fn steady_slip_is_continuous_across_facets() {
+    use tread::assembly::FIXED;
+    use tread::contact::laws::CoulombTanh;
+    use tread::contact::{FacetRule, Friction, NormalCompliance};
+    use tread::driver::steady::SteadyRolling;
+    use tread::driver::SolidSystem;
+    use tread::material::{Material, MooneyRivlin};
+    use tread::mesh::{annulus, AnnulusSpec};
+    use tread::physics::{PressureMode, SolidModel};
+
+    let mesh = annulus(&AnnulusSpec {
+        ri: 1.0,
+        ro: 2.0,
+        n_r: 2,
+        n_theta: 24,
+        degree: 2,
+        grading_r: 1.0,
+        grading_theta: 0.5,
+    });
+    let mat: Material = MooneyRivlin::new(80.0, 20.0, 4000.0).into();
+    let model = SolidModel::new(mesh, mat, 0.027, PressureMode::None);
+    let contact = ContactModel::new(
+        &model.mesh,
+        1.85,
+        19.0,
+        NormalCompliance::new(2e4, 1.0, 0.0, 0.0),
+        Friction::CoulombTanh(CoulombTanh::new(0.3, 0.5)),
+        FacetRule::Lobatto(4),
+        None,
+    );
+    let mut st = SteadyRolling::new(SolidSystem::with_contact(model, contact), 10.0, 2.0);
+    for nd in 0..st.sys.model.mesh.n_nodes() {
+        let x = st.sys.model.mesh.nodes[nd];
+        if st.sys.dofs.eq[2 * nd] != FIXED {
+            st.sys.x[2 * nd] += 0.02 * (2.0 * x[1]).sin() * (0.5 * x[0]).cos();
+            st.sys.x[2 * nd + 1] += 0.01 * (0.7 * x[0]).cos();
+        }
+    }
+    // Largest difference of the slip between samples at the same angle (shared facet ends).
+    let jump = |st: &SteadyRolling| {
+        let mut s: Vec<(f64, f64)> = st
+            .sys
+            .contact_samples()
+            .iter()
+            .map(|s| (s.theta, s.w))
+            .collect();
+        s.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut shared = 0;
+        let mut jump = 0.0f64;
+        for p in s.windows(2) {
+            if (p[0].0 - p[1].0).abs() < 1e-12 {
+                shared += 1;
+                jump = jump.max((p[0].1 - p[1].1).abs());
+            }
+        }
+        assert!(shared >= 24, "{shared} shared points");
+        jump
+    };
+    assert!(st.sys.contact.as_ref().unwrap().steady_slip.is_some());
+    let nodal = jump(&st);
+    let slip = st.sys.contact.as_mut().unwrap().steady_slip.take();
+    let facetwise = jump(&st);
+    st.sys.contact.as_mut().unwrap().steady_slip = slip;
+    println!("slip jump at shared facet ends: nodal {nodal:.3e}, facet-wise {facetwise:.3e}");
+    assert!(nodal < 1e-12, "nodal slip jumps by {nodal:.3e}");
+    assert!(
+        facetwise > 1e-3,
+        "facet-wise slip jumps by only {facetwise:.3e}"
+    );
+}
