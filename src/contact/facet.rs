@@ -522,8 +522,8 @@ impl ContactModel {
             }
             for a in 0..nn {
                 let na = nv[a] * ds;
-                for b in 0..ne {
-                    loc.k[(2 * a) * nd + 2 * b] -= na * dtt_du1[b];
+                for (b, d) in dtt_du1.iter().enumerate().take(ne) {
+                    loc.k[(2 * a) * nd + 2 * b] -= na * d;
                 }
                 for b in 0..nn {
                     loc.k[(2 * a) * nd + 2 * b + 1] -= na * dtt_du2[b];
