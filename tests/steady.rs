@@ -90,6 +90,9 @@ fn steady_tangent_matches_finite_differences() {
         );
         let sys = SolidSystem::with_contact(model, contact);
         let mut st = SteadyRolling::new(sys, 10.0, 2.0);
+        // The friction slip comes from nodal θ-derivatives along the boundary (extended
+        // contact elements): its tangent is checked too.
+        assert!(st.sys.contact.as_ref().unwrap().steady_slip.is_some());
         // A smooth non-trivial state: the bottom pushed up, a swirl.
         for nd in 0..st.sys.model.mesh.n_nodes() {
             let x = st.sys.model.mesh.nodes[nd];

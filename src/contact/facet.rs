@@ -26,6 +26,7 @@
 //! difference.
 
 use super::laws::{Friction, FrictionLaw, NormalCompliance};
+use super::steady_slip::{SteadySlip, MAX_EXT};
 use crate::assembly::{DofMap, LocalSystem};
 use crate::element::gauss_1d;
 use crate::element::lagrange_1d;
@@ -104,7 +105,9 @@ pub enum SlipKinematics {
     /// Steady rolling on the referential (spatial) mesh (DESIGN §5): the unknown is the motion
     /// χ(r, θ) = X + u, the velocity is v = ω ∂θχ, differentiated along the facet
     /// (∂θ = (d/dη) / (dθ/dη), θ the polar angle of the reference facet point), so
-    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used.
+    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used. With
+    /// [`ContactModel::steady_slip`] set, ∂θu1 in w comes from nodal derivatives instead
+    /// (continuous across facets, [`super::steady_slip`]).
     Steady { omega: f64 },
 }
 
@@ -133,6 +136,10 @@ pub struct ContactModel {
     pub load: Option<f64>,
     pub kinematics: SlipKinematics,
     pub facets: Vec<Facet>,
+    /// Steady mode: continuous slip velocity from nodal θ-derivatives along the contact
+    /// boundary ([`super::steady_slip`]); set by [`Self::enable_steady_slip`]. Changes the
+    /// element dof lists: build the assembler after setting it.
+    pub steady_slip: Option<SteadySlip>,
     visited: AtomicUsize,
     pts: Vec<f64>,
     wts: Vec<f64>,
@@ -198,6 +205,7 @@ impl ContactModel {
             load,
             kinematics: SlipKinematics::Static { dtau: 1.0 },
             facets: mesh.facet_set("outer").to_vec(),
+            steady_slip: None,
             visited: AtomicUsize::new(0),
             pts,
             wts,
@@ -210,18 +218,35 @@ impl ContactModel {
         (0..=p).map(move |j| ln[j])
     }
 
-    /// Dof lists of the contact elements (full numbering): facet node dofs, then the road
-    /// height under load control.
+    /// Use the continuous steady slip velocity ([`super::steady_slip`]) when the facets allow
+    /// it (returns whether it is on). The element dof lists change: rebuild the assembler.
+    pub fn enable_steady_slip(&mut self, mesh: &Mesh) -> bool {
+        if self.steady_slip.is_none() {
+            self.steady_slip = SteadySlip::new(mesh, &self.facets);
+        }
+        self.steady_slip.is_some()
+    }
+
+    /// Dof lists of the contact elements (full numbering): facet node dofs (with the steady
+    /// slip: the facet's extended node list, [`SteadySlip::nodes`]), then the road height
+    /// under load control.
     pub fn element_dofs(&self, mesh: &Mesh, dofs: &DofMap) -> (Vec<u32>, Vec<usize>) {
         let mut list = Vec::new();
         let mut off = vec![0];
-        for f in &self.facets {
+        for (e, f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
-            for a in Self::side_nodes(f, p) {
-                list.push(2 * nodes[a]);
-                list.push(2 * nodes[a] + 1);
+            if let Some(s) = &self.steady_slip {
+                for &n in s.nodes(e) {
+                    list.push(2 * n);
+                    list.push(2 * n + 1);
+                }
+            } else {
+                for a in Self::side_nodes(f, p) {
+                    list.push(2 * nodes[a]);
+                    list.push(2 * nodes[a] + 1);
+                }
             }
             if self.load.is_some() && dofs.n_global > 0 {
                 list.push(dofs.global(0) as u32);
@@ -351,6 +376,45 @@ impl ContactModel {
         (u, vel)
     }
 
+    /// The steady slip stencil of facet `e`, when the steady kinematics use it.
+    #[inline]
+    fn nodal_slip(&self) -> Option<&SteadySlip> {
+        match self.kinematics {
+            SlipKinematics::Steady { .. } => self.steady_slip.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// Steady slip w = ω (∂θX1 + Σ_j N_j (∂θu1)_j) − v0 at a facet point from the nodal
+    /// derivatives ([`super::steady_slip`]); `cw[b]` = ∂w/∂u_{b,1} over the facet's extended
+    /// node list.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn nodal_slip_w(
+        &self,
+        s: &SteadySlip,
+        e: usize,
+        nn: usize,
+        nv: &[f64; 3],
+        fp: &FacetPoint,
+        x: &[f64],
+        cw: &mut [f64; MAX_EXT],
+    ) -> f64 {
+        let omega = match self.kinematics {
+            SlipKinematics::Steady { omega } => omega,
+            _ => 0.0,
+        };
+        let d = s.facet_derivatives(e, nn, x);
+        let mut du = 0.0;
+        for j in 0..nn {
+            du += nv[j] * d[j];
+            for &(i, w) in &s.stencil[e][j] {
+                cw[i as usize] += omega * nv[j] * w;
+            }
+        }
+        omega * (fp.dx_dtheta[0] + du) - self.v0
+    }
+
     /// ∂v/∂u_b (per facet node b, same for both components): kv N_b (static, dynamic) or
     /// ω ∂θN_b (steady).
     #[inline]
@@ -381,7 +445,10 @@ impl ContactModel {
         let h = self.road_height(dofs, x);
         let has_h = self.load.is_some() && dofs.n_global > 0;
         let nn = p + 1;
-        let ih = 2 * nn; // local index of H
+        let slip = self.nodal_slip();
+        // Nodes of the element: the facet's, or its extended list with the steady slip.
+        let ne = self.steady_slip.as_ref().map_or(nn, |s| s.nodes(e).len());
+        let ih = 2 * ne; // local index of H
         if has_h && e == 0 {
             // R_H = P − ∫ t_n ds0: the load enters once, through the first contact element.
             loc.r[ih] += self.load.unwrap_or(0.0);
@@ -421,13 +488,24 @@ impl ContactModel {
                 dtn_du2[b] = -nval.d_delta * kx * nv[b] - d_rate * cv[b];
             }
             let dtn_dh = -nval.d_delta * kx;
-            let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) = (0.0, [0.0; 3], [0.0; 3], 0.0);
+            let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) =
+                (0.0, [0.0; MAX_EXT], [0.0; 3], 0.0);
             if friction {
-                let w = vel[0] - self.v0;
+                // ∂w/∂u_{b,1}: the facet-wise cv_b, or ω Σ_j N_j W_jb (nodal derivatives).
+                let mut cw = [0.0; MAX_EXT];
+                let w = match slip {
+                    Some(s) => self.nodal_slip_w(s, e, nn, &nv, &fp, x, &mut cw),
+                    None => {
+                        cw[..nn].copy_from_slice(&cv[..nn]);
+                        vel[0] - self.v0
+                    }
+                };
                 let fv = self.friction.eval(w, nval.t, delta);
                 tt = fv.t;
+                for b in 0..ne {
+                    dtt_du1[b] = fv.d_w * cw[b];
+                }
                 for b in 0..nn {
-                    dtt_du1[b] = fv.d_w * cv[b];
                     dtt_du2[b] = fv.d_tn * dtn_du2[b] - fv.d_delta * kx * nv[b];
                 }
                 dtt_dh = fv.d_tn * dtn_dh - fv.d_delta * kx;
@@ -444,8 +522,10 @@ impl ContactModel {
             }
             for a in 0..nn {
                 let na = nv[a] * ds;
+                for (b, d) in dtt_du1.iter().enumerate().take(ne) {
+                    loc.k[(2 * a) * nd + 2 * b] -= na * d;
+                }
                 for b in 0..nn {
-                    loc.k[(2 * a) * nd + 2 * b] -= na * dtt_du1[b];
                     loc.k[(2 * a) * nd + 2 * b + 1] -= na * dtt_du2[b];
                     loc.k[(2 * a + 1) * nd + 2 * b + 1] -= na * dtn_du2[b];
                 }
@@ -501,18 +581,25 @@ impl ContactModel {
         let (_, _, dynamic) = self.kinematics.factors();
         let damping = dynamic && self.normal.has_damping();
         let mut out = Vec::new();
-        for f in &self.facets {
+        for (e, f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
             let side = f.local_nodes(p);
+            let slip = self.nodal_slip();
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
                 let fp = self.facet_point(mesh, f, q, &nv, &dv, p);
                 let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, &fp, x, aux);
                 let xc = fp.x + u;
                 let delta = -h - xc[1];
-                let w = vel[0] - self.v0;
+                let w = match slip {
+                    Some(s) => {
+                        let mut cw = [0.0; MAX_EXT];
+                        self.nodal_slip_w(s, e, p + 1, &nv, &fp, x, &mut cw)
+                    }
+                    None => vel[0] - self.v0,
+                };
                 let (t_n, t_t) = if delta > 0.0 {
                     let nv = self.normal.eval(delta, if damping { -vel[1] } else { 0.0 });
                     let tt = if self.friction.is_active() {

@@ -8,7 +8,11 @@
 //! inertia term −ω² ∫ ρ0 ∂θχ · ∂θη (the paper's B), plus the contact element of
 //! [`crate::contact`] with [`SlipKinematics::Steady`]: normal compliance with damping on
 //! δ̇ = −ω ∂θχ2 and friction on the slip w = ω ∂θχ1 − v0. With friction or damping the tangent
-//! is unsymmetric (LU).
+//! is unsymmetric (LU). The friction slip takes ∂θu from nodal five-point θ-differences along
+//! the contact boundary, interpolated over each facet ([`crate::contact::steady_slip`],
+//! [`SolidSystem::enable_steady_slip`]): the facet-wise derivative jumps at the facet ends, and
+//! in the stick zone, where the exact slip is below the regularisation ε, that jump switched the
+//! friction traction between +μ t_n and −μ t_n inside every facet.
 //!
 //! The transient mode's objective strain-rate damping (`time.strain_rate_damping`, S_v = η Ė)
 //! is in the steady residual too, discretized as in the transient mode: Ė = sym(Fᵀ ∇v_h) with
@@ -94,6 +98,7 @@ impl SteadyRolling {
             v0_free: f64::NAN,
         };
         s.set_omega(omega, v0);
+        s.sys.enable_steady_slip();
         s.sys.enable_steady_viscosity();
         s
     }

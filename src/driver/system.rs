@@ -210,6 +210,33 @@ impl SolidSystem {
         (iphi, block)
     }
 
+    /// Steady (θ-referential) mode with friction: take the slip velocity from nodal
+    /// θ-derivatives along the contact boundary ([`crate::contact::steady_slip`]), continuous
+    /// across facets. The contact elements grow to the stencil nodes: the assembler is rebuilt
+    /// (the blocks keep their order). No effect without friction or when the contact facets
+    /// do not allow the stencil (then the facet-wise derivative stays).
+    pub fn enable_steady_slip(&mut self) {
+        let Some(c) = &mut self.contact else {
+            return;
+        };
+        if !c.friction.is_active() || c.steady_slip.is_some() {
+            return;
+        }
+        if !c.enable_steady_slip(&self.model.mesh) {
+            return;
+        }
+        let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
+            .asm
+            .blocks
+            .iter()
+            .map(|b| (b.dofs.clone(), b.offsets.clone()))
+            .collect();
+        lists[1] = c.element_dofs(&self.model.mesh, &self.dofs);
+        let parallel = self.asm.parallel;
+        self.asm = Assembler::with_blocks(&self.dofs, lists);
+        self.asm.parallel = parallel;
+    }
+
     /// Steady (θ-referential) mode with strain-rate damping: assemble the damping on the
     /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
     /// v_a = ω (t_a + (∂θu)_a) with ring differences ([`RingDerivative`]), as the transient mode

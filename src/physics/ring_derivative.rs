@@ -32,7 +32,7 @@ pub struct RingDerivative {
 }
 
 /// Derivative at `t0` of the Lagrange interpolant through (t_k, ·), as weights.
-fn lagrange_derivative_weights(t: &[f64; WIDTH], t0: f64) -> [f64; WIDTH] {
+pub fn lagrange_derivative_weights(t: &[f64; WIDTH], t0: f64) -> [f64; WIDTH] {
     let mut w = [0.0; WIDTH];
     for j in 0..WIDTH {
         // L_j'(t0) = Σ_{m≠j} [1/(t_j − t_m)] Π_{k≠j,m} (t0 − t_k)/(t_j − t_k)
