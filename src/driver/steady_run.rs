@@ -270,13 +270,15 @@ pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
             model.strain_rate_damping
         )));
     }
-    let sys = match (&scene.road, &scene.contact) {
+    let mut sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;
             SolidSystem::with_contact(model, c)
         }
         _ => SolidSystem::new(model, "hub"),
     };
+    sys.enable_steady_viscoelastic()
+        .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
     Ok(SteadyRolling::new(
         sys,
         scene.motion.omega,

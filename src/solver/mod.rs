@@ -4,6 +4,7 @@
 //! Riks–Crisfield arc-length continuation ([`continuation`]).
 
 pub mod continuation;
+pub mod krylov;
 pub mod linear;
 pub mod newton;
 pub mod stepping;
