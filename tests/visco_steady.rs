@@ -170,3 +170,111 @@ fn newton_converges_quadratically_with_ring_history() {
     assert!(*hist.last().unwrap() < 1e-11, "{hist:?}");
     let _ = quad;
 }
+
+/// Steady solution of the scene (no normal damping: the viscoelastic hysteresis is then the
+/// only dissipation), returning (rolling resistance T / (P Ro), P).
+fn resistance(sc: &Scene) -> (f64, f64) {
+    let mut st = build_steady(sc).unwrap_or_else(|e| panic!("{e}"));
+    let mut rep = StepReport::default();
+    solve_steady(sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+    let (f, t) = st.sys.hub_reaction();
+    let p = -f[1];
+    (t / (p * sc.geometry.ro), p)
+}
+
+/// Zero rolling resistance in the relaxed (slow: τ ≪ contact time) and instantaneous (fast:
+/// τ ≫ contact time and revolution time) limits, against a clear resistance in between; in the
+/// relaxed limit the load equals that of the elastic material with the relaxed modulus.
+#[test]
+fn rolling_resistance_vanishes_in_the_relaxed_and_instantaneous_limits() {
+    let set = ["contact.b_n=0.0", "mesh.n_r=3", "mesh.n_theta=64"];
+    let (mu_mid, p_mid) = resistance(&scene_with(&set, "convolution", 0.03));
+    let (mu_slow, p_slow) = resistance(&scene_with(&set, "convolution", 1e-7));
+    let (mu_fast, p_fast) = resistance(&scene_with(&set, "convolution", 1e5));
+    let (mu_slow_m, _) = resistance(&scene_with(&set, "multiplicative", 1e-7));
+    let (mu_fast_m, _) = resistance(&scene_with(&set, "multiplicative", 1e5));
+    // The elastic material alone (the relaxed modulus).
+    let text = scene_text(SCENE);
+    let i = text.find("\n[material.viscoelastic]").unwrap();
+    let j = text.find("\n[analysis]").unwrap();
+    let elastic = format!("{}{}", &text[..i], &text[j..]);
+    let mut all: Vec<String> = vec!["analysis.mode=\"steady\"".into()];
+    all.extend(set.iter().map(|s| s.to_string()));
+    let sc_el = Scene::from_toml_str(&elastic, "elastic", &all).unwrap();
+    let (mu_el, p_el) = resistance(&sc_el);
+    println!(
+        "T/(P Ro): tau = 0.03: {mu_mid:.4e} (P {p_mid:.4}); tau = 1e-7: {mu_slow:.3e} (P {p_slow:.4}), multiplicative {mu_slow_m:.3e}; tau = 1e5: {mu_fast:.3e} (P {p_fast:.4}), multiplicative {mu_fast_m:.3e}; elastic {mu_el:.3e} (P {p_el:.4})"
+    );
+    assert!(mu_mid > 0.01, "{mu_mid}");
+    for mu in [mu_slow, mu_fast, mu_slow_m, mu_fast_m, mu_el] {
+        assert!(mu.abs() < 1e-4 * mu_mid, "{mu} vs {mu_mid}");
+    }
+    assert!((p_slow - p_el).abs() < 1e-5 * p_el, "{p_slow} vs {p_el}");
+    // The instantaneous limit is stiffer (higher load at the same penetration).
+    assert!(p_fast > 1.05 * p_el, "{p_fast} vs {p_el}");
+}
+
+/// A mesh without rings of quadrature points (Gmsh) cannot carry the steady streamline
+/// integration: a clear error naming the reason, no silent elastic run.
+#[test]
+fn steady_viscoelastic_on_a_mesh_without_rings_is_refused() {
+    let file = format!(
+        "{}/scenarios/footprint_refined.msh",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = scene_text(SCENE);
+    let (i, j) = (
+        text.find("\n[mesh]").unwrap(),
+        text.find("\n[material]").unwrap(),
+    );
+    let text = format!("{}\n[mesh]\nfile = \"{file}\"\n{}", &text[..i], &text[j..]);
+    let sc = Scene::from_toml_str(&text, "gmsh", &["analysis.mode=\"steady\"".into()])
+        .unwrap_or_else(|e| panic!("{e}"));
+    let e = build_steady(&sc).err().expect("refused");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert!(
+        msg.contains("material.viscoelastic") && msg.contains("rings"),
+        "{msg}"
+    );
+    // The transient mode keeps its history on any mesh.
+    let st = Scene::from_toml_str(&text, "t", &[]).unwrap_or_else(|e| panic!("{e}"));
+    let m = tread::app::build_model(&st).unwrap_or_else(|e| panic!("{e}"));
+    assert!(m.viscoelastic.is_some() && !m.history.is_empty());
+}
+
+/// Energy balance of steady rolling with the dissipative (multiplicative) model and no other
+/// dissipation: the power of the hub torque T ω equals the viscous dissipation ∫ D dV, up to
+/// the discretization error, which shrinks with the mesh.
+#[test]
+fn hub_power_balances_the_viscous_dissipation() {
+    let mut errs = Vec::new();
+    for (nr, nt) in [(3, 64), (3, 128), (4, 256)] {
+        let sc = scene_with(
+            &[
+                "contact.b_n=0.0",
+                &format!("mesh.n_r={nr}"),
+                &format!("mesh.n_theta={nt}"),
+            ],
+            "multiplicative",
+            0.03,
+        );
+        let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
+        let mut rep = StepReport::default();
+        solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(st.evaluate(false));
+        let (_, t) = st.sys.hub_reaction();
+        let power = t * st.omega_signed();
+        let d = st
+            .sys
+            .steady_history
+            .as_ref()
+            .unwrap()
+            .dissipation(&st.sys.model)
+            .unwrap();
+        let e = (power - d).abs() / d;
+        println!("{nr} x {nt}: T omega = {power:.5e}, dissipation = {d:.5e}, rel diff {e:.2e}");
+        errs.push(e);
+    }
+    assert!(errs[2] < 0.02 && errs[2] < errs[0], "{errs:?}");
+}
