@@ -278,3 +278,78 @@ fn hub_power_balances_the_viscous_dissipation() {
     }
     assert!(errs[2] < 0.02 && errs[2] < errs[0], "{errs:?}");
 }
+
+#[path = "common/hunter.rs"]
+#[allow(dead_code)]
+mod hunter;
+
+/// Rolling resistance against speed from the steady mode by continuation in ω (v0 / ω fixed,
+/// no normal damping, 3 × 128 Q2): the curve rises from zero, peaks and falls. Printed beside
+/// the independent reference of a rigid cylinder on a standard-linear-solid half-space (Hunter
+/// 1961, same G∞, G1, τ, R = Ro, the FE load, V = v0). The cylinder here is a layer of
+/// thickness Ro − Ri = 1 in on a rigid hub with a contact half-width of about 0.5 in, far
+/// from Hunter's thick layer with a/R ≪ 1, so the table measures that model difference; the
+/// test asserts the shape of the FE curve only. Writes `resistance_vs_speed.csv`.
+#[test]
+fn rolling_resistance_versus_speed_by_omega_continuation() {
+    use tread::driver::steady::{step_parameter, SteadyParameter};
+    let omegas = [
+        0.5, 1.0, 2.0, 3.0, 4.5, 6.0, 8.0, 10.0, 13.0, 17.0, 22.0, 28.0,
+    ];
+    let v_per_omega = 1.9666667;
+    let sc = scene_with(
+        &[
+            "contact.b_n=0.0",
+            "mesh.n_r=3",
+            "mesh.n_theta=128",
+            &format!("motion.omega={}", omegas[0]),
+            &format!("road.v0={}", v_per_omega * omegas[0]),
+        ],
+        "convolution",
+        0.03,
+    );
+    let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
+    let mut rep = StepReport::default();
+    solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+    st.param = SteadyParameter::Omega;
+    let (newton_opts, _) = tread::app::solver_options(&sc, false);
+    let mut newton = Newton::new(&st, LinearKind::Lu, newton_opts).unwrap();
+    let dir = tempdir::TestDir::new("visco_steady", "resistance_vs_speed");
+    let mut csv = String::from("omega,v0,load,hub_torque,resistance,hunter_resistance\n");
+    let mut curve = Vec::new();
+    println!("  omega    V      P        T/(P Ro)     Hunter      diff");
+    for &om in &omegas {
+        step_parameter(&mut st, om, &mut newton, 8).unwrap_or_else(|e| panic!("omega {om}: {e}"));
+        assert!(st.evaluate(false));
+        let (f, t) = st.sys.hub_reaction();
+        let p = -f[1];
+        let mu = t / (p * sc.geometry.ro);
+        let pb = hunter::HunterProblem {
+            g_inf: 200.0,
+            g1: 100.0,
+            tau: 0.03,
+            radius: sc.geometry.ro,
+            load: p,
+        };
+        let mu_h = pb.solve(st.v0(), 40).map_or(f64::NAN, |s| -s.resistance);
+        println!(
+            "  {om:5.1}  {:6.2}  {p:7.3}  {mu:.4e}  {mu_h:.4e}  {:+6.1} %",
+            st.v0(),
+            100.0 * (mu - mu_h) / mu_h
+        );
+        csv.push_str(&format!("{om},{},{p},{t},{mu},{mu_h}\n", st.v0()));
+        curve.push(mu);
+    }
+    std::fs::write(dir.join("resistance_vs_speed.csv"), csv).unwrap();
+    let (i_max, mu_max) =
+        curve.iter().enumerate().fold(
+            (0, 0.0),
+            |(im, m), (i, &c)| if c > m { (i, c) } else { (im, m) },
+        );
+    println!("peak: T/(P Ro) = {mu_max:.4e} at omega = {}", omegas[i_max]);
+    assert!(i_max > 0 && i_max + 1 < curve.len(), "{curve:?}");
+    assert!(
+        curve[0] < 0.5 * mu_max && curve[curve.len() - 1] < 0.8 * mu_max,
+        "{curve:?}"
+    );
+}
