@@ -353,3 +353,55 @@ fn rolling_resistance_versus_speed_by_omega_continuation() {
         "{curve:?}"
     );
 }
+
+/// `tread compare` on the viscoelastic scene (3 × 64 Q2, the transient run to a tight steady
+/// tolerance): the steady mode with the ring history and the transient mode with the history
+/// at the material quadrature points agree on the hub forces and the rolling resistance
+/// T / (P Ro) within 0.5 % and on the referential field within 1 %, at two speeds. Slow (the
+/// transient runs take minutes): `cargo test --release --test visco_steady -- --ignored`.
+#[test]
+#[ignore]
+fn compare_transient_and_steady_with_viscoelastic_history() {
+    use tread::app::RunOptions;
+    for (omega, extra) in [
+        (10.0, vec!["time.error_tol=1e-4", "time.steady_tol=1e-5"]),
+        (20.0, vec!["time.steady_tol=1e-5"]),
+    ] {
+        let mut set: Vec<String> = vec![
+            "mesh.n_r=3".into(),
+            "mesh.n_theta=64".into(),
+            format!("motion.omega={omega}"),
+            format!("road.v0={}", 1.9666667 * omega),
+            "output.sinks=[\"summary\",\"csv\"]".into(),
+        ];
+        set.extend(extra.iter().map(|s| s.to_string()));
+        let sc = Scene::from_toml_str(&scene_text(SCENE), "visco_compare", &set)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let dir = tempdir::TestDir::new("visco_steady", &format!("compare-{omega}"));
+        let out = tread::driver::compare::run(
+            &sc,
+            &RunOptions {
+                out_dir: dir.to_path_buf(),
+                verbose: false,
+                quiet: true,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let c = &out.summary["results"]["compare"];
+        let g = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k}: {c}"));
+        let mu = |t: f64, fy: f64| t / (-fy * 2.0);
+        let mu_t = mu(g("hub_torque_transient"), g("hub_force_y_transient"));
+        let mu_s = mu(g("hub_torque_steady"), g("hub_force_y_steady"));
+        let d_mu = (mu_t - mu_s).abs() / mu_s;
+        println!(
+            "omega {omega}: Fy {:.5e} / {:.5e} (rel {:.2e}), T/(P Ro) {mu_t:.5e} / {mu_s:.5e} (rel {d_mu:.2e}), field rel L2 {:.2e}",
+            g("hub_force_y_transient"),
+            g("hub_force_y_steady"),
+            g("hub_force_y_rel_diff"),
+            g("field_rel_l2")
+        );
+        assert!(g("hub_force_x_rel_diff") < 5e-3 && g("hub_force_y_rel_diff") < 5e-3);
+        assert!(d_mu < 5e-3, "rolling resistance: {mu_t} vs {mu_s}");
+        assert!(g("field_rel_l2") < 1e-2);
+    }
+}
