@@ -365,7 +365,9 @@ fn compare_transient_and_steady_with_viscoelastic_history() {
     use tread::app::RunOptions;
     for (omega, extra) in [
         (10.0, vec!["time.error_tol=1e-4", "time.steady_tol=1e-5"]),
-        (20.0, vec!["time.steady_tol=1e-5"]),
+        // (With the default time.error_tol = 1e-3 the transient torque at 20 rad/s was 3 %
+        // off the steady one while the load and field agreed within 0.1 % and 0.5 %.)
+        (20.0, vec!["time.error_tol=1e-4", "time.steady_tol=1e-5"]),
     ] {
         let mut set: Vec<String> = vec![
             "mesh.n_r=3".into(),

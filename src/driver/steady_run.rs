@@ -724,7 +724,7 @@ pub fn run_with_dump(
             "normal_damping": damping,
             "strain_rate_damping": st.sys.model.strain_rate_damping > 0.0,
             "inertia": st.sys.model.omega2 > 0.0,
-            "history": false,
+            "history": st.sys.steady_history.is_some(),
             "pressure": st.sys.dofs.per_cell > 0,
             "contact_facets_per_iteration": st.sys.mean_facets_per_assembly(),
         },
