@@ -407,3 +407,59 @@ fn compare_transient_and_steady_with_viscoelastic_history() {
         assert!(g("field_rel_l2") < 1e-2);
     }
 }
+
+/// The independent check against the exact steady rolling of a viscoelastic body: the scene
+/// `viscoelastic_hunter.toml` (thin contact, a/R ≈ 0.045, on a layer ≈ 20 a thick: the setting in
+/// which a viscoelastic roller on a rigid road has the contact mechanics of a rigid cylinder on a
+/// viscoelastic half-space) in the steady mode against Hunter's solution (tests/common/hunter.rs,
+/// computed independently with the same G∞, G1, τ, R = Ro, the FE load and V = v0) at speeds
+/// around the resistance peak: the rolling resistance within 2 %, the contact edges within
+/// 0.01 in (≈ 1.5 footprint cells, the resolution of the FE edges). Remaining differences:
+/// finite layer, compressibility K/G = 100, penalty contact, finite strain.
+#[test]
+fn rolling_resistance_matches_the_half_space_reference() {
+    let text = scene_text("scenarios/viscoelastic_hunter.toml");
+    println!("  omega   P        T/(P Ro) FE   Hunter      diff     edges FE            Hunter");
+    for om in [0.5, 1.0, 2.5, 5.0] {
+        let v0 = 1.998 * om;
+        let sc = Scene::from_toml_str(
+            &text,
+            "hunter",
+            &[format!("motion.omega={om}"), format!("road.v0={v0}")],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
+        let mut rep = StepReport::default();
+        solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+        let (f, t) = st.sys.hub_reaction();
+        let p = -f[1];
+        let mu = t / (p * sc.geometry.ro);
+        let samples = st.sys.contact_samples();
+        let touching: Vec<f64> = samples
+            .iter()
+            .filter(|s| s.t_n > 0.0)
+            .map(|s| s.x1)
+            .collect();
+        let (x0, x1) = (
+            touching.iter().cloned().fold(f64::INFINITY, f64::min),
+            touching.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        );
+        let pb = hunter::HunterProblem {
+            g_inf: 200.0,
+            g1: 100.0,
+            tau: 0.03,
+            radius: sc.geometry.ro,
+            load: p,
+        };
+        let s = pb.solve(v0, 40).expect("reference solves");
+        let (h0, h1) = s.edges();
+        let d = (mu + s.resistance) / -s.resistance;
+        println!(
+            "  {om:4.1}  {p:7.4}  {mu:.4e}  {:.4e}  {:+5.2} %   [{x0:+.4}, {x1:+.4}]  [{h0:+.4}, {h1:+.4}]",
+            -s.resistance,
+            100.0 * d
+        );
+        assert!(d.abs() < 0.02, "omega {om}: {mu} vs {}", -s.resistance);
+        assert!((x0 - h0).abs() < 0.01 && (x1 - h1).abs() < 0.01);
+    }
+}
