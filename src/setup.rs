@@ -224,7 +224,9 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
         )));
     }
     if let Some(file) = &ms.file {
-        return build_model_from_file(scene, file, material, pressure);
+        let mut model = build_model_from_file(scene, file, material, pressure)?;
+        attach_viscoelastic(scene, &mut model)?;
+        return Ok(model);
     }
     let mut mesh = annulus(&AnnulusSpec {
         ri: scene.geometry.ri,
@@ -239,6 +241,13 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
     // (objectivity; see `Mesh::make_isoparametric`).
     mesh.make_isoparametric();
     let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    attach_viscoelastic(scene, &mut model)?;
+    Ok(model)
+}
+
+/// The scene's `[material.viscoelastic]` overstress on `model` (history at every quadrature
+/// point), after checking that the mode carries a history.
+fn attach_viscoelastic(scene: &Scene, model: &mut SolidModel) -> Result<(), AppError> {
     if let Some(vs) = &scene.material.viscoelastic {
         let ve = vs
             .build()
@@ -246,23 +255,24 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
         check_viscoelastic_mode(scene)?;
         model.set_viscoelastic(ve);
     }
-    Ok(model)
+    Ok(())
 }
 
 /// The modes and integrators that carry a viscoelastic history so far: the transient mode with
-/// generalized-α or central difference (history committed per accepted step). The ODE
-/// integrators (BDF, SDIRK) would need the internal variables in their state vector; the
-/// static, spinning and steady modes would need the relaxed limit or the streamline
-/// integration.
+/// generalized-α or central difference (history committed per accepted step) and the steady
+/// mode (internal variables integrated along the rings of quadrature points, see
+/// `physics::viscoelastic_steady`; ring-structured meshes only). The ODE integrators (BDF,
+/// SDIRK) would need the internal variables in their state vector; the static and spinning
+/// modes would need the relaxed limit.
 fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
-    if scene.analysis.mode != Mode::Transient {
+    if !matches!(scene.analysis.mode, Mode::Transient | Mode::Steady) {
         return Err(AppError::Unsupported(format!(
             "material.viscoelastic: mode \"{}\" does not support viscoelastic materials yet \
-             (use mode = \"transient\")",
+             (use mode = \"transient\" or \"steady\")",
             scene.analysis.mode
         )));
     }
-    if let Some(ts) = &scene.time {
+    if let (Some(ts), Mode::Transient) = (&scene.time, scene.analysis.mode) {
         if matches!(
             ts.integrator,
             crate::io::scene::IntegratorName::Bdf | crate::io::scene::IntegratorName::Sdirk

@@ -194,6 +194,12 @@ impl NonlinearSystem for SteadyRolling {
     fn restore_state(&mut self, buf: &[f64]) {
         self.sys.restore_state(buf)
     }
+    fn has_tangent_correction(&self) -> bool {
+        self.sys.has_tangent_correction()
+    }
+    fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+        self.sys.tangent_correction(v, out)
+    }
 }
 
 impl ParametricSystem for SteadyRolling {

@@ -270,13 +270,15 @@ pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
             model.strain_rate_damping
         )));
     }
-    let sys = match (&scene.road, &scene.contact) {
+    let mut sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;
             SolidSystem::with_contact(model, c)
         }
         _ => SolidSystem::new(model, "hub"),
     };
+    sys.enable_steady_viscoelastic()
+        .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
     Ok(SteadyRolling::new(
         sys,
         scene.motion.omega,
@@ -722,7 +724,7 @@ pub fn run_with_dump(
             "normal_damping": damping,
             "strain_rate_damping": st.sys.model.strain_rate_damping > 0.0,
             "inertia": st.sys.model.omega2 > 0.0,
-            "history": false,
+            "history": st.sys.steady_history.is_some(),
             "pressure": st.sys.dofs.per_cell > 0,
             "contact_facets_per_iteration": st.sys.mean_facets_per_assembly(),
         },

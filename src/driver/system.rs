@@ -20,7 +20,8 @@
 use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
-use crate::physics::{RingDerivative, SolidModel};
+use crate::physics::viscoelastic_steady::RingError;
+use crate::physics::{RingDerivative, SolidModel, SteadyHistory};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 
@@ -59,6 +60,9 @@ pub struct SolidSystem {
     /// Steady mode: strain-rate damping on the nodal velocities ω ∂θχ
     /// ([`Self::enable_steady_viscosity`]).
     pub steady_visc: Option<SteadyViscosity>,
+    /// Steady mode with a viscoelastic material: the internal variables integrated along the
+    /// rings of quadrature points ([`Self::enable_steady_viscoelastic`]).
+    pub steady_history: Option<SteadyHistory>,
 }
 
 /// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
@@ -124,6 +128,7 @@ impl SolidSystem {
             ref_norms: vec![0.0, 1e-3 * area, h_ref, 0.0],
             facet_visits: (0, 0),
             steady_visc: None,
+            steady_history: None,
         }
     }
 
@@ -359,6 +364,27 @@ impl SolidSystem {
             });
     }
 
+    /// Steady (θ-referential) mode with a viscoelastic material: before every evaluation the
+    /// history of the quadrature points is replaced by the periodic steady states along the
+    /// rings at the current state and ω ([`SteadyHistory`]), and Newton takes the exact step
+    /// with the ring coupling applied matrix-free. No effect for an elastic material; an error
+    /// when the mesh has no rings.
+    pub fn enable_steady_viscoelastic(&mut self) -> Result<(), RingError> {
+        if self.model.viscoelastic.is_none() || self.steady_history.is_some() {
+            return Ok(());
+        }
+        self.steady_history = Some(SteadyHistory::new(&self.model)?);
+        Ok(())
+    }
+
+    /// Bring the steady history in line with the current state (see
+    /// [`Self::enable_steady_viscoelastic`]).
+    fn sync_steady_history(&mut self) {
+        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.model.steady_omega) {
+            sh.sync(&mut self.model, &self.dofs, &self.x, om);
+        }
+    }
+
     /// Norm of the residual at the current state (assembles the residual only).
     pub fn residual_norm(&mut self) -> f64 {
         self.evaluate(false);
@@ -495,6 +521,7 @@ impl NonlinearSystem for SolidSystem {
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
+        self.sync_steady_history();
         let ok = self
             .model
             .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
@@ -525,6 +552,15 @@ impl NonlinearSystem for SolidSystem {
     }
     fn restore_state(&mut self, buf: &[f64]) {
         self.x.copy_from_slice(buf);
+        self.sync_steady_history();
+    }
+    fn has_tangent_correction(&self) -> bool {
+        self.steady_history.is_some() && self.model.steady_omega.is_some()
+    }
+    fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.model.steady_omega) {
+            sh.apply_correction(&self.model, &self.dofs, om, v, out);
+        }
     }
 }
 

@@ -9,6 +9,8 @@
 
 pub mod ring_derivative;
 pub mod solid;
+pub mod viscoelastic_steady;
 
 pub use ring_derivative::RingDerivative;
 pub use solid::{PointValues, PressureMode, SolidModel};
+pub use viscoelastic_steady::SteadyHistory;

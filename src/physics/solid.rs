@@ -821,6 +821,33 @@ impl SolidModel {
 
 // Viscoelastic history: allocation and commit (the kernels only read it).
 impl SolidModel {
+    /// Gauss points per direction of the kernels' rule on cell `c` (2 for Q1, 3 for Q2): the
+    /// points of [`Self::history`] (point `l · q + i` at `(ξ_i, η_l)`).
+    pub fn qp_per_direction(&self, c: usize) -> usize {
+        match self.mesh.degree[c] {
+            1 => 2,
+            _ => 3,
+        }
+    }
+
+    /// Geometry of quadrature point `q` of cell `c` in the kernels' rule: reference position
+    /// X, weight w = w_q det(dX/dξ), and the reference gradients ∂N_a/∂X of the cell's shape
+    /// functions in `g` (first `n` entries, n = nodes of the cell). `None` for a degenerate cell.
+    pub fn qp_geometry(&self, c: usize, q: usize, g: &mut [[f64; 2]; 9]) -> Option<(Vec2, f64)> {
+        match self.mesh.degree[c] {
+            1 => {
+                let mut g4 = [[0.0; 2]; 4];
+                let pg = self.point(c, &self.q1, q, &mut g4)?;
+                g[..4].copy_from_slice(&g4);
+                Some((pg.x, pg.w))
+            }
+            _ => {
+                let pg = self.point(c, &self.q2, q, g)?;
+                Some((pg.x, pg.w))
+            }
+        }
+    }
+
     /// Make the material viscoelastic: allocate the history of every quadrature point of the
     /// kernels' Gauss rules, at the undisturbed reference state.
     pub fn set_viscoelastic(&mut self, ve: Viscoelastic) {

@@ -85,6 +85,15 @@ pub trait NonlinearSystem {
     fn update(&mut self, alpha: f64, dx: &[f64]);
     fn save_state(&self, buf: &mut Vec<f64>);
     fn restore_state(&mut self, buf: &[f64]);
+    /// Whether the exact tangent has a part that is not in [`Self::matrix_values`] (e.g. the
+    /// ring coupling of a steady viscoelastic history), applied matrix-free by
+    /// [`Self::tangent_correction`]. Newton then takes the exact step by GMRES preconditioned
+    /// with the factorization of the assembled matrix ([`super::krylov`]).
+    fn has_tangent_correction(&self) -> bool {
+        false
+    }
+    /// `out += (K_exact − K_assembled) v` at the last evaluation (equation numbering).
+    fn tangent_correction(&mut self, _v: &[f64], _out: &mut [f64]) {}
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -230,6 +239,9 @@ pub struct NewtonReport {
     pub table: Vec<IterationRecord>,
     pub assemblies: usize,
     pub factorizations: usize,
+    /// GMRES products with the exact tangent (systems with a
+    /// [`NonlinearSystem::tangent_correction`]; 0 otherwise).
+    pub krylov_iterations: usize,
 }
 
 /// Newton solver owning the sparse factorization (symbolic analysis done once).
@@ -412,6 +424,19 @@ impl Newton {
                 *d = -r;
             }
             self.solver.solve_in_place(&mut self.dx)?;
+            if sys.has_tangent_correction() {
+                // The exact step: GMRES on K + C from the assembled part's step.
+                let b: Vec<f64> = sys.residual().iter().map(|r| -r).collect();
+                let ks =
+                    super::krylov::gmres(sys, &mut self.solver, &b, &mut self.dx, 1e-10, 40, 160)?;
+                rep.krylov_iterations += ks.iterations;
+                if self.opts.verbose {
+                    eprintln!(
+                        "         GMRES: {} products, relative residual {:.2e}",
+                        ks.iterations, ks.rel_residual
+                    );
+                }
+            }
             rec.increment_norm = self.dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let r0 = total_norm(&norms);
             sys.save_state(&mut self.saved);
