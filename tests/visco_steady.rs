@@ -5,12 +5,10 @@
 //! the transient mode (`tread compare`), and a clear refusal on meshes without rings.
 
 #[path = "common/fixtures.rs"]
-#[allow(dead_code)]
 mod fixtures;
-#[path = "common/tempdir.rs"]
-mod tempdir;
 
 use fixtures::scene_text;
+use fixtures::tempdir;
 use tread::assembly::FIXED;
 use tread::driver::steady::SteadyRolling;
 use tread::driver::steady_run::{build_steady, solve_steady};
