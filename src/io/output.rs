@@ -220,6 +220,7 @@ const OUTPUT_NAMES: &[&str] = &[
     "branch.csv",
     "compare.csv",
     "increments.sta",
+    "run.sta",
     "fields.pvd",
     "steady.vtu",
     "contact.pvd",

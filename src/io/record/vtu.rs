@@ -11,7 +11,8 @@
 //! | `cauchy_stress` | 9 | the full Cauchy stress tensor, row-major 3×3 (σ13 = σ23 = 0); stress |
 //! | `max_shear_stress` | 1 | in-plane maximum shear stress (see [`super::stress_measure`]); stress |
 //! | `sigma_11`, `sigma_22`, `sigma_12`, `sigma_33` | 1 | the same stresses one by one; stress |
-//! | `pressure` | 1 | the pressure field p of a mixed (incompressible) formulation, σ = σ_law − p I; only when the model has one; stress |
+//! | `pressure` | 1 | hydrostatic pressure −(σ11 + σ22 + σ33)/3 (compression positive); stress |
+//! | `pressure_field` | 1 | the pressure unknown p of a mixed (incompressible) formulation, σ = σ_law − p I (it includes the law's reference pressure, e.g. 2c1 + 4c2 for Mooney–Rivlin, so it is not the hydrostatic pressure); only when the model has one; stress |
 //!
 //! σ33 is the plane-strain out-of-plane stress of the constitutive law (F33 = 1), not zero.
 //! Nodal stresses are cell values averaged at shared nodes; a node where no cell gives a
@@ -224,8 +225,13 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
         point_data.push(Array::new("sigma_22", 1, col(&|n| view.stress[n][1])));
         point_data.push(Array::new("sigma_12", 1, col(&|n| view.stress[n][2])));
         point_data.push(Array::new("sigma_33", 1, col(&s33)));
+        point_data.push(Array::new(
+            "pressure",
+            1,
+            col(&|n| -(view.stress[n][0] + view.stress[n][1] + s33(n)) / 3.0),
+        ));
         if view.pressure.len() == nn {
-            point_data.push(Array::new("pressure", 1, col(&|n| view.pressure[n])));
+            point_data.push(Array::new("pressure_field", 1, col(&|n| view.pressure[n])));
         }
     }
     let cell_data = vec![
