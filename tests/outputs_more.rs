@@ -623,3 +623,44 @@ fn mcap_log_names_the_scene_for_the_recording() {
         Some("spinning_neo_hookean")
     );
 }
+
+#[test]
+fn contact_surface_series_carries_pressure_shear_and_slip() {
+    let d = TestDir::new("outputs_more", "contact_series");
+    let out = d.join("out");
+    run_ok(
+        &scene("indentation_friction.toml"),
+        &out,
+        &[
+            "mesh.n_r=2",
+            "mesh.n_theta=32",
+            r#"output.sinks=["summary","csv","vtu"]"#,
+        ],
+    );
+    let fields = parse_pvd(&out.join("fields.pvd"));
+    let contact = parse_pvd(&out.join("contact.pvd"));
+    assert_eq!(
+        fields.iter().map(|f| f.0).collect::<Vec<_>>(),
+        contact.iter().map(|f| f.0).collect::<Vec<_>>(),
+        "one contact surface per recorded step, same times"
+    );
+    let v = parse_vtu(&out.join(&contact.last().unwrap().1));
+    assert_eq!(v.n_cells, 1);
+    for a in ["theta", "penetration", "t_n", "t_t", "slip_velocity", "ds0"] {
+        assert_eq!(v.arrays[a].len(), v.n_points, "{a}");
+    }
+    // The polyline is closed: n + 1 connectivity entries, back to the first point.
+    let conn = &v.arrays["connectivity"];
+    assert_eq!(conn.len(), v.n_points + 1);
+    assert_eq!(conn.first(), conn.last());
+    // The same tractions as contact.csv (end of the run).
+    let (h, rows) = read_csv(&out.join("contact.csv"));
+    let max = |x: &[f64]| x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let tn_csv = column(&h, &rows, "t_n");
+    assert_eq!(rows.len(), v.n_points);
+    assert_eq!(max(&v.arrays["t_n"]), max(&tn_csv));
+    assert!(max(&v.arrays["t_n"]) > 0.0);
+    assert!(max_abs(&v.arrays["t_t"]) > 0.0, "friction acts");
+    let theta = &v.arrays["theta"];
+    assert!(theta.windows(2).all(|w| w[1] >= w[0]), "ordered by θ");
+}

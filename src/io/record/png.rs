@@ -609,12 +609,11 @@ pub fn clamp_round_off(name: &str, s: &[(f64, f64)], scale: f64) -> (String, Vec
 
 impl Recorder for PngSink {
     fn run_started(&mut self, meta: &RunMeta) {
-        let units = meta.scene_toml.parse::<toml::Table>().ok().and_then(|t| {
-            t.get("scene")?
-                .get("units")?
-                .as_str()
-                .map(|u| Units::parse(u))
-        });
+        let units = meta
+            .scene_toml
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| t.get("scene")?.get("units")?.as_str().map(Units::parse));
         self.units = units.unwrap_or_default();
         self.time_name = if meta.time_name == "load_factor" {
             "load factor λ [1]".into()

@@ -21,6 +21,12 @@
 //! scene's materials). Cells are VTK_BIQUADRATIC_QUAD (28) for Q2 and VTK_QUAD (9) for Q1; the
 //! field data `TimeValue` is the step's time.
 //!
+//! With contact, `contact.pvd` lists `contact/step_NNNNNN.vtu`: the contact surface of each
+//! recorded step as one closed polyline (VTK_POLY_LINE) through the contact sample points at
+//! their current positions, with point data `theta`, `penetration`, `t_n`, `t_t`,
+//! `slip_velocity`, `ds0` (see [`contact_vtu_bytes`]); ParaView's *Plot Data* draws t_n against
+//! x1 from it.
+//!
 //! Encoding (`[output] vtu_format`): `binary` (default) stores every array as raw
 //! little-endian data in one `<AppendedData encoding="raw">` block, each array preceded by its
 //! byte count as a UInt64 (`header_type="UInt64"`); `ascii` writes the same arrays as text, each
@@ -36,6 +42,8 @@ pub struct VtuSink {
     dir: PathBuf,
     /// (time, file name relative to `dir`) of every written step.
     written: Vec<(f64, String)>,
+    /// The same for the contact surface (`contact.pvd`).
+    contact_written: Vec<(f64, String)>,
     error: Option<RecordError>,
     format: VtuFormat,
 }
@@ -51,6 +59,7 @@ impl VtuSink {
         Self {
             dir: dir.to_path_buf(),
             written: Vec::new(),
+            contact_written: Vec::new(),
             error: None,
             format,
         }
@@ -67,7 +76,17 @@ impl VtuSink {
         write_atomic(&path, &vtu_bytes(mesh, view, info.time, self.format))?;
         self.written.push((info.time, name));
         let pvd = self.dir.join("fields.pvd");
-        write_atomic(&pvd, pvd_text(&self.written).as_bytes())
+        write_atomic(&pvd, pvd_text(&self.written).as_bytes())?;
+        if let Some(bytes) = contact_vtu_bytes(view.contact, info.time, self.format) {
+            let sub = self.dir.join("contact");
+            std::fs::create_dir_all(&sub).map_err(|e| RecordError::new("vtu", &sub, e))?;
+            let name = format!("contact/step_{:06}.vtu", info.index);
+            write_atomic(&self.dir.join(&name), &bytes)?;
+            self.contact_written.push((info.time, name));
+            let pvd = self.dir.join("contact.pvd");
+            write_atomic(&pvd, pvd_text(&self.contact_written).as_bytes())?;
+        }
+        Ok(())
     }
 }
 
@@ -150,7 +169,11 @@ impl Values {
         let per_line = per_line.max(1);
         let mut line = |k: usize, t: String| {
             out.push_str(&t);
-            out.push(if (k + 1) % per_line == 0 { '\n' } else { ' ' });
+            out.push(if (k + 1).is_multiple_of(per_line) {
+                '\n'
+            } else {
+                ' '
+            });
         };
         match self {
             Values::F64(v) => v.iter().enumerate().for_each(|(k, x)| line(k, num(*x))),
@@ -189,6 +212,10 @@ impl Array {
 
 /// The arrays of one `.vtu`: points, point data, cell data, cells.
 struct Grid {
+    /// Attributes of `<PointData>` naming the active arrays.
+    active: &'static str,
+    n_points: usize,
+    n_cells: usize,
     points: Array,
     point_data: Vec<Array>,
     cell_data: Vec<Array>,
@@ -256,6 +283,9 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
         types.push(t);
     }
     Grid {
+        active: " Scalars=\"max_shear_stress\" Vectors=\"displacement\" Tensors=\"cauchy_stress\"",
+        n_points: nn,
+        n_cells: nc,
         points: Array::new("Points", 3, Values::F64(points)),
         point_data,
         cell_data,
@@ -269,9 +299,61 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
 
 /// The bytes of one `.vtu` file in the given encoding.
 pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: VtuFormat) -> Vec<u8> {
-    let g = grid(mesh, view);
+    grid_bytes(&grid(mesh, view), time, format)
+}
+
+/// The contact surface of a step as a closed polyline through the contact sample points (in
+/// the order of their reference angle θ) at their current positions (x1, x2, 0), with point
+/// data `theta` (rad), `penetration` (length, > 0 in contact), `t_n` (normal traction on the
+/// body, stress units, > 0 in compression), `t_t` (tangential traction, stress units),
+/// `slip_velocity` (length/time) and `ds0` (reference length weight, length). `None` without
+/// contact samples.
+pub fn contact_vtu_bytes(
+    samples: &[crate::contact::ContactSample],
+    time: f64,
+    format: VtuFormat,
+) -> Option<Vec<u8>> {
+    if samples.is_empty() {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    order.sort_by(|&a, &b| samples[a].theta.total_cmp(&samples[b].theta));
+    let pts = order
+        .iter()
+        .flat_map(|&k| [samples[k].x1, samples[k].x2, 0.0])
+        .collect();
+    let col = |f: &dyn Fn(&crate::contact::ContactSample) -> f64| {
+        Values::F64(order.iter().map(|&k| f(&samples[k])).collect())
+    };
+    let n = samples.len() as i64;
+    let conn: Vec<i64> = (0..n).chain(std::iter::once(0)).collect();
+    let g = Grid {
+        active: " Scalars=\"t_n\"",
+        n_points: samples.len(),
+        n_cells: 1,
+        points: Array::new("Points", 3, Values::F64(pts)),
+        point_data: vec![
+            Array::new("theta", 1, col(&|c| c.theta)),
+            Array::new("penetration", 1, col(&|c| c.delta)),
+            Array::new("t_n", 1, col(&|c| c.t_n)),
+            Array::new("t_t", 1, col(&|c| c.t_t)),
+            Array::new("slip_velocity", 1, col(&|c| c.w)),
+            Array::new("ds0", 1, col(&|c| c.ds0)),
+        ],
+        cell_data: Vec::new(),
+        cells: vec![
+            Array::new("connectivity", 1, Values::I64(conn)),
+            Array::new("offsets", 1, Values::I64(vec![n + 1])),
+            // VTK_POLY_LINE
+            Array::new("types", 1, Values::U8(vec![4])),
+        ],
+    };
+    Some(grid_bytes(&g, time, format))
+}
+
+fn grid_bytes(g: &Grid, time: f64, format: VtuFormat) -> Vec<u8> {
     let binary = format == VtuFormat::Binary;
-    let mut s = String::with_capacity(if binary { 4096 } else { 200 * mesh.n_nodes() });
+    let mut s = String::with_capacity(if binary { 4096 } else { 200 * g.n_points });
     let mut blob: Vec<u8> = Vec::new();
     // One array: inline text, or a reference into the appended block.
     let mut array = |s: &mut String, a: &Array| {
@@ -309,17 +391,16 @@ pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: VtuFormat) -> 
     let _ = writeln!(
         s,
         "<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        mesh.n_nodes(),
-        mesh.n_cells()
+        g.n_points, g.n_cells
     );
     s.push_str("<Points>\n");
     array(&mut s, &g.points);
     s.push_str("</Points>\n");
-    s.push_str("<PointData Scalars=\"max_shear_stress\" Vectors=\"displacement\" Tensors=\"cauchy_stress\">\n");
+    let _ = writeln!(s, "<PointData{}>", g.active);
     for a in &g.point_data {
         array(&mut s, a);
     }
-    s.push_str("</PointData>\n<CellData Scalars=\"region\">\n");
+    s.push_str("</PointData>\n<CellData>\n");
     for a in &g.cell_data {
         array(&mut s, a);
     }
