@@ -645,14 +645,17 @@ fn contact_surface_series_carries_pressure_shear_and_slip() {
         "one contact surface per recorded step, same times"
     );
     let v = parse_vtu(&out.join(&contact.last().unwrap().1));
-    assert_eq!(v.n_cells, 1);
+    assert_eq!(v.n_cells, v.n_points, "one segment per point (closed)");
     for a in ["theta", "penetration", "t_n", "t_t", "slip_velocity", "ds0"] {
         assert_eq!(v.arrays[a].len(), v.n_points, "{a}");
     }
-    // The polyline is closed: n + 1 connectivity entries, back to the first point.
+    // Segments k → k + 1, the last back to the first point.
     let conn = &v.arrays["connectivity"];
-    assert_eq!(conn.len(), v.n_points + 1);
-    assert_eq!(conn.first(), conn.last());
+    assert_eq!(conn.len(), 2 * v.n_points);
+    for (k, seg) in conn.chunks(2).enumerate() {
+        assert_eq!(seg, [k as f64, ((k + 1) % v.n_points) as f64]);
+    }
+    assert!(v.arrays["types"].iter().all(|&t| t == 3.0));
     // The same tractions as contact.csv (end of the run).
     let (h, rows) = read_csv(&out.join("contact.csv"));
     let max = |x: &[f64]| x.iter().copied().fold(f64::NEG_INFINITY, f64::max);

@@ -22,7 +22,7 @@
 //! field data `TimeValue` is the step's time.
 //!
 //! With contact, `contact.pvd` lists `contact/step_NNNNNN.vtu`: the contact surface of each
-//! recorded step as one closed polyline (VTK_POLY_LINE) through the contact sample points at
+//! recorded step as a closed chain of line segments (VTK_LINE) through the contact sample points at
 //! their current positions, with point data `theta`, `penetration`, `t_n`, `t_t`,
 //! `slip_velocity`, `ds0` (see [`contact_vtu_bytes`]); ParaView's *Plot Data* draws t_n against
 //! x1 from it.
@@ -302,7 +302,7 @@ pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: VtuFormat) -> 
     grid_bytes(&grid(mesh, view), time, format)
 }
 
-/// The contact surface of a step as a closed polyline through the contact sample points (in
+/// The contact surface of a step as a closed chain of line segments through the contact sample points (in
 /// the order of their reference angle θ) at their current positions (x1, x2, 0), with point
 /// data `theta` (rad), `penetration` (length, > 0 in contact), `t_n` (normal traction on the
 /// body, stress units, > 0 in compression), `t_t` (tangential traction, stress units),
@@ -326,11 +326,12 @@ pub fn contact_vtu_bytes(
         Values::F64(order.iter().map(|&k| f(&samples[k])).collect())
     };
     let n = samples.len() as i64;
-    let conn: Vec<i64> = (0..n).chain(std::iter::once(0)).collect();
+    // Closed: segment k joins points k and k + 1, the last one back to point 0.
+    let conn: Vec<i64> = (0..n).flat_map(|k| [k, (k + 1) % n]).collect();
     let g = Grid {
         active: " Scalars=\"t_n\"",
         n_points: samples.len(),
-        n_cells: 1,
+        n_cells: samples.len(),
         points: Array::new("Points", 3, Values::F64(pts)),
         point_data: vec![
             Array::new("theta", 1, col(&|c| c.theta)),
@@ -343,9 +344,9 @@ pub fn contact_vtu_bytes(
         cell_data: Vec::new(),
         cells: vec![
             Array::new("connectivity", 1, Values::I64(conn)),
-            Array::new("offsets", 1, Values::I64(vec![n + 1])),
-            // VTK_POLY_LINE
-            Array::new("types", 1, Values::U8(vec![4])),
+            Array::new("offsets", 1, Values::I64((1..=n).map(|k| 2 * k).collect())),
+            // VTK_LINE segments (read by every VTK reader, meshio included).
+            Array::new("types", 1, Values::U8(vec![3; samples.len()])),
         ],
     };
     Some(grid_bytes(&g, time, format))
