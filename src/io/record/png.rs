@@ -734,10 +734,19 @@ impl Recorder for PngSink {
             let n: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_n)).collect();
             let t: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_t)).collect();
             let p = self.dir.join("contact.png");
+            // Six significant digits, and the unit.
+            let tc = self.contact_time;
+            let dec = (5.0 - tc.abs().max(1e-300).log10().floor()).clamp(0.0, 12.0) as usize;
             let title = format!(
-                "Contact tractions at {} = {}",
+                "Contact tractions at {} = {:.*}{}",
                 self.time_name.split(" [").next().unwrap_or("time"),
-                crate::io::output::fmt_num(self.contact_time)
+                dec,
+                tc,
+                if self.time_name.starts_with("time") {
+                    format!(" {}", u.time)
+                } else {
+                    String::new()
+                }
             );
             draw(
                 "contact.png",
