@@ -222,15 +222,16 @@ mod convert {
     pub fn run(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayError> {
         let bytes = std::fs::read(mcap_path)
             .map_err(|e| ReplayError::Read(mcap_path.to_path_buf(), e.to_string()))?;
-        let mut builder = rerun::RecordingStreamBuilder::new("tread").send_properties(false);
-        if let Some(name) = super::mcap_scene_name(&bytes) {
-            builder = builder.recording_name(name);
-        }
-        let rec = builder
+        let rec = rerun::RecordingStreamBuilder::new("tread")
+            .send_properties(false)
             .save(rrd)
             .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
         rec.set_log_time_enabled(false);
         rec.set_log_tick_enabled(false);
+        // Named after the scene (`send_properties(false)` drops a builder's name).
+        if let Some(name) = super::mcap_scene_name(&bytes) {
+            let _ = rec.send_recording_name(name);
+        }
         let mut st = ConvertStats::default();
         // Metadata records (not part of the message stream).
         if let Ok(reader) = mcap::read::LinearReader::new(&bytes) {
