@@ -119,6 +119,10 @@ enum Command {
         /// Convert (MCAP to .rrd) into this file instead of opening a viewer.
         #[arg(long, value_name = "FILE")]
         to: Option<PathBuf>,
+        /// Address the viewer listens on (default: the loopback address 127.0.0.1; `0.0.0.0`
+        /// accepts connections from other machines).
+        #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+        bind: std::net::IpAddr,
     },
 }
 
@@ -126,22 +130,87 @@ enum Command {
 const MAX_SCENE_BYTES: u64 = 4 << 20;
 
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
+    load_checked(path, set).map_err(|e| match e {
+        LoadError::Read(m) => m,
+        LoadError::Scene(e) => e.to_string(),
+    })
+}
+
+enum LoadError {
+    Read(String),
+    Scene(tread::io::scene::SceneErrors),
+}
+
+/// Load with `--mode M` (an override of `analysis.mode`). The problems the switch causes —
+/// sections the scene has for its own mode, sections the new mode needs — are labelled
+/// `(--mode M)` instead of `(--set)` and headed by one line saying what happened; problems of
+/// the scene or of `--set` values keep their labels.
+fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Scene, String> {
+    let Some(m) = mode else {
+        return load(path, set);
+    };
+    let mut all = set.to_vec();
+    all.push(format!("analysis.mode=\"{m}\""));
+    let mut errs = match load_checked(path, &all) {
+        Ok(s) => return Ok(s),
+        Err(LoadError::Read(e)) => return Err(e),
+        Err(LoadError::Scene(e)) => e,
+    };
+    let (own, base): (Option<String>, Vec<String>) = match load_checked(path, set) {
+        Ok(s) => (Some(s.analysis.mode.to_string()), Vec::new()),
+        Err(LoadError::Scene(e)) => (None, e.0.iter().map(|e| e.key.clone()).collect()),
+        Err(LoadError::Read(_)) => (None, Vec::new()),
+    };
+    let mut caused = 0;
+    for e in &mut errs.0 {
+        if !base.contains(&e.key) {
+            caused += 1;
+            if e.is_override() {
+                e.source_name = e.source_name.replace(":(--set)", &format!(":(--mode {m})"));
+            }
+        }
+    }
+    let head = if caused > 0 {
+        format!(
+            "--mode {m}: {} of the scene {}{} {} not fit analysis mode \"{m}\" (below); \
+             remove or add them in a copy of the scene, or run it in its own mode:\n",
+            if caused == 1 {
+                "1 section or key".to_string()
+            } else {
+                format!("{caused} sections or keys")
+            },
+            path.display(),
+            own.map(|o| format!(" (written for mode \"{o}\")"))
+                .unwrap_or_default(),
+            if caused == 1 { "does" } else { "do" },
+        )
+    } else {
+        String::new()
+    };
+    Err(format!("{head}{errs}"))
+}
+
+fn load_checked(path: &Path, set: &[String]) -> Result<Scene, LoadError> {
     use std::io::Read;
     let mut bytes = Vec::new();
     std::fs::File::open(path)
         .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
-        .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
+        .map_err(|e| LoadError::Read(format!("cannot read scene {}: {e}", path.display())))?;
     if bytes.len() as u64 > MAX_SCENE_BYTES {
-        return Err(format!(
+        return Err(LoadError::Read(format!(
             "cannot read scene {}: larger than {} MiB, not a scene file",
             path.display(),
             MAX_SCENE_BYTES >> 20
-        ));
+        )));
     }
-    let text = String::from_utf8(bytes)
-        .map_err(|e| format!("cannot read scene {}: not UTF-8 text ({e})", path.display()))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        LoadError::Read(format!(
+            "cannot read scene {}: not UTF-8 text ({e})",
+            path.display()
+        ))
+    })?;
     let mut scene =
-        Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(|e| e.to_string())?;
+        Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(LoadError::Scene)?;
     // A relative mesh file is relative to the scene file.
     scene.resolve_paths(path);
     Ok(scene)
@@ -292,39 +361,31 @@ fn main() -> ExitCode {
         Some(Command::Run {
             scene,
             out,
-            mut set,
+            set,
             mode,
             verbose,
             dump_matrix,
-        }) => {
-            if let Some(m) = mode {
-                set.push(format!("analysis.mode=\"{m}\""));
-            }
-            match load(&scene, &set) {
-                Ok(s)
-                    if dump_matrix.is_some()
-                        && s.analysis.mode != tread::io::scene::Mode::Steady =>
-                {
-                    eprintln!(
+        }) => match load_with_mode(&scene, &set, mode.as_deref()) {
+            Ok(s) if dump_matrix.is_some() && s.analysis.mode != tread::io::scene::Mode::Steady => {
+                eprintln!(
                         "tread: --dump-matrix writes the steady tangent: it needs analysis mode \"steady\" (--mode steady), not \"{}\"",
                         s.analysis.mode
                     );
-                    ExitCode::from(2)
-                }
-                Ok(s) => {
-                    if threads == 0 && s.solver.threads > 0 {
-                        let _ = rayon::ThreadPoolBuilder::new()
-                            .num_threads(s.solver.threads)
-                            .build_global();
-                    }
-                    run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
-                }
-                Err(e) => {
-                    eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
-                    ExitCode::from(2)
-                }
+                ExitCode::from(2)
             }
-        }
+            Ok(s) => {
+                if threads == 0 && s.solver.threads > 0 {
+                    let _ = rayon::ThreadPoolBuilder::new()
+                        .num_threads(s.solver.threads)
+                        .build_global();
+                }
+                run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
+            }
+            Err(e) => {
+                eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
+                ExitCode::from(2)
+            }
+        },
         Some(Command::Compare {
             scene,
             out,
@@ -401,15 +462,17 @@ fn main() -> ExitCode {
         Some(Command::Sweep { command }) => {
             tread::sweep::cli::main(command, cli.threads, cli.quiet)
         }
-        Some(Command::Replay { log, to }) => match tread::io::replay::replay(&log, to.as_deref()) {
-            Ok(msg) => {
-                say(&msg);
-                ExitCode::SUCCESS
+        Some(Command::Replay { log, to, bind }) => {
+            match tread::io::replay::replay_bound(&log, to.as_deref(), bind) {
+                Ok(msg) => {
+                    say(&msg);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("tread: {e}");
+                    ExitCode::from(1)
+                }
             }
-            Err(e) => {
-                eprintln!("tread: {e}");
-                ExitCode::from(1)
-            }
-        },
+        }
     }
 }

@@ -84,7 +84,13 @@ pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders
             Sink::Summary => {}
             // Scalars at every step: decimating them aliases with the node passages.
             Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), 1),
-            Sink::Vtu => r.push(Box::new(record::vtu::VtuSink::new(out_dir)), every),
+            Sink::Vtu => r.push(
+                Box::new(record::vtu::VtuSink::with_format(
+                    out_dir,
+                    scene.output.vtu_format,
+                )),
+                every,
+            ),
             Sink::Mcap => r.push(Box::new(record::mcap::McapSink::new(out_dir)), every),
             Sink::Png => r.push(Box::new(record::png::PngSink::new(out_dir)), every),
             #[cfg(feature = "rerun")]
@@ -95,6 +101,8 @@ pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders
             ),
         }
     }
+    // The increment status file is always written (one short line per increment).
+    r.push(Box::new(record::sta::StaSink::new(out_dir)), 1);
     if !quiet {
         r.push(Box::new(record::progress::Progress::new()), 1);
     }

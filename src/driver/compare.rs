@@ -284,6 +284,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             &tr_opts.out_dir,
             &st_opts.out_dir,
             &opts.out_dir.join("contact_compare.png"),
+            &crate::io::record::png::Units::parse(&scene.scene.units),
         );
     }
     let mut headline = comparison_table(&rows);
@@ -357,7 +358,7 @@ fn write_text_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> Result<
 type Curve = Vec<(f64, f64)>;
 
 /// t_n and t_T along x1 from both modes' `contact.csv` (warnings only on failure).
-fn contact_plot(tr: &Path, st: &Path, out: &Path) {
+fn contact_plot(tr: &Path, st: &Path, out: &Path, units: &crate::io::record::png::Units) {
     let load = |dir: &Path| -> Option<(Curve, Curve)> {
         let (h, rows) = read_csv(&dir.join("contact.csv")).ok()?;
         let ix = h.iter().position(|c| c == "x1")?;
@@ -381,8 +382,8 @@ fn contact_plot(tr: &Path, st: &Path, out: &Path) {
     if let Err(e) = crate::io::record::png::line_chart(
         out,
         "Contact tractions: transient (extracted) vs steady",
-        "x1",
-        "traction per unit reference length",
+        &crate::io::record::png::with_unit("x1", &units.length),
+        &crate::io::record::png::with_unit("traction", &units.stress()),
         &[
             ("t_n transient", &tn_t),
             ("t_n steady", &tn_s),

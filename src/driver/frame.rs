@@ -3,7 +3,8 @@
 //! view ([`crate::io::record::Recorder::wants_view`]).
 //!
 //! * Nodal stress: the Cauchy stress σ = P Fᵀ/J of each cell evaluated at its nodes and averaged
-//!   over the cells sharing a node (discontinuous across cells otherwise).
+//!   over the cells sharing a node (discontinuous across cells otherwise); with σ33 of plane
+//!   strain and the pressure field of a mixed formulation ([`NodalStress`]).
 //! * Strain energy ∫ (W(F) − W(I)) dV and kinetic energy ½ ω² ∫ ρ |F t|² dV (t = (−X2, X1): the
 //!   velocity of steady spin is v = ω ∂θχ = ω F t), with the 3×3 Gauss rule per cell.
 //! * Hub loads: [`SolidSystem::hub_reaction`].
@@ -23,6 +24,9 @@ use crate::solver::{IterationRecord, RejectedStep, StepInfo, StepObserver};
 /// Owned data of a view; [`SolidFrame::view`] lends it out with the system's state.
 pub struct SolidFrame {
     pub stress: Vec<[f64; 3]>,
+    /// Nodal σ33 (plane strain) and pressure field p (empty without one).
+    pub sigma_33: Vec<f64>,
+    pub pressure: Vec<f64>,
     pub contact: Vec<ContactSample>,
     pub hub: HubLoads,
     pub energy: Energy,
@@ -65,8 +69,11 @@ impl<R: Recorder + ?Sized> StepObserver<SolidSystem> for R {
 impl SolidFrame {
     pub fn capture(sys: &SolidSystem) -> Self {
         let (f, m) = sys.hub_reaction();
+        let ns = nodal_stress_full_at(sys, &sys.x);
         Self {
-            stress: nodal_stress(sys),
+            stress: ns.in_plane,
+            sigma_33: ns.sigma_33,
+            pressure: ns.pressure,
             contact: sys.contact_samples(),
             hub: HubLoads {
                 force: [f[0], f[1]],
@@ -85,6 +92,8 @@ impl SolidFrame {
             mesh: Some(&sys.model.mesh),
             x: &sys.x,
             stress: &self.stress,
+            sigma_33: &self.sigma_33,
+            pressure: &self.pressure,
             contact: &self.contact,
             hub: Some(self.hub),
             energy: Some(self.energy),
@@ -102,37 +111,90 @@ pub fn nodal_stress(sys: &SolidSystem) -> Vec<[f64; 3]> {
 
 /// [`nodal_stress`] of the state `x` (full vector, same layout as `sys.x`).
 pub fn nodal_stress_at(sys: &SolidSystem, x: &[f64]) -> Vec<[f64; 3]> {
+    nodal_stress_full_at(sys, x).in_plane
+}
+
+/// Nodal stresses of a state, averaged over the cells sharing each node; NaN at a node where
+/// no cell gives a finite value.
+pub struct NodalStress {
+    /// `[σ11, σ22, σ12]`.
+    pub in_plane: Vec<[f64; 3]>,
+    /// σ33 of plane strain (`F33 = 1`): the law's out-of-plane stress minus the pressure.
+    pub sigma_33: Vec<f64>,
+    /// Pressure field p of a mixed (incompressible) formulation, σ = σ_law − p I; empty when the
+    /// model has none.
+    pub pressure: Vec<f64>,
+}
+
+/// [`NodalStress`] of the state `x` (full vector, same layout as `sys.x`).
+///
+/// The pressure is recovered from the in-plane stress: the element's Cauchy stress is
+/// σ = σ_law − p I (the term −p cof F of P gives −p I), so p = tr(σ_law − σ)/2 with
+/// σ_law = P_law(∇u) Fᵀ/J.
+pub fn nodal_stress_full_at(sys: &SolidSystem, x: &[f64]) -> NodalStress {
     let mesh = &sys.model.mesh;
-    let mut sum = vec![[0.0; 3]; mesh.n_nodes()];
-    let mut count = vec![0u32; mesh.n_nodes()];
+    let has_p = !matches!(
+        sys.model.pressure,
+        crate::physics::solid::PressureMode::None
+    );
+    let nn = mesh.n_nodes();
+    // [σ11, σ22, σ12, σ33, p] per node.
+    let mut sum = vec![[0.0; 5]; nn];
+    let mut count = vec![0u32; nn];
     for c in 0..mesh.n_cells() {
         let p = mesh.degree[c] as usize;
         let nodes = mesh.cell_nodes(c);
+        let law = sys.model.material_of(c);
         for j in 0..=p {
             for i in 0..=p {
                 let xi = -1.0 + 2.0 * i as f64 / p as f64;
                 let eta = -1.0 + 2.0 * j as f64 / p as f64;
                 if let Some(pv) = sys.model.point_values(c, &sys.dofs, x, xi, eta) {
                     let s = pv.sigma;
-                    if s.iter().all(|v| v.is_finite()) {
+                    let pres = if has_p {
+                        let f = Mat2::identity() + pv.grad_u;
+                        let sl = law.stress(&pv.grad_u) * f.transpose() / f.determinant();
+                        0.5 * (sl - s).trace()
+                    } else {
+                        0.0
+                    };
+                    let s33 = law.cauchy_33(&pv.grad_u) - pres;
+                    let v = [
+                        s[(0, 0)],
+                        s[(1, 1)],
+                        0.5 * (s[(0, 1)] + s[(1, 0)]),
+                        s33,
+                        pres,
+                    ];
+                    if v.iter().all(|v| v.is_finite()) {
                         let n = nodes[i + (p + 1) * j] as usize;
-                        sum[n][0] += s[(0, 0)];
-                        sum[n][1] += s[(1, 1)];
-                        sum[n][2] += 0.5 * (s[(0, 1)] + s[(1, 0)]);
+                        for (a, b) in sum[n].iter_mut().zip(v) {
+                            *a += b;
+                        }
                         count[n] += 1;
                     }
                 }
             }
         }
     }
-    for (s, &k) in sum.iter_mut().zip(&count) {
-        if k > 0 {
-            for v in s.iter_mut() {
-                *v /= f64::from(k);
-            }
+    let mut out = NodalStress {
+        in_plane: Vec::with_capacity(nn),
+        sigma_33: Vec::with_capacity(nn),
+        pressure: Vec::with_capacity(if has_p { nn } else { 0 }),
+    };
+    for (s, &k) in sum.iter().zip(&count) {
+        let m = if k > 0 {
+            s.map(|v| v / f64::from(k))
+        } else {
+            [f64::NAN; 5]
+        };
+        out.in_plane.push([m[0], m[1], m[2]]);
+        out.sigma_33.push(m[3]);
+        if has_p {
+            out.pressure.push(m[4]);
         }
     }
-    sum
+    out
 }
 
 /// Strain and kinetic energy (per unit thickness).

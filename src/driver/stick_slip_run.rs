@@ -111,6 +111,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 mesh: None,
                 x: &[],
                 stress: &[],
+                sigma_33: &[],
+                pressure: &[],
                 contact: &[],
                 hub: None,
                 energy: None,

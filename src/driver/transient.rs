@@ -1411,6 +1411,16 @@ pub fn integrate(
         v0.copy_from_slice(&tr.vn);
         a0.copy_from_slice(&tr.an);
         tr.sys.save_state(&mut saved);
+        if newton.opts.verbose {
+            // A header above the Newton table of this step.
+            eprintln!(
+                "  step {}: t = {:.6e} -> {:.6e}, dt = {:.4e}",
+                rep.steps,
+                t0,
+                t0 + h,
+                h
+            );
+        }
         match tr.step(&mut newton, h) {
             Ok((err, its)) => {
                 let reject = opts.adaptive

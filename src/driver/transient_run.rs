@@ -23,7 +23,7 @@
 //! `ring, pos, X1, X2, u1, u2`, where (X1, X2) is the referential (spatial) node position and
 //! u = χ − X the displacement of the material point that sits there.
 
-use super::frame::nodal_stress_at;
+use super::frame::nodal_stress_full_at;
 use super::system::SolidSystem;
 use super::tables;
 use super::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
@@ -191,7 +191,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             return;
         }
         let snap = tr.snapshot();
-        let stress = nodal_stress_at(&tr.sys, &tr.un);
+        let ns = nodal_stress_full_at(&tr.sys, &tr.un);
         let contact = tr
             .sys
             .contact
@@ -202,7 +202,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         let view = StepView {
             mesh: Some(&tr.sys.model.mesh),
             x: &tr.un,
-            stress: &stress,
+            stress: &ns.in_plane,
+            sigma_33: &ns.sigma_33,
+            pressure: &ns.pressure,
             contact: &contact,
             hub: Some(HubLoads {
                 force: [snap.hub_force_x, snap.hub_force_y],
@@ -405,7 +407,7 @@ fn record_steady_field(
     let mut x = tr.un.clone();
     let n = field.len().min(x.len());
     x[..n].copy_from_slice(&field[..n]);
-    let stress = nodal_stress_at(&tr.sys, &x);
+    let ns = nodal_stress_full_at(&tr.sys, &x);
     let contact = tr
         .sys
         .contact
@@ -419,7 +421,9 @@ fn record_steady_field(
     let view = StepView {
         mesh: Some(&tr.sys.model.mesh),
         x: &x,
-        stress: &stress,
+        stress: &ns.in_plane,
+        sigma_33: &ns.sigma_33,
+        pressure: &ns.pressure,
         contact: &contact,
         hub: Some(HubLoads {
             force: [mean[0], mean[1]],

@@ -218,6 +218,7 @@ const OUTPUT_NAMES: &[&str] = &[
     "branch.csv",
     "compare.csv",
     "increments.sta",
+    "run.sta",
     "fields.pvd",
     "steady.vtu",
     "contact.pvd",

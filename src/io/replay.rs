@@ -6,7 +6,12 @@
 //!   `--to FILE.rrd` only converts.
 //!
 //! The viewer is the `rerun` executable on `PATH` (or `$TREAD_RERUN_BIN`); when there is none,
-//! [`ReplayError::NoViewer`] says how to install it.
+//! [`ReplayError::NoViewer`] says how to install it. The viewer's server listens on the
+//! loopback address only (`rerun --bind 127.0.0.1`); `tread replay --bind ADDR` chooses
+//! another address (e.g. `0.0.0.0` to accept connections from other machines).
+//!
+//! A converted recording is named after the scene (the `name` of the MCAP's `scene` metadata
+//! record), as the `.rrd` written during a run is.
 //!
 //! The conversion reads the MCAP with a streaming reader (a truncated file converts up to its
 //! last complete chunk), decodes every protobuf message with the schema embedded in the file
@@ -75,8 +80,36 @@ fn kind(log: &Path) -> Option<&'static str> {
     }
 }
 
-/// Run `tread replay LOG [--to FILE]`; returns a line to print.
+/// Address the viewer listens on unless the user chooses another: the loopback address.
+pub const DEFAULT_BIND: std::net::IpAddr = std::net::IpAddr::V4(std::net::Ipv4Addr::LOCALHOST);
+
+/// Run `tread replay LOG [--to FILE]` with the viewer bound to [`DEFAULT_BIND`].
 pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
+    replay_bound(log, to, DEFAULT_BIND)
+}
+
+/// The scene name of an MCAP log (its `scene` metadata record), if it has one.
+pub fn mcap_scene_name(bytes: &[u8]) -> Option<String> {
+    let reader = mcap::read::LinearReader::new(bytes).ok()?;
+    for r in reader {
+        match r {
+            Ok(mcap::records::Record::Metadata(m)) if m.name == "scene" => {
+                return m.metadata.get("name").cloned();
+            }
+            Ok(_) => {}
+            Err(_) => return None,
+        }
+    }
+    None
+}
+
+/// Run `tread replay LOG [--to FILE] [--bind ADDR]`; returns a line to print. A viewer started
+/// here listens on `bind`.
+pub fn replay_bound(
+    log: &Path,
+    to: Option<&Path>,
+    bind: std::net::IpAddr,
+) -> Result<String, ReplayError> {
     if !log.is_file() {
         return Err(ReplayError::Read(log.to_path_buf(), "no such file".into()));
     }
@@ -113,14 +146,14 @@ pub fn replay(log: &Path, to: Option<&Path>) -> Result<String, ReplayError> {
                 find_viewer().ok_or_else(|| ReplayError::NoViewer(log.display().to_string()))?;
             let tmp = std::env::temp_dir().join(format!("tread-replay-{}.rrd", std::process::id()));
             mcap_to_rrd(log, &tmp)?;
-            let r = open(&viewer, &tmp);
+            let r = open(&viewer, &tmp, bind);
             let _ = std::fs::remove_file(&tmp);
             r
         }
         _ => {
             let viewer =
                 find_viewer().ok_or_else(|| ReplayError::NoViewer(log.display().to_string()))?;
-            open(&viewer, log)
+            open(&viewer, log, bind)
         }
     }
 }
@@ -150,8 +183,10 @@ pub fn check_mcap(log: &Path) -> Result<u64, ReplayError> {
     Ok(n)
 }
 
-fn open(viewer: &Path, file: &Path) -> Result<String, ReplayError> {
+fn open(viewer: &Path, file: &Path, bind: std::net::IpAddr) -> Result<String, ReplayError> {
     let status = Command::new(viewer)
+        .arg("--bind")
+        .arg(bind.to_string())
         .arg(file)
         .status()
         .map_err(|e| ReplayError::Viewer(format!("{}: {e}", viewer.display())))?;
@@ -193,6 +228,10 @@ mod convert {
             .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
         rec.set_log_time_enabled(false);
         rec.set_log_tick_enabled(false);
+        // Named after the scene (`send_properties(false)` drops a builder's name).
+        if let Some(name) = super::mcap_scene_name(&bytes) {
+            let _ = rec.send_recording_name(name);
+        }
         let mut st = ConvertStats::default();
         // Metadata records (not part of the message stream).
         if let Ok(reader) = mcap::read::LinearReader::new(&bytes) {

@@ -36,7 +36,7 @@
 //!             mass = "consistent" | "lumped", max_steps = 200000  (transient)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
-//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1
+//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1, vtu_format = "binary" | "ascii"
 //!             (sinks from "summary", "csv", "vtu", "mcap", "rerun", "png")
 //! ```
 //!
@@ -329,6 +329,18 @@ keyword_enum! {
         MooneyRivlin => "mooney_rivlin",
         /// Incompressible Mooney–Rivlin `c1 (I1 − 3) + c2 (I2 − 3)`, J = 1 by a Q2/P1 pressure.
         MooneyRivlinIncompressible => "mooney_rivlin_incompressible",
+    }
+}
+
+keyword_enum! {
+    /// Encoding of the `.vtu` files (`[output] vtu_format`).
+    #[derive(Default)]
+    VtuFormat, "VTU format" {
+        #[default]
+        /// Raw little-endian binary in an appended block (`header_type="UInt64"`).
+        Binary => "binary",
+        /// Text (larger and slower; readable in an editor).
+        Ascii => "ascii",
     }
 }
 
@@ -1287,6 +1299,8 @@ pub struct OutputSpec {
     pub sinks: Vec<Sink>,
     /// Decimation: steps between recorded frames (>= 1); the final step is always recorded.
     pub every: usize,
+    /// Encoding of the `.vtu` files: `binary` (default) or `ascii`.
+    pub vtu_format: VtuFormat,
 }
 
 /// Default of `[output] sinks`: the light-weight outputs (MCAP and Rerun logs are opt-in).
@@ -1297,6 +1311,7 @@ impl Default for OutputSpec {
         OutputSpec {
             sinks: DEFAULT_SINKS.to_vec(),
             every: 1,
+            vtu_format: VtuFormat::Binary,
         }
     }
 }
@@ -1974,6 +1989,7 @@ static SCHEMA: &[SectionSchema] = &[
         fields: &[
             opt("sinks", Kind::KeywordList(Sink::NAMES)),
             opt("every", Kind::UInt),
+            opt("vtu_format", Kind::Keyword(VtuFormat::NAMES)),
         ],
     },
 ];

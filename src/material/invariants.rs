@@ -33,6 +33,16 @@
 
 use crate::math::{cofactor, det_identity_plus_minus_one, flatten, v, Mat2, Tangent};
 
+/// Out-of-plane Cauchy stress σ33 of plane strain (`F33 = 1`) from the first partials:
+/// `∂I1/∂F33 = 2`, `∂I2/∂F33 = 2(I1 − 1)`, `∂J/∂F33 = J`, so
+/// `σ33 = P33 / J = (2W1 + 2W2 (I1 − 1)) / J + WJ`.
+/// (A pressure field adds `−p`; the caller subtracts it.)
+#[inline]
+pub fn sigma33_from_invariants(k: &Kinematics, d: &InvariantDerivs) -> f64 {
+    let i1 = 3.0 + k.i1m3;
+    (2.0 * d.d1[0] + 2.0 * d.d1[1] * (i1 - 1.0)) / k.j + d.d1[2]
+}
+
 /// Kinematic quantities of one quadrature point, all derived from `H = ∇u`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Kinematics {

@@ -140,6 +140,16 @@ impl Material {
         }
     }
 
+    /// Out-of-plane Cauchy stress σ33 of plane strain from this law alone (an element pressure
+    /// field adds `−p`); NaN when `J ≤ 0`.
+    pub fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+        match self {
+            Material::NeoHookean(m) => m.cauchy_33(grad_u),
+            Material::MooneyRivlin(m) => m.cauchy_33(grad_u),
+            Material::MooneyRivlinIncompressible(m) => m.cauchy_33(grad_u),
+        }
+    }
+
     /// 3D bulk modulus `K` of the small-strain limit (`None` for an incompressible law).
     pub fn small_strain_bulk_modulus(&self) -> Option<f64> {
         match self {

@@ -72,6 +72,17 @@ impl MooneyRivlin {
     }
 }
 
+impl MooneyRivlin {
+    /// Out-of-plane Cauchy stress σ33 (plane strain, `F33 = 1`); NaN when `J ≤ 0`.
+    pub fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+        let k = Kinematics::new(grad_u);
+        if !k.is_admissible() {
+            return f64::NAN;
+        }
+        super::invariants::sigma33_from_invariants(&k, &self.derivs(&k))
+    }
+}
+
 impl Hyperelastic for MooneyRivlin {
     fn energy(&self, grad_u: &Mat2) -> f64 {
         let k = Kinematics::new(grad_u);

@@ -176,16 +176,62 @@ pub struct Vtu {
     pub arrays: BTreeMap<String, Vec<f64>>,
 }
 
+/// Parse a `.vtu` written as ASCII or as raw appended binary (`header_type="UInt64"`).
 pub fn parse_vtu(path: &Path) -> Vtu {
     use quick_xml::events::Event;
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut r = quick_xml::Reader::from_str(&text);
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let marker = b"<AppendedData encoding=\"raw\">";
+    let (xml, blob): (String, &[u8]) = match bytes.windows(marker.len()).position(|w| w == marker) {
+        Some(k) => {
+            let us = k + bytes[k..]
+                .iter()
+                .position(|&b| b == b'_')
+                .expect("'_' after AppendedData");
+            let head = String::from_utf8(bytes[..k].to_vec()).expect("utf8 XML header");
+            (head + "</VTKFile>", &bytes[us + 1..])
+        }
+        None => (String::from_utf8(bytes.clone()).expect("utf8"), &[]),
+    };
+    let decode = |ty: &str, offset: usize| -> Vec<f64> {
+        let n = u64::from_le_bytes(blob[offset..offset + 8].try_into().unwrap()) as usize;
+        let d = &blob[offset + 8..offset + 8 + n];
+        match ty {
+            "Float64" => d
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                .collect(),
+            "Int64" => d
+                .chunks_exact(8)
+                .map(|c| i64::from_le_bytes(c.try_into().unwrap()) as f64)
+                .collect(),
+            "Int32" => d
+                .chunks_exact(4)
+                .map(|c| i32::from_le_bytes(c.try_into().unwrap()) as f64)
+                .collect(),
+            "UInt8" => d.iter().map(|&b| f64::from(b)).collect(),
+            other => panic!("unknown VTK type {other}"),
+        }
+    };
+    let mut r = quick_xml::Reader::from_str(&xml);
     let mut v = Vtu::default();
     let mut current: Option<String> = None;
     let mut in_points = false;
+    let store = |v: &mut Vtu, name: &str, vals: Vec<f64>| {
+        if name == "Points" {
+            v.points.extend(vals);
+        } else if name == "TimeValue" {
+            v.time = vals[0];
+        } else {
+            v.arrays.entry(name.to_string()).or_default().extend(vals);
+        }
+    };
     loop {
         match r.read_event().expect("well-formed XML") {
-            Event::Start(e) => {
+            ev @ (Event::Start(_) | Event::Empty(_)) => {
+                let empty = matches!(ev, Event::Empty(_));
+                let (Event::Start(e) | Event::Empty(e)) = ev else {
+                    unreachable!()
+                };
                 let attr = |k: &str| {
                     e.attributes()
                         .flatten()
@@ -199,13 +245,20 @@ pub fn parse_vtu(path: &Path) -> Vtu {
                     }
                     b"Points" => in_points = true,
                     b"DataArray" => {
-                        current = Some(attr("Name").unwrap_or_else(|| {
+                        let name = attr("Name").unwrap_or_else(|| {
                             if in_points {
                                 "Points".into()
                             } else {
                                 "?".into()
                             }
-                        }))
+                        });
+                        if attr("format").as_deref() == Some("appended") {
+                            let off: usize = attr("offset").unwrap().parse().unwrap();
+                            let vals = decode(&attr("type").unwrap(), off);
+                            store(&mut v, &name, vals);
+                        } else if !empty {
+                            current = Some(name);
+                        }
                     }
                     _ => {}
                 }
@@ -225,13 +278,7 @@ pub fn parse_vtu(path: &Path) -> Vtu {
                         .split_whitespace()
                         .map(|w| w.parse::<f64>().expect("number"))
                         .collect();
-                    if name == "Points" {
-                        v.points.extend(vals);
-                    } else if name == "TimeValue" {
-                        v.time = vals[0];
-                    } else {
-                        v.arrays.entry(name.clone()).or_default().extend(vals);
-                    }
+                    store(&mut v, name, vals);
                 }
             }
             Event::Eof => break,

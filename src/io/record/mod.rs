@@ -99,6 +99,7 @@ pub mod png;
 pub mod progress;
 #[cfg(feature = "rerun")]
 pub mod rrd;
+pub mod sta;
 pub mod vtu;
 
 pub use interrupt::{install_interrupt_handler, interrupted, request_interrupt};
@@ -163,6 +164,12 @@ pub struct StepView<'a> {
     /// Nodal Cauchy stress `[σ11, σ22, σ12]` (cell values averaged at shared nodes); empty
     /// without a mesh.
     pub stress: &'a [[f64; 3]],
+    /// Nodal out-of-plane stress σ33 (plane strain: from the constitutive law with F33 = 1,
+    /// minus the pressure); empty when not computed.
+    pub sigma_33: &'a [f64],
+    /// Nodal pressure p of a mixed (incompressible) formulation, σ = σ_law − p I; empty when the
+    /// model has no pressure field.
+    pub pressure: &'a [f64],
     /// Contact traction samples along the outer boundary (empty without contact).
     pub contact: &'a [ContactSample],
     pub hub: Option<HubLoads>,
@@ -628,6 +635,8 @@ mod tests {
                 mesh: None,
                 x: &x,
                 stress: &[],
+                sigma_33: &[],
+                pressure: &[],
                 contact: &[],
                 hub: None,
                 energy: None,

@@ -10,6 +10,15 @@
 //! * `series.png` — the model's own scalars (e.g. stick-slip x, v) against time.
 //!
 //! A plot without data is not written. Non-finite points are skipped.
+//!
+//! Every axis carries its unit, derived from `[scene] units` (`"L-F-T"`, e.g. `in-lbf-s`:
+//! length L, force F, time T; stresses and tractions F/L², forces per unit thickness F/L,
+//! torques and energies per unit thickness F·L/L). Tick labels are plain numbers (`60`, `0.25`,
+//! `1.5e-7` only when the numbers need it). Quantities of different units never share an axis:
+//! `series.png` and `branch.png` draw one panel per quantity. A hub force or torque whose
+//! largest magnitude is below [`ROUND_OFF`] times its natural scale (the largest nodal stress
+//! magnitude times the outer radius, squared for the torque) is round-off, not a signal: it is
+//! drawn as a flat line at zero, and its legend says so.
 
 use super::{ContinuationPoint, RecordError, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::contact::ContactSample;
@@ -44,6 +53,11 @@ pub struct PngSink {
     contact_time: f64,
     branch_param: String,
     branch: Vec<Series>,
+    units: Units,
+    /// Largest nodal stress magnitude seen and the outer radius of the mesh (scales of the
+    /// hub resultants).
+    stress_scale: f64,
+    radius: f64,
 }
 
 impl PngSink {
@@ -58,6 +72,9 @@ impl PngSink {
             contact_time: 0.0,
             branch_param: String::new(),
             branch: Vec::new(),
+            units: Units::default(),
+            stress_scale: 0.0,
+            radius: 0.0,
         }
     }
 }
@@ -229,6 +246,47 @@ impl AxisLayout {
         }
     }
 
+    /// A plain tick label: as many decimals as the tick spacing needs (`60`, `0.25`,
+    /// `-98.42`), scientific notation (`1.5e-7`) only for very large or very small numbers.
+    pub fn plain_label(&self, v: f64) -> String {
+        if self.scale == Scale::Log10 {
+            return self.label(v, false);
+        }
+        let step = self
+            .major
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .fold(f64::INFINITY, f64::min);
+        let step = if step.is_finite() && step > 0.0 {
+            step
+        } else {
+            (self.hi - self.lo)
+                .abs()
+                .max(v.abs())
+                .max(f64::MIN_POSITIVE)
+        };
+        let big = v.abs().max(self.lo.abs()).max(self.hi.abs());
+        if big >= 1e7 || step < 1e-5 * big.max(1e-300) || big < 1e-4 {
+            // Scientific, with the digits the spacing needs relative to the value.
+            if v == 0.0 {
+                return "0".into();
+            }
+            let digits = ((v.abs() / step).log10().ceil().max(0.0) as usize).min(12);
+            let t = format!("{v:.digits$e}");
+            return t.replace("e0", "").replace("e-0", "e-");
+        }
+        let decimals = (-step.log10().floor()).max(0.0) as usize;
+        let t = format!("{:.*}", decimals.min(12), v);
+        if t.trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+        {
+            "0".into()
+        } else {
+            t
+        }
+    }
+
     /// The tick label at plot coordinate `v`: `1e-3` for a decade of a log axis; on a linear
     /// axis plotters' default format (`sci = false`) or `{:.3e}` (`sci = true`).
     pub fn label(&self, v: f64, sci: bool) -> String {
@@ -369,8 +427,8 @@ pub fn chart(
         .configure_mesh()
         .x_desc(x.label)
         .y_desc(y.label)
-        .x_label_formatter(&|v| xa.label(*v, false))
-        .y_label_formatter(&|v| ya.label(*v, true))
+        .x_label_formatter(&|v| xa.plain_label(*v))
+        .y_label_formatter(&|v| ya.plain_label(*v))
         .draw()
         .map_err(|e| e.to_string())?;
     for (k, (name, s)) in mapped.iter().enumerate() {
@@ -396,13 +454,175 @@ pub fn chart(
     Ok(notes)
 }
 
+/// One panel of [`panels`]: the y-axis label (with its unit) and the series drawn in it.
+pub type Panel<'a> = (String, Vec<(&'a str, &'a [(f64, f64)])>);
+
+/// Panels stacked vertically over a shared x quantity, each with its own y axis (for
+/// quantities of different units), written to `path`.
+pub fn panels(path: &Path, title: &str, x_label: &str, panels: &[Panel]) -> Result<(), String> {
+    if panels.is_empty() {
+        return Ok(());
+    }
+    ensure_font()?;
+    let h = (220 * panels.len()).clamp(560, 1400) as u32;
+    let root = BitMapBackend::new(path, (900, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let root = root
+        .titled(title, ("sans-serif", 22))
+        .map_err(|e| e.to_string())?;
+    let areas = root.split_evenly((panels.len(), 1));
+    for (area, (y_label, series)) in areas.iter().zip(panels) {
+        let pts = || series.iter().flat_map(|(_, s)| s.iter());
+        let xa = AxisLayout::new(Scale::Linear, pts().map(|p| p.0));
+        let ya = AxisLayout::new(Scale::Linear, pts().map(|p| p.1));
+        let mut chart = ChartBuilder::on(area)
+            .margin(8)
+            .x_label_area_size(40)
+            .y_label_area_size(90)
+            .build_cartesian_2d(xa.clone(), ya.clone())
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label.as_str())
+            .x_label_formatter(&|v| xa.plain_label(*v))
+            .y_label_formatter(&|v| ya.plain_label(*v))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (k, (name, s)) in series.iter().enumerate() {
+            let c = COLORS[k % COLORS.len()];
+            chart
+                .draw_series(LineSeries::new(s.iter().copied(), c.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// A resultant below this fraction of its natural scale is plotted as zero (round-off).
+pub const ROUND_OFF: f64 = 1e-9;
+
+/// Units of the axes, from `[scene] units = "L-F-T"`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Units {
+    pub length: String,
+    pub force: String,
+    pub time: String,
+}
+
+impl Default for Units {
+    fn default() -> Self {
+        Units::parse(crate::io::scene::DEFAULT_UNITS)
+    }
+}
+
+impl Units {
+    /// `"in-lbf-s"` → in, lbf, s. Anything else keeps the text as the name of each base unit
+    /// (`length [u]`), so no axis is left without one.
+    pub fn parse(text: &str) -> Self {
+        let parts: Vec<&str> = text.split('-').map(str::trim).collect();
+        match parts.as_slice() {
+            [l, f, t] if !l.is_empty() && !f.is_empty() && !t.is_empty() => Units {
+                length: l.to_string(),
+                force: f.to_string(),
+                time: t.to_string(),
+            },
+            _ => {
+                let u = if text.trim().is_empty() {
+                    "?"
+                } else {
+                    text.trim()
+                };
+                Units {
+                    length: format!("length of {u}"),
+                    force: format!("force of {u}"),
+                    time: format!("time of {u}"),
+                }
+            }
+        }
+    }
+    /// Stress and traction: F/L².
+    pub fn stress(&self) -> String {
+        format!("{}/{}²", self.force, self.length)
+    }
+    /// Force per unit thickness: F/L.
+    pub fn force_per_thickness(&self) -> String {
+        format!("{}/{}", self.force, self.length)
+    }
+    /// Torque or energy per unit thickness: F·L/L.
+    pub fn moment_per_thickness(&self) -> String {
+        format!("{}·{}/{}", self.force, self.length, self.length)
+    }
+    /// Unit of a named model scalar or continuation measure ("1" when dimensionless).
+    pub fn of_scalar(&self, name: &str) -> String {
+        match name {
+            "x" | "u_r_outer" | "patch_x_min" | "patch_x_max" | "road_height" | "penetration" => {
+                self.length.clone()
+            }
+            "v" | "belt_speed" | "speed" => format!("{}/{}", self.length, self.time),
+            "friction_force" | "normal_force" => self.force.clone(),
+            "slipping" => "0 = stick, 1 = slip".into(),
+            "phi" => "rad".into(),
+            "omega" => format!("rad/{}", self.time),
+            "revolutions" => "revolutions".into(),
+            "hub_force_x" | "hub_force_y" | "contact_force_x" | "contact_force_y" => {
+                self.force_per_thickness()
+            }
+            "hub_torque" | "energy_strain" | "energy_kinetic" | "energy_total" => {
+                self.moment_per_thickness()
+            }
+            "max_pressure" | "max_shear_stress" => self.stress(),
+            "newton_iterations" => "iterations".into(),
+            _ => "1".into(),
+        }
+    }
+}
+
+/// `name [unit]`.
+pub fn with_unit(name: &str, unit: &str) -> String {
+    format!("{name} [{unit}]")
+}
+
+/// The series with values below `ROUND_OFF × scale` replaced by zeros, and its legend name.
+pub fn clamp_round_off(name: &str, s: &[(f64, f64)], scale: f64) -> (String, Vec<(f64, f64)>) {
+    let max = s.iter().map(|p| p.1.abs()).fold(0.0, f64::max);
+    if scale > 0.0 && scale.is_finite() && max <= ROUND_OFF * scale {
+        (
+            format!("{name} = 0 (|{name}| ≤ {max:.0e}: round-off)"),
+            s.iter().map(|p| (p.0, 0.0)).collect(),
+        )
+    } else {
+        (name.to_string(), s.to_vec())
+    }
+}
+
 impl Recorder for PngSink {
     fn run_started(&mut self, meta: &RunMeta) {
+        let units = meta
+            .scene_toml
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| t.get("scene")?.get("units")?.as_str().map(Units::parse));
+        self.units = units.unwrap_or_default();
         self.time_name = if meta.time_name == "load_factor" {
-            "load factor λ".into()
+            "load factor λ [1]".into()
         } else {
-            "time".into()
+            with_unit("time", &self.units.time)
         };
+        if let Some(m) = meta.mesh {
+            self.radius = m.nodes.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+        }
     }
     fn wants_view(&self, _info: &StepInfo) -> bool {
         true
@@ -410,6 +630,18 @@ impl Recorder for PngSink {
     fn step(&mut self, info: &StepInfo, view: Option<&StepView>) {
         let Some(v) = view else { return };
         let t = info.time;
+        for st in v.stress {
+            for c in st {
+                if c.is_finite() {
+                    self.stress_scale = self.stress_scale.max(c.abs());
+                }
+            }
+        }
+        if self.radius == 0.0 {
+            if let Some(m) = v.mesh {
+                self.radius = m.nodes.iter().map(|p| p[0].hypot(p[1])).fold(0.0, f64::max);
+            }
+        }
         if let Some(h) = v.hub {
             push(&mut self.hub[0], t, h.force[0]);
             push(&mut self.hub[1], t, h.force[1]);
@@ -442,7 +674,12 @@ impl Recorder for PngSink {
             }
         };
         let tn = self.time_name.clone();
+        let u = self.units.clone();
         if !self.hub[0].is_empty() {
+            let fscale = self.stress_scale * self.radius;
+            let (nx, fx) = clamp_round_off("F_x", &self.hub[0], fscale);
+            let (ny, fy) = clamp_round_off("F_y", &self.hub[1], fscale);
+            let (nm, m) = clamp_round_off("M", &self.hub[2], fscale * self.radius);
             let p = self.dir.join("hub_forces.png");
             draw(
                 "hub_forces.png",
@@ -450,8 +687,8 @@ impl Recorder for PngSink {
                     &p,
                     "Hub force on the body",
                     &tn,
-                    "force per unit thickness",
-                    &[("F_x", &self.hub[0]), ("F_y", &self.hub[1])],
+                    &with_unit("force per unit thickness", &u.force_per_thickness()),
+                    &[(nx.as_str(), fx.as_slice()), (ny.as_str(), fy.as_slice())],
                 ),
             );
             let p = self.dir.join("hub_torque.png");
@@ -461,8 +698,8 @@ impl Recorder for PngSink {
                     &p,
                     "Hub torque on the body",
                     &tn,
-                    "torque",
-                    &[("M", &self.hub[2])],
+                    &with_unit("torque per unit thickness", &u.moment_per_thickness()),
+                    &[(nm.as_str(), m.as_slice())],
                 ),
             );
         }
@@ -474,7 +711,7 @@ impl Recorder for PngSink {
                     &p,
                     "Energy",
                     &tn,
-                    "energy per unit thickness",
+                    &with_unit("energy per unit thickness", &u.moment_per_thickness()),
                     &[
                         ("strain", &self.energy[0]),
                         ("kinetic", &self.energy[1]),
@@ -497,41 +734,59 @@ impl Recorder for PngSink {
             let n: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_n)).collect();
             let t: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_t)).collect();
             let p = self.dir.join("contact.png");
-            let title = format!("Contact tractions at {tn} = {:.4e}", self.contact_time);
+            // Six significant digits, and the unit.
+            let tc = self.contact_time;
+            let dec = (5.0 - tc.abs().max(1e-300).log10().floor()).clamp(0.0, 12.0) as usize;
+            let title = format!(
+                "Contact tractions at {} = {:.*}{}",
+                self.time_name.split(" [").next().unwrap_or("time"),
+                dec,
+                tc,
+                if self.time_name.starts_with("time") {
+                    format!(" {}", u.time)
+                } else {
+                    String::new()
+                }
+            );
             draw(
                 "contact.png",
                 line_chart(
                     &p,
                     &title,
-                    "x1",
-                    "traction per unit reference length",
+                    &with_unit("x1", &u.length),
+                    &with_unit("traction", &u.stress()),
                     &[("t_n", &n), ("t_T", &t)],
                 ),
             );
         }
         if !self.branch.is_empty() {
             let p = self.dir.join("branch.png");
-            let s: Vec<(&str, &[(f64, f64)])> = self
+            let x = with_unit(&self.branch_param, &u.of_scalar(&self.branch_param));
+            let ps: Vec<Panel> = self
                 .branch
                 .iter()
-                .map(|(n, v)| (n.as_str(), v.as_slice()))
+                .map(|(n, v)| {
+                    (
+                        with_unit(n, &u.of_scalar(n)),
+                        vec![(n.as_str(), v.as_slice())],
+                    )
+                })
                 .collect();
-            draw(
-                "branch.png",
-                line_chart(&p, "Solution branch", &self.branch_param, "measure", &s),
-            );
+            draw("branch.png", panels(&p, "Solution branch", &x, &ps));
         }
         if !self.model.is_empty() {
             let p = self.dir.join("series.png");
-            let s: Vec<(&str, &[(f64, f64)])> = self
+            let ps: Vec<Panel> = self
                 .model
                 .iter()
-                .map(|(n, v)| (n.as_str(), v.as_slice()))
+                .map(|(n, v)| {
+                    (
+                        with_unit(n, &u.of_scalar(n)),
+                        vec![(n.as_str(), v.as_slice())],
+                    )
+                })
                 .collect();
-            draw(
-                "series.png",
-                line_chart(&p, "Model scalars", &tn, "value", &s),
-            );
+            draw("series.png", panels(&p, "Model scalars", &tn, &ps));
         }
         errors
     }

@@ -247,6 +247,9 @@ impl Recorder for RrdSink {
         };
         rec.set_log_time_enabled(false);
         rec.set_log_tick_enabled(false);
+        // `send_properties(false)` (no wall-clock start time: reproducible files) drops the
+        // builder's name too, so the name is sent on its own.
+        let _ = rec.send_recording_name(meta.scene_name);
         self.rec = Some(rec.clone());
         if let Some(mesh) = meta.mesh {
             self.triangles = display_triangles(mesh);
