@@ -286,7 +286,8 @@ fn sigma_33_matches_the_three_dimensional_energy() {
         let (i1, i2, _) = inv(h, s);
         c1 * (i1 - 3.0) + c2 * (i2 - 3.0)
     };
-    let laws: [(Material, &dyn Fn(&Mat2, f64) -> f64); 3] = [
+    type Energy<'a> = &'a dyn Fn(&Mat2, f64) -> f64;
+    let laws: [(Material, Energy); 3] = [
         (NeoHookean::new(mu, lambda).into(), &nh),
         (MooneyRivlin::new(c1, c2, kappa).into(), &mr),
         (MooneyRivlinIncompressible::new(c1, c2).into(), &inc),
@@ -322,8 +323,11 @@ fn sigma_33_matches_the_three_dimensional_energy() {
 // run.sta
 // ---------------------------------------------------------------------------------------------
 
-/// Data lines of a `run.sta`: (step, status, time, dt, newton, residual).
-fn read_sta(path: &Path) -> (Vec<String>, Vec<(u64, String, f64, f64, usize, f64)>) {
+/// One data line of a `run.sta`: (step, status, time, dt, newton, residual).
+type StaRow = (u64, String, f64, f64, usize, f64);
+
+/// Comment lines and data lines of a `run.sta`.
+fn read_sta(path: &Path) -> (Vec<String>, Vec<StaRow>) {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut comments = Vec::new();
     let mut rows = Vec::new();
