@@ -112,7 +112,15 @@ fn slurm_sweep_with_a_failing_point_equals_the_local_backend() {
 fn cancelled_slurm_sweep_resumes_and_completes() {
     require_slurm();
     let d = TestDir::new("sweep", "slurm_cancel");
-    let spec = write_spec(&d, SLOW);
+    // Slow enough (10000 load steps, about 7 s) that scancel always arrives while run 0001
+    // works: with 20 steps a run took 0.16 s, with 400 steps 0.3 s, and finished before it.
+    let spec = write_spec(
+        &d,
+        &SLOW.replace(
+            "\"solver.load_steps\", values = [20]",
+            "\"solver.load_steps\", values = [10000]",
+        ),
+    );
     let root = d.join("out");
     let args = [
         "sweep",

@@ -52,7 +52,8 @@ y = ["u_r_outer"]
 file = "u_r.png"
 "#;
 
-/// Four slower runs (≈ 1–2 s each in release) for interruption tests.
+/// Four slower runs (≈ 0.2 s each in release; the signal tests raise the load steps to 400) for
+/// interruption tests.
 pub const SLOW: &str = r#"
 [sweep]
 name = "slow"
