@@ -372,10 +372,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
     }
     let steady_text = match rep.time_to_steady {
-        Some(t) if rep.steady => format!(
-            "steady rolling reached at t = {}",
-            crate::io::output::fmt_num(t)
-        ),
+        Some(t) if rep.steady => format!("steady rolling reached at t = {t:.4e} s"),
         _ => "steady rolling NOT reached".to_string(),
     };
     let headline = vec![format!(

@@ -8,14 +8,21 @@
 //! `revolution_period` is given), the steps and the steps per second:
 //!
 //! ```text
-//! ⠙ [00:00:12] ████████░░░░░░░░  t = 1.250e-1 / 5.000e-1  rev 2.98  step 1250  104.2 steps/s
+//! ⠙ [00:00:12] ████████░░░░░░░░ ETA 00:00:36  t = 1.250e-1 / 5.000e-1  rev 2.98  step 1250  104.2 steps/s
 //! ```
+//!
+//! The ETA is indicatif's estimate of the time left to the end of the bar (`time_end`, or
+//! λ = 1) at the recent rate: an upper bound for a transient run, which stops as soon as
+//! steady rolling is reached.
 
 use super::{RecordError, Recorder, RejectedStep, RunEnd, RunMeta, StepInfo};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::time::Instant;
 
 const TICKS: u64 = 1000;
+
+/// The bar's layout: spinner, elapsed time, bar, time left at the recent rate, message.
+const TEMPLATE: &str = "{spinner} [{elapsed_precise}] {bar:30} ETA {eta_precise} {msg}";
 
 pub struct Progress {
     bar: Option<ProgressBar>,
@@ -91,8 +98,8 @@ impl Recorder for Progress {
         self.load_factor = meta.time_name == "load_factor";
         self.start = Instant::now();
         let bar = ProgressBar::with_draw_target(Some(TICKS), ProgressDrawTarget::stderr());
-        let style = ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar());
+        let style =
+            ProgressStyle::with_template(TEMPLATE).unwrap_or_else(|_| ProgressStyle::default_bar());
         bar.set_style(style);
         bar.set_message(format!("{}: starting", meta.scene_name));
         self.bar = Some(bar);
@@ -119,6 +126,15 @@ impl Recorder for Progress {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The layout parses (an invalid template would silently fall back to the default bar,
+    /// which has no ETA) and shows the time left.
+    #[test]
+    fn template_parses_and_shows_the_eta() {
+        assert!(ProgressStyle::with_template(TEMPLATE).is_ok());
+        assert!(TEMPLATE.contains("{eta_precise}"));
+        assert!(ProgressStyle::with_template("{spinner} {bar:30 {msg}").is_err());
+    }
 
     #[test]
     fn time_stepping_message_shows_time_revolutions_and_rate() {
