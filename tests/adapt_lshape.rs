@@ -189,24 +189,3 @@ fn hp_converges_exponentially_in_cube_root_of_n() {
     let e_q2 = rq2.iter().rfind(|s| s.n_eq <= last.n_eq).unwrap().error;
     assert!(last.error < 0.5 * e_q2, "hp {} vs Q2 {}", last.error, e_q2);
 }
-
-#[test]
-#[ignore]
-fn phase_times() {
-    let mut o = AdaptOptions::h(1);
-    o.solver = Solver::Cg { tol: 1e-6 };
-    o.max_dofs = 60_000;
-    for s in lshape(&o).iter().rev().take(3) {
-        println!(
-            "N={} solve {:.3} est {:.3} mark {:.3} refine {:.3} transfer {:.3} total {:.3} cg {}",
-            s.n_eq,
-            s.t_solve,
-            s.t_estimate,
-            s.t_mark,
-            s.t_refine,
-            s.t_transfer,
-            s.t_total,
-            s.cg_iterations
-        );
-    }
-}

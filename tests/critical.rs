@@ -188,39 +188,3 @@ fn continuation_passes_the_critical_speed_of_a_small_mesh() {
     });
     assert!(hit, "no crossing reported near {wc}: {special:?}");
 }
-
-#[test]
-#[ignore]
-fn explore() {
-    for (ne, p) in [(8, 4), (16, 4), (16, 6)] {
-        let r = reference(ne, p);
-        for n in [4, 8, 16, 32, 64, 128] {
-            let t = std::time::Instant::now();
-            let w = r.crossing(n, 30.0, 90.0, 12).unwrap();
-            println!(
-                "1D {ne}x{p} n={n}: {w:?} ({:.2} s)",
-                t.elapsed().as_secs_f64()
-            );
-        }
-    }
-    for (nr, nt, g) in [(4, 48, 1.0), (8, 64, 1.0), (8, 96, 0.33), (12, 128, 0.33)] {
-        let opts = CriticalOptions {
-            n_max: Some(16),
-            omega_max: Some(75.0),
-            samples: 30,
-            ..Default::default()
-        };
-        let t = std::time::Instant::now();
-        let rep = critical::run(&spinning_scene(nr, nt, g), &opts).unwrap();
-        let c: Vec<String> = rep
-            .crossings
-            .iter()
-            .map(|c| format!("{}:{:.4}", c.n, c.omega))
-            .collect();
-        println!(
-            "FE {nr}x{nt} g={g}: {} ({:.1} s)",
-            c.join(" "),
-            t.elapsed().as_secs_f64()
-        );
-    }
-}

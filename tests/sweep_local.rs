@@ -221,15 +221,10 @@ fn ctrl_c_stops_the_local_pool_cleanly_and_the_sweep_resumes() {
 #[test]
 fn run_one_records_killed_on_sigterm_and_checks_its_index() {
     let d = TestDir::new("sweep", "sigterm");
-    // Slow enough (400 load steps) that the signal always arrives while the run works; the run
-    // stops at its next step boundary once signalled, so the length costs nothing.
-    let spec = write_spec(
-        &d,
-        &SLOW.replace(
-            "\"solver.load_steps\", values = [20]",
-            "\"solver.load_steps\", values = [400]",
-        ),
-    );
+    // Slow enough (10000 load steps, seconds) that the signal always arrives while the run
+    // works (400 steps take about 0.3 s, close to the 0.2 s wait below); the run stops at its
+    // next step boundary once signalled, so the length costs nothing.
+    let spec = write_spec(&d, &slow_with_load_steps(10000));
     let root = d.join("out");
     let mut child = tread()
         .args([

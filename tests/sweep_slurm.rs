@@ -114,13 +114,7 @@ fn cancelled_slurm_sweep_resumes_and_completes() {
     let d = TestDir::new("sweep", "slurm_cancel");
     // Slow enough (10000 load steps, about 7 s) that scancel always arrives while run 0001
     // works: with 20 steps a run took 0.16 s, with 400 steps 0.3 s, and finished before it.
-    let spec = write_spec(
-        &d,
-        &SLOW.replace(
-            "\"solver.load_steps\", values = [20]",
-            "\"solver.load_steps\", values = [10000]",
-        ),
-    );
+    let spec = write_spec(&d, &slow_with_load_steps(10000));
     let root = d.join("out");
     let args = [
         "sweep",

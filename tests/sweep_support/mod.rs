@@ -71,6 +71,15 @@ zip = [
 sinks = ["summary"]
 "#;
 
+/// [`SLOW`] with `load_steps` load steps per run: long enough that a signal sent while a run
+/// works always arrives before it finishes (20 steps take about 0.2 s).
+pub fn slow_with_load_steps(load_steps: usize) -> String {
+    SLOW.replace(
+        "\"solver.load_steps\", values = [20]",
+        &format!("\"solver.load_steps\", values = [{load_steps}]"),
+    )
+}
+
 pub fn tread() -> Command {
     Command::new(env!("CARGO_BIN_EXE_tread"))
 }
