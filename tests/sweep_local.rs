@@ -172,7 +172,25 @@ fn local_sweep_with_a_failing_point_then_resumes_and_matches_bare_runs() {
 #[test]
 fn ctrl_c_stops_the_local_pool_cleanly_and_the_sweep_resumes() {
     let d = TestDir::new("sweep", "interrupt");
-    let spec = write_spec(&d, SLOW);
+    // Run 0001 is the slow one (10000 load steps, seconds), so that the signal always
+    // arrives while it works; the others take about 0.2 s.
+    let spec = write_spec(
+        &d,
+        &SLOW
+            .replace(
+                "[[axis]]\nkey = \"motion.omega\"\nvalues = [10.0, 20.0, 30.0, 40.0]\n[[axis]]\nzip = [",
+                "[[axis]]\nzip = [\n  { key = \"motion.omega\", values = [10.0, 20.0, 30.0, 40.0] },",
+            )
+            .replace("{ key = \"mesh.n_r\", values = [6] }", "{ key = \"mesh.n_r\", values = [6, 6, 6, 6] }")
+            .replace(
+                "{ key = \"mesh.n_theta\", values = [128] }",
+                "{ key = \"mesh.n_theta\", values = [128, 128, 128, 128] }",
+            )
+            .replace(
+                "{ key = \"solver.load_steps\", values = [20] }",
+                "{ key = \"solver.load_steps\", values = [20, 10000, 20, 20] }",
+            ),
+    );
     let root = d.join("out");
     let args = [
         "--threads",

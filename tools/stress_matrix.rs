@@ -404,6 +404,7 @@ fn solve_class(e: &SolveError) -> &'static str {
         SolveError::Linear(_) => "linear_solver",
         SolveError::NotConverged { .. } => "newton_not_converged",
         SolveError::LineSearch { .. } => "line_search",
+        SolveError::KrylovStalled { .. } => "krylov_stalled",
         SolveError::InadmissibleStart => "inadmissible",
         SolveError::ExplicitUnstable { .. } => "explicit_unstable",
         SolveError::Interrupted { .. } => "interrupted",

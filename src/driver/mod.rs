@@ -29,4 +29,4 @@ pub mod tables;
 pub mod transient;
 pub mod transient_run;
 
-pub use system::SolidSystem;
+pub use system::{SolidSystem, SteadyDampingTangent};

@@ -17,10 +17,15 @@
 //! The transient mode's objective strain-rate damping (`time.strain_rate_damping`, S_v = η Ė)
 //! is in the steady residual too, discretized as in the transient mode: Ė = sym(Fᵀ ∇v_h) with
 //! v_h the interpolant of the nodal velocities v_a = ω ∂θχ(X_a), taken by five-point
-//! differences along the node rings ([`crate::physics::RingDerivative`],
-//! [`SolidSystem::enable_steady_viscosity`]). (The elementwise gradient of ω ∂θχ_h, which is
-//! discontinuous across the radial cell edges, converged to a different solution: 1.7 % in the
-//! field and 1 % in the hub force at 20 rad/s on the paper's cylinder, whatever the mesh.)
+//! differences along the node rings, or by cell averages on a mesh without rings
+//! ([`crate::physics::NodalThetaDerivative`], [`SolidSystem::enable_steady_viscosity`]). (The
+//! elementwise gradient of ω ∂θχ_h, which is discontinuous across the radial cell edges,
+//! converged to a different solution: 1.7 % in the field and 1 % in the hub force at 20 rad/s
+//! on the paper's cylinder, whatever the mesh.) The nodal derivative couples a cell with its
+//! neighbours' neighbours; the assembled tangent keeps the undamped sparsity (each cell
+//! linearises its velocities with its own derivative) and Newton takes the exact step by
+//! GMRES with the rest of the tangent applied matrix-free ([`crate::solver::krylov`]), so a
+//! damped Newton iteration costs about as much as an undamped one.
 //!
 //! # Procedure
 //!
@@ -78,6 +83,9 @@ pub struct SteadyRolling {
     pub v0_per_omega: f64,
     /// Outer radius (H = ro − disp).
     pub ro: f64,
+    /// Why the steady damping's tangent was switched from matrix-free to assembled
+    /// ([`crate::driver::SteadyDampingTangent`]), if it was.
+    pub damping_fallback: Option<String>,
     /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
     pub recovery: Option<Recovery>,
     /// Free-rolling road speed at the current ω (zero hub torque), once solved for
@@ -96,10 +104,12 @@ impl SteadyRolling {
             ro,
             recovery: None,
             v0_free: f64::NAN,
+            damping_fallback: None,
         };
         s.set_omega(omega, v0);
         s.sys.enable_steady_slip();
-        s.sys.enable_steady_viscosity();
+        // A degenerate cell map fails the first evaluation anyway (J ≤ 0), with its message.
+        let _ = s.sys.enable_steady_viscosity();
         s
     }
 

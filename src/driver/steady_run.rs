@@ -24,7 +24,7 @@
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
 use super::steady_recovery;
-use super::system::{Loading, SolidSystem};
+use super::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
@@ -260,16 +260,6 @@ pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
 pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
     let mut model = build_model(scene)?;
     model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
-    if model.strain_rate_damping > 0.0 && model.mesh.rings.is_none() {
-        // The steady damping's velocity ω ∂θχ comes from differences along node rings.
-        return Err(AppError::Unsupported(format!(
-            "time.strain_rate_damping = {} in the steady mode needs a ring-structured mesh (the \
-             generated annulus): the steady velocity field is built from differences along node \
-             rings; this mesh (mesh.file) has none. Set time.strain_rate_damping = 0 or use the \
-             generated mesh",
-            model.strain_rate_damping
-        )));
-    }
     let mut sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
             let c = build_contact(scene, &model)?;
@@ -321,7 +311,7 @@ pub fn solve_steady(
     let mut x_init = Vec::new();
     st.sys.save_state(&mut x_init);
     st.recovery = None;
-    match press(
+    let mut first = press(
         st,
         loading,
         kind,
@@ -329,7 +319,36 @@ pub fn solve_steady(
         &step_opts,
         report,
         rec,
-    ) {
+    );
+    if let Err(e) = &first {
+        if !matches!(e, SolveError::Interrupted { .. })
+            && st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree)
+        {
+            // The matrix-free damping tangent is the fast path; the assembled one is the
+            // robust one. Try it before any homotopy.
+            let why = format!(
+                "the press with the matrix-free damping tangent failed ({e}); solved again \
+                 with the assembled tangent"
+            );
+            if verbose {
+                eprintln!("  {why}");
+            }
+            st.sys
+                .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+            st.sys.restore_state(&x_init);
+            st.damping_fallback = Some(why);
+            first = press(
+                st,
+                loading,
+                kind,
+                newton_opts.clone(),
+                &step_opts,
+                report,
+                rec,
+            );
+        }
+    }
+    match first {
         Ok(()) => Ok(()),
         Err(SolveError::Interrupted { at }) => Err(SolveError::Interrupted { at }),
         Err(e) => {
@@ -577,6 +596,10 @@ pub fn run_with_dump(
         let n0 = report.steps.len() as u64;
         let mut partial = None;
         let sweep = st.param == SteadyParameter::Creep;
+        // Continuation passes limit points and critical speeds, where the matrix-free damping
+        // tangent's GMRES iteration can stall: follow branches with the assembled one.
+        st.sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
         let res = if sweep {
             let rec: &mut dyn Recorder = &mut recorders;
             creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
@@ -723,6 +746,8 @@ pub fn run_with_dump(
             "friction": friction,
             "normal_damping": damping,
             "strain_rate_damping": st.sys.model.strain_rate_damping > 0.0,
+            "damping_tangent": st.sys.steady_damping_tangent(),
+            "damping_tangent_fallback": st.damping_fallback,
             "inertia": st.sys.model.omega2 > 0.0,
             "history": st.sys.steady_history.is_some(),
             "pressure": st.sys.dofs.per_cell > 0,

@@ -21,7 +21,7 @@ use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::viscoelastic_steady::RingError;
-use crate::physics::{RingDerivative, SolidModel, SteadyHistory};
+use crate::physics::{NodalThetaDerivative, SolidModel, SteadyHistory};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 
@@ -66,17 +66,45 @@ pub struct SolidSystem {
 }
 
 /// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
-/// ring-difference operator and, per cell, the extended element (the cell's nodes, then the
-/// other nodes of their ring stencils) assembled as one block of the system.
+/// nodal θ-derivative, each cell's own derivative (the assembled tangent's approximation of
+/// it) and, per cell, the derivative of the cell residual with respect to its nodal
+/// velocities, from which the rest of the exact tangent is applied matrix-free.
 #[derive(Clone, Debug)]
 pub struct SteadyViscosity {
-    pub ring: RingDerivative,
-    /// Index of the extended-element block in the assembler.
-    pub block: usize,
-    /// Per cell and local node: (index of the stencil node in the extended element, weight).
-    stencil: Vec<Vec<[(u16, f64); crate::physics::ring_derivative::WIDTH]>>,
+    pub nodal: NodalThetaDerivative,
+    /// Per cell, its own θ-derivative at its nodes (N × N row-major) at `local_off[c]`.
+    local: Vec<f64>,
+    local_off: Vec<usize>,
+    /// Per cell, ∂r_c/∂v_c (2N × 2N row-major) at `av_off[c]`, from the last evaluation with
+    /// the matrix.
+    av: Vec<f64>,
+    av_off: Vec<usize>,
     /// Nodal velocities of the current evaluation (full length; reused, not reallocated).
     vel: Vec<f64>,
+    /// Scratch for the matrix-free product: a full-length increment and its nodal velocities.
+    du: Vec<f64>,
+    dv: Vec<f64>,
+    /// The coupling beyond the cells assembled into the matrix instead of applied matrix-free
+    /// ([`SolidSystem::set_steady_damping_assembled`]): the index of the extended-element
+    /// block, and per cell its extended nodes (the cell's, then the other nodes of their
+    /// derivative stencils) at `ext_off[c]..ext_off[c + 1]`.
+    assembled: Option<(usize, Vec<u32>, Vec<usize>)>,
+    /// Set when a GMRES solve with the matrix-free coupling did not reach its tolerance.
+    pub stalled: bool,
+}
+
+/// How the Newton matrix of the steady damping is formed (see
+/// [`SolidSystem::enable_steady_viscosity`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SteadyDampingTangent {
+    /// The cells' own sparsity in the matrix, the rest applied matrix-free by GMRES: the
+    /// fill and the memory of the undamped problem.
+    MatrixFree,
+    /// The whole coupling assembled (extended elements, a wider sparsity and more LU fill):
+    /// a direct solve of the exact tangent, robust where the GMRES iteration is not (near the
+    /// critical speed, extreme stiffness ratios).
+    Assembled,
 }
 
 impl SolidSystem {
@@ -242,52 +270,72 @@ impl SolidSystem {
         self.asm.parallel = parallel;
     }
 
-    /// Steady (θ-referential) mode with strain-rate damping: assemble the damping on the
-    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
-    /// v_a = ω (t_a + (∂θu)_a) with ring differences ([`RingDerivative`]), as the transient mode
-    /// does with its nodal velocities. Each cell's damping forces then depend on the nodes of
-    /// its ring stencils (two positions beyond the cell on each side), assembled as an extra
-    /// block with the exact tangent. Active in [`NonlinearSystem::evaluate`] and
-    /// [`Self::hub_reaction`] while `model.steady_omega` is set. No effect without damping or
-    /// without a ring-structured mesh (the steady mode always has one).
-    pub fn enable_steady_viscosity(&mut self) {
-        use crate::physics::ring_derivative::WIDTH;
+    /// Steady (θ-referential) mode with strain-rate damping: the damping acts on the material
+    /// rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// v_a = ω (t_a + (∂θu)_a) ([`NodalThetaDerivative`]: ring differences, or the cell average
+    /// on a mesh without rings), as the transient mode does with its nodal velocities. The
+    /// residual is exact. The assembled tangent linearises each cell's velocities with the
+    /// cell's own θ-derivative, which keeps the sparsity (and the LU fill) of the undamped
+    /// problem; the difference to the exact tangent, Σ_c A_c ω (D − D_c) δu with
+    /// A_c = ∂r_c/∂v_c, is applied matrix-free ([`NonlinearSystem::tangent_correction`]), so
+    /// Newton takes the exact step by GMRES preconditioned with the assembled factorization.
+    /// Active in [`NonlinearSystem::evaluate`] and [`Self::hub_reaction`] while
+    /// `model.steady_omega` is set. Returns `false` (and leaves the damping off) when a cell
+    /// map is degenerate; no effect without damping.
+    pub fn enable_steady_viscosity(&mut self) -> bool {
         if self.steady_visc.is_some() || self.model.strain_rate_damping <= 0.0 {
-            return;
+            return true;
         }
-        let Some(ring) = RingDerivative::new(&self.model.mesh) else {
-            return;
+        let Some(nodal) = NodalThetaDerivative::new(&self.model) else {
+            return false;
         };
         let mesh = &self.model.mesh;
-        let (mut list, mut off) = (Vec::new(), vec![0]);
-        let mut stencil = Vec::with_capacity(mesh.n_cells());
+        let (mut local, mut local_off, mut av_off) = (Vec::new(), vec![0], vec![0]);
         for c in 0..mesh.n_cells() {
-            let nodes = mesh.cell_nodes(c);
-            let mut ext: Vec<u32> = nodes.to_vec();
-            for &a in nodes {
-                for &(b, _) in &ring.stencils[a as usize] {
-                    if !ext.contains(&b) {
-                        ext.push(b);
-                    }
-                }
-            }
-            let st: Vec<[(u16, f64); WIDTH]> = nodes
-                .iter()
-                .map(|&a| {
-                    let mut s = [(0u16, 0.0); WIDTH];
-                    for (k, &(b, w)) in ring.stencils[a as usize].iter().enumerate() {
-                        let i = ext.iter().position(|&e| e == b).unwrap_or(0);
-                        s[k] = (i as u16, w);
-                    }
-                    s
-                })
-                .collect();
-            stencil.push(st);
-            for &n in &ext {
-                list.push(2 * n);
-                list.push(2 * n + 1);
-            }
-            off.push(list.len());
+            let Some(d) = self.model.cell_theta_derivative(c) else {
+                return false;
+            };
+            local.extend_from_slice(&d);
+            local_off.push(local.len());
+            let nu = 2 * mesh.cell_nodes(c).len();
+            av_off.push(av_off[c] + nu * nu);
+        }
+        let n_full = self.x.len();
+        self.steady_visc = Some(SteadyViscosity {
+            nodal,
+            local,
+            local_off,
+            av: vec![0.0; av_off[mesh.n_cells()]],
+            av_off,
+            vel: vec![0.0; n_full],
+            du: vec![0.0; n_full],
+            dv: vec![0.0; n_full],
+            assembled: None,
+            stalled: false,
+        });
+        true
+    }
+
+    /// The Newton matrix of the steady damping (`None` when that damping is not active).
+    pub fn steady_damping_tangent(&self) -> Option<SteadyDampingTangent> {
+        let sv = self.steady_visc.as_ref()?;
+        (self.model.strain_rate_damping > 0.0).then_some(if sv.assembled.is_some() {
+            SteadyDampingTangent::Assembled
+        } else {
+            SteadyDampingTangent::MatrixFree
+        })
+    }
+
+    /// Switch the steady damping's Newton matrix (no effect without that damping). The
+    /// assembler is rebuilt (a new sparsity), so solvers made for the old one must be made
+    /// again.
+    pub fn set_steady_damping_tangent(&mut self, mode: SteadyDampingTangent) {
+        let Some(sv) = self.steady_visc.as_mut() else {
+            return;
+        };
+        let want = mode == SteadyDampingTangent::Assembled;
+        if want == sv.assembled.is_some() {
+            return;
         }
         let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
             .asm
@@ -295,17 +343,88 @@ impl SolidSystem {
             .iter()
             .map(|b| (b.dofs.clone(), b.offsets.clone()))
             .collect();
-        let block = lists.len();
-        lists.push((list, off));
+        if let Some((block, _, _)) = sv.assembled.take() {
+            lists.truncate(block);
+        } else {
+            let mesh = &self.model.mesh;
+            let (mut ext, mut ext_off) = (Vec::new(), vec![0]);
+            let (mut list, mut off) = (Vec::new(), vec![0]);
+            for c in 0..mesh.n_cells() {
+                let start = ext.len();
+                let nodes = mesh.cell_nodes(c);
+                ext.extend_from_slice(nodes);
+                for &a in nodes {
+                    let a = a as usize;
+                    for &b in &sv.nodal.idx[sv.nodal.ptr[a]..sv.nodal.ptr[a + 1]] {
+                        if !ext[start..].contains(&b) {
+                            ext.push(b);
+                        }
+                    }
+                }
+                ext_off.push(ext.len());
+                for &n in &ext[start..] {
+                    list.push(2 * n);
+                    list.push(2 * n + 1);
+                }
+                off.push(list.len());
+            }
+            sv.assembled = Some((lists.len(), ext, ext_off));
+            lists.push((list, off));
+        }
         let parallel = self.asm.parallel;
         self.asm = Assembler::with_blocks(&self.dofs, lists);
         self.asm.parallel = parallel;
-        self.steady_visc = Some(SteadyViscosity {
-            vel: vec![0.0; self.x.len()],
-            ring,
-            block,
-            stencil,
-        });
+    }
+
+    /// Add the steady damping's coupling beyond the cells to the matrix (assembled mode):
+    /// per cell, A_c ω (D − D_c) on its extended element, from the A_c of the cell assembly
+    /// just made.
+    fn add_steady_damping_coupling(&mut self) {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_ref(), self.model.steady_omega) else {
+            return;
+        };
+        let Some((block, ext, ext_off)) = &sv.assembled else {
+            return;
+        };
+        if self.model.strain_rate_damping <= 0.0 {
+            return;
+        }
+        let mesh = &self.model.mesh;
+        self.asm
+            .add_block_large(*block, &self.dofs, true, |c, _r, k| {
+                let nodes = mesh.cell_nodes(c);
+                let nn = nodes.len();
+                let nu = 2 * nn;
+                let ex = &ext[ext_off[c]..ext_off[c + 1]];
+                let nd = 2 * ex.len();
+                let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
+                let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
+                let mut w = vec![0.0f64; ex.len()];
+                for m in 0..nn {
+                    // Row m of ω (D − D_c) over the extended nodes.
+                    w.fill(0.0);
+                    let node = nodes[m] as usize;
+                    for p in sv.nodal.ptr[node]..sv.nodal.ptr[node + 1] {
+                        if let Some(e) = ex.iter().position(|&q| q == sv.nodal.idx[p]) {
+                            w[e] += om * sv.nodal.w[p];
+                        }
+                    }
+                    for b in 0..nn {
+                        w[b] -= om * d[m * nn + b];
+                    }
+                    for r in 0..nu {
+                        for comp in 0..2 {
+                            let arm = a[r * nu + 2 * m + comp];
+                            if arm == 0.0 {
+                                continue;
+                            }
+                            for (e, &we) in w.iter().enumerate() {
+                                k[r * nd + 2 * e + comp] += arm * we;
+                            }
+                        }
+                    }
+                }
+            });
     }
 
     /// Nodal velocities ω ∂θχ of the steady mode's damping at the current state (full-length
@@ -316,52 +435,83 @@ impl SolidSystem {
             return None;
         }
         let mut vel = vec![0.0; self.x.len()];
-        sv.ring.velocities(&self.model.mesh, &self.x, om, &mut vel);
+        sv.nodal.velocities(&self.model.mesh, &self.x, om, &mut vel);
         Some((vel, om))
     }
 
-    /// Assemble the steady damping block (residual and, with `with_matrix`, the tangent).
-    fn add_steady_viscosity(&mut self, with_matrix: bool) {
+    /// Assemble the cells (residual and, with `with_matrix`, the tangent): with the steady
+    /// damping when it is active, otherwise the model's plain assembly. Returns whether the
+    /// state is admissible.
+    fn assemble_cells(&mut self, with_matrix: bool) -> bool {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
+            return self
+                .model
+                .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        };
+        if self.model.strain_rate_damping <= 0.0 {
+            return self
+                .model
+                .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+        }
+        sv.nodal
+            .velocities(&self.model.mesh, &self.x, om, &mut sv.vel);
+        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
+        let (vel, local, local_off, av_off) = (&sv.vel, &sv.local, &sv.local_off, &sv.av_off);
+        let av = crate::assembly::SharedMut::new(&mut sv.av);
+        model.reset_admissible();
+        self.asm.assemble(dofs, with_matrix, |c, loc| {
+            let d = &local[local_off[c]..local_off[c + 1]];
+            if !with_matrix {
+                model.cell_system_steady_viscous(c, dofs, x, vel, om, d, loc, false, None);
+                return;
+            }
+            let mut a = [0.0; 324];
+            model.cell_system_steady_viscous(c, dofs, x, vel, om, d, loc, true, Some(&mut a));
+            for (i, v) in a[..av_off[c + 1] - av_off[c]].iter().enumerate() {
+                // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
+                unsafe { av.set(av_off[c] + i, *v) };
+            }
+        });
+        model.admissible()
+    }
+
+    /// `out += (K_exact − K_assembled) v` of the steady damping: Σ_c A_c ω (D δu − D_c δu_c)
+    /// (see [`Self::enable_steady_viscosity`]).
+    fn steady_viscosity_correction(&mut self, v: &[f64], out: &mut [f64]) {
         let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
             return;
         };
-        if self.model.strain_rate_damping <= 0.0 {
+        if self.model.strain_rate_damping <= 0.0 || sv.assembled.is_some() {
             return;
         }
-        sv.ring
-            .velocities(&self.model.mesh, &self.x, om, &mut sv.vel);
-        let sv = &*sv;
-        let vel = &sv.vel;
-        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
-        self.asm
-            .add_block_large(sv.block, dofs, with_matrix, |c, r, k| {
-                let nu = 2 * model.mesh.cell_nodes(c).len();
-                let nd = r.len();
-                let mut rv = [0.0; 18];
-                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
-                model.cell_viscous_split(c, dofs, x, vel, with_matrix, &mut rv, &mut ax, &mut av);
-                r[..nu].copy_from_slice(&rv[..nu]);
-                if !with_matrix {
-                    return;
+        sv.du.fill(0.0);
+        self.dofs.scatter_free(v, &mut sv.du);
+        sv.nodal.apply(&sv.du, om, &mut sv.dv);
+        let mesh = &self.model.mesh;
+        for c in 0..mesh.n_cells() {
+            let nodes = mesh.cell_nodes(c);
+            let (nn, cd) = (nodes.len(), self.dofs.cell(c));
+            let nu = 2 * nn;
+            let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
+            let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
+            let mut diff = [0.0; 18];
+            for m in 0..nn {
+                for i in 0..2 {
+                    let loc: f64 = (0..nn)
+                        .map(|b| d[m * nn + b] * sv.du[cd[2 * b + i] as usize])
+                        .sum();
+                    diff[2 * m + i] = sv.dv[cd[2 * m + i] as usize] - om * loc;
                 }
-                for i in 0..nu {
-                    for j in 0..nu {
-                        k[i * nd + j] += ax[i * nu + j];
-                    }
-                    // v_{a,comp} = ω (t_a + Σ_b w_b u_{b,comp}).
-                    for (a, st) in sv.stencil[c].iter().enumerate() {
-                        for comp in 0..2 {
-                            let dv = av[i * nu + 2 * a + comp];
-                            if dv == 0.0 {
-                                continue;
-                            }
-                            for &(e, w) in st {
-                                k[i * nd + 2 * e as usize + comp] += dv * om * w;
-                            }
-                        }
-                    }
+            }
+            for r in 0..nu {
+                let e = self.dofs.eq[cd[r] as usize];
+                if e == FIXED {
+                    continue;
                 }
-            });
+                let y: f64 = (0..nu).map(|s| a[r * nu + s] * diff[s]).sum();
+                out[e as usize] += y;
+            }
+        }
     }
 
     /// Steady (θ-referential) mode with a viscoelastic material: before every evaluation the
@@ -444,17 +594,15 @@ impl SolidSystem {
             }
             let nd = self.dofs.cell(c).len();
             loc.clear(nd);
-            self.model.cell_residual(c, &self.dofs, &self.x, &mut loc);
-            if let Some((vel, _)) = &steady_vel {
+            match (&steady_vel, &self.steady_visc) {
                 // The steady damping forces are part of what the hub transmits.
-                let mut rv = [0.0; 18];
-                let (mut ax, mut av) = ([0.0; 18 * 18], [0.0; 18 * 18]);
-                self.model.cell_viscous_split(
-                    c, &self.dofs, &self.x, vel, false, &mut rv, &mut ax, &mut av,
-                );
-                for (a, v) in rv.iter().enumerate().take(2 * nodes.len()) {
-                    loc.r[a] += v;
+                (Some((vel, om)), Some(sv)) => {
+                    let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
+                    self.model.cell_system_steady_viscous(
+                        c, &self.dofs, &self.x, vel, *om, d, &mut loc, false, None,
+                    );
                 }
+                _ => self.model.cell_residual(c, &self.dofs, &self.x, &mut loc),
             }
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
@@ -522,10 +670,10 @@ impl NonlinearSystem for SolidSystem {
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
         self.sync_steady_history();
-        let ok = self
-            .model
-            .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
-        self.add_steady_viscosity(with_matrix);
+        let ok = self.assemble_cells(with_matrix);
+        if with_matrix {
+            self.add_steady_damping_coupling();
+        }
         if let Some(c) = &self.contact {
             c.reset_visited();
             let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);
@@ -555,9 +703,17 @@ impl NonlinearSystem for SolidSystem {
         self.sync_steady_history();
     }
     fn has_tangent_correction(&self) -> bool {
-        self.steady_history.is_some() && self.model.steady_omega.is_some()
+        self.model.steady_omega.is_some()
+            && (self.steady_history.is_some()
+                || self.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree))
+    }
+    fn tangent_correction_stalled(&mut self) {
+        if let Some(sv) = self.steady_visc.as_mut() {
+            sv.stalled = true;
+        }
     }
     fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+        self.steady_viscosity_correction(v, out);
         if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.model.steady_omega) {
             sh.apply_correction(&self.model, &self.dofs, om, v, out);
         }

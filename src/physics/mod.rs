@@ -3,14 +3,17 @@
 //!
 //! [`solid`] states the residual R(χ; η) = ∫ P : ∇η dV − ω² ∫ ρ0 ∂θχ · ∂θη dV − ∫ b · η dV
 //! (+ pressure terms) and its tangent, with ∂θ = t · ∇, t = (−X2, X1), the derivative along
-//! reference circles; [`ring_derivative`] the nodal θ-derivatives along the node rings that
-//! the steady mode's strain-rate damping uses (v = ω ∂θχ). Quantities are in the scene's
+//! reference circles; [`theta_derivative`] the nodal θ-derivatives (along the node rings,
+//! [`ring_derivative`], or cell averages on any mesh) that the steady mode's strain-rate
+//! damping uses (v = ω ∂θχ). Quantities are in the scene's
 //! units, per unit thickness (plane strain).
 
 pub mod ring_derivative;
 pub mod solid;
+pub mod theta_derivative;
 pub mod viscoelastic_steady;
 
 pub use ring_derivative::RingDerivative;
 pub use solid::{PointValues, PressureMode, SolidModel};
+pub use theta_derivative::{NodalThetaDerivative, ThetaDerivativeSource};
 pub use viscoelastic_steady::SteadyHistory;

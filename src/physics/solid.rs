@@ -81,10 +81,10 @@ pub struct SolidModel {
     pub strain_rate_damping: f64,
     /// Steady rolling at this ω (θ-referential mode): the strain-rate damping acts on the
     /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
-    /// ω ∂θχ (ring differences, [`crate::physics::RingDerivative`]). That term couples a cell
-    /// with its ring neighbours, so it is not part of the cell kernels: the steady system
-    /// ([`crate::driver::SolidSystem`]) assembles it with [`Self::cell_viscous_split`]. `None`
-    /// in the transient mode, where the velocity is an independent field.
+    /// ω ∂θχ ([`crate::physics::NodalThetaDerivative`]). Those velocities depend on nodes
+    /// beyond the cell, so the steady system ([`crate::driver::SolidSystem`]) computes them and
+    /// assembles with [`Self::cell_system_steady_viscous`]. `None` in the transient mode, where
+    /// the velocity is an independent field.
     pub steady_omega: Option<f64>,
     /// Viscoelastic overstress (`None`: elastic, no history).
     pub viscoelastic: Option<Viscoelastic>,
@@ -110,6 +110,23 @@ pub struct PointValues {
     pub grad_u: Mat2,
     /// dX/d(ξ, η).
     pub jac: Mat2,
+}
+
+/// How the nodal velocities of the strain-rate damping vary with the displacements, for the
+/// tangent.
+#[derive(Clone, Copy)]
+enum VelocityMap<'a> {
+    /// Time integration: δv_a = kv δu_a.
+    Diagonal(f64),
+    /// Steady mode: δv_m = ω Σ_b d[m N + b] δu_b, d the cell's own θ-derivative.
+    CellDerivative { omega: f64, d: &'a [f64] },
+}
+
+/// Nodal velocities (full vector) of the strain-rate damping and their linearisation.
+#[derive(Clone, Copy)]
+struct Visc<'a> {
+    vel: &'a [f64],
+    map: VelocityMap<'a>,
 }
 
 /// Values at one quadrature point needed by the kernels.
@@ -217,7 +234,7 @@ impl SolidModel {
     ) -> bool {
         self.inverted.store(false, Ordering::Relaxed);
         asm.assemble(dofs, with_matrix, |c, loc| {
-            self.cell_kernel(c, dofs, x, loc, with_matrix, None)
+            self.cell_kernel(c, dofs, x, loc, with_matrix, None, None)
         });
         !self.inverted.load(Ordering::Relaxed)
     }
@@ -280,7 +297,7 @@ impl SolidModel {
         loc: &mut LocalSystem,
         with_k: bool,
     ) {
-        self.cell_kernel(c, dofs, x, loc, with_k, None);
+        self.cell_kernel(c, dofs, x, loc, with_k, None, None);
     }
 
     /// As [`Self::cell_system`] plus the viscous stress P_v = F S_v, S_v = η Ė with
@@ -298,62 +315,70 @@ impl SolidModel {
         loc: &mut LocalSystem,
         with_k: bool,
     ) {
-        let visc = (self.strain_rate_damping > 0.0).then_some((vel, kv));
-        self.cell_kernel(c, dofs, x, loc, with_k, visc);
+        let visc = (self.strain_rate_damping > 0.0).then_some(Visc {
+            vel,
+            map: VelocityMap::Diagonal(kv),
+        });
+        self.cell_kernel(c, dofs, x, loc, with_k, visc, None);
     }
 
-    /// The strain-rate damping part alone of cell `c` at state `x` with nodal velocities
-    /// `vel` (full vectors): its residual `r` and, with `with_k`, its derivatives with respect
-    /// to the cell's nodal displacements (`ax`) and nodal velocities (`av`), row-major
-    /// 2N × 2N over the cell's displacement dofs. Obtained as differences of
-    /// [`Self::cell_system_viscous`] evaluations (the same quadrature), so that every other
-    /// term (elastic, inertia, pressure) cancels exactly. Used by the steady mode, whose
-    /// velocities are functions of the displacements of neighbouring cells too.
-    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
-    pub fn cell_viscous_split(
+    /// The steady mode's cell system with the strain-rate damping: as
+    /// [`Self::cell_system_viscous`] with the nodal velocities `vel` = ω ∂θχ (full vector,
+    /// computed by the caller from a nodal θ-derivative that may reach beyond the cell). The
+    /// tangent takes the velocities' dependence on the displacements through the cell's own
+    /// θ-derivative `d` (N × N row-major, (∂θf)(X_m) ≈ Σ_b d[m N + b] f_b, from
+    /// [`Self::cell_theta_derivative`]): an approximation of the exact coupling that keeps
+    /// the cell's sparsity. With `av`, the derivative of the cell residual with respect to
+    /// the cell's nodal velocities is written there (2N × 2N row-major), from which the
+    /// caller applies the rest of the exact tangent matrix-free.
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_system_steady_viscous(
         &self,
         c: usize,
         dofs: &DofMap,
         x: &[f64],
         vel: &[f64],
+        omega: f64,
+        d: &[f64],
+        loc: &mut LocalSystem,
         with_k: bool,
-        r: &mut [f64],
-        ax: &mut [f64],
-        av: &mut [f64],
+        av: Option<&mut [f64; 324]>,
     ) {
-        let nu = 2 * self.mesh.cell_nodes(c).len();
-        let nd = dofs.cell(c).len();
-        let mut l0 = Box::new(LocalSystem::new(nd));
-        let mut l1 = Box::new(LocalSystem::new(nd));
-        self.cell_kernel(c, dofs, x, &mut l0, with_k, None);
-        if self.strain_rate_damping > 0.0 {
-            self.cell_kernel(c, dofs, x, &mut l1, with_k, Some((vel, 0.0)));
-        } else {
-            l1.r[..nd].copy_from_slice(&l0.r[..nd]);
-            l1.k[..nd * nd].copy_from_slice(&l0.k[..nd * nd]);
+        let visc = (self.strain_rate_damping > 0.0).then_some(Visc {
+            vel,
+            map: VelocityMap::CellDerivative { omega, d },
+        });
+        self.cell_kernel(c, dofs, x, loc, with_k, visc, av);
+    }
+
+    /// The cell's own θ-derivative at its nodes: d[m N + b] = ∇N_b(X_m) · (−X_m2, X_m1),
+    /// ∂θ = −X2 ∂1 + X1 ∂2 the derivative along the reference circles, so that
+    /// (∂θf)(X_m) ≈ Σ_b d[m N + b] f_b for the interpolant of the nodal values f_b. Exact for
+    /// fields the element reproduces; one-sided at the cell's edges. `None` if the cell map
+    /// is degenerate at a node.
+    pub fn cell_theta_derivative(&self, c: usize) -> Option<Vec<f64>> {
+        match self.mesh.degree[c] {
+            1 => self.cell_theta_derivative_generic::<Q1, 4>(c),
+            _ => self.cell_theta_derivative_generic::<Q2, 9>(c),
         }
-        for i in 0..nu {
-            r[i] = l1.r[i] - l0.r[i];
-        }
-        if !with_k {
-            return;
-        }
-        for i in 0..nu {
-            for j in 0..nu {
-                ax[i * nu + j] = l1.k[i * nd + j] - l0.k[i * nd + j];
+    }
+
+    fn cell_theta_derivative_generic<E: Lagrange2D, const N: usize>(
+        &self,
+        c: usize,
+    ) -> Option<Vec<f64>> {
+        let pts: Vec<(f64, f64)> = (0..N).map(E::node_ref).collect();
+        let tab = ShapeTable::<N>::new::<E>(pts, vec![1.0; N]);
+        let mut g = [[0.0; 2]; N];
+        let mut d = vec![0.0; N * N];
+        for m in 0..N {
+            let pg = self.point(c, &tab, m, &mut g)?;
+            let t = [-pg.x[1], pg.x[0]];
+            for b in 0..N {
+                d[m * N + b] = g[b][0] * t[0] + g[b][1] * t[1];
             }
         }
-        if self.strain_rate_damping > 0.0 {
-            l0.clear(nd);
-            self.cell_kernel(c, dofs, x, &mut l0, true, Some((vel, 1.0)));
-            for i in 0..nu {
-                for j in 0..nu {
-                    av[i * nu + j] = l0.k[i * nd + j] - l1.k[i * nd + j];
-                }
-            }
-        } else {
-            av[..nu * nu].iter_mut().for_each(|v| *v = 0.0);
-        }
+        Some(d)
     }
 
     /// Strain energy ∫ W(∇u) dV of the whole mesh at state `x` (displacement part only).
@@ -377,9 +402,10 @@ impl SolidModel {
 
     /// Local residual of cell `c` at state `x` (including rows of fixed dofs: reactions).
     pub fn cell_residual(&self, c: usize, dofs: &DofMap, x: &[f64], loc: &mut LocalSystem) {
-        self.cell_kernel(c, dofs, x, loc, false, None);
+        self.cell_kernel(c, dofs, x, loc, false, None, None);
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn cell_kernel(
         &self,
         c: usize,
@@ -387,11 +413,12 @@ impl SolidModel {
         x: &[f64],
         loc: &mut LocalSystem,
         with_k: bool,
-        visc: Option<(&[f64], f64)>,
+        visc: Option<Visc<'_>>,
+        av: Option<&mut [f64; 324]>,
     ) {
         match self.mesh.degree[c] {
-            1 => self.cell_generic::<4>(&self.q1, c, dofs, x, loc, with_k, visc),
-            _ => self.cell_generic::<9>(&self.q2, c, dofs, x, loc, with_k, visc),
+            1 => self.cell_generic::<4>(&self.q1, c, dofs, x, loc, with_k, visc, av),
+            _ => self.cell_generic::<9>(&self.q2, c, dofs, x, loc, with_k, visc, av),
         }
     }
 
@@ -531,7 +558,8 @@ impl SolidModel {
         x: &[f64],
         loc: &mut LocalSystem,
         with_k: bool,
-        visc: Option<(&[f64], f64)>,
+        visc: Option<Visc<'_>>,
+        mut av: Option<&mut [f64; 324]>,
     ) {
         let cd = dofs.cell(c);
         let nd = cd.len();
@@ -542,10 +570,23 @@ impl SolidModel {
         }
         let u = &u[..nu];
         let mut vloc = [0.0; 18];
-        if let Some((vel, _)) = visc {
+        // Velocity dependence: δv_a = kv δu_a (time integration), or
+        // δv_m = ω Σ_b d_mb δu_b (steady, the cell's θ-derivative).
+        let (mut kv, mut steady_d, mut omega) = (0.0, None, 0.0);
+        if let Some(vc) = &visc {
             for a in 0..nu {
-                vloc[a] = vel[cd[a] as usize];
+                vloc[a] = vc.vel[cd[a] as usize];
             }
+            match vc.map {
+                VelocityMap::Diagonal(k) => kv = k,
+                VelocityMap::CellDerivative { omega: om, d } => {
+                    steady_d = Some(d);
+                    omega = om;
+                }
+            }
+        }
+        if let Some(a) = av.as_deref_mut() {
+            a[..nu * nu].fill(0.0);
         }
         // Pressure coefficients of this cell.
         let mut pc = Vector3::zeros();
@@ -609,7 +650,10 @@ impl SolidModel {
                 p_st += pv;
                 a_t += av;
             }
-            if let Some((_, kv)) = visc {
+            // ∂P/∂(∇v) of the damping, when the velocities are not a multiple of the cell's own
+            // displacements (steady mode).
+            let mut a_l = Tangent::zeros();
+            if visc.is_some() {
                 // Viscous stress on the Green-strain rate (objective).
                 let eta = self.strain_rate_damping;
                 let f = Mat2::identity() + h;
@@ -621,15 +665,18 @@ impl SolidModel {
                         for l in 0..2 {
                             let mut e = Mat2::zeros();
                             e[(k, l)] = 1.0;
-                            let ds = (e.transpose() * f * kv
-                                + fd.transpose() * e
-                                + e.transpose() * fd
-                                + f.transpose() * e * kv)
-                                * (0.5 * eta);
-                            let dp = e * sv + f * ds;
+                            // Through F (at fixed ∇v) and through ∇v.
+                            let ds_h = (fd.transpose() * e + e.transpose() * fd) * (0.5 * eta);
+                            let dp_h = e * sv + f * ds_h;
+                            let dp_l = f * ((e.transpose() * f + f.transpose() * e) * (0.5 * eta));
                             for i in 0..2 {
                                 for j in 0..2 {
-                                    a_t[(v(i, j), v(k, l))] += dp[(i, j)];
+                                    a_t[(v(i, j), v(k, l))] += dp_h[(i, j)];
+                                    if steady_d.is_some() {
+                                        a_l[(v(i, j), v(k, l))] += dp_l[(i, j)];
+                                    } else {
+                                        a_t[(v(i, j), v(k, l))] += kv * dp_l[(i, j)];
+                                    }
                                 }
                             }
                         }
@@ -703,6 +750,44 @@ impl SolidModel {
                                 kv -= inertia;
                             }
                             loc.k[row + 2 * b + k] += kv;
+                        }
+                    }
+                }
+            }
+            if let Some(d) = steady_d {
+                // Steady damping through the velocities: K_ab += Σ_J G_aJ A^L_{iJ,kL} G̃_bL with
+                // G̃_b = ω Σ_m d_mb G_m (the gradient of the velocity interpolant per δu_b);
+                // `av` gets the same with G_b (per δv_b).
+                let mut gt = [[0.0; 2]; N];
+                for m in 0..N {
+                    for b in 0..N {
+                        let dm = omega * d[m * N + b];
+                        gt[b][0] += dm * g[m][0];
+                        gt[b][1] += dm * g[m][1];
+                    }
+                }
+                for a in 0..N {
+                    let mut gl = [[0.0; 4]; 2];
+                    for i in 0..2 {
+                        for kl in 0..4 {
+                            gl[i][kl] = g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)];
+                        }
+                    }
+                    for b in 0..N {
+                        for i in 0..2 {
+                            let row = (2 * a + i) * nd;
+                            for k in 0..2 {
+                                let val = gl[i][v(k, 0)] * gt[b][0] + gl[i][v(k, 1)] * gt[b][1];
+                                loc.k[row + 2 * b + k] += val * w;
+                            }
+                        }
+                        if let Some(avm) = av.as_deref_mut() {
+                            for i in 0..2 {
+                                for k in 0..2 {
+                                    let val = gl[i][v(k, 0)] * g[b][0] + gl[i][v(k, 1)] * g[b][1];
+                                    avm[(2 * a + i) * nu + 2 * b + k] += val * w;
+                                }
+                            }
                         }
                     }
                 }

@@ -48,10 +48,42 @@
 //!   annulus). Treat g as a hint; the inertia / det sign, when available, is authoritative. The point is located
 //!   by linear interpolation of g (or of the signed log-determinant). Both are reported in the
 //!   branch table ([`BranchPoint::det_sign`], [`BranchPoint::test_function`]).
+//! - **Tangents with a matrix-free part** ([`NonlinearSystem::has_tangent_correction`]: the
+//!   steady damping's coupling beyond the cells, a viscoelastic ring history): every solve
+//!   (tangent, corrector, test function) is made with the exact tangent by GMRES
+//!   preconditioned with the assembled factorization. The det sign and the inertia count are
+//!   those of the assembled part only; g uses the exact tangent.
 
 use super::linear::{LinearKind, SparseSolver};
 use super::newton::{convergence_reference, NonlinearSystem, SolveError};
 use std::time::Instant;
+
+/// x ← K⁻¹ x with K the exact tangent: the assembled factorization `lu`, followed, when the
+/// system has a matrix-free part ([`NonlinearSystem::has_tangent_correction`]), by GMRES on
+/// the exact tangent to the relative residual `rtol` (see [`super::krylov`]).
+fn exact_solve<S: NonlinearSystem + ?Sized>(
+    sys: &mut S,
+    lu: &mut SparseSolver,
+    x: &mut [f64],
+    rtol: f64,
+) -> Result<(), SolveError> {
+    if !sys.has_tangent_correction() {
+        lu.solve_in_place(x)?;
+        return Ok(());
+    }
+    let b = x.to_vec();
+    lu.solve_in_place(x)?;
+    let st = super::krylov::gmres(sys, lu, &b, x, rtol, 40, 200)?;
+    if st.rel_residual.is_nan() || st.rel_residual > 10.0 * rtol.max(1e-8) {
+        sys.tangent_correction_stalled();
+        return Err(SolveError::KrylovStalled {
+            products: st.iterations,
+            reached: st.rel_residual,
+            asked: rtol,
+        });
+    }
+    Ok(())
+}
 
 /// A nonlinear system with a scalar parameter λ.
 pub trait ParametricSystem: NonlinearSystem {
@@ -303,7 +335,7 @@ impl Continuation {
         for (t, r) in self.tu.iter_mut().zip(&self.r_lambda) {
             *t = -r;
         }
-        self.solver.solve_in_place(&mut self.tu)?;
+        exact_solve(sys, &mut self.solver, &mut self.tu, 1e-10)?;
         let fs = t0.elapsed().as_secs_f64();
         let (sign, logdet) = self.solver.det_sign_log();
         let neg = self
@@ -314,7 +346,7 @@ impl Continuation {
         if self.opts.test_function {
             for _ in 0..3 {
                 self.z.copy_from_slice(&self.c);
-                self.solver.solve_in_place(&mut self.z)?;
+                exact_solve(sys, &mut self.solver, &mut self.z, 1e-8)?;
                 let cz = dot(&self.c, &self.z);
                 let zn = dot(&self.z, &self.z).sqrt();
                 if !(zn.is_finite() && zn > 0.0) {
@@ -618,11 +650,11 @@ impl Continuation {
             for (a, r) in self.a.iter_mut().zip(sys.residual()) {
                 *a = -r;
             }
-            self.solver.solve_in_place(&mut self.a)?;
+            exact_solve(sys, &mut self.solver, &mut self.a, 1e-10)?;
             for (b, r) in self.b.iter_mut().zip(&self.r_lambda) {
                 *b = -r;
             }
-            self.solver.solve_in_place(&mut self.b)?;
+            exact_solve(sys, &mut self.solver, &mut self.b, 1e-10)?;
             // Quadratic spherical constraint for δλ, with Δx' = Δx + a.
             let mut aa = self.wdot(&self.b, &self.b) / xs2 + 1.0 / ls2;
             let mut bb = 0.0;

@@ -94,6 +94,9 @@ pub trait NonlinearSystem {
     }
     /// `out += (K_exact − K_assembled) v` at the last evaluation (equation numbering).
     fn tangent_correction(&mut self, _v: &[f64], _out: &mut [f64]) {}
+    /// Told when a GMRES solve with [`Self::tangent_correction`] did not reach its tolerance
+    /// (the system may then offer another way to form its tangent).
+    fn tangent_correction_stalled(&mut self) {}
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -108,6 +111,13 @@ pub enum SolveError {
         iterations: usize,
         residual: f64,
         stagnation: Option<Stagnation>,
+    },
+    /// The GMRES iteration on a tangent with a matrix-free part did not reach its tolerance.
+    #[error("the Newton step's GMRES iteration stalled: relative residual {reached:.2e} after {products} products (asked {asked:.1e}); the assembled part of the tangent is a poor preconditioner here")]
+    KrylovStalled {
+        products: usize,
+        reached: f64,
+        asked: f64,
     },
     #[error("line search failed: no step length ≥ {min_alpha} reduced the residual (relative residual {residual:.3e})")]
     LineSearch { min_alpha: f64, residual: f64 },
@@ -200,6 +210,10 @@ pub struct NewtonOptions {
     pub increment_tol: f64,
     /// Print the convergence table to stderr.
     pub verbose: bool,
+    /// Largest relative residual asked of the GMRES step when the tangent has a matrix-free
+    /// part ([`NonlinearSystem::has_tangent_correction`]; inexact Newton, see
+    /// [`Newton::solve`]).
+    pub krylov_eta_max: f64,
 }
 
 impl Default for NewtonOptions {
@@ -211,6 +225,7 @@ impl Default for NewtonOptions {
             min_alpha: 1.0 / 64.0,
             increment_tol: 1e-14,
             verbose: false,
+            krylov_eta_max: 1e-2,
         }
     }
 }
@@ -357,6 +372,7 @@ impl Newton {
         }
         let total_norm = |n: &[f64]| n.iter().map(|v| v * v).sum::<f64>().sqrt();
         let (mut damped, mut last_increment) = (0, f64::NAN);
+        let (mut prev_norm, mut prev_eta): (Option<f64>, f64) = (None, 1.0);
         for it in 0..=self.opts.max_iterations {
             let rel: Vec<f64> = norms
                 .iter()
@@ -425,14 +441,57 @@ impl Newton {
             }
             self.solver.solve_in_place(&mut self.dx)?;
             if sys.has_tangent_correction() {
-                // The exact step: GMRES on K + C from the assembled part's step.
+                // The Newton step on K + C by GMRES from the assembled part's step, to a
+                // relative residual η (inexact Newton, Eisenstat–Walker's second choice):
+                // η_k = 0.9 (‖R_k‖/‖R_k−1‖)², safeguarded by 0.9 η_k−1² while that is large,
+                // at most `krylov_eta_max`. The convergence stays superlinear (quadratic in the
+                // limit) while the early, far-from-solution steps are cheap; no solve is made
+                // finer than the step that reaches a thousandth of the tolerance needs (the convergence
+                // reference can be dominated by one stiff term, e.g. a large bulk modulus, and
+                // hide the other equations' residual).
+                let r_now = total_norm(&norms);
+                let eta_max = self.opts.krylov_eta_max;
+                let mut eta = match prev_norm {
+                    Some(rp) if rp > 0.0 => {
+                        let e = 0.9 * (r_now / rp).powi(2);
+                        let safe = 0.9 * prev_eta * prev_eta;
+                        if safe > 0.1 {
+                            e.max(safe)
+                        } else {
+                            e
+                        }
+                    }
+                    _ => eta_max,
+                };
+                eta = eta
+                    .min(eta_max)
+                    .max(1e-3 * self.opts.tol / worst)
+                    .clamp(1e-10, eta_max);
+                prev_norm = Some(r_now);
+                prev_eta = eta;
                 let b: Vec<f64> = sys.residual().iter().map(|r| -r).collect();
                 let ks =
-                    super::krylov::gmres(sys, &mut self.solver, &b, &mut self.dx, 1e-10, 40, 160)?;
+                    super::krylov::gmres(sys, &mut self.solver, &b, &mut self.dx, eta, 40, 160)?;
                 rep.krylov_iterations += ks.iterations;
+                // A step far less accurate than asked is not a Newton step: stop here rather
+                // than wander (the caller may switch to an assembled tangent).
+                if !ks.rel_residual.is_finite() || ks.rel_residual > 10.0 * eta {
+                    sys.tangent_correction_stalled();
+                    if self.opts.verbose {
+                        eprintln!(
+                            "         GMRES stalled: {} products, relative residual {:.2e} (asked {eta:.1e})",
+                            ks.iterations, ks.rel_residual
+                        );
+                    }
+                    return Err(SolveError::KrylovStalled {
+                        products: ks.iterations,
+                        reached: ks.rel_residual,
+                        asked: eta,
+                    });
+                }
                 if self.opts.verbose {
                     eprintln!(
-                        "         GMRES: {} products, relative residual {:.2e}",
+                        "         GMRES: {} products, relative residual {:.2e} (asked {eta:.1e})",
                         ks.iterations, ks.rel_residual
                     );
                 }
