@@ -59,9 +59,9 @@
 //! offending entries; (4) each section is deserialized with serde (`deny_unknown_fields`
 //! everywhere, so the typed structs are strict on their own too, e.g. for
 //! `toml::from_str::<Scene>`); (5) the typed sections are validated (ranges and cross-key rules).
-//! Line numbers come from a small locator that walks the original text tracking `[table]` headers
-//! (comments, quoted keys, dotted keys and multi-line strings/arrays are handled), so a key that was
-//! *not* overridden always reports its line in the file.
+//! Line numbers come from the byte spans that the `toml` parser gives for every key of the
+//! original text (`spans`), so a key that was *not* overridden always reports its line in the
+//! file.
 //!
 //! Which sections a mode uses: `spinning` uses `[motion]`; `static` requires `[road]` and
 //! `[contact]` and may have `[friction]`; `stick_slip` requires `[stick_slip]` and a `[friction]`
@@ -113,6 +113,10 @@ use std::collections::BTreeSet;
 use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
+
+mod spans;
+
+use spans::Locator;
 
 /// Default of `[scene] units` (informational only).
 pub const DEFAULT_UNITS: &str = "in-lbf-s";
@@ -1428,7 +1432,9 @@ impl Scene {
         let mut doc: toml::Table = match text.parse::<toml::Table>() {
             Ok(t) => t,
             Err(e) => {
-                let line = e.span().map(|s| line_of_offset(text, s.start));
+                let line = e
+                    .span()
+                    .map(|s| spans::LineIndex::new(text).line_of(s.start));
                 let key = line
                     .and_then(|l| locator.key_at_line(l))
                     .unwrap_or_default();
@@ -2684,15 +2690,6 @@ fn key_from_de_error(e: &toml::de::Error, section: &str) -> String {
     section.to_string()
 }
 
-fn line_of_offset(text: &str, offset: usize) -> usize {
-    let end = offset.min(text.len());
-    text.as_bytes()[..end]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
-}
-
 // ---------------------------------------------------------------------------------------------
 // Validation of the typed sections
 // ---------------------------------------------------------------------------------------------
@@ -3764,220 +3761,6 @@ fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Line locator
-// ---------------------------------------------------------------------------------------------
-
-/// Where each table header and key is defined in the original text (1-based lines).
-#[derive(Debug, Default)]
-struct Locator {
-    entries: Vec<(Vec<String>, usize)>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum MultiLine {
-    Basic,
-    Literal,
-}
-
-#[derive(Debug, Default)]
-struct ScanState {
-    multiline: Option<MultiLine>,
-    depth: usize,
-}
-
-impl Locator {
-    fn new(text: &str) -> Locator {
-        let mut entries = Vec::new();
-        let mut table: Vec<String> = Vec::new();
-        let mut st = ScanState::default();
-        for (i, line) in text.lines().enumerate() {
-            let lineno = i + 1;
-            if st.multiline.is_some() || st.depth > 0 {
-                scan_value(line, &mut st);
-                continue;
-            }
-            let t = line.trim_start();
-            if t.is_empty() || t.starts_with('#') {
-                continue;
-            }
-            if let Some(h) = t.strip_prefix('[') {
-                let (h, close) = match h.strip_prefix('[') {
-                    Some(h2) => (h2, "]]"),
-                    None => (h, "]"),
-                };
-                if let Some((path, after)) = parse_key_path(h) {
-                    if after.trim_start().starts_with(close) {
-                        entries.push((path.clone(), lineno));
-                        table = path;
-                    }
-                }
-                continue;
-            }
-            if let Some((path, after)) = parse_key_path(t) {
-                if let Some(value) = after.trim_start().strip_prefix('=') {
-                    let mut full = table.clone();
-                    for seg in path {
-                        full.push(seg);
-                        entries.push((full.clone(), lineno));
-                    }
-                    scan_value(value, &mut st);
-                }
-            }
-        }
-        Locator { entries }
-    }
-
-    /// Line of a dotted key; for a key not in the text, the line where its nearest ancestor
-    /// (e.g. the section header) is defined; `None` if none is.
-    fn locate(&self, dotted: &str) -> Option<usize> {
-        if dotted.is_empty() {
-            return None;
-        }
-        let target: Vec<&str> = dotted.split('.').collect();
-        let mut best: Option<(usize, usize)> = None; // (matched length, line)
-        for (path, line) in &self.entries {
-            if path.len() > target.len() || path.iter().zip(&target).any(|(a, b)| a != b) {
-                continue;
-            }
-            if best.is_none_or(|(len, _)| path.len() > len) {
-                best = Some((path.len(), *line));
-            }
-        }
-        best.map(|(_, line)| line)
-    }
-
-    /// The longest key path defined on a line, dotted.
-    fn key_at_line(&self, line: usize) -> Option<String> {
-        self.entries
-            .iter()
-            .filter(|(_, l)| *l == line)
-            .max_by_key(|(p, _)| p.len())
-            .map(|(p, _)| p.join("."))
-    }
-}
-
-/// Scan (the rest of) a value on one line, tracking strings, comments and bracket depth.
-fn scan_value(s: &str, st: &mut ScanState) {
-    let b = s.as_bytes();
-    let n = b.len();
-    let mut i = 0;
-    while i < n {
-        if let Some(ml) = st.multiline {
-            let delim: &[u8] = match ml {
-                MultiLine::Basic => b"\"\"\"",
-                MultiLine::Literal => b"'''",
-            };
-            let mut closed = false;
-            while i < n {
-                if ml == MultiLine::Basic && b[i] == b'\\' {
-                    i += 2;
-                    continue;
-                }
-                if b[i..].starts_with(delim) {
-                    i += 3;
-                    // Up to two extra quotes may belong to the content.
-                    while i < n && b[i] == delim[0] {
-                        i += 1;
-                    }
-                    closed = true;
-                    break;
-                }
-                i += 1;
-            }
-            if !closed {
-                return;
-            }
-            st.multiline = None;
-            continue;
-        }
-        match b[i] {
-            b'#' => return,
-            b'"' => {
-                if b[i..].starts_with(b"\"\"\"") {
-                    st.multiline = Some(MultiLine::Basic);
-                    i += 3;
-                    continue;
-                }
-                i += 1;
-                while i < n && b[i] != b'"' {
-                    if b[i] == b'\\' {
-                        i += 1;
-                    }
-                    i += 1;
-                }
-            }
-            b'\'' => {
-                if b[i..].starts_with(b"'''") {
-                    st.multiline = Some(MultiLine::Literal);
-                    i += 3;
-                    continue;
-                }
-                i += 1;
-                while i < n && b[i] != b'\'' {
-                    i += 1;
-                }
-            }
-            b'[' | b'{' => st.depth += 1,
-            b']' | b'}' => st.depth = st.depth.saturating_sub(1),
-            _ => {}
-        }
-        i += 1;
-    }
-}
-
-/// Parse a (possibly dotted, possibly quoted) TOML key at the start of `s`.
-fn parse_key_path(s: &str) -> Option<(Vec<String>, &str)> {
-    let mut segs = Vec::new();
-    let mut rest = s;
-    loop {
-        rest = rest.trim_start_matches([' ', '\t']);
-        let (seg, r) = if let Some(r) = rest.strip_prefix('"') {
-            parse_basic_string(r)?
-        } else if let Some(r) = rest.strip_prefix('\'') {
-            let end = r.find('\'')?;
-            (r[..end].to_string(), &r[end + 1..])
-        } else {
-            let end = rest
-                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'))
-                .unwrap_or(rest.len());
-            if end == 0 {
-                return None;
-            }
-            (rest[..end].to_string(), &rest[end..])
-        };
-        segs.push(seg);
-        rest = r.trim_start_matches([' ', '\t']);
-        match rest.strip_prefix('.') {
-            Some(r) => rest = r,
-            None => return Some((segs, rest)),
-        }
-    }
-}
-
-/// Parse the body of a basic string (after the opening quote); returns it and the rest after the
-/// closing quote.
-fn parse_basic_string(s: &str) -> Option<(String, &str)> {
-    let mut out = String::new();
-    let mut chars = s.char_indices();
-    while let Some((i, c)) = chars.next() {
-        match c {
-            '"' => return Some((out, &s[i + 1..])),
-            '\\' => {
-                let (_, e) = chars.next()?;
-                out.push(match e {
-                    'n' => '\n',
-                    't' => '\t',
-                    'r' => '\r',
-                    other => other,
-                });
-            }
-            other => out.push(other),
-        }
-    }
-    None
-}
-
-// ---------------------------------------------------------------------------------------------
 // Tests
 // ---------------------------------------------------------------------------------------------
 
@@ -3985,18 +3768,18 @@ fn parse_basic_string(s: &str) -> Option<(String, &str)> {
 mod tests {
     use super::*;
 
-    const INCOMPRESSIBLE: &str = include_str!("../../scenarios/spinning_incompressible.toml");
-    const NEO_HOOKEAN: &str = include_str!("../../scenarios/spinning_neo_hookean.toml");
-    const MOONEY_RIVLIN: &str = include_str!("../../scenarios/spinning_mooney_rivlin.toml");
-    const FRICTIONLESS: &str = include_str!("../../scenarios/indentation_frictionless.toml");
-    const FRICTION: &str = include_str!("../../scenarios/indentation_friction.toml");
-    const LOAD_CONTROL: &str = include_str!("../../scenarios/indentation_load_control.toml");
-    const STICK_SLIP: &str = include_str!("../../scenarios/stick_slip.toml");
-    const ODEN: &str = include_str!("../../scenarios/oden_hollow_cylinder.toml");
-    const ROLLING_FRICTIONLESS: &str = include_str!("../../scenarios/rolling_frictionless.toml");
-    const FREE_ROLLING: &str = include_str!("../../scenarios/free_rolling.toml");
-    const STEADY_SWEEP: &str = include_str!("../../scenarios/oden_steady_sweep.toml");
-    const BRAKING: &str = include_str!("../../scenarios/braking.toml");
+    const INCOMPRESSIBLE: &str = include_str!("../../../scenarios/spinning_incompressible.toml");
+    const NEO_HOOKEAN: &str = include_str!("../../../scenarios/spinning_neo_hookean.toml");
+    const MOONEY_RIVLIN: &str = include_str!("../../../scenarios/spinning_mooney_rivlin.toml");
+    const FRICTIONLESS: &str = include_str!("../../../scenarios/indentation_frictionless.toml");
+    const FRICTION: &str = include_str!("../../../scenarios/indentation_friction.toml");
+    const LOAD_CONTROL: &str = include_str!("../../../scenarios/indentation_load_control.toml");
+    const STICK_SLIP: &str = include_str!("../../../scenarios/stick_slip.toml");
+    const ODEN: &str = include_str!("../../../scenarios/oden_hollow_cylinder.toml");
+    const ROLLING_FRICTIONLESS: &str = include_str!("../../../scenarios/rolling_frictionless.toml");
+    const FREE_ROLLING: &str = include_str!("../../../scenarios/free_rolling.toml");
+    const STEADY_SWEEP: &str = include_str!("../../../scenarios/oden_steady_sweep.toml");
+    const BRAKING: &str = include_str!("../../../scenarios/braking.toml");
 
     const MINIMAL: &str = r#"
 [scene]
