@@ -416,6 +416,13 @@ pub static CSV_FILES: &[CsvFile] = &[
             k("hub_force_x", "F/L", "", "hub force, x1"),
             k("hub_force_y", "F/L", "", "hub force, x2"),
             k("hub_torque", "F·L/L", "", "hub torque"),
+            k("omega", "rad/T", "", "hub angular speed at the passage"),
+            k(
+                "change_omega",
+                N,
+                "",
+                "relative change of ω over the passage",
+            ),
         ],
     },
     CsvFile {
