@@ -462,7 +462,7 @@ fn main() -> ExitCode {
                     "# {}: valid; resolved scene with defaults:",
                     scene.display()
                 ));
-                say(s.to_toml_string().trim_end());
+                say(s.to_annotated_toml_string().trim_end());
                 ExitCode::SUCCESS
             }
             Err(e) => {

@@ -637,6 +637,12 @@ impl Scene {
         }
     }
 
+    /// [`Self::to_toml_string`] with every key's unit and meaning (from the scene schema) as a
+    /// trailing comment: the listing of `tread check`. Parses back to `self` as well.
+    pub fn to_annotated_toml_string(&self) -> String {
+        schema::annotate(&self.to_toml_string())
+    }
+
     /// [`Self::to_toml_string`] of a scene with `[[material]]` regions.
     fn to_toml_string_regions(&self) -> String {
         let table = toml::Table::try_from(self).and_then(|mut t| {

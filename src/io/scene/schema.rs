@@ -690,3 +690,67 @@ pub fn markdown_reference() -> String {
     }
     out
 }
+
+// ---------------------------------------------------------------------------------------------
+// Annotated listing (`tread check`)
+// ---------------------------------------------------------------------------------------------
+
+/// The field of a dotted table path and key (`["material", "viscoelastic"]`, `"gamma"`).
+fn field_at(table: &[String], key: &str) -> Option<&'static FieldSchema> {
+    let (first, rest) = table.split_first()?;
+    let mut fields: &'static [FieldSchema] = section_schema(first)?.fields;
+    for seg in rest {
+        match fields.iter().find(|f| f.key == seg.as_str())?.kind {
+            Kind::Table(sub) => fields = sub,
+            _ => return None,
+        }
+    }
+    fields.iter().find(|f| f.key == key)
+}
+
+/// A TOML listing of a scene with each key's unit and meaning from [`SCHEMA`] as a trailing
+/// comment (`ri = 0.5  # [L] inner (hub) radius, > 0`). Only lines that hold a whole
+/// `key = value` are annotated; the text parses back to the same tables.
+pub(super) fn annotate(text: &str) -> String {
+    let mut table: Vec<String> = Vec::new();
+    let mut out = String::new();
+    for line in text.lines() {
+        let t = line.trim();
+        let header = t
+            .strip_prefix("[[")
+            .and_then(|h| h.strip_suffix("]]"))
+            .or_else(|| t.strip_prefix('[').and_then(|h| h.strip_suffix(']')));
+        let mut note = None;
+        if let Some(h) = header.filter(|h| !h.contains('"') && !h.contains('=')) {
+            table = h.split('.').map(|s| s.trim().to_string()).collect();
+        } else if let Some((key, _)) = t.split_once('=') {
+            let key = key.trim();
+            // Only a complete `key = value` on this line (not the start of a multi-line array).
+            if t.parse::<toml::Table>().is_ok_and(|p| p.contains_key(key)) {
+                note = field_at(&table, key);
+                if key == "region" && table.first().map(String::as_str) == Some("material") {
+                    out.push_str(line);
+                    out.push_str("  # name of a 2D physical group of mesh.file\n");
+                    continue;
+                }
+            }
+        }
+        out.push_str(line);
+        if let Some(f) = note {
+            let unit = if f.unit == NONE {
+                String::new()
+            } else {
+                format!("[{}] ", f.unit)
+            };
+            let allowed = match f.kind {
+                Kind::Keyword(names) | Kind::KeywordList(names) => {
+                    format!(" ({})", names.join(" | "))
+                }
+                _ => String::new(),
+            };
+            out.push_str(&format!("  # {unit}{}{allowed}", f.doc));
+        }
+        out.push('\n');
+    }
+    out
+}
