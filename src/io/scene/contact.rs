@@ -280,3 +280,243 @@ pub(super) fn validate_contact(c: &ContactSpec, mode: Option<Mode>, out: &mut Ve
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn indentation_scenes_parse() {
+        let s = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "indentation_frictionless");
+        assert_eq!(s.analysis.mode, Mode::Static);
+        assert_eq!((s.geometry.ri, s.geometry.ro), (1.0, 2.0));
+        assert_eq!((s.mesh.n_r, s.mesh.n_theta, s.mesh.order), (6, 96, 2));
+        assert_eq!(s.mesh.grading_theta, 0.6);
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlin {
+                c1: 80.0,
+                c2: 20.0,
+                kappa: 2000.0
+            })
+        );
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(s.motion.omega, 0.0);
+        assert_eq!(
+            s.road,
+            Some(RoadSpec {
+                disp: Some(0.1),
+                load: None,
+                v0: 0.0,
+                ramp: 0.0,
+                v0_ramp: None
+            })
+        );
+        assert_eq!(
+            s.contact,
+            Some(ContactSpec {
+                c_n: 2.0e5,
+                m_n: 1.0,
+                b_n: 0.0,
+                l_n: 0.0,
+                quadrature: ContactQuadrature::Lobatto,
+                points: 4,
+                clamp: ClampKind::Hard,
+                clamp_width: None
+            })
+        );
+        // c_n = 1000 G / (Ro − Ri).
+        let g = s.material.shear_modulus().unwrap_or(0.0);
+        let c_n = s.contact.as_ref().map_or(0.0, |c| c.c_n);
+        assert!((c_n - 1000.0 * g / (s.geometry.ro - s.geometry.ri)).abs() < 1e-6);
+        assert_eq!(s.friction, FrictionSpec::default());
+        assert_eq!(s.friction.params(), Some(FrictionParams::None));
+        assert!(!s.friction.is_active());
+        assert_eq!(s.stick_slip, None);
+        assert_eq!(s.solver.load_steps, 5);
+        assert!(s.validate().is_ok());
+
+        let f = load(FRICTION).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(f.scene.name, "indentation_friction");
+        assert_eq!(
+            f.friction.params(),
+            Some(FrictionParams::CoulombTanh { mu: 0.3, eps: 0.01 })
+        );
+        assert!(f.friction.is_active());
+        // Same scene otherwise.
+        assert_eq!(
+            (&f.road, &f.contact, &f.mesh),
+            (&s.road, &s.contact, &s.mesh)
+        );
+        assert_eq!(f.material, s.material);
+    }
+
+    #[test]
+    fn load_control_scene_parses() {
+        let s = load(LOAD_CONTROL).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "indentation_load_control");
+        assert_eq!(s.analysis.mode, Mode::Static);
+        assert_eq!(
+            s.road,
+            Some(RoadSpec {
+                disp: None,
+                load: Some(300.0),
+                v0: 0.0,
+                ramp: 0.0,
+                v0_ramp: None
+            })
+        );
+        let base = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.contact, base.contact);
+        assert_eq!(s.friction, base.friction);
+        assert_eq!(s.mesh, base.mesh);
+        assert_eq!(s.solver, base.solver);
+    }
+
+    #[test]
+    fn contact_defaults_are_filled() {
+        let text = remove_section(FRICTIONLESS, "[contact]") + "[contact]\nc_n = 1e4\n";
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.contact,
+            Some(ContactSpec {
+                c_n: 1e4,
+                m_n: DEFAULT_M_N,
+                b_n: 0.0,
+                l_n: 0.0,
+                quadrature: ContactQuadrature::Lobatto,
+                points: DEFAULT_CONTACT_POINTS,
+                clamp: ClampKind::Hard,
+                clamp_width: None
+            })
+        );
+        // No [friction] at all: law none.
+        let text = remove_section(FRICTION, "[friction]");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.friction.law, FrictionLawName::None);
+        assert!(!s.friction.is_active());
+    }
+
+    #[test]
+    fn non_positive_c_n_rejected_with_line() {
+        for bad in ["c_n = 0.0", "c_n = -2.0e5"] {
+            let text = replace_line(FRICTIONLESS, "c_n", bad);
+            let e = errors(&text);
+            assert_only(&e, "contact.c_n", Some(line_of(&text, "c_n")));
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+    }
+
+    #[test]
+    fn contact_exponents_damping_and_points_rejected() {
+        let text = replace_line(FRICTIONLESS, "m_n", "m_n = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "contact.m_n", Some(line_of(&text, "m_n")));
+        assert!(e.0[0].message.contains(">= 1"), "{e}");
+
+        let text = replace_line(FRICTIONLESS, "b_n", "b_n = -1.0");
+        let text = replace_line(&text, "l_n", "l_n = -0.5");
+        let text = replace_line(&text, "points", "points = 7");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["b_n", "l_n", "points"] {
+            let err = e
+                .find(&format!("contact.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)), "{err}");
+        }
+        let e = errors(&replace_line(FRICTIONLESS, "points", "points = 1"));
+        assert!(e.has_key("contact.points"), "{e}");
+        for ok in ["points = 2", "points = 6"] {
+            assert!(
+                load(&replace_line(FRICTIONLESS, "points", ok)).is_ok(),
+                "{ok}"
+            );
+        }
+        assert!(load(&replace_line(FRICTIONLESS, "m_n", "m_n = 1.5")).is_ok());
+    }
+
+    #[test]
+    fn contact_clamp_keys_are_validated() {
+        // Default: the hard clamp, no width.
+        let sc = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!((c.clamp, c.clamp_width), (ClampKind::Hard, None));
+        // Smooth with and without a width.
+        let text = replace_line(FRICTIONLESS, "points", "points = 4\nclamp = \"smooth\"");
+        let sc = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!((c.clamp, c.clamp_width), (ClampKind::Smooth, None));
+        let sc = load_with(&text, &["contact.clamp_width=25"]).unwrap_or_else(|e| panic!("{e}"));
+        let c = sc.contact.as_ref().unwrap_or_else(|| panic!("no contact"));
+        assert_eq!(c.clamp_width, Some(25.0));
+        // A misspelt clamp names the key and the allowed values.
+        let bad = replace_line(FRICTIONLESS, "points", "points = 4\nclamp = \"soft\"");
+        let e = errors(&bad);
+        assert_only(&e, "contact.clamp", Some(line_of(&bad, "clamp")));
+        assert!(
+            e.0[0].message.contains("\"hard\"") && e.0[0].message.contains("\"smooth\""),
+            "{e}"
+        );
+        // A width must be positive and is only allowed with the smooth clamp.
+        for w in ["0", "-3"] {
+            let e = errors_with(&text, &[&format!("contact.clamp_width={w}")]);
+            assert!(e.has_key("contact.clamp_width"), "{e}");
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+        let e = errors_with(FRICTIONLESS, &["contact.clamp_width=5"]);
+        assert!(e.has_key("contact.clamp_width"), "{e}");
+        assert!(e.0[0].message.contains("smooth"), "{e}");
+        // The printed scene keeps the choice (round trip).
+        let sc = load_with(&text, &["contact.clamp_width=25"]).unwrap_or_else(|e| panic!("{e}"));
+        let back = load(&sc.to_toml_string()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back.contact, sc.contact);
+    }
+
+    #[test]
+    fn both_or_neither_disp_and_load_rejected() {
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nload = 300.0");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        assert!(e.0[0].message.contains("not both"), "{e}");
+
+        let text = FRICTIONLESS
+            .lines()
+            .filter(|l| !l.starts_with("disp"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "[road]")));
+        assert!(e.0[0].message.contains("required"), "{e}");
+
+        let text = replace_line(LOAD_CONTROL, "load =", "load = 0.0");
+        let e = errors(&text);
+        assert_only(&e, "road.load", Some(line_of(&text, "load =")));
+        let text = replace_line(FRICTIONLESS, "disp", "disp = -0.1");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        // Penetration at least the wall thickness.
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 1.0");
+        let e = errors(&text);
+        assert_only(&e, "road.disp", Some(line_of(&text, "disp")));
+        assert!(e.0[0].message.contains("wall thickness"), "{e}");
+        assert!(load(&replace_line(FRICTIONLESS, "disp", "disp = 0")).is_ok());
+    }
+
+    #[test]
+    fn missing_c_n_reported_once() {
+        let text = FRICTIONLESS
+            .lines()
+            .filter(|l| !l.starts_with("c_n"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "contact.c_n", Some(line_of(&text, "[contact]")));
+        assert!(e.0[0].message.contains("required key is missing"), "{e}");
+        let e = errors(&replace_line(FRICTIONLESS, "c_n", "c_n = \"big\""));
+        assert_eq!(e.0.len(), 1, "{e}");
+        assert!(e.0[0].message.contains("expected a number"), "{e}");
+    }
+}

@@ -233,3 +233,152 @@ pub(super) fn validate_friction(f: &FrictionSpec, out: &mut Vec<Issue>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn friction_params_and_is_active() {
+        let mut f = FrictionSpec {
+            law: FrictionLawName::CoulombLinear,
+            mu: Some(0.0),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert_eq!(
+            f.params(),
+            Some(FrictionParams::CoulombLinear { mu: 0.0, eps: 1e-3 })
+        );
+        assert!(!f.is_active(), "zero coefficient");
+        f.mu = Some(0.2);
+        assert!(f.is_active());
+        f.eps = None;
+        assert_eq!(f.params(), None);
+        assert!(!f.is_active(), "incomplete");
+        let om = FrictionSpec {
+            law: FrictionLawName::OdenMartins,
+            c_t: Some(5.0),
+            m_t: Some(1.5),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert_eq!(
+            om.params(),
+            Some(FrictionParams::OdenMartins {
+                c_t: 5.0,
+                m_t: 1.5,
+                eps: 1e-3
+            })
+        );
+        assert!(om.is_active());
+        let rd = FrictionSpec {
+            law: FrictionLawName::RateDependent,
+            mu_s: Some(0.0),
+            mu_k: Some(0.0),
+            v_s: Some(1.0),
+            eps: Some(1e-3),
+            ..FrictionSpec::default()
+        };
+        assert!(!rd.is_active());
+        assert_eq!(FrictionSpec::keys_of(FrictionLawName::None), &[] as &[&str]);
+        assert_eq!(
+            FrictionSpec::keys_of(FrictionLawName::RateDependent),
+            &["mu_s", "mu_k", "v_s", "eps"]
+        );
+    }
+
+    #[test]
+    fn negative_mu_and_non_positive_eps_rejected() {
+        let text = replace_line(FRICTION, "mu =", "mu = -0.1");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu =")));
+        assert!(e.0[0].message.contains(">= 0"), "{e}");
+        assert!(load(&replace_line(FRICTION, "mu =", "mu = 0.0")).is_ok());
+
+        for bad in ["eps = 0.0", "eps = -0.01"] {
+            let text = replace_line(FRICTION, "eps", bad);
+            let e = errors(&text);
+            assert_only(&e, "friction.eps", Some(line_of(&text, "eps")));
+            assert!(e.0[0].message.contains("> 0"), "{e}");
+        }
+        let text = replace_line(STICK_SLIP, "eps", "eps = 0");
+        let e = errors(&text);
+        assert_only(&e, "friction.eps", Some(line_of(&text, "eps")));
+        let text = replace_line(STICK_SLIP, "mu_s", "mu_s = -0.6");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_s", Some(line_of(&text, "mu_s")));
+        let text = replace_line(STICK_SLIP, "v_s", "v_s = 0.0");
+        let e = errors(&text);
+        assert_only(&e, "friction.v_s", Some(line_of(&text, "v_s")));
+    }
+
+    #[test]
+    fn kinetic_above_static_rejected() {
+        let text = replace_line(STICK_SLIP, "mu_k", "mu_k = 0.7");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_k", Some(line_of(&text, "mu_k")));
+        assert!(e.0[0].message.contains("must not exceed"), "{e}");
+        assert!(load(&replace_line(STICK_SLIP, "mu_k", "mu_k = 0.6")).is_ok());
+    }
+
+    #[test]
+    fn oden_martins_keys_checked() {
+        let text = FRICTIONLESS.replace(
+            "law = \"none\"",
+            "law = \"oden_martins\"\nc_t = 6.0e4\nm_t = 0.5\neps = 0.01",
+        );
+        let e = errors(&text);
+        assert_only(&e, "friction.m_t", Some(line_of(&text, "m_t")));
+        let s = load(&replace_line(&text, "m_t", "m_t = 1.0")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::OdenMartins {
+                c_t: 6.0e4,
+                m_t: 1.0,
+                eps: 0.01
+            })
+        );
+        // Missing keys of the law: reported at the [friction] header.
+        let text = FRICTIONLESS.replace("law = \"none\"", "law = \"oden_martins\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["friction.c_t", "friction.m_t", "friction.eps"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, "[friction]")));
+            assert!(err.message.contains("required for friction law"), "{err}");
+        }
+    }
+
+    #[test]
+    fn friction_key_of_another_law_rejected() {
+        let text = replace_line(FRICTION, "eps", "eps = 0.01\nmu_s = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu_s", Some(line_of(&text, "mu_s")));
+        assert!(e.0[0].message.contains("not a parameter"), "{e}");
+        assert!(e.0[0].message.contains("coulomb_tanh"), "{e}");
+        assert!(e.0[0].message.contains("law, mu, eps"), "{e}");
+
+        let text = replace_line(STICK_SLIP, "v_s", "v_s = 0.01\nmu = 0.5");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu = 0.5")));
+
+        let text = FRICTIONLESS.replace("law = \"none\"", "law = \"none\"\nmu = 0.3");
+        let e = errors(&text);
+        assert_only(&e, "friction.mu", Some(line_of(&text, "mu =")));
+        assert!(e.0[0].message.contains("takes no other key"), "{e}");
+    }
+
+    #[test]
+    fn invalid_friction_law_reported_once() {
+        // The keys of an unknown law are not checked against the default law.
+        let text = replace_line(FRICTION, "law", "law = \"coulomb\"");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(e.0[0].message.contains("coulomb_tanh"), "{e}");
+        let text = replace_line(STICK_SLIP, "law", "law = 3");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+    }
+}

@@ -74,3 +74,32 @@ pub(super) fn validate_geometry(g: &Geometry, out: &mut Vec<Issue>) {
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn ri_not_less_than_ro_rejected_with_line() {
+        let text = replace_line(MINIMAL, "ri =", "ri = 2.5   # larger than ro");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        let err = &e.0[0];
+        assert_eq!(err.key, "geometry.ro");
+        assert_eq!(err.line, Some(line_of(&text, "ro =")));
+        assert!(err.message.contains("greater than"), "{}", err.message);
+
+        let text = replace_line(MINIMAL, "ri =", "ri = -1.0");
+        let e = errors(&text);
+        let err = e.find("geometry.ri").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "ri =")));
+    }
+
+    #[test]
+    fn scene_name_must_be_a_directory_name() {
+        let e = errors(&replace_line(MINIMAL, "name", "name = \"my scene/1\""));
+        assert!(e.has_key("scene.name"), "{e}");
+        let e = errors(&replace_line(MINIMAL, "name", "name = \"\""));
+        assert!(e.has_key("scene.name"), "{e}");
+    }
+}

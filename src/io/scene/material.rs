@@ -310,3 +310,227 @@ pub(super) fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn incompressible_scene_parses() {
+        let s = load(INCOMPRESSIBLE).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_incompressible");
+        assert_eq!(s.scene.units, "in-lbf-s");
+        assert_eq!(s.geometry.ri, 1.0);
+        assert_eq!(s.geometry.ro, 2.0);
+        assert_eq!(s.mesh.n_r, 4);
+        assert_eq!(s.mesh.n_theta, 48);
+        assert_eq!(s.mesh.order, 2);
+        assert_eq!(s.material.model, MaterialModel::MooneyRivlinIncompressible);
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlinIncompressible {
+                c1: 80.0,
+                c2: 20.0,
+                formulation: Formulation::Exact,
+                kappa: None
+            })
+        );
+        assert_eq!(s.material.formulation, Some(Formulation::Exact));
+        assert_eq!(s.material.shear_modulus(), Some(200.0));
+        assert_eq!(s.material.bulk_modulus(), None);
+        assert!(s.material.is_incompressible());
+        assert_eq!(s.analysis.mode, Mode::Spinning);
+        assert_eq!(s.motion.omega, 20.0);
+        // The density is chosen so that c_R / Ro is about the paper's top speed, 395 rpm.
+        let c_r = 0.955 * s.shear_wave_speed().unwrap_or(0.0);
+        let rpm = c_r / s.geometry.ro * 60.0 / (2.0 * std::f64::consts::PI);
+        assert!((rpm - 395.0).abs() < 10.0, "critical spin {rpm} rpm");
+    }
+
+    #[test]
+    fn neo_hookean_scene_parses() {
+        let s = load(NEO_HOOKEAN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_neo_hookean");
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::NeoHookean {
+                mu: 200.0,
+                lambda: 1800.0
+            })
+        );
+        assert_eq!(s.material.rho, 0.027);
+        assert_eq!(s.motion.omega, 20.0);
+        assert_eq!((s.geometry.ri, s.geometry.ro), (1.0, 2.0));
+        assert!(!s.material.is_incompressible());
+        let k = s.material.bulk_modulus().unwrap_or(0.0);
+        assert!((k - (1800.0 + 400.0 / 3.0)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn mooney_rivlin_scene_parses() {
+        let s = load(MOONEY_RIVLIN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "spinning_mooney_rivlin");
+        assert_eq!(
+            s.material.params(),
+            Some(MaterialParams::MooneyRivlin {
+                c1: 80.0,
+                c2: 20.0,
+                kappa: 2000.0
+            })
+        );
+        assert_eq!(s.material.resolved_kappa(), Some(2000.0));
+        assert_eq!(s.material.resolved_formulation(), None);
+        assert_eq!(s.material.shear_modulus(), Some(200.0));
+    }
+
+    #[test]
+    fn perturbed_kappa_default_is_resolved() {
+        let text = r#"
+[scene]
+name = "p"
+[geometry]
+ri = 1
+ro = 2
+[material]
+model = "mooney_rivlin_incompressible"
+rho = 0.027
+c1 = 80
+c2 = 20
+formulation = "perturbed"
+[analysis]
+mode = "spinning"
+[motion]
+omega = 0
+"#;
+        let s = load(text).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.material.formulation, Some(Formulation::Perturbed));
+        assert_eq!(s.material.kappa, Some(1e4 * 100.0));
+        assert_eq!(s.material.resolved_kappa(), Some(1e6));
+        // Integers are accepted for floats.
+        assert_eq!(s.geometry.ri, 1.0);
+        assert_eq!(s.motion.omega, 0.0);
+        // Explicit kappa wins.
+        let s2 = load_with(text, &["material.kappa=5000"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s2.material.kappa, Some(5000.0));
+    }
+
+    #[test]
+    fn non_positive_moduli_and_density_rejected() {
+        let text = replace_line(MINIMAL, "mu =", "mu = 0.0");
+        let text = replace_line(&text, "rho =", "rho = -0.027");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("material.mu").and_then(|x| x.line),
+            Some(line_of(&text, "mu ="))
+        );
+        assert_eq!(
+            e.find("material.rho").and_then(|x| x.line),
+            Some(line_of(&text, "rho ="))
+        );
+        // Sorted by line.
+        assert!(e.0[0].line < e.0[1].line);
+
+        let e = errors(&replace_line(MOONEY_RIVLIN, "c2 ", "c2 = -1.0"));
+        assert!(e.has_key("material.c2"), "{e}");
+        let e = errors(&replace_line(MOONEY_RIVLIN, "kappa", "kappa = 0"));
+        assert!(e.has_key("material.kappa"), "{e}");
+        // c2 = 0 is fine.
+        assert!(load(&replace_line(MOONEY_RIVLIN, "c2 ", "c2 = 0.0")).is_ok());
+    }
+
+    #[test]
+    fn key_not_belonging_to_model_rejected() {
+        // lambda with mooney_rivlin
+        let text = replace_line(MOONEY_RIVLIN, "kappa", "kappa = 2000.0\nlambda = 1800.0");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 1, "{e}");
+        let err = &e.0[0];
+        assert_eq!(err.key, "material.lambda");
+        assert_eq!(err.line, Some(line_of(&text, "lambda")));
+        assert!(err.message.contains("not a parameter"), "{}", err.message);
+        // kappa with the exact incompressible formulation
+        let text = replace_line(INCOMPRESSIBLE, "c2 ", "c2 = 20.0\nkappa = 1e5");
+        let e = errors(&text);
+        assert!(e.has_key("material.kappa"), "{e}");
+        // formulation with neo_hookean
+        let e = errors(&replace_line(
+            MINIMAL,
+            "mu =",
+            "mu = 200\nformulation = \"exact\"",
+        ));
+        assert!(e.has_key("material.formulation"), "{e}");
+    }
+
+    #[test]
+    fn viscoelastic_subtable_is_parsed_and_checked() {
+        let base = r#"
+[scene]
+name = "v"
+[geometry]
+ri = 1.0
+ro = 2.0
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[material.viscoelastic]
+model = "convolution"
+gamma = 200.0
+prony = [[0.7, 0.01], [0.3, 1]]
+[analysis]
+mode = "transient"
+[motion]
+omega = 10.0
+[time]
+dt = 1e-3
+t_end = 0.1
+"#;
+        let s = Scene::from_toml_str(base, "v.toml", &[]).unwrap_or_else(|e| panic!("{e}"));
+        let ve = s.material.viscoelastic.clone().expect("parsed");
+        assert_eq!(ve.prony, vec![[0.7, 0.01], [0.3, 1.0]]);
+        let law = ve.build().expect("valid");
+        assert_eq!(law.model, crate::material::ViscoModel::Convolution);
+        assert_eq!(law.prony(), &[(0.7, 0.01), (0.3, 1.0)]);
+        // Every problem at once, each with its key and line.
+        let bad = base
+            .replace("model = \"convolution\"", "model = \"maxwell\"\ncolour = 1")
+            .replace("gamma = 200.0", "gamma = \"big\"")
+            .replace(
+                "prony = [[0.7, 0.01], [0.3, 1]]",
+                "prony = [[0.7], [0.3, 1]]",
+            );
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("invalid");
+        for key in [
+            "material.viscoelastic.model",
+            "material.viscoelastic.colour",
+            "material.viscoelastic.gamma",
+            "material.viscoelastic.prony",
+        ] {
+            assert!(e.has_key(key), "{key} not reported: {e}");
+        }
+        let text = e.to_string();
+        assert!(
+            text.contains("maxwell") && text.contains("\"multiplicative\""),
+            "{text}"
+        );
+        // Values checked by the law: a non-positive relaxation time, a negative gamma.
+        let bad = base.replace("[0.3, 1]]", "[0.3, 0.0]]");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("tau = 0");
+        let err = e
+            .find("material.viscoelastic.prony")
+            .unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("tau > 0"), "{}", err.message);
+        assert_eq!(err.line, Some(15));
+        let bad = base.replace("gamma = 200.0", "gamma = -1.0");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("gamma < 0");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
+        // Missing keys.
+        let bad = base.replace("gamma = 200.0\n", "");
+        let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("missing");
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
+    }
+}

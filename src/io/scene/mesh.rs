@@ -141,3 +141,41 @@ pub(super) fn validate_mesh(m: &MeshSpec, out: &mut Vec<Issue>) {
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn n_theta_too_small_or_odd_rejected() {
+        let e = errors(&format!("{MINIMAL}\n[mesh]\nn_theta = 6\n"));
+        let err = e.find("mesh.n_theta").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains(">= 8"), "{}", err.message);
+        let text = format!("{MINIMAL}\n[mesh]\nn_theta = 33\n");
+        let e = errors(&text);
+        let err = e.find("mesh.n_theta").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("even"), "{}", err.message);
+        assert_eq!(err.line, Some(line_of(&text, "n_theta")));
+    }
+
+    #[test]
+    fn other_mesh_and_solver_ranges_rejected() {
+        let text = format!(
+            "{MINIMAL}\n[mesh]\nn_r = 0\norder = 3\ngrading_r = 0\ngrading_theta = 1.0\n\
+             [solver]\ntolerance = 1.0\nmax_iterations = 0\nload_steps = 0\n"
+        );
+        let e = errors(&text);
+        for key in [
+            "mesh.n_r",
+            "mesh.order",
+            "mesh.grading_r",
+            "mesh.grading_theta",
+            "solver.tolerance",
+            "solver.max_iterations",
+            "solver.load_steps",
+        ] {
+            assert!(e.has_key(key), "missing {key} in\n{e}");
+        }
+        assert_eq!(e.0.len(), 7, "{e}");
+    }
+}

@@ -311,3 +311,234 @@ pub(super) fn validate_motion_control(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn torque_control_scenes_parse() {
+        let f = load(FREE_ROLLING).unwrap_or_else(|e| panic!("{e}"));
+        let b = load(BRAKING).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (f.scene.name.as_str(), b.scene.name.as_str()),
+            ("free_rolling", "braking")
+        );
+        for s in [&f, &b] {
+            assert_eq!(s.analysis.mode, Mode::Transient);
+            assert_eq!(s.motion.control, Control::Torque);
+            assert_eq!(s.motion.hub_inertia, 0.5);
+            assert_eq!(s.motion.omega, 2.0);
+            assert_eq!((s.mesh.n_r, s.mesh.n_theta), (2, 32));
+            let road = s.road.as_ref().unwrap_or_else(|| panic!("no road"));
+            assert_eq!((road.disp, road.v0_ramp), (Some(0.1), Some(0.0)));
+            assert!(s.friction.is_active());
+            assert!(s.validate().is_ok());
+        }
+        assert_eq!((f.motion.torque, f.motion.ramp), (0.0, 0.0));
+        assert_eq!((b.motion.torque, b.motion.ramp), (-10.0, 0.2));
+        // The two scenes differ only in the torque, its ramp and the naming.
+        assert_eq!(
+            (
+                &f.geometry,
+                &f.mesh,
+                &f.material,
+                &f.road,
+                &f.contact,
+                &f.friction,
+                &f.time
+            ),
+            (
+                &b.geometry,
+                &b.mesh,
+                &b.material,
+                &b.road,
+                &b.contact,
+                &b.friction,
+                &b.time
+            )
+        );
+        // Defaults: speed control, no inertia, no torque.
+        let s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (s.motion.control, s.motion.hub_inertia, s.motion.torque),
+            (Control::Speed, 0.0, 0.0)
+        );
+    }
+
+    #[test]
+    fn torque_control_keys_are_validated() {
+        // Torque control without an inertia (or a negative one): reported on the key.
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=0"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        let e = errors_with(FREE_ROLLING, &["motion.hub_inertia=-1"]);
+        assert_only(&e, "motion.hub_inertia", None);
+        // Torque and inertia are only for torque control; lines of the file.
+        let text = BRAKING.replace("control = \"torque\"", "control = \"speed\"");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert_eq!(
+            e.find("motion.torque").and_then(|x| x.line),
+            Some(line_of(&text, "torque = -10.0"))
+        );
+        assert_eq!(
+            e.find("motion.hub_inertia").and_then(|x| x.line),
+            Some(line_of(&text, "hub_inertia ="))
+        );
+        // Only generalized-α, only transient.
+        let e = errors_with(
+            FREE_ROLLING,
+            &["time.integrator=central_difference", "time.mass=lumped"],
+        );
+        assert_only(
+            &e,
+            "motion.control",
+            Some(line_of(FREE_ROLLING, "control = \"torque\"")),
+        );
+        assert!(e.0[0].message.contains("generalized_alpha"), "{e}");
+        let e = errors_with(MINIMAL, &["motion.control=torque", "motion.hub_inertia=1"]);
+        assert!(e.has_key("motion.control"), "{e}");
+        // Unknown keyword, wrong type, non-finite torque.
+        let e = errors_with(FREE_ROLLING, &["motion.control=brake"]);
+        assert_only(&e, "motion.control", None);
+        assert!(e.0[0].message.contains("speed"), "{e}");
+        let text = FREE_ROLLING.replace("torque = 0.0 ", "torque = \"none\" ");
+        let e = errors(&text);
+        assert_only(
+            &e,
+            "motion.torque",
+            Some(line_of(&text, "torque = \"none\"")),
+        );
+        let e = errors_with(BRAKING, &["motion.torque=nan"]);
+        assert_only(&e, "motion.torque", None);
+    }
+
+    #[test]
+    fn transient_requires_omega() {
+        let text = ODEN
+            .lines()
+            .filter(|l| !l.starts_with("omega"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "motion.omega", Some(line_of(&text, "[motion]")));
+        assert!(e.0[0].message.contains("\"transient\""), "{e}");
+        // No [motion] at all: at the line of `mode`.
+        let text = remove_section(&minimal_transient(), "[motion]");
+        let e = errors(&text);
+        assert_only(&e, "motion.omega", Some(line_of(&text, "mode =")));
+        let e = errors(&remove_section(MINIMAL, "[motion]"));
+        assert_only(&e, "motion.omega", Some(line_of(MINIMAL, "mode =")));
+        // omega = 0 is allowed (a road moving under a non-spinning cylinder).
+        assert!(load(&replace_line(ODEN, "omega", "omega = 0")).is_ok());
+        let e = errors(&replace_line(ODEN, "omega", "omega = -10"));
+        assert!(e.has_key("motion.omega"), "{e}");
+    }
+
+    #[test]
+    fn ramps_only_in_transient() {
+        // motion.ramp in spinning (file) and static (override).
+        let text = replace_line(MINIMAL, "omega", "omega = 20.0\nramp = 0.1");
+        let e = errors(&text);
+        assert_only(&e, "motion.ramp", Some(line_of(&text, "ramp")));
+        assert!(e.0[0].message.contains("\"spinning\""), "{e}");
+        let e = errors_with(FRICTIONLESS, &["motion.ramp=0.1"]);
+        assert_only(&e, "motion.ramp", None);
+        assert!(e.0[0].is_override(), "{e}");
+        let e = errors_with(STICK_SLIP, &["motion.ramp=1"]);
+        assert_only(&e, "motion.ramp", None);
+        // road.ramp and road.v0_ramp in static.
+        let text = replace_line(FRICTIONLESS, "disp", "disp = 0.1\nramp = 0.05");
+        let e = errors(&text);
+        assert_only(&e, "road.ramp", Some(line_of(&text, "ramp")));
+        assert!(e.0[0].message.contains("static"), "{e}");
+        let text = replace_line(FRICTIONLESS, "v0", "v0 = 0.0\nv0_ramp = 0.05");
+        let e = errors(&text);
+        assert_only(&e, "road.v0_ramp", Some(line_of(&text, "v0_ramp")));
+        // Zero ramps are fine anywhere.
+        let text = replace_line(FRICTIONLESS, "v0", "v0 = 0.0\nv0_ramp = 0\nramp = 0.0");
+        assert!(load(&text).is_ok());
+        assert!(load(&replace_line(MINIMAL, "omega", "omega = 20.0\nramp = 0")).is_ok());
+        // Negative or non-finite ramps in transient.
+        let text = replace_line(ODEN, "ramp = 0.05", "ramp = -0.05");
+        let e = errors(&text);
+        assert_only(&e, "motion.ramp", Some(line_of(&text, "ramp = -0.05")));
+        assert!(e.0[0].message.contains(">= 0"), "{e}");
+        let e = errors_with(ODEN, &["road.ramp=-1", "road.v0_ramp=-2"]);
+        assert_eq!(e.0.len(), 2, "{e}");
+        assert!(e.has_key("road.ramp") && e.has_key("road.v0_ramp"), "{e}");
+        assert!(e.0.iter().all(|x| x.is_override()), "{e}");
+        let e = errors_with(ODEN, &["motion.ramp=inf"]);
+        assert_only(&e, "motion.ramp", None);
+        // v0_ramp given: it wins over motion.ramp.
+        let s = load_with(ODEN, &["road.v0_ramp=0.2"]).unwrap_or_else(|e| panic!("{e}"));
+        let road = s.road.clone().unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!(road.v0_ramp, Some(0.2));
+        assert_eq!(road.resolved_v0_ramp(&s.motion), 0.2);
+    }
+
+    #[test]
+    fn smoothstep_ramps() {
+        assert_eq!((smoothstep(-1.0), smoothstep(0.0)), (0.0, 0.0));
+        assert_eq!((smoothstep(1.0), smoothstep(2.0)), (1.0, 1.0));
+        assert!((smoothstep(0.5) - 0.5).abs() < 1e-15);
+        // Symmetric, monotone, C²: derivative and integral consistent with S.
+        let h = 1e-6;
+        for i in 1..100 {
+            let x = i as f64 / 100.0;
+            assert!((smoothstep(x) + smoothstep(1.0 - x) - 1.0).abs() < 1e-14);
+            assert!(smoothstep(x) >= smoothstep(x - 0.01));
+            let d = (smoothstep(x + h) - smoothstep(x - h)) / (2.0 * h);
+            assert!((d - smoothstep_derivative(x)).abs() < 1e-6, "{x}");
+            let q = (smoothstep_integral(x + h) - smoothstep_integral(x - h)) / (2.0 * h);
+            assert!((q - smoothstep(x)).abs() < 1e-6, "{x}");
+        }
+        assert_eq!(smoothstep_derivative(0.0), 0.0);
+        assert_eq!(smoothstep_derivative(1.0), 0.0);
+        assert!((smoothstep_integral(1.0) - 0.5).abs() < 1e-15);
+        assert!((smoothstep_integral(3.0) - 2.5).abs() < 1e-15);
+
+        let m = Motion {
+            omega: 10.0,
+            ramp: 0.05,
+            ..Motion::default()
+        };
+        assert_eq!((m.omega_at(-1.0), m.omega_at(0.0)), (0.0, 0.0));
+        assert!((m.omega_at(0.025) - 5.0).abs() < 1e-12);
+        assert_eq!(m.omega_at(0.05), 10.0);
+        assert_eq!(m.omega_at(1.0), 10.0);
+        assert!((m.angle_at(1.0) - 10.0 * (1.0 - 0.025)).abs() < 1e-12);
+        assert!((m.angle_at(0.05) - 10.0 * 0.025).abs() < 1e-12);
+        assert_eq!(m.angle_at(-1.0), 0.0);
+        assert!((m.omega_dot_at(0.025) - 10.0 * 1.875 / 0.05).abs() < 1e-9);
+        assert_eq!(m.omega_dot_at(0.06), 0.0);
+        // A zero ramp: full speed at once.
+        let step = Motion {
+            omega: 10.0,
+            ramp: 0.0,
+            ..Motion::default()
+        };
+        assert_eq!((step.omega_at(0.0), step.omega_at(0.3)), (10.0, 10.0));
+        assert!((step.angle_at(0.3) - 3.0).abs() < 1e-12);
+        assert_eq!(step.omega_dot_at(0.0), 0.0);
+
+        let road = RoadSpec {
+            disp: Some(0.1),
+            load: None,
+            v0: 20.0,
+            ramp: 0.1,
+            v0_ramp: None,
+        };
+        assert!((road.ramp_factor(0.05) - 0.5).abs() < 1e-12);
+        assert_eq!(road.ramp_factor(0.2), 1.0);
+        assert!((road.ramp_factor_rate(0.05) - 1.875 / 0.1).abs() < 1e-9);
+        assert!((road.v0_at(0.025, &m) - 10.0).abs() < 1e-12);
+        assert_eq!(road.v0_at(0.05, &m), 20.0);
+        let late = RoadSpec {
+            v0_ramp: Some(0.5),
+            ..road
+        };
+        assert!((late.v0_at(0.25, &m) - 10.0).abs() < 1e-12);
+    }
+}

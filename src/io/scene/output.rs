@@ -74,3 +74,38 @@ pub(super) fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn output_sinks_are_checked() {
+        let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"hdf5\"]\nevery = 0\n");
+        let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
+        let sinks = e.find("output.sinks").unwrap_or_else(|| panic!("{e}"));
+        assert!(
+            sinks.message.contains("hdf5") && sinks.line.is_some(),
+            "{e}"
+        );
+        assert!(e.has_key("output.every"), "{e}");
+        let text = format!("{MINIMAL}\n[output]\nsinks = [\"csv\", \"csv\"]\n");
+        let e = load(&text).err().unwrap_or_else(|| panic!("accepted"));
+        assert!(
+            e.find("output.sinks")
+                .is_some_and(|x| x.message.contains("twice")),
+            "{e}"
+        );
+        let e = errors_with(MINIMAL, &["output.sinks=csv,nope"]);
+        assert!(
+            e.find("output.sinks")
+                .is_some_and(|x| x.message.contains("nope")),
+            "{e}"
+        );
+        // Round trip of a non-default list.
+        let s = load_with(MINIMAL, &["output.sinks=mcap,rerun", "output.every=3"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let back = load(&s.to_toml_string()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back, s);
+    }
+}

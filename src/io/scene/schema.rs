@@ -754,3 +754,223 @@ pub(super) fn annotate(text: &str) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn keyword_enums_match_serde_names() {
+        fn check<T: Serialize + FromStr + fmt::Display + Copy + PartialEq + fmt::Debug>(
+            all: &[T],
+            names: &[&str],
+        ) {
+            assert_eq!(all.len(), names.len());
+            for (v, n) in all.iter().zip(names) {
+                assert_eq!(serde_json::to_string(v).ok(), Some(format!("\"{n}\"")));
+                assert_eq!(v.to_string(), *n);
+                assert_eq!(n.parse::<T>().ok(), Some(*v));
+            }
+        }
+        check(Mode::ALL, Mode::NAMES);
+        check(MaterialModel::ALL, MaterialModel::NAMES);
+        check(Formulation::ALL, Formulation::NAMES);
+        check(LinearChoice::ALL, LinearChoice::NAMES);
+        check(ContactQuadrature::ALL, ContactQuadrature::NAMES);
+        check(FrictionLawName::ALL, FrictionLawName::NAMES);
+        check(Sink::ALL, Sink::NAMES);
+        assert_eq!("spinning".parse::<Mode>(), Ok(Mode::Spinning));
+        assert_eq!("static".parse::<Mode>(), Ok(Mode::Static));
+        assert_eq!("stick_slip".parse::<Mode>(), Ok(Mode::StickSlip));
+        assert_eq!("transient".parse::<Mode>(), Ok(Mode::Transient));
+        assert_eq!("steady".parse::<Mode>(), Ok(Mode::Steady));
+        check(ContinuationParameter::ALL, ContinuationParameter::NAMES);
+        let err = "dynamic".parse::<Mode>().err().unwrap_or_default();
+        assert!(
+            err.contains("\"spinning\", \"static\", \"stick_slip\", \"transient\", \"steady\""),
+            "{err}"
+        );
+        check(IntegratorName::ALL, IntegratorName::NAMES);
+        check(MassKind::ALL, MassKind::NAMES);
+        assert_eq!(IntegratorName::default(), IntegratorName::GeneralizedAlpha);
+        assert_eq!(MassKind::default(), MassKind::Consistent);
+        assert_eq!(
+            IntegratorName::NAMES,
+            &["generalized_alpha", "central_difference", "bdf", "sdirk"]
+        );
+        assert_eq!(FrictionLawName::default(), FrictionLawName::None);
+        assert_eq!(ContactQuadrature::default(), ContactQuadrature::Lobatto);
+    }
+
+    #[test]
+    fn schema_matches_serde_structs() {
+        fn keys<T: Serialize>(v: &T) -> Vec<String> {
+            match serde_json::to_value(v) {
+                Ok(serde_json::Value::Object(m)) => m.keys().cloned().collect(),
+                _ => Vec::new(),
+            }
+        }
+        let full_material = MaterialSpec {
+            model: MaterialModel::NeoHookean,
+            rho: 1.0,
+            mu: Some(1.0),
+            lambda: Some(1.0),
+            c1: Some(1.0),
+            c2: Some(1.0),
+            kappa: Some(1.0),
+            formulation: Some(Formulation::Exact),
+            viscoelastic: Some(ViscoelasticSpec {
+                model: "convolution".into(),
+                gamma: 1.0,
+                prony: vec![[1.0, 1.0]],
+            }),
+        };
+        let info = SceneInfo {
+            name: "a".into(),
+            description: String::new(),
+            units: String::new(),
+        };
+        let cases: Vec<(&str, Vec<String>)> = vec![
+            ("scene", keys(&info)),
+            ("geometry", keys(&Geometry { ri: 1.0, ro: 2.0 })),
+            (
+                "mesh",
+                keys(&MeshSpec {
+                    file: Some("m.msh".into()),
+                    hub: Some("hub".into()),
+                    contact: Some("contact".into()),
+                    ..MeshSpec::default()
+                }),
+            ),
+            ("material", keys(&full_material)),
+            (
+                "analysis",
+                keys(&Analysis {
+                    mode: Mode::Spinning,
+                }),
+            ),
+            ("motion", keys(&Motion::default())),
+            ("road", keys(&full_road())),
+            ("contact", keys(&full_contact())),
+            ("friction", keys(&full_friction())),
+            ("stick_slip", keys(&full_stick_slip())),
+            ("time", keys(&full_time())),
+            ("continuation", keys(&ContinuationSpec::default())),
+            ("solver", keys(&SolverSpec::default())),
+            ("output", keys(&OutputSpec::default())),
+        ];
+        assert_eq!(cases.len(), SCHEMA.len());
+        for (name, mut serde_keys) in cases {
+            let sec = section_schema(name).unwrap_or_else(|| panic!("{name}"));
+            let mut schema_keys: Vec<String> =
+                sec.fields.iter().map(|f| f.key.to_string()).collect();
+            serde_keys.sort();
+            schema_keys.sort();
+            assert_eq!(serde_keys, schema_keys, "section {name}");
+        }
+    }
+
+    #[test]
+    fn schema_required_flags_match_serde() {
+        fn check<T: Serialize + DeserializeOwned + fmt::Debug>(name: &str, full: &T) {
+            let sec = section_schema(name).unwrap_or_else(|| panic!("{name}"));
+            let table = match toml::Value::try_from(full) {
+                Ok(toml::Value::Table(t)) => t,
+                other => panic!("{name}: {other:?}"),
+            };
+            for f in sec.fields {
+                assert!(table.contains_key(f.key), "{name}.{} not serialized", f.key);
+                let mut t = table.clone();
+                t.remove(f.key);
+                let r = toml::Value::Table(t).try_into::<T>();
+                assert_eq!(r.is_err(), f.required, "{name}.{}: {r:?}", f.key);
+            }
+        }
+        check(
+            "scene",
+            &SceneInfo {
+                name: "a".into(),
+                description: "d".into(),
+                units: "u".into(),
+            },
+        );
+        check("geometry", &Geometry { ri: 1.0, ro: 2.0 });
+        check(
+            "mesh",
+            &MeshSpec {
+                file: Some("m.msh".into()),
+                hub: Some("hub".into()),
+                contact: Some("contact".into()),
+                ..MeshSpec::default()
+            },
+        );
+        check(
+            "material",
+            &MaterialSpec {
+                model: MaterialModel::NeoHookean,
+                rho: 1.0,
+                mu: Some(1.0),
+                lambda: Some(1.0),
+                c1: Some(1.0),
+                c2: Some(1.0),
+                kappa: Some(1.0),
+                formulation: Some(Formulation::Exact),
+                viscoelastic: Some(ViscoelasticSpec {
+                    model: "multiplicative".into(),
+                    gamma: 2.0,
+                    prony: vec![[0.5, 0.1], [0.5, 1.0]],
+                }),
+            },
+        );
+        check("analysis", &Analysis { mode: Mode::Static });
+        check("motion", &Motion::default());
+        check("road", &full_road());
+        check("contact", &full_contact());
+        check("friction", &full_friction());
+        check("stick_slip", &full_stick_slip());
+        check("time", &full_time());
+        check("solver", &SolverSpec::default());
+        check("output", &OutputSpec::default());
+    }
+
+    #[test]
+    fn annotated_listing_round_trips_and_names_units() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).expect("scenarios/") {
+            let path = entry.expect("entry").path();
+            let text = std::fs::read_to_string(&path).unwrap_or_default();
+            if path.extension().and_then(|e| e.to_str()) != Some("toml") || text.contains("[sweep]")
+            {
+                continue;
+            }
+            let s = Scene::from_path(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+            let out = s.to_annotated_toml_string();
+            // (A scene with `mesh.file` does not parse back: the listing writes the generator's
+            // keys too, which a file mesh refuses; the plain listing does the same.)
+            if s.mesh.file.is_none() {
+                let back = Scene::from_toml_str(&out, "annotated", &[])
+                    .unwrap_or_else(|e| panic!("{e}\n{out}"));
+                assert_eq!(back, s, "{out}");
+            }
+            // Every one-line `key = value` carries its comment.
+            for line in out.lines() {
+                let t = line.trim();
+                if t.contains(" = ") && !t.ends_with('[') && !t.starts_with('"') {
+                    assert!(
+                        t.contains("  # "),
+                        "{}: no annotation on `{t}`",
+                        path.display()
+                    );
+                }
+            }
+            n += 1;
+        }
+        assert!(n >= 20);
+        let s = load(MINIMAL).unwrap_or_else(|e| panic!("{e}"));
+        let out = s.to_annotated_toml_string();
+        assert!(out.contains("ri = 1.0  # [L] inner (hub) radius"), "{out}");
+        assert!(out.contains("rho = 0.027  # [F·T²/L⁴]"), "{out}");
+    }
+}

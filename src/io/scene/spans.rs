@@ -119,6 +119,7 @@ impl LineIndex {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::scene::tests::*;
 
     #[test]
     fn arrays_of_tables_inline_tables_and_syntax_errors() {
@@ -137,5 +138,49 @@ mod tests {
         assert_eq!(loc.key_at_line(2).as_deref(), Some("geometry.ri"));
         assert_eq!(LineIndex::new("a\nb\n").line_of(2), 2);
         assert_eq!(LineIndex::new("a\nb\n").line_of(0), 1);
+    }
+
+    #[test]
+    fn locator_handles_comments_quotes_dotted_and_multiline() {
+        let text = r#"# header comment [geometry]
+title = """
+[geometry]
+ri = 99
+"""
+arr = [
+  [1, 2],
+  { ri = 3 },
+]
+[ "geometry" ]   # spaced, quoted header
+"ri" = 1.0 # comment with ro = 5
+ro = "a # not a comment" # real comment
+mesh.n_r = 4
+[material]
+'rho'=1
+"#;
+        let loc = Locator::new(text);
+        assert_eq!(loc.locate("geometry"), Some(10));
+        assert_eq!(loc.locate("geometry.ri"), Some(11));
+        assert_eq!(loc.locate("geometry.ro"), Some(12));
+        assert_eq!(loc.locate("geometry.mesh.n_r"), Some(13));
+        assert_eq!(loc.locate("material.rho"), Some(15));
+        assert_eq!(loc.locate("material.mu"), Some(14)); // missing: section header
+        assert_eq!(loc.locate("solver.tolerance"), None);
+        assert_eq!(loc.locate("arr"), Some(6));
+        assert_eq!(loc.key_at_line(12).as_deref(), Some("geometry.ro"));
+
+        // Top-level dotted keys define their section implicitly.
+        let loc = Locator::new("geometry.ri = 1\ngeometry.ro = 2\n");
+        assert_eq!(loc.locate("geometry.ro"), Some(2));
+        assert_eq!(loc.locate("geometry.x"), Some(1));
+    }
+
+    #[test]
+    fn dotted_keys_in_file_get_lines() {
+        let text = MINIMAL.replace("[motion]\nomega = 20.0\n", "motion.omega = -3.0\n");
+        // Dotted top-level key after [analysis] means analysis.motion.omega: unknown key.
+        let e = errors(&text);
+        let err = e.find("analysis.motion").unwrap_or_else(|| panic!("{e}"));
+        assert_eq!(err.line, Some(line_of(&text, "motion.omega")));
     }
 }

@@ -136,3 +136,31 @@ pub(super) fn validate_continuation(
         _ => {}
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn steady_sweep_scene_and_continuation_rules() {
+        let s = load(STEADY_SWEEP).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.analysis.mode, Mode::Steady);
+        let c = s.continuation.clone().unwrap_or_default();
+        assert_eq!(c.parameter, ContinuationParameter::Omega);
+        assert_eq!(c.target, 60.0);
+        // [continuation] only in steady mode, with the line of its header.
+        let e = errors_with(STEADY_SWEEP, &["analysis.mode=\"transient\""]);
+        let err = e.find("continuation").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("not used"), "{e}");
+        // load continuation needs load control.
+        let e = errors_with(STEADY_SWEEP, &["continuation.parameter=\"load\""]);
+        assert_only(&e, "continuation.parameter", None);
+        // ds_max < ds.
+        let e = errors_with(STEADY_SWEEP, &["continuation.ds_max=0.001"]);
+        assert_only(&e, "continuation.ds_max", None);
+        // A transient scene runs in steady mode with --mode steady ([time] allowed).
+        let t = load_with(ODEN, &["analysis.mode=\"steady\""]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(t.analysis.mode, Mode::Steady);
+    }
+}

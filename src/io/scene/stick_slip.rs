@@ -97,3 +97,131 @@ pub(super) fn validate_stick_slip(s: &StickSlipSpec, out: &mut Vec<Issue>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn stick_slip_scene_parses() {
+        let s = load(STICK_SLIP).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.scene.name, "stick_slip");
+        assert_eq!(s.scene.units, "m-N-s");
+        assert_eq!(s.analysis.mode, Mode::StickSlip);
+        assert_eq!(s.road, None);
+        assert_eq!(s.contact, None);
+        let ss = s
+            .stick_slip
+            .clone()
+            .unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(
+            (
+                ss.mass,
+                ss.stiffness,
+                ss.normal_force,
+                ss.belt_speed,
+                ss.t_end
+            ),
+            (1.0, 100.0, 10.0, 0.1, 20.0)
+        );
+        assert_eq!((ss.rtol, ss.atol, ss.x0), (1e-8, 1e-10, 0.0));
+        assert_eq!((ss.v0, ss.output_interval), (None, None));
+        assert_eq!(ss.initial_velocity(), 0.1);
+        assert!((ss.resolved_output_interval() - 0.01).abs() < 1e-15);
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::RateDependent {
+                mu_s: 0.6,
+                mu_k: 0.4,
+                v_s: 1e-4,
+                eps: 1e-7
+            })
+        );
+        assert!(s.friction.is_active());
+        assert!(s.validate().is_ok());
+        // Defaults of an explicit minimal [stick_slip].
+        let text = STICK_SLIP
+            .lines()
+            .filter(|l| {
+                let t = l.trim_start();
+                !["rtol", "atol", "x0"].iter().any(|k| t.starts_with(k))
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let d = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let dss = d.stick_slip.unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(dss.rtol, DEFAULT_STICK_SLIP_RTOL);
+        assert_eq!(dss.atol, DEFAULT_STICK_SLIP_ATOL);
+        assert_eq!(dss.x0, 0.0);
+    }
+
+    #[test]
+    fn stick_slip_without_section_or_law_rejected() {
+        let text = remove_section(STICK_SLIP, "[stick_slip]");
+        let e = errors(&text);
+        assert_only(&e, "stick_slip", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("missing"), "{e}");
+
+        let text = remove_section(STICK_SLIP, "[friction]");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("\"none\""), "{e}");
+
+        let text = STICK_SLIP.replace(
+            "law = \"rate_dependent\"",
+            "law = \"oden_martins\"\nc_t = 1\nm_t = 1",
+        );
+        let text = text
+            .lines()
+            .filter(|l| !["mu_s", "mu_k", "v_s"].iter().any(|k| l.starts_with(k)))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_only(&e, "friction.law", Some(line_of(&text, "law")));
+        assert!(e.0[0].message.contains("penetration"), "{e}");
+
+        // Coulomb laws are fine.
+        let text = STICK_SLIP
+            .lines()
+            .filter(|l| !["mu_s", "mu_k", "v_s"].iter().any(|k| l.starts_with(k)))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let s = load_with(&text, &["friction.law=coulomb_linear", "friction.mu=0.5"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(FrictionParams::CoulombLinear { mu: 0.5, eps: 1e-7 })
+        );
+    }
+
+    #[test]
+    fn stick_slip_ranges_and_required_keys() {
+        let text = replace_line(STICK_SLIP, "mass", "mass = 0.0");
+        let text = replace_line(&text, "belt_speed", "belt_speed = -0.1");
+        let text = replace_line(&text, "rtol", "rtol = 0");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["mass", "belt_speed", "rtol"] {
+            let err = e
+                .find(&format!("stick_slip.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)));
+        }
+        let e = errors(&STICK_SLIP.replace("t_end = 20.0", ""));
+        let err = e.find("stick_slip.t_end").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("required key is missing"), "{err}");
+        assert_eq!(e.0.len(), 1, "{e}");
+        let e = errors_with(STICK_SLIP, &["stick_slip.output_interval=30"]);
+        assert_only(&e, "stick_slip.output_interval", None);
+        assert!(e.0[0].is_override());
+        let s = load_with(
+            STICK_SLIP,
+            &["stick_slip.output_interval=0.05", "stick_slip.v0=0"],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let ss = s.stick_slip.unwrap_or_else(|| panic!("no [stick_slip]"));
+        assert_eq!(ss.resolved_output_interval(), 0.05);
+        assert_eq!(ss.initial_velocity(), 0.0);
+    }
+}

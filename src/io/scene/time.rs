@@ -290,3 +290,380 @@ pub(super) fn validate_steady_extraction(
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+
+    #[test]
+    fn time_defaults_are_filled() {
+        let s = load(&minimal_transient()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.analysis.mode, Mode::Transient);
+        // A spinning cylinder in time: no road, no contact.
+        assert_eq!((&s.road, &s.contact), (&None, &None));
+        assert_eq!(s.motion.ramp, 0.0);
+        let t = s.time.unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t, TimeSpec::new(1e-3, 0.5));
+        assert_eq!(t.integrator, IntegratorName::GeneralizedAlpha);
+        assert_eq!(t.rho_inf, DEFAULT_RHO_INF);
+        assert_eq!(t.rho_inf, 0.8);
+        assert_eq!((t.dt_min, t.dt_max), (None, None));
+        assert_eq!(t.resolved_dt_min(), 1e-3 * DT_MIN_FACTOR);
+        assert_eq!(t.resolved_dt_max(), 1e-3 * DT_MAX_FACTOR);
+        assert!(t.adaptive && t.stop_at_steady);
+        assert_eq!((t.error_tol, t.steady_tol), (1e-4, 1e-4));
+        assert_eq!(t.mass, MassKind::Consistent);
+        assert_eq!(t.max_steps, 200_000);
+        assert_eq!(t.max_steps, DEFAULT_MAX_STEPS);
+
+        // Road defaults in transient: no ramps, v0_ramp follows motion.ramp.
+        let text = remove_section(&remove_section(ODEN, "[road]"), "[time]")
+            + "[road]\ndisp = 0.05\nv0 = 3.0\n[time]\ndt = 1e-3\nt_end = 1\n";
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let road = s.road.unwrap_or_else(|| panic!("no [road]"));
+        assert_eq!((road.ramp, road.v0_ramp), (0.0, None));
+        assert_eq!(road.resolved_v0_ramp(&s.motion), s.motion.ramp);
+        assert_eq!(road.resolved_v0_ramp(&s.motion), 0.05);
+    }
+
+    #[test]
+    fn time_ranges_rejected_with_key_and_line() {
+        let cases: [(&str, &str, &str, &str); 14] = [
+            ("dt =", "dt = 0.0", "time.dt", "> 0"),
+            ("dt =", "dt = -2e-4", "time.dt", "> 0"),
+            ("t_end", "t_end = 0", "time.t_end", "> 0"),
+            ("t_end", "t_end = -1.0", "time.t_end", "> 0"),
+            ("dt =", "dt = 3.0", "time.dt", "must not exceed t_end"),
+            ("rho_inf", "rho_inf = -0.1", "time.rho_inf", "[0, 1]"),
+            ("rho_inf", "rho_inf = 1.01", "time.rho_inf", "[0, 1]"),
+            (
+                "dt =",
+                "dt = 2e-4\ndt_min = 3e-4",
+                "time.dt_min",
+                "must not exceed dt",
+            ),
+            ("dt =", "dt = 2e-4\ndt_min = 0", "time.dt_min", "> 0"),
+            ("dt =", "dt = 2e-4\ndt_max = 1e-4", "time.dt_max", ">= dt"),
+            ("error_tol", "error_tol = 0.0", "time.error_tol", "> 0"),
+            ("steady_tol", "steady_tol = 0", "time.steady_tol", "> 0"),
+            ("steady_tol", "steady_tol = -1e-3", "time.steady_tol", "> 0"),
+            ("max_steps", "max_steps = 0", "time.max_steps", ">= 1"),
+        ];
+        for (prefix, new, key, what) in cases {
+            let text = replace_line(ODEN, prefix, new);
+            let e = errors(&text);
+            let field = key.trim_start_matches("time.");
+            assert_only(&e, key, Some(line_of(&text, &format!("{field} ="))));
+            assert!(e.0[0].message.contains(what), "{new}: {e}");
+            assert!(
+                e.0[0].to_string().starts_with(&format!(
+                    "test.toml:{}: key `{key}`",
+                    line_of(&text, &format!("{field} ="))
+                )),
+                "{e}"
+            );
+        }
+        // Boundary values are accepted.
+        for ok in [
+            ("rho_inf", "rho_inf = 0"),
+            ("rho_inf", "rho_inf = 1.0"),
+            ("dt =", "dt = 2e-4\ndt_min = 2e-4\ndt_max = 2e-4"),
+            ("dt =", "dt = 2.0"),
+        ] {
+            let text = replace_line(ODEN, ok.0, ok.1);
+            assert!(load(&text).is_ok(), "{}", ok.1);
+        }
+        // Several problems of [time] at once, each on its own line.
+        let text = replace_line(ODEN, "rho_inf", "rho_inf = 2");
+        let text = replace_line(&text, "t_end", "t_end = 0");
+        let text = replace_line(&text, "error_tol", "error_tol = -1");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["rho_inf", "t_end", "error_tol"] {
+            let err = e
+                .find(&format!("time.{key}"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, key)));
+        }
+        // Missing required keys: at the [time] header.
+        let text = ODEN
+            .lines()
+            .filter(|l| !l.starts_with("dt =") && !l.starts_with("t_end"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = errors(&text);
+        assert_eq!(e.0.len(), 2, "{e}");
+        for key in ["time.dt", "time.t_end"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!(err.line, Some(line_of(&text, "[time]")));
+            assert!(err.message.contains("required key is missing"), "{err}");
+        }
+        // Wrong types and unknown values.
+        let text = replace_line(ODEN, "integrator", "integrator = \"newmark\"");
+        let e = errors(&text);
+        assert_only(&e, "time.integrator", Some(line_of(&text, "integrator")));
+        assert!(e.0[0].message.contains("\"generalized_alpha\""), "{e}");
+        let text = replace_line(ODEN, "adaptive", "adaptive = 1");
+        let e = errors(&text);
+        assert_only(&e, "time.adaptive", Some(line_of(&text, "adaptive")));
+        let text = replace_line(ODEN, "max_steps", "max_steps = 1.5");
+        let e = errors(&text);
+        assert_only(&e, "time.max_steps", Some(line_of(&text, "max_steps")));
+        let text = replace_line(ODEN, "dt =", "dt = 2e-4\ndt_step = 1");
+        let e = errors(&text);
+        assert_only(&e, "time.dt_step", Some(line_of(&text, "dt_step")));
+        assert!(e.0[0].message.contains("steady_tol"), "{e}");
+    }
+
+    #[test]
+    fn central_difference_uses_lumped_mass() {
+        // Explicit consistent mass with central difference: named at its line.
+        let text = replace_line(ODEN, "integrator", "integrator = \"central_difference\"");
+        let e = errors(&text);
+        assert_only(&e, "time.mass", Some(line_of(&text, "mass =")));
+        assert!(e.0[0].message.contains("lumped"), "{e}");
+        // Omitted: resolved to lumped (and written so by to_toml_string).
+        let text = text
+            .lines()
+            .filter(|l| !l.starts_with("mass ="))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t.integrator, IntegratorName::CentralDifference);
+        assert_eq!(
+            (t.mass, t.effective_mass()),
+            (MassKind::Lumped, MassKind::Lumped)
+        );
+        assert!(t.is_explicit());
+        let out = s.to_toml_string();
+        assert!(out.contains("mass = \"lumped\""), "{out}");
+        assert_eq!(load(&out).unwrap_or_else(|e| panic!("{e}\n{out}")), s);
+        // Explicit lumped is fine; an override back to consistent is reported as (--set).
+        assert!(load(&replace_line(
+            &text,
+            "integrator",
+            "integrator = \"central_difference\"\nmass = \"lumped\""
+        ))
+        .is_ok());
+        let e = errors_with(&text, &["time.mass=consistent"]);
+        assert_only(&e, "time.mass", None);
+        assert!(e.0[0].is_override(), "{e}");
+        // An unknown mass is reported once, not also as "consistent".
+        let e = errors_with(&text, &["time.mass=diagonal"]);
+        assert_only(&e, "time.mass", None);
+        assert!(e.0[0].message.contains("\"lumped\""), "{e}");
+        // Other integrators keep the consistent default.
+        let s = load_with(ODEN, &["time.integrator=bdf"]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.time.map(|t| t.mass), Some(MassKind::Consistent));
+        let s = load_with(ODEN, &["time.integrator=sdirk", "time.mass=lumped"])
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.time.map(|t| (t.integrator, t.mass)),
+            Some((IntegratorName::Sdirk, MassKind::Lumped))
+        );
+    }
+
+    #[test]
+    fn time_section_only_in_transient() {
+        let time = "\n[time]\ndt = 1e-3\nt_end = 1.0\n";
+        for base in [MINIMAL, FRICTIONLESS, STICK_SLIP] {
+            let text = format!("{base}{time}");
+            let e = errors(&text);
+            assert_only(&e, "time", Some(line_of(&text, "[time]")));
+            assert!(e.0[0].message.contains("not used"), "{e}");
+            assert!(e.0[0].message.contains("\"transient\""), "{e}");
+        }
+        // Created by an override: (--set).
+        let e = errors_with(MINIMAL, &["time.dt=1e-3", "time.t_end=1"]);
+        assert_only(&e, "time", None);
+        assert!(e.0[0].is_override(), "{e}");
+        // Required in transient: at the line of `mode`.
+        let text = remove_section(ODEN, "[time]");
+        let e = errors(&text);
+        assert_only(&e, "time", Some(line_of(&text, "mode =")));
+        assert!(e.0[0].message.contains("missing"), "{e}");
+        assert!(e.0[0].message.contains("dt, t_end"), "{e}");
+        // [stick_slip] in a transient scene.
+        let text = format!(
+            "{ODEN}\n[stick_slip]\nmass = 1\nstiffness = 1\nnormal_force = 1\nbelt_speed = 1\n\
+             t_end = 1\n"
+        );
+        let e = errors(&text);
+        assert_only(&e, "stick_slip", Some(line_of(&text, "[stick_slip]")));
+    }
+
+    #[test]
+    fn graded_mesh_rejected_when_stopping_at_steady() {
+        let text = replace_line(ODEN, "grading_theta", "grading_theta = 0.5");
+        let e = errors(&text);
+        assert_only(
+            &e,
+            "mesh.grading_theta",
+            Some(line_of(&text, "grading_theta")),
+        );
+        assert!(e.0[0].message.contains("uniform in θ"), "{e}");
+        // Without stopping at the steady state a graded mesh is allowed.
+        let text = replace_line(&text, "stop_at_steady", "stop_at_steady = false");
+        assert!(load(&text).is_ok());
+        // An out-of-range grading is reported once.
+        let e = errors(&replace_line(ODEN, "grading_theta", "grading_theta = 1.0"));
+        assert_eq!(e.0.len(), 1, "{e}");
+        // Static scenes keep their graded meshes.
+        assert!(load(FRICTIONLESS).is_ok());
+    }
+
+    #[test]
+    fn overrides_of_time_keys() {
+        let s = load_with(ODEN, &["time.dt=1e-4"]).unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(t.dt, 1e-4);
+        assert!((t.resolved_dt_min() - 1e-8).abs() < 1e-20);
+        assert!((t.resolved_dt_max() - 1e-3).abs() < 1e-15);
+        let s = load_with(
+            ODEN,
+            &[
+                "time.integrator=central_difference",
+                "time.mass=lumped",
+                "time.adaptive=false",
+                "time.stop_at_steady=false",
+                "time.t_end=0.5",
+                "time.rho_inf=1",
+                "time.dt_min=1e-6",
+                "time.dt_max=1e-3",
+                "time.error_tol=1e-5",
+                "time.steady_tol=1e-5",
+                "time.max_steps=10",
+                "motion.ramp=0.1",
+            ],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
+        assert_eq!(
+            t,
+            TimeSpec {
+                integrator: IntegratorName::CentralDifference,
+                rho_inf: 1.0,
+                dt: 2e-4,
+                dt_min: Some(1e-6),
+                dt_max: Some(1e-3),
+                t_end: 0.5,
+                adaptive: false,
+                error_tol: 1e-5,
+                steady_tol: 1e-5,
+                stop_at_steady: false,
+                mass: MassKind::Lumped,
+                max_steps: 10,
+                strain_rate_damping: 1.0,
+            }
+        );
+        // road.v0_ramp follows the overridden motion.ramp.
+        assert_eq!(
+            s.road.as_ref().map(|r| r.resolved_v0_ramp(&s.motion)),
+            Some(0.1)
+        );
+        // Bad override values: (--set) and the key.
+        let e = errors_with(ODEN, &["time.dt=-1e-4"]);
+        assert_only(&e, "time.dt", None);
+        assert!(e.0[0].is_override());
+        assert!(
+            e.0[0]
+                .to_string()
+                .starts_with("test.toml:(--set): key `time.dt`"),
+            "{e}"
+        );
+        let e = errors_with(ODEN, &["time.dt=5"]);
+        assert_only(&e, "time.dt", None);
+        assert!(e.0[0].message.contains("t_end"), "{e}");
+        // dt overridden below an explicit dt_min in the file: dt_min keeps its line.
+        let text = replace_line(ODEN, "dt =", "dt = 2e-4\ndt_min = 1e-5");
+        let e = errors_with(&text, &["time.dt=1e-6"]);
+        assert_only(&e, "time.dt_min", Some(line_of(&text, "dt_min")));
+        let e = errors_with(ODEN, &["time.integrator=euler"]);
+        assert_only(&e, "time.integrator", None);
+        assert!(e.0[0].message.contains("\"sdirk\""), "{e}");
+        // Switching a spinning scene to transient by override.
+        let s = load_with(
+            MINIMAL,
+            &["analysis.mode=transient", "time.dt=1e-3", "time.t_end=1"],
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.time.map(|t| (t.dt, t.t_end)), Some((1e-3, 1.0)));
+        let e = errors_with(MINIMAL, &["analysis.mode=transient"]);
+        assert_only(&e, "time", None);
+        assert!(e.0[0].is_override(), "{e}");
+    }
+
+    #[test]
+    fn round_trip_of_transient_keys() {
+        let cases: [(&str, &[&str]); 3] = [
+            (
+                ODEN,
+                &[
+                    "time.dt_min=1e-7",
+                    "time.dt_max=1e-3",
+                    "road.v0_ramp=0.2",
+                    "time.integrator=bdf",
+                ],
+            ),
+            (
+                ROLLING_FRICTIONLESS,
+                &["time.integrator=central_difference", "time.mass=lumped"],
+            ),
+            (
+                &ODEN.replace("disp = 0.1", "load = 300.0"),
+                &["time.rho_inf=0"],
+            ),
+        ];
+        for (text, ov) in cases {
+            let s = load_with(text, ov).unwrap_or_else(|e| panic!("{e}"));
+            let out = s.to_toml_string();
+            let back = load(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+            assert_eq!(back, s, "{out}");
+            let direct: Scene = toml::from_str(&out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(direct, s);
+            assert!(out.contains("[time]") && out.contains("ramp = "), "{out}");
+        }
+        let s = load(&minimal_transient()).unwrap_or_else(|e| panic!("{e}"));
+        let out = s.to_toml_string();
+        assert!(
+            out.contains("[time]\nintegrator = \"generalized_alpha\""),
+            "{out}"
+        );
+        assert!(!out.contains("dt_min") && !out.contains("[road]"), "{out}");
+        assert_eq!(load(&out).unwrap_or_else(|e| panic!("{e}\n{out}")), s);
+        // Scenes of the other modes write no [time].
+        let out = load(FRICTIONLESS)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .to_toml_string();
+        assert!(!out.contains("[time]"), "{out}");
+    }
+
+    #[test]
+    fn validate_checks_transient_scenes_built_in_code() {
+        let mut s = load(ODEN).unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.validate().is_ok());
+        if let Some(t) = s.time.as_mut() {
+            t.dt = -1.0;
+            t.integrator = IntegratorName::CentralDifference;
+            t.mass = MassKind::Consistent;
+        }
+        s.motion.ramp = -1.0;
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert_eq!(e.0.len(), 3, "{e}");
+        for key in ["time.dt", "time.mass", "motion.ramp"] {
+            let err = e.find(key).unwrap_or_else(|| panic!("{e}"));
+            assert_eq!((err.line, err.source_name.as_str()), (None, "<scene>"));
+        }
+        s.time = None;
+        s.motion.ramp = 0.0;
+        let e = s.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.has_key("time"), "{e}");
+        // [time] in a static scene built in code.
+        let mut st = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));
+        st.time = Some(TimeSpec::new(1e-3, 1.0));
+        let e = st.validate().err().unwrap_or_else(|| panic!("accepted"));
+        assert!(e.has_key("time"), "{e}");
+    }
+}
