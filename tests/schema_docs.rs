@@ -5,8 +5,9 @@
 //!   draft 2020-12 keywords that the schema uses; an unknown keyword fails the test);
 //! - every `summary.json` key and CSV column that runs write is in the reference: the committed
 //!   regression summaries (which tests/regression.rs keeps equal to what the runs write) and
-//!   runs made here (compare, a viscoelastic transient, a two-region static scene, a steady sweep
-//!   and a stick-slip run, all with their CSV tables).
+//!   runs made here (compare, a viscoelastic transient, a two-region static scene, a steady sweep,
+//!   a steady creep-controlled sweep, a stick-slip, a spinning and an indentation run, all with
+//!   their CSV tables).
 
 #[path = "common/tempdir.rs"]
 mod tempdir;
@@ -360,6 +361,17 @@ fn every_summary_key_and_csv_column_that_runs_write_is_documented() {
             ],
         ),
         ("stick_slip", vec!["run".into(), sc("stick_slip.toml")]),
+        (
+            "creep",
+            vec![
+                "run".into(),
+                sc("creep_force_curve.toml"),
+                "--set".into(),
+                "mesh.n_theta=32".into(),
+                "--set".into(),
+                "continuation.max_steps=3".into(),
+            ],
+        ),
         (
             "spinning",
             vec!["run".into(), sc("spinning_incompressible.toml")],

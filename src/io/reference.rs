@@ -43,6 +43,7 @@ const TS: &str = "transient, steady";
 const CONT: &str = "steady with [continuation]";
 const SS: &str = "stick_slip";
 const CMP: &str = "tread compare";
+const SDC: &str = "steady with motion.control other than speed";
 const REC: &str = "steady, when the first solve failed";
 
 /// Every key of `summary.json` (objects are listed with their keys).
@@ -131,7 +132,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.time_to_steady", "T", TS, "time when steady rolling was declared (null if not; steady: 0)"),
     k("results.steady", N, TS, "whether rolling became steady (steady: converged)"),
     k("results.revolutions", N, TS, "hub revolutions (steady: 0)"),
-    k("results.steps", N, TS, "accepted time steps (steady: Newton steps)"),
+    k("results.steps", N, TS, "accepted time steps (steady: continuation steps, 0 without [continuation])"),
     k("results.rejected_steps", N, TR, "rejected time steps"),
     k("results.node_passages", N, TR, "cell passages through the bottom"),
     k("results.final_time", "T", TR, "time reached"),
@@ -142,7 +143,16 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.omega_steady", "rad/T", TR, "hub angular speed at the end"),
     k("results.rolling_radius", "L", TR, "effective rolling radius v0 / ω"),
     k("results.applied_torque", "F·L/L", TR, "hub torque applied at the end (torque control; else the reaction)"),
-    k("results.control", N, TS, "hub control (`speed`, `torque`, `free_rolling`, `creep`)"),
+    k("results.control", N, TS, "transient: the hub control (`speed`, `torque`); steady: null for `speed`, else what the control did (keys below)"),
+    k("results.control.control", N, SDC, "`torque`, `free_rolling` or `creep`"),
+    k("results.control.target_torque", "F·L/L", SDC, "target hub torque (0 for free rolling and creep's free-rolling stage)"),
+    k("results.control.torque_tolerance", "F·L/L", SDC, "absolute torque tolerance, 1e-7 |F_y| Ro at the press-in state"),
+    k("results.control.v0_free", "L/T", SDC, "free-rolling road speed (free rolling and creep; else null)"),
+    k("results.control.rolling_radius", "L", SDC, "effective rolling radius R_e = v0_free / ω (else null)"),
+    k("results.control.creep", N, SDC, "creep ξ = v0 / v0_free − 1 of the final state (else null)"),
+    k("results.control.evaluations", N, SDC, "steady solves, one per trial v0"),
+    k("results.control.newton_iterations", N, SDC, "their Newton iterations"),
+    k("results.control.history", "[L/T, F·L/L]", SDC, "(v0, hub torque) of every trial of the secant iteration"),
     k("results.creep", N, SD, "creep ξ = (v0 − ω R_e) / (ω R_e)"),
     k("results.v0", "L/T", SD, "road speed"),
     k("results.wall_time_first_solution_s", "s", SD, "wall time to the first steady solution"),
@@ -189,13 +199,13 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.continuation.assemblies", N, CONT, "tangent assemblies"),
     k("results.continuation.factorizations", N, CONT, "factorisations"),
     // stick-slip
-    k("results.period", "T", SS, "measured cycle period"),
+    k("results.period", "T", SS, "mean time between stick→slip transitions, the first interval skipped (null with fewer than three)"),
     k("results.amplitude", "L", SS, "slip amplitude x_max − x_min"),
     k("results.x_min", "L", SS, "smallest x of the last cycle"),
     k("results.x_max", "L", SS, "largest x of the last cycle"),
-    k("results.stick_time", "T", SS, "time stuck per cycle"),
-    k("results.slip_time", "T", SS, "time slipping per cycle"),
-    k("results.cycles", N, SS, "complete cycles measured"),
+    k("results.stick_time", "T", SS, "duration of the stick phase in the last complete cycle"),
+    k("results.slip_time", "T", SS, "duration of the slip phase in the last complete cycle"),
+    k("results.cycles", N, SS, "stick→slip transitions"),
     k("results.period_rel_error", N, SS, "relative difference of the period from the closed form"),
     k("results.amplitude_rel_error", N, SS, "relative difference of the amplitude from the closed form"),
     k("results.closed_form", N, SS, "the exact static/kinetic Coulomb cycle (rate-dependent law), else null"),
