@@ -2,7 +2,11 @@
 //! (normal compliance `t_n = c_n δ^m_n + b_n δ^l_n δ̇`, per unit reference length, and its
 //! quadrature).
 
-use super::*;
+use super::analysis::Mode;
+use super::geometry::Geometry;
+use super::issue::{issue, positive, Issue};
+use super::motion::{ramp_rate, ramp_value, Motion};
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Quadrature rule on each element edge of the contact boundary (`[contact] quadrature`).
@@ -285,6 +289,7 @@ pub(super) fn validate_contact(c: &ContactSpec, mode: Option<Mode>, out: &mut Ve
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn indentation_scenes_parse() {

@@ -1,7 +1,7 @@
 //! Scene errors: each names the dotted key, the line of the file (or `(--set)` for an override) and
 //! what is wrong; [`SceneErrors`] holds them all.
 
-use super::*;
+use std::fmt;
 
 /// One problem in a scene.
 ///

@@ -1,7 +1,8 @@
 //! `[friction]`: the friction law `t_T = −μ(|w|) t_n φ_ε(w)` with slip velocity `w = ẋ1 − v0` (in
 //! static, `w` is a slip per unit pseudo-time and `eps`, `v_s` are lengths).
 
-use super::*;
+use super::issue::{issue, Issue};
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Friction law (`[friction] law`).

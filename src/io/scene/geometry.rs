@@ -1,6 +1,10 @@
 //! `[scene]` (name, description, units) and `[geometry]` (the reference annulus `ri <= |X| <= ro`).
 
-use super::*;
+use super::issue::{issue, positive, Issue};
+use serde::{Deserialize, Serialize};
+
+/// Default of `[scene] units` (informational only).
+pub const DEFAULT_UNITS: &str = "in-lbf-s";
 
 /// `[scene]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -2,47 +2,13 @@
 //! required keys; every problem collected, offending entries dropped) and serde deserialisation of
 //! each section. Errors are located from the spans of the original text.
 
-use super::*;
-
-/// Where an issue's location comes from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Origin {
-    /// `(--set)` if the key was overridden, else the line of the key in the original text.
-    Auto,
-    /// Always `(--set)`: a problem with the override itself.
-    Override,
-}
-
-#[derive(Clone, Debug)]
-pub(super) struct Issue {
-    pub(super) key: String,
-    pub(super) message: String,
-    pub(super) origin: Origin,
-    /// Another key whose location is reported when `key` itself is nowhere in the file (e.g.
-    /// `analysis.mode` for a section that the mode requires).
-    pub(super) anchor: Option<&'static str>,
-}
-
-pub(super) fn issue(key: impl Into<String>, message: impl Into<String>) -> Issue {
-    Issue {
-        key: key.into(),
-        message: message.into(),
-        origin: Origin::Auto,
-        anchor: None,
-    }
-}
-
-/// An issue about a key that may be absent from the file: located at `anchor` in that case.
-pub(super) fn issue_near(
-    key: impl Into<String>,
-    message: impl Into<String>,
-    anchor: &'static str,
-) -> Issue {
-    Issue {
-        anchor: Some(anchor),
-        ..issue(key, message)
-    }
-}
+use super::errors::{SceneError, SceneErrors, OVERRIDE_TAG};
+use super::issue::{issue, Issue, Origin};
+use super::material::{validate_material, MaterialModel, MaterialSpec, RegionMaterial};
+use super::schema::{check_kind, describe_value, section_list, section_schema, Kind, SCHEMA};
+use super::spans::Locator;
+use serde::de::DeserializeOwned;
+use std::collections::BTreeSet;
 
 pub(super) struct Ctx<'a> {
     pub(super) source_name: &'a str,
@@ -507,10 +473,6 @@ impl Ctx<'_> {
     }
 }
 
-pub(super) fn table_has(doc: &toml::Table, section: &str, key: &str) -> bool {
-    matches!(doc.get(section), Some(toml::Value::Table(t)) if t.contains_key(key))
-}
-
 /// Parse an override value as a TOML value; fall back to the bare text as a string. For
 /// string-valued keys, unquoted text is always taken literally (so `scene.name=2024` works).
 pub(super) fn parse_override_value(text: &str, kind: Kind) -> toml::Value {
@@ -552,8 +514,4 @@ pub(super) fn key_from_de_error(e: &toml::de::Error, section: &str) -> String {
         }
     }
     section.to_string()
-}
-
-pub(super) fn positive(x: f64) -> bool {
-    x.is_finite() && x > 0.0
 }

@@ -1,7 +1,20 @@
 //! `[material]` / `[[material]]`: the hyperelastic model and its parameters (stresses in F/L²,
 //! density in F·T²/L⁴), and the optional `[material.viscoelastic]` Prony overstress.
 
-use super::*;
+use super::issue::{issue, positive, quoted_list, Issue};
+use serde::{Deserialize, Serialize};
+
+/// `kappa = PERTURBED_KAPPA_FACTOR * (c1 + c2)` when the perturbed incompressible formulation is
+/// chosen without an explicit `kappa`.
+pub const PERTURBED_KAPPA_FACTOR: f64 = 1.0e4;
+
+/// One `[[material]]` entry: the material of a mesh region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionMaterial {
+    /// Name of a 2D physical group of the mesh file.
+    pub region: String,
+    pub material: MaterialSpec,
+}
 
 keyword_enum! {
     /// Hyperelastic model (`[material] model`).
@@ -315,6 +328,7 @@ pub(super) fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn incompressible_scene_parses() {

@@ -1,7 +1,11 @@
 //! `[mesh]`: the structured annulus (`n_r`, `n_theta`, `order`, gradings) or a Gmsh `.msh` 4.1 file
 //! with its hub and contact groups.
 
-use super::*;
+use super::issue::{issue, issue_near, positive, table_has, Issue};
+use serde::{Deserialize, Serialize};
+
+/// Smallest allowed `mesh.n_theta`.
+pub const MIN_N_THETA: usize = 8;
 
 /// `[mesh]`: structured annular mesh.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -10,8 +10,11 @@
 //! it as a JSON Schema for editors. One file per section holds its serde struct, keyword enums
 //! and range checks (`geometry.rs` for `[scene]` and `[geometry]`, `mesh.rs`, `material.rs`,
 //! `motion.rs`, `contact.rs` for `[road]` and `[contact]`, `friction.rs`, `stick_slip.rs`,
-//! `time.rs`, `steady.rs` for `[continuation]`, `solver.rs`, `output.rs`); `load.rs` applies
-//! overrides and the schema pass, `spans.rs` locates keys, `errors.rs` holds the error types.
+//! `time.rs`, `steady.rs` for `[continuation]`, `solver.rs`, `output.rs`, `analysis.rs`);
+//! `load.rs` applies overrides and the schema pass, `spans.rs` locates keys, `errors.rs` holds
+//! the error types and `issue.rs` the unlocated problems that the section checks report. The
+//! files import one way: sections from `issue.rs` and earlier sections, `schema.rs` from the
+//! sections, `load.rs` from `schema.rs`, and this file from all of them.
 //! In short:
 //!
 //! ```toml
@@ -114,25 +117,14 @@
 //! (`time.dt_min`, `time.dt_max`, `road.v0_ramp`, `stick_slip.v0`, `stick_slip.output_interval`)
 //! stay unset when not given; methods give the values (`resolved_*`, `initial_velocity`).
 
-use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
-use std::fmt;
 use std::path::Path;
-use std::str::FromStr;
 
+use issue::{issue, issue_near, table_has, Issue};
 pub(crate) use schema::cell;
-use schema::*;
 pub use schema::{json_schema, markdown_reference};
 use spans::Locator;
-
-/// Default of `[scene] units` (informational only).
-pub const DEFAULT_UNITS: &str = "in-lbf-s";
-/// `kappa = PERTURBED_KAPPA_FACTOR * (c1 + c2)` when the perturbed incompressible formulation is
-/// chosen without an explicit `kappa`.
-pub const PERTURBED_KAPPA_FACTOR: f64 = 1.0e4;
-/// Smallest allowed `mesh.n_theta`.
-pub const MIN_N_THETA: usize = 8;
 
 // ---------------------------------------------------------------------------------------------
 // Keyword enums
@@ -146,7 +138,7 @@ macro_rules! keyword_enum {
         }
     ) => {
         $(#[$meta])*
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, ::serde::Serialize, ::serde::Deserialize)]
         #[serde(rename_all = "snake_case")]
         pub enum $name {
             $( $(#[$vmeta])* $variant ),+
@@ -166,13 +158,13 @@ macro_rules! keyword_enum {
             }
         }
 
-        impl fmt::Display for $name {
-            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        impl ::std::fmt::Display for $name {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
                 f.write_str(self.as_str())
             }
         }
 
-        impl FromStr for $name {
+        impl ::std::str::FromStr for $name {
             type Err = String;
 
             fn from_str(s: &str) -> Result<Self, String> {
@@ -182,7 +174,7 @@ macro_rules! keyword_enum {
                         "unknown {} \"{}\"; expected one of {}",
                         $what,
                         other,
-                        quoted_list(Self::NAMES)
+                        $crate::io::scene::issue::quoted_list(Self::NAMES)
                     )),
                 }
             }
@@ -190,10 +182,12 @@ macro_rules! keyword_enum {
     };
 }
 
+mod analysis;
 mod contact;
 mod errors;
 mod friction;
 mod geometry;
+mod issue;
 mod load;
 mod material;
 mod mesh;
@@ -206,6 +200,7 @@ mod steady;
 mod stick_slip;
 mod time;
 
+pub use analysis::*;
 pub use contact::*;
 pub use errors::*;
 pub use friction::*;
@@ -219,31 +214,6 @@ pub use solver::*;
 pub use steady::*;
 pub use stick_slip::*;
 pub use time::*;
-
-keyword_enum! {
-    /// What to compute (`[analysis] mode`). `steady` will be added as a further variant.
-    Mode, "analysis mode" {
-        /// Steady spinning about the hub at `[motion] omega`, no contact: the centrifugal load
-        /// `ρ ω² X` is ramped in `load_steps` steps of ω².
-        Spinning => "spinning",
-        /// Quasi-static indentation of the (non-spinning) cylinder onto the road (`[road]`,
-        /// `[contact]`, optional `[friction]`), by load stepping in a pseudo-time τ ∈ [0, 1].
-        Static => "static",
-        /// The classical one-degree-of-freedom stick-slip oscillator (a mass on a spring, pressed
-        /// onto a moving belt): `[stick_slip]` and `[friction]`; no finite elements.
-        StickSlip => "stick_slip",
-        /// The dynamic Lagrangian model (material mesh rotating with the body) integrated in time
-        /// (`[time]`) until rolling is steady: the hub spins up to `[motion] omega`; with `[road]`
-        /// and `[contact]` (optional, both or neither) the road rises and moves at `v0`, and
-        /// `[friction]` may act. Without them: a cylinder spinning up in time, no contact.
-        Transient => "transient",
-        /// Steady rolling solved directly in the θ-referential (Eulerian/ALE) description: the
-        /// same scene as `transient` (`[road]` and `[contact]` optional, both or neither; the
-        /// ramps and `[time]` are ignored), at `[motion] omega` and `road.v0`, optionally
-        /// followed by arc-length continuation (`[continuation]`).
-        Steady => "steady",
-    }
-}
 
 /// One scene file, resolved: every default filled.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -284,21 +254,6 @@ pub struct Scene {
     /// first region's material (for scales such as the shear wave speed).
     #[serde(skip)]
     pub regions: Vec<RegionMaterial>,
-}
-
-/// One `[[material]]` entry: the material of a mesh region.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RegionMaterial {
-    /// Name of a 2D physical group of the mesh file.
-    pub region: String,
-    pub material: MaterialSpec,
-}
-
-/// `[analysis]`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Analysis {
-    pub mode: Mode,
 }
 
 impl Scene {

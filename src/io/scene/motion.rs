@@ -1,7 +1,10 @@
 //! `[motion]`: hub angular speed (rad/T), its C² smoothstep ramp in time, and the hub control
 //! (speed, torque, free rolling, creep).
 
-use super::*;
+use super::analysis::Mode;
+use super::issue::{issue, issue_near, Issue};
+use super::time::IntegratorName;
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// How the hub rotation is driven (`[motion] control`).
@@ -316,6 +319,7 @@ pub(super) fn validate_motion_control(
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn torque_control_scenes_parse() {

@@ -1,6 +1,7 @@
 //! `[output]`: output sinks, decimation and the VTU encoding.
 
-use super::*;
+use super::issue::{issue, Issue};
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Encoding of the `.vtu` files (`[output] vtu_format`).

@@ -12,7 +12,23 @@
 //! T time; the program does not convert. Forces, torques and energies are per unit thickness
 //! (plane strain).
 
-use super::*;
+use super::analysis::{Analysis, Mode};
+use super::contact::{ClampKind, ContactQuadrature, ContactSpec, RoadSpec};
+use super::friction::{FrictionLawName, FrictionSpec};
+use super::geometry::{Geometry, SceneInfo};
+use super::issue::quoted_list;
+use super::material::{Formulation, MaterialModel, MaterialSpec};
+use super::mesh::MeshSpec;
+use super::motion::{Control, Motion};
+use super::output::{OutputSpec, Sink, VtuFormat};
+use super::solver::{LinearChoice, SolverSpec};
+use super::steady::{ContinuationParameter, ContinuationSpec};
+use super::stick_slip::StickSlipSpec;
+use super::time::{IntegratorName, MassKind, TimeSpec};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::collections::BTreeSet;
+
 use serde_json::{json, Map, Value};
 
 #[derive(Clone, Copy, Debug)]
@@ -317,14 +333,6 @@ pub(super) fn section_list() -> String {
     SCHEMA
         .iter()
         .map(|s| format!("[{}]", s.name))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-pub(super) fn quoted_list(names: &[&str]) -> String {
-    names
-        .iter()
-        .map(|n| format!("\"{n}\""))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -759,6 +767,9 @@ pub(super) fn annotate(text: &str) -> String {
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
+    use std::fmt;
+    use std::str::FromStr;
 
     #[test]
     fn keyword_enums_match_serde_names() {

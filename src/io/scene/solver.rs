@@ -1,6 +1,7 @@
 //! `[solver]`: Newton with load stepping and cut-backs, the linear solver and threads.
 
-use super::*;
+use super::issue::{issue, Issue};
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Sparse linear solver (`[solver] linear`).

@@ -1,7 +1,11 @@
 //! `[continuation]`: arc-length continuation of the steady mode (parameter, target, scaled arc
 //! lengths).
 
-use super::*;
+use super::analysis::Mode;
+use super::contact::RoadSpec;
+use super::issue::{issue, positive, Issue};
+use super::motion::Control;
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Parameter of the arc-length continuation (`[continuation] parameter`).
@@ -141,6 +145,7 @@ pub(super) fn validate_continuation(
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn steady_sweep_scene_and_continuation_rules() {

@@ -1,6 +1,7 @@
 //! `[stick_slip]`: the one-degree-of-freedom stick-slip oscillator `mass ẍ = −stiffness x + F_T`.
 
-use super::*;
+use super::issue::{issue, positive, Issue};
+use serde::{Deserialize, Serialize};
 
 /// `[stick_slip]`: the one-degree-of-freedom stick-slip oscillator
 /// `mass ẍ = −stiffness x + F_T`, `F_T = −μ(|w|) normal_force φ_ε(w)`, `w = ẋ − belt_speed`
@@ -102,6 +103,7 @@ pub(super) fn validate_stick_slip(s: &StickSlipSpec, out: &mut Vec<Issue>) {
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn stick_slip_scene_parses() {

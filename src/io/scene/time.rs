@@ -1,7 +1,10 @@
 //! `[time]`: time integration of the transient mode (integrator, steps in T, error and steady
 //! tolerances, mass matrix), and the rule that steady-state extraction needs a mesh uniform in θ.
 
-use super::*;
+use super::analysis::Mode;
+use super::issue::{issue, positive, Issue};
+use super::mesh::MeshSpec;
+use serde::{Deserialize, Serialize};
 
 keyword_enum! {
     /// Time integrator of the `transient` mode (`[time] integrator`).
@@ -295,6 +298,7 @@ pub(super) fn validate_steady_extraction(
 mod tests {
     use super::*;
     use crate::io::scene::tests::*;
+    use crate::io::scene::*;
 
     #[test]
     fn time_defaults_are_filled() {
