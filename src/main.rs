@@ -107,6 +107,17 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Print the JSON Schema (draft 2020-12) of scene files, for editors (taplo / Even Better
+    /// TOML); with --markdown, the reference of scene keys, summary.json keys and CSV columns
+    /// with their units (docs/reference.md).
+    Schema {
+        /// The Markdown reference instead of the JSON Schema.
+        #[arg(long)]
+        markdown: bool,
+        /// Write to this file instead of standard output.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
     /// Parameter sweeps: many runs of one scene (plan, run on a local pool or Slurm, collect).
     Sweep {
         #[command(subcommand)]
@@ -451,7 +462,7 @@ fn main() -> ExitCode {
                     "# {}: valid; resolved scene with defaults:",
                     scene.display()
                 ));
-                say(s.to_toml_string().trim_end());
+                say(s.to_annotated_toml_string().trim_end());
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -459,6 +470,27 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Some(Command::Schema { markdown, out }) => {
+            let text = if markdown {
+                tread::io::reference::markdown()
+            } else {
+                let schema = tread::io::scene::json_schema();
+                serde_json::to_string_pretty(&schema).unwrap_or_default() + "\n"
+            };
+            match out {
+                Some(path) => match std::fs::write(&path, text) {
+                    Ok(()) => ExitCode::SUCCESS,
+                    Err(e) => {
+                        eprintln!("tread: cannot write {}: {e}", path.display());
+                        ExitCode::from(1)
+                    }
+                },
+                None => {
+                    say(text.trim_end());
+                    ExitCode::SUCCESS
+                }
+            }
+        }
         Some(Command::Sweep { command }) => {
             tread::sweep::cli::main(command, cli.threads, cli.quiet)
         }

@@ -3,6 +3,7 @@
 
 pub mod output;
 pub mod record;
+pub mod reference;
 pub mod replay;
 pub mod scene;
 

@@ -1,0 +1,521 @@
+//! The reference of what a user writes and reads: scene keys (from the scene schema) and every
+//! `summary.json` key and CSV column with its unit (the registries below). `tread schema
+//! --markdown` prints it; `docs/reference.md` is that output, and a test checks that the committed
+//! file equals what the program generates, and that every key and column that runs write is
+//! registered here.
+//!
+//! Units are those of the scene (`[scene] units = "L-F-T"`): L length, F force, T time; forces,
+//! torques and energies are per unit thickness (plane strain); `–` marks dimensionless numbers,
+//! counts, flags and text. In load stepping the "time" is the load factor λ (dimensionless).
+
+use crate::io::scene::markdown_reference;
+
+/// One documented output key or column.
+#[derive(Clone, Copy, Debug)]
+pub struct OutputKey {
+    /// Dotted key (`results.hub_force_x`; `[]` marks the elements of an array) or column name.
+    pub key: &'static str,
+    /// Unit in the scene's L-F-T system, `–` when dimensionless or not a number.
+    pub unit: &'static str,
+    /// Which runs write it (empty: every run that writes the file).
+    pub when: &'static str,
+    pub doc: &'static str,
+}
+
+const fn k(
+    key: &'static str,
+    unit: &'static str,
+    when: &'static str,
+    doc: &'static str,
+) -> OutputKey {
+    OutputKey {
+        key,
+        unit,
+        when,
+        doc,
+    }
+}
+
+const N: &str = "–";
+const TR: &str = "transient";
+const SD: &str = "steady";
+const TS: &str = "transient, steady";
+const CONT: &str = "steady with [continuation]";
+const SS: &str = "stick_slip";
+const CMP: &str = "tread compare";
+const SDC: &str = "steady with motion.control other than speed";
+const REC: &str = "steady, when the first solve failed";
+
+/// Every key of `summary.json` (objects are listed with their keys).
+pub static SUMMARY_KEYS: &[OutputKey] = &[
+    k("scene", N, "", "scene name"),
+    k("mode", N, "", "analysis mode that ran (`spinning`, `static`, `stick_slip`, `transient`, `steady`, `compare`)"),
+    k("dofs", N, "", "number of unknowns solved for (free displacement dofs + pressure dofs + global unknowns)"),
+    k("newton_iterations", N, "", "Newton iterations summed over the run"),
+    k("wall_time_s", "s", "", "wall time of the run (set-up, solve, results), seconds"),
+    k("converged", N, "", "whether the analysis reached its target"),
+    k("error", N, "", "null, or why the solve failed (`interrupted` after Ctrl-C)"),
+    k("warnings", N, TS, "list of warnings, e.g. steady rolling not reached by `t_end`"),
+    k("version", N, "", "tread version"),
+    k("transient_dir", N, CMP, "folder of the transient run's own outputs"),
+    k("steady_dir", N, CMP, "folder of the steady run's own outputs"),
+    // terms
+    k("terms", N, "", "which terms of the model ran"),
+    k("terms.friction", N, "", "friction acted (a law other than `none` with a non-zero coefficient)"),
+    k("terms.normal_damping", N, "", "contact damping `b_n` acted"),
+    k("terms.inertia", N, "", "inertia (or the centrifugal load) was assembled"),
+    k("terms.history", N, "", "the material carried history (viscoelastic)"),
+    k("terms.pressure", N, "", "a pressure field was solved for (incompressible material)"),
+    k("terms.strain_rate_damping", N, TR, "`time.strain_rate_damping` acted"),
+    k("terms.contact_facets_per_iteration", N, "", "mean contact facets integrated per assembly"),
+    // mesh
+    k("mesh", N, "", "the mesh"),
+    k("mesh.n_r", N, "", "radial cells (as in the scene)"),
+    k("mesh.n_theta", N, "", "circumferential cells (as in the scene)"),
+    k("mesh.order", N, "", "element order"),
+    k("mesh.nodes", N, "", "number of nodes"),
+    k("mesh.cells", N, "", "number of cells"),
+    k("mesh.pressure_dofs", N, "", "pressure unknowns (incompressible material)"),
+    // solver
+    k("solver", N, "", "solver statistics"),
+    k("solver.linear", N, "", "sparse solver used (`cholesky` or `lu`)"),
+    k("solver.switched_to_lu", N, "", "Cholesky failed and LU took over"),
+    k("solver.load_steps", N, "", "accepted load (or time) steps"),
+    k("solver.cutbacks", N, "", "step halvings after a failed Newton solve"),
+    k("solver.threads", N, "", "worker threads"),
+    k("solver.interrupted_at", "T or λ", "interrupted runs", "load factor or time reached when the run was interrupted"),
+    k("solver.recovery", N, SD, "null when the first steady solve worked, else how it was recovered"),
+    k("solver.recovery.direct_error", N, REC, "why the direct solve failed"),
+    k("solver.recovery.strategy", N, REC, "strategy that succeeded (`kappa_homotopy`, `eps_homotopy`, `omega_stepping`, `combined`); null if none did"),
+    k("solver.recovery.attempts", N, REC, "one entry per strategy tried"),
+    k("solver.recovery.attempts[].strategy", N, REC, "strategy of this attempt"),
+    k("solver.recovery.attempts[].succeeded", N, REC, "whether it reached the scene's state"),
+    k("solver.recovery.attempts[].error", N, REC, "why it failed (null if it succeeded)"),
+    k("solver.recovery.attempts[].press_steps", N, REC, "load steps of the initial press"),
+    k("solver.recovery.attempts[].press_cutbacks", N, REC, "cut-backs of the initial press"),
+    k("solver.recovery.attempts[].legs", N, REC, "parameter legs walked"),
+    k("solver.recovery.attempts[].legs[].parameter", N, REC, "parameter of the leg"),
+    k("solver.recovery.attempts[].legs[].from", "as the parameter", REC, "start value"),
+    k("solver.recovery.attempts[].legs[].to", "as the parameter", REC, "target value"),
+    k("solver.recovery.attempts[].legs[].steps", N, REC, "steps of the leg"),
+    k("solver.recovery.attempts[].legs[].cutbacks", N, REC, "cut-backs of the leg"),
+    k("solver.recovery.attempts[].legs[].reached", "as the parameter", REC, "value reached"),
+    k("solver.recovery.newton_iterations", N, REC, "Newton iterations of the recovery"),
+    k("solver.recovery.cutbacks", N, REC, "cut-backs of the recovery"),
+    k("solver.recovery.wall_time_s", "s", REC, "wall time of the recovery"),
+    k("solver.recovery.message", N, REC, "one-line account of the recovery"),
+    // results: spinning and static
+    k("results", N, "", "the results of the mode"),
+    k("results.omega", "rad/T", "spinning, steady", "angular speed reached"),
+    k("results.u_r_outer", "L", "spinning, static", "mean radial displacement of the outer surface, (1/L)∮ u·e_R ds"),
+    k("results.sigma_r_inner", "F/L²", "spinning, static", "ring average of the Cauchy σ_rr on the hub surface"),
+    k("results.sigma_theta_inner", "F/L²", "spinning, static", "ring average of the Cauchy σ_θθ on the hub surface"),
+    k("results.sigma_r_outer", "F/L²", "spinning, static", "ring average of σ_rr on the outer surface"),
+    k("results.sigma_theta_outer", "F/L²", "spinning, static", "ring average of σ_θθ on the outer surface"),
+    k("results.max_displacement", "L", "spinning, static", "largest nodal |u|"),
+    k("results.hub_force_x", "F/L", "static, transient, steady", "force of the hub on the body, x1 (from the residual at the hub dofs; transient: last step)"),
+    k("results.hub_force_y", "F/L", "static, transient, steady", "force of the hub on the body, x2 (an indented cylinder has < 0)"),
+    k("results.hub_torque", "F·L/L", "static, transient, steady", "moment of the hub on the body about its centre, counter-clockwise positive"),
+    k("results.contact_x_min", "L", "static, transient, steady", "lower end in x1 of the contact patch (outermost facet points with t_n > 0)"),
+    k("results.contact_x_max", "L", "static, transient, steady", "upper end in x1 of the contact patch"),
+    k("results.max_pressure", "F/L²", "static, transient, steady", "peak normal traction (per unit reference length)"),
+    k("results.contact_force_x", "F/L", "static, transient, steady", "resultant of the contact tractions on the body, x1"),
+    k("results.contact_force_y", "F/L", "static, transient, steady", "resultant of the contact tractions on the body, x2"),
+    k("results.contact_half_width_moment", "L", "static, transient, steady", "Hertz-type half-width 2√⟨(x1 − x̄)²⟩ of the pressure"),
+    k("results.contact_centroid", "L", TS, "x̄: pressure-weighted mean x1 of the patch"),
+    k("results.contact_moment", "F·L/L", TS, "moment of the contact tractions about the hub centre"),
+    k("results.road_height", "L", "static", "final road height H"),
+    k("results.penetration", "L", "static, steady", "final penetration DISP = Ro − H"),
+    k("results.contact_facets_per_iteration", N, "static", "mean facets integrated per assembly"),
+    k("results.contact_facets_total", N, "static", "facets on the outer surface"),
+    // transient and steady
+    k("results.time_to_steady", "T", TS, "time when steady rolling was declared (null if not; steady: 0)"),
+    k("results.steady", N, TS, "whether rolling became steady (steady: converged)"),
+    k("results.revolutions", N, TS, "hub revolutions (steady: 0)"),
+    k("results.steps", N, TS, "accepted time steps (steady: continuation steps, 0 without [continuation])"),
+    k("results.rejected_steps", N, TR, "rejected time steps"),
+    k("results.node_passages", N, TR, "cell passages through the bottom"),
+    k("results.final_time", "T", TR, "time reached"),
+    k("results.dt_min_used", "T", TR, "smallest accepted step"),
+    k("results.dt_max_used", "T", TR, "largest accepted step"),
+    k("results.integrator", N, TR, "time integrator"),
+    k("results.mass", N, TR, "mass matrix (`consistent`, `lumped`)"),
+    k("results.omega_steady", "rad/T", TR, "hub angular speed at the end"),
+    k("results.rolling_radius", "L", TR, "effective rolling radius v0 / ω"),
+    k("results.applied_torque", "F·L/L", TR, "hub torque applied at the end (torque control; else the reaction)"),
+    k("results.control", N, TS, "transient: the hub control (`speed`, `torque`); steady: null for `speed`, else what the control did (keys below)"),
+    k("results.control.control", N, SDC, "`torque`, `free_rolling` or `creep`"),
+    k("results.control.target_torque", "F·L/L", SDC, "target hub torque (0 for free rolling and creep's free-rolling stage)"),
+    k("results.control.torque_tolerance", "F·L/L", SDC, "absolute torque tolerance, 1e-7 |F_y| Ro at the press-in state"),
+    k("results.control.v0_free", "L/T", SDC, "free-rolling road speed (free rolling and creep; else null)"),
+    k("results.control.rolling_radius", "L", SDC, "effective rolling radius R_e = v0_free / ω (else null)"),
+    k("results.control.creep", N, SDC, "creep ξ = v0 / v0_free − 1 of the final state (else null)"),
+    k("results.control.evaluations", N, SDC, "steady solves, one per trial v0"),
+    k("results.control.newton_iterations", N, SDC, "their Newton iterations"),
+    k("results.control.history", "[L/T, F·L/L]", SDC, "(v0, hub torque) of every trial of the secant iteration"),
+    k("results.creep", N, SD, "creep ξ = (v0 − ω R_e) / (ω R_e)"),
+    k("results.v0", "L/T", SD, "road speed"),
+    k("results.wall_time_first_solution_s", "s", SD, "wall time to the first steady solution"),
+    k("results.steady_change_field", N, TR, "relative change of the referential field over the last node passage"),
+    k("results.steady_change_force", N, TR, "relative change of the hub force over the last node passage"),
+    k("results.steady_change_torque", N, TR, "relative change of the hub torque over the last node passage"),
+    k("results.steady_change_omega", N, TR, "relative change of ω over the last node passage"),
+    k("results.hub_force_x_passage_mean", "F/L", TS, "hub_force_x averaged over the last node passage (the steady load)"),
+    k("results.hub_force_y_passage_mean", "F/L", TS, "hub_force_y averaged over the last node passage"),
+    k("results.hub_torque_passage_mean", "F·L/L", TS, "hub_torque averaged over the last node passage"),
+    // continuation
+    k("results.branch", N, CONT, "the branch, one entry per converged point (the rows of branch.csv)"),
+    k("results.branch[].step", N, CONT, "continuation step"),
+    k("results.branch[].lambda", "as the parameter", CONT, "parameter value"),
+    k("results.branch[].omega", "rad/T", CONT, "angular speed"),
+    k("results.branch[].v0", "L/T", CONT, "road speed"),
+    k("results.branch[].creep", N, CONT, "creep ξ"),
+    k("results.branch[].penetration", "L", CONT, "penetration Ro − H"),
+    k("results.branch[].hub_force_x", "F/L", CONT, "hub force, x1"),
+    k("results.branch[].hub_force_y", "F/L", CONT, "hub force, x2"),
+    k("results.branch[].hub_torque", "F·L/L", CONT, "hub torque"),
+    k("results.branch[].contact_x_min", "L", CONT, "lower end of the contact patch"),
+    k("results.branch[].contact_x_max", "L", CONT, "upper end of the contact patch"),
+    k("results.branch[].max_pressure", "F/L²", CONT, "peak normal traction"),
+    k("results.branch[].wave_amplitude", "L", CONT, "half the peak-to-peak u_r of the outer surface more than 60° from the bottom (standing waves)"),
+    k("results.branch[].det_sign", N, CONT, "sign of the tangent's determinant (symmetric tangent only)"),
+    k("results.branch[].negative_eigenvalues", N, CONT, "negative eigenvalues of the tangent (symmetric tangent only)"),
+    k("results.branch[].test_function", N, CONT, "smallest-eigenvalue estimate"),
+    k("results.branch[].iterations", N, CONT, "corrector iterations"),
+    k("results.branch[].kind", N, CONT, "0 start, 1 regular, 2 limit point, 3 bifurcation"),
+    k("results.branch[].wall_time_s", "s", CONT, "wall time of the step"),
+    k("results.branch[].factor_solve_s", "s", CONT, "time in factorisations and solves"),
+    k("results.special_points", N, CONT, "limit and bifurcation points"),
+    k("results.special_points[].step", N, CONT, "step after which it was detected"),
+    k("results.special_points[].kind", N, CONT, "`limit` or `bifurcation`"),
+    k("results.special_points[].lambda", "as the parameter", CONT, "estimated parameter value"),
+    k("results.special_points[].detected_by", N, CONT, "what detected it"),
+    k("results.continuation", N, CONT, "continuation statistics"),
+    k("results.continuation.parameter", N, CONT, "continuation parameter"),
+    k("results.continuation.steps", N, CONT, "continuation steps"),
+    k("results.continuation.stop_reason", N, CONT, "why the continuation stopped"),
+    k("results.continuation.corrector_iterations", N, CONT, "corrector iterations in total"),
+    k("results.continuation.cutbacks", N, CONT, "step reductions"),
+    k("results.continuation.assemblies", N, CONT, "tangent assemblies"),
+    k("results.continuation.factorizations", N, CONT, "factorisations"),
+    // stick-slip
+    k("results.period", "T", SS, "mean time between stick→slip transitions, the first interval skipped (null with fewer than three)"),
+    k("results.amplitude", "L", SS, "slip amplitude x_max − x_min"),
+    k("results.x_min", "L", SS, "smallest x of the last cycle"),
+    k("results.x_max", "L", SS, "largest x of the last cycle"),
+    k("results.stick_time", "T", SS, "duration of the stick phase in the last complete cycle"),
+    k("results.slip_time", "T", SS, "duration of the slip phase in the last complete cycle"),
+    k("results.cycles", N, SS, "stick→slip transitions"),
+    k("results.period_rel_error", N, SS, "relative difference of the period from the closed form"),
+    k("results.amplitude_rel_error", N, SS, "relative difference of the amplitude from the closed form"),
+    k("results.closed_form", N, SS, "the exact static/kinetic Coulomb cycle (rate-dependent law), else null"),
+    k("results.closed_form.period", "T", SS, "period"),
+    k("results.closed_form.amplitude", "L", SS, "amplitude"),
+    k("results.closed_form.stick_time", "T", SS, "stick time"),
+    k("results.closed_form.slip_time", "T", SS, "slip time"),
+    k("results.closed_form.x_min", "L", SS, "smallest x"),
+    k("results.closed_form.x_max", "L", SS, "largest x"),
+    k("results.solver_stats", N, SS, "statistics of the ODE integrator"),
+    k("results.solver_stats.steps", N, SS, "steps"),
+    k("results.solver_stats.newton_iterations", N, SS, "Newton iterations"),
+    k("results.solver_stats.newton_failures", N, SS, "Newton failures"),
+    k("results.solver_stats.error_test_failures", N, SS, "error-test failures"),
+    k("results.solver_stats.factorizations", N, SS, "factorisations"),
+    // compare
+    k("results.compare", N, CMP, "transient against steady; the transient loads are the averages over its last node passage"),
+    k("results.compare.hub_force_x_transient", "F/L", CMP, "transient hub_force_x"),
+    k("results.compare.hub_force_x_steady", "F/L", CMP, "steady hub_force_x"),
+    k("results.compare.hub_force_y_transient", "F/L", CMP, "transient hub_force_y"),
+    k("results.compare.hub_force_y_steady", "F/L", CMP, "steady hub_force_y"),
+    k("results.compare.hub_torque_transient", "F·L/L", CMP, "transient hub_torque"),
+    k("results.compare.hub_torque_steady", "F·L/L", CMP, "steady hub_torque"),
+    k("results.compare.transient_loads", N, CMP, "`passage_mean` or `last_step`: which transient loads are compared"),
+    k("results.compare.hub_force_x_transient_last_step", "F/L", CMP, "transient hub_force_x at the last step"),
+    k("results.compare.hub_force_y_transient_last_step", "F/L", CMP, "transient hub_force_y at the last step"),
+    k("results.compare.hub_torque_transient_last_step", "F·L/L", CMP, "transient hub_torque at the last step"),
+    k("results.compare.hub_force_x_rel_diff", N, CMP, "|Δ hub_force_x| / |F_steady|"),
+    k("results.compare.hub_force_y_rel_diff", N, CMP, "|Δ hub_force_y| / |F_steady|"),
+    k("results.compare.hub_torque_abs_diff", "F·L/L", CMP, "|Δ hub_torque|"),
+    k("results.compare.hub_torque_rel_diff", N, CMP, "|Δ hub_torque| / (|F_steady| Ro)"),
+    k("results.compare.field_rel_l2", N, CMP, "relative FE L2 difference of the referential fields"),
+    k("results.compare.field_max_abs", "L", CMP, "largest nodal difference of the referential fields"),
+    k("results.compare.field_rel_max", N, CMP, "field_max_abs / largest steady nodal |u|"),
+    k("results.compare.contact_x_min_transient", "L", CMP, "transient contact_x_min"),
+    k("results.compare.contact_x_min_steady", "L", CMP, "steady contact_x_min"),
+    k("results.compare.contact_x_max_transient", "L", CMP, "transient contact_x_max"),
+    k("results.compare.contact_x_max_steady", "L", CMP, "steady contact_x_max"),
+    k("results.compare.max_pressure_transient", "F/L²", CMP, "transient max_pressure"),
+    k("results.compare.max_pressure_steady", "F/L²", CMP, "steady max_pressure"),
+    k("results.compare.wall_time_transient_s", "s", CMP, "wall time of the transient run"),
+    k("results.compare.wall_time_steady_s", "s", CMP, "wall time of the steady run"),
+    k("results.compare.speedup", N, CMP, "wall_time_transient_s / wall_time_steady_s"),
+    k("results.compare.transient_steady", N, CMP, "whether the transient reached steady rolling"),
+    k("results.compare.transient_time_to_steady", "T", CMP, "the transient's time_to_steady"),
+    k("results.compare.transient_steps", N, CMP, "the transient's accepted steps"),
+];
+
+/// One CSV file and its columns.
+#[derive(Clone, Copy, Debug)]
+pub struct CsvFile {
+    pub name: &'static str,
+    pub when: &'static str,
+    pub columns: &'static [OutputKey],
+}
+
+const HIST: &str = "history.csv";
+
+/// Every CSV file and column. `history.csv` holds `step, time` and the series of the run, each
+/// only where it applies.
+pub static CSV_FILES: &[CsvFile] = &[
+    CsvFile {
+        name: HIST,
+        when: "sink `csv`; one row per accepted step",
+        columns: &[
+            k("step", N, "", "index of the accepted step"),
+            k(
+                "time",
+                "T or λ",
+                "",
+                "t (transient, stick_slip) or the load factor λ (load stepping)",
+            ),
+            k("newton_iterations", N, "", "Newton iterations of the step"),
+            k("hub_force_x", "F/L", "", "force of the hub on the body, x1"),
+            k("hub_force_y", "F/L", "", "force of the hub on the body, x2"),
+            k("hub_torque", "F·L/L", "", "moment of the hub on the body"),
+            k("energy_strain", "F·L/L", "", "stored strain energy"),
+            k("energy_kinetic", "F·L/L", "", "kinetic energy"),
+            k("energy_total", "F·L/L", "", "strain + kinetic energy"),
+            k("road_height", "L", "with contact", "road height H"),
+            k(
+                "contact_force_x",
+                "F/L",
+                "with contact",
+                "resultant contact traction, x1",
+            ),
+            k(
+                "contact_force_y",
+                "F/L",
+                "with contact",
+                "resultant contact traction, x2",
+            ),
+            k(
+                "max_pressure",
+                "F/L²",
+                "with contact",
+                "peak normal traction",
+            ),
+            k(
+                "patch_x_min",
+                "L",
+                "with contact",
+                "lower end of the contact patch",
+            ),
+            k(
+                "patch_x_max",
+                "L",
+                "with contact",
+                "upper end of the contact patch",
+            ),
+            k(
+                "max_shear_stress",
+                "F/L²",
+                "",
+                "largest nodal in-plane maximum shear stress",
+            ),
+            k("phi", "rad", TR, "hub rotation angle"),
+            k("revolutions", N, TR, "hub revolutions"),
+            k("x", "L", SS, "position of the mass"),
+            k("v", "L/T", SS, "velocity of the mass"),
+            k("friction_force", "F", SS, "friction force on the mass"),
+            k("slipping", N, SS, "0 = stick, 1 = slip"),
+        ],
+    },
+    CsvFile {
+        name: "profile.csv",
+        when: "sink `csv`; spinning, static",
+        columns: &[
+            k("r", "L", "", "radius of the radial Gauss point"),
+            k("u_r", "L", "", "ring average of the radial displacement"),
+            k("sigma_r", "F/L²", "", "ring average of σ_rr"),
+            k("sigma_theta", "F/L²", "", "ring average of σ_θθ"),
+            k("sigma_r_theta", "F/L²", "", "ring average of σ_rθ"),
+        ],
+    },
+    CsvFile {
+        name: "nodes.csv",
+        when: "sink `csv`",
+        columns: &[
+            k("node", N, "", "node index"),
+            k("X1", "L", "", "reference position, x1"),
+            k("X2", "L", "", "reference position, x2"),
+            k("u1", "L", "", "displacement, x1"),
+            k("u2", "L", "", "displacement, x2"),
+        ],
+    },
+    CsvFile {
+        name: "convergence.csv",
+        when: "sink `csv`",
+        columns: &[
+            k("step", N, "", "load step"),
+            k("load_factor", N, "", "load factor λ of the step"),
+            k("iteration", N, "", "Newton iteration"),
+            k(
+                "residual_u_rel",
+                N,
+                "",
+                "relative residual of the displacement equations",
+            ),
+            k(
+                "residual_p_rel",
+                N,
+                "",
+                "relative residual of the pressure equations",
+            ),
+            k(
+                "residual_h_rel",
+                N,
+                "",
+                "relative residual of the global equations (road height, hub)",
+            ),
+            k("increment_norm", N, "", "norm of the Newton increment"),
+            k("alpha", N, "", "line-search step length"),
+        ],
+    },
+    CsvFile {
+        name: "contact.csv",
+        when: "sink `csv`; static",
+        columns: &[
+            k(
+                "theta",
+                "rad",
+                "",
+                "reference angle of the facet point (−π/2 = bottom)",
+            ),
+            k("x1", "L", "", "current position, x1"),
+            k("x2", "L", "", "current position, x2"),
+            k("penetration", "L", "", "penetration δ"),
+            k(
+                "t_n",
+                "F/L²",
+                "",
+                "normal traction on the body per unit reference length",
+            ),
+            k("t_t", "F/L²", "", "tangential traction on the body"),
+            k(
+                "slip_velocity",
+                "L/T (static: L)",
+                "",
+                "slip velocity w (static: slip per unit pseudo-time)",
+            ),
+            k("ds0", "L", "", "reference length weight"),
+        ],
+    },
+    CsvFile {
+        name: "passages.csv",
+        when: "sink `csv`; transient",
+        columns: &[
+            k("t", "T", "", "time of the cell passage"),
+            k(
+                "change_field",
+                N,
+                "",
+                "relative change of the referential field over the passage",
+            ),
+            k("change_force", N, "", "relative change of the hub force"),
+            k("change_torque", N, "", "relative change of the hub torque"),
+            k("hub_force_x", "F/L", "", "hub force, x1"),
+            k("hub_force_y", "F/L", "", "hub force, x2"),
+            k("hub_torque", "F·L/L", "", "hub torque"),
+            k("omega", "rad/T", "", "hub angular speed at the passage"),
+            k(
+                "change_omega",
+                N,
+                "",
+                "relative change of ω over the passage",
+            ),
+        ],
+    },
+    CsvFile {
+        name: "steady_field.csv",
+        when: "sink `csv`; transient, steady",
+        columns: &[
+            k("ring", N, "", "ring of referential nodes"),
+            k("pos", N, "", "position along the ring"),
+            k("X1", "L", "", "referential node, x1"),
+            k("X2", "L", "", "referential node, x2"),
+            k("u1", "L", "", "u = χ − X, x1"),
+            k("u2", "L", "", "u = χ − X, x2"),
+        ],
+    },
+    CsvFile {
+        name: "branch.csv",
+        when: "steady with [continuation]; the columns of `results.branch[]` above",
+        columns: &[],
+    },
+    CsvFile {
+        name: "compare.csv",
+        when: "tread compare; one row per quantity",
+        columns: &[
+            k(
+                "quantity",
+                N,
+                "",
+                "name of the compared quantity (a key of `results.compare`)",
+            ),
+            k("transient", "as the quantity", "", "transient value"),
+            k("steady", "as the quantity", "", "steady value"),
+            k("abs_diff", "as the quantity", "", "|transient − steady|"),
+        ],
+    },
+];
+
+/// Whether a `summary.json` key (dotted, `[]` for array elements) is in [`SUMMARY_KEYS`].
+pub fn summary_key_documented(key: &str) -> bool {
+    SUMMARY_KEYS.iter().any(|k| k.key == key)
+}
+
+/// Whether a column of a CSV file is in [`CSV_FILES`] (`branch.csv`: the `results.branch[]` keys).
+pub fn csv_column_documented(file: &str, column: &str) -> bool {
+    if file == "branch.csv" {
+        return summary_key_documented(&format!("results.branch[].{column}"));
+    }
+    CSV_FILES
+        .iter()
+        .any(|f| f.name == file && f.columns.iter().any(|c| c.key == column))
+}
+
+fn rows(keys: &[OutputKey], out: &mut String) {
+    out.push_str("| key | unit | written by | meaning |\n|---|---|---|---|\n");
+    for k in keys {
+        out.push_str(&format!(
+            "| `{}` | {} | {} | {} |\n",
+            k.key,
+            crate::io::scene::cell(k.unit),
+            if k.when.is_empty() { "all" } else { k.when },
+            crate::io::scene::cell(k.doc)
+        ));
+    }
+}
+
+/// The whole reference in Markdown (`tread schema --markdown`, `docs/reference.md`).
+pub fn markdown() -> String {
+    let mut out = String::from(
+        "# tread reference: scene keys, summary.json keys, CSV columns\n\n\
+         Generated by `tread schema --markdown` from the program's own tables; do not edit by \
+         hand (a test compares this file with the program's output).\n\n## Scene keys\n\n",
+    );
+    out.push_str(&markdown_reference());
+    out.push_str(
+        "\n## summary.json\n\nUnits as above (L, F, T of the scene; s = seconds of wall time). \
+         `[]` marks the elements of an array. Non-finite numbers are written as null.\n\n",
+    );
+    rows(SUMMARY_KEYS, &mut out);
+    out.push_str("\n## CSV files\n\nEmpty fields are non-finite values.\n");
+    for f in CSV_FILES {
+        out.push_str(&format!("\n### `{}`\n\n{}\n\n", f.name, f.when));
+        if !f.columns.is_empty() {
+            rows(f.columns, &mut out);
+        }
+    }
+    out
+}

@@ -1,0 +1,58 @@
+//! One problem found in a scene before it is located in the file ([`Issue`]), and the small
+//! helpers every section's checks share.
+
+/// Where an issue's location comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Origin {
+    /// `(--set)` if the key was overridden, else the line of the key in the original text.
+    Auto,
+    /// Always `(--set)`: a problem with the override itself.
+    Override,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct Issue {
+    pub(super) key: String,
+    pub(super) message: String,
+    pub(super) origin: Origin,
+    /// Another key whose location is reported when `key` itself is nowhere in the file (e.g.
+    /// `analysis.mode` for a section that the mode requires).
+    pub(super) anchor: Option<&'static str>,
+}
+
+pub(super) fn issue(key: impl Into<String>, message: impl Into<String>) -> Issue {
+    Issue {
+        key: key.into(),
+        message: message.into(),
+        origin: Origin::Auto,
+        anchor: None,
+    }
+}
+
+/// An issue about a key that may be absent from the file: located at `anchor` in that case.
+pub(super) fn issue_near(
+    key: impl Into<String>,
+    message: impl Into<String>,
+    anchor: &'static str,
+) -> Issue {
+    Issue {
+        anchor: Some(anchor),
+        ..issue(key, message)
+    }
+}
+
+pub(super) fn positive(x: f64) -> bool {
+    x.is_finite() && x > 0.0
+}
+
+pub(super) fn quoted_list(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("\"{n}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+pub(super) fn table_has(doc: &toml::Table, section: &str, key: &str) -> bool {
+    matches!(doc.get(section), Some(toml::Value::Table(t)) if t.contains_key(key))
+}

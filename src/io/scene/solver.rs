@@ -1,0 +1,69 @@
+//! `[solver]`: Newton with load stepping and cut-backs, the linear solver and threads.
+
+use super::issue::{issue, Issue};
+use serde::{Deserialize, Serialize};
+
+keyword_enum! {
+    /// Sparse linear solver (`[solver] linear`).
+    #[derive(Default)]
+    LinearChoice, "linear solver" {
+        #[default]
+        /// Cholesky when the tangent is symmetric positive definite, LU otherwise.
+        Auto => "auto",
+        /// Sparse Cholesky (symmetric positive definite tangents only).
+        Cholesky => "cholesky",
+        /// Sparse LU.
+        Lu => "lu",
+    }
+}
+
+/// `[solver]`: Newton with load stepping (in ω² for `spinning`; in the road penetration or the
+/// road load for `static`) and cutbacks. In `transient`: the Newton iterations of each implicit
+/// time step, a failed step being retried with half the step (`load_steps` unused). Not used by
+/// `stick_slip`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSpec {
+    /// Relative residual tolerance, in (0, 1).
+    pub tolerance: f64,
+    /// Newton iterations per load step (>= 1).
+    pub max_iterations: usize,
+    /// Initial number of load steps (>= 1).
+    pub load_steps: usize,
+    /// How many times a failed step may be halved.
+    pub max_cutbacks: usize,
+    pub linear: LinearChoice,
+    /// Worker threads; 0 = all cores.
+    pub threads: usize,
+    /// Backtracking line search on the residual norm.
+    pub line_search: bool,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec {
+            tolerance: 1e-10,
+            max_iterations: 25,
+            load_steps: 4,
+            max_cutbacks: 10,
+            linear: LinearChoice::Auto,
+            threads: 0,
+            line_search: true,
+        }
+    }
+}
+
+pub(super) fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
+    if !(s.tolerance.is_finite() && s.tolerance > 0.0 && s.tolerance < 1.0) {
+        out.push(issue(
+            "solver.tolerance",
+            format!("relative tolerance must be in (0, 1), got {}", s.tolerance),
+        ));
+    }
+    if s.max_iterations < 1 {
+        out.push(issue("solver.max_iterations", "must be >= 1, got 0"));
+    }
+    if s.load_steps < 1 {
+        out.push(issue("solver.load_steps", "must be >= 1, got 0"));
+    }
+}

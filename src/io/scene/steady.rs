@@ -1,0 +1,171 @@
+//! `[continuation]`: arc-length continuation of the steady mode (parameter, target, scaled arc
+//! lengths).
+
+use super::analysis::Mode;
+use super::contact::RoadSpec;
+use super::issue::{issue, positive, Issue};
+use super::motion::Control;
+use serde::{Deserialize, Serialize};
+
+keyword_enum! {
+    /// Parameter of the arc-length continuation (`[continuation] parameter`).
+    #[derive(Default)]
+    ContinuationParameter, "continuation parameter" {
+        #[default]
+        /// Angular speed ω (rad/s); the road speed keeps its ratio v0 / ω.
+        Omega => "omega",
+        /// Hub load (force per unit thickness; needs `road.load`).
+        Load => "load",
+        /// Penetration DISP = Ro − H (needs `road.disp`).
+        Disp => "disp",
+        /// Creep ξ (see `motion.control = "creep"`; needs `motion.control = "creep"` or
+        /// `"free_rolling"`): v0 = (1 + ξ) v0_free at fixed ω, from braking to driving.
+        Creep => "creep",
+    }
+}
+
+/// `[continuation]` (`steady` mode): Riks–Crisfield arc-length continuation from the first
+/// steady solution to `target`. Arc lengths are in scaled units: ‖Δu‖ / u_s and Δλ / λ_s with
+/// u_s the norm of the first solution's displacement vector and λ_s = |target − start|, so
+/// `ds = 0.05` is about 1/20 of the way when the solution changes proportionally.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContinuationSpec {
+    pub parameter: ContinuationParameter,
+    /// Final parameter value (rad/s, force per unit thickness, or length).
+    pub target: f64,
+    /// Initial arc length (scaled, > 0).
+    pub ds: f64,
+    /// Largest arc length (scaled, >= ds).
+    pub ds_max: f64,
+    /// Maximum number of continuation steps (>= 1).
+    pub max_steps: usize,
+    /// Corrector iterations aimed at by the step-size control (>= 1).
+    pub desired_iterations: usize,
+}
+
+impl Default for ContinuationSpec {
+    fn default() -> Self {
+        Self {
+            parameter: ContinuationParameter::Omega,
+            target: 0.0,
+            ds: 0.05,
+            ds_max: 0.25,
+            max_steps: 200,
+            desired_iterations: 4,
+        }
+    }
+}
+
+pub(super) fn validate_continuation(
+    c: &ContinuationSpec,
+    mode: Option<Mode>,
+    road: Option<&RoadSpec>,
+    control: Option<Control>,
+    out: &mut Vec<Issue>,
+) {
+    if c.parameter == ContinuationParameter::Creep {
+        if !(c.target.is_finite() && c.target > -1.0) {
+            out.push(issue(
+                "continuation.target",
+                format!(
+                    "final creep must be finite and > -1 (v0 > 0), got {}",
+                    c.target
+                ),
+            ));
+        }
+        if mode == Some(Mode::Steady)
+            && !matches!(control, None | Some(Control::Creep | Control::FreeRolling))
+        {
+            out.push(issue(
+                "continuation.parameter",
+                "parameter \"creep\" is measured from free rolling: it needs motion.control = \
+                 \"creep\" or \"free_rolling\"",
+            ));
+        }
+    } else if !(c.target.is_finite() && c.target >= 0.0) {
+        out.push(issue(
+            "continuation.target",
+            format!(
+                "final parameter value must be finite and >= 0, got {}",
+                c.target
+            ),
+        ));
+    }
+    if !positive(c.ds) {
+        out.push(issue(
+            "continuation.ds",
+            format!("initial arc length must be > 0, got {}", c.ds),
+        ));
+    }
+    if !(c.ds_max.is_finite() && c.ds_max >= c.ds) {
+        out.push(issue(
+            "continuation.ds_max",
+            format!(
+                "largest arc length must be >= ds = {}, got {}",
+                c.ds, c.ds_max
+            ),
+        ));
+    }
+    if c.max_steps < 1 {
+        out.push(issue("continuation.max_steps", "must be >= 1, got 0"));
+    }
+    if c.desired_iterations < 1 {
+        out.push(issue(
+            "continuation.desired_iterations",
+            "must be >= 1, got 0",
+        ));
+    }
+    if mode != Some(Mode::Steady) {
+        return;
+    }
+    match (c.parameter, road) {
+        (ContinuationParameter::Load, r) if r.and_then(|r| r.load).is_none() => out.push(issue(
+            "continuation.parameter",
+            "parameter \"load\" continues in the hub load: it needs load control (road.load)",
+        )),
+        (ContinuationParameter::Disp, r) if r.and_then(|r| r.disp).is_none() => out.push(issue(
+            "continuation.parameter",
+            "parameter \"disp\" continues in the penetration: it needs displacement control \
+             (road.disp)",
+        )),
+        (ContinuationParameter::Disp, Some(r))
+            if c.target >= 0.0 && r.disp.is_some_and(|d| c.target == d) =>
+        {
+            out.push(issue(
+                "continuation.target",
+                "target equals the starting penetration road.disp: nothing to continue",
+            ));
+        }
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::scene::tests::*;
+    use crate::io::scene::*;
+
+    #[test]
+    fn steady_sweep_scene_and_continuation_rules() {
+        let s = load(STEADY_SWEEP).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(s.analysis.mode, Mode::Steady);
+        let c = s.continuation.clone().unwrap_or_default();
+        assert_eq!(c.parameter, ContinuationParameter::Omega);
+        assert_eq!(c.target, 60.0);
+        // [continuation] only in steady mode, with the line of its header.
+        let e = errors_with(STEADY_SWEEP, &["analysis.mode=\"transient\""]);
+        let err = e.find("continuation").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("not used"), "{e}");
+        // load continuation needs load control.
+        let e = errors_with(STEADY_SWEEP, &["continuation.parameter=\"load\""]);
+        assert_only(&e, "continuation.parameter", None);
+        // ds_max < ds.
+        let e = errors_with(STEADY_SWEEP, &["continuation.ds_max=0.001"]);
+        assert_only(&e, "continuation.ds_max", None);
+        // A transient scene runs in steady mode with --mode steady ([time] allowed).
+        let t = load_with(ODEN, &["analysis.mode=\"steady\""]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(t.analysis.mode, Mode::Steady);
+    }
+}
