@@ -36,7 +36,9 @@
 //!             mass = "consistent" | "lumped", max_steps = 200000  (transient)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
-//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1, vtu_format = "binary" | "ascii"
+//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1, vtu_format = "binary" | "ascii",
+//!             vtu_compression = "none" | "zlib" (binary only),
+//!             displacement_scale = 1 (magnification of the body in the Rerun view)
 //!             (sinks from "summary", "csv", "vtu", "mcap", "rerun", "png")
 //! ```
 //!
@@ -341,6 +343,18 @@ keyword_enum! {
         Binary => "binary",
         /// Text (larger and slower; readable in an editor).
         Ascii => "ascii",
+    }
+}
+
+keyword_enum! {
+    /// Compression of the binary `.vtu` data (`[output] vtu_compression`).
+    #[derive(Default)]
+    VtuCompression, "VTU compression" {
+        #[default]
+        /// Raw bytes.
+        None => "none",
+        /// zlib (deflate) blocks of 32 KiB (`compressor="vtkZLibDataCompressor"`).
+        Zlib => "zlib",
     }
 }
 
@@ -1301,6 +1315,10 @@ pub struct OutputSpec {
     pub every: usize,
     /// Encoding of the `.vtu` files: `binary` (default) or `ascii`.
     pub vtu_format: VtuFormat,
+    /// Displacement magnification of the body in the Rerun recording's view (> 0; default 1).
+    pub displacement_scale: f64,
+    /// Compression of the binary `.vtu` data: `none` (default) or `zlib`.
+    pub vtu_compression: VtuCompression,
 }
 
 /// Default of `[output] sinks`: the light-weight outputs (MCAP and Rerun logs are opt-in).
@@ -1312,6 +1330,8 @@ impl Default for OutputSpec {
             sinks: DEFAULT_SINKS.to_vec(),
             every: 1,
             vtu_format: VtuFormat::Binary,
+            displacement_scale: 1.0,
+            vtu_compression: VtuCompression::None,
         }
     }
 }
@@ -1990,6 +2010,8 @@ static SCHEMA: &[SectionSchema] = &[
             opt("sinks", Kind::KeywordList(Sink::NAMES)),
             opt("every", Kind::UInt),
             opt("vtu_format", Kind::Keyword(VtuFormat::NAMES)),
+            opt("displacement_scale", Kind::Float),
+            opt("vtu_compression", Kind::Keyword(VtuCompression::NAMES)),
         ],
     },
 ];
@@ -3755,6 +3777,18 @@ fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
 fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
     if s.every < 1 {
         out.push(issue("output.every", "must be >= 1, got 0"));
+    }
+    if !(s.displacement_scale.is_finite() && s.displacement_scale > 0.0) {
+        out.push(issue(
+            "output.displacement_scale",
+            format!("must be a finite number > 0, got {}", s.displacement_scale),
+        ));
+    }
+    if s.vtu_compression != VtuCompression::None && s.vtu_format == VtuFormat::Ascii {
+        out.push(issue(
+            "output.vtu_compression",
+            "applies to vtu_format = \"binary\" only (the ascii format is not compressed)",
+        ));
     }
     for (i, k) in s.sinks.iter().enumerate() {
         if s.sinks[..i].contains(k) {
