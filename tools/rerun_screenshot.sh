@@ -51,7 +51,11 @@ fi
 
 # 3. A virtual display, the viewer, the screenshot.
 DISPLAY_NUM=$(( 90 + RANDOM % 100 ))
-Xvfb ":$DISPLAY_NUM" -screen 0 "${SIZE}x24" -nolisten tcp >/dev/null 2>&1 &
+W=${SIZE%x*}
+H=${SIZE#*x}
+# The screen is larger than the window (at the top left) so that the pointer, which starts at
+# the screen centre, does not hover over the window and open a tooltip in the picture.
+Xvfb ":$DISPLAY_NUM" -screen 0 "$((3 * W))x$((3 * H))x24" -nolisten tcp >/dev/null 2>&1 &
 XVFB=$!
 trap 'kill "$XVFB" 2>/dev/null || true' EXIT
 sleep 1
@@ -63,7 +67,7 @@ trap 'kill "$XVFB" 2>/dev/null || true; rm -rf "$RUNDIR"' EXIT
 # panics while quitting after --screenshot-to ("Failed to take store hub"), after the file is
 # written: its exit status is reported, the file decides.
 set +e
-DISPLAY=":$DISPLAY_NUM" XDG_RUNTIME_DIR="$RUNDIR" \
+DISPLAY=":$DISPLAY_NUM" XDG_RUNTIME_DIR="$RUNDIR" WINIT_X11_SCALE_FACTOR=1 \
     VK_ICD_FILENAMES=$(ls /usr/share/vulkan/icd.d/lvp_icd*.json | head -1) \
     timeout 180 "$VENV/bin/rerun" --bind 127.0.0.1 --port $(( 20000 + RANDOM % 20000 )) \
     --renderer vulkan --window-size "$SIZE" --screenshot-to "$OUT" "$REC" >"$RUNDIR/viewer.log" 2>&1
