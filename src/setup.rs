@@ -85,10 +85,10 @@ pub fn build_recorders(scene: &Scene, out_dir: &Path, quiet: bool) -> (Recorders
             // Scalars at every step: decimating them aliases with the node passages.
             Sink::Csv => r.push(Box::new(record::csv::CsvSink::new(out_dir)), 1),
             Sink::Vtu => r.push(
-                Box::new(record::vtu::VtuSink::with_format(
-                    out_dir,
-                    scene.output.vtu_format,
-                )),
+                Box::new(
+                    record::vtu::VtuSink::with_format(out_dir, scene.output.vtu_format)
+                        .with_compression(scene.output.vtu_compression),
+                ),
                 every,
             ),
             Sink::Mcap => r.push(Box::new(record::mcap::McapSink::new(out_dir)), every),

@@ -127,7 +127,8 @@ fn sigint_finishes_every_log_and_exits_130() {
     #[cfg(feature = "rerun")]
     {
         let r = read_rrd(&out.join("run.rrd"));
-        assert_eq!(r["/body/mesh"].mesh_vertices.len(), steps);
+        // Every step, and the reference configuration at sim_time 0 before them.
+        assert_eq!(r["/body/mesh"].mesh_vertices.len(), steps + 1);
         assert_eq!(r["/hub/force_y"].scalars.len(), steps);
         let hf = column(&h, &rows, "hub_force_y");
         assert!(

@@ -190,7 +190,9 @@ fn static_run_every_output_reads_back() {
         let tt: Vec<i64> = fyr.times.iter().map(|x| x.1).collect();
         assert_eq!(tt[steps - 1], 1_000_000_000);
         let mesh_r = &r["/body/mesh"];
-        assert_eq!(mesh_r.mesh_vertices, vec![n_nodes; steps]);
+        // Every step, and the reference configuration at sim_time 0 (no step index) first.
+        assert_eq!(mesh_r.mesh_vertices, vec![n_nodes; steps + 1]);
+        assert_eq!(mesh_r.times[0], (-1, 0));
         for n in 0..n_nodes {
             let p = mesh_r.last_vertices[n];
             assert!((f64::from(p[0]) - (x1[n] + u1[n])).abs() < 1e-5);
@@ -437,7 +439,7 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
         assert_eq!(r["/branch/hub_torque"].scalars.len(), 5);
         assert!(r["/branch/table"].static_rows >= 1);
         assert_eq!(r["/steady/mesh"].mesh_vertices, vec![mesh.n_nodes()]);
-        assert_eq!(r["/body/mesh"].mesh_vertices.len(), recorded.len());
+        assert_eq!(r["/body/mesh"].mesh_vertices.len(), recorded.len() + 1);
         let k = &r["/energy/kinetic"];
         assert_eq!(
             k.times.iter().map(|x| x.0 as u64).collect::<Vec<_>>(),

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Read every output of two scenes back with independent readers (Python mcap + protobuf,
-# meshio, and `rerun rrd verify` when a run.rrd is written) and check steps, times and the
+# meshio, and `rerun rrd verify` when a run.rrd is written; zlib-compressed VTU against the
+# uncompressed files, tools/check_vtu_zlib.py) and check steps, times and the
 # static friction traction. Installs the readers into a venv ($TREAD_READER_VENV, default
 # target/reader-venv). Without network access the check is SKIPPED (exit 0, message says so).
 # Usage: tools/read_outputs.sh [path/to/tread]
@@ -23,6 +24,11 @@ RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$
     --set mesh.n_r=3 --set mesh.n_theta=48 --set "$SINKS"
 RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/free_rolling.toml --out "$OUT/free_rolling" --set "$SINKS"
 "$VENV/bin/python" tools/read_outputs.py "$OUT/indentation_friction" "$OUT/free_rolling"
+# zlib-compressed VTU: the same scene with `output.vtu_compression = "zlib"` must give the same
+# arrays (decoded independently, then by meshio, and by VTK when the `vtk` package is there).
+RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$OUT/indentation_friction_zlib" \
+    --set mesh.n_r=3 --set mesh.n_theta=48 --set "$SINKS" --set output.vtu_compression=zlib
+"$VENV/bin/python" tools/check_vtu_zlib.py "$OUT/indentation_friction_zlib" "$OUT/indentation_friction"
 # The .rrd files (only in builds with the `rerun` feature).
 rrds=$(find "$OUT" -name run.rrd)
 if [ -z "$rrds" ]; then

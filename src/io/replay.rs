@@ -4,6 +4,9 @@
 //! * `LOG.rrd`: runs the Rerun viewer (`rerun LOG.rrd`) and waits for it.
 //! * `LOG.mcap`: converts it to a temporary `.rrd` ([`mcap_to_rrd`]) and opens that; with
 //!   `--to FILE.rrd` only converts.
+//! * `LOG.rrd --to FILE.rrd`: rewrites the recording ([`recover_rrd`]): the way to repair the
+//!   `run.rrd` of a killed run, which ends without the footer that `rerun rrd verify` requires
+//!   (and possibly inside a message).
 //!
 //! The viewer is the `rerun` executable on `PATH` (or `$TREAD_RERUN_BIN`); when there is none,
 //! [`ReplayError::NoViewer`] says how to install it. The viewer's server listens on the
@@ -11,7 +14,12 @@
 //! another address (e.g. `0.0.0.0` to accept connections from other machines).
 //!
 //! A converted recording is named after the scene (the `name` of the MCAP's `scene` metadata
-//! record), as the `.rrd` written during a run is.
+//! record), as the `.rrd` written during a run is, and carries the same default layout
+//! ([`crate::io::record::rrd_layout`], with the MCAP's entity paths and the units of its scene):
+//! `/tread/contact_patch` messages become the bar charts `tread/contact_curves/pressure` and
+//! `tread/contact_curves/shear` (t_n, t_T at the points in contact against x1, bars as wide as
+//! each point's share of the patch), and the Newton residual also gets its log10
+//! (`tread/newton/log10_residual`).
 //!
 //! The conversion reads the MCAP with a streaming reader (a truncated file converts up to its
 //! last complete chunk), decodes every protobuf message with the schema embedded in the file
@@ -137,9 +145,18 @@ pub fn replay_bound(
             ))
         }
         ("rrd", Some(to)) => {
-            std::fs::copy(log, to)
-                .map_err(|e| ReplayError::Write(to.to_path_buf(), e.to_string()))?;
-            Ok(format!("copied {} to {}", log.display(), to.display()))
+            let st = recover_rrd(log, to)?;
+            Ok(format!(
+                "rewrote {} messages of {} to {}{}",
+                st.messages,
+                log.display(),
+                to.display(),
+                if st.truncated {
+                    " (the .rrd ended inside a message, as after a killed run: kept every complete message, added the footer)"
+                } else {
+                    ""
+                }
+            ))
         }
         ("mcap", None) => {
             let viewer =
@@ -200,6 +217,71 @@ fn open(viewer: &Path, file: &Path, bind: std::net::IpAddr) -> Result<String, Re
     }
 }
 
+/// Rewrite the `.rrd` `src` into `dst`: every message up to the first one that cannot be decoded
+/// (the end of a file cut short by a killed run), then the footer (the chunk manifest that
+/// `rerun rrd verify` requires and that a killed run never writes). A complete file is copied
+/// message by message. Without the `rerun` feature the file is copied byte for byte.
+#[cfg(feature = "rerun")]
+pub fn recover_rrd(src: &Path, dst: &Path) -> Result<ConvertStats, ReplayError> {
+    use rerun::external::re_log_encoding::DecoderApp;
+    if same_file(src, dst) {
+        return Err(ReplayError::Write(
+            dst.to_path_buf(),
+            "is the file being read; choose another --to".into(),
+        ));
+    }
+    let f = std::fs::File::open(src)
+        .map_err(|e| ReplayError::Read(src.to_path_buf(), e.to_string()))?;
+    let mut st = ConvertStats::default();
+    let mut msgs = Vec::new();
+    for m in DecoderApp::decode_lazy(std::io::BufReader::new(f)) {
+        match m {
+            Ok(m) => msgs.push(m),
+            Err(_) => {
+                st.truncated = true;
+                break;
+            }
+        }
+    }
+    if msgs.is_empty() {
+        return Err(ReplayError::Read(
+            src.to_path_buf(),
+            "not a Rerun recording (no readable message)".into(),
+        ));
+    }
+    let sink = rerun::sink::FileSink::new(dst)
+        .map_err(|e| ReplayError::Write(dst.to_path_buf(), e.to_string()))?;
+    st.messages = msgs.len() as u64;
+    for m in msgs {
+        sink.send(m);
+    }
+    sink.flush_blocking(std::time::Duration::from_secs(600))
+        .map_err(|e| ReplayError::Write(dst.to_path_buf(), e.to_string()))?;
+    // Dropping the sink writes the footer and closes the file.
+    drop(sink);
+    Ok(st)
+}
+
+/// See the `rerun` build's docs: here the file is copied.
+#[cfg(not(feature = "rerun"))]
+pub fn recover_rrd(src: &Path, dst: &Path) -> Result<ConvertStats, ReplayError> {
+    if same_file(src, dst) {
+        return Err(ReplayError::Write(
+            dst.to_path_buf(),
+            "is the file being read; choose another --to".into(),
+        ));
+    }
+    std::fs::copy(src, dst).map_err(|e| ReplayError::Write(dst.to_path_buf(), e.to_string()))?;
+    Ok(ConvertStats::default())
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
 /// Convert an MCAP log to a Rerun `.rrd` (see the module docs).
 #[cfg(not(feature = "rerun"))]
 pub fn mcap_to_rrd(_mcap: &Path, _rrd: &Path) -> Result<ConvertStats, ReplayError> {
@@ -215,6 +297,7 @@ pub fn mcap_to_rrd(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayE
 #[cfg(feature = "rerun")]
 mod convert {
     use super::{ConvertStats, ReplayError};
+    use crate::io::record::rrd_layout;
     use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, Value};
     use std::collections::{BTreeMap, HashMap};
     use std::path::Path;
@@ -232,6 +315,24 @@ mod convert {
         if let Some(name) = super::mcap_scene_name(&bytes) {
             let _ = rec.send_recording_name(name);
         }
+        let scene_toml = mcap_scene_toml(&bytes).unwrap_or_default();
+        let radius = scene_toml
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| t.get("geometry")?.get("ro")?.as_float())
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .unwrap_or(1.0);
+        let units = crate::io::record::rrd::scene_units(&scene_toml);
+        let spec = rrd_layout::LayoutSpec {
+            units,
+            radius,
+            magnification: 1.0,
+            // The MCAP's log time is the step's time or load factor: named as such.
+            time_name: "sim_time".into(),
+            paths: rrd_layout::LayoutPaths::replay(),
+        };
+        rrd_layout::send_layout(&rec, "tread", &spec)
+            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
         let mut st = ConvertStats::default();
         // Metadata records (not part of the message stream).
         if let Ok(reader) = mcap::read::LinearReader::new(&bytes) {
@@ -299,6 +400,7 @@ mod convert {
             match desc.full_name() {
                 "foxglove.SceneUpdate" => scene_update(&rec, &topic, &msg),
                 "foxglove.PointCloud" => point_cloud(&rec, &topic, &msg),
+                "treadcontact.TreadContact" => contact_bars(&rec, &msg),
                 "foxglove.Log" => {
                     if let Some(Value::String(t)) =
                         msg.get_field_by_name("message").map(|v| v.into_owned())
@@ -316,6 +418,12 @@ mod convert {
                             if x.is_finite() {
                                 let _ =
                                     rec.log(format!("{topic}/{name}"), &rerun::Scalars::single(x));
+                                if topic == "tread/newton" && name == "residual" && x > 0.0 {
+                                    let _ = rec.log(
+                                        "tread/newton/log10_residual",
+                                        &rerun::Scalars::single(x.log10()),
+                                    );
+                                }
                             }
                         }
                     }
@@ -326,6 +434,70 @@ mod convert {
             .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
         drop(rec);
         Ok(st)
+    }
+
+    /// The resolved scene TOML of an MCAP log (its `scene` metadata record).
+    fn mcap_scene_toml(bytes: &[u8]) -> Option<String> {
+        let reader = mcap::read::LinearReader::new(bytes).ok()?;
+        for r in reader {
+            match r {
+                Ok(mcap::records::Record::Metadata(m)) if m.name == "scene" => {
+                    return m.metadata.get("toml").cloned();
+                }
+                Ok(_) => {}
+                Err(_) => return None,
+            }
+        }
+        None
+    }
+
+    fn f64_list(m: &DynamicMessage, name: &str) -> Vec<f64> {
+        match m.get_field_by_name(name).map(|v| v.into_owned()) {
+            Some(Value::List(l)) => l.iter().map(|v| number(v).unwrap_or(f64::NAN)).collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// t_n and t_T at the points in contact (t_n > 0) as bar charts against x1.
+    fn contact_bars(rec: &rerun::RecordingStream, msg: &DynamicMessage) {
+        let (x1, tn, tt) = (
+            f64_list(msg, "x1"),
+            f64_list(msg, "t_n"),
+            f64_list(msg, "t_t"),
+        );
+        let mut pts: Vec<(f64, f64, f64)> = (0..x1.len().min(tn.len()).min(tt.len()))
+            .filter(|&k| tn[k] > 0.0 && x1[k].is_finite() && tt[k].is_finite())
+            .map(|k| (x1[k], tn[k], tt[k]))
+            .collect();
+        if pts.is_empty() {
+            return;
+        }
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let x: Vec<f64> = pts.iter().map(|p| p.0).collect();
+        let w: Vec<f32> = crate::io::record::rrd::bar_widths(&x)
+            .into_iter()
+            .map(|w| w as f32)
+            .collect();
+        for (entity, vals, colour) in [
+            (
+                "tread/contact_curves/pressure",
+                pts.iter().map(|p| p.1).collect::<Vec<_>>(),
+                rerun::Color::from_rgb(200, 60, 40),
+            ),
+            (
+                "tread/contact_curves/shear",
+                pts.iter().map(|p| p.2).collect(),
+                rerun::Color::from_rgb(40, 90, 200),
+            ),
+        ] {
+            let _ = rec.log(
+                entity,
+                &rerun::BarChart::new(vals)
+                    .with_abscissa(x.clone())
+                    .with_widths(w.clone())
+                    .with_color(colour),
+            );
+        }
     }
 
     fn descriptor(ch: &mcap::Channel) -> Option<MessageDescriptor> {

@@ -99,6 +99,8 @@ pub mod png;
 pub mod progress;
 #[cfg(feature = "rerun")]
 pub mod rrd;
+#[cfg(feature = "rerun")]
+pub mod rrd_layout;
 pub mod sta;
 pub mod vtu;
 

@@ -31,9 +31,16 @@
 //! little-endian data in one `<AppendedData encoding="raw">` block, each array preceded by its
 //! byte count as a UInt64 (`header_type="UInt64"`); `ascii` writes the same arrays as text, each
 //! number the shortest text that reads back exactly (`NaN`, `inf` for non-finite values).
+//!
+//! Compression (`[output] vtu_compression`, binary only): `none` (default) or `zlib`. With
+//! `zlib` the file declares `compressor="vtkZLibDataCompressor"` and each appended array is
+//! split into blocks of [`ZLIB_BLOCK`] bytes (the last one shorter), each compressed as a zlib
+//! stream, after the VTK header of UInt64 numbers: number of blocks, block size, size of the last
+//! block when it is partial (0 when full), then the compressed size of every block. ParaView,
+//! VTK and meshio read it.
 
 use super::{RecordError, Recorder, RunEnd, SteadyReached, StepInfo, StepView};
-pub use crate::io::scene::VtuFormat;
+pub use crate::io::scene::{VtuCompression, VtuFormat};
 use crate::mesh::Mesh;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -46,7 +53,11 @@ pub struct VtuSink {
     contact_written: Vec<(f64, String)>,
     error: Option<RecordError>,
     format: VtuFormat,
+    compression: VtuCompression,
 }
+
+/// Uncompressed size of a zlib block of the appended data (VTK's default).
+pub const ZLIB_BLOCK: usize = 32 * 1024;
 
 impl VtuSink {
     /// Writes into `dir` (`fields.pvd`, `fields/`, `steady.vtu`), binary.
@@ -62,6 +73,20 @@ impl VtuSink {
             contact_written: Vec::new(),
             error: None,
             format,
+            compression: VtuCompression::None,
+        }
+    }
+
+    /// Compress the binary data (no effect on the ascii format).
+    pub fn with_compression(mut self, compression: VtuCompression) -> Self {
+        self.compression = compression;
+        self
+    }
+
+    fn encoding(&self) -> Encoding {
+        Encoding {
+            format: self.format,
+            compression: self.compression,
         }
     }
 
@@ -73,11 +98,16 @@ impl VtuSink {
         std::fs::create_dir_all(&sub).map_err(|e| RecordError::new("vtu", &sub, e))?;
         let name = format!("fields/step_{:06}.vtu", info.index);
         let path = self.dir.join(&name);
-        write_atomic(&path, &vtu_bytes(mesh, view, info.time, self.format))?;
+        write_atomic(
+            &path,
+            &grid_bytes(&grid(mesh, view), info.time, self.encoding()),
+        )?;
         self.written.push((info.time, name));
         let pvd = self.dir.join("fields.pvd");
         write_atomic(&pvd, pvd_text(&self.written).as_bytes())?;
-        if let Some(bytes) = contact_vtu_bytes(view.contact, info.time, self.format) {
+        if let Some(bytes) =
+            contact_grid(view.contact).map(|g| grid_bytes(&g, info.time, self.encoding()))
+        {
             let sub = self.dir.join("contact");
             std::fs::create_dir_all(&sub).map_err(|e| RecordError::new("vtu", &sub, e))?;
             let name = format!("contact/step_{:06}.vtu", info.index);
@@ -297,9 +327,26 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
     }
 }
 
-/// The bytes of one `.vtu` file in the given encoding.
-pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: VtuFormat) -> Vec<u8> {
-    grid_bytes(&grid(mesh, view), time, format)
+/// How the arrays of a `.vtu` are written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Encoding {
+    pub format: VtuFormat,
+    /// Only for the binary format.
+    pub compression: VtuCompression,
+}
+
+impl From<VtuFormat> for Encoding {
+    fn from(format: VtuFormat) -> Self {
+        Encoding {
+            format,
+            compression: VtuCompression::None,
+        }
+    }
+}
+
+/// The bytes of one `.vtu` file in the given encoding (a [`VtuFormat`] or an [`Encoding`]).
+pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: impl Into<Encoding>) -> Vec<u8> {
+    grid_bytes(&grid(mesh, view), time, format.into())
 }
 
 /// The contact surface of a step as a closed chain of line segments through the contact sample points (in
@@ -311,8 +358,12 @@ pub fn vtu_bytes(mesh: &Mesh, view: &StepView, time: f64, format: VtuFormat) -> 
 pub fn contact_vtu_bytes(
     samples: &[crate::contact::ContactSample],
     time: f64,
-    format: VtuFormat,
+    format: impl Into<Encoding>,
 ) -> Option<Vec<u8>> {
+    contact_grid(samples).map(|g| grid_bytes(&g, time, format.into()))
+}
+
+fn contact_grid(samples: &[crate::contact::ContactSample]) -> Option<Grid> {
     if samples.is_empty() {
         return None;
     }
@@ -349,11 +400,42 @@ pub fn contact_vtu_bytes(
             Array::new("types", 1, Values::U8(vec![3; samples.len()])),
         ],
     };
-    Some(grid_bytes(&g, time, format))
+    Some(g)
 }
 
-fn grid_bytes(g: &Grid, time: f64, format: VtuFormat) -> Vec<u8> {
-    let binary = format == VtuFormat::Binary;
+/// The appended bytes of one array compressed in zlib blocks (see the module docs), with the
+/// UInt64 header.
+fn zlib_blocks(raw: &[u8]) -> Vec<u8> {
+    use std::io::Write as _;
+    let blocks: Vec<Vec<u8>> = raw
+        .chunks(ZLIB_BLOCK)
+        .map(|b| {
+            let mut z = flate2::write::ZlibEncoder::new(
+                Vec::with_capacity(b.len() / 2 + 64),
+                flate2::Compression::default(),
+            );
+            // Writing into a Vec cannot fail.
+            let _ = z.write_all(b);
+            z.finish().unwrap_or_default()
+        })
+        .collect();
+    let mut out =
+        Vec::with_capacity(8 * (3 + blocks.len()) + blocks.iter().map(Vec::len).sum::<usize>());
+    out.extend_from_slice(&(blocks.len() as u64).to_le_bytes());
+    out.extend_from_slice(&(ZLIB_BLOCK as u64).to_le_bytes());
+    out.extend_from_slice(&((raw.len() % ZLIB_BLOCK) as u64).to_le_bytes());
+    for b in &blocks {
+        out.extend_from_slice(&(b.len() as u64).to_le_bytes());
+    }
+    for b in &blocks {
+        out.extend_from_slice(b);
+    }
+    out
+}
+
+fn grid_bytes(g: &Grid, time: f64, enc: Encoding) -> Vec<u8> {
+    let binary = enc.format == VtuFormat::Binary;
+    let zlib = binary && enc.compression == VtuCompression::Zlib;
     let mut s = String::with_capacity(if binary { 4096 } else { 200 * g.n_points });
     let mut blob: Vec<u8> = Vec::new();
     // One array: inline text, or a reference into the appended block.
@@ -370,8 +452,14 @@ fn grid_bytes(g: &Grid, time: f64, format: VtuFormat) -> Vec<u8> {
         );
         if binary {
             let _ = writeln!(s, "{head} format=\"appended\" offset=\"{}\"/>", blob.len());
-            blob.extend_from_slice(&(a.values.n_bytes() as u64).to_le_bytes());
-            a.values.push_le(&mut blob);
+            if zlib {
+                let mut raw = Vec::with_capacity(a.values.n_bytes());
+                a.values.push_le(&mut raw);
+                blob.extend_from_slice(&zlib_blocks(&raw));
+            } else {
+                blob.extend_from_slice(&(a.values.n_bytes() as u64).to_le_bytes());
+                a.values.push_le(&mut blob);
+            }
         } else {
             let _ = writeln!(s, "{head} format=\"ascii\">");
             a.values.push_text(s, a.components.max(1));
@@ -379,9 +467,11 @@ fn grid_bytes(g: &Grid, time: f64, format: VtuFormat) -> Vec<u8> {
         }
     };
     s.push_str("<?xml version=\"1.0\"?>\n");
-    s.push_str(
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-    );
+    s.push_str(if zlib {
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">\n"
+    } else {
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+    });
     s.push_str("<UnstructuredGrid>\n<FieldData>\n");
     let _ = writeln!(
         s,
@@ -455,7 +545,8 @@ impl Recorder for VtuSink {
     fn steady_reached(&mut self, s: &SteadyReached, view: &StepView) {
         if let (Some(mesh), None) = (view.mesh, &self.error) {
             let path = self.dir.join("steady.vtu");
-            if let Err(e) = write_atomic(&path, &vtu_bytes(mesh, view, s.time, self.format)) {
+            let bytes = vtu_bytes(mesh, view, s.time, self.encoding());
+            if let Err(e) = write_atomic(&path, &bytes) {
                 self.error = Some(e);
             }
         }

@@ -46,7 +46,9 @@
 //!             mass = "consistent" | "lumped", max_steps = 200000  (transient)
 //! [solver]    tolerance = 1e-10, max_iterations = 25, load_steps = 4, max_cutbacks = 10,
 //!             linear = "auto", threads = 0, line_search = true
-//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1, vtu_format = "binary" | "ascii"
+//! [output]    sinks = ["summary", "csv", "vtu", "png"], every = 1, vtu_format = "binary" | "ascii",
+//!             vtu_compression = "none" | "zlib" (binary only),
+//!             displacement_scale = 1 (magnification of the body in the Rerun view)
 //!             (sinks from "summary", "csv", "vtu", "mcap", "rerun", "png")
 //! ```
 //!

@@ -1,4 +1,5 @@
-//! `[output]`: output sinks, decimation and the VTU encoding.
+//! `[output]`: output sinks, decimation, the VTU encoding and compression, and the Rerun
+//! view's displacement magnification.
 
 use super::issue::{issue, Issue};
 use serde::{Deserialize, Serialize};
@@ -12,6 +13,18 @@ keyword_enum! {
         Binary => "binary",
         /// Text (larger and slower; readable in an editor).
         Ascii => "ascii",
+    }
+}
+
+keyword_enum! {
+    /// Compression of the binary `.vtu` data (`[output] vtu_compression`).
+    #[derive(Default)]
+    VtuCompression, "VTU compression" {
+        #[default]
+        /// Raw bytes.
+        None => "none",
+        /// zlib (deflate) blocks of 32 KiB (`compressor="vtkZLibDataCompressor"`).
+        Zlib => "zlib",
     }
 }
 
@@ -43,6 +56,10 @@ pub struct OutputSpec {
     pub every: usize,
     /// Encoding of the `.vtu` files: `binary` (default) or `ascii`.
     pub vtu_format: VtuFormat,
+    /// Displacement magnification of the body in the Rerun recording's view (> 0; default 1).
+    pub displacement_scale: f64,
+    /// Compression of the binary `.vtu` data: `none` (default) or `zlib`.
+    pub vtu_compression: VtuCompression,
 }
 
 /// Default of `[output] sinks`: the light-weight outputs (MCAP and Rerun logs are opt-in).
@@ -54,6 +71,8 @@ impl Default for OutputSpec {
             sinks: DEFAULT_SINKS.to_vec(),
             every: 1,
             vtu_format: VtuFormat::Binary,
+            displacement_scale: 1.0,
+            vtu_compression: VtuCompression::None,
         }
     }
 }
@@ -68,6 +87,18 @@ impl OutputSpec {
 pub(super) fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
     if s.every < 1 {
         out.push(issue("output.every", "must be >= 1, got 0"));
+    }
+    if !(s.displacement_scale.is_finite() && s.displacement_scale > 0.0) {
+        out.push(issue(
+            "output.displacement_scale",
+            format!("must be a finite number > 0, got {}", s.displacement_scale),
+        ));
+    }
+    if s.vtu_compression != VtuCompression::None && s.vtu_format == VtuFormat::Ascii {
+        out.push(issue(
+            "output.vtu_compression",
+            "applies to vtu_format = \"binary\" only (the ascii format is not compressed)",
+        ));
     }
     for (i, k) in s.sinks.iter().enumerate() {
         if s.sinks[..i].contains(k) {

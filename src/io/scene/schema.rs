@@ -20,7 +20,7 @@ use super::issue::quoted_list;
 use super::material::{Formulation, MaterialModel, MaterialSpec};
 use super::mesh::MeshSpec;
 use super::motion::{Control, Motion};
-use super::output::{OutputSpec, Sink, VtuFormat};
+use super::output::{OutputSpec, Sink, VtuCompression, VtuFormat};
 use super::solver::{LinearChoice, SolverSpec};
 use super::steady::{ContinuationParameter, ContinuationSpec};
 use super::stick_slip::StickSlipSpec;
@@ -307,6 +307,8 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("every", Kind::UInt, NONE,
                 "steps between recorded fields, >= 1 (the final step is always recorded)"),
             opt("vtu_format", Kind::Keyword(VtuFormat::NAMES), NONE, "encoding of the .vtu files"),
+            opt("vtu_compression", Kind::Keyword(VtuCompression::NAMES), NONE, "compression of the binary .vtu data (binary only)"),
+            opt("displacement_scale", Kind::Float, NONE, "magnification of the displacement in the Rerun view of the body (> 0; the numbers are unchanged)"),
         ],
     },
 ];
