@@ -152,10 +152,12 @@ enum LoadError {
     Scene(tread::io::scene::SceneErrors),
 }
 
-/// Load with `--mode M` (an override of `analysis.mode`). The problems the switch causes —
-/// sections the scene has for its own mode, sections the new mode needs — are labelled
-/// `(--mode M)` instead of `(--set)` and headed by one line saying what happened; problems of
-/// the scene or of `--set` values keep their labels.
+/// Load with `--mode M` (an override of `analysis.mode`). Sections and keys that the scene has
+/// for its own mode and that mode M does not use (e.g. `[road]`, `[contact]`, `[friction]`,
+/// `[time]` and `motion.ramp` of a rolling scene run with `--mode spinning`) are left out, and
+/// a line says which. Other problems the switch causes (sections the new mode needs) are
+/// labelled `(--mode M)` instead of `(--set)` and headed by one line saying what happened;
+/// problems of the scene or of `--set` values keep their labels.
 fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Scene, String> {
     let Some(m) = mode else {
         return load(path, set);
@@ -172,6 +174,23 @@ fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Sce
         Err(LoadError::Scene(e)) => (None, e.0.iter().map(|e| e.key.clone()).collect()),
         Err(LoadError::Read(_)) => (None, Vec::new()),
     };
+    // Sections and keys the scene has for its own mode and the new one does not use are left
+    // out (and said so), as long as that is all that stands in the way.
+    let caused_keys: Vec<String> = errs
+        .0
+        .iter()
+        .filter(|e| !base.contains(&e.key))
+        .map(|e| e.key.clone())
+        .collect();
+    if !caused_keys.is_empty() && caused_keys.len() == errs.0.len() {
+        if let Some((scene, dropped)) = strip_for_mode(path, &all, &caused_keys) {
+            eprintln!(
+                "--mode {m}: left out what analysis mode \"{m}\" does not use: {}",
+                dropped.join(", ")
+            );
+            return Ok(scene);
+        }
+    }
     let mut caused = 0;
     for e in &mut errs.0 {
         if !base.contains(&e.key) {
@@ -199,6 +218,52 @@ fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Sce
         String::new()
     };
     Err(format!("{head}{errs}"))
+}
+
+/// The scene at `path` with the sections and keys named in `keys` removed (a key `s.k` whose
+/// section the mode does not use at all, such as `friction.law` without contact, removes
+/// its section), loaded with `set`; up to three rounds, each removing what the last one
+/// still reported. `None` when that does not give a valid scene.
+fn strip_for_mode(path: &Path, set: &[String], keys: &[String]) -> Option<(Scene, Vec<String>)> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let mut table: toml::Table = toml::from_str(&text).ok()?;
+    let mut dropped: Vec<String> = Vec::new();
+    let mut keys = keys.to_vec();
+    for _ in 0..3 {
+        let mut progress = false;
+        for k in &keys {
+            let (sec, key) = match k.split_once('.') {
+                Some((a, b)) => (a.to_string(), Some(b.to_string())),
+                None => (k.clone(), None),
+            };
+            // Without contact the friction law has nothing to act on: the section goes.
+            let whole = key.is_none() || (sec == "friction" && key.as_deref() == Some("law"));
+            if whole {
+                if table.remove(&sec).is_some() {
+                    dropped.push(format!("[{sec}]"));
+                    progress = true;
+                }
+            } else if let Some(toml::Value::Table(t)) = table.get_mut(&sec) {
+                let key = key.unwrap_or_default();
+                if t.remove(&key).is_some() {
+                    dropped.push(format!("{sec}.{key}"));
+                    progress = true;
+                }
+            }
+        }
+        if !progress {
+            return None;
+        }
+        let stripped = toml::to_string(&table).ok()?;
+        match Scene::from_toml_str(&stripped, &path.display().to_string(), set) {
+            Ok(mut scene) => {
+                scene.resolve_paths(path);
+                return Some((scene, dropped));
+            }
+            Err(e) => keys = e.0.iter().map(|e| e.key.clone()).collect(),
+        }
+    }
+    None
 }
 
 fn load_checked(path: &Path, set: &[String]) -> Result<Scene, LoadError> {

@@ -552,6 +552,41 @@ fn mode_switch_errors_name_the_mode_flag() {
         assert!(!err.contains("(--set)"), "{err}");
         assert!(err.contains("--mode"), "{err}");
     }
+    // A rolling scene run as spinning: the road, contact, friction, time and the spin-up ramp
+    // are left out (and said so), and it runs.
+    let o = tread()
+        .args(["-q", "run"])
+        .arg(scene("oden_hollow_cylinder.toml"))
+        .args([
+            "--mode",
+            "spinning",
+            "--set",
+            "mesh.n_theta=16",
+            "--set",
+            "mesh.n_r=1",
+            "--set",
+            "output.sinks=summary",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    for s in [
+        "left out",
+        "[road]",
+        "[contact]",
+        "[friction]",
+        "[time]",
+        "motion.ramp",
+    ] {
+        assert!(err.contains(s), "{s}: {err}");
+    }
+    let sum: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(sum["mode"], "spinning", "{sum}");
+    assert_eq!(sum["converged"], true, "{sum}");
     // A real --set error is still labelled (--set).
     let o = tread()
         .args(["-q", "run"])
