@@ -303,3 +303,39 @@ fn ring_and_cell_average_velocities_converge_together() {
         assert!(d.0 < 1.5e-3 && d.1 < 1.5e-3, "mesh {k}: {diffs:?}");
     }
 }
+
+/// `[solver] damping_tangent` selects the Newton matrix; `auto` (the default) starts
+/// matrix-free, and without damping there is none to choose.
+#[test]
+fn damping_tangent_scene_key() {
+    let base = ["analysis.mode=\"steady\"", "mesh.n_theta=16", "mesh.n_r=1"];
+    for (value, want) in [
+        (None, Some(SteadyDampingTangent::MatrixFree)),
+        (Some("auto"), Some(SteadyDampingTangent::MatrixFree)),
+        (Some("matrix_free"), Some(SteadyDampingTangent::MatrixFree)),
+        (Some("assembled"), Some(SteadyDampingTangent::Assembled)),
+    ] {
+        let mut set: Vec<String> = base.iter().map(|s| s.to_string()).collect();
+        if let Some(v) = value {
+            set.push(format!("solver.damping_tangent=\"{v}\""));
+        }
+        let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
+        let st = build_steady(&scene(ODEN, "key", &set)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(st.sys.steady_damping_tangent(), want, "{value:?}");
+    }
+    let st = build_steady(&scene(
+        ODEN,
+        "key",
+        &[&base[..], &["time.strain_rate_damping=0"]].concat(),
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(st.sys.steady_damping_tangent(), None);
+    let e = Scene::from_toml_str(
+        ODEN,
+        "key",
+        &["solver.damping_tangent=\"sparse\"".to_string()],
+    )
+    .err()
+    .expect("refused");
+    assert!(e.to_string().contains("damping_tangent"), "{e}");
+}

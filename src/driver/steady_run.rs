@@ -29,7 +29,7 @@ use super::tables;
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
-use crate::io::scene::{ContinuationParameter, Control, Scene, Sink};
+use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
@@ -269,11 +269,12 @@ pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
     };
     sys.enable_steady_viscoelastic()
         .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
-    Ok(SteadyRolling::new(
-        sys,
-        scene.motion.omega,
-        scene.geometry.ro,
-    ))
+    let mut st = SteadyRolling::new(sys, scene.motion.omega, scene.geometry.ro);
+    if scene.solver.damping_tangent == DampingTangentChoice::Assembled {
+        st.sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+    }
+    Ok(st)
 }
 
 /// Solve the steady state at the scene's ω and v0 (pressing stage). `report` collects the
@@ -323,6 +324,7 @@ pub fn solve_steady(
     if let Err(e) = &first {
         if !matches!(e, SolveError::Interrupted { .. })
             && st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree)
+            && scene.solver.damping_tangent == DampingTangentChoice::Auto
         {
             // The matrix-free damping tangent is the fast path; the assembled one is the
             // robust one. Try it before any homotopy.
@@ -598,8 +600,10 @@ pub fn run_with_dump(
         let sweep = st.param == SteadyParameter::Creep;
         // Continuation passes limit points and critical speeds, where the matrix-free damping
         // tangent's GMRES iteration can stall: follow branches with the assembled one.
-        st.sys
-            .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+        if scene.solver.damping_tangent != DampingTangentChoice::MatrixFree {
+            st.sys
+                .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+        }
         let res = if sweep {
             let rec: &mut dyn Recorder = &mut recorders;
             creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {

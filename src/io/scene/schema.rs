@@ -21,7 +21,7 @@ use super::material::{Formulation, MaterialModel, MaterialSpec};
 use super::mesh::MeshSpec;
 use super::motion::{Control, Motion};
 use super::output::{OutputSpec, Sink, VtuCompression, VtuFormat};
-use super::solver::{LinearChoice, SolverSpec};
+use super::solver::{DampingTangentChoice, LinearChoice, SolverSpec};
 use super::steady::{ContinuationParameter, ContinuationSpec};
 use super::stick_slip::StickSlipSpec;
 use super::time::{IntegratorName, MassKind, TimeSpec};
@@ -295,6 +295,8 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("linear", Kind::Keyword(LinearChoice::NAMES), NONE, "sparse linear solver"),
             opt("threads", Kind::UInt, NONE, "worker threads; 0 = all cores"),
             opt("line_search", Kind::Bool, NONE, "backtracking line search on the residual norm"),
+            opt("damping_tangent", Kind::Keyword(DampingTangentChoice::NAMES), NONE,
+                "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve, assembled for continuation)"),
         ],
     },
     SectionSchema {

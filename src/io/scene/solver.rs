@@ -17,6 +17,22 @@ keyword_enum! {
     }
 }
 
+keyword_enum! {
+    /// Newton matrix of the steady mode's strain-rate damping (`[solver] damping_tangent`).
+    #[derive(Default)]
+    DampingTangentChoice, "damping tangent" {
+        #[default]
+        /// Matrix-free for a single steady solve (falling back to assembled if its GMRES
+        /// iteration stalls), assembled for continuation.
+        Auto => "auto",
+        /// The cells' own sparsity in the matrix, the coupling beyond the cells applied
+        /// matrix-free (GMRES): the memory and fill of the undamped problem.
+        MatrixFree => "matrix_free",
+        /// The whole coupling assembled (wider sparsity, more LU fill): a direct solve.
+        Assembled => "assembled",
+    }
+}
+
 /// `[solver]`: Newton with load stepping (in ω² for `spinning`; in the road penetration or the
 /// road load for `static`) and cutbacks. In `transient`: the Newton iterations of each implicit
 /// time step, a failed step being retried with half the step (`load_steps` unused). Not used by
@@ -37,6 +53,8 @@ pub struct SolverSpec {
     pub threads: usize,
     /// Backtracking line search on the residual norm.
     pub line_search: bool,
+    /// Newton matrix of the steady mode's strain-rate damping.
+    pub damping_tangent: DampingTangentChoice,
 }
 
 impl Default for SolverSpec {
@@ -49,6 +67,7 @@ impl Default for SolverSpec {
             linear: LinearChoice::Auto,
             threads: 0,
             line_search: true,
+            damping_tangent: DampingTangentChoice::Auto,
         }
     }
 }
