@@ -335,7 +335,6 @@ fn damping_tangent_scene_key() {
         "key",
         &["solver.damping_tangent=\"sparse\"".to_string()],
     )
-    .err()
-    .expect("refused");
+    .expect_err("refused");
     assert!(e.to_string().contains("damping_tangent"), "{e}");
 }
