@@ -479,59 +479,159 @@ fn run_steady(set: &[&str], tag: &str) -> (serde_json::Value, bool) {
 }
 
 #[test]
-fn stiff_bulk_modulus_and_small_eps_are_recovered_by_homotopies() {
-    // κ/G = 1e6 (compressible Mooney–Rivlin) and ε = 1e-5 v0 near free rolling: the direct
-    // press fails; a homotopy from κ = 100 G (resp. ε = 1e-3 v0) down to the scene's value
-    // reaches a state that solves the scene's own equations.
-    for (set, strategy) in [
-        (
-            // With the non-smooth damping l_n = 0 (the scene's smooth l_n = 1 law lets the
-            // direct press converge at this κ).
-            vec![
-                "analysis.mode=\"steady\"",
-                "material.kappa=2e8",
-                "contact.b_n=5",
-                "contact.l_n=0",
-            ],
-            "kappa_homotopy",
-        ),
-        (
-            vec![
-                "analysis.mode=\"steady\"",
-                "road.v0=21",
-                "friction.eps=2.1e-4",
-            ],
-            "eps_homotopy",
-        ),
-    ] {
-        let sc = scene(ODEN, &set);
-        assert!(
-            !direct_press_converges(&sc),
-            "{set:?}: the direct press converged, nothing to recover"
-        );
-        let (sc, st) = steady_solution(ODEN, &set);
-        let r = st.recovery.as_ref().expect("a recovery report");
-        println!("{set:?}: {}", r.message);
-        assert_eq!(r.strategy.map(|s| s.to_string()).as_deref(), Some(strategy));
-        // Relative to the contact force scale (capped by G·DISP): Newton's test is relative to
-        // the element force flux, which the κ-weighted volumetric forces dominate at κ/G = 1e5
-        // (measured 6.9e-8 there).
-        let res = scene_residual(&sc, &st);
-        assert!(res < 1e-6, "{set:?}: residual {res:e}");
-        // The hub load has the magnitude of the benign scene's (Fy = −98.5 lbf/in at
-        // κ/G = 100; a stiffer κ raises it: −104.1 at 1e3, −111.7 at 1e5, −118.2 at 1e6).
-        let fy = st.sys.hub_reaction().0[1];
-        assert!((-125.0..-80.0).contains(&fy), "{set:?}: Fy = {fy}");
-        // Logged in summary.json (solver.recovery) with the strategy and its steps.
-        let tag = strategy.to_string();
-        let (summary, ok) = run_steady(&set, &tag);
-        assert!(ok && summary["converged"] == true);
-        let rec = &summary["solver"]["recovery"];
-        assert_eq!(rec["strategy"], strategy, "{rec}");
-        let legs = rec["attempts"][0]["legs"].as_array().unwrap();
-        assert!(legs[0]["steps"].as_u64().unwrap() >= 2, "{rec}");
-        assert!(rec["message"].as_str().unwrap().contains(strategy));
-    }
+fn stiff_bulk_modulus_is_recovered_by_the_kappa_homotopy() {
+    // κ/G = 1e6 (compressible Mooney–Rivlin) with the non-smooth damping l_n = 0 (the scene's
+    // smooth l_n = 1 law lets the direct press converge at this κ): the direct press fails; a
+    // homotopy from κ = 100 G down to the scene's value reaches a state that solves the scene's
+    // own equations.
+    let set = [
+        "analysis.mode=\"steady\"",
+        "material.kappa=2e8",
+        "contact.b_n=5",
+        "contact.l_n=0",
+    ];
+    let strategy = "kappa_homotopy";
+    let sc = scene(ODEN, &set);
+    assert!(
+        !direct_press_converges(&sc),
+        "{set:?}: the direct press converged, nothing to recover"
+    );
+    let (sc, st) = steady_solution(ODEN, &set);
+    let r = st.recovery.as_ref().expect("a recovery report");
+    println!("{set:?}: {}", r.message);
+    assert_eq!(r.strategy.map(|s| s.to_string()).as_deref(), Some(strategy));
+    // Relative to the contact force scale (capped by G·DISP): Newton's test is relative to
+    // the element force flux, which the κ-weighted volumetric forces dominate at κ/G = 1e5
+    // (measured 6.9e-8 there).
+    let res = scene_residual(&sc, &st);
+    assert!(res < 1e-6, "{set:?}: residual {res:e}");
+    // The hub load has the magnitude of the benign scene's (Fy = −98.5 lbf/in at κ/G = 100; a
+    // stiffer κ raises it: −104.1 at 1e3, −111.7 at 1e5, −118.2 at 1e6).
+    let fy = st.sys.hub_reaction().0[1];
+    assert!((-125.0..-80.0).contains(&fy), "{set:?}: Fy = {fy}");
+    // Logged in summary.json (solver.recovery) with the strategy and its steps.
+    let (summary, ok) = run_steady(&set, strategy);
+    assert!(ok && summary["converged"] == true);
+    let rec = &summary["solver"]["recovery"];
+    assert_eq!(rec["strategy"], strategy, "{rec}");
+    let legs = rec["attempts"][0]["legs"].as_array().unwrap();
+    assert!(legs[0]["steps"].as_u64().unwrap() >= 2, "{rec}");
+    assert!(rec["message"].as_str().unwrap().contains(strategy));
+}
+
+#[test]
+fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() {
+    use tread::driver::steady_recovery::{recover, Strategy};
+    use tread::driver::system::Loading;
+    // ε = 1e-5 v0 near free rolling.
+    let set = [
+        "analysis.mode=\"steady\"",
+        "road.v0=21",
+        "friction.eps=2.1e-4",
+    ];
+    let sc = scene(ODEN, &set);
+    // 1. The recovery's ε homotopy (from ε = 1e-3 v_ref), run from the undeformed state as
+    //    after a failed press: its first applicable strategy.
+    let mut st = steady_run::build_steady(&sc).unwrap();
+    let x_init = st.sys.x.clone();
+    let (nopt, sopt) = tread::app::solver_options(&sc, false);
+    let kind = tread::app::linear_kind(&sc, &st.sys);
+    let loading = Loading::Indent {
+        h_touch: sc.geometry.ro,
+        disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
+    };
+    let r = recover(
+        &mut st,
+        loading,
+        kind,
+        &nopt,
+        &sopt,
+        &x_init,
+        &tread::solver::SolveError::InadmissibleStart,
+        &mut Default::default(),
+    )
+    .unwrap();
+    println!("{}", r.message);
+    assert_eq!(r.strategy, Some(Strategy::EpsHomotopy));
+    assert!(r.attempts[0].legs[0].steps >= 2, "{}", r.message);
+    let res = scene_residual(&sc, &st);
+    assert!(res < 1e-6, "recovery: residual {res:e}");
+    let fy = st.sys.hub_reaction().0[1];
+    assert!((-125.0..-80.0).contains(&fy), "recovery: Fy = {fy}");
+    // 2. The run itself starts with the ε continuation (ε < 1e-2 v_ref) and needs no
+    //    recovery; it lands on the same solution.
+    let (_, cont) = steady_solution(ODEN, &set);
+    assert!(cont.recovery.is_none());
+    let a = cont.eps_continuation.as_ref().expect("an eps continuation");
+    assert!(a.succeeded && a.legs[0].steps >= 2, "{a:?}");
+    let res = scene_residual(&sc, &cont);
+    assert!(res < 1e-6, "continuation: residual {res:e}");
+    let (f1, m1) = st.sys.hub_reaction();
+    let (f2, m2) = cont.sys.hub_reaction();
+    let df = (f1 - f2).norm() / f1.norm();
+    let dm = (m1 - m2).abs() / (f1.norm() * 2.0);
+    println!(
+        "ε continuation vs ε homotopy recovery: |dF|/|F| = {df:.2e}, |dM|/(|F| Ro) = {dm:.2e}"
+    );
+    assert!(df < 1e-6 && dm < 1e-6, "{df:e} {dm:e}");
+    let (summary, ok) = run_steady(&set, "eps_continuation");
+    assert!(ok && summary["converged"] == true);
+    assert!(summary["solver"]["recovery"].is_null());
+    let e = &summary["solver"]["eps_continuation"];
+    assert_eq!(e["succeeded"], true, "{e}");
+    assert_eq!(e["legs"][0]["to"].as_f64(), Some(2.1e-4), "{e}");
+    assert!(e["legs"][0]["from"].as_f64().unwrap() > 0.2, "{e}");
+}
+
+#[test]
+fn eps_continuation_lands_on_the_direct_solution() {
+    use tread::driver::steady::press;
+    use tread::driver::system::Loading;
+    // ε = 5e-3 v0 (below the continuation threshold 1e-2 v_ref, but large enough for the
+    // direct press to converge): the continuation from ε_c = 1e-2 v_ref and the direct press
+    // must give the same steady state.
+    let set = [
+        "analysis.mode=\"steady\"",
+        "road.v0=21",
+        "friction.eps=0.105",
+    ];
+    let (sc, cont) = steady_solution(ODEN, &set);
+    let a = cont.eps_continuation.as_ref().expect("an eps continuation");
+    assert!(a.succeeded, "{a:?}");
+    let mut direct = steady_run::build_steady(&sc).unwrap();
+    let (nopt, sopt) = tread::app::solver_options(&sc, false);
+    let kind = tread::app::linear_kind(&sc, &direct.sys);
+    let loading = Loading::Indent {
+        h_touch: sc.geometry.ro,
+        disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
+    };
+    press(
+        &mut direct,
+        loading,
+        kind,
+        nopt,
+        &sopt,
+        &mut Default::default(),
+        &mut (),
+    )
+    .expect("the direct press converges at this ε");
+    let umax = direct.sys.x.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let du = direct
+        .sys
+        .x
+        .iter()
+        .zip(&cont.sys.x)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let (f1, m1) = direct.sys.hub_reaction();
+    let (f2, m2) = cont.sys.hub_reaction();
+    let df = (f1 - f2).norm() / f1.norm();
+    let dm = (m1 - m2).abs() / (f1.norm() * 2.0);
+    println!(
+        "continuation vs direct: max |du|/max |u| = {:.2e}, |dF|/|F| = {df:.2e}, |dM|/(|F| Ro) = {dm:.2e}",
+        du / umax
+    );
+    assert!(du <= 1e-6 * umax && df <= 1e-6 && dm <= 1e-6);
 }
 
 #[test]

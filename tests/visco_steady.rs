@@ -143,6 +143,9 @@ fn newton_converges_quadratically_with_ring_history() {
         tol: 1e-12,
         max_iterations: 12,
         line_search: false,
+        // The exact Newton step: GMRES to a tight relative residual at every iteration (the
+        // default forcing term is loose far from the solution, an inexact Newton method).
+        krylov_eta_max: 1e-8,
         ..NewtonOptions::default()
     };
     let mut newton = Newton::new(&st, LinearKind::Lu, opts.clone()).unwrap();

@@ -88,6 +88,10 @@ pub struct SteadyRolling {
     pub damping_fallback: Option<String>,
     /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
     pub recovery: Option<Recovery>,
+    /// Set when the scene's small friction regularisation was reached by the ε continuation
+    /// of [`super::steady_recovery::continue_in_eps`] (also when it failed and the direct
+    /// press-in was tried instead).
+    pub eps_continuation: Option<super::steady_report::Attempt>,
     /// Free-rolling road speed at the current ω (zero hub torque), once solved for
     /// ([`solve_torque`] with target 0); the reference of the creep. NaN until then.
     pub v0_free: f64,
@@ -103,6 +107,7 @@ impl SteadyRolling {
             v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
             ro,
             recovery: None,
+            eps_continuation: None,
             v0_free: f64::NAN,
             damping_fallback: None,
         };

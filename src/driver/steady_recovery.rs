@@ -34,6 +34,12 @@
 //! tolerance: it is the same solution a successful direct solve would give (when the branch
 //! is unique there).
 //!
+//! The ε leg is also used before any failure: a scene whose ε is below
+//! [`EPS_CONTINUATION_OVER_V`] · v_ref is pressed in at that ε and walked down to its own
+//! ([`continue_in_eps`], `summary.json`: `solver.eps_continuation`; `[solver] eps_continuation
+//! = false` turns it off). Only if that fails does the direct press-in, and then this recovery,
+//! follow.
+//!
 //! An attempt that fails restores the scene's parameters; when every attempt fails the state
 //! is put back where the direct solve left it and the direct solve's error stands. What
 //! happened is returned as a [`Recovery`] (the steady driver writes it to `summary.json` as
@@ -56,6 +62,9 @@ use std::time::Instant;
 pub const KAPPA_BENIGN_OVER_G: f64 = 100.0;
 /// ε_b / v_ref: the regularisation the ε-homotopy starts from.
 pub const EPS_BENIGN_OVER_V: f64 = 1e-3;
+/// ε_c / v_ref: a scene whose friction regularisation ε is below ε_c is not pressed in at its
+/// ε but at ε_c, and ε is then walked down to the scene's value ([`continue_in_eps`]).
+pub const EPS_CONTINUATION_OVER_V: f64 = 1e-2;
 /// Initial homotopy step Δs of a leg.
 const DS0: f64 = 0.25;
 /// Smallest Δs before a leg gives up.
@@ -289,6 +298,75 @@ pub fn recover(
     rec.wall_time_s = t0.elapsed().as_secs_f64();
     rec.message = rec.describe();
     Ok(rec)
+}
+
+/// The ε continuation a scene's steady solve starts with, if it needs one: from
+/// ε_c = [`EPS_CONTINUATION_OVER_V`] · v_ref down to the scene's ε, geometric steps.
+///
+/// Why: in the stick zone the regularised law t_T = −μ t_n tanh(w/ε) turns the slip w into a
+/// stiff function of the traction (∂t_T/∂w ∝ 1/ε), and Newton converges only from slips
+/// within a few ε of the solution. The press-in starts from the undeformed state, where the
+/// slip of a rolling body is of the order of the rolling speed, so at ε = 1e-4 v0 it needs
+/// hundreds of line-searched iterations and cut-backs. Along a geometric path in ε the stick
+/// zone's slip shrinks with ε, each step starts a few ε_k from its solution, and a step takes a
+/// few quadratic iterations (the secant predictor extrapolates the slip profile).
+pub fn eps_continuation_leg(t: &Targets) -> Option<Leg> {
+    let v_ref = t.v0.abs().max(t.omega.abs() * t.ro);
+    let e = t.eps?;
+    let ec = EPS_CONTINUATION_OVER_V * v_ref;
+    (e > 0.0 && e < ec && ec.is_finite()).then_some(Leg {
+        parameter: HomotopyParameter::Eps,
+        from: ec,
+        to: e,
+        spacing: Spacing::Geometric,
+    })
+}
+
+/// Press in at the start of `leg` (an ε continuation, [`eps_continuation_leg`]) and walk it to
+/// the scene's ε. On success the state is the steady solution at the scene's parameters. On
+/// failure (returned as `Ok` with `succeeded = false`) the parameters are the scene's again
+/// and the state is `x_init`, so the caller can press in directly. Only an interrupt (Ctrl-C)
+/// is an error.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_in_eps(
+    st: &mut SteadyRolling,
+    leg: &Leg,
+    loading: Loading,
+    kind: LinearKind,
+    newton_opts: &NewtonOptions,
+    step_opts: &StepOptions,
+    x_init: &[f64],
+    report: &mut StepReport,
+) -> Result<Attempt, SolveError> {
+    let targets = Targets::of(st);
+    let res = attempt(
+        st,
+        &targets,
+        Strategy::EpsHomotopy,
+        std::slice::from_ref(leg),
+        loading,
+        kind,
+        newton_opts,
+        step_opts,
+        x_init,
+    );
+    let a = match res {
+        Ok(a) | Err(AttemptError::Failed(a)) => a,
+        Err(AttemptError::Interrupted(at)) => {
+            restore_targets(st, &targets);
+            return Err(SolveError::Interrupted { at });
+        }
+    };
+    report.total_iterations += a.newton_iterations;
+    report.cutbacks += a.cutbacks();
+    if !a.succeeded {
+        restore_targets(st, &targets);
+        st.sys.restore_state(x_init);
+        st.sys.x_prev.copy_from_slice(x_init);
+        st.sys.lambda = 0.0;
+        st.sys.lambda_prev = 0.0;
+    }
+    Ok(a)
 }
 
 enum AttemptError {

@@ -312,6 +312,39 @@ pub fn solve_steady(
     let mut x_init = Vec::new();
     st.sys.save_state(&mut x_init);
     st.recovery = None;
+    st.eps_continuation = None;
+    let eps_leg = steady_recovery::eps_continuation_leg(&steady_recovery::Targets::of(st))
+        .filter(|_| scene.solver.eps_continuation);
+    if let Some(leg) = eps_leg {
+        let a = steady_recovery::continue_in_eps(
+            st,
+            &leg,
+            loading,
+            kind,
+            &newton_opts,
+            &step_opts,
+            &x_init,
+            report,
+        )?;
+        let ok = a.succeeded;
+        if verbose {
+            eprintln!(
+                "  friction eps continuation {:.3e} -> {:.3e}: {} ({} Newton iterations)",
+                leg.from,
+                leg.to,
+                if ok {
+                    "reached"
+                } else {
+                    "failed, pressing in directly"
+                },
+                a.newton_iterations
+            );
+        }
+        st.eps_continuation = Some(a);
+        if ok {
+            return Ok(());
+        }
+    }
     let mut first = press(
         st,
         loading,
@@ -683,6 +716,7 @@ pub fn run_with_dump(
         .recovery
         .as_ref()
         .and_then(|r| r.attempts.iter().find(|a| a.succeeded))
+        .or(st.eps_continuation.as_ref().filter(|a| a.succeeded))
     {
         Some(a) => a.steps(),
         None => report.steps.iter().filter(|s| s.converged).count(),
@@ -767,6 +801,7 @@ pub fn run_with_dump(
             "cutbacks": report.cutbacks,
             "threads": rayon::current_num_threads(),
             "recovery": st.recovery.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
+            "eps_continuation": st.eps_continuation.as_ref().map(|a| serde_json::to_value(a).unwrap_or_default()),
         },
         "version": env!("CARGO_PKG_VERSION"),
     });
@@ -783,7 +818,10 @@ pub fn run_with_dump(
     };
     // The final state is already recorded as the last load step or branch point, except when
     // a recovery homotopy (which records no steps) found it.
-    if recorders.steps_recorded() == 0 || st.recovery.as_ref().is_some_and(|r| r.succeeded()) {
+    if recorders.steps_recorded() == 0
+        || st.recovery.as_ref().is_some_and(|r| r.succeeded())
+        || st.eps_continuation.as_ref().is_some_and(|a| a.succeeded)
+    {
         st.sys.record_step(&final_info, &mut recorders);
     }
     for e in recorders.run_finished(&RunEnd {

@@ -45,6 +45,7 @@ const SS: &str = "stick_slip";
 const CMP: &str = "tread compare";
 const SDC: &str = "steady with motion.control other than speed";
 const REC: &str = "steady, when the first solve failed";
+const EPSC: &str = "steady, friction with ε < 1e-2 v_ref";
 
 /// Every key of `summary.json` (objects are listed with their keys).
 pub static SUMMARY_KEYS: &[OutputKey] = &[
@@ -102,6 +103,23 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("solver.recovery.attempts[].legs[].steps", N, REC, "steps of the leg"),
     k("solver.recovery.attempts[].legs[].cutbacks", N, REC, "cut-backs of the leg"),
     k("solver.recovery.attempts[].legs[].reached", "as the parameter", REC, "value reached"),
+    k("solver.eps_continuation", N, SD, "null, or how a steady solve with a small friction regularisation (ε < 1e-2 v_ref, v_ref = max(|v0|, |ω| Ro)) reached it: pressed in at ε_c = 1e-2 v_ref, then ε walked down geometrically to the scene's value (when it fails, the direct press-in follows)"),
+    k("solver.eps_continuation.strategy", N, EPSC, "always `eps_homotopy`"),
+    k("solver.eps_continuation.succeeded", N, EPSC, "whether it reached the scene's ε"),
+    k("solver.eps_continuation.error", N, EPSC, "why it failed (null if it succeeded)"),
+    k("solver.eps_continuation.press_steps", N, EPSC, "load steps of the press-in at ε_c"),
+    k("solver.eps_continuation.press_cutbacks", N, EPSC, "cut-backs of the press-in at ε_c"),
+    k("solver.eps_continuation.legs", N, EPSC, "the ε leg (one entry)"),
+    k("solver.eps_continuation.legs[].parameter", N, EPSC, "`eps`"),
+    k("solver.eps_continuation.legs[].from", "L/T", EPSC, "ε_c"),
+    k("solver.eps_continuation.legs[].to", "L/T", EPSC, "the scene's ε"),
+    k("solver.eps_continuation.legs[].spacing", N, EPSC, "`geometric`"),
+    k("solver.eps_continuation.legs[].steps", N, EPSC, "steps in ε"),
+    k("solver.eps_continuation.legs[].newton_iterations", N, EPSC, "Newton iterations of the ε steps"),
+    k("solver.eps_continuation.legs[].cutbacks", N, EPSC, "step halvings in ε"),
+    k("solver.eps_continuation.legs[].reached", "L/T", EPSC, "ε reached"),
+    k("solver.eps_continuation.newton_iterations", N, EPSC, "Newton iterations (press-in and ε steps)"),
+    k("solver.eps_continuation.wall_time_s", "s", EPSC, "wall time of the continuation"),
     k("solver.recovery.newton_iterations", N, REC, "Newton iterations of the recovery"),
     k("solver.recovery.cutbacks", N, REC, "cut-backs of the recovery"),
     k("solver.recovery.wall_time_s", "s", REC, "wall time of the recovery"),

@@ -212,7 +212,11 @@ pub struct NewtonOptions {
     pub verbose: bool,
     /// Largest relative residual asked of the GMRES step when the tangent has a matrix-free
     /// part ([`NonlinearSystem::has_tangent_correction`]; inexact Newton, see
-    /// [`Newton::solve`]).
+    /// [`Newton::solve`]). Far from the solution the Newton step is shortened by the line
+    /// search anyway, so a loose step is as good as an exact one there; near it the forcing
+    /// term falls quadratically with the residual. 0.3 took 9–11 Newton iterations and 7–14
+    /// GMRES products per iteration on the damped rolling cylinder at 16k and 66k DOFs, against
+    /// 11–12 iterations and 13–22 products with 1e-2.
     pub krylov_eta_max: f64,
 }
 
@@ -225,7 +229,7 @@ impl Default for NewtonOptions {
             min_alpha: 1.0 / 64.0,
             increment_tol: 1e-14,
             verbose: false,
-            krylov_eta_max: 1e-2,
+            krylov_eta_max: 0.3,
         }
     }
 }
@@ -473,9 +477,10 @@ impl Newton {
                 let ks =
                     super::krylov::gmres(sys, &mut self.solver, &b, &mut self.dx, eta, 40, 160)?;
                 rep.krylov_iterations += ks.iterations;
-                // A step far less accurate than asked is not a Newton step: stop here rather
-                // than wander (the caller may switch to an assembled tangent).
-                if !ks.rel_residual.is_finite() || ks.rel_residual > 10.0 * eta {
+                // A step far less accurate than asked (or one that does not even halve the
+                // residual of the linear system) is not a Newton step: stop here rather than
+                // wander (the caller may switch to an assembled tangent).
+                if !ks.rel_residual.is_finite() || ks.rel_residual > (10.0 * eta).min(0.5) {
                     sys.tangent_correction_stalled();
                     if self.opts.verbose {
                         eprintln!(

@@ -297,6 +297,8 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("line_search", Kind::Bool, NONE, "backtracking line search on the residual norm"),
             opt("damping_tangent", Kind::Keyword(DampingTangentChoice::NAMES), NONE,
                 "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve, assembled for continuation)"),
+            opt("eps_continuation", Kind::Bool, NONE,
+                "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
         ],
     },
     SectionSchema {

@@ -55,6 +55,9 @@ pub struct SolverSpec {
     pub line_search: bool,
     /// Newton matrix of the steady mode's strain-rate damping.
     pub damping_tangent: DampingTangentChoice,
+    /// Steady mode with friction: a regularisation ε below 1e-2 v_ref is reached by pressing
+    /// in at 1e-2 v_ref and walking ε down (false: press in at the scene's ε directly).
+    pub eps_continuation: bool,
 }
 
 impl Default for SolverSpec {
@@ -68,6 +71,7 @@ impl Default for SolverSpec {
             threads: 0,
             line_search: true,
             damping_tangent: DampingTangentChoice::Auto,
+            eps_continuation: true,
         }
     }
 }
