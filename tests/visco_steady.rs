@@ -477,3 +477,129 @@ fn rolling_resistance_matches_the_half_space_reference() {
         assert!((x0 - h0).abs() < 0.01 && (x1 - h1).abs() < 0.01);
     }
 }
+
+/// `scenarios/viscoelastic_resistance_curve.toml` through `tread run` on a coarser mesh: the
+/// arc-length continuation in ω carries the ring history (its corrector solves by GMRES on the
+/// exact tangent), brackets the resistance peak, writes `resistance.png` and
+/// `results.rolling_resistance`; the branch's C_rr equals direct steady solves at two of its
+/// speeds (same mesh), and the peak lies where the half-space reference (Hunter 1961, same
+/// G∞, G1, τ, R = Ro, load and V = v0 of the branch) has its peak.
+#[test]
+fn resistance_curve_by_arc_length_continuation_brackets_the_peak() {
+    let set = [
+        "mesh.n_r=6",
+        "mesh.n_theta=128",
+        "continuation.target=6.0",
+        "output.sinks=[\"summary\", \"csv\", \"png\"]",
+    ];
+    let text = scene_text("scenarios/viscoelastic_resistance_curve.toml");
+    let sc =
+        Scene::from_toml_str(&text, "resistance_curve", &set.map(String::from))
+            .unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir::TestDir::new("visco_steady", "resistance_curve");
+    let opts = tread::app::RunOptions {
+        out_dir: dir.join("run"),
+        verbose: false,
+        quiet: true,
+    };
+    tread::app::run(&sc, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("run/summary.json")).unwrap())
+            .unwrap();
+    let png = std::fs::metadata(dir.join("run/resistance.png")).expect("resistance.png");
+    assert!(png.len() > 10_000, "{png:?}");
+    let rr = &summary["results"]["rolling_resistance"];
+    let omegas: Vec<f64> = rr["omega"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let coeffs: Vec<f64> = rr["coefficient"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let branch = summary["results"]["branch"].as_array().unwrap();
+    assert!(omegas.len() >= 5, "{rr}");
+    let peak_omega = rr["peak"]["omega"].as_f64().expect("an interior peak");
+    let peak_c = rr["peak"]["coefficient"].as_f64().unwrap();
+    println!(
+        "branch: {:?}",
+        omegas.iter().zip(&coeffs).collect::<Vec<_>>()
+    );
+    println!("peak: C_rr = {peak_c:.4e} at omega = {peak_omega:.4}");
+    assert!(peak_omega > omegas[0] && peak_omega < *omegas.last().unwrap());
+    // Direct steady solves at two branch speeds give the branch's coefficient.
+    for i in [1, omegas.len() - 2] {
+        let om = omegas[i];
+        let v0 = branch[i]["v0"].as_f64().unwrap();
+        let mut s2: Vec<String> = set[..2].iter().map(|s| s.to_string()).collect();
+        s2.push(format!("motion.omega={om}"));
+        s2.push(format!("road.v0={v0}"));
+        let text2 = text.split("\n[continuation]").next().unwrap().to_string();
+        let sc2 = Scene::from_toml_str(&text2, "direct", &s2).unwrap_or_else(|e| panic!("{e}"));
+        let mut st = build_steady(&sc2).unwrap_or_else(|e| panic!("{e}"));
+        let mut rep = StepReport::default();
+        solve_steady(&sc2, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+        let (f, t) = st.sys.hub_reaction();
+        let c = t / (-f[1] * sc2.geometry.ro);
+        println!(
+            "omega {om:.4}: branch C_rr {:.8e}, direct {c:.8e}",
+            coeffs[i]
+        );
+        assert!(
+            (c - coeffs[i]).abs() < 1e-6 * c.abs(),
+            "omega {om}: {c} vs {}",
+            coeffs[i]
+        );
+    }
+    // The half-space reference's peak over the same speeds (load of the nearest branch point).
+    let load_at = |om: f64| {
+        let i = (0..branch.len())
+            .min_by(|&a, &b| {
+                let da = (branch[a]["omega"].as_f64().unwrap() - om).abs();
+                let db = (branch[b]["omega"].as_f64().unwrap() - om).abs();
+                da.total_cmp(&db)
+            })
+            .unwrap();
+        -branch[i]["hub_force_y"].as_f64().unwrap()
+    };
+    let v_per_omega = branch[0]["v0"].as_f64().unwrap() / omegas[0];
+    let grid: Vec<f64> = (0..=40)
+        .map(|k| 0.3 * (20.0f64).powf(k as f64 / 40.0))
+        .collect();
+    let href: Vec<f64> = grid
+        .iter()
+        .map(|&om| {
+            let pb = hunter::HunterProblem {
+                g_inf: 200.0,
+                g1: 100.0,
+                tau: 0.03,
+                radius: sc.geometry.ro,
+                load: load_at(om),
+            };
+            pb.solve(v_per_omega * om, 40)
+                .map_or(f64::NAN, |s| -s.resistance)
+        })
+        .collect();
+    let k = (0..grid.len())
+        .max_by(|&a, &b| href[a].total_cmp(&href[b]))
+        .unwrap();
+    println!(
+        "half-space reference: peak C_rr = {:.4e} at omega = {:.4}",
+        href[k], grid[k]
+    );
+    assert!(k > 0 && k + 1 < grid.len());
+    assert!(
+        (peak_omega / grid[k] - 1.0).abs() < 0.25,
+        "{peak_omega} vs {}",
+        grid[k]
+    );
+    assert!(
+        (peak_c / href[k] - 1.0).abs() < 0.1,
+        "{peak_c} vs {}",
+        href[k]
+    );
+}

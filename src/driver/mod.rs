@@ -18,6 +18,7 @@ pub mod compare;
 pub mod critical;
 pub mod frame;
 pub mod indentation;
+pub mod resistance;
 pub mod spinning;
 pub mod steady;
 pub mod steady_recovery;

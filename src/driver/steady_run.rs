@@ -21,6 +21,7 @@
 //! [0, 1]), then one per continuation point (time = the continuation parameter, as in
 //! `branch.csv`).
 
+use super::resistance;
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
 use super::steady_recovery;
@@ -747,6 +748,13 @@ pub fn run_with_dump(
         "creep": st.creep(),
         "control": control_report.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
     });
+    let resistance_curve = cont.is_some()
+        && st.sys.steady_history.is_some()
+        && st.param == SteadyParameter::Omega
+        && rows.len() > 1;
+    if resistance_curve {
+        results["rolling_resistance"] = resistance::summary(&rows, scene.geometry.ro);
+    }
     if let Some(c) = &cont {
         results["branch"] = serde_json::to_value(&rows).unwrap_or_default();
         results["special_points"] = serde_json::to_value(&c.special).unwrap_or_default();
@@ -855,6 +863,12 @@ pub fn run_with_dump(
         };
         if rows.len() > 1 && st.param == SteadyParameter::Creep {
             creep_plots(scene, &rows, dir);
+        }
+        if resistance_curve {
+            if let Err(e) = resistance::plot(&dir.join("resistance.png"), &rows, scene.geometry.ro)
+            {
+                eprintln!("tread: warning: resistance.png: {e}");
+            }
         }
         if rows.len() > 1 {
             let fy = pts(&|r| r.hub_force_y);

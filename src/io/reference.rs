@@ -41,6 +41,7 @@ const TR: &str = "transient";
 const SD: &str = "steady";
 const TS: &str = "transient, steady";
 const CONT: &str = "steady with [continuation]";
+const VCONT: &str = "steady, [material.viscoelastic], continuation in omega";
 const SS: &str = "stick_slip";
 const CMP: &str = "tread compare";
 const SDC: &str = "steady with motion.control other than speed";
@@ -185,6 +186,14 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.hub_torque_passage_mean", "F·L/L", TS, "hub_torque averaged over the last node passage"),
     // continuation
     k("results.branch", N, CONT, "the branch, one entry per converged point (the rows of branch.csv)"),
+    k("results.rolling_resistance", N, VCONT, "rolling-resistance coefficient along the branch (see the keys below)"),
+    k("results.rolling_resistance.definition", N, VCONT, "`C_rr = sign(omega) T / (P Ro), P = -F_y`"),
+    k("results.rolling_resistance.omega", "1/T", VCONT, "ω of each branch point with a load"),
+    k("results.rolling_resistance.coefficient", N, VCONT, "C_rr at those points (> 0: the hub feeds the dissipation)"),
+    k("results.rolling_resistance.peak", N, VCONT, "the interior maximum of C_rr (parabola in log ω through the largest value and its neighbours); null when the branch does not bracket it"),
+    k("results.rolling_resistance.peak.omega", "1/T", VCONT, "ω at the peak"),
+    k("results.rolling_resistance.peak.coefficient", N, VCONT, "C_rr at the peak"),
+    k("results.rolling_resistance.peak.step", N, VCONT, "branch step of the largest sampled C_rr"),
     k("results.branch[].step", N, CONT, "continuation step"),
     k("results.branch[].lambda", "as the parameter", CONT, "parameter value"),
     k("results.branch[].omega", "rad/T", CONT, "angular speed"),
