@@ -1,4 +1,4 @@
-//! Bad input to `tread critical` and `tread sweep`: flags, scenes and sweep files a user can
+//! Bad input to `tread critical`, `tread sweep` and `tread compare`: flags, scenes and sweep files a user can
 //! get wrong. Each gets exit status 2 and an error naming what is wrong, never a panic, and
 //! writes no result file.
 
@@ -141,4 +141,33 @@ fn malformed_sweep_files_are_refused_with_the_key_named() {
     let (code, err) = tread(&["sweep", "plan", f.to_str().unwrap()]);
     assert_eq!(code, 2, "binary: {err}");
     assert!(err.contains("UTF-8"), "{err}");
+}
+
+/// `tread compare` with a transient too short for one cell passage: exit 2 and an error that
+/// says why there is nothing to compare and which key to raise (not a missing-file message).
+#[test]
+fn compare_with_a_transient_too_short_to_extract_says_so() {
+    let d = TestDir::new("bad_input", "compare_short");
+    let out = d.path().join("out");
+    let o = out.to_str().expect("utf-8 path");
+    let sc = scene("oden_hollow_cylinder.toml");
+    let (code, err) = tread(&[
+        "compare",
+        &sc,
+        "--out",
+        o,
+        "--set",
+        "mesh.n_r=1",
+        "--set",
+        "mesh.n_theta=16",
+        "--set",
+        "time.t_end=0.01",
+        "--set",
+        "output.sinks=[\"summary\"]",
+    ]);
+    assert_eq!(code, 2, "exit status {code}, stderr: {err}");
+    for n in ["before its first cell passage", "time.t_end", "0.01"] {
+        assert!(err.contains(n), "error does not mention {n:?}: {err}");
+    }
+    assert!(!out.join("compare.csv").exists());
 }

@@ -175,7 +175,16 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let model = app::build_model(scene)?;
     let n = model.mesh.n_nodes();
     let per_ring = model.mesh.rings.map_or(n, |r| r.per_ring);
-    let u_t = read_field(&tr_opts.out_dir.join("steady_field.csv"), n, per_ring)
+    let tr_field = tr_opts.out_dir.join("steady_field.csv");
+    if !tr_field.exists() {
+        return Err(AppError::Unsupported(format!(
+            "compare: the transient run ended at t = {} s before its first cell passage, so it \
+             extracted no referential field to compare (raise time.t_end, now {} s)",
+            ts["results"]["final_time"].as_f64().map_or("?".into(), |t| format!("{t:.4e}")),
+            scene.time.as_ref().map_or(f64::NAN, |t| t.t_end)
+        )));
+    }
+    let u_t = read_field(&tr_field, n, per_ring)
         .map_err(|e| AppError::Unsupported(format!("compare: transient field: {e}")))?;
     let u_s = read_field(&st_opts.out_dir.join("steady_field.csv"), n, per_ring)
         .map_err(|e| AppError::Unsupported(format!("compare: steady field: {e}")))?;
