@@ -18,11 +18,16 @@
 //! min_a Σ_i |Σ_k a_k φ_k(d_i) − s(X_i)|²   ⇔   (Σ_i φ(d_i) φ(d_i)ᵀ) a = Σ_i φ(d_i) s(X_i)ᵀ,
 //! ```
 //!
-//! with the complete polynomial of the patch's degree p = max cell degree: φ = (1, d1, d2) for
-//! p = 1, φ = (1, d1, d2, d1², d1 d2, d2²) for p = 2 (invariant under rotations of the mesh).
-//! The normal equations are 6 × 6 (fixed-size, solved by a singular value decomposition); a
-//! patch whose samples cannot determine the polynomial (too few samples, samples on too few
-//! lines: relative smallest singular value below 1e-12) is fitted with the next lower degree.
+//! with a complete polynomial: φ = (1, d1, d2) (P1) for a patch of Q1 cells (one sample per
+//! cell, four in an interior patch) and the complete cubic φ = (1, d1, d2, d1², d1 d2, d2²,
+//! d1² d2, d1 d2², d1³, d2³) (P3) for a patch with a Q2 cell (sixteen samples in an interior
+//! patch). The cubic is one degree above the element's: the samples are accurate to O(h³) and a
+//! quadratic fit would add an O(h³) truncation error of its own, which dominates at the boundary
+//! nodes where the patch polynomial is extrapolated. Complete polynomials are invariant under
+//! rotations of the mesh. The normal equations are 10 × 10 (fixed-size, no allocation, solved
+//! by a singular value decomposition); a patch whose samples cannot determine the polynomial
+//! (too few samples, samples on too few lines: smallest singular value below 1e-12 of the
+//! largest diagonal entry) is fitted with the next lower complete degree (P2, P1, P0).
 //!
 //! **Nodal values.** Only patches of *interior* vertices (vertices on no boundary facet; a
 //! boundary facet is a cell side that no other cell shares) are used, as Zienkiewicz and Zhu do:
@@ -35,11 +40,12 @@
 //! (only cells with no finite sample) keeps the mean of the finite samples of its cells, or 0.
 //! Every value is finite.
 //!
-//! **Exactness.** If the sampled stress is a polynomial of degree ≤ p in X on a patch, the fit
-//! reproduces it exactly; in particular a homogeneous deformation (constant stress, which Q1 and
+//! **Exactness.** If the sampled stress is a polynomial of the fitted degree in X on a patch,
+//! the fit reproduces it exactly; in particular a homogeneous deformation (constant stress, which Q1 and
 //! Q2 represent exactly) is recovered to round-off at every node. For a smooth solution the
 //! recovered stress at the nodes converges one order faster (or more) than the stress of the
-//! elements evaluated at the nodes.
+//! elements evaluated at the nodes (spinning annulus, Q2: σ_r on the hub converges like h³
+//! against h² for the element stresses; `tests/recovery.rs`).
 //!
 //! Conventions: components in the global Cartesian basis (x1, x2) of the reference
 //! configuration, as functions of the reference position X (the mesh nodes); plane strain, per
@@ -56,8 +62,8 @@ use rayon::prelude::*;
 /// Recovered nodal stress components `[σ11, σ22, σ12, σ33]`.
 pub type Stress4 = [f64; 4];
 
-/// Largest number of polynomial terms of a patch fit (complete quadratic).
-const MAX_TERMS: usize = 6;
+/// Number of monomials of the patch fits ([`monomials`]; a fit uses a subset, [`masks`]).
+const MAX_TERMS: usize = 10;
 type Normal = SMatrix<f64, MAX_TERMS, MAX_TERMS>;
 type Rhs = SMatrix<f64, MAX_TERMS, 4>;
 
@@ -169,28 +175,38 @@ impl Poly {
 
 #[inline]
 fn monomials(d: &Vec2) -> SVector<f64, MAX_TERMS> {
+    let (x, y) = (d[0], d[1]);
     SVector::<f64, MAX_TERMS>::from([
         1.0,
-        d[0],
-        d[1],
-        d[0] * d[0],
-        d[0] * d[1],
-        d[1] * d[1],
+        x,
+        y,
+        x * x,
+        x * y,
+        y * y,
+        x * x * y,
+        x * y * y,
+        x * x * x,
+        y * y * y,
     ])
 }
 
-/// Terms of the complete polynomial of degree `p` (0, 1, 2).
-#[inline]
-fn terms(p: usize) -> usize {
-    match p {
-        0 => 1,
-        1 => 3,
-        _ => 6,
+/// Bit masks (over [`monomials`]) of the fits tried, best first, for a patch of degree `p`:
+/// P1 then P0 for Q1; P3, P2, P1, P0 for Q2.
+fn masks(p: usize) -> &'static [u16] {
+    const P0: u16 = 0b1;
+    const P1: u16 = 0b111;
+    const P2: u16 = 0b11_1111;
+    const P3: u16 = 0b11_1111_1111;
+    if p <= 1 {
+        &[P1, P0]
+    } else {
+        &[P3, P2, P1, P0]
     }
 }
 
-/// Least-squares fit of the samples of `cells` around `z` with the complete polynomial of
-/// degree `p`, lowering the degree until the fit is determined; `None` without finite samples.
+/// Least-squares fit of the samples of `cells` around `z` with the complete polynomial of the
+/// patch of degree `p` ([`masks`]), lowering the degree until the fit is determined; `None`
+/// without samples.
 fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly> {
     let h = cells
         .iter()
@@ -214,15 +230,16 @@ fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly
     if n == 0 {
         return None;
     }
-    for deg in (0..=p.min(2)).rev() {
-        let k = terms(deg);
+    for &mask in masks(p) {
+        let on = |i: usize| mask & (1 << i) != 0;
+        let k = mask.count_ones() as usize;
         if n < k {
             continue;
         }
         // The inactive terms get the identity rows: the active block is solved on its own.
         let mut ak = a;
         let mut bk = b;
-        for i in k..MAX_TERMS {
+        for i in (0..MAX_TERMS).filter(|&i| !on(i)) {
             for j in 0..MAX_TERMS {
                 ak[(i, j)] = 0.0;
                 ak[(j, i)] = 0.0;
@@ -235,7 +252,7 @@ fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly
         // The padding adds unit singular values; the samples' scaled monomials are at most 1,
         // so the active block's largest entry is at most n: relative rank test against it.
         let svd = ak.svd(true, true);
-        let amax = (0..k).map(|i| a[(i, i)]).fold(0.0, f64::max);
+        let amax = (0..MAX_TERMS).filter(|&i| on(i)).map(|i| a[(i, i)]).fold(0.0, f64::max);
         if !(svd.singular_values.min() > 1e-12 * amax) {
             continue;
         }
