@@ -63,8 +63,16 @@ fn solve(sys: &mut SolidSystem, omega: f64) {
         max_cutbacks: 8,
         verbose: false,
     };
-    solve_spinning(sys, omega, LinearKind::Cholesky, opts, &so, &mut rep, &mut ())
-        .expect("spinning solve converges");
+    solve_spinning(
+        sys,
+        omega,
+        LinearKind::Cholesky,
+        opts,
+        &so,
+        &mut rep,
+        &mut (),
+    )
+    .expect("spinning solve converges");
 }
 
 /// σ_r = e_R·σ e_R at reference position X of the stress [σ11, σ22, σ12].
@@ -183,9 +191,10 @@ fn spinning_recovered_sigma_r_converges_faster() {
         -(rows[b].3[j] / rows[a].3[j]).ln() / (rows[b].0 as f64 / rows[a].0 as f64).ln()
     };
     eprintln!("σ_r(Ri) = {s_ref:.10e}; relative errors (rate in h against the previous mesh)");
-    eprintln!("mesh     DOFs  raw nodes      raw ring       rec vertices   rec nodes      rec ring");
-    for i in 0..rows.len() {
-        let (n_r, n_t, dofs, e) = rows[i];
+    eprintln!(
+        "mesh     DOFs  raw nodes      raw ring       rec vertices   rec nodes      rec ring"
+    );
+    for (i, &(n_r, n_t, dofs, e)) in rows.iter().enumerate() {
         let mut line = format!("{n_r:2}x{n_t:<3} {dofs:6}");
         for (j, v) in e.iter().enumerate() {
             if i == 0 {
@@ -201,10 +210,23 @@ fn spinning_recovered_sigma_r_converges_faster() {
     assert!(dofs <= 10_000, "{dofs} DOFs");
     // Measured: 8.26e-5 (hub vertices), 1.11e-4 (all hub nodes), 1.02e-4 (ring average);
     // the element stresses: 2.0e-3.
-    assert!(e[2] <= 9e-5, "recovered σ_r at the hub vertices: {:.3e}", e[2]);
-    assert!(e[3] <= 1.2e-4, "recovered σ_r at the hub nodes: {:.3e}", e[3]);
+    assert!(
+        e[2] <= 9e-5,
+        "recovered σ_r at the hub vertices: {:.3e}",
+        e[2]
+    );
+    assert!(
+        e[3] <= 1.2e-4,
+        "recovered σ_r at the hub nodes: {:.3e}",
+        e[3]
+    );
     assert!(e[4] <= 1.1e-4, "recovered ring average: {:.3e}", e[4]);
-    assert!(e[0] > 15.0 * e[3], "raw {:.3e} vs recovered {:.3e}", e[0], e[3]);
+    assert!(
+        e[0] > 15.0 * e[3],
+        "raw {:.3e} vs recovered {:.3e}",
+        e[0],
+        e[3]
+    );
     // Observed rates over the last three meshes (4x32, 8x64, 12x96).
     let (raw_rate, rec_rate) = (rate(last - 2, last, 0), rate(last - 2, last, 3));
     eprintln!("rates in h over the last three meshes: raw {raw_rate:.2}, recovered {rec_rate:.2}");

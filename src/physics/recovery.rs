@@ -252,8 +252,13 @@ fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly
         // The padding adds unit singular values; the samples' scaled monomials are at most 1,
         // so the active block's largest entry is at most n: relative rank test against it.
         let svd = ak.svd(true, true);
-        let amax = (0..MAX_TERMS).filter(|&i| on(i)).map(|i| a[(i, i)]).fold(0.0, f64::max);
-        if !(svd.singular_values.min() > 1e-12 * amax) {
+        let amax = (0..MAX_TERMS)
+            .filter(|&i| on(i))
+            .map(|i| a[(i, i)])
+            .fold(0.0, f64::max);
+        if svd.singular_values.min().partial_cmp(&(1e-12 * amax))
+            != Some(std::cmp::Ordering::Greater)
+        {
             continue;
         }
         if let Ok(coef) = svd.solve(&bk, 0.0) {
@@ -359,7 +364,7 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
         }
     }
     // Nodes no interior patch reaches: enlarged patches of the boundary vertices of their cells.
-    if cnt.iter().any(|&k| k == 0) {
+    if cnt.contains(&0) {
         let covered = cnt.clone();
         let mut grown: Vec<u32> = Vec::new();
         for v in 0..nn {
@@ -367,9 +372,11 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
                 continue;
             }
             let cells = patch(v);
-            let needed = cells
-                .iter()
-                .any(|&c| mesh.cell_nodes(c as usize).iter().any(|&n| covered[n as usize] == 0));
+            let needed = cells.iter().any(|&c| {
+                mesh.cell_nodes(c as usize)
+                    .iter()
+                    .any(|&n| covered[n as usize] == 0)
+            });
             if !needed {
                 continue;
             }
@@ -390,7 +397,7 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
     // Last resort: the mean of the finite samples of the node's cells.
     let mut acc2 = vec![[0.0f64; 4]; nn];
     let mut cnt2 = vec![0u32; nn];
-    if cnt.iter().any(|&k| k == 0) {
+    if cnt.contains(&0) {
         for (c, cs) in samples.iter().enumerate().take(nc) {
             if cs.n == 0 {
                 continue;
