@@ -239,6 +239,7 @@ fn vtu_keeps_nan_as_nan() {
         x: &x,
         stress: &stress,
         sigma_33: &s33,
+        stress_recovered: &[],
         pressure: &[],
         contact: &[],
         hub: None,

@@ -110,6 +110,7 @@ fn zlib_vtu_decompresses_to_the_raw_arrays() {
         x: &x,
         stress: &stress,
         sigma_33: &s33,
+        stress_recovered: &[],
         pressure: &[],
         contact: &[],
         hub: None,

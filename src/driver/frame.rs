@@ -5,6 +5,7 @@
 //! * Nodal stress: the Cauchy stress σ = P Fᵀ/J of each cell evaluated at its nodes and averaged
 //!   over the cells sharing a node (discontinuous across cells otherwise); with σ33 of plane
 //!   strain and the pressure field of a mixed formulation ([`NodalStress`]).
+//! * Recovered nodal stress: superconvergent patch recovery ([`crate::physics::recovery`]).
 //! * Strain energy ∫ (W(F) − W(I)) dV and kinetic energy ½ ω² ∫ ρ |F t|² dV (t = (−X2, X1): the
 //!   velocity of steady spin is v = ω ∂θχ = ω F t), with the 3×3 Gauss rule per cell.
 //! * Hub loads: [`SolidSystem::hub_reaction`].
@@ -27,6 +28,8 @@ pub struct SolidFrame {
     /// Nodal σ33 (plane strain) and pressure field p (empty without one).
     pub sigma_33: Vec<f64>,
     pub pressure: Vec<f64>,
+    /// Recovered nodal Cauchy stress `[σ11, σ22, σ12, σ33]` ([`crate::physics::recovery`]).
+    pub stress_recovered: Vec<[f64; 4]>,
     pub contact: Vec<ContactSample>,
     pub hub: HubLoads,
     pub energy: Energy,
@@ -74,6 +77,9 @@ impl SolidFrame {
             stress: ns.in_plane,
             sigma_33: ns.sigma_33,
             pressure: ns.pressure,
+            stress_recovered: crate::physics::recovery::recover_cauchy(
+                &sys.model, &sys.dofs, &sys.x,
+            ),
             contact: sys.contact_samples(),
             hub: HubLoads {
                 force: [f[0], f[1]],
@@ -94,6 +100,7 @@ impl SolidFrame {
             stress: &self.stress,
             sigma_33: &self.sigma_33,
             pressure: &self.pressure,
+            stress_recovered: &self.stress_recovered,
             contact: &self.contact,
             hub: Some(self.hub),
             energy: Some(self.energy),

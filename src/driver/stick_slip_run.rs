@@ -112,6 +112,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 x: &[],
                 stress: &[],
                 sigma_33: &[],
+                stress_recovered: &[],
                 pressure: &[],
                 contact: &[],
                 hub: None,

@@ -192,6 +192,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
         let snap = tr.snapshot();
         let ns = nodal_stress_full_at(&tr.sys, &tr.un);
+        let recovered =
+            crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.un);
         let contact = tr
             .sys
             .contact
@@ -204,6 +206,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             x: &tr.un,
             stress: &ns.in_plane,
             sigma_33: &ns.sigma_33,
+            stress_recovered: &recovered,
             pressure: &ns.pressure,
             contact: &contact,
             hub: Some(HubLoads {
@@ -405,6 +408,7 @@ fn record_steady_field(
     let n = field.len().min(x.len());
     x[..n].copy_from_slice(&field[..n]);
     let ns = nodal_stress_full_at(&tr.sys, &x);
+    let recovered = crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &x);
     let contact = tr
         .sys
         .contact
@@ -420,6 +424,7 @@ fn record_steady_field(
         x: &x,
         stress: &ns.in_plane,
         sigma_33: &ns.sigma_33,
+        stress_recovered: &recovered,
         pressure: &ns.pressure,
         contact: &contact,
         hub: Some(HubLoads {

@@ -847,6 +847,7 @@ impl SolidModel {
         }
     }
 
+    #[allow(clippy::needless_range_loop)] // a: local node, as in the kernels.
     fn point_values_generic<E: Lagrange2D, const N: usize>(
         &self,
         c: usize,
@@ -855,16 +856,31 @@ impl SolidModel {
         xi: f64,
         eta: f64,
     ) -> Option<PointValues> {
-        let tab = ShapeTable::<N>::new::<E>(vec![(xi, eta)], vec![1.0]);
+        // Shape values at the point (no allocation: output loops call this per point).
+        let mut sn = [0.0; N];
+        let mut sdn = [[0.0; 2]; N];
+        E::eval(xi, eta, &mut sn, &mut sdn);
         let cd = dofs.cell(c);
         let nu = 2 * N;
-        let u: Vec<f64> = (0..nu).map(|a| x[cd[a] as usize]).collect();
+        let mut ub = [0.0; 18];
+        for a in 0..nu {
+            ub[a] = x[cd[a] as usize];
+        }
+        let u = &ub[..nu];
+        let (px, jac) = self.map(c, xi, eta, &sn, &sdn);
+        let inv = jac.try_inverse()?;
         let mut g = [[0.0; 2]; N];
-        let pg = self.point(c, &tab, 0, &mut g)?;
-        let h = Self::grad_u(&u, &g);
+        for a in 0..N {
+            let d = sdn[a];
+            g[a] = [
+                d[0] * inv[(0, 0)] + d[1] * inv[(1, 0)],
+                d[0] * inv[(0, 1)] + d[1] * inv[(1, 1)],
+            ];
+        }
+        let h = Self::grad_u(u, &g);
         let mut disp = Vec2::zeros();
         for a in 0..N {
-            disp += Vec2::new(u[2 * a], u[2 * a + 1]) * tab.n[0][a];
+            disp += Vec2::new(u[2 * a], u[2 * a + 1]) * sn[a];
         }
         let mut p_st = self.material_of(c).stress(&h);
         let f = Mat2::identity() + h;
@@ -883,19 +899,18 @@ impl SolidModel {
                     &self.q1 as &dyn std::any::Any
                 };
                 let tab_c = rule.downcast_ref::<ShapeTable<N>>()?;
-                self.perturbed_pressure::<N>(c, tab_c, &u, kappa, p0)
+                self.perturbed_pressure::<N>(c, tab_c, u, kappa, p0)
                     .map(|(p, _)| p)
             }
         };
         if let Some(pc) = pcoef {
             let (xc, hc) = self.pressure_frame(c);
-            p_st -= cofactor(&f) * pc.dot(&Self::pbasis(&pg.x, &xc, hc));
+            p_st -= cofactor(&f) * pc.dot(&Self::pbasis(&px, &xc, hc));
         }
         let j = 1.0 + det_identity_plus_minus_one(&h);
         let sigma = p_st * f.transpose() / j;
-        let (_, jac) = self.map(c, xi, eta, &tab.n[0], &tab.dn[0]);
         Some(PointValues {
-            x: pg.x,
+            x: px,
             u: disp,
             sigma,
             grad_u: h,

@@ -169,6 +169,9 @@ pub struct StepView<'a> {
     /// Nodal out-of-plane stress σ33 (plane strain: from the constitutive law with F33 = 1,
     /// minus the pressure); empty when not computed.
     pub sigma_33: &'a [f64],
+    /// Recovered nodal Cauchy stress `[σ11, σ22, σ12, σ33]` (superconvergent patch recovery,
+    /// [`crate::physics::recovery`]); empty when not computed.
+    pub stress_recovered: &'a [[f64; 4]],
     /// Nodal pressure p of a mixed (incompressible) formulation, σ = σ_law − p I; empty when the
     /// model has no pressure field.
     pub pressure: &'a [f64],
@@ -638,6 +641,7 @@ mod tests {
                 x: &x,
                 stress: &[],
                 sigma_33: &[],
+                stress_recovered: &[],
                 pressure: &[],
                 contact: &[],
                 hub: None,

@@ -12,6 +12,7 @@
 //! | `max_shear_stress` | 1 | in-plane maximum shear stress (see [`super::stress_measure`]); stress |
 //! | `sigma_11`, `sigma_22`, `sigma_12`, `sigma_33` | 1 | the same stresses one by one; stress |
 //! | `pressure` | 1 | hydrostatic pressure −(σ11 + σ22 + σ33)/3 (compression positive); stress |
+//! | `cauchy_stress_recovered` | 9 | the recovered (smoothed, superconvergent) Cauchy stress, row-major 3×3 like `cauchy_stress`: superconvergent patch recovery of the element stresses at the superconvergent points, continuous across cells (see `crate::physics::recovery`); always finite; stress |
 //! | `pressure_field` | 1 | the pressure unknown p of a mixed (incompressible) formulation, σ = σ_law − p I (it includes the law's reference pressure, e.g. 2c1 + 4c2 for Mooney–Rivlin, so it is not the hydrostatic pressure); only when the model has one; stress |
 //!
 //! σ33 is the plane-strain out-of-plane stress of the constitutive law (F33 = 1), not zero.
@@ -289,6 +290,18 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
         ));
         if view.pressure.len() == nn {
             point_data.push(Array::new("pressure_field", 1, col(&|n| view.pressure[n])));
+        }
+        if view.stress_recovered.len() == nn {
+            let tensor = view
+                .stress_recovered
+                .iter()
+                .flat_map(|&[a, b, c, d]| [a, c, 0.0, c, b, 0.0, 0.0, 0.0, d])
+                .collect();
+            point_data.push(Array::new(
+                "cauchy_stress_recovered",
+                9,
+                Values::F64(tensor),
+            ));
         }
     }
     let cell_data = vec![
