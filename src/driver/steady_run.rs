@@ -886,23 +886,43 @@ pub fn run_with_dump(
             }
         }
         if rows.len() > 1 {
-            let fy = pts(&|r| r.hub_force_y);
+            // One panel per quantity (each with its unit) against the continuation parameter.
+            let u = record::png::Units::parse(&scene.scene.units);
             let fx = pts(&|r| r.hub_force_x);
+            let fy = pts(&|r| r.hub_force_y);
             let tq = pts(&|r| r.hub_torque);
-            let label = scene
-                .continuation
-                .as_ref()
-                .map_or("parameter".to_string(), |c| c.parameter.to_string());
-            if let Err(e) = record::png::line_chart(
+            let wa = pts(&|r| r.wave_amplitude);
+            let (name, unit) = match scene.continuation.as_ref().map(|c| c.parameter) {
+                Some(ContinuationParameter::Omega) | None => ("omega", u.of_scalar("omega")),
+                Some(ContinuationParameter::Load) => ("hub load", u.force_per_thickness()),
+                Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
+                Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
+            };
+            let x = record::png::with_unit(name, &unit);
+            let f = u.force_per_thickness();
+            let ps: Vec<record::png::Panel> = vec![
+                (
+                    record::png::with_unit("hub force F_x", &f),
+                    vec![("hub_force_x", fx.as_slice())],
+                ),
+                (
+                    record::png::with_unit("hub force F_y", &f),
+                    vec![("hub_force_y", fy.as_slice())],
+                ),
+                (
+                    record::png::with_unit("hub torque", &u.moment_per_thickness()),
+                    vec![("hub_torque", tq.as_slice())],
+                ),
+                (
+                    record::png::with_unit("wave amplitude", &u.length),
+                    vec![("wave_amplitude", wa.as_slice())],
+                ),
+            ];
+            if let Err(e) = record::png::panels(
                 &dir.join("branch.png"),
-                "Steady branch: hub loads",
-                &label,
-                "hub force / torque (per unit thickness)",
-                &[
-                    ("hub_force_x", &fx),
-                    ("hub_force_y", &fy),
-                    ("hub_torque", &tq),
-                ],
+                "Steady branch: hub loads and standing-wave amplitude",
+                &x,
+                &ps,
             ) {
                 eprintln!("tread: warning: branch.png: {e}");
             }
