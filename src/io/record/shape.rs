@@ -7,7 +7,8 @@
 //! the displacement) filled by the von Mises Cauchy stress at the nodes (the nodal stresses of
 //! the recorder's view, the same ones the VTU files hold), linearly interpolated over the
 //! display triangles of the cells ([`super::display_triangles`]), with the outline of the body,
-//! the rigid hub (grey), the road line, and a colour bar in the scene's stress unit. Every
+//! the rigid hub (grey), the road line (at x2 = −Ro + k (Ro − H) with k the magnification, so
+//! the magnified body still meets it), and a colour bar in the scene's stress unit. Every
 //! picture of a run shares one colour scale (0 to the largest stress of all snapshots) and one
 //! length scale, so they compare directly. The speed is given in rad/s and rpm, with the
 //! standing-wave amplitude of that point (`wave_amplitude` of `branch.csv`).
@@ -148,6 +149,8 @@ pub struct ShapeSnapshots {
     taken: Vec<Option<ShapeSnapshot>>,
     tris: Vec<[u32; 3]>,
     loops: Vec<Vec<u32>>,
+    /// Outer radius of the reference mesh.
+    ro: f64,
 }
 
 /// Size of a single picture and of one montage panel (pixels).
@@ -174,6 +177,7 @@ impl ShapeSnapshots {
             taken: vec![None; requested.len()],
             tris: display_triangles(mesh),
             loops: boundary_loops(mesh),
+            ro: mesh.nodes.iter().map(|x| x.norm()).fold(0.0, f64::max),
         }
     }
 
@@ -261,6 +265,9 @@ impl ShapeSnapshots {
                     b[2].min(p[1]),
                     b[3].max(p[1]),
                 ];
+            }
+            if let Some(h) = s.road_height.filter(|h| h.is_finite()) {
+                b[2] = b[2].min(-self.ro + self.scale * (self.ro - h));
             }
         }
         if !(b[0].is_finite() && b[2].is_finite()) {
@@ -443,8 +450,11 @@ impl ShapeSnapshots {
                     .map_err(e)?;
             }
             if let Some(hr) = s.road_height.filter(|v| v.is_finite()) {
+                // The road moved with the magnified body: at x2 = −Ro + k (Ro − H), where the
+                // undeformed bottom lands when moved k times the penetration.
                 let (x0, _) = origin(k);
-                let y = to_px(k, [0.0, -hr])[1].round() as i32;
+                let y_road = -self.ro + self.scale * (self.ro - hr);
+                let y = to_px(k, [0.0, y_road])[1].round() as i32;
                 let xa = x0.round() as i32 - 4;
                 let xb = (x0 + px_per * bw).round() as i32 + 4;
                 root.draw(&PathElement::new(
@@ -502,89 +512,4 @@ fn tick_label(v: f64, span: f64) -> String {
     }
     let decimals = (-(step.log10().floor())).clamp(0.0, 6.0) as usize;
     format!("{v:.decimals$}")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_triangle_covers_the_pixels_whose_centres_are_inside() {
-        let mut r = Raster::new(10, 10, [255, 255, 255]);
-        // Right triangle with legs along the top and left edges of a 6 × 6 square.
-        r.fill_triangle([[0.0, 0.0], [6.0, 0.0], [0.0, 6.0]], [1.0; 3], 0.0, 1.0);
-        let top = colormap(1.0);
-        for y in 0..10 {
-            for x in 0..10 {
-                let inside = (x as f64 + 0.5) + (y as f64 + 0.5) <= 6.0;
-                let want = if inside { top } else { [255, 255, 255] };
-                assert_eq!(r.pixel(x, y), Some(want), "pixel ({x}, {y})");
-            }
-        }
-        // Either orientation draws the same; degenerate and non-finite triangles draw nothing.
-        let mut s = Raster::new(10, 10, [255, 255, 255]);
-        s.fill_triangle([[0.0, 0.0], [0.0, 6.0], [6.0, 0.0]], [1.0; 3], 0.0, 1.0);
-        assert_eq!(r, s);
-        let blank = Raster::new(10, 10, [255, 255, 255]);
-        let mut d = blank.clone();
-        d.fill_triangle([[0.0, 0.0], [5.0, 5.0], [9.0, 9.0]], [1.0; 3], 0.0, 1.0);
-        d.fill_triangle(
-            [[0.0, f64::NAN], [5.0, 0.0], [0.0, 5.0]],
-            [1.0; 3],
-            0.0,
-            1.0,
-        );
-        assert_eq!(d, blank);
-        // Off-image parts are clipped.
-        let mut c = blank.clone();
-        c.fill_triangle(
-            [[-50.0, -50.0], [60.0, -50.0], [-50.0, 60.0]],
-            [0.0; 3],
-            0.0,
-            1.0,
-        );
-        assert_eq!(c.pixel(0, 0), Some(colormap(0.0)));
-        assert_eq!(c.pixel(9, 9), Some([255, 255, 255]));
-    }
-
-    #[test]
-    fn colours_are_interpolated_and_the_bar_maps_min_and_max_to_its_ends() {
-        let mut r = Raster::new(100, 4, [255, 255, 255]);
-        // Value = x / 100 along a long thin pair of triangles: colour of lo at the left end,
-        // of hi at the right end.
-        r.fill_triangle(
-            [[0.0, 0.0], [100.0, 0.0], [100.0, 4.0]],
-            [0.0, 100.0, 100.0],
-            0.0,
-            100.0,
-        );
-        r.fill_triangle(
-            [[0.0, 0.0], [100.0, 4.0], [0.0, 4.0]],
-            [0.0, 100.0, 0.0],
-            0.0,
-            100.0,
-        );
-        assert_eq!(r.pixel(0, 2), Some(colormap(0.005)));
-        assert_eq!(r.pixel(99, 2), Some(colormap(0.995)));
-        assert_eq!(r.pixel(50, 2), Some(colormap(0.505)));
-        let mut b = Raster::new(5, 50, [255, 255, 255]);
-        b.colour_bar(1, 0, 3, 50);
-        assert_eq!(b.pixel(2, 0), Some(colormap(1.0)));
-        assert_eq!(b.pixel(2, 49), Some(colormap(0.0)));
-        assert_eq!(b.pixel(0, 10), Some([255, 255, 255]));
-        assert_eq!(b.pixel(4, 10), Some([255, 255, 255]));
-    }
-
-    #[test]
-    fn von_mises_of_simple_states() {
-        // Uniaxial σ11 = s: s; pure shear σ12 = t: √3 t; hydrostatic: 0.
-        assert!((von_mises([2.0, 0.0, 0.0], 0.0) - 2.0).abs() < 1e-14);
-        assert!((von_mises([0.0, 0.0, 1.0], 0.0) - 3f64.sqrt()).abs() < 1e-14);
-        assert!(von_mises([-5.0, -5.0, 0.0], -5.0).abs() < 1e-14);
-        assert_eq!(omega_tag(10.0), "10");
-        assert_eq!(omega_tag(45.25), "45.25");
-        assert_eq!(omega_tag(-3.5), "m3.5");
-        assert_eq!(tick_label(0.0, 300.0), "0");
-        assert_eq!(tick_label(123.4, 300.0), "123");
-    }
 }
