@@ -987,7 +987,7 @@ pub fn run_with_dump(
 }
 
 /// The shape snapshots of `[output] snapshot_omegas` when they apply: PNG output and an
-/// arc-length continuation in ω (otherwise none; [`snapshot_warning`] says why).
+/// arc-length continuation in ω (without the latter [`snapshot_warning`] says why none).
 fn shape_snapshots(scene: &Scene, st: &SteadyRolling) -> Option<ShapeSnapshots> {
     let o = &scene.output;
     (snapshot_warning(scene).is_none() && o.has(Sink::Png) && !o.snapshot_omegas.is_empty())
@@ -1004,17 +1004,12 @@ pub fn snapshot_warning(scene: &Scene) -> Option<String> {
         .continuation
         .as_ref()
         .is_some_and(|c| c.parameter == ContinuationParameter::Omega);
-    if !omega_continuation {
-        Some(
-            "output.snapshot_omegas is ignored: the shapes are drawn at the points of a \
-             [continuation] with parameter = \"omega\""
-                .into(),
-        )
-    } else if !o.has(Sink::Png) {
-        Some("output.snapshot_omegas is ignored: output.sinks does not list \"png\"".into())
-    } else {
-        None
-    }
+    // Without the png sink nothing is drawn, as for every other plot (no warning).
+    (!omega_continuation).then(|| {
+        "output.snapshot_omegas is ignored: the shapes are drawn at the points of a \
+         [continuation] with parameter = \"omega\""
+            .into()
+    })
 }
 
 /// `creep_force.png` (hub F_x against the creep, with the Coulomb limits ±μ|F_y|) and
