@@ -525,9 +525,8 @@ fn resistance_curve_by_arc_length_continuation_brackets_the_peak() {
         "output.sinks=[\"summary\", \"csv\", \"png\"]",
     ];
     let text = scene_text("scenarios/viscoelastic_resistance_curve.toml");
-    let sc =
-        Scene::from_toml_str(&text, "resistance_curve", &set.map(String::from))
-            .unwrap_or_else(|e| panic!("{e}"));
+    let sc = Scene::from_toml_str(&text, "resistance_curve", &set.map(String::from))
+        .unwrap_or_else(|e| panic!("{e}"));
     let dir = tempdir::TestDir::new("visco_steady", "resistance_curve");
     let opts = tread::app::RunOptions {
         out_dir: dir.join("run"),

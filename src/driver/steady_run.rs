@@ -17,10 +17,12 @@
 //! Files: `steady_field.csv` (same format as the transient mode's, see
 //! [`super::transient_run`]: `ring, pos, X1, X2, u1, u2` per referential node), `contact.csv`,
 //! `nodes.csv`, `branch.csv` (continuation) and, with the `png` sink, `branch.png` and
-//! `contact.png`. Recorder steps: the load steps of the pressing stage (time = load factor in
+//! `contact.png`, and with `[output] snapshot_omegas` (continuation in ω) the deformed shapes
+//! `shape_omega_<ω>.png` and `shape_montage.png` ([`crate::io::record::shape`]). Recorder steps: the load steps of the pressing stage (time = load factor in
 //! [0, 1]), then one per continuation point (time = the continuation parameter, as in
 //! `branch.csv`).
 
+use super::frame::SolidFrame;
 use super::resistance;
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
@@ -29,6 +31,7 @@ use super::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
 use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
@@ -495,8 +498,8 @@ pub fn apply_control(
 
 /// The warnings of a steady run of this scene (none so far: the steady residual has every
 /// term of the transient model).
-pub fn warnings(_scene: &Scene) -> Vec<String> {
-    Vec::new()
+pub fn warnings(scene: &Scene) -> Vec<String> {
+    snapshot_warning(scene).into_iter().collect()
 }
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
@@ -600,6 +603,7 @@ pub fn run_with_dump(
     }
     let mut cont: Option<ContinuationReport> = None;
     let mut rows: Vec<BranchRow> = Vec::new();
+    let mut shapes = shape_snapshots(scene, &st);
     if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
         st.param = match cs.parameter {
             ContinuationParameter::Omega => SteadyParameter::Omega,
@@ -665,7 +669,12 @@ pub fn run_with_dump(
             Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
                 let rec: &mut dyn Recorder = &mut recorders;
                 let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
-                    rows.push(branch_row(s, p));
+                    let row = branch_row(s, p);
+                    if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
+                        let frame = SolidFrame::capture(&s.sys);
+                        sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
+                    }
+                    rows.push(row);
                     // Time of a branch point: the continuation parameter (ω, load, DISP), as
                     // in branch.csv; the start point (p.step = 0) is the last load step.
                     let info = StepInfo {
@@ -861,6 +870,12 @@ pub fn run_with_dump(
                 .filter(|p| p.0.is_finite() && p.1.is_finite())
                 .collect()
         };
+        if let Some(sh) = &shapes {
+            let units = record::png::Units::parse(&scene.scene.units);
+            if let Err(e) = sh.write(dir, &units) {
+                eprintln!("tread: warning: shape pictures: {e}");
+            }
+        }
         if rows.len() > 1 && st.param == SteadyParameter::Creep {
             creep_plots(scene, &rows, dir);
         }
@@ -871,23 +886,43 @@ pub fn run_with_dump(
             }
         }
         if rows.len() > 1 {
-            let fy = pts(&|r| r.hub_force_y);
+            // One panel per quantity (each with its unit) against the continuation parameter.
+            let u = record::png::Units::parse(&scene.scene.units);
             let fx = pts(&|r| r.hub_force_x);
+            let fy = pts(&|r| r.hub_force_y);
             let tq = pts(&|r| r.hub_torque);
-            let label = scene
-                .continuation
-                .as_ref()
-                .map_or("parameter".to_string(), |c| c.parameter.to_string());
-            if let Err(e) = record::png::line_chart(
+            let wa = pts(&|r| r.wave_amplitude);
+            let (name, unit) = match scene.continuation.as_ref().map(|c| c.parameter) {
+                Some(ContinuationParameter::Omega) | None => ("omega", u.of_scalar("omega")),
+                Some(ContinuationParameter::Load) => ("hub load", u.force_per_thickness()),
+                Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
+                Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
+            };
+            let x = record::png::with_unit(name, &unit);
+            let f = u.force_per_thickness();
+            let ps: Vec<record::png::Panel> = vec![
+                (
+                    record::png::with_unit("hub force F_x", &f),
+                    vec![("hub_force_x", fx.as_slice())],
+                ),
+                (
+                    record::png::with_unit("hub force F_y", &f),
+                    vec![("hub_force_y", fy.as_slice())],
+                ),
+                (
+                    record::png::with_unit("hub torque", &u.moment_per_thickness()),
+                    vec![("hub_torque", tq.as_slice())],
+                ),
+                (
+                    record::png::with_unit("wave amplitude", &u.length),
+                    vec![("wave_amplitude", wa.as_slice())],
+                ),
+            ];
+            if let Err(e) = record::png::panels(
                 &dir.join("branch.png"),
-                "Steady branch: hub loads",
-                &label,
-                "hub force / torque (per unit thickness)",
-                &[
-                    ("hub_force_x", &fx),
-                    ("hub_force_y", &fy),
-                    ("hub_torque", &tq),
-                ],
+                "Steady branch: hub loads and standing-wave amplitude",
+                &x,
+                &ps,
             ) {
                 eprintln!("tread: warning: branch.png: {e}");
             }
@@ -949,6 +984,32 @@ pub fn run_with_dump(
         Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
         Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
     }
+}
+
+/// The shape snapshots of `[output] snapshot_omegas` when they apply: PNG output and an
+/// arc-length continuation in ω (without the latter [`snapshot_warning`] says why none).
+fn shape_snapshots(scene: &Scene, st: &SteadyRolling) -> Option<ShapeSnapshots> {
+    let o = &scene.output;
+    (snapshot_warning(scene).is_none() && o.has(Sink::Png) && !o.snapshot_omegas.is_empty())
+        .then(|| ShapeSnapshots::new(&st.sys.model.mesh, &o.snapshot_omegas, o.displacement_scale))
+}
+
+/// Why `[output] snapshot_omegas` draws nothing in this steady run, if it is given.
+pub fn snapshot_warning(scene: &Scene) -> Option<String> {
+    let o = &scene.output;
+    if o.snapshot_omegas.is_empty() {
+        return None;
+    }
+    let omega_continuation = scene
+        .continuation
+        .as_ref()
+        .is_some_and(|c| c.parameter == ContinuationParameter::Omega);
+    // Without the png sink nothing is drawn, as for every other plot (no warning).
+    (!omega_continuation).then(|| {
+        "output.snapshot_omegas is ignored: the shapes are drawn at the points of a \
+         [continuation] with parameter = \"omega\""
+            .into()
+    })
 }
 
 /// `creep_force.png` (hub F_x against the creep, with the Coulomb limits ±μ|F_y|) and

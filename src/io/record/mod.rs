@@ -101,6 +101,7 @@ pub mod progress;
 pub mod rrd;
 #[cfg(feature = "rerun")]
 pub mod rrd_layout;
+pub mod shape;
 pub mod sta;
 pub mod vtu;
 

@@ -489,6 +489,21 @@ pub(super) fn parse_override_value(text: &str, kind: Kind) -> toml::Value {
                 .map(|w| toml::Value::String(w.trim().trim_matches('"').to_string()))
                 .collect(),
         ),
+        // `--set output.snapshot_omegas=10,30,45` is a comma-separated list of numbers.
+        (Some(v @ toml::Value::Array(_)), Kind::FloatList) => v,
+        (Some(v @ (toml::Value::Integer(_) | toml::Value::Float(_))), Kind::FloatList) => {
+            toml::Value::Array(vec![v])
+        }
+        (_, Kind::FloatList) => toml::Value::Array(
+            text.split(',')
+                .map(|w| {
+                    let w = w.trim();
+                    w.parse::<f64>()
+                        .map(toml::Value::Float)
+                        .unwrap_or_else(|_| toml::Value::String(w.to_string()))
+                })
+                .collect(),
+        ),
         (Some(v @ toml::Value::String(_)), _) => v,
         (_, Kind::Str | Kind::Keyword(_)) => toml::Value::String(text.to_string()),
         (Some(v), _) => v,

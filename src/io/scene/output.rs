@@ -60,7 +60,13 @@ pub struct OutputSpec {
     pub displacement_scale: f64,
     /// Compression of the binary `.vtu` data: `none` (default) or `zlib`.
     pub vtu_compression: VtuCompression,
+    /// Speeds (rad/s) at which the steady continuation in ω draws the deformed shape with
+    /// stress contours (`shape_omega_<ω>.png`, `shape_montage.png`); empty: none.
+    pub snapshot_omegas: Vec<f64>,
 }
+
+/// Most speeds `[output] snapshot_omegas` may list.
+pub const MAX_SNAPSHOTS: usize = 12;
 
 /// Default of `[output] sinks`: the light-weight outputs (MCAP and Rerun logs are opt-in).
 pub const DEFAULT_SINKS: &[Sink] = &[Sink::Summary, Sink::Csv, Sink::Vtu, Sink::Png];
@@ -73,6 +79,7 @@ impl Default for OutputSpec {
             vtu_format: VtuFormat::Binary,
             displacement_scale: 1.0,
             vtu_compression: VtuCompression::None,
+            snapshot_omegas: Vec::new(),
         }
     }
 }
@@ -98,6 +105,21 @@ pub(super) fn validate_output(s: &OutputSpec, out: &mut Vec<Issue>) {
         out.push(issue(
             "output.vtu_compression",
             "applies to vtu_format = \"binary\" only (the ascii format is not compressed)",
+        ));
+    }
+    if s.snapshot_omegas.len() > MAX_SNAPSHOTS {
+        out.push(issue(
+            "output.snapshot_omegas",
+            format!(
+                "lists {} speeds; at most {MAX_SNAPSHOTS} are drawn",
+                s.snapshot_omegas.len()
+            ),
+        ));
+    }
+    if let Some(w) = s.snapshot_omegas.iter().find(|w| !w.is_finite()) {
+        out.push(issue(
+            "output.snapshot_omegas",
+            format!("must be finite numbers (rad/s), got {w}"),
         ));
     }
     for (i, k) in s.sinks.iter().enumerate() {

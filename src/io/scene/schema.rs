@@ -44,6 +44,8 @@ pub(super) enum Kind {
     Table(&'static [FieldSchema]),
     /// An array of `[number, number]` pairs (Prony terms).
     FloatPairs,
+    /// An array of numbers.
+    FloatList,
 }
 
 #[derive(Debug)]
@@ -312,7 +314,9 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
                 "steps between recorded fields, >= 1 (the final step is always recorded)"),
             opt("vtu_format", Kind::Keyword(VtuFormat::NAMES), NONE, "encoding of the .vtu files"),
             opt("vtu_compression", Kind::Keyword(VtuCompression::NAMES), NONE, "compression of the binary .vtu data (binary only)"),
-            opt("displacement_scale", Kind::Float, NONE, "magnification of the displacement in the Rerun view of the body (> 0; the numbers are unchanged)"),
+            opt("displacement_scale", Kind::Float, NONE, "magnification of the displacement in the Rerun view of the body and in the shape pictures (> 0; the numbers are unchanged)"),
+            opt("snapshot_omegas", Kind::FloatList, "rad/T",
+                "steady mode with a continuation in omega and the png sink: speeds (rad/s, at most 12) at which to draw the deformed shape with von Mises stress contours; the branch point nearest to each is drawn to shape_omega_<omega>.png, all of them to shape_montage.png"),
         ],
     },
 ];
@@ -398,6 +402,20 @@ pub(super) fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
             }
             true
         }
+        (Kind::FloatList, toml::Value::Array(items)) => {
+            for item in items {
+                match item.as_float().or(item.as_integer().map(|i| i as f64)) {
+                    Some(x) if x.is_finite() => {}
+                    _ => {
+                        return Err(format!(
+                            "expected an array of finite numbers, found an entry {}",
+                            describe_value(item)
+                        ))
+                    }
+                }
+            }
+            true
+        }
         (Kind::Str, toml::Value::String(_)) => true,
         (Kind::Keyword(names), toml::Value::String(s)) => {
             if names.contains(&s.as_str()) {
@@ -443,6 +461,7 @@ pub(super) fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
             Kind::Str => "a string".to_string(),
             Kind::Table(_) => "a table".to_string(),
             Kind::FloatPairs => "an array of [number, number] pairs".to_string(),
+            Kind::FloatList => "an array of numbers".to_string(),
             Kind::Keyword(names) => format!("a string, one of {}", quoted_list(names)),
             Kind::KeywordList(names) => {
                 format!("an array of strings from {}", quoted_list(names))
@@ -464,7 +483,7 @@ fn placeholder(kind: Kind) -> toml::Value {
         Kind::Bool => toml::Value::Boolean(true),
         Kind::Str => toml::Value::String("x".into()),
         Kind::Keyword(names) => toml::Value::String(names.first().copied().unwrap_or("").into()),
-        Kind::KeywordList(_) => toml::Value::Array(Vec::new()),
+        Kind::KeywordList(_) | Kind::FloatList => toml::Value::Array(Vec::new()),
         Kind::Table(sub) => toml::Value::Table(
             sub.iter()
                 .filter(|f| f.required)
@@ -534,6 +553,7 @@ fn field_json(f: &FieldSchema, default: Option<&toml::Value>) -> Value {
             "uniqueItems": true
         }),
         Kind::Table(sub) => object_json(sub, &toml::Table::new(), None),
+        Kind::FloatList => json!({ "type": "array", "items": { "type": "number" } }),
         Kind::FloatPairs => json!({
             "type": "array",
             "items": {
@@ -646,6 +666,7 @@ fn kind_text(kind: Kind) -> String {
         Kind::KeywordList(names) => format!("list from {}", ticks(names)),
         Kind::Table(_) => "table".into(),
         Kind::FloatPairs => "[[number, number], …]".into(),
+        Kind::FloatList => "[number, …]".into(),
     }
 }
 
