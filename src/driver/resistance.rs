@@ -55,10 +55,10 @@ pub fn curve(rows: &[BranchRow], ro: f64) -> Vec<(f64, f64)> {
 /// largest value is at an end of the branch or there are fewer than three points. Points are
 /// taken in the order of |ω| (a branch in ω may be walked either way).
 pub fn peak(rows: &[BranchRow], ro: f64) -> Option<ResistancePeak> {
-    let mut pts: Vec<(f64, f64, usize)> = rows
+    let mut pts: Vec<(f64, f64, usize, f64)> = rows
         .iter()
-        .map(|r| (r.omega.abs(), coefficient(r, ro), r.step))
-        .filter(|(w, c, _)| w.is_finite() && *w > 0.0 && c.is_finite())
+        .map(|r| (r.omega.abs(), coefficient(r, ro), r.step, r.omega.signum()))
+        .filter(|(w, c, _, _)| w.is_finite() && *w > 0.0 && c.is_finite())
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     if pts.len() < 3 {
@@ -82,7 +82,7 @@ pub fn peak(rows: &[BranchRow], ro: f64) -> Option<ResistancePeak> {
         (x1, y1)
     };
     Some(ResistancePeak {
-        omega: x.exp() * pts[i].0.signum(),
+        omega: x.exp() * pts[i].3,
         coefficient: y,
         step: pts[i].2,
     })
