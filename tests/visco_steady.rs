@@ -505,7 +505,10 @@ fn rolling_resistance_matches_the_half_space_reference() {
         );
         // Measured: inner 80 % max 2.1-2.7 %, rms 0.7-0.8 % of p_max; over the whole patch
         // rms 1.8-3.3 %, the maxima (11-18 %) at the edges, which sit 0.001-0.005 in off.
-        assert!(worst_in < 0.03 && rms_in < 0.01, "omega {om}: {worst_in} {rms_in}");
+        assert!(
+            worst_in < 0.03 && rms_in < 0.01,
+            "omega {om}: {worst_in} {rms_in}"
+        );
         assert!(rms < 0.04, "omega {om}: {rms}");
     }
 }

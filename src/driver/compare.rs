@@ -180,7 +180,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         return Err(AppError::Unsupported(format!(
             "compare: the transient run ended at t = {} s before its first cell passage, so it \
              extracted no referential field to compare (raise time.t_end, now {} s)",
-            ts["results"]["final_time"].as_f64().map_or("?".into(), |t| format!("{t:.4e}")),
+            ts["results"]["final_time"]
+                .as_f64()
+                .map_or("?".into(), |t| format!("{t:.4e}")),
             scene.time.as_ref().map_or(f64::NAN, |t| t.t_end)
         )));
     }

@@ -18,9 +18,22 @@
 //! the contact half-width and τ the relaxation time; Hunter 1961). A maximum at either end of
 //! the branch is reported as not found: the branch does not bracket the peak.
 
-use super::steady_run::BranchRow;
 use crate::io::record::png;
 use std::path::Path;
+
+/// What the coefficient needs of one branch point (the steady mode builds these from its
+/// branch rows).
+#[derive(Clone, Copy, Debug)]
+pub struct BranchLoad {
+    /// Continuation step.
+    pub step: usize,
+    /// Angular speed (rad/s).
+    pub omega: f64,
+    /// Vertical hub force F_y (force per unit thickness; < 0 when pressed).
+    pub hub_force_y: f64,
+    /// Hub torque T (counter-clockwise positive, per unit thickness).
+    pub hub_torque: f64,
+}
 
 /// The peak of C_rr(ω) on a branch.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -34,7 +47,7 @@ pub struct ResistancePeak {
 }
 
 /// C_rr of one branch point (NaN without a load: P ≤ 0).
-pub fn coefficient(row: &BranchRow, ro: f64) -> f64 {
+pub fn coefficient(row: &BranchLoad, ro: f64) -> f64 {
     let p = -row.hub_force_y;
     if p > 0.0 && ro > 0.0 {
         row.omega.signum() * row.hub_torque / (p * ro)
@@ -44,7 +57,7 @@ pub fn coefficient(row: &BranchRow, ro: f64) -> f64 {
 }
 
 /// (ω, C_rr) of every branch point with a finite coefficient and ω ≠ 0.
-pub fn curve(rows: &[BranchRow], ro: f64) -> Vec<(f64, f64)> {
+pub fn curve(rows: &[BranchLoad], ro: f64) -> Vec<(f64, f64)> {
     rows.iter()
         .map(|r| (r.omega, coefficient(r, ro)))
         .filter(|(w, c)| w.is_finite() && *w != 0.0 && c.is_finite())
@@ -54,7 +67,7 @@ pub fn curve(rows: &[BranchRow], ro: f64) -> Vec<(f64, f64)> {
 /// The interior maximum of C_rr along the branch (see the module docs), or None when the
 /// largest value is at an end of the branch or there are fewer than three points. Points are
 /// taken in the order of |ω| (a branch in ω may be walked either way).
-pub fn peak(rows: &[BranchRow], ro: f64) -> Option<ResistancePeak> {
+pub fn peak(rows: &[BranchLoad], ro: f64) -> Option<ResistancePeak> {
     let mut pts: Vec<(f64, f64, usize, f64)> = rows
         .iter()
         .map(|r| (r.omega.abs(), coefficient(r, ro), r.step, r.omega.signum()))
@@ -90,7 +103,7 @@ pub fn peak(rows: &[BranchRow], ro: f64) -> Option<ResistancePeak> {
 
 /// `results.rolling_resistance`: the definition, the curve and the peak (null when the
 /// branch does not bracket one).
-pub fn summary(rows: &[BranchRow], ro: f64) -> serde_json::Value {
+pub fn summary(rows: &[BranchLoad], ro: f64) -> serde_json::Value {
     let c = curve(rows, ro);
     serde_json::json!({
         "definition": "C_rr = sign(omega) T / (P Ro), P = -F_y",
@@ -101,7 +114,7 @@ pub fn summary(rows: &[BranchRow], ro: f64) -> serde_json::Value {
 }
 
 /// `resistance.png`: C_rr against |ω| (log axis), with the peak as its own marked series.
-pub fn plot(path: &Path, rows: &[BranchRow], ro: f64) -> Result<(), String> {
+pub fn plot(path: &Path, rows: &[BranchLoad], ro: f64) -> Result<(), String> {
     let c: Vec<(f64, f64)> = curve(rows, ro)
         .into_iter()
         .map(|(w, v)| (w.abs(), v))
@@ -126,30 +139,12 @@ pub fn plot(path: &Path, rows: &[BranchRow], ro: f64) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::continuation::PointKind;
-
-    fn row(step: usize, omega: f64, torque: f64) -> BranchRow {
-        BranchRow {
+    fn row(step: usize, omega: f64, torque: f64) -> BranchLoad {
+        BranchLoad {
             step,
-            lambda: omega,
             omega,
-            v0: 2.0 * omega,
-            penetration: 0.01,
-            hub_force_x: 0.0,
             hub_force_y: -4.0,
             hub_torque: torque,
-            contact_x_min: -0.1,
-            contact_x_max: 0.1,
-            max_pressure: 1.0,
-            wave_amplitude: 0.0,
-            det_sign: 1.0,
-            negative_eigenvalues: 0.0,
-            test_function: 1.0,
-            iterations: 2,
-            kind: PointKind::Regular,
-            wall_time_s: 0.0,
-            factor_solve_s: 0.0,
-            creep: f64::NAN,
         }
     }
 
@@ -158,7 +153,7 @@ mod tests {
         // C_rr(ω) = 0.01 − 0.002 (ln ω − ln 1.7)², sampled unevenly: the vertex is recovered.
         let c = |w: f64| 0.01 - 0.002 * (w.ln() - 1.7f64.ln()).powi(2);
         let ws = [0.3, 0.5, 1.1, 2.4, 4.0, 9.0];
-        let rows: Vec<BranchRow> = ws
+        let rows: Vec<BranchLoad> = ws
             .iter()
             .enumerate()
             .map(|(i, &w)| row(i, w, c(w) * 4.0 * 2.0))
@@ -168,9 +163,9 @@ mod tests {
         assert!((p.coefficient - 0.01).abs() < 1e-15, "{p:?}");
         assert_eq!(p.step, 3);
         // Walked the other way (decreasing ω), and at negative ω (clockwise, T < 0 dissipates).
-        let rev: Vec<BranchRow> = rows.iter().rev().cloned().collect();
+        let rev: Vec<BranchLoad> = rows.iter().rev().cloned().collect();
         assert_eq!(peak(&rev, 2.0), Some(p));
-        let neg: Vec<BranchRow> = rows
+        let neg: Vec<BranchLoad> = rows
             .iter()
             .map(|r| row(r.step, -r.omega, -r.hub_torque))
             .collect();
@@ -180,7 +175,7 @@ mod tests {
 
     #[test]
     fn a_monotone_branch_has_no_peak() {
-        let rows: Vec<BranchRow> = (1..6).map(|i| row(i, i as f64, 0.1 * i as f64)).collect();
+        let rows: Vec<BranchLoad> = (1..6).map(|i| row(i, i as f64, 0.1 * i as f64)).collect();
         assert_eq!(peak(&rows, 2.0), None);
         assert_eq!(peak(&rows[..2], 2.0), None);
         // Unloaded points have no coefficient.

@@ -762,7 +762,8 @@ pub fn run_with_dump(
         && st.param == SteadyParameter::Omega
         && rows.len() > 1;
     if resistance_curve {
-        results["rolling_resistance"] = resistance::summary(&rows, scene.geometry.ro);
+        results["rolling_resistance"] =
+            resistance::summary(&branch_loads(&rows), scene.geometry.ro);
     }
     if let Some(c) = &cont {
         results["branch"] = serde_json::to_value(&rows).unwrap_or_default();
@@ -880,8 +881,11 @@ pub fn run_with_dump(
             creep_plots(scene, &rows, dir);
         }
         if resistance_curve {
-            if let Err(e) = resistance::plot(&dir.join("resistance.png"), &rows, scene.geometry.ro)
-            {
+            if let Err(e) = resistance::plot(
+                &dir.join("resistance.png"),
+                &branch_loads(&rows),
+                scene.geometry.ro,
+            ) {
                 eprintln!("tread: warning: resistance.png: {e}");
             }
         }
@@ -1067,4 +1071,16 @@ pub fn write_steady_csv(
         tables::write_contact_csv(&dir.join("contact.csv"), &samples)?;
     }
     tables::write_nodes_csv(&dir.join("nodes.csv"), mesh, &sys.x)
+}
+
+/// The branch points as the rolling-resistance curve takes them.
+fn branch_loads(rows: &[BranchRow]) -> Vec<resistance::BranchLoad> {
+    rows.iter()
+        .map(|r| resistance::BranchLoad {
+            step: r.step,
+            omega: r.omega,
+            hub_force_y: r.hub_force_y,
+            hub_torque: r.hub_torque,
+        })
+        .collect()
 }
