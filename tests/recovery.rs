@@ -23,25 +23,8 @@ const NEO: &str = "model = \"neo_hookean\"\nmu = 200.0\nlambda = 1800.0";
 const MR: &str = "model = \"mooney_rivlin\"\nc1 = 80.0\nc2 = 20.0\nkappa = 2000.0";
 
 fn scene_with_mesh(material: &str, mesh: &str) -> Scene {
-    let text = format!(
-        r#"
-[scene]
-name = "test"
-[geometry]
-ri = {RI}
-ro = {RO}
-[mesh]
-{mesh}
-[material]
-{material}
-rho = {RHO}
-[analysis]
-mode = "spinning"
-[motion]
-omega = 1.0
-"#
-    );
-    Scene::from_toml_str(&text, "test", &[]).expect("valid test scene")
+    // The shared scene has RI, RO and RHO of this file.
+    common::spinning_scene(material, mesh)
 }
 
 fn scene(material: &str, n_r: usize, n_theta: usize, order: usize) -> Scene {

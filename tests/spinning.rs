@@ -15,27 +15,13 @@ const RO: f64 = 2.0;
 const RHO: f64 = 0.027;
 
 fn scene(material: &str, n_r: usize, n_theta: usize, order: usize) -> Scene {
-    let text = format!(
-        r#"
-[scene]
-name = "test"
-[geometry]
-ri = {RI}
-ro = {RO}
-[mesh]
-n_r = {n_r}
+    // The shared scene has RI, RO and RHO of this file.
+    common::spinning_scene(
+        material,
+        &format!("n_r = {n_r}
 n_theta = {n_theta}
-order = {order}
-[material]
-{material}
-rho = {RHO}
-[analysis]
-mode = "spinning"
-[motion]
-omega = 1.0
-"#
-    );
-    Scene::from_toml_str(&text, "test", &[]).expect("valid test scene")
+order = {order}"),
+    )
 }
 
 fn solve(sys: &mut SolidSystem, omega: f64, kind: LinearKind, steps: usize) -> StepReport {
