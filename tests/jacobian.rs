@@ -199,7 +199,7 @@ fn tangent_is_symmetric_without_friction() {
 mod contact {
     use super::*;
     use tread::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
-    use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance, SlipKinematics};
+    use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
     use tread::solver::stepping::LoadedSystem;
 
     /// A small mesh pushed into the road so that several facets are in contact, with a
@@ -236,9 +236,7 @@ mod contact {
                 sys.x_prev[2 * n] = sys.x[2 * n] - 0.004 * x[0];
             }
         }
-        if let Some(c) = &mut sys.contact {
-            c.kinematics = SlipKinematics::Static { dtau: 0.5 };
-        }
+        sys.set_load_step_length(0.5);
         sys
     }
 

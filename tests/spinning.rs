@@ -18,9 +18,11 @@ fn scene(material: &str, n_r: usize, n_theta: usize, order: usize) -> Scene {
     // The shared scene has RI, RO and RHO of this file.
     common::spinning_scene(
         material,
-        &format!("n_r = {n_r}
+        &format!(
+            "n_r = {n_r}
 n_theta = {n_theta}
-order = {order}"),
+order = {order}"
+        ),
     )
 }
 

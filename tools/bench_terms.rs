@@ -21,6 +21,7 @@ use common::median;
 
 use std::time::Instant;
 use tread::app::RunOptions;
+use tread::contact::SlipKinematics;
 use tread::io::Scene;
 use tread::solver::NonlinearSystem;
 
@@ -63,10 +64,17 @@ fn contact_block_time(set: &[&str], repeats: usize) -> (f64, f64) {
             std::process::exit(1);
         };
         let (mesh, dofs, x, xp) = (&sys.model.mesh, &sys.dofs, &sys.x, &sys.x_prev);
+        let kin = match sys.model.steady_omega {
+            Some(omega) => SlipKinematics::Steady { omega },
+            None => SlipKinematics::Static {
+                x_prev: xp,
+                dtau: 1.0,
+            },
+        };
         let t0 = Instant::now();
         for _ in 0..inner {
             sys.asm.add_block(1, dofs, true, |e, loc| {
-                c.kernel(mesh, dofs, x, xp, e, loc, true)
+                c.kernel(mesh, dofs, x, &kin, e, loc, true)
             });
         }
         times.push(t0.elapsed().as_secs_f64() / inner as f64);

@@ -469,12 +469,7 @@ fn run_once(
 
 /// Contact half-width 2 √⟨x²⟩ of the configuration `x` (full displacement vector).
 fn half_width(tr: &Transient, x: &[f64], v: &[f64]) -> f64 {
-    let samples = tr
-        .sys
-        .contact
-        .as_ref()
-        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, x, v))
-        .unwrap_or_default();
+    let samples = tr.contact_samples(x, v);
     2.0 * ContactModel::totals(&samples).pressure_second_moment.sqrt()
 }
 

@@ -91,32 +91,32 @@ pub fn lobatto_1d(n: usize) -> (Vec<f64>, Vec<f64>) {
     (x.to_vec(), w.to_vec())
 }
 
-/// How the slip velocity and the penetration rate are obtained.
+/// How the slip velocity and the penetration rate are obtained: supplied by the driver with
+/// every evaluation ([`ContactModel::kernel`], [`ContactModel::samples`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SlipKinematics {
-    /// Static analysis: the auxiliary vector is the state of the last converged load step;
-    /// velocity v = (x − x_prev)/Δτ in load-stepping pseudo-time, w = v1 − v0; no normal
-    /// damping (δ̇ is not a physical rate).
-    Static { dtau: f64 },
-    /// Dynamic analysis: the auxiliary vector is the velocity field; the unknown moves the
-    /// positions by `kx` and the velocities by `kv` per unit change (e.g. generalized-α:
-    /// kx = 1 − α_f, kv = (1 − α_f) γ / (β Δt)). w = v1 − v0, δ̇ = −v2.
-    Dynamic { kx: f64, kv: f64 },
+pub enum SlipKinematics<'a> {
+    /// Static analysis: `x_prev` is the state of the last converged load step; velocity
+    /// v = (x − x_prev)/Δτ in load-stepping pseudo-time, w = v1 − v0; no normal damping (δ̇ is
+    /// not a physical rate).
+    Static { x_prev: &'a [f64], dtau: f64 },
+    /// Dynamic analysis: `v` is the velocity field; the unknown moves the positions by `kx`
+    /// and the velocities by `kv` per unit change (e.g. generalized-α: kx = 1 − α_f,
+    /// kv = (1 − α_f) γ / (β Δt)). w = v1 − v0, δ̇ = −v2.
+    Dynamic { v: &'a [f64], kx: f64, kv: f64 },
     /// Steady rolling on the referential (spatial) mesh (DESIGN §5): the unknown is the motion
     /// χ(r, θ) = X + u, the velocity is v = ω ∂θχ, differentiated along the facet
     /// (∂θ = (d/dη) / (dθ/dη), θ the polar angle of the reference facet point), so
-    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. `aux` is not used. With
-    /// [`ContactModel::steady_slip`] set, ∂θu1 in w comes from nodal derivatives instead
-    /// (continuous across facets, [`super::steady_slip`]).
+    /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. With [`ContactModel::steady_slip`] set, ∂θu1 in w
+    /// comes from nodal derivatives instead (continuous across facets, [`super::steady_slip`]).
     Steady { omega: f64 },
 }
 
-impl SlipKinematics {
+impl SlipKinematics<'_> {
     /// (kx, kv, damping active).
     fn factors(&self) -> (f64, f64, bool) {
         match *self {
-            SlipKinematics::Static { dtau } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
-            SlipKinematics::Dynamic { kx, kv } => (kx, kv, true),
+            SlipKinematics::Static { dtau, .. } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
+            SlipKinematics::Dynamic { kx, kv, .. } => (kx, kv, true),
             SlipKinematics::Steady { omega } => (1.0, omega, true),
         }
     }
@@ -134,7 +134,6 @@ pub struct ContactModel {
     pub rule: FacetRule,
     /// Downward hub load P (force per unit thickness) under load control.
     pub load: Option<f64>,
-    pub kinematics: SlipKinematics,
     pub facets: Vec<Facet>,
     /// Steady mode: continuous slip velocity from nodal θ-derivatives along the contact
     /// boundary ([`super::steady_slip`]); set by [`Self::enable_steady_slip`]. Changes the
@@ -203,7 +202,6 @@ impl ContactModel {
             friction,
             rule,
             load,
-            kinematics: SlipKinematics::Static { dtau: 1.0 },
             facets: mesh.facet_set("outer").to_vec(),
             steady_slip: None,
             visited: AtomicUsize::new(0),
@@ -327,8 +325,8 @@ impl ContactModel {
         Self::side_nodes(f, p).any(|a| pos(a)[1] < -h + margin)
     }
 
-    /// Displacement and velocity at facet point `q` of cell `c` (see [`SlipKinematics`] for
-    /// the meaning of `aux`).
+    /// Displacement and velocity at facet point `q` of cell `c` (the velocity as
+    /// [`SlipKinematics`] defines it).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn point_motion(
@@ -339,27 +337,27 @@ impl ContactModel {
         nv: &[f64; 3],
         fp: &FacetPoint,
         x: &[f64],
-        aux: &[f64],
+        kin: &SlipKinematics,
     ) -> (Vec2, Vec2) {
         let mut u = Vec2::zeros();
         for j in 0..nn {
             let n = nodes[side[j]] as usize;
             u += Vec2::new(x[2 * n], x[2 * n + 1]) * nv[j];
         }
-        let vel = match self.kinematics {
-            SlipKinematics::Static { dtau } => {
+        let vel = match *kin {
+            SlipKinematics::Static { x_prev, dtau } => {
                 let mut a = Vec2::zeros();
                 for j in 0..nn {
                     let n = nodes[side[j]] as usize;
-                    a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
+                    a += Vec2::new(x_prev[2 * n], x_prev[2 * n + 1]) * nv[j];
                 }
                 (u - a) / dtau.max(f64::MIN_POSITIVE)
             }
-            SlipKinematics::Dynamic { .. } => {
+            SlipKinematics::Dynamic { v, .. } => {
                 let mut a = Vec2::zeros();
                 for j in 0..nn {
                     let n = nodes[side[j]] as usize;
-                    a += Vec2::new(aux[2 * n], aux[2 * n + 1]) * nv[j];
+                    a += Vec2::new(v[2 * n], v[2 * n + 1]) * nv[j];
                 }
                 a
             }
@@ -378,8 +376,8 @@ impl ContactModel {
 
     /// The steady slip stencil of facet `e`, when the steady kinematics use it.
     #[inline]
-    fn nodal_slip(&self) -> Option<&SteadySlip> {
-        match self.kinematics {
+    fn nodal_slip(&self, kin: &SlipKinematics) -> Option<&SteadySlip> {
+        match kin {
             SlipKinematics::Steady { .. } => self.steady_slip.as_ref(),
             _ => None,
         }
@@ -398,9 +396,10 @@ impl ContactModel {
         nv: &[f64; 3],
         fp: &FacetPoint,
         x: &[f64],
+        kin: &SlipKinematics,
         cw: &mut [f64; MAX_EXT],
     ) -> f64 {
-        let omega = match self.kinematics {
+        let omega = match *kin {
             SlipKinematics::Steady { omega } => omega,
             _ => 0.0,
         };
@@ -418,23 +417,28 @@ impl ContactModel {
     /// ∂v/∂u_b (per facet node b, same for both components): kv N_b (static, dynamic) or
     /// ω ∂θN_b (steady).
     #[inline]
-    fn velocity_coefficients(&self, nv: &[f64; 3], fp: &FacetPoint, kv: f64) -> [f64; 3] {
-        match self.kinematics {
+    fn velocity_coefficients(
+        nv: &[f64; 3],
+        fp: &FacetPoint,
+        kin: &SlipKinematics,
+        kv: f64,
+    ) -> [f64; 3] {
+        match *kin {
             SlipKinematics::Steady { omega } => fp.dn_dtheta.map(|d| omega * d),
             _ => nv.map(|n| kv * n),
         }
     }
 
     /// Contact element kernel for facet `e`: fills the local residual/tangent in the order of
-    /// [`Self::element_dofs`]. `x`: current full state; `aux`: the state of the last converged
-    /// load step (static) or the velocity field (dynamic), see [`SlipKinematics`].
+    /// [`Self::element_dofs`]. `x`: current full state; `kin`: how the velocities are
+    /// obtained (the last converged load step, the velocity field or ω ∂θχ).
     #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
     pub fn kernel(
         &self,
         mesh: &Mesh,
         dofs: &DofMap,
         x: &[f64],
-        aux: &[f64],
+        kin: &SlipKinematics,
         e: usize,
         loc: &mut LocalSystem,
         with_k: bool,
@@ -445,7 +449,7 @@ impl ContactModel {
         let h = self.road_height(dofs, x);
         let has_h = self.load.is_some() && dofs.n_global > 0;
         let nn = p + 1;
-        let slip = self.nodal_slip();
+        let slip = self.nodal_slip(kin);
         // Nodes of the element: the facet's, or its extended list with the steady slip.
         let ne = self.steady_slip.as_ref().map_or(nn, |s| s.nodes(e).len());
         let ih = 2 * ne; // local index of H
@@ -461,12 +465,12 @@ impl ContactModel {
         let side = f.local_nodes(p);
         let nd = loc.nd;
         let friction = self.friction.is_active();
-        let (kx, kv, dynamic) = self.kinematics.factors();
+        let (kx, kv, dynamic) = kin.factors();
         let damping = dynamic && self.normal.has_damping();
         for q in 0..self.pts.len() {
             let (nv, dv) = lagrange_1d(p, self.pts[q]);
             let fp = self.facet_point(mesh, &f, q, &nv, &dv, p);
-            let (u, vel) = self.point_motion(nodes, &side, nn, &nv, &fp, x, aux);
+            let (u, vel) = self.point_motion(nodes, &side, nn, &nv, &fp, x, kin);
             let xc = fp.x + u;
             let delta = -h - xc[1];
             if delta <= 0.0 {
@@ -481,7 +485,7 @@ impl ContactModel {
             // Derivatives with respect to the unknowns (δ = −H − x2, δ̇ = −v2): with
             // ∂x/∂u_b = kx N_b and ∂v/∂u_b = cv_b ([`Self::velocity_coefficients`]),
             // ∂t_n/∂u_{b,2} = −d_delta kx N_b − d_rate cv_b; ∂/∂H has the kx part only.
-            let cv = self.velocity_coefficients(&nv, &fp, kv);
+            let cv = Self::velocity_coefficients(&nv, &fp, kin, kv);
             let d_rate = if damping { nval.d_rate } else { 0.0 };
             let mut dtn_du2 = [0.0; 3];
             for b in 0..nn {
@@ -494,7 +498,7 @@ impl ContactModel {
                 // ∂w/∂u_{b,1}: the facet-wise cv_b, or ω Σ_j N_j W_jb (nodal derivatives).
                 let mut cw = [0.0; MAX_EXT];
                 let w = match slip {
-                    Some(s) => self.nodal_slip_w(s, e, nn, &nv, &fp, x, &mut cw),
+                    Some(s) => self.nodal_slip_w(s, e, nn, &nv, &fp, x, kin, &mut cw),
                     None => {
                         cw[..nn].copy_from_slice(&cv[..nn]);
                         vel[0] - self.v0
@@ -568,17 +572,17 @@ impl ContactModel {
         out
     }
 
-    /// Traction samples at every facet quadrature point (contact or not); `aux` as in
+    /// Traction samples at every facet quadrature point (contact or not); `kin` as in
     /// [`Self::kernel`].
     pub fn samples(
         &self,
         mesh: &Mesh,
         dofs: &DofMap,
         x: &[f64],
-        aux: &[f64],
+        kin: &SlipKinematics,
     ) -> Vec<ContactSample> {
         let h = self.road_height(dofs, x);
-        let (_, _, dynamic) = self.kinematics.factors();
+        let (_, _, dynamic) = kin.factors();
         let damping = dynamic && self.normal.has_damping();
         let mut out = Vec::new();
         for (e, f) in self.facets.iter().enumerate() {
@@ -586,17 +590,17 @@ impl ContactModel {
             let p = mesh.degree[c] as usize;
             let nodes = mesh.cell_nodes(c);
             let side = f.local_nodes(p);
-            let slip = self.nodal_slip();
+            let slip = self.nodal_slip(kin);
             for q in 0..self.pts.len() {
                 let (nv, dv) = lagrange_1d(p, self.pts[q]);
                 let fp = self.facet_point(mesh, f, q, &nv, &dv, p);
-                let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, &fp, x, aux);
+                let (u, vel) = self.point_motion(nodes, &side, p + 1, &nv, &fp, x, kin);
                 let xc = fp.x + u;
                 let delta = -h - xc[1];
                 let w = match slip {
                     Some(s) => {
                         let mut cw = [0.0; MAX_EXT];
-                        self.nodal_slip_w(s, e, p + 1, &nv, &fp, x, &mut cw)
+                        self.nodal_slip_w(s, e, p + 1, &nv, &fp, x, kin, &mut cw)
                     }
                     None => vel[0] - self.v0,
                 };

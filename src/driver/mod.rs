@@ -27,7 +27,9 @@ pub mod steady_run;
 pub mod stick_slip_run;
 pub mod system;
 pub mod tables;
+pub mod terms;
 pub mod transient;
 pub mod transient_run;
 
 pub use system::{SolidSystem, SteadyDampingTangent};
+pub use terms::{Inertia, Rates, Terms};

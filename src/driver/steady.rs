@@ -6,7 +6,7 @@
 //! position X (numbering and positions as the transient mode's extracted field, so the two can
 //! be compared node by node). The residual is the [`crate::physics::SolidModel`] one with the
 //! inertia term −ω² ∫ ρ0 ∂θχ · ∂θη (the paper's B), plus the contact element of
-//! [`crate::contact`] with [`SlipKinematics::Steady`]: normal compliance with damping on
+//! [`crate::contact`] with [`SlipKinematics::Steady`](crate::contact::SlipKinematics::Steady): normal compliance with damping on
 //! δ̇ = −ω ∂θχ2 and friction on the slip w = ω ∂θχ1 − v0. With friction or damping the tangent
 //! is unsymmetric (LU). The friction slip takes ∂θu from nodal five-point θ-differences along
 //! the contact boundary, interpolated over each facet ([`crate::contact::steady_slip`],
@@ -55,7 +55,6 @@
 
 use super::steady_report::Recovery;
 use super::system::{Loading, SolidSystem};
-use crate::contact::SlipKinematics;
 use crate::io::record::Recorder;
 use crate::solver::continuation::ParametricSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
@@ -136,7 +135,6 @@ impl SteadyRolling {
         self.sys.model.omega2 = omega * omega;
         self.sys.model.steady_omega = Some(omega);
         if let Some(c) = &mut self.sys.contact {
-            c.kinematics = SlipKinematics::Steady { omega };
             c.v0 = v0;
         }
     }

@@ -17,7 +17,8 @@
 //! cell pressures and the global unknowns (e.g. the road height under load control); the hub
 //! nodes are fixed and carry no equation.
 
-use crate::assembly::{Assembler, DofMap, LocalSystem, FIXED};
+use super::terms::{CellForces, CellRate, Rates, Terms};
+use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::viscoelastic_steady::RingError;
@@ -48,6 +49,9 @@ pub struct SolidSystem {
     /// State at the start of the last accepted load step: after [`LoadedSystem::commit`] the
     /// static slip w = (x − x_start)/Δτ of that step is still known for the outputs.
     x_step_start: Vec<f64>,
+    /// Load-step length Δτ of the current step in load-stepping pseudo-time (the static
+    /// friction slip is (x − x_prev)/Δτ).
+    dtau: f64,
     pub loading: Loading,
     /// Load factor of the current target and of the last converged step.
     pub lambda: f64,
@@ -149,6 +153,7 @@ impl SolidSystem {
             x_prev: x.clone(),
             x_step_start: x.clone(),
             x,
+            dtau: 1.0,
             loading: Loading::Spin { omega2: 0.0 },
             lambda: 0.0,
             lambda_prev: 0.0,
@@ -439,40 +444,115 @@ impl SolidSystem {
         Some((vel, om))
     }
 
-    /// Assemble the cells (residual and, with `with_matrix`, the tangent): with the steady
-    /// damping when it is active, otherwise the model's plain assembly. Returns whether the
-    /// state is admissible.
-    fn assemble_cells(&mut self, with_matrix: bool) -> bool {
-        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
-            return self
-                .model
-                .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
-        };
-        if self.model.strain_rate_damping <= 0.0 {
-            return self
-                .model
-                .assemble(&mut self.asm, &self.dofs, &self.x, with_matrix);
+    /// Set the load-step length Δτ with which the static friction slip (x − x_prev)/Δτ is
+    /// measured (normally set by [`LoadedSystem::set_load`]).
+    pub fn set_load_step_length(&mut self, dtau: f64) {
+        self.dtau = dtau.max(f64::MIN_POSITIVE);
+    }
+
+    /// The rates of the system's own evaluation ([`NonlinearSystem::evaluate`]): steady while
+    /// `model.steady_omega` is set, otherwise load stepping.
+    pub fn own_rates(&self) -> Rates<'static> {
+        if self.model.steady_omega.is_some() {
+            Rates::Steady
+        } else {
+            Rates::Static
         }
-        sv.nodal
-            .velocities(&self.model.mesh, &self.x, om, &mut sv.vel);
-        let (model, dofs, x) = (&self.model, &self.dofs, &self.x);
-        let (vel, local, local_off, av_off) = (&sv.vel, &sv.local, &sv.local_off, &sv.av_off);
-        let av = crate::assembly::SharedMut::new(&mut sv.av);
-        model.reset_admissible();
-        self.asm.assemble(dofs, with_matrix, |c, loc| {
-            let d = &local[local_off[c]..local_off[c + 1]];
-            if !with_matrix {
-                model.cell_system_steady_viscous(c, dofs, x, vel, om, d, loc, false, None);
-                return;
-            }
-            let mut a = [0.0; 324];
-            model.cell_system_steady_viscous(c, dofs, x, vel, om, d, loc, true, Some(&mut a));
-            for (i, v) in a[..av_off[c + 1] - av_off[c]].iter().enumerate() {
-                // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
-                unsafe { av.set(av_off[c] + i, *v) };
-            }
-        });
-        model.admissible()
+    }
+
+    /// The one assembly of residual and (with `with_matrix`) tangent that every analysis
+    /// uses: the cells' forces at the driver's rates, scaled, plus inertia (see
+    /// [`super::terms`]), the steady damping's coupling beyond the cells (assembled mode),
+    /// then the contact facets at the same rates. Returns whether the state is admissible
+    /// (no J ≤ 0) and the residual finite.
+    pub fn assemble(&mut self, terms: &Terms, with_matrix: bool) -> bool {
+        let steady = matches!(terms.rates, Rates::Steady);
+        if steady {
+            self.sync_steady_history();
+        }
+        let ok = {
+            let xs: &[f64] = match terms.rates {
+                Rates::Dynamic { x, .. } => x,
+                _ => &self.x,
+            };
+            let (model, dofs, asm) = (&self.model, &self.dofs, &mut self.asm);
+            let mut av_out = None;
+            let rate = match (terms.rates, self.steady_visc.as_mut(), model.steady_omega) {
+                (Rates::Dynamic { v, kv, .. }, _, _) => CellRate::Dynamic { v, kv },
+                (Rates::Steady, Some(sv), Some(omega)) if model.strain_rate_damping > 0.0 => {
+                    sv.nodal.velocities(&model.mesh, xs, omega, &mut sv.vel);
+                    av_out = Some((SharedMut::new(&mut sv.av), &sv.av_off));
+                    CellRate::Steady {
+                        vel: &sv.vel,
+                        omega,
+                        local: &sv.local,
+                        local_off: &sv.local_off,
+                    }
+                }
+                _ => CellRate::None,
+            };
+            let cells = CellForces {
+                model,
+                dofs,
+                x: xs,
+                rate,
+                force_scale: terms.force_scale,
+                inertia: terms.inertia,
+            };
+            model.reset_admissible();
+            asm.zero(with_matrix);
+            asm.add_block(0, dofs, with_matrix, |c, loc| {
+                match &av_out {
+                    Some((av, av_off)) if with_matrix => {
+                        let mut a = [0.0; 324];
+                        cells.eval(c, loc, true, Some(&mut a));
+                        for (i, v) in a[..av_off[c + 1] - av_off[c]].iter().enumerate() {
+                            // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
+                            unsafe { av.set(av_off[c] + i, *v) };
+                        }
+                    }
+                    _ => cells.eval(c, loc, with_matrix, None),
+                }
+                if let Some(hook) = terms.cell_hook {
+                    hook(model, c, loc);
+                }
+            });
+            model.admissible()
+        };
+        if with_matrix && steady {
+            self.add_steady_damping_coupling();
+        }
+        if let Some(c) = &self.contact {
+            let xs: &[f64] = match terms.rates {
+                Rates::Dynamic { x, .. } => x,
+                _ => &self.x,
+            };
+            let kin = match terms.rates {
+                Rates::Static => SlipKinematics::Static {
+                    x_prev: &self.x_prev,
+                    dtau: self.dtau,
+                },
+                Rates::Steady => SlipKinematics::Steady {
+                    omega: self.model.steady_omega.unwrap_or(0.0),
+                },
+                Rates::Dynamic { v, kv, .. } => SlipKinematics::Dynamic { v, kx: 1.0, kv },
+            };
+            c.reset_visited();
+            let (mesh, dofs, fs) = (&self.model.mesh, &self.dofs, terms.force_scale);
+            self.asm.add_block(1, dofs, with_matrix, |e, loc| {
+                c.kernel(mesh, dofs, xs, &kin, e, loc, with_matrix);
+                if fs != 1.0 {
+                    let nd = loc.nd;
+                    loc.r[..nd].iter_mut().for_each(|v| *v *= fs);
+                    if with_matrix {
+                        loc.k[..nd * nd].iter_mut().for_each(|v| *v *= fs);
+                    }
+                }
+            });
+            self.facet_visits.0 += c.visited_facets();
+            self.facet_visits.1 += 1;
+        }
+        ok && self.asm.residual.iter().all(|r| r.is_finite())
     }
 
     /// `out += (K_exact − K_assembled) v` of the steady damping: Σ_c A_c ω (D δu − D_c δu_c)
@@ -554,13 +634,20 @@ impl SolidSystem {
     pub fn contact_samples(&self) -> Vec<ContactSample> {
         match &self.contact {
             Some(c) => {
-                let aux = match c.kinematics {
-                    SlipKinematics::Static { .. } if self.x_step_start.len() == self.x.len() => {
-                        &self.x_step_start
-                    }
-                    _ => &self.x_prev,
+                let kin = match self.own_rates() {
+                    Rates::Steady => SlipKinematics::Steady {
+                        omega: self.model.steady_omega.unwrap_or(0.0),
+                    },
+                    _ => SlipKinematics::Static {
+                        x_prev: if self.x_step_start.len() == self.x.len() {
+                            &self.x_step_start
+                        } else {
+                            &self.x_prev
+                        },
+                        dtau: self.dtau,
+                    },
                 };
-                c.samples(&self.model.mesh, &self.dofs, &self.x, aux)
+                c.samples(&self.model.mesh, &self.dofs, &self.x, &kin)
             }
             None => Vec::new(),
         }
@@ -579,36 +666,70 @@ impl SolidSystem {
     /// on the body: the residual entries of the fixed hub dofs (R = f_int − f_ext, so at a
     /// support R equals the reaction).
     pub fn hub_reaction(&self) -> (Vec2, f64) {
-        let mut is_hub = vec![false; self.model.mesh.n_nodes()];
-        for &n in self.model.mesh.node_set("hub") {
+        let steady_vel = match self.own_rates() {
+            Rates::Steady => self.steady_velocities(),
+            _ => None,
+        };
+        // The steady damping forces are part of what the hub transmits.
+        let rate = match (&steady_vel, &self.steady_visc) {
+            (Some((vel, omega)), Some(sv)) => CellRate::Steady {
+                vel,
+                omega: *omega,
+                local: &sv.local,
+                local_off: &sv.local_off,
+            },
+            _ => CellRate::None,
+        };
+        self.hub_sum(&self.x, rate, 1.0, None)
+    }
+
+    /// Force and moment that the hub exerts on the body under the given terms, evaluated at
+    /// the configuration of the rates (`Rates::Dynamic`'s `x`, otherwise the state): the hub
+    /// rows of the cell forces (contact acts away from the hub). For the steady rates use
+    /// [`Self::hub_reaction`].
+    pub fn hub_reaction_with(&self, terms: &Terms) -> (Vec2, f64) {
+        let (x, rate): (&[f64], _) = match terms.rates {
+            Rates::Dynamic { x, v, kv } => (x, CellRate::Dynamic { v, kv }),
+            _ => (&self.x, CellRate::None),
+        };
+        self.hub_sum(x, rate, terms.force_scale, terms.inertia)
+    }
+
+    fn hub_sum(
+        &self,
+        x: &[f64],
+        rate: CellRate,
+        force_scale: f64,
+        inertia: Option<super::terms::Inertia>,
+    ) -> (Vec2, f64) {
+        let mesh = &self.model.mesh;
+        let mut is_hub = vec![false; mesh.n_nodes()];
+        for &n in mesh.node_set("hub") {
             is_hub[n as usize] = true;
         }
+        let cells = CellForces {
+            model: &self.model,
+            dofs: &self.dofs,
+            x,
+            rate,
+            force_scale,
+            inertia,
+        };
         let mut force = Vec2::zeros();
         let mut moment = 0.0;
         let mut loc = Box::new(LocalSystem::new(0));
-        let steady_vel = self.steady_velocities();
-        for c in 0..self.model.mesh.n_cells() {
-            let nodes = self.model.mesh.cell_nodes(c);
+        for c in 0..mesh.n_cells() {
+            let nodes = mesh.cell_nodes(c);
             if !nodes.iter().any(|&n| is_hub[n as usize]) {
                 continue;
             }
-            let nd = self.dofs.cell(c).len();
-            loc.clear(nd);
-            match (&steady_vel, &self.steady_visc) {
-                // The steady damping forces are part of what the hub transmits.
-                (Some((vel, om)), Some(sv)) => {
-                    let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
-                    self.model.cell_system_steady_viscous(
-                        c, &self.dofs, &self.x, vel, *om, d, &mut loc, false, None,
-                    );
-                }
-                _ => self.model.cell_residual(c, &self.dofs, &self.x, &mut loc),
-            }
+            loc.clear(self.dofs.cell(c).len());
+            cells.eval(c, &mut loc, false, None);
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
                 if is_hub[n] && self.dofs.eq[2 * n] == FIXED {
                     let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
-                    let xp = self.model.mesh.nodes[n] + Vec2::new(self.x[2 * n], self.x[2 * n + 1]);
+                    let xp = mesh.nodes[n] + Vec2::new(x[2 * n], x[2 * n + 1]);
                     force += f;
                     moment += xp[0] * f[1] - xp[1] * f[0];
                 }
@@ -669,21 +790,8 @@ impl NonlinearSystem for SolidSystem {
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        self.sync_steady_history();
-        let ok = self.assemble_cells(with_matrix);
-        if with_matrix {
-            self.add_steady_damping_coupling();
-        }
-        if let Some(c) = &self.contact {
-            c.reset_visited();
-            let (mesh, dofs, x, xp) = (&self.model.mesh, &self.dofs, &self.x, &self.x_prev);
-            self.asm.add_block(1, dofs, with_matrix, |e, loc| {
-                c.kernel(mesh, dofs, x, xp, e, loc, with_matrix)
-            });
-            self.facet_visits.0 += c.visited_facets();
-            self.facet_visits.1 += 1;
-        }
-        ok && self.asm.residual.iter().all(|r| r.is_finite())
+        let rates = self.own_rates();
+        self.assemble(&Terms::forces(rates), with_matrix)
     }
     fn residual(&self) -> &[f64] {
         &self.asm.residual
@@ -736,17 +844,14 @@ impl LoadedSystem for SolidSystem {
                 }
             }
         }
-        if let Some(c) = &mut self.contact {
-            // Steady rolling measures velocities by ω ∂θχ, not in the load-stepping time. A
-            // restore to the converged λ (λ = λ_prev) keeps the last step's Δτ, with which
-            // the outputs evaluate that step's slip.
-            if !matches!(c.kinematics, SlipKinematics::Steady { .. })
-                && (lambda > self.lambda_prev || self.lambda_prev == 0.0)
-            {
-                c.kinematics = SlipKinematics::Static {
-                    dtau: (lambda - self.lambda_prev).max(f64::MIN_POSITIVE),
-                };
-            }
+        // Steady rolling measures velocities by ω ∂θχ, not in the load-stepping time. A
+        // restore to the converged λ (λ = λ_prev) keeps the last step's Δτ, with which the
+        // outputs evaluate that step's slip.
+        if self.contact.is_some()
+            && self.model.steady_omega.is_none()
+            && (lambda > self.lambda_prev || self.lambda_prev == 0.0)
+        {
+            self.dtau = (lambda - self.lambda_prev).max(f64::MIN_POSITIVE);
         }
     }
     fn commit(&mut self) {

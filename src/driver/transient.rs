@@ -38,9 +38,11 @@
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
 use super::system::SolidSystem;
+use super::terms::{CellHook, Inertia, Rates, Terms};
 use crate::assembly::{LocalSystem, SharedMut, FIXED, MAX_LOCAL};
-use crate::contact::SlipKinematics;
+use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
+use crate::physics::SolidModel;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
 use std::f64::consts::PI;
 
@@ -484,47 +486,36 @@ impl Transient {
     /// (x, v1, a1): internal (elastic and viscous), contact-free cell residual plus inertia at
     /// the hub nodes.
     pub fn hub_reaction(&self) -> (Vec2, f64) {
-        let mesh = &self.sys.model.mesh;
-        let mut is_hub = vec![false; mesh.n_nodes()];
-        for &n in &self.hub {
-            is_hub[n as usize] = true;
-        }
-        let (mut f, mut m) = (Vec2::zeros(), 0.0);
-        let mut loc = Box::new(LocalSystem::new(0));
-        for c in 0..mesh.n_cells() {
-            let nodes = mesh.cell_nodes(c);
-            if !nodes.iter().any(|&n| is_hub[n as usize]) {
-                continue;
-            }
-            loc.clear(self.sys.dofs.cell(c).len());
-            // With the viscous (strain-rate) stress: it is part of what the hub transmits.
-            self.sys.model.cell_system_viscous(
-                c,
-                &self.sys.dofs,
-                &self.sys.x,
-                &self.v1,
-                0.0,
-                &mut loc,
-                false,
-            );
-            let nn = nodes.len();
-            let mm = &self.mass[self.mass_off[c]..self.mass_off[c + 1]];
-            for a in 0..nn {
-                let na = nodes[a] as usize;
-                if !is_hub[na] || self.sys.dofs.eq[2 * na] != FIXED {
-                    continue;
-                }
-                let mut fa = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
-                for b in 0..nn {
-                    let nb = nodes[b] as usize;
-                    fa += Vec2::new(self.a1[2 * nb], self.a1[2 * nb + 1]) * mm[a * nn + b];
-                }
-                let xp = mesh.nodes[na] + Vec2::new(self.sys.x[2 * na], self.sys.x[2 * na + 1]);
-                f += fa;
-                m += xp[0] * fa[1] - xp[1] * fa[0];
-            }
-        }
-        (f, m)
+        // With the viscous (strain-rate) stress: it is part of what the hub transmits.
+        self.sys.hub_reaction_with(&Terms {
+            rates: Rates::Dynamic {
+                x: &self.sys.x,
+                v: &self.v1,
+                kv: 0.0,
+            },
+            force_scale: 1.0,
+            inertia: Some(Inertia {
+                mass: &self.mass,
+                offsets: &self.mass_off,
+                acc: &self.a1,
+                ca: 0.0,
+            }),
+            cell_hook: None,
+        })
+    }
+
+    /// Contact traction samples of the configuration `x` with the velocity field `v` (full
+    /// vectors); empty without contact.
+    pub fn contact_samples(&self, x: &[f64], v: &[f64]) -> Vec<ContactSample> {
+        let Some(c) = &self.sys.contact else {
+            return Vec::new();
+        };
+        let kin = SlipKinematics::Dynamic {
+            v,
+            kx: 1.0,
+            kv: 0.0,
+        };
+        c.samples(&self.sys.model.mesh, &self.sys.dofs, x, &kin)
     }
 
     pub fn snapshot(&self) -> Snapshot {
@@ -603,123 +594,99 @@ impl Transient {
         cm: f64,
         prev: f64,
     ) -> bool {
-        let sys = &mut self.sys;
-        sys.model.reset_admissible();
-        sys.asm.zero(with_matrix);
-        let (model, dofs) = (&sys.model, &sys.dofs);
-        let (xa, va, aa, mass, off) = (&self.xa, &self.va, &self.aa, &self.mass, &self.mass_off);
-        let is_hub = &self.is_hub;
+        let Transient {
+            sys,
+            xa,
+            va,
+            aa,
+            mass,
+            mass_off,
+            is_hub,
+            hub_angle,
+            ..
+        } = self;
         // Torque control: each hub cell leaves its projections on t_b = e3 × x_b in `store`.
-        let (hub_slot, store) = match &mut self.hub_angle {
+        let (hub_slot, store) = match hub_angle {
             Some(h) => (Some(&h.hub_slot), Some(SharedMut::new(&mut h.store))),
             None => (None, None),
         };
-        sys.asm.add_block(0, dofs, with_matrix, |c, loc| {
-            model.cell_system_viscous(c, dofs, xa, va, kv, loc, with_matrix);
-            let nd = loc.nd;
-            if fs != 1.0 {
-                loc.r[..nd].iter_mut().for_each(|v| *v *= fs);
-                if with_matrix {
-                    loc.k[..nd * nd].iter_mut().for_each(|v| *v *= fs);
-                }
+        let xa: &[f64] = xa;
+        let hub_projections = |model: &SolidModel, c: usize, loc: &LocalSystem| {
+            let (Some(hs), Some(st)) = (hub_slot, &store) else {
+                return;
+            };
+            let slot = hs[c];
+            if slot == u32::MAX {
+                return;
             }
-            let cd = dofs.cell(c);
-            let m = &mass[off[c]..off[c + 1]];
-            let nn = model.mesh.cell_nodes(c).len();
-            for a in 0..nn {
-                for b in 0..nn {
-                    let mab = m[a * nn + b];
-                    if mab == 0.0 {
-                        continue;
-                    }
-                    for i in 0..2 {
-                        loc.r[2 * a + i] += mab * aa[cd[2 * b + i] as usize];
-                        if with_matrix {
-                            loc.k[(2 * a + i) * nd + 2 * b + i] += cm * mab;
-                        }
-                    }
-                }
+            let (nd, nn) = (loc.nd, model.mesh.cell_nodes(c).len());
+            let base = slot as usize * HUB_STRIDE;
+            // SAFETY: each hub cell writes only its own stride of `store`.
+            let w = |i: usize, v: f64| unsafe { st.set(base + i, v) };
+            let nodes = model.mesh.cell_nodes(c);
+            let pos = |a: usize| {
+                let n = nodes[a] as usize;
+                model.mesh.nodes[n] + Vec2::new(xa[2 * n], xa[2 * n + 1])
+            };
+            let hub_t = |a: usize| {
+                let x = pos(a);
+                Vec2::new(-x[1], x[0])
+            };
+            let (mut rphi, mut kpp) = (0.0, 0.0);
+            for a in (0..nn).filter(|&a| is_hub[nodes[a] as usize]) {
+                let (t, x) = (hub_t(a), pos(a));
+                rphi += t[0] * loc.r[2 * a] + t[1] * loc.r[2 * a + 1];
+                kpp -= x[0] * loc.r[2 * a] + x[1] * loc.r[2 * a + 1];
             }
-            if let (Some(hs), Some(st)) = (hub_slot, &store) {
-                let slot = hs[c];
-                if slot != u32::MAX {
-                    let base = slot as usize * HUB_STRIDE;
-                    // SAFETY: each hub cell writes only its own stride of `store`.
-                    let w = |i: usize, v: f64| unsafe { st.set(base + i, v) };
-                    let nodes = model.mesh.cell_nodes(c);
-                    let pos = |a: usize| {
-                        let n = nodes[a] as usize;
-                        model.mesh.nodes[n] + Vec2::new(xa[2 * n], xa[2 * n + 1])
-                    };
-                    let hub_t = |a: usize| {
-                        let x = pos(a);
-                        Vec2::new(-x[1], x[0])
-                    };
-                    let (mut rphi, mut kpp) = (0.0, 0.0);
-                    for a in (0..nn).filter(|&a| is_hub[nodes[a] as usize]) {
-                        let (t, x) = (hub_t(a), pos(a));
-                        rphi += t[0] * loc.r[2 * a] + t[1] * loc.r[2 * a + 1];
-                        kpp -= x[0] * loc.r[2 * a] + x[1] * loc.r[2 * a + 1];
+            w(2 * MAX_LOCAL, rphi);
+            if with_matrix {
+                // Column K t and row tᵀ K over the local dofs.
+                for i in 0..nd {
+                    let (mut col, mut row) = (0.0, 0.0);
+                    for b in (0..nn).filter(|&b| is_hub[nodes[b] as usize]) {
+                        let t = hub_t(b);
+                        col += loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
+                        row += t[0] * loc.k[(2 * b) * nd + i] + t[1] * loc.k[(2 * b + 1) * nd + i];
                     }
-                    w(2 * MAX_LOCAL, rphi);
-                    if with_matrix {
-                        // Column K t and row tᵀ K over the local dofs.
-                        for i in 0..nd {
-                            let (mut col, mut row) = (0.0, 0.0);
-                            for b in (0..nn).filter(|&b| is_hub[nodes[b] as usize]) {
-                                let t = hub_t(b);
-                                col +=
-                                    loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
-                                row += t[0] * loc.k[(2 * b) * nd + i]
-                                    + t[1] * loc.k[(2 * b + 1) * nd + i];
-                            }
-                            w(i, col);
-                            w(MAX_LOCAL + i, row);
-                            if i < 2 * nn && is_hub[nodes[i / 2] as usize] {
-                                kpp += hub_t(i / 2)[i % 2] * col;
-                            }
-                        }
-                        w(2 * MAX_LOCAL + 1, kpp);
+                    w(i, col);
+                    w(MAX_LOCAL + i, row);
+                    if i < 2 * nn && is_hub[nodes[i / 2] as usize] {
+                        kpp += hub_t(i / 2)[i % 2] * col;
                     }
                 }
+                w(2 * MAX_LOCAL + 1, kpp);
             }
-        });
-        let ok = model.admissible();
-        if let Some(c) = &mut sys.contact {
-            c.kinematics = SlipKinematics::Dynamic { kx: 1.0, kv };
-        }
-        if let Some(c) = &sys.contact {
-            c.reset_visited();
-            let (mesh, va) = (&sys.model.mesh, &self.va);
-            sys.asm.add_block(1, dofs, with_matrix, |e, loc| {
-                c.kernel(mesh, dofs, xa, va, e, loc, with_matrix);
-                if fs != 1.0 {
-                    let nd = loc.nd;
-                    loc.r[..nd].iter_mut().for_each(|v| *v *= fs);
-                    if with_matrix {
-                        loc.k[..nd * nd].iter_mut().for_each(|v| *v *= fs);
-                    }
-                }
-            });
-            sys.facet_visits.0 += c.visited_facets();
-            sys.facet_visits.1 += 1;
-        }
+        };
+        let terms = Terms {
+            rates: Rates::Dynamic { x: xa, v: va, kv },
+            force_scale: fs,
+            inertia: Some(Inertia {
+                mass,
+                offsets: mass_off,
+                acc: aa,
+                ca: cm,
+            }),
+            cell_hook: hub_slot.map(|_| &hub_projections as CellHook),
+        };
+        let ok = sys.assemble(&terms, with_matrix);
+        let sys = &mut self.sys;
         if let Some(h) = &self.hub_angle {
             // φ row: Σ_b t_b · R_b (scattered from the hub cells) + I φ̈_α − fs T(t).
             if !h.frozen {
                 let st = &h.store;
-                sys.asm.add_block(h.block, dofs, with_matrix, |e, loc| {
-                    let base = e * HUB_STRIDE;
-                    let nd = loc.nd - 1;
-                    loc.r[nd] = st[base + 2 * MAX_LOCAL];
-                    if with_matrix {
-                        for i in 0..nd {
-                            loc.k[i * (nd + 1) + nd] = st[base + i];
-                            loc.k[nd * (nd + 1) + i] = st[base + MAX_LOCAL + i];
+                sys.asm
+                    .add_block(h.block, &sys.dofs, with_matrix, |e, loc| {
+                        let base = e * HUB_STRIDE;
+                        let nd = loc.nd - 1;
+                        loc.r[nd] = st[base + 2 * MAX_LOCAL];
+                        if with_matrix {
+                            for i in 0..nd {
+                                loc.k[i * (nd + 1) + nd] = st[base + i];
+                                loc.k[nd * (nd + 1) + i] = st[base + MAX_LOCAL + i];
+                            }
+                            loc.k[nd * (nd + 1) + nd] = st[base + 2 * MAX_LOCAL + 1];
                         }
-                        loc.k[nd * (nd + 1) + nd] = st[base + 2 * MAX_LOCAL + 1];
-                    }
-                });
+                    });
                 let (inertia, torque) = (
                     h.inertia * self.aa[h.iphi],
                     fs * h.torque.value(self.t_eval),
@@ -1320,8 +1287,8 @@ pub fn integrate(
     if let Some(c) = &tr.sys.contact {
         if c.load.is_some() && tr.sys.dofs.n_global > 0 {
             let ih = tr.sys.dofs.global(0);
-            let lowest = c
-                .samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn)
+            let lowest = tr
+                .contact_samples(&tr.un, &tr.vn)
                 .iter()
                 .map(|s| s.x2)
                 .fold(f64::INFINITY, f64::min);

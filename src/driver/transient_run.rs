@@ -194,12 +194,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         let ns = nodal_stress_full_at(&tr.sys, &tr.un);
         let recovered =
             crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.un);
-        let contact = tr
-            .sys
-            .contact
-            .as_ref()
-            .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
-            .unwrap_or_default();
+        let contact = tr.contact_samples(&tr.un, &tr.vn);
         let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
         let view = StepView {
             mesh: Some(&tr.sys.model.mesh),
@@ -238,12 +233,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     if let (true, Some(field)) = (rep.steady, tr.steady_field.as_ref()) {
         record_steady_field(&tr, &rep, field, &mut recorders);
     }
-    let samples = tr
-        .sys
-        .contact
-        .as_ref()
-        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
-        .unwrap_or_default();
+    let samples = tr.contact_samples(&tr.un, &tr.vn);
     let tot = ContactModel::totals(&samples);
     let (f, m) = tr.hub_reaction();
     let omega_hub = tr.omega_now();
@@ -409,12 +399,7 @@ fn record_steady_field(
     x[..n].copy_from_slice(&field[..n]);
     let ns = nodal_stress_full_at(&tr.sys, &x);
     let recovered = crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &x);
-    let contact = tr
-        .sys
-        .contact
-        .as_ref()
-        .map(|c| c.samples(&tr.sys.model.mesh, &tr.sys.dofs, &tr.un, &tr.vn))
-        .unwrap_or_default();
+    let contact = tr.contact_samples(&tr.un, &tr.vn);
     let snap = tr.snapshot();
     let mean = rep
         .passage_mean
