@@ -259,6 +259,8 @@ pub struct Transient {
     wall: f64,
     /// Last stable-step estimate of the central-difference scheme (NaN before any).
     pub dt_stable: f64,
+    /// The attempted step awaiting [`Self::accept`]: (t_{n+1}, Δt).
+    pending: Option<(f64, f64)>,
 }
 
 impl Transient {
@@ -325,6 +327,7 @@ impl Transient {
             t_eval: 0.0,
             wall,
             dt_stable: f64::NAN,
+            pending: None,
         }
     }
 
@@ -744,9 +747,22 @@ impl Transient {
         ok
     }
 
-    /// Advance one step of size `dt` from the committed state (t, un, vn, an). On success the
-    /// new state is committed and the local error estimate (generalized-α) is returned.
+    /// Advance one step of size `dt` from the committed state (t, un, vn, an): [`Self::attempt`]
+    /// then [`Self::accept`]. Returns the local error estimate (generalized-α) and the Newton
+    /// iterations.
     pub fn step(&mut self, newton: &mut Newton, dt: f64) -> Result<(f64, usize), SolveError> {
+        let out = self.attempt(newton, dt)?;
+        self.accept();
+        Ok(out)
+    }
+
+    /// Attempt one step of size `dt` from the committed state (t, un, vn, an): the new state is
+    /// left in (`sys.x`, `v1`, `a1`) and nothing committed, so that the caller may still
+    /// reject it (restore `sys` with [`NonlinearSystem::restore_state`]) or keep it with
+    /// [`Self::accept`]. Returns the local error estimate (generalized-α) and the Newton
+    /// iterations.
+    pub fn attempt(&mut self, newton: &mut Newton, dt: f64) -> Result<(f64, usize), SolveError> {
+        self.pending = None;
         self.dt = dt;
         let t1 = self.t + dt;
         match self.scheme {
@@ -793,9 +809,7 @@ impl Transient {
                 let nd = (2 * mesh.n_nodes()).max(1) as f64;
                 let floor = 1e-3 * self.wall;
                 let err = (num / nd).sqrt() / (den / nd).sqrt().max(floor);
-                let (dofs, x) = (&self.sys.dofs, &self.sys.x);
-                self.sys.model.commit_history(dofs, x, dt);
-                self.commit(t1);
+                self.pending = Some((t1, dt));
                 Ok((err, rep.iterations))
             }
             Scheme::CentralDifference => {
@@ -814,40 +828,59 @@ impl Transient {
                         dt_stable: self.dt_stable,
                     });
                 }
+                // a_n = −M_L⁻¹ f(u_n) on the free dofs (into a1; the committed a_n stays
+                // until the step is accepted), then v_{n+1/2} = v_{n−1/2} + Δt a_n and
+                // u_{n+1} = u_n + Δt v_{n+1/2}.
+                self.a1.copy_from_slice(&self.an);
                 for d in 0..self.un.len() {
                     let e = self.sys.dofs.eq[d];
                     if e != FIXED && self.ml[d] > 0.0 {
-                        self.an[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
+                        self.a1[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
                     }
                 }
                 // Prescribed dofs: velocity from the prescribed positions.
                 self.prescribe(t1);
+                self.v1.copy_from_slice(&self.vn);
                 for d in 0..self.un.len() {
                     if self.sys.dofs.eq[d] != FIXED && self.ml[d] > 0.0 {
-                        self.vn[d] += dt * self.an[d];
-                        self.sys.x[d] = self.un[d] + dt * self.vn[d];
+                        self.v1[d] += dt * self.a1[d];
+                        self.sys.x[d] = self.un[d] + dt * self.v1[d];
                     } else {
-                        self.vn[d] = (self.sys.x[d] - self.un[d]) / dt;
+                        self.v1[d] = (self.sys.x[d] - self.un[d]) / dt;
                     }
                 }
-                self.v1.copy_from_slice(&self.vn);
-                self.a1.copy_from_slice(&self.an);
-                let (dofs, x) = (&self.sys.dofs, &self.sys.x);
-                self.sys.model.commit_history(dofs, x, dt);
-                let x = self.sys.x.clone();
-                self.un.copy_from_slice(&x);
-                self.t = t1;
+                self.pending = Some((t1, dt));
                 Ok((0.0, 0))
             }
         }
     }
 
-    fn commit(&mut self, t1: f64) {
+    /// Commit the step of the last successful [`Self::attempt`]: the quadrature-point history,
+    /// (t, un, vn, an) ← (t_{n+1}, x, v1, a1) and, for generalized-α, the forces f(u_n, v_n)
+    /// of the new committed state that the next step averages with. No effect without a
+    /// pending step.
+    pub fn accept(&mut self) {
+        let Some((t1, dt)) = self.pending.take() else {
+            return;
+        };
+        self.commit_state(t1, Some(dt));
+        if matches!(self.scheme, Scheme::GeneralizedAlpha(_)) {
+            self.update_fprev();
+        }
+    }
+
+    /// The one commit of the transient state: (t, un, vn, an) ← (t1, x, v1, a1), and the
+    /// quadrature-point history over a step `history_dt` (`None`: the integrator evaluated no
+    /// history increment, so none is committed).
+    pub(crate) fn commit_state(&mut self, t1: f64, history_dt: Option<f64>) {
+        if let Some(dt) = history_dt {
+            let (dofs, x) = (&self.sys.dofs, &self.sys.x);
+            self.sys.model.commit_history(dofs, x, dt);
+        }
         self.un.copy_from_slice(&self.sys.x);
         self.vn.copy_from_slice(&self.v1);
         self.an.copy_from_slice(&self.a1);
         self.t = t1;
-        self.update_fprev();
     }
 
     /// Stable time step of the central-difference scheme with its lagged-velocity damping:
@@ -1316,7 +1349,7 @@ pub fn integrate(
     };
     let mut snap0 = tr.snapshot();
     rep.history.push(snap0);
-    let (mut u0, mut v0, mut a0) = (tr.un.clone(), tr.vn.clone(), tr.an.clone());
+    let (mut u0, mut v0) = (tr.un.clone(), tr.vn.clone());
     let mut saved = Vec::new();
     while tr.t < opts.t_end - 1e-12 * opts.t_end && rep.steps < opts.max_steps {
         // Ctrl-C: stop at this step boundary (the committed state is the last accepted step).
@@ -1376,7 +1409,6 @@ pub fn integrate(
         let t0 = tr.t;
         u0.copy_from_slice(&tr.un);
         v0.copy_from_slice(&tr.vn);
-        a0.copy_from_slice(&tr.an);
         tr.sys.save_state(&mut saved);
         if newton.opts.verbose {
             // A header above the Newton table of this step.
@@ -1388,17 +1420,14 @@ pub fn integrate(
                 h
             );
         }
-        match tr.step(&mut newton, h) {
+        match tr.attempt(&mut newton, h) {
             Ok((err, its)) => {
                 let reject = opts.adaptive
                     && matches!(tr.scheme, Scheme::GeneralizedAlpha(_))
                     && err > 4.0 * opts.error_tol
                     && h > opts.dt_min;
                 if reject {
-                    tr.t = t0;
-                    tr.un.copy_from_slice(&u0);
-                    tr.vn.copy_from_slice(&v0);
-                    tr.an.copy_from_slice(&a0);
+                    // Nothing was committed: only the iterate goes back.
                     tr.sys.restore_state(&saved);
                     rep.rejected += 1;
                     rep.rejections.push((
@@ -1410,6 +1439,7 @@ pub fn integrate(
                         .max(opts.dt_min);
                     continue;
                 }
+                tr.accept();
                 rep.steps += 1;
                 rep.newton_iterations += its;
                 rep.dt_min_used = rep.dt_min_used.min(h);
@@ -1470,10 +1500,6 @@ pub fn integrate(
                 }
             }
             Err(e) => {
-                tr.t = t0;
-                tr.un.copy_from_slice(&u0);
-                tr.vn.copy_from_slice(&v0);
-                tr.an.copy_from_slice(&a0);
                 tr.sys.restore_state(&saved);
                 rep.rejected += 1;
                 rep.rejections.push((t0 + h, h, e.to_string()));

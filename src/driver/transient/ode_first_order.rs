@@ -415,11 +415,8 @@ impl<'t> FirstOrder<'t> {
             tr.v1[d] = y[n + e];
             tr.a1[d] = dy[n + e];
         }
-        let tr = &mut **tr;
-        tr.un.copy_from_slice(&tr.sys.x);
-        tr.vn.copy_from_slice(&tr.v1);
-        tr.an.copy_from_slice(&tr.a1);
-        tr.t = t;
+        // The first-order integrators evaluate no history increment (elastic forces only).
+        tr.commit_state(t, None);
     }
 }
 
