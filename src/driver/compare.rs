@@ -56,6 +56,7 @@ pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
 }
 
 /// Field differences on the referential mesh of `scene`: (relative L2, max |Δu|, max |u_s|).
+/// `u_t`, `u_s`: displacements, 2 per node in node order (an error when shorter).
 pub fn field_difference(
     scene: &Scene,
     u_t: &[f64],
@@ -63,6 +64,14 @@ pub fn field_difference(
 ) -> Result<(f64, f64, f64), AppError> {
     let sys = crate::driver::SolidSystem::new(app::build_model(scene)?, "hub");
     let n = sys.model.mesh.n_nodes();
+    if u_t.len() < 2 * n || u_s.len() < 2 * n {
+        return Err(AppError::Unsupported(format!(
+            "compare: the referential fields have {} and {} values, the mesh {} nodes",
+            u_t.len(),
+            u_s.len(),
+            n
+        )));
+    }
     let mut xd = sys.x.clone();
     let mut xs = sys.x.clone();
     for i in 0..2 * n {

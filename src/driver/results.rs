@@ -127,7 +127,7 @@ pub enum ModeSummary {
     /// `static` and `spinning`.
     Solid(SolidSummary),
     Transient(TransientSummary),
-    Steady(SteadySummary),
+    Steady(Box<SteadySummary>),
     StickSlip(StickSlipSummary),
     Compare(CompareSummary),
 }

@@ -693,7 +693,7 @@ pub fn run_with_dump(
         &mode,
         st.sys.n_dofs(),
         converged,
-        ModeSummary::Steady(SteadySummary {
+        ModeSummary::Steady(Box::new(SteadySummary {
             run: RunStats {
                 newton_iterations: report.total_iterations
                     + cont.as_ref().map_or(0, |c| c.total_iterations)
@@ -731,7 +731,7 @@ pub fn run_with_dump(
                 recovery: st.recovery.clone(),
                 eps_continuation: st.eps_continuation.clone(),
             },
-        }),
+        })),
     );
     let summary = typed.to_json();
     let interrupted = matches!(solve, Err(SolveError::Interrupted { .. }));
