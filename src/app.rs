@@ -18,11 +18,15 @@
 //! [`AppError::Interrupted`] (exit status 130).
 
 use crate::driver::indentation;
+use crate::driver::results::{
+    MeshInfo, ModeSummary, RunStats, SolidMesh, SolidResults, SolidSolver, SolidSummary, Summary,
+    Terms,
+};
 use crate::driver::spinning;
 use crate::driver::system::Loading;
 use crate::driver::tables;
 use crate::driver::SolidSystem;
-use crate::io::output::{ensure_dir, sanitize, write_csv, write_json, OutputError};
+use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta};
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::physics::PressureMode;
@@ -136,7 +140,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "DISP = {:.6e}: hub force = ({:.6e}, {:.6e}), hub torque = {:.3e}, contact patch x1 in [{:.5}, {:.5}], max pressure = {:.6e}",
                 r.penetration, r.hub_force_x, r.hub_force_y, r.hub_torque, r.contact_x_min, r.contact_x_max, r.max_pressure
             ));
-            serde_json::to_value(r).unwrap_or_default()
+            SolidResults::Static(r)
         }
         _ => {
             let r = spinning::results(&sys);
@@ -144,48 +148,59 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "omega = {:.6} rad/s: u_r(outer) = {:.6e}, sigma_r(inner) = {:.6e}, sigma_theta(inner) = {:.6e}, sigma_theta(outer) = {:.6e}",
                 r.omega, r.u_r_outer, r.sigma_r_inner, r.sigma_theta_inner, r.sigma_theta_outer
             ));
-            serde_json::to_value(r).unwrap_or_default()
+            SolidResults::Spinning(r)
         }
     };
     let friction = sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
-    let mut summary = serde_json::json!({
-        "scene": scene.scene.name,
-        "mode": scene.analysis.mode.to_string(),
-        "dofs": sys.n_dofs(),
-        "newton_iterations": report.total_iterations,
-        "wall_time_s": wall,
-        "converged": converged,
-        "error": solve.as_ref().err().map(|e| e.to_string()),
-        "results": results,
-        "terms": {
-            "friction": friction,
-            "normal_damping": false,
-            "inertia": scene.analysis.mode == Mode::Spinning,
-            "history": false,
-            "pressure": !matches!(sys.model.pressure, PressureMode::None),
-            "contact_facets_per_iteration": sys.mean_facets_per_assembly(),
-        },
-        "mesh": {
-            "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
-            "nodes": sys.model.mesh.n_nodes(), "cells": sys.model.mesh.n_cells(),
-            "pressure_dofs": sys.dofs.per_cell * sys.model.mesh.n_cells(),
-        },
-        "solver": {
-            "linear": format!("{:?}", if report.switched_to_lu { LinearKind::Lu } else { kind }).to_lowercase(),
-            "switched_to_lu": report.switched_to_lu,
-            "load_steps": report.steps.iter().filter(|s| s.converged).count(),
-            "cutbacks": report.cutbacks,
-            "threads": rayon::current_num_threads(),
-        },
-        "version": env!("CARGO_PKG_VERSION"),
-    });
-    if interrupted {
-        summary["solver"]["interrupted_at"] = serde_json::json!(match &solve {
-            Err(SolveError::Interrupted { at }) => *at,
-            _ => 0.0,
-        });
-    }
-    sanitize(&mut summary);
+    let linear = if report.switched_to_lu {
+        LinearKind::Lu
+    } else {
+        kind
+    };
+    let typed = Summary::new(
+        &scene.scene.name,
+        scene.analysis.mode.to_string(),
+        sys.n_dofs(),
+        converged,
+        ModeSummary::Solid(SolidSummary {
+            run: RunStats {
+                newton_iterations: report.total_iterations,
+                wall_time_s: wall,
+                error: solve.as_ref().err().map(|e| e.to_string()),
+            },
+            results,
+            terms: Terms {
+                friction,
+                normal_damping: false,
+                inertia: scene.analysis.mode == Mode::Spinning,
+                history: false,
+                pressure: !matches!(sys.model.pressure, PressureMode::None),
+                contact_facets_per_iteration: sys.mean_facets_per_assembly(),
+            },
+            mesh: SolidMesh {
+                common: MeshInfo {
+                    n_r: scene.mesh.n_r,
+                    n_theta: scene.mesh.n_theta,
+                    order: scene.mesh.order,
+                    nodes: sys.model.mesh.n_nodes(),
+                    cells: sys.model.mesh.n_cells(),
+                },
+                pressure_dofs: sys.dofs.per_cell * sys.model.mesh.n_cells(),
+            },
+            solver: SolidSolver {
+                linear: format!("{linear:?}").to_lowercase(),
+                switched_to_lu: report.switched_to_lu,
+                load_steps: report.steps.iter().filter(|s| s.converged).count(),
+                cutbacks: report.cutbacks,
+                threads: rayon::current_num_threads(),
+                interrupted_at: match &solve {
+                    Err(SolveError::Interrupted { at }) => Some(*at),
+                    _ => None,
+                },
+            },
+        }),
+    );
+    let summary = typed.to_json();
     let error = solve.as_ref().err().map(|e| e.to_string());
     finish_recorders(
         &mut recorders,
@@ -206,6 +221,8 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         solve,
         RunOutcome {
             summary,
+            typed,
+            field: None,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

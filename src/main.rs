@@ -356,10 +356,10 @@ fn run_with(
                 if compare {
                     say(&format!(
                         "compared the transient and steady modes: dofs = {}",
-                        o.summary["dofs"]
+                        o.typed.dofs
                     ));
                 } else {
-                    say(&status_line(&o.summary, started.elapsed().as_secs_f64()));
+                    say(&status_line(&o.typed, started.elapsed().as_secs_f64()));
                 }
                 for line in &o.headline {
                     say(line);
@@ -387,21 +387,19 @@ fn say(line: &str) {
 }
 
 /// "converged: …" (or "finished: … steady rolling not reached") from a summary.
-fn status_line(summary: &serde_json::Value, wall: f64) -> String {
-    let steady_missed = summary["results"]["steady"] == serde_json::Value::Bool(false);
+fn status_line(summary: &tread::driver::results::Summary, wall: f64) -> String {
+    let steady_missed = summary.steady_reached() == Some(false);
     let head = if steady_missed {
         "finished (steady rolling not reached)"
     } else {
         "converged"
     };
-    let mut parts = Vec::new();
-    if let Some(d) = summary["dofs"].as_u64() {
-        parts.push(format!("dofs = {d}"));
+    let mut parts = vec![format!("dofs = {}", summary.dofs)];
+    let stats = summary.run_stats();
+    if let Some(r) = stats {
+        parts.push(format!("Newton iterations = {}", r.newton_iterations));
     }
-    if let Some(n) = summary["newton_iterations"].as_u64() {
-        parts.push(format!("Newton iterations = {n}"));
-    }
-    let wall = summary["wall_time_s"].as_f64().unwrap_or(wall);
+    let wall = stats.map_or(wall, |r| r.wall_time_s);
     parts.push(format!("wall time = {wall:.3} s"));
     format!("{head}: {}", parts.join(", "))
 }

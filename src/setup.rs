@@ -10,6 +10,7 @@
 
 use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
 use crate::contact::{Clamp, ContactModel, FacetRule, Friction, NormalCompliance};
+use crate::driver::results::Summary;
 use crate::driver::SolidSystem;
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
@@ -383,7 +384,15 @@ pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
 /// Everything a run produced.
 #[derive(Debug)]
 pub struct RunOutcome {
+    /// The JSON of the run's `summary.json`.
     pub summary: serde_json::Value,
+    /// The same summary, typed (`summary` is its [`Summary::to_json`]).
+    pub typed: Summary,
+    /// The referential displacement field of the rolling modes (2 per node, node order, the
+    /// numbers of `steady_field.csv`): the steady solution's nodal displacements, or the
+    /// transient run's field extracted at its last node passage. None for the other modes and
+    /// for a transient run that saw no node passage.
+    pub field: Option<Vec<f64>>,
     pub out_dir: PathBuf,
     pub converged: bool,
     /// Human-readable result lines for the terminal.

@@ -119,15 +119,16 @@ fn main() {
             };
             match tread::driver::compare::run(&scene, &opts) {
                 Ok(o) => {
-                    let c = &o.summary["results"]["compare"];
-                    let g = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+                    let Some(c) = o.typed.compare() else {
+                        continue;
+                    };
                     println!(
                         "| {tol} | {:.3e} | {:.3e} | {:.2} | {:.3} | {:.0} |",
-                        g("hub_force_y_rel_diff"),
-                        g("field_rel_l2"),
-                        g("wall_time_transient_s"),
-                        g("wall_time_steady_s"),
-                        g("speedup")
+                        c.hub_force_y_rel_diff,
+                        c.field_rel_l2,
+                        c.wall_time_transient_s,
+                        c.wall_time_steady_s,
+                        c.speedup
                     );
                 }
                 Err(e) => eprintln!("compare at error_tol {tol}: {e}"),

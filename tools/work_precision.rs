@@ -166,7 +166,7 @@ fn solve(
         let outer = t0.elapsed().as_secs_f64();
         last = match res {
             Ok(o) => {
-                let conv = o.converged && o.summary["results"]["steady"].as_bool().unwrap_or(true);
+                let conv = o.converged && o.typed.steady_reached().unwrap_or(true);
                 (o.summary, conv, String::new())
             }
             Err(e) => {

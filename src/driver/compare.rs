@@ -13,7 +13,8 @@
 //!      by several per cent of |F| on a coarse mesh), or the last step's when the run had
 //!      fewer than two passages (`transient_loads` = "last_step"); the last step's are also
 //!      given as `hub_force_x_transient_last_step` etc.;
-//!    * the referential displacement fields (`steady_field.csv` of both): `field_rel_l2` =
+//!    * the referential displacement fields of both runs (in memory, the numbers of their
+//!      `steady_field.csv`): `field_rel_l2` =
 //!      ‖u_t − u_s‖_L2(Ω) / ‖u_s‖_L2(Ω) (integrated with the finite-element interpolation on the
 //!      referential mesh, 3×3 Gauss points per cell), `field_max_abs` = max over nodes of
 //!      |u_t − u_s|, `field_rel_max` = that over max |u_s|;
@@ -23,10 +24,11 @@
 //!
 //!    With the `png` sink, `OUT/contact_compare.png` draws t_n and t_T along x1 from both.
 
+use super::results::{CompareResults, CompareSection, CompareSummary, ModeSummary, Summary};
 use super::steady_run;
 use crate::app::{self, AppError, RunOptions, RunOutcome};
 use crate::element::QuadRule;
-use crate::io::output::{ensure_dir, sanitize, write_json, OutputError};
+use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::math::Vec2;
 use std::path::Path;
@@ -53,33 +55,8 @@ pub fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
     Ok((header, rows))
 }
 
-/// Displacement field (2 per node, node order) from a `steady_field.csv`.
-fn read_field(path: &Path, n_nodes: usize, per_ring: usize) -> Result<Vec<f64>, String> {
-    let (h, rows) = read_csv(path)?;
-    let col = |name: &str| {
-        h.iter()
-            .position(|c| c == name)
-            .ok_or_else(|| format!("{}: no column `{name}`", path.display()))
-    };
-    let (ir, ip, iu1, iu2) = (col("ring")?, col("pos")?, col("u1")?, col("u2")?);
-    let mut u = vec![0.0; 2 * n_nodes];
-    for (k, r) in rows.iter().enumerate() {
-        let (Some(ring), Some(pos), Some(u1), Some(u2)) =
-            (r.get(ir), r.get(ip), r.get(iu1), r.get(iu2))
-        else {
-            return Err(format!("{} row {}: too few columns", path.display(), k + 2));
-        };
-        let n = *ring as usize * per_ring + *pos as usize;
-        if n >= n_nodes {
-            return Err(format!("{}: node {n} out of range", path.display()));
-        }
-        u[2 * n] = *u1;
-        u[2 * n + 1] = *u2;
-    }
-    Ok(u)
-}
-
 /// Field differences on the referential mesh of `scene`: (relative L2, max |Δu|, max |u_s|).
+/// `u_t`, `u_s`: displacements, 2 per node in node order (an error when shorter).
 pub fn field_difference(
     scene: &Scene,
     u_t: &[f64],
@@ -87,6 +64,14 @@ pub fn field_difference(
 ) -> Result<(f64, f64, f64), AppError> {
     let sys = crate::driver::SolidSystem::new(app::build_model(scene)?, "hub");
     let n = sys.model.mesh.n_nodes();
+    if u_t.len() < 2 * n || u_s.len() < 2 * n {
+        return Err(AppError::Unsupported(format!(
+            "compare: the referential fields have {} and {} values, the mesh {} nodes",
+            u_t.len(),
+            u_s.len(),
+            n
+        )));
+    }
     let mut xd = sys.x.clone();
     let mut xs = sys.x.clone();
     for i in 0..2 * n {
@@ -133,10 +118,6 @@ fn with_csv(scene: &Scene, mode: Mode) -> Scene {
     s
 }
 
-fn f(v: &serde_json::Value, key: &str) -> f64 {
-    v["results"][key].as_f64().unwrap_or(f64::NAN)
-}
-
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     ensure_dir(&opts.out_dir)?;
     if scene.time.is_none() {
@@ -163,99 +144,103 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         ..opts.clone()
     };
     let st = app::run(&st_scene, &st_opts)?;
-    let (ts, ss) = (&tr.summary, &st.summary);
-    if ts["results"]["steady"].as_bool() != Some(true) {
+    let (Some(ts), Some(ss)) = (tr.typed.transient(), st.typed.steady()) else {
+        return Err(AppError::Unsupported(
+            "compare: the transient and steady runs gave no results to compare".into(),
+        ));
+    };
+    if !ts.steady {
         warnings.push(
             "the transient run did not reach its steady state (time.t_end or max_steps first): \
              its last extracted field is compared"
                 .into(),
         );
     }
-    // Fields on the referential mesh.
-    let model = app::build_model(scene)?;
-    let n = model.mesh.n_nodes();
-    let per_ring = model.mesh.rings.map_or(n, |r| r.per_ring);
-    let tr_field = tr_opts.out_dir.join("steady_field.csv");
-    if !tr_field.exists() {
+    // Fields on the referential mesh (those of both runs' steady_field.csv).
+    let Some(u_t) = tr.field.as_deref() else {
         return Err(AppError::Unsupported(format!(
-            "compare: the transient run ended at t = {} s before its first cell passage, so it \
-             extracted no referential field to compare (raise time.t_end, now {} s)",
-            ts["results"]["final_time"]
-                .as_f64()
-                .map_or("?".into(), |t| format!("{t:.4e}")),
+            "compare: the transient run ended at t = {:.4e} s before its first cell passage, so \
+             it extracted no referential field to compare (raise time.t_end, now {} s)",
+            ts.final_time,
             scene.time.as_ref().map_or(f64::NAN, |t| t.t_end)
         )));
-    }
-    let u_t = read_field(&tr_field, n, per_ring)
-        .map_err(|e| AppError::Unsupported(format!("compare: transient field: {e}")))?;
-    let u_s = read_field(&st_opts.out_dir.join("steady_field.csv"), n, per_ring)
-        .map_err(|e| AppError::Unsupported(format!("compare: steady field: {e}")))?;
-    let (rel_l2, max_d, max_s) = field_difference(scene, &u_t, &u_s)?;
-    let last = (
-        f(ts, "hub_force_x"),
-        f(ts, "hub_force_y"),
-        f(ts, "hub_torque"),
-    );
+    };
+    let Some(u_s) = st.field.as_deref() else {
+        return Err(AppError::Unsupported(
+            "compare: the steady run gave no referential field".into(),
+        ));
+    };
+    let (rel_l2, max_d, max_s) = field_difference(scene, u_t, u_s)?;
+    let nan = f64::NAN;
+    let last = (ts.hub_force_x, ts.hub_force_y, ts.hub_torque);
     let mean = (
-        f(ts, "hub_force_x_passage_mean"),
-        f(ts, "hub_force_y_passage_mean"),
-        f(ts, "hub_torque_passage_mean"),
+        ts.hub_force_x_passage_mean.unwrap_or(nan),
+        ts.hub_force_y_passage_mean.unwrap_or(nan),
+        ts.hub_torque_passage_mean.unwrap_or(nan),
     );
     let have_mean = mean.0.is_finite() && mean.1.is_finite() && mean.2.is_finite();
     let (fxt, fyt, tqt) = if have_mean { mean } else { last };
-    let (fxs, fys, tqs) = (
-        f(ss, "hub_force_x"),
-        f(ss, "hub_force_y"),
-        f(ss, "hub_torque"),
-    );
+    let (fxs, fys, tqs) = (ss.hub_force_x, ss.hub_force_y, ss.hub_torque);
     let fmag = fxs.hypot(fys).max(f64::MIN_POSITIVE);
-    let (wt, ws) = (
-        ts["wall_time_s"].as_f64().unwrap_or(f64::NAN),
-        ss["wall_time_s"].as_f64().unwrap_or(f64::NAN),
-    );
-    let compare = serde_json::json!({
-        "hub_force_x_transient": fxt, "hub_force_x_steady": fxs,
-        "hub_force_y_transient": fyt, "hub_force_y_steady": fys,
-        "hub_torque_transient": tqt, "hub_torque_steady": tqs,
-        "transient_loads": if have_mean { "passage_mean" } else { "last_step" },
-        "hub_force_x_transient_last_step": last.0,
-        "hub_force_y_transient_last_step": last.1,
-        "hub_torque_transient_last_step": last.2,
-        "hub_force_x_rel_diff": (fxt - fxs).abs() / fmag,
-        "hub_force_y_rel_diff": (fyt - fys).abs() / fmag,
-        "hub_torque_abs_diff": (tqt - tqs).abs(),
-        "hub_torque_rel_diff": (tqt - tqs).abs() / (fmag * scene.geometry.ro),
-        "field_rel_l2": rel_l2,
-        "field_max_abs": max_d,
-        "field_rel_max": if max_s > 0.0 { max_d / max_s } else { f64::NAN },
-        "contact_x_min_transient": f(ts, "contact_x_min"), "contact_x_min_steady": f(ss, "contact_x_min"),
-        "contact_x_max_transient": f(ts, "contact_x_max"), "contact_x_max_steady": f(ss, "contact_x_max"),
-        "max_pressure_transient": f(ts, "max_pressure"), "max_pressure_steady": f(ss, "max_pressure"),
-        "wall_time_transient_s": wt,
-        "wall_time_steady_s": ws,
-        "speedup": wt / ws,
-        "transient_steady": ts["results"]["steady"].as_bool().unwrap_or(false),
-        "transient_time_to_steady": ts["results"]["time_to_steady"],
-        "transient_steps": ts["results"]["steps"],
-    });
-    let mut summary = serde_json::json!({
-        "scene": scene.scene.name,
-        "mode": "compare",
-        "dofs": ss["dofs"],
-        "converged": tr.converged && st.converged,
-        "warnings": warnings,
-        "results": { "compare": compare },
-        "transient_dir": tr_opts.out_dir.display().to_string(),
-        "steady_dir": st_opts.out_dir.display().to_string(),
-        "version": env!("CARGO_PKG_VERSION"),
-    });
-    sanitize(&mut summary);
+    let wall = |o: &RunOutcome| o.typed.run_stats().map_or(nan, |r| r.wall_time_s);
+    let (wt, ws) = (wall(&tr), wall(&st));
+    let compare = CompareResults {
+        hub_force_x_transient: fxt,
+        hub_force_x_steady: fxs,
+        hub_force_y_transient: fyt,
+        hub_force_y_steady: fys,
+        hub_torque_transient: tqt,
+        hub_torque_steady: tqs,
+        transient_loads: if have_mean {
+            "passage_mean"
+        } else {
+            "last_step"
+        }
+        .to_string(),
+        hub_force_x_transient_last_step: last.0,
+        hub_force_y_transient_last_step: last.1,
+        hub_torque_transient_last_step: last.2,
+        hub_force_x_rel_diff: (fxt - fxs).abs() / fmag,
+        hub_force_y_rel_diff: (fyt - fys).abs() / fmag,
+        hub_torque_abs_diff: (tqt - tqs).abs(),
+        hub_torque_rel_diff: (tqt - tqs).abs() / (fmag * scene.geometry.ro),
+        field_rel_l2: rel_l2,
+        field_max_abs: max_d,
+        field_rel_max: if max_s > 0.0 { max_d / max_s } else { nan },
+        contact_x_min_transient: ts.contact_x_min,
+        contact_x_min_steady: ss.contact_x_min,
+        contact_x_max_transient: ts.contact_x_max,
+        contact_x_max_steady: ss.contact_x_max,
+        max_pressure_transient: ts.max_pressure,
+        max_pressure_steady: ss.max_pressure,
+        wall_time_transient_s: wt,
+        wall_time_steady_s: ws,
+        speedup: wt / ws,
+        transient_steady: ts.steady,
+        transient_time_to_steady: ts.time_to_steady,
+        transient_steps: ts.steps,
+    };
+    let converged = tr.converged && st.converged;
     for w in &warnings {
         eprintln!("tread: warning: {w}");
     }
+    let typed = Summary::new(
+        &scene.scene.name,
+        "compare",
+        st.typed.dofs,
+        converged,
+        ModeSummary::Compare(CompareSummary {
+            warnings,
+            results: CompareSection {
+                compare: compare.clone(),
+            },
+            transient_dir: tr_opts.out_dir.display().to_string(),
+            steady_dir: st_opts.out_dir.display().to_string(),
+        }),
+    );
+    let summary = typed.to_json();
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
-    let c = &summary["results"]["compare"];
-    let g = |k: &str| c[k].as_f64().unwrap_or(f64::NAN);
+    let c = &compare;
     let pair = |name: &str, a: f64, b: f64| {
         vec![
             name.to_string(),
@@ -270,18 +255,18 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         pair("hub_torque", tqt, tqs),
         pair(
             "contact_x_min",
-            g("contact_x_min_transient"),
-            g("contact_x_min_steady"),
+            c.contact_x_min_transient,
+            c.contact_x_min_steady,
         ),
         pair(
             "contact_x_max",
-            g("contact_x_max_transient"),
-            g("contact_x_max_steady"),
+            c.contact_x_max_transient,
+            c.contact_x_max_steady,
         ),
         pair(
             "max_pressure",
-            g("max_pressure_transient"),
-            g("max_pressure_steady"),
+            c.max_pressure_transient,
+            c.max_pressure_steady,
         ),
         pair("wall_time_s", wt, ws),
     ];
@@ -302,7 +287,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     headline.extend([
         format!(
             "hub force transient ({fxt:.5e}, {fyt:.5e}) vs steady ({fxs:.5e}, {fys:.5e}): relative differences {:.3e}, {:.3e}; torque {tqt:.5e} vs {tqs:.5e}",
-            g("hub_force_x_rel_diff"), g("hub_force_y_rel_diff")
+            c.hub_force_x_rel_diff, c.hub_force_y_rel_diff
         ),
         format!(
             "referential field: relative L2 difference {rel_l2:.3e}, max |du| = {max_d:.3e}; wall time transient {wt:.3} s, steady {ws:.3} s (speed-up {:.1})",
@@ -322,8 +307,10 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     ]);
     Ok(RunOutcome {
         summary,
+        typed,
+        field: None,
         out_dir: opts.out_dir.clone(),
-        converged: tr.converged && st.converged,
+        converged,
         headline,
     })
 }

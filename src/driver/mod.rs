@@ -10,6 +10,8 @@
 //! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
 //!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
 //!   Imports go one way: `app` → `*_run` → the analyses → `system` → physics and solvers.
+//! * [`results`]: the typed contents of every mode's `summary.json`, which the `*_run` files
+//!   fill and [`crate::setup::RunOutcome`] carries in memory.
 //!
 //! Conventions throughout: forces per unit thickness, ω in rad/s (counter-clockwise > 0), the
 //! road at x2 = −H below the hub centre, units as the scene declares them.
@@ -19,6 +21,7 @@ pub mod critical;
 pub mod frame;
 pub mod indentation;
 pub mod resistance;
+pub mod results;
 pub mod spinning;
 pub mod steady;
 pub mod steady_recovery;

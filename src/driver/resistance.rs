@@ -101,16 +101,33 @@ pub fn peak(rows: &[BranchLoad], ro: f64) -> Option<ResistancePeak> {
     })
 }
 
-/// `results.rolling_resistance`: the definition, the curve and the peak (null when the
-/// branch does not bracket one).
-pub fn summary(rows: &[BranchLoad], ro: f64) -> serde_json::Value {
+/// `results.rolling_resistance` of the steady mode: the coefficient along a branch in ω.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RollingResistance {
+    /// The formula of the coefficient.
+    pub definition: String,
+    /// ω of the branch points with a finite coefficient (rad/s).
+    pub omega: Vec<f64>,
+    /// C_rr at those points (dimensionless).
+    pub coefficient: Vec<f64>,
+    /// The interior peak (null when the branch does not bracket one).
+    pub peak: Option<ResistancePeak>,
+}
+
+/// The rolling resistance of a branch: the definition, the curve and the peak.
+pub fn rolling_resistance(rows: &[BranchLoad], ro: f64) -> RollingResistance {
     let c = curve(rows, ro);
-    serde_json::json!({
-        "definition": "C_rr = sign(omega) T / (P Ro), P = -F_y",
-        "omega": c.iter().map(|p| p.0).collect::<Vec<_>>(),
-        "coefficient": c.iter().map(|p| p.1).collect::<Vec<_>>(),
-        "peak": peak(rows, ro),
-    })
+    RollingResistance {
+        definition: "C_rr = sign(omega) T / (P Ro), P = -F_y".to_string(),
+        omega: c.iter().map(|p| p.0).collect(),
+        coefficient: c.iter().map(|p| p.1).collect(),
+        peak: peak(rows, ro),
+    }
+}
+
+/// [`rolling_resistance`] as JSON (`results.rolling_resistance`).
+pub fn summary(rows: &[BranchLoad], ro: f64) -> serde_json::Value {
+    serde_json::to_value(rolling_resistance(rows, ro)).unwrap_or_default()
 }
 
 /// `resistance.png`: C_rr against |ω| (log axis), with the peak as its own marked series.

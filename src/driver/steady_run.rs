@@ -24,13 +24,18 @@
 
 use super::frame::SolidFrame;
 use super::resistance;
+pub use super::results::{BranchRow, ControlReport};
+use super::results::{
+    ContinuationSummary, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
+    SteadySummary, SteadyTerms, Summary, Terms,
+};
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
 use super::steady_recovery;
 use super::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
-use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
 use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
@@ -43,90 +48,6 @@ use crate::solver::stepping::StepReport;
 use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// One row of the branch table.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct BranchRow {
-    pub step: usize,
-    pub lambda: f64,
-    pub omega: f64,
-    pub v0: f64,
-    pub penetration: f64,
-    pub hub_force_x: f64,
-    pub hub_force_y: f64,
-    pub hub_torque: f64,
-    pub contact_x_min: f64,
-    pub contact_x_max: f64,
-    pub max_pressure: f64,
-    /// Standing-wave indicator: half the peak-to-peak radial displacement of the outer
-    /// surface nodes more than 60° away from the bottom (outside the patch region).
-    pub wave_amplitude: f64,
-    pub det_sign: f64,
-    pub negative_eigenvalues: f64,
-    pub test_function: f64,
-    pub iterations: usize,
-    pub kind: PointKind,
-    pub wall_time_s: f64,
-    pub factor_solve_s: f64,
-    /// Creep ξ = v0 / v0_free − 1 (NaN, an empty CSV field, without a free-rolling reference).
-    pub creep: f64,
-}
-
-impl BranchRow {
-    pub const HEADER: [&'static str; 20] = [
-        "step",
-        "lambda",
-        "omega",
-        "v0",
-        "penetration",
-        "hub_force_x",
-        "hub_force_y",
-        "hub_torque",
-        "contact_x_min",
-        "contact_x_max",
-        "max_pressure",
-        "wave_amplitude",
-        "det_sign",
-        "negative_eigenvalues",
-        "test_function",
-        "iterations",
-        "kind",
-        "wall_time_s",
-        "factor_solve_s",
-        "creep",
-    ];
-
-    fn values(&self) -> Vec<f64> {
-        let kind = match self.kind {
-            PointKind::Start => 0.0,
-            PointKind::Regular => 1.0,
-            PointKind::LimitPoint => 2.0,
-            PointKind::Bifurcation => 3.0,
-        };
-        vec![
-            self.step as f64,
-            self.lambda,
-            self.omega,
-            self.v0,
-            self.penetration,
-            self.hub_force_x,
-            self.hub_force_y,
-            self.hub_torque,
-            self.contact_x_min,
-            self.contact_x_max,
-            self.max_pressure,
-            self.wave_amplitude,
-            self.det_sign,
-            self.negative_eigenvalues,
-            self.test_function,
-            self.iterations as f64,
-            kind,
-            self.wall_time_s,
-            self.factor_solve_s,
-            self.creep,
-        ]
-    }
-}
 
 fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
     let t = ContactModel::totals(&st.sys.contact_samples());
@@ -417,28 +338,6 @@ pub fn solve_steady(
 /// Relative tolerance of the torque and free-rolling controls: converged when
 /// |T − T_target| ≤ `TORQUE_RTOL` · |F_y| · Ro (hub vertical force times outer radius).
 pub const TORQUE_RTOL: f64 = 1e-7;
-
-/// What the rolling control (`motion.control`) did after the press-in.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct ControlReport {
-    /// `speed`, `torque`, `free_rolling` or `creep`.
-    pub control: String,
-    /// Target hub torque (torque and free rolling; 0 for creep's free-rolling stage).
-    pub target_torque: f64,
-    /// Torque tolerance (absolute): `TORQUE_RTOL` · |F_y| · Ro at the press-in state.
-    pub torque_tolerance: f64,
-    /// Free-rolling road speed v0_free and rolling radius R_e = v0_free / ω (free rolling and
-    /// creep; NaN otherwise).
-    pub v0_free: f64,
-    pub rolling_radius: f64,
-    /// Creep ξ = v0 / v0_free − 1 of the final state (NaN without a free-rolling reference).
-    pub creep: f64,
-    /// Steady solves (one Newton solve per trial v0) and their Newton iterations.
-    pub evaluations: usize,
-    pub newton_iterations: usize,
-    /// (v0, hub torque) of every trial of the secant iteration.
-    pub history: Vec<(f64, f64)>,
-}
 
 /// Apply the scene's rolling control after the press-in at `road.v0`:
 /// - `speed`: nothing (v0 = `road.v0`);
@@ -735,49 +634,45 @@ pub fn run_with_dump(
         + cont
             .as_ref()
             .map_or(0, |c| c.points.len().saturating_sub(1));
-    let mut results = serde_json::json!({
-        "steady": converged,
-        "time_to_steady": 0.0,
-        "revolutions": 0.0,
-        "steps": steps,
-        "omega": st.omega(),
-        "v0": st.v0(),
-        "penetration": st.penetration(),
-        "hub_force_x": f[0],
-        "hub_force_y": f[1],
-        "hub_torque": m,
-        "contact_x_min": tot.x_min,
-        "contact_x_max": tot.x_max,
-        "max_pressure": tot.max_pressure,
-        "contact_force_x": tot.force_x,
-        "contact_force_y": tot.force_y,
-        "contact_centroid": tot.centroid,
-        "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
-        "wall_time_first_solution_s": t_first,
-        "creep": st.creep(),
-        "control": control_report.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
-    });
     let resistance_curve = cont.is_some()
         && st.sys.steady_history.is_some()
         && st.param == SteadyParameter::Omega
         && rows.len() > 1;
-    if resistance_curve {
-        results["rolling_resistance"] =
-            resistance::summary(&branch_loads(&rows), scene.geometry.ro);
-    }
-    if let Some(c) = &cont {
-        results["branch"] = serde_json::to_value(&rows).unwrap_or_default();
-        results["special_points"] = serde_json::to_value(&c.special).unwrap_or_default();
-        results["continuation"] = serde_json::json!({
-            "parameter": scene.continuation.as_ref().map(|c| c.parameter.to_string()),
-            "stop_reason": c.stop_reason,
-            "steps": c.points.len().saturating_sub(1),
-            "corrector_iterations": c.total_iterations,
-            "cutbacks": c.cutbacks,
-            "assemblies": c.assemblies,
-            "factorizations": c.factorizations,
-        });
-    }
+    let results = SteadyResults {
+        steady: converged,
+        time_to_steady: 0.0,
+        revolutions: 0.0,
+        steps,
+        omega: st.omega(),
+        v0: st.v0(),
+        penetration: st.penetration(),
+        hub_force_x: f[0],
+        hub_force_y: f[1],
+        hub_torque: m,
+        contact_x_min: tot.x_min,
+        contact_x_max: tot.x_max,
+        max_pressure: tot.max_pressure,
+        contact_force_x: tot.force_x,
+        contact_force_y: tot.force_y,
+        contact_centroid: tot.centroid,
+        contact_half_width_moment: 2.0 * tot.pressure_second_moment.sqrt(),
+        wall_time_first_solution_s: t_first,
+        creep: st.creep(),
+        control: control_report.clone(),
+        rolling_resistance: resistance_curve
+            .then(|| resistance::rolling_resistance(&branch_loads(&rows), scene.geometry.ro)),
+        branch: cont.as_ref().map(|_| rows.clone()),
+        special_points: cont.as_ref().map(|c| c.special.clone()),
+        continuation: cont.as_ref().map(|c| ContinuationSummary {
+            parameter: scene.continuation.as_ref().map(|c| c.parameter.to_string()),
+            stop_reason: c.stop_reason.clone(),
+            steps: c.points.len().saturating_sub(1),
+            corrector_iterations: c.total_iterations,
+            cutbacks: c.cutbacks,
+            assemblies: c.assemblies,
+            factorizations: c.factorizations,
+        }),
+    };
     let friction = st
         .sys
         .contact
@@ -788,42 +683,57 @@ pub fn run_with_dump(
         .contact
         .as_ref()
         .is_some_and(|c| c.normal.has_damping());
-    let mut summary = serde_json::json!({
-        "scene": scene.scene.name,
-        "mode": mode,
-        "dofs": st.sys.n_dofs(),
-        "newton_iterations": report.total_iterations + cont.as_ref().map_or(0, |c| c.total_iterations) + control_report.as_ref().map_or(0, |c| c.newton_iterations),
-        "wall_time_s": wall,
-        "converged": converged,
-        "error": solve.as_ref().err().map(|e| e.to_string()),
-        "warnings": warn,
-        "results": results,
-        "terms": {
-            "friction": friction,
-            "normal_damping": damping,
-            "strain_rate_damping": st.sys.model.strain_rate_damping > 0.0,
-            "damping_tangent": st.sys.steady_damping_tangent(),
-            "damping_tangent_fallback": st.damping_fallback,
-            "inertia": st.sys.model.omega2 > 0.0,
-            "history": st.sys.steady_history.is_some(),
-            "pressure": st.sys.dofs.per_cell > 0,
-            "contact_facets_per_iteration": st.sys.mean_facets_per_assembly(),
-        },
-        "mesh": {
-            "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
-            "nodes": st.sys.model.mesh.n_nodes(), "cells": st.sys.model.mesh.n_cells(),
-        },
-        "solver": {
-            "linear": format!("{:?}", if report.switched_to_lu { LinearKind::Lu } else { linear_kind(scene, &st.sys) }).to_lowercase(),
-            "load_steps": report.steps.iter().filter(|s| s.converged).count(),
-            "cutbacks": report.cutbacks,
-            "threads": rayon::current_num_threads(),
-            "recovery": st.recovery.as_ref().map(|r| serde_json::to_value(r).unwrap_or_default()),
-            "eps_continuation": st.eps_continuation.as_ref().map(|a| serde_json::to_value(a).unwrap_or_default()),
-        },
-        "version": env!("CARGO_PKG_VERSION"),
-    });
-    sanitize(&mut summary);
+    let linear = if report.switched_to_lu {
+        LinearKind::Lu
+    } else {
+        linear_kind(scene, &st.sys)
+    };
+    let typed = Summary::new(
+        &scene.scene.name,
+        &mode,
+        st.sys.n_dofs(),
+        converged,
+        ModeSummary::Steady(Box::new(SteadySummary {
+            run: RunStats {
+                newton_iterations: report.total_iterations
+                    + cont.as_ref().map_or(0, |c| c.total_iterations)
+                    + control_report.as_ref().map_or(0, |c| c.newton_iterations),
+                wall_time_s: wall,
+                error: solve.as_ref().err().map(|e| e.to_string()),
+            },
+            warnings: warn,
+            results,
+            terms: SteadyTerms {
+                common: Terms {
+                    friction,
+                    normal_damping: damping,
+                    inertia: st.sys.model.omega2 > 0.0,
+                    history: st.sys.steady_history.is_some(),
+                    pressure: st.sys.dofs.per_cell > 0,
+                    contact_facets_per_iteration: st.sys.mean_facets_per_assembly(),
+                },
+                strain_rate_damping: st.sys.model.strain_rate_damping > 0.0,
+                damping_tangent: st.sys.steady_damping_tangent(),
+                damping_tangent_fallback: st.damping_fallback.clone(),
+            },
+            mesh: MeshInfo {
+                n_r: scene.mesh.n_r,
+                n_theta: scene.mesh.n_theta,
+                order: scene.mesh.order,
+                nodes: st.sys.model.mesh.n_nodes(),
+                cells: st.sys.model.mesh.n_cells(),
+            },
+            solver: SteadySolver {
+                linear: format!("{linear:?}").to_lowercase(),
+                load_steps: report.steps.iter().filter(|s| s.converged).count(),
+                cutbacks: report.cutbacks,
+                threads: rayon::current_num_threads(),
+                recovery: st.recovery.clone(),
+                eps_continuation: st.eps_continuation.clone(),
+            },
+        })),
+    );
+    let summary = typed.to_json();
     let interrupted = matches!(solve, Err(SolveError::Interrupted { .. }));
     let error = solve.as_ref().err().map(|e| e.to_string());
     let final_info = StepInfo {
@@ -981,6 +891,12 @@ pub fn run_with_dump(
     match solve {
         Ok(()) => Ok(RunOutcome {
             summary,
+            typed,
+            field: st
+                .sys
+                .x
+                .get(..2 * st.sys.model.mesh.n_nodes())
+                .map(<[f64]>::to_vec),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -11,7 +11,10 @@
 use crate::contact::laws::{CoulombLinear, CoulombTanh, RateDependent};
 use crate::contact::stick_slip::{closed_form_cycle, simulate, Phase, StickSlipSpec};
 use crate::contact::Friction;
-use crate::io::output::{ensure_dir, sanitize, write_json};
+use crate::driver::results::{
+    ModeSummary, RunStats, StickSlipResults, StickSlipSummary, Summary, Terms,
+};
+use crate::io::output::{ensure_dir, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::io::scene::{FrictionParams, Scene};
 use crate::setup::{AppError, RunOptions, RunOutcome};
@@ -157,43 +160,50 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 opt(r.amplitude),
                 r.stats.steps
             ));
-            serde_json::json!({
-                "period": r.period,
-                "amplitude": r.amplitude,
-                "x_min": r.x_min,
-                "x_max": r.x_max,
-                "stick_time": r.stick_time,
-                "slip_time": r.slip_time,
-                "cycles": r.stick_to_slip.len(),
-                "solver_stats": r.stats,
-                "period_rel_error": closed.as_ref().and_then(|c| c.as_ref().ok()).zip(r.period).map(|(c, p)| (p - c.period) / c.period),
-                "amplitude_rel_error": closed.as_ref().and_then(|c| c.as_ref().ok()).zip(r.amplitude).map(|(c, a)| (a - c.amplitude) / c.amplitude),
-                "closed_form": closed.as_ref().and_then(|c| c.as_ref().ok()).map(|c| serde_json::to_value(c).unwrap_or_default()),
+            let closed = closed.as_ref().and_then(|c| c.as_ref().ok());
+            Some(StickSlipResults {
+                period: r.period,
+                amplitude: r.amplitude,
+                x_min: r.x_min,
+                x_max: r.x_max,
+                stick_time: r.stick_time,
+                slip_time: r.slip_time,
+                cycles: r.stick_to_slip.len(),
+                solver_stats: r.stats,
+                period_rel_error: closed.zip(r.period).map(|(c, p)| (p - c.period) / c.period),
+                amplitude_rel_error: closed
+                    .zip(r.amplitude)
+                    .map(|(c, a)| (a - c.amplitude) / c.amplitude),
+                closed_form: closed.copied(),
             })
         }
-        Err(_) => serde_json::Value::Null,
+        Err(_) => None,
     };
-    let mut summary = serde_json::json!({
-        "scene": scene.scene.name,
-        "mode": scene.analysis.mode.to_string(),
-        "dofs": 2,
-        "newton_iterations": res.as_ref().map(|r| r.stats.newton_iterations).unwrap_or(0),
-        "wall_time_s": wall,
-        "converged": converged,
-        "error": error,
-        "results": results,
-        // One mass on a belt: friction and inertia, nothing else (no mesh, no contact facets).
-        "terms": {
-            "friction": true,
-            "normal_damping": false,
-            "inertia": true,
-            "history": false,
-            "pressure": false,
-            "contact_facets_per_iteration": 0.0,
-        },
-        "version": env!("CARGO_PKG_VERSION"),
-    });
-    sanitize(&mut summary);
+    let typed = Summary::new(
+        &scene.scene.name,
+        scene.analysis.mode.to_string(),
+        2,
+        converged,
+        ModeSummary::StickSlip(StickSlipSummary {
+            run: RunStats {
+                newton_iterations: res.as_ref().map(|r| r.stats.newton_iterations).unwrap_or(0),
+                wall_time_s: wall,
+                error: error.clone(),
+            },
+            results,
+            // One mass on a belt: friction and inertia, nothing else (no mesh, no contact
+            // facets).
+            terms: Terms {
+                friction: true,
+                normal_damping: false,
+                inertia: true,
+                history: false,
+                pressure: false,
+                contact_facets_per_iteration: 0.0,
+            },
+        }),
+    );
+    let summary = typed.to_json();
     for e in recorders.run_finished(&RunEnd {
         converged,
         interrupted,
@@ -211,6 +221,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     match res {
         Ok(_) => Ok(RunOutcome {
             summary,
+            typed,
+            field: None,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -24,6 +24,10 @@
 //! u = χ − X the displacement of the material point that sits there.
 
 use super::frame::nodal_stress_full_at;
+use super::results::{
+    MeshInfo, ModeSummary, RunStats, Summary, Terms, TransientResults, TransientSummary,
+    TransientTerms,
+};
 use super::system::SolidSystem;
 use super::tables;
 use super::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
@@ -31,7 +35,7 @@ use super::transient::{
     integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
 };
 use crate::contact::ContactModel;
-use crate::io::output::{ensure_dir, sanitize, write_csv, write_json};
+use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::{
     self, Energy, HubLoads, Recorder, RejectedStep, RunEnd, RunMeta, SteadyReached, StepInfo,
     StepView,
@@ -104,19 +108,27 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         if scene.motion.omega > 0.0 {
             if let Err(e) = tr.start_rigid_spin(scene.motion.omega, kind, None) {
                 // Nothing was integrated: the summary says why, so that the folder is not empty.
-                let mut summary = serde_json::json!({
-                    "scene": scene.scene.name,
-                    "mode": scene.analysis.mode.to_string(),
-                    "dofs": tr.sys.n_dofs(),
-                    "newton_iterations": 0,
-                    "wall_time_s": t0.elapsed().as_secs_f64(),
-                    "converged": false,
-                    "error": format!("the initial rigid spin at omega = {} rad/s failed: {e}", crate::io::output::fmt_num(scene.motion.omega)),
-                    "warnings": Vec::<String>::new(),
-                    "results": serde_json::Value::Null,
-                    "version": env!("CARGO_PKG_VERSION"),
-                });
-                sanitize(&mut summary);
+                let summary = Summary::new(
+                    &scene.scene.name,
+                    scene.analysis.mode.to_string(),
+                    tr.sys.n_dofs(),
+                    false,
+                    ModeSummary::Transient(TransientSummary {
+                        run: RunStats {
+                            newton_iterations: 0,
+                            wall_time_s: t0.elapsed().as_secs_f64(),
+                            error: Some(format!(
+                                "the initial rigid spin at omega = {} rad/s failed: {e}",
+                                crate::io::output::fmt_num(scene.motion.omega)
+                            )),
+                        },
+                        warnings: Vec::new(),
+                        results: None,
+                        terms: None,
+                        mesh: None,
+                    }),
+                )
+                .to_json();
                 write_json(&opts.out_dir.join("summary.json"), &summary)?;
                 return Err(AppError::Solve(e, opts.out_dir.clone()));
             }
@@ -238,41 +250,45 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let (f, m) = tr.hub_reaction();
     let omega_hub = tr.omega_now();
     let v0_end = tr.kin.v0.value(tr.t);
-    let results = serde_json::json!({
-        "control": scene.motion.control.as_str(),
-        "omega_steady": omega_hub,
-        "applied_torque": tr.applied_torque(tr.t),
-        "rolling_radius": if omega_hub != 0.0 { v0_end / omega_hub } else { f64::NAN },
-        "contact_moment": tot.moment,
-        "time_to_steady": rep.time_to_steady,
-        "revolutions": rep.revolutions,
-        "steps": rep.steps,
-        "rejected_steps": rep.rejected,
-        "steady": rep.steady,
-        "final_time": rep.final_time,
-        "node_passages": rep.passages,
-        "steady_change_field": rep.last_change[0],
-        "steady_change_force": rep.last_change[1],
-        "steady_change_torque": rep.last_change[2],
-        "steady_change_omega": rep.last_change[3],
-        "dt_min_used": rep.dt_min_used,
-        "dt_max_used": rep.dt_max_used,
-        "hub_force_x": f[0],
-        "hub_force_y": f[1],
-        "hub_torque": m,
-        "hub_force_x_passage_mean": rep.passage_mean.map(|p| p[0]),
-        "hub_force_y_passage_mean": rep.passage_mean.map(|p| p[1]),
-        "hub_torque_passage_mean": rep.passage_mean.map(|p| p[2]),
-        "contact_x_min": tot.x_min,
-        "contact_x_max": tot.x_max,
-        "max_pressure": tot.max_pressure,
-        "contact_force_x": tot.force_x,
-        "contact_force_y": tot.force_y,
-        "contact_centroid": tot.centroid,
-        "contact_half_width_moment": 2.0 * tot.pressure_second_moment.sqrt(),
-        "integrator": ode.map_or(tr.scheme.name(), |m| m.name()),
-        "mass": if lumped { "lumped" } else { "consistent" },
-    });
+    let results = TransientResults {
+        control: scene.motion.control.as_str().to_string(),
+        omega_steady: omega_hub,
+        applied_torque: tr.applied_torque(tr.t),
+        rolling_radius: if omega_hub != 0.0 {
+            v0_end / omega_hub
+        } else {
+            f64::NAN
+        },
+        contact_moment: tot.moment,
+        time_to_steady: rep.time_to_steady,
+        revolutions: rep.revolutions,
+        steps: rep.steps,
+        rejected_steps: rep.rejected,
+        steady: rep.steady,
+        final_time: rep.final_time,
+        node_passages: rep.passages,
+        steady_change_field: rep.last_change[0],
+        steady_change_force: rep.last_change[1],
+        steady_change_torque: rep.last_change[2],
+        steady_change_omega: rep.last_change[3],
+        dt_min_used: rep.dt_min_used,
+        dt_max_used: rep.dt_max_used,
+        hub_force_x: f[0],
+        hub_force_y: f[1],
+        hub_torque: m,
+        hub_force_x_passage_mean: rep.passage_mean.map(|p| p[0]),
+        hub_force_y_passage_mean: rep.passage_mean.map(|p| p[1]),
+        hub_torque_passage_mean: rep.passage_mean.map(|p| p[2]),
+        contact_x_min: tot.x_min,
+        contact_x_max: tot.x_max,
+        max_pressure: tot.max_pressure,
+        contact_force_x: tot.force_x,
+        contact_force_y: tot.force_y,
+        contact_centroid: tot.centroid,
+        contact_half_width_moment: 2.0 * tot.pressure_second_moment.sqrt(),
+        integrator: ode.map_or(tr.scheme.name(), |m| m.name()).to_string(),
+        mass: if lumped { "lumped" } else { "consistent" }.to_string(),
+    };
     let friction = tr
         .sys
         .contact
@@ -300,32 +316,40 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     for w in &warnings {
         eprintln!("tread: warning: {w}");
     }
-    let mut summary = serde_json::json!({
-        "scene": scene.scene.name,
-        "mode": scene.analysis.mode.to_string(),
-        "dofs": tr.sys.n_dofs(),
-        "newton_iterations": rep.newton_iterations,
-        "wall_time_s": wall,
-        "converged": converged,
-        "error": err.as_ref().map(|e| e.to_string()),
-        "warnings": warnings,
-        "results": results,
-        "terms": {
-            "friction": friction,
-            "normal_damping": damping,
-            "strain_rate_damping": tr.sys.model.strain_rate_damping > 0.0,
-            "inertia": true,
-            "history": tr.sys.model.viscoelastic.is_some(),
-            "pressure": tr.sys.dofs.per_cell > 0,
-            "contact_facets_per_iteration": tr.sys.mean_facets_per_assembly(),
-        },
-        "mesh": {
-            "n_r": scene.mesh.n_r, "n_theta": scene.mesh.n_theta, "order": scene.mesh.order,
-            "nodes": tr.sys.model.mesh.n_nodes(), "cells": tr.sys.model.mesh.n_cells(),
-        },
-        "version": env!("CARGO_PKG_VERSION"),
-    });
-    sanitize(&mut summary);
+    let typed = Summary::new(
+        &scene.scene.name,
+        scene.analysis.mode.to_string(),
+        tr.sys.n_dofs(),
+        converged,
+        ModeSummary::Transient(TransientSummary {
+            run: RunStats {
+                newton_iterations: rep.newton_iterations,
+                wall_time_s: wall,
+                error: err.as_ref().map(|e| e.to_string()),
+            },
+            warnings,
+            results: Some(results),
+            terms: Some(TransientTerms {
+                common: Terms {
+                    friction,
+                    normal_damping: damping,
+                    inertia: true,
+                    history: tr.sys.model.viscoelastic.is_some(),
+                    pressure: tr.sys.dofs.per_cell > 0,
+                    contact_facets_per_iteration: tr.sys.mean_facets_per_assembly(),
+                },
+                strain_rate_damping: tr.sys.model.strain_rate_damping > 0.0,
+            }),
+            mesh: Some(MeshInfo {
+                n_r: scene.mesh.n_r,
+                n_theta: scene.mesh.n_theta,
+                order: scene.mesh.order,
+                nodes: tr.sys.model.mesh.n_nodes(),
+                cells: tr.sys.model.mesh.n_cells(),
+            }),
+        }),
+    );
+    let summary = typed.to_json();
     let interrupted = matches!(err, Some(SolveError::Interrupted { .. }));
     let error = err.as_ref().map(|e| e.to_string());
     for e in recorders.run_finished(&RunEnd {
@@ -375,6 +399,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     match err {
         None => Ok(RunOutcome {
             summary,
+            typed,
+            field: tr
+                .steady_field
+                .as_ref()
+                .and_then(|u| u.get(..2 * tr.sys.model.mesh.n_nodes()))
+                .map(<[f64]>::to_vec),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -1,0 +1,625 @@
+//! The typed contents of a run's `summary.json`, one structure per analysis mode.
+//!
+//! [`Summary`] is the envelope every mode writes (`scene`, `mode`, `dofs`, `converged`,
+//! `version`) with the mode's own part flattened into it ([`ModeSummary`]): the run's counts and
+//! error ([`RunStats`]), the `results` of the mode ([`SolidResults`], [`TransientResults`],
+//! [`SteadyResults`], [`StickSlipResults`], [`CompareResults`]), the physical terms the model
+//! carried ([`Terms`] and its per-mode extensions), the mesh ([`MeshInfo`]) and the solver's
+//! report. The drivers fill these structures; `summary.json` is their serialization
+//! ([`Summary::to_json`], where non-finite numbers become null), and [`crate::setup::RunOutcome`]
+//! carries them in memory, so that `tread compare` and the tools read typed fields instead of
+//! keys.
+//!
+//! Keys that some modes write as null are `Option` fields serialized as null; keys that a mode
+//! does not write at all are `Option` fields skipped when `None`, or live only in that mode's
+//! structure.
+//!
+//! Units are the scene's (consistent units, e.g. SI): lengths in its length unit, forces and
+//! tractions per unit thickness, torques (moments) per unit thickness, ω in rad/s
+//! (counter-clockwise > 0), times in seconds (wall times measured on the machine).
+
+use super::indentation::IndentationResults;
+use super::resistance::RollingResistance;
+use super::spinning::SpinningResults;
+use super::steady_report::{Attempt, Recovery};
+use super::system::SteadyDampingTangent;
+use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
+use crate::io::output::sanitize;
+use crate::solver::continuation::{PointKind, SpecialPoint};
+use serde::Serialize;
+
+/// The whole `summary.json` of a run: the keys every mode writes and the mode's own part.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// The scene's name (`[scene] name`).
+    pub scene: String,
+    /// The analysis mode (`static`, `spinning`, `steady`, `transient`, `stick_slip`, `compare`).
+    pub mode: String,
+    /// Number of unknowns of the solved system (the steady run's for `compare`; 2 for the
+    /// stick-slip oscillator).
+    pub dofs: usize,
+    /// Whether the run reached its end without a failure.
+    pub converged: bool,
+    /// Version of `tread` that wrote the summary.
+    pub version: String,
+    /// The mode's own keys.
+    #[serde(flatten)]
+    pub body: ModeSummary,
+}
+
+impl Summary {
+    /// A summary of this program's version.
+    pub fn new(
+        scene: impl Into<String>,
+        mode: impl Into<String>,
+        dofs: usize,
+        converged: bool,
+        body: ModeSummary,
+    ) -> Self {
+        Self {
+            scene: scene.into(),
+            mode: mode.into(),
+            dofs,
+            converged,
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            body,
+        }
+    }
+
+    /// The JSON of `summary.json`: the serialization with every non-finite number as null.
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).unwrap_or_default();
+        sanitize(&mut v);
+        v
+    }
+
+    /// Newton iterations, wall time and error of the run (not given by `compare`).
+    pub fn run_stats(&self) -> Option<&RunStats> {
+        match &self.body {
+            ModeSummary::Solid(s) => Some(&s.run),
+            ModeSummary::Transient(s) => Some(&s.run),
+            ModeSummary::Steady(s) => Some(&s.run),
+            ModeSummary::StickSlip(s) => Some(&s.run),
+            ModeSummary::Compare(_) => None,
+        }
+    }
+
+    /// The transient mode's results (None for other modes and for a transient run that
+    /// integrated nothing).
+    pub fn transient(&self) -> Option<&TransientResults> {
+        match &self.body {
+            ModeSummary::Transient(s) => s.results.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// The steady mode's results.
+    pub fn steady(&self) -> Option<&SteadyResults> {
+        match &self.body {
+            ModeSummary::Steady(s) => Some(&s.results),
+            _ => None,
+        }
+    }
+
+    /// The comparison's results.
+    pub fn compare(&self) -> Option<&CompareResults> {
+        match &self.body {
+            ModeSummary::Compare(s) => Some(&s.results.compare),
+            _ => None,
+        }
+    }
+
+    /// `results.steady` of the rolling modes: whether the transient run reached its steady
+    /// state, or whether the steady solve converged (None for the other modes).
+    pub fn steady_reached(&self) -> Option<bool> {
+        match &self.body {
+            ModeSummary::Transient(s) => s.results.as_ref().map(|r| r.steady),
+            ModeSummary::Steady(s) => Some(s.results.steady),
+            _ => None,
+        }
+    }
+}
+
+/// The keys of one mode's summary.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum ModeSummary {
+    /// `static` and `spinning`.
+    Solid(SolidSummary),
+    Transient(TransientSummary),
+    Steady(Box<SteadySummary>),
+    StickSlip(StickSlipSummary),
+    Compare(CompareSummary),
+}
+
+/// Counts, wall time and error of a run (every mode but `compare`).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunStats {
+    /// Newton iterations over the whole run.
+    pub newton_iterations: usize,
+    /// Wall time of the run (s).
+    pub wall_time_s: f64,
+    /// Why the run failed (null when it converged).
+    pub error: Option<String>,
+}
+
+/// The physical terms a model carried (`terms`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Terms {
+    /// Friction law active on the road.
+    pub friction: bool,
+    /// Normal contact damping.
+    pub normal_damping: bool,
+    /// Inertia (centrifugal and, in the transient mode, the mass matrix).
+    pub inertia: bool,
+    /// A viscoelastic history.
+    pub history: bool,
+    /// Pressure unknowns (incompressible formulation).
+    pub pressure: bool,
+    /// Mean number of contact facets integrated per assembly.
+    pub contact_facets_per_iteration: f64,
+}
+
+/// `terms` of the transient mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct TransientTerms {
+    #[serde(flatten)]
+    pub common: Terms,
+    /// Strain-rate (Kelvin–Voigt) damping in the bulk.
+    pub strain_rate_damping: bool,
+}
+
+/// `terms` of the steady mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadyTerms {
+    #[serde(flatten)]
+    pub common: Terms,
+    /// Strain-rate (Kelvin–Voigt) damping in the bulk.
+    pub strain_rate_damping: bool,
+    /// Newton matrix of that damping (null when the damping is not active).
+    pub damping_tangent: Option<SteadyDampingTangent>,
+    /// Why the matrix-free damping tangent was given up for the assembled one (null when not).
+    pub damping_tangent_fallback: Option<String>,
+}
+
+/// `mesh`: size of the mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshInfo {
+    /// Cells through the thickness and around the circumference (`[mesh]`).
+    pub n_r: usize,
+    pub n_theta: usize,
+    /// Polynomial degree of the cells.
+    pub order: usize,
+    /// Nodes and cells of the mesh.
+    pub nodes: usize,
+    pub cells: usize,
+}
+
+/// `mesh` of the static and spinning modes.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolidMesh {
+    #[serde(flatten)]
+    pub common: MeshInfo,
+    /// Pressure unknowns (per-cell pressures of the incompressible formulation).
+    pub pressure_dofs: usize,
+}
+
+/// `solver` of the static and spinning modes.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolidSolver {
+    /// Linear solver used at the end (`cholesky` or `lu`).
+    pub linear: String,
+    /// Whether Cholesky failed and LU took over.
+    pub switched_to_lu: bool,
+    /// Converged load steps and cut-backs of the load stepping.
+    pub load_steps: usize,
+    pub cutbacks: usize,
+    /// Worker threads of the assembly and solvers.
+    pub threads: usize,
+    /// Load factor at which an interrupt stopped the run (absent when not interrupted).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted_at: Option<f64>,
+}
+
+/// `results` of the static and spinning modes.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum SolidResults {
+    /// Static indentation: hub loads, contact patch, road height.
+    Static(IndentationResults),
+    /// Free spinning: ring-averaged displacements and stresses.
+    Spinning(SpinningResults),
+}
+
+/// summary.json of the static and spinning modes.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolidSummary {
+    #[serde(flatten)]
+    pub run: RunStats,
+    pub results: SolidResults,
+    pub terms: Terms,
+    pub mesh: SolidMesh,
+    pub solver: SolidSolver,
+}
+
+/// `results` of the transient mode (the final state, or the last node passage where stated).
+#[derive(Clone, Debug, Serialize)]
+pub struct TransientResults {
+    /// `motion.control` (`speed` or `torque`).
+    pub control: String,
+    /// Hub angular speed at the end of the run (rad/s).
+    pub omega_steady: f64,
+    /// Hub torque applied at the end (torque control; per unit thickness).
+    pub applied_torque: f64,
+    /// v0 / ω at the end (length; NaN when ω = 0).
+    pub rolling_radius: f64,
+    /// Moment of the contact tractions about the hub centre (per unit thickness).
+    pub contact_moment: f64,
+    /// Time at which the state became steady (s; null when it did not).
+    pub time_to_steady: Option<f64>,
+    /// Hub revolutions integrated.
+    pub revolutions: f64,
+    /// Accepted and rejected time steps.
+    pub steps: usize,
+    pub rejected_steps: usize,
+    /// Whether steady rolling was reached.
+    pub steady: bool,
+    /// Time at the end of the run (s).
+    pub final_time: f64,
+    /// Node passages seen by the steady-state monitor.
+    pub node_passages: usize,
+    /// Relative changes over the last node passage of the referential field, hub force, hub
+    /// torque and hub speed (dimensionless).
+    pub steady_change_field: f64,
+    pub steady_change_force: f64,
+    pub steady_change_torque: f64,
+    pub steady_change_omega: f64,
+    /// Smallest and largest time step used (s).
+    pub dt_min_used: f64,
+    pub dt_max_used: f64,
+    /// Force and moment the hub exerts on the body at the last step (per unit thickness).
+    pub hub_force_x: f64,
+    pub hub_force_y: f64,
+    pub hub_torque: f64,
+    /// Hub loads averaged over the last node passage (null before two passages).
+    pub hub_force_x_passage_mean: Option<f64>,
+    pub hub_force_y_passage_mean: Option<f64>,
+    pub hub_torque_passage_mean: Option<f64>,
+    /// Contact patch ends in x1 (length) and peak normal traction (per unit reference length).
+    pub contact_x_min: f64,
+    pub contact_x_max: f64,
+    pub max_pressure: f64,
+    /// Resultant of the contact tractions on the body (per unit thickness).
+    pub contact_force_x: f64,
+    pub contact_force_y: f64,
+    /// Centroid x1 of the normal traction (length).
+    pub contact_centroid: f64,
+    /// Hertz-type half-width 2 √⟨(x1 − x̄)²⟩ of the normal traction (length).
+    pub contact_half_width_moment: f64,
+    /// Time integrator and mass matrix (`lumped` or `consistent`).
+    pub integrator: String,
+    pub mass: String,
+}
+
+/// summary.json of the transient mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct TransientSummary {
+    #[serde(flatten)]
+    pub run: RunStats,
+    pub warnings: Vec<String>,
+    /// Null when nothing was integrated (the initial rigid spin failed).
+    pub results: Option<TransientResults>,
+    /// Absent when nothing was integrated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub terms: Option<TransientTerms>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshInfo>,
+}
+
+/// One row of the steady branch table (`branch.csv`, `results.branch`).
+#[derive(Clone, Debug, Serialize)]
+pub struct BranchRow {
+    /// Continuation step (0: the start point).
+    pub step: usize,
+    /// Continuation parameter (ω in rad/s, hub load per unit thickness, DISP or creep).
+    pub lambda: f64,
+    /// Angular speed (rad/s) and road speed (length/s).
+    pub omega: f64,
+    pub v0: f64,
+    /// Penetration DISP = Ro − H (length).
+    pub penetration: f64,
+    /// Hub loads (per unit thickness).
+    pub hub_force_x: f64,
+    pub hub_force_y: f64,
+    pub hub_torque: f64,
+    /// Contact patch ends in x1 (length) and peak normal traction.
+    pub contact_x_min: f64,
+    pub contact_x_max: f64,
+    pub max_pressure: f64,
+    /// Standing-wave indicator: half the peak-to-peak radial displacement of the outer
+    /// surface nodes more than 60° away from the bottom (outside the patch region; length).
+    pub wave_amplitude: f64,
+    /// Sign of the tangent's determinant, its negative eigenvalues and the bifurcation test
+    /// function.
+    pub det_sign: f64,
+    pub negative_eigenvalues: f64,
+    pub test_function: f64,
+    /// Corrector iterations.
+    pub iterations: usize,
+    pub kind: PointKind,
+    /// Wall time of the step and of one factorization + solve (s).
+    pub wall_time_s: f64,
+    pub factor_solve_s: f64,
+    /// Creep ξ = v0 / v0_free − 1 (NaN, an empty CSV field, without a free-rolling reference).
+    pub creep: f64,
+}
+
+impl BranchRow {
+    pub const HEADER: [&'static str; 20] = [
+        "step",
+        "lambda",
+        "omega",
+        "v0",
+        "penetration",
+        "hub_force_x",
+        "hub_force_y",
+        "hub_torque",
+        "contact_x_min",
+        "contact_x_max",
+        "max_pressure",
+        "wave_amplitude",
+        "det_sign",
+        "negative_eigenvalues",
+        "test_function",
+        "iterations",
+        "kind",
+        "wall_time_s",
+        "factor_solve_s",
+        "creep",
+    ];
+
+    /// The row as the numbers of `branch.csv` (in [`Self::HEADER`] order).
+    pub fn values(&self) -> Vec<f64> {
+        let kind = match self.kind {
+            PointKind::Start => 0.0,
+            PointKind::Regular => 1.0,
+            PointKind::LimitPoint => 2.0,
+            PointKind::Bifurcation => 3.0,
+        };
+        vec![
+            self.step as f64,
+            self.lambda,
+            self.omega,
+            self.v0,
+            self.penetration,
+            self.hub_force_x,
+            self.hub_force_y,
+            self.hub_torque,
+            self.contact_x_min,
+            self.contact_x_max,
+            self.max_pressure,
+            self.wave_amplitude,
+            self.det_sign,
+            self.negative_eigenvalues,
+            self.test_function,
+            self.iterations as f64,
+            kind,
+            self.wall_time_s,
+            self.factor_solve_s,
+            self.creep,
+        ]
+    }
+}
+
+/// What the rolling control (`motion.control`) did after the press-in (`results.control`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ControlReport {
+    /// `speed`, `torque`, `free_rolling` or `creep`.
+    pub control: String,
+    /// Target hub torque (torque and free rolling; 0 for creep's free-rolling stage; per unit
+    /// thickness).
+    pub target_torque: f64,
+    /// Torque tolerance (absolute): `TORQUE_RTOL` · |F_y| · Ro at the press-in state.
+    pub torque_tolerance: f64,
+    /// Free-rolling road speed v0_free and rolling radius R_e = v0_free / ω (free rolling and
+    /// creep; NaN otherwise).
+    pub v0_free: f64,
+    pub rolling_radius: f64,
+    /// Creep ξ = v0 / v0_free − 1 of the final state (NaN without a free-rolling reference).
+    pub creep: f64,
+    /// Steady solves (one Newton solve per trial v0) and their Newton iterations.
+    pub evaluations: usize,
+    pub newton_iterations: usize,
+    /// (v0, hub torque) of every trial of the secant iteration.
+    pub history: Vec<(f64, f64)>,
+}
+
+/// `results.continuation` of the steady mode: how the branch was followed.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContinuationSummary {
+    /// `[continuation] parameter` (`omega`, `load`, `disp`, `creep`).
+    pub parameter: Option<String>,
+    /// Why the continuation stopped.
+    pub stop_reason: String,
+    /// Continuation steps, corrector iterations, step halvings, assemblies and factorizations.
+    pub steps: usize,
+    pub corrector_iterations: usize,
+    pub cutbacks: usize,
+    pub assemblies: usize,
+    pub factorizations: usize,
+}
+
+/// `results` of the steady mode (the final state; the keys shared with the transient mode have
+/// the same meaning).
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadyResults {
+    /// Whether the steady solve converged.
+    pub steady: bool,
+    /// Always 0 (the keys of the transient mode).
+    pub time_to_steady: f64,
+    pub revolutions: f64,
+    /// Converged steps: load steps of the path to the first solution and continuation steps.
+    pub steps: usize,
+    /// Angular speed (rad/s), road speed (length/s) and penetration DISP (length).
+    pub omega: f64,
+    pub v0: f64,
+    pub penetration: f64,
+    /// Hub loads (per unit thickness).
+    pub hub_force_x: f64,
+    pub hub_force_y: f64,
+    pub hub_torque: f64,
+    /// Contact patch ends in x1 (length) and peak normal traction.
+    pub contact_x_min: f64,
+    pub contact_x_max: f64,
+    pub max_pressure: f64,
+    /// Resultant of the contact tractions on the body (per unit thickness).
+    pub contact_force_x: f64,
+    pub contact_force_y: f64,
+    /// Centroid x1 of the normal traction (length).
+    pub contact_centroid: f64,
+    /// Hertz-type half-width 2 √⟨(x1 − x̄)²⟩ of the normal traction (length).
+    pub contact_half_width_moment: f64,
+    /// Wall time to the first steady solution (s).
+    pub wall_time_first_solution_s: f64,
+    /// Creep ξ = v0 / v0_free − 1 (NaN without a free-rolling reference).
+    pub creep: f64,
+    /// What the rolling control did (null under speed control).
+    pub control: Option<ControlReport>,
+    /// Rolling resistance along a branch in ω of a viscoelastic body (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rolling_resistance: Option<RollingResistance>,
+    /// Converged branch points (with continuation only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch: Option<Vec<BranchRow>>,
+    /// Limit and bifurcation points (with continuation only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub special_points: Option<Vec<SpecialPoint>>,
+    /// How the branch was followed (with continuation only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuation: Option<ContinuationSummary>,
+}
+
+/// `solver` of the steady mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadySolver {
+    /// Linear solver of the press-in (`cholesky` or `lu`).
+    pub linear: String,
+    /// Converged load steps and cut-backs of the press-in.
+    pub load_steps: usize,
+    pub cutbacks: usize,
+    /// Worker threads of the assembly and solvers.
+    pub threads: usize,
+    /// What the recovery of a failed press-in did (null when none ran).
+    pub recovery: Option<Recovery>,
+    /// The continuation in the friction regularisation ε before the press-in (null when none).
+    pub eps_continuation: Option<Attempt>,
+}
+
+/// summary.json of the steady mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct SteadySummary {
+    #[serde(flatten)]
+    pub run: RunStats,
+    pub warnings: Vec<String>,
+    pub results: SteadyResults,
+    pub terms: SteadyTerms,
+    pub mesh: MeshInfo,
+    pub solver: SteadySolver,
+}
+
+/// `results` of the stick-slip mode (times in s, positions in the scene's length unit).
+#[derive(Clone, Debug, Serialize)]
+pub struct StickSlipResults {
+    /// Mean period of the stick-slip cycle (null with fewer than two cycles).
+    pub period: Option<f64>,
+    /// Slip amplitude (x_max − x_min) / 2 of the cycle (null with fewer than two cycles).
+    pub amplitude: Option<f64>,
+    /// Extremes of the block position over the measured cycles.
+    pub x_min: Option<f64>,
+    pub x_max: Option<f64>,
+    /// Time sticking and slipping per cycle.
+    pub stick_time: Option<f64>,
+    pub slip_time: Option<f64>,
+    /// Stick-to-slip transitions seen.
+    pub cycles: usize,
+    /// Counts of the ODE solver.
+    pub solver_stats: SolverStats,
+    /// (measured − closed form) / closed form of the period and amplitude (null without a
+    /// closed form or a measurement).
+    pub period_rel_error: Option<f64>,
+    pub amplitude_rel_error: Option<f64>,
+    /// The closed-form static/kinetic cycle (rate-dependent law only; null otherwise).
+    pub closed_form: Option<ClosedFormCycle>,
+}
+
+/// summary.json of the stick-slip mode.
+#[derive(Clone, Debug, Serialize)]
+pub struct StickSlipSummary {
+    #[serde(flatten)]
+    pub run: RunStats,
+    /// Null when the integration failed.
+    pub results: Option<StickSlipResults>,
+    pub terms: Terms,
+}
+
+/// `results.compare` of `tread compare`: the transient and steady modes side by side (see
+/// [`super::compare`] for the definitions).
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareResults {
+    /// Hub loads of both modes (per unit thickness; the transient's passage means or last step
+    /// as `transient_loads` says).
+    pub hub_force_x_transient: f64,
+    pub hub_force_x_steady: f64,
+    pub hub_force_y_transient: f64,
+    pub hub_force_y_steady: f64,
+    pub hub_torque_transient: f64,
+    pub hub_torque_steady: f64,
+    /// `passage_mean` or `last_step`.
+    pub transient_loads: String,
+    /// The transient's hub loads at its last step.
+    pub hub_force_x_transient_last_step: f64,
+    pub hub_force_y_transient_last_step: f64,
+    pub hub_torque_transient_last_step: f64,
+    /// |F_i(transient) − F_i(steady)| / |F(steady)| (dimensionless).
+    pub hub_force_x_rel_diff: f64,
+    pub hub_force_y_rel_diff: f64,
+    /// |T_t − T_s| (per unit thickness) and that over |F(steady)| Ro (dimensionless).
+    pub hub_torque_abs_diff: f64,
+    pub hub_torque_rel_diff: f64,
+    /// ‖u_t − u_s‖_L2 / ‖u_s‖_L2 of the referential fields (dimensionless).
+    pub field_rel_l2: f64,
+    /// max over nodes of |u_t − u_s| (length) and that over max |u_s|.
+    pub field_max_abs: f64,
+    pub field_rel_max: f64,
+    /// Contact patch ends (length) and peak pressure of both modes.
+    pub contact_x_min_transient: f64,
+    pub contact_x_min_steady: f64,
+    pub contact_x_max_transient: f64,
+    pub contact_x_max_steady: f64,
+    pub max_pressure_transient: f64,
+    pub max_pressure_steady: f64,
+    /// Wall times of both runs (s) and their ratio transient / steady.
+    pub wall_time_transient_s: f64,
+    pub wall_time_steady_s: f64,
+    pub speedup: f64,
+    /// Whether the transient run reached its steady state, when (s) and in how many steps.
+    pub transient_steady: bool,
+    pub transient_time_to_steady: Option<f64>,
+    pub transient_steps: usize,
+}
+
+/// `results` of `tread compare` (one key, `compare`).
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareSection {
+    pub compare: CompareResults,
+}
+
+/// summary.json of `tread compare`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareSummary {
+    pub warnings: Vec<String>,
+    pub results: CompareSection,
+    /// Output folders of the two runs.
+    pub transient_dir: String,
+    pub steady_dir: String,
+}
