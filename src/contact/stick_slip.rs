@@ -57,7 +57,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use diffsol::{FaerLU, FaerMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use serde::{Deserialize, Serialize};
 
-use super::laws::{Friction, FrictionLaw, LawError};
+use super::laws::{Friction, FrictionKind, FrictionLaw, LawError};
 
 /// Hard cap on the number of integrator steps (a guard against step-size collapse).
 pub const MAX_STEPS: usize = 5_000_000;
@@ -355,11 +355,9 @@ impl StickSlipSpec {
             self.stick_threshold > 0.0 && self.stick_threshold < 1.0,
             "must lie in (0, 1)",
         )?;
-        match self.friction {
-            Friction::CoulombTanh(_) | Friction::CoulombLinear(_) | Friction::RateDependent(_) => {}
-            Friction::None | Friction::OdenMartins(_) => {
-                return Err(StickSlipError::UnsupportedLaw(self.friction.name()))
-            }
+        let kind = self.friction.kind();
+        if kind == FrictionKind::None || kind.needs_penetration() {
+            return Err(StickSlipError::UnsupportedLaw(self.friction.name()));
         }
         self.friction.validate()?;
         Ok(())
