@@ -1366,6 +1366,52 @@ mod tests {
     }
 
     #[test]
+    fn law_declarations_are_consistent() {
+        // Keywords are distinct, and a key shared by several laws is declared the same by all.
+        let mut names = FrictionKind::NAMES.to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), FrictionKind::ALL.len());
+        for key in FrictionKind::all_keys() {
+            let first = FrictionKind::param(key).copied();
+            for kind in FrictionKind::laws_with(key) {
+                let p = kind.params().iter().find(|p| p.key == key).copied();
+                assert_eq!(p, first, "`{key}` of {kind}");
+            }
+        }
+        // Values go through build/values and serde unchanged, in the declared order.
+        for kind in FrictionKind::ALL.iter().copied() {
+            let values: Vec<f64> = (1..=kind.params().len()).map(|i| 0.5 + i as f64).collect();
+            let law = kind.build(&values);
+            assert_eq!(law.kind(), kind);
+            assert_eq!(law.values(), values, "{kind}");
+            assert_eq!(law.name(), kind.as_str());
+            assert_eq!(kind.as_str().parse::<FrictionKind>(), Ok(kind));
+            let json = serde_json::to_value(law).unwrap_or_default();
+            let keys: Vec<&str> = json
+                .as_object()
+                .map(|m| {
+                    m.keys()
+                        .map(String::as_str)
+                        .filter(|k| *k != "law")
+                        .collect()
+                })
+                .unwrap_or_default();
+            let mut declared: Vec<&str> = kind.params().iter().map(|p| p.key).collect();
+            declared.sort_unstable();
+            assert_eq!(keys, declared, "{kind}");
+            let back: Friction = serde_json::from_value(json).unwrap_or_default();
+            assert_eq!(back, law);
+        }
+        let missing: Result<Friction, _> =
+            serde_json::from_str(r#"{"law":"coulomb_tanh","mu":0.3}"#);
+        assert!(missing.is_err());
+        let foreign: Result<Friction, _> =
+            serde_json::from_str(r#"{"law":"coulomb_tanh","mu":0.3,"eps":0.1,"v_s":1}"#);
+        assert!(foreign.is_err());
+    }
+
+    #[test]
     fn friction_serde_is_tagged_by_law_name() {
         let laws = [
             Friction::None,

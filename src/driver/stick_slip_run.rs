@@ -8,11 +8,13 @@
 //! so `history.csv` (CSV sink), `run.mcap`, `run.rrd` and `series.png` carry the time history.
 //! An interrupt stops the replay at a sample.
 
-use crate::contact::stick_slip::{closed_form_cycle, simulate, Phase, StickSlipSpec};
+use crate::contact::stick_slip::{
+    closed_form_cycle, simulate, supported_law_list, Phase, StickSlipSpec,
+};
 use crate::contact::Friction;
 use crate::io::output::{ensure_dir, sanitize, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
-use crate::io::scene::{stick_slip_law, stick_slip_laws, Scene};
+use crate::io::scene::{stick_slip_law, Scene};
 use crate::setup::{AppError, RunOptions, RunOutcome};
 use std::time::Instant;
 
@@ -29,7 +31,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         _ => {
             return Err(AppError::Unsupported(format!(
                 "friction.law: stick_slip needs {}",
-                or_words(&stick_slip_laws())
+                supported_law_list()
             )))
         }
     };
@@ -209,14 +211,5 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             format!("stick-slip integration failed: {e}"),
             opts.out_dir.clone(),
         )),
-    }
-}
-
-/// `a, b or c`.
-fn or_words(names: &[&str]) -> String {
-    match names.split_last() {
-        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
-        Some((last, _)) => last.to_string(),
-        None => String::new(),
     }
 }

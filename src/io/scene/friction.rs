@@ -121,16 +121,12 @@ impl<'de> Deserialize<'de> for FrictionSpec {
 /// Whether the stick–slip oscillator can use friction law `law`: any law but `none` that
 /// does not need a penetration.
 pub fn stick_slip_law(law: FrictionLawName) -> bool {
-    law != FrictionLawName::None && !law.needs_penetration()
+    crate::contact::stick_slip::supports(law)
 }
 
 /// The keywords of the friction laws the stick–slip oscillator can use, in registration order.
 pub fn stick_slip_laws() -> Vec<&'static str> {
-    FrictionLawName::ALL
-        .iter()
-        .filter(|l| stick_slip_law(**l))
-        .map(|l| l.as_str())
-        .collect()
+    crate::contact::stick_slip::supported_laws()
 }
 
 /// The checks of `[friction]`, from the law's declared parameters: keys of another law, missing
