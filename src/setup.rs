@@ -8,15 +8,14 @@
 //! physics modules the values are handed to (road at x2 = −H below the hub centre, ω > 0
 //! counter-clockwise).
 
-use crate::contact::laws::{CoulombLinear, CoulombTanh, OdenMartins, RateDependent};
-use crate::contact::{Clamp, ContactModel, FacetRule, Friction, NormalCompliance};
+use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
 use crate::driver::results::Summary;
 use crate::driver::SolidSystem;
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
-    ClampKind, ContactQuadrature, Formulation, FrictionParams, LinearChoice, MaterialParams, Mode,
-    Scene, Sink, DEFAULT_CLAMP_WIDTH_OVER_G,
+    ClampKind, ContactQuadrature, Formulation, LinearChoice, MaterialParams, Mode, Scene, Sink,
+    DEFAULT_CLAMP_WIDTH_OVER_G,
 };
 use crate::material::{
     Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
@@ -177,28 +176,10 @@ pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, 
         },
     };
     let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
-    let friction = match scene.friction.params() {
-        None => {
-            return Err(AppError::Unsupported(
-                "friction: a parameter required by `friction.law` is missing".into(),
-            ))
-        }
-        Some(FrictionParams::None) => Friction::None,
-        Some(FrictionParams::CoulombTanh { mu, eps }) => {
-            Friction::CoulombTanh(CoulombTanh::new(mu, eps))
-        }
-        Some(FrictionParams::CoulombLinear { mu, eps }) => {
-            Friction::CoulombLinear(CoulombLinear::new(mu, eps))
-        }
-        Some(FrictionParams::RateDependent {
-            mu_s,
-            mu_k,
-            v_s,
-            eps,
-        }) => Friction::RateDependent(RateDependent::new(mu_s, mu_k, v_s, eps)),
-        Some(FrictionParams::OdenMartins { c_t, m_t, eps }) => {
-            Friction::OdenMartins(OdenMartins::new(c_t, m_t, eps))
-        }
+    let Some(friction) = scene.friction.params() else {
+        return Err(AppError::Unsupported(
+            "friction: a parameter required by `friction.law` is missing".into(),
+        ));
     };
     let rule = match cs.quadrature {
         ContactQuadrature::Gauss => FacetRule::Gauss(cs.points),

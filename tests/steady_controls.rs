@@ -100,7 +100,7 @@ fn creep_force_curve_saturates_at_coulomb_limit() {
             "output.sinks=[\"summary\", \"csv\"]",
         ],
     );
-    let mu = sc.friction.mu.unwrap_or(f64::NAN);
+    let mu = sc.friction.get("mu").unwrap_or(f64::NAN);
     let s = run(&sc, &dir);
     let b = s["results"]["branch"]
         .as_array()

@@ -47,6 +47,16 @@
 //! The friction laws take t_n as an argument and use max(t_n, 0) (a negative normal traction
 //! would otherwise make friction drive the slip); d_tn is zero where t_n < 0.
 //!
+//! # Scene description and registration
+//!
+//! Each friction law declares, next to its physics, how a scene file gives it
+//! ([`FrictionLawSpec`]): its `law` keyword, its parameters ([`ParamSpec`]: key, meaning, unit,
+//! bound), how to build it from their values and any check between parameters. The one list in
+//! `friction_laws!` builds from these entries both the [`Friction`] enum with its dispatch and
+//! the keyword enum [`FrictionKind`]; the scene's `[friction]` keys, reference, range checks and
+//! messages are made from the declarations. Adding a law is its struct with its
+//! [`FrictionLaw`] and [`FrictionLawSpec`] impls, plus its name in that list.
+//!
 //! [`RateDependent`]: |w| is not differentiable at w = 0, but μ(|w|) tanh(w/ε) is C¹ there:
 //! sign(w) tanh(w/ε) = tanh(|w|/ε), so
 //! d/dw [μ(|w|) tanh(w/ε)] = μ'(|w|) tanh(|w|/ε) + μ(|w|) sech²(w/ε)/ε,
@@ -65,18 +75,18 @@ pub enum LawError {
         /// The offending value.
         value: f64,
         /// What is required.
-        reason: &'static str,
+        reason: String,
     },
 }
 
-fn check(name: &'static str, value: f64, ok: bool, reason: &'static str) -> Result<(), LawError> {
+fn check(name: &'static str, value: f64, ok: bool, reason: &str) -> Result<(), LawError> {
     if ok && value.is_finite() {
         Ok(())
     } else {
         Err(LawError::InvalidParameter {
             name,
             value,
-            reason,
+            reason: reason.to_string(),
         })
     }
 }
@@ -274,6 +284,104 @@ pub trait FrictionLaw: Send + Sync {
     fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue;
 }
 
+/// The lower bound of a parameter's admissible range (every parameter must also be finite).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Bound {
+    /// value > lo.
+    Above(f64),
+    /// value ≥ lo.
+    AtLeast(f64),
+}
+
+impl Bound {
+    /// Whether `x` is finite and within the bound.
+    pub fn admits(self, x: f64) -> bool {
+        x.is_finite()
+            && match self {
+                Bound::Above(lo) => x > lo,
+                Bound::AtLeast(lo) => x >= lo,
+            }
+    }
+}
+
+impl std::fmt::Display for Bound {
+    /// `> 0`, `>= 1`: how the scene's messages and reference write the bound.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Bound::Above(lo) => write!(f, "> {lo}"),
+            Bound::AtLeast(lo) => write!(f, ">= {lo}"),
+        }
+    }
+}
+
+/// One parameter of a friction law as a scene file gives it: a number under `key` in
+/// `[friction]`, with what it is, its unit and its bound. The scene's key list, reference and
+/// range checks (with their messages) are all made from these declarations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamSpec {
+    /// Key in `[friction]` (`mu`, `eps`, ...).
+    pub key: &'static str,
+    /// What the value is, as messages name it ("friction coefficient μ").
+    pub what: &'static str,
+    /// Unit in the scene's L-F-T system (`–` for dimensionless).
+    pub unit: &'static str,
+    /// Admissible range.
+    pub bound: Bound,
+    /// More about the value for the scene reference ("" for nothing).
+    pub note: &'static str,
+}
+
+/// The regularisation velocity ε, a parameter of every law.
+const EPS: ParamSpec = ParamSpec {
+    key: "eps",
+    what: "slip-velocity regularisation ε",
+    unit: "L/T (static: L)",
+    bound: Bound::Above(0.0),
+    note: "a slip length in static",
+};
+
+/// The Coulomb coefficient μ of both Coulomb laws.
+const MU: ParamSpec = ParamSpec {
+    key: "mu",
+    what: "friction coefficient μ",
+    unit: "–",
+    bound: Bound::AtLeast(0.0),
+    note: "",
+};
+
+/// A friction law with its scene description: the keyword, the parameters, and how to build the
+/// law from their values. Registering the type in `friction_laws!` adds it to [`Friction`] and to
+/// the scene's `[friction] law` keywords, keys, checks and reference.
+pub trait FrictionLawSpec: FrictionLaw + Copy {
+    /// Keyword of `[friction] law` (snake_case).
+    const NAME: &'static str;
+    /// Parameters, in the order of [`Self::from_values`] and [`Self::values`].
+    const PARAMS: &'static [ParamSpec];
+    /// Whether the traction is a function of the penetration δ rather than of t_n, so that the
+    /// law cannot act on the stick–slip oscillator (which has no δ).
+    const NEEDS_PENETRATION: bool = false;
+
+    /// The law from its parameter values in the order of [`Self::PARAMS`] (not range-checked).
+    fn from_values(v: &[f64]) -> Self;
+
+    /// The parameter values in the order of [`Self::PARAMS`].
+    fn values(&self) -> Vec<f64>;
+
+    /// Whether the law can produce a non-zero traction.
+    fn is_active(&self) -> bool;
+
+    /// The friction coefficient at large slip, where the law has one.
+    fn kinetic_coefficient(&self) -> Option<f64> {
+        None
+    }
+
+    /// Checks between parameters beyond their own bounds, on the values a scene gives (any may
+    /// be missing): `(key, message)` for each violation.
+    fn cross_check(_given: &dyn Fn(&str) -> Option<f64>) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
+}
+
 /// Regularised Coulomb friction t_T = −μ t_n tanh(w/ε).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CoulombTanh {
@@ -287,6 +395,27 @@ impl CoulombTanh {
     /// A law with coefficient `mu` and regularisation velocity `eps`.
     pub fn new(mu: f64, eps: f64) -> Self {
         Self { mu, eps }
+    }
+}
+
+impl FrictionLawSpec for CoulombTanh {
+    const NAME: &'static str = "coulomb_tanh";
+    const PARAMS: &'static [ParamSpec] = &[MU, EPS];
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.mu, self.eps]
+    }
+
+    fn is_active(&self) -> bool {
+        self.mu != 0.0
+    }
+
+    fn kinetic_coefficient(&self) -> Option<f64> {
+        Some(self.mu)
     }
 }
 
@@ -322,6 +451,27 @@ impl CoulombLinear {
     /// A law with coefficient `mu` and regularisation velocity `eps`.
     pub fn new(mu: f64, eps: f64) -> Self {
         Self { mu, eps }
+    }
+}
+
+impl FrictionLawSpec for CoulombLinear {
+    const NAME: &'static str = "coulomb_linear";
+    const PARAMS: &'static [ParamSpec] = &[MU, EPS];
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.mu, self.eps]
+    }
+
+    fn is_active(&self) -> bool {
+        self.mu != 0.0
+    }
+
+    fn kinetic_coefficient(&self) -> Option<f64> {
+        Some(self.mu)
     }
 }
 
@@ -384,6 +534,64 @@ impl RateDependent {
     }
 }
 
+impl FrictionLawSpec for RateDependent {
+    const NAME: &'static str = "rate_dependent";
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec {
+            key: "mu_s",
+            what: "static friction coefficient μ_s",
+            unit: "–",
+            bound: Bound::AtLeast(0.0),
+            note: "",
+        },
+        ParamSpec {
+            key: "mu_k",
+            what: "kinetic friction coefficient μ_k",
+            unit: "–",
+            bound: Bound::AtLeast(0.0),
+            note: "at most mu_s",
+        },
+        ParamSpec {
+            key: "v_s",
+            what: "decay velocity v_s",
+            unit: "L/T (static: L)",
+            bound: Bound::Above(0.0),
+            note: "μ decays from mu_s to mu_k over it",
+        },
+        EPS,
+    ];
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1], v[2], v[3])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.mu_s, self.mu_k, self.v_s, self.eps]
+    }
+
+    fn is_active(&self) -> bool {
+        self.mu_s != 0.0 || self.mu_k != 0.0
+    }
+
+    fn kinetic_coefficient(&self) -> Option<f64> {
+        Some(self.mu_k)
+    }
+
+    /// μ_k ≤ μ_s (velocity weakening or neutral), checked where both are given and ≥ 0.
+    fn cross_check(given: &dyn Fn(&str) -> Option<f64>) -> Vec<(&'static str, String)> {
+        match (given("mu_s"), given("mu_k")) {
+            (Some(mu_s), Some(mu_k)) if mu_s >= 0.0 && mu_k >= 0.0 && mu_k > mu_s => vec![(
+                "mu_k",
+                format!(
+                    "kinetic coefficient μ_k = {mu_k} must not exceed the static coefficient \
+                     μ_s = {mu_s}"
+                ),
+            )],
+            _ => Vec::new(),
+        }
+    }
+}
+
 impl FrictionLaw for RateDependent {
     #[inline]
     fn eval(&self, w: f64, t_n: f64, _delta: f64) -> FrictionValue {
@@ -422,6 +630,40 @@ impl OdenMartins {
     }
 }
 
+impl FrictionLawSpec for OdenMartins {
+    const NAME: &'static str = "oden_martins";
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec {
+            key: "c_t",
+            what: "tangential compliance coefficient c_t",
+            unit: "F/L^(2+m_t)",
+            bound: Bound::AtLeast(0.0),
+            note: "",
+        },
+        ParamSpec {
+            key: "m_t",
+            what: "tangential compliance exponent m_t",
+            unit: "–",
+            bound: Bound::AtLeast(1.0),
+            note: "",
+        },
+        EPS,
+    ];
+    const NEEDS_PENETRATION: bool = true;
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1], v[2])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.c_t, self.m_t, self.eps]
+    }
+
+    fn is_active(&self) -> bool {
+        self.c_t != 0.0
+    }
+}
+
 impl FrictionLaw for OdenMartins {
     #[inline]
     fn eval(&self, w: f64, _t_n: f64, delta: f64) -> FrictionValue {
@@ -439,117 +681,296 @@ impl FrictionLaw for OdenMartins {
     }
 }
 
-/// The closed set of friction laws, dispatched statically by `match`.
-///
-/// | variant           | parameters                 | scene `law =`      |
-/// |-------------------|----------------------------|--------------------|
-/// | `None`            | –                          | `"none"`           |
-/// | `CoulombTanh`     | mu, eps                    | `"coulomb_tanh"`   |
-/// | `CoulombLinear`   | mu, eps                    | `"coulomb_linear"` |
-/// | `RateDependent`   | mu_s, mu_k, v_s, eps       | `"rate_dependent"` |
-/// | `OdenMartins`     | c_t, m_t, eps              | `"oden_martins"`   |
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case")]
-pub enum Friction {
-    /// Frictionless contact: t_T = 0.
-    #[default]
-    None,
-    /// See [`CoulombTanh`].
-    CoulombTanh(CoulombTanh),
-    /// See [`CoulombLinear`].
-    CoulombLinear(CoulombLinear),
-    /// See [`RateDependent`].
-    RateDependent(RateDependent),
-    /// See [`OdenMartins`].
-    OdenMartins(OdenMartins),
+/// Builds, from the list of registered law types, the [`Friction`] enum with its `match`
+/// dispatch and the [`FrictionKind`] keyword enum (the scene's `law = "..."`), both from the
+/// same entries. Each entry is a type implementing [`FrictionLawSpec`]; the variant of both
+/// enums has the type's name. Frictionless contact (`None`, `"none"`) comes first in both.
+macro_rules! friction_laws {
+    ($($law:ident),+ $(,)?) => {
+        /// The closed set of friction laws, dispatched statically by `match`: frictionless
+        /// contact or one of the registered laws (scene `law =` is each law's
+        /// [`FrictionLawSpec::NAME`], its keys are the law's [`FrictionLawSpec::PARAMS`]).
+        ///
+        /// Serialised as the scene's `[friction]` table: `law` and the law's parameters.
+        #[derive(Debug, Clone, Copy, PartialEq, Default)]
+        pub enum Friction {
+            /// Frictionless contact: t_T = 0.
+            #[default]
+            None,
+            $(
+                #[doc = concat!("See [`", stringify!($law), "`].")]
+                $law($law),
+            )+
+        }
+
+        /// Which friction law, without its parameters: the keyword of `[friction] law`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+        pub enum FrictionKind {
+            /// No friction (frictionless contact), `"none"`.
+            #[default]
+            None,
+            $(
+                #[doc = concat!("[`", stringify!($law), "`].")]
+                $law,
+            )+
+        }
+
+        impl FrictionKind {
+            /// Every kind, in registration order (`None` first).
+            pub const ALL: &'static [FrictionKind] = &[FrictionKind::None, $(FrictionKind::$law),+];
+            /// The scene keyword of every kind, in the order of [`Self::ALL`].
+            pub const NAMES: &'static [&'static str] =
+                &["none", $(<$law as FrictionLawSpec>::NAME),+];
+
+            /// The scene keyword of this kind.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    FrictionKind::None => "none",
+                    $(FrictionKind::$law => <$law as FrictionLawSpec>::NAME,)+
+                }
+            }
+
+            /// The parameters of this kind, in their declared order (none for `None`).
+            pub fn params(self) -> &'static [ParamSpec] {
+                match self {
+                    FrictionKind::None => &[],
+                    $(FrictionKind::$law => <$law as FrictionLawSpec>::PARAMS,)+
+                }
+            }
+
+            /// Whether the law needs a penetration δ (see [`FrictionLawSpec::NEEDS_PENETRATION`]).
+            pub fn needs_penetration(self) -> bool {
+                match self {
+                    FrictionKind::None => false,
+                    $(FrictionKind::$law => <$law as FrictionLawSpec>::NEEDS_PENETRATION,)+
+                }
+            }
+
+            /// The law's checks between parameters (see [`FrictionLawSpec::cross_check`]).
+            pub fn cross_check(
+                self,
+                given: &dyn Fn(&str) -> Option<f64>,
+            ) -> Vec<(&'static str, String)> {
+                match self {
+                    FrictionKind::None => Vec::new(),
+                    $(FrictionKind::$law => <$law as FrictionLawSpec>::cross_check(given),)+
+                }
+            }
+
+            /// The law of this kind from its parameter values, in the order of [`Self::params`].
+            ///
+            /// # Panics
+            /// If `values` is shorter than [`Self::params`].
+            pub fn build(self, values: &[f64]) -> Friction {
+                match self {
+                    FrictionKind::None => Friction::None,
+                    $(FrictionKind::$law => Friction::$law(<$law as FrictionLawSpec>::from_values(values)),)+
+                }
+            }
+        }
+
+        impl Friction {
+            /// Which law this is.
+            pub fn kind(&self) -> FrictionKind {
+                match self {
+                    Friction::None => FrictionKind::None,
+                    $(Friction::$law(_) => FrictionKind::$law,)+
+                }
+            }
+
+            /// The parameter values, in the order of [`FrictionKind::params`].
+            pub fn values(&self) -> Vec<f64> {
+                match self {
+                    Friction::None => Vec::new(),
+                    $(Friction::$law(l) => l.values(),)+
+                }
+            }
+
+            /// Whether the law can produce a non-zero traction (false for `None`, μ = 0 or
+            /// c_T = 0), so that callers can skip friction work altogether.
+            pub fn is_active(&self) -> bool {
+                match self {
+                    Friction::None => false,
+                    $(Friction::$law(l) => l.is_active(),)+
+                }
+            }
+
+            /// The friction coefficient at large slip (see
+            /// [`FrictionLawSpec::kinetic_coefficient`]); `None` for frictionless contact.
+            pub fn kinetic_coefficient(&self) -> Option<f64> {
+                match self {
+                    Friction::None => None,
+                    $(Friction::$law(l) => l.kinetic_coefficient(),)+
+                }
+            }
+        }
+
+        impl FrictionLaw for Friction {
+            #[inline]
+            fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue {
+                match self {
+                    Friction::None => FrictionValue::default(),
+                    $(Friction::$law(l) => l.eval(w, t_n, delta),)+
+                }
+            }
+        }
+    };
+}
+
+friction_laws!(CoulombTanh, CoulombLinear, RateDependent, OdenMartins);
+
+impl FrictionKind {
+    /// Every parameter key of any law, once each, in registration order (the first law that
+    /// declares a key fixes its place).
+    pub fn all_keys() -> Vec<&'static str> {
+        let mut keys: Vec<&'static str> = Vec::new();
+        for kind in Self::ALL {
+            for p in kind.params() {
+                if !keys.contains(&p.key) {
+                    keys.push(p.key);
+                }
+            }
+        }
+        keys
+    }
+
+    /// The declaration of parameter `key` by the first law that has it.
+    pub fn param(key: &str) -> Option<&'static ParamSpec> {
+        Self::ALL
+            .iter()
+            .flat_map(|k| k.params())
+            .find(|p| p.key == key)
+    }
+
+    /// The kinds whose parameters include `key`.
+    pub fn laws_with(key: &str) -> Vec<FrictionKind> {
+        Self::ALL
+            .iter()
+            .copied()
+            .filter(|k| k.params().iter().any(|p| p.key == key))
+            .collect()
+    }
+
+    /// The law of this kind from given values looked up by key; `Err(key)` names the first
+    /// parameter that is missing. The values are not range-checked.
+    pub fn build_from(self, given: impl Fn(&str) -> Option<f64>) -> Result<Friction, &'static str> {
+        let values = self
+            .params()
+            .iter()
+            .map(|p| given(p.key).ok_or(p.key))
+            .collect::<Result<Vec<f64>, _>>()?;
+        Ok(self.build(&values))
+    }
+}
+
+impl std::fmt::Display for FrictionKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for FrictionKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let s = s.trim();
+        match Self::ALL.iter().find(|k| k.as_str() == s) {
+            Some(k) => Ok(*k),
+            None => Err(format!(
+                "unknown friction law \"{s}\"; expected one of {}",
+                Self::NAMES
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+        }
+    }
+}
+
+impl Serialize for FrictionKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for FrictionKind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
 }
 
 impl Friction {
-    /// Whether the law can produce a non-zero traction (false for `None`, μ = 0 or c_T = 0), so
-    /// that callers can skip friction work altogether.
-    pub fn is_active(&self) -> bool {
-        match self {
-            Friction::None => false,
-            Friction::CoulombTanh(l) => l.mu != 0.0,
-            Friction::CoulombLinear(l) => l.mu != 0.0,
-            Friction::RateDependent(l) => l.mu_s != 0.0 || l.mu_k != 0.0,
-            Friction::OdenMartins(l) => l.c_t != 0.0,
-        }
-    }
-
     /// The scene-file name of the law.
     pub fn name(&self) -> &'static str {
-        match self {
-            Friction::None => "none",
-            Friction::CoulombTanh(_) => "coulomb_tanh",
-            Friction::CoulombLinear(_) => "coulomb_linear",
-            Friction::RateDependent(_) => "rate_dependent",
-            Friction::OdenMartins(_) => "oden_martins",
-        }
+        self.kind().as_str()
     }
 
     /// The regularisation velocity ε (None for frictionless contact).
     pub fn eps(&self) -> Option<f64> {
-        match self {
-            Friction::None => None,
-            Friction::CoulombTanh(l) => Some(l.eps),
-            Friction::CoulombLinear(l) => Some(l.eps),
-            Friction::RateDependent(l) => Some(l.eps),
-            Friction::OdenMartins(l) => Some(l.eps),
-        }
+        let i = self.kind().params().iter().position(|p| p.key == "eps")?;
+        self.values().get(i).copied()
     }
 
     /// Set the regularisation velocity ε (no effect for frictionless contact). Used by the
     /// steady solver's ε-homotopy, which walks ε down from a benign value to the scene's.
     pub fn set_eps(&mut self, eps: f64) {
-        match self {
-            Friction::None => {}
-            Friction::CoulombTanh(l) => l.eps = eps,
-            Friction::CoulombLinear(l) => l.eps = eps,
-            Friction::RateDependent(l) => l.eps = eps,
-            Friction::OdenMartins(l) => l.eps = eps,
+        let kind = self.kind();
+        if let Some(i) = kind.params().iter().position(|p| p.key == "eps") {
+            let mut values = self.values();
+            values[i] = eps;
+            *self = kind.build(&values);
         }
     }
 
-    /// Check the parameters: coefficients ≥ 0, ε > 0, v_s > 0, m_T ≥ 1, all finite.
+    /// Check the parameters against their declared bounds ([`ParamSpec::bound`]; all finite).
     pub fn validate(&self) -> Result<(), LawError> {
-        const POS: &str = "must be > 0";
-        const NONNEG: &str = "must be >= 0";
-        match self {
-            Friction::None => Ok(()),
-            Friction::CoulombTanh(l) => {
-                check("mu", l.mu, l.mu >= 0.0, NONNEG)?;
-                check("eps", l.eps, l.eps > 0.0, POS)
-            }
-            Friction::CoulombLinear(l) => {
-                check("mu", l.mu, l.mu >= 0.0, NONNEG)?;
-                check("eps", l.eps, l.eps > 0.0, POS)
-            }
-            Friction::RateDependent(l) => {
-                check("mu_s", l.mu_s, l.mu_s >= 0.0, NONNEG)?;
-                check("mu_k", l.mu_k, l.mu_k >= 0.0, NONNEG)?;
-                check("v_s", l.v_s, l.v_s > 0.0, POS)?;
-                check("eps", l.eps, l.eps > 0.0, POS)
-            }
-            Friction::OdenMartins(l) => {
-                check("c_t", l.c_t, l.c_t >= 0.0, NONNEG)?;
-                check("m_t", l.m_t, l.m_t >= 1.0, "must be >= 1")?;
-                check("eps", l.eps, l.eps > 0.0, POS)
-            }
+        for (p, &v) in self.kind().params().iter().zip(&self.values()) {
+            check(p.key, v, p.bound.admits(v), &format!("must be {}", p.bound))?;
         }
+        Ok(())
     }
 }
 
-impl FrictionLaw for Friction {
-    #[inline]
-    fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue {
-        match self {
-            Friction::None => FrictionValue::default(),
-            Friction::CoulombTanh(l) => l.eval(w, t_n, delta),
-            Friction::CoulombLinear(l) => l.eval(w, t_n, delta),
-            Friction::RateDependent(l) => l.eval(w, t_n, delta),
-            Friction::OdenMartins(l) => l.eval(w, t_n, delta),
+impl Serialize for Friction {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let params = self.kind().params();
+        let mut m = s.serialize_map(Some(1 + params.len()))?;
+        m.serialize_entry("law", self.name())?;
+        for (p, v) in params.iter().zip(self.values()) {
+            m.serialize_entry(p.key, &v)?;
         }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Friction {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        struct Tagged {
+            #[serde(default)]
+            law: FrictionKind,
+            #[serde(flatten)]
+            values: std::collections::BTreeMap<String, f64>,
+        }
+        let t = Tagged::deserialize(d)?;
+        if let Some(key) = t
+            .values
+            .keys()
+            .find(|k| !t.law.params().iter().any(|p| p.key == k.as_str()))
+        {
+            return Err(serde::de::Error::custom(format!(
+                "`{key}` is not a parameter of friction law \"{}\"",
+                t.law
+            )));
+        }
+        t.law
+            .build_from(|k| t.values.get(k).copied())
+            .map_err(|key| {
+                serde::de::Error::custom(format!("friction law \"{}\" needs `{key}`", t.law))
+            })
     }
 }
 
@@ -942,6 +1363,52 @@ mod tests {
         let mut none = Friction::None;
         none.set_eps(1.0);
         assert_eq!(none.eps(), None);
+    }
+
+    #[test]
+    fn law_declarations_are_consistent() {
+        // Keywords are distinct, and a key shared by several laws is declared the same by all.
+        let mut names = FrictionKind::NAMES.to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), FrictionKind::ALL.len());
+        for key in FrictionKind::all_keys() {
+            let first = FrictionKind::param(key).copied();
+            for kind in FrictionKind::laws_with(key) {
+                let p = kind.params().iter().find(|p| p.key == key).copied();
+                assert_eq!(p, first, "`{key}` of {kind}");
+            }
+        }
+        // Values go through build/values and serde unchanged, in the declared order.
+        for kind in FrictionKind::ALL.iter().copied() {
+            let values: Vec<f64> = (1..=kind.params().len()).map(|i| 0.5 + i as f64).collect();
+            let law = kind.build(&values);
+            assert_eq!(law.kind(), kind);
+            assert_eq!(law.values(), values, "{kind}");
+            assert_eq!(law.name(), kind.as_str());
+            assert_eq!(kind.as_str().parse::<FrictionKind>(), Ok(kind));
+            let json = serde_json::to_value(law).unwrap_or_default();
+            let keys: Vec<&str> = json
+                .as_object()
+                .map(|m| {
+                    m.keys()
+                        .map(String::as_str)
+                        .filter(|k| *k != "law")
+                        .collect()
+                })
+                .unwrap_or_default();
+            let mut declared: Vec<&str> = kind.params().iter().map(|p| p.key).collect();
+            declared.sort_unstable();
+            assert_eq!(keys, declared, "{kind}");
+            let back: Friction = serde_json::from_value(json).unwrap_or_default();
+            assert_eq!(back, law);
+        }
+        let missing: Result<Friction, _> =
+            serde_json::from_str(r#"{"law":"coulomb_tanh","mu":0.3}"#);
+        assert!(missing.is_err());
+        let foreign: Result<Friction, _> =
+            serde_json::from_str(r#"{"law":"coulomb_tanh","mu":0.3,"eps":0.1,"v_s":1}"#);
+        assert!(foreign.is_err());
     }
 
     #[test]

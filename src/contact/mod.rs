@@ -17,4 +17,6 @@ pub mod steady_slip;
 pub mod stick_slip;
 
 pub use facet::{ContactModel, ContactSample, ContactTotals, FacetRule, SlipKinematics};
-pub use laws::{Clamp, Friction, FrictionLaw, NormalCompliance};
+pub use laws::{
+    Bound, Clamp, Friction, FrictionKind, FrictionLaw, FrictionLawSpec, NormalCompliance, ParamSpec,
+};

@@ -57,7 +57,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use diffsol::{FaerLU, FaerMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason, Vector};
 use serde::{Deserialize, Serialize};
 
-use super::laws::{Friction, FrictionLaw, LawError};
+use super::laws::{Friction, FrictionKind, FrictionLaw, LawError};
 
 /// Hard cap on the number of integrator steps (a guard against step-size collapse).
 pub const MAX_STEPS: usize = 5_000_000;
@@ -89,7 +89,10 @@ pub enum StickSlipError {
     #[error("stick-slip friction law: {0}")]
     Law(#[from] LawError),
     /// The friction law cannot be used here (needs a penetration, or there is no friction).
-    #[error("friction law `{0}` is not supported by the stick-slip oscillator (use coulomb_tanh, coulomb_linear or rate_dependent)")]
+    #[error(
+        "friction law `{0}` is not supported by the stick-slip oscillator (use {list})",
+        list = supported_law_list()
+    )]
     UnsupportedLaw(&'static str),
     /// diffsol returned an error (step-size collapse, Newton failure, ...).
     #[error("diffsol failed at t = {t}: {message}")]
@@ -316,6 +319,31 @@ pub fn closed_form_cycle(
     })
 }
 
+/// Whether the oscillator can use friction law `kind`: any law but `None` that does not need a
+/// penetration (the block has none).
+pub fn supports(kind: FrictionKind) -> bool {
+    kind != FrictionKind::None && !kind.needs_penetration()
+}
+
+/// The keywords of the friction laws the oscillator can use, in registration order.
+pub fn supported_laws() -> Vec<&'static str> {
+    FrictionKind::ALL
+        .iter()
+        .filter(|k| supports(**k))
+        .map(|k| k.as_str())
+        .collect()
+}
+
+/// [`supported_laws`] as text: `a, b or c`.
+pub fn supported_law_list() -> String {
+    let names = supported_laws();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        Some((last, _)) => last.to_string(),
+        None => String::new(),
+    }
+}
+
 impl StickSlipSpec {
     /// A stick threshold (relative to v_b) suited to `friction`: max(0.01, 20 ε/v_b), at most 0.5.
     ///
@@ -355,11 +383,8 @@ impl StickSlipSpec {
             self.stick_threshold > 0.0 && self.stick_threshold < 1.0,
             "must lie in (0, 1)",
         )?;
-        match self.friction {
-            Friction::CoulombTanh(_) | Friction::CoulombLinear(_) | Friction::RateDependent(_) => {}
-            Friction::None | Friction::OdenMartins(_) => {
-                return Err(StickSlipError::UnsupportedLaw(self.friction.name()))
-            }
+        if !supports(self.friction.kind()) {
+            return Err(StickSlipError::UnsupportedLaw(self.friction.name()));
         }
         self.friction.validate()?;
         Ok(())

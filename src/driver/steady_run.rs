@@ -939,8 +939,8 @@ fn creep_plots(scene: &Scene, rows: &[BranchRow], dir: &Path) {
     // The sliding coefficient at large slip: Coulomb μ, or μ_k of the rate-dependent law.
     let mu = scene
         .friction
-        .mu
-        .or(scene.friction.mu_k)
+        .params()
+        .and_then(|f| f.kinetic_coefficient())
         .unwrap_or(f64::NAN);
     let pts = |g: &dyn Fn(&BranchRow) -> f64| -> Vec<(f64, f64)> {
         rows.iter()

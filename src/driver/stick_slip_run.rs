@@ -8,15 +8,16 @@
 //! so `history.csv` (CSV sink), `run.mcap`, `run.rrd` and `series.png` carry the time history.
 //! An interrupt stops the replay at a sample.
 
-use crate::contact::laws::{CoulombLinear, CoulombTanh, RateDependent};
-use crate::contact::stick_slip::{closed_form_cycle, simulate, Phase, StickSlipSpec};
+use crate::contact::stick_slip::{
+    closed_form_cycle, simulate, supported_law_list, Phase, StickSlipSpec,
+};
 use crate::contact::Friction;
 use crate::driver::results::{
     ModeSummary, RunStats, StickSlipResults, StickSlipSummary, Summary, Terms,
 };
 use crate::io::output::{ensure_dir, write_json};
 use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
-use crate::io::scene::{FrictionParams, Scene};
+use crate::io::scene::{stick_slip_law, Scene};
 use crate::setup::{AppError, RunOptions, RunOutcome};
 use std::time::Instant;
 
@@ -28,28 +29,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "mode \"stick_slip\" needs the [stick_slip] section".into(),
         ));
     };
-    let (friction, static_kinetic) = match scene.friction.params() {
-        Some(FrictionParams::CoulombTanh { mu, eps }) => {
-            (Friction::CoulombTanh(CoulombTanh::new(mu, eps)), None)
-        }
-        Some(FrictionParams::CoulombLinear { mu, eps }) => {
-            (Friction::CoulombLinear(CoulombLinear::new(mu, eps)), None)
-        }
-        Some(FrictionParams::RateDependent {
-            mu_s,
-            mu_k,
-            v_s,
-            eps,
-        }) => (
-            Friction::RateDependent(RateDependent::new(mu_s, mu_k, v_s, eps)),
-            Some((mu_s, mu_k)),
-        ),
+    let friction = match scene.friction.params() {
+        Some(f) if stick_slip_law(f.kind()) => f,
         _ => {
-            return Err(AppError::Unsupported(
-                "friction.law: stick_slip needs coulomb_tanh, coulomb_linear or rate_dependent"
-                    .into(),
-            ))
+            return Err(AppError::Unsupported(format!(
+                "friction.law: stick_slip needs {}",
+                supported_law_list()
+            )))
         }
+    };
+    // The closed-form static/kinetic cycle exists for the rate-dependent law.
+    let static_kinetic = match friction {
+        Friction::RateDependent(l) => Some((l.mu_s, l.mu_k)),
+        _ => None,
     };
     let spec = StickSlipSpec {
         mass: ss.mass,

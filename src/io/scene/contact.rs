@@ -288,6 +288,8 @@ pub(super) fn validate_contact(c: &ContactSpec, mode: Option<Mode>, out: &mut Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::laws::CoulombTanh;
+    use crate::contact::Friction;
     use crate::io::scene::tests::*;
     use crate::io::scene::*;
 
@@ -337,7 +339,7 @@ mod tests {
         let c_n = s.contact.as_ref().map_or(0.0, |c| c.c_n);
         assert!((c_n - 1000.0 * g / (s.geometry.ro - s.geometry.ri)).abs() < 1e-6);
         assert_eq!(s.friction, FrictionSpec::default());
-        assert_eq!(s.friction.params(), Some(FrictionParams::None));
+        assert_eq!(s.friction.params(), Some(Friction::None));
         assert!(!s.friction.is_active());
         assert_eq!(s.stick_slip, None);
         assert_eq!(s.solver.load_steps, 5);
@@ -347,7 +349,7 @@ mod tests {
         assert_eq!(f.scene.name, "indentation_friction");
         assert_eq!(
             f.friction.params(),
-            Some(FrictionParams::CoulombTanh { mu: 0.3, eps: 0.01 })
+            Some(Friction::CoulombTanh(CoulombTanh::new(0.3, 0.01)))
         );
         assert!(f.friction.is_active());
         // Same scene otherwise.

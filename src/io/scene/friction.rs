@@ -1,147 +1,141 @@
 //! `[friction]`: the friction law `t_T = −μ(|w|) t_n φ_ε(w)` with slip velocity `w = ẋ1 − v0` (in
 //! static, `w` is a slip per unit pseudo-time and `eps`, `v_s` are lengths).
+//!
+//! The section is `law` (a [`FrictionLawName`]) and the law's parameters. Which keys a law has,
+//! what they mean, their units and bounds are declared by the law itself next to its physics
+//! ([`crate::contact::FrictionLawSpec`]); this file holds the section as given (so that every
+//! problem can be reported with its key), the generic checks that walk those declarations, and
+//! the resolution into the physics law [`Friction`].
 
 use super::issue::{issue, Issue};
+use crate::contact::Friction;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
-keyword_enum! {
-    /// Friction law (`[friction] law`).
-    #[derive(Default)]
-    FrictionLawName, "friction law" {
-        #[default]
-        /// No friction (frictionless contact).
-        None => "none",
-        /// Coulomb, `t_T = −μ t_n tanh(w/ε)`.
-        CoulombTanh => "coulomb_tanh",
-        /// Coulomb, `t_T = −μ t_n clamp(w/ε, −1, 1)`.
-        CoulombLinear => "coulomb_linear",
-        /// `μ(|w|) = μ_k + (μ_s − μ_k) exp(−|w|/v_s)`, `t_T = −μ(|w|) t_n tanh(w/ε)`.
-        RateDependent => "rate_dependent",
-        /// Oden–Martins normal-compliance friction, `t_T = −c_t δ^m_t tanh(w/ε)`.
-        OdenMartins => "oden_martins",
-    }
-}
+/// Friction law (`[friction] law`): the keyword enum of the registered laws, `none` first.
+pub use crate::contact::FrictionKind as FrictionLawName;
 
-/// `[friction]`. Which of the optional parameters are required depends on `law`;
-/// [`FrictionSpec::params`] gives them as one enum.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// `[friction]` as given: the law and the parameter values by key. Which parameters are
+/// required depends on `law`; [`FrictionSpec::params`] gives the physics law.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrictionSpec {
-    #[serde(default)]
     pub law: FrictionLawName,
-    /// Coulomb coefficient (coulomb_tanh, coulomb_linear), >= 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mu: Option<f64>,
-    /// Regularisation of the slip velocity (velocity; a slip length in `static`), > 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub eps: Option<f64>,
-    /// Static coefficient (rate_dependent), >= 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mu_s: Option<f64>,
-    /// Kinetic coefficient (rate_dependent), in [0, mu_s].
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mu_k: Option<f64>,
-    /// Decay velocity of μ from mu_s to mu_k (rate_dependent), > 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub v_s: Option<f64>,
-    /// Oden–Martins tangential compliance coefficient (stress/length^m_t), >= 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub c_t: Option<f64>,
-    /// Oden–Martins tangential compliance exponent, >= 1.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub m_t: Option<f64>,
-}
-
-/// Resolved friction parameters, one variant per law.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FrictionParams {
-    None,
-    CoulombTanh {
-        mu: f64,
-        eps: f64,
-    },
-    CoulombLinear {
-        mu: f64,
-        eps: f64,
-    },
-    RateDependent {
-        mu_s: f64,
-        mu_k: f64,
-        v_s: f64,
-        eps: f64,
-    },
-    OdenMartins {
-        c_t: f64,
-        m_t: f64,
-        eps: f64,
-    },
+    /// Parameter values by key; only keys of some registered law (a key of another law than
+    /// `law` is reported by the checks).
+    pub values: BTreeMap<String, f64>,
 }
 
 impl FrictionSpec {
-    /// The parameters of the chosen law. `None` only if a parameter the law requires is
-    /// missing, which cannot happen after validation.
-    pub fn params(&self) -> Option<FrictionParams> {
-        match self.law {
-            FrictionLawName::None => Some(FrictionParams::None),
-            FrictionLawName::CoulombTanh => Some(FrictionParams::CoulombTanh {
-                mu: self.mu?,
-                eps: self.eps?,
-            }),
-            FrictionLawName::CoulombLinear => Some(FrictionParams::CoulombLinear {
-                mu: self.mu?,
-                eps: self.eps?,
-            }),
-            FrictionLawName::RateDependent => Some(FrictionParams::RateDependent {
-                mu_s: self.mu_s?,
-                mu_k: self.mu_k?,
-                v_s: self.v_s?,
-                eps: self.eps?,
-            }),
-            FrictionLawName::OdenMartins => Some(FrictionParams::OdenMartins {
-                c_t: self.c_t?,
-                m_t: self.m_t?,
-                eps: self.eps?,
-            }),
+    /// A section with `law` and the given `(key, value)` pairs.
+    pub fn new(law: FrictionLawName, values: &[(&str, f64)]) -> Self {
+        Self {
+            law,
+            values: values.iter().map(|&(k, v)| (k.to_string(), v)).collect(),
         }
+    }
+
+    /// The value given for `key`.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.values.get(key).copied()
+    }
+
+    /// Give `key` the value `value`.
+    pub fn set(&mut self, key: &str, value: f64) {
+        self.values.insert(key.to_string(), value);
+    }
+
+    /// Remove `key`.
+    pub fn unset(&mut self, key: &str) {
+        self.values.remove(key);
+    }
+
+    /// The physics law. `None` only if a parameter the law requires is missing, which cannot
+    /// happen after validation.
+    pub fn params(&self) -> Option<Friction> {
+        self.law.build_from(|k| self.get(k)).ok()
     }
 
     /// Whether friction acts at all: false for law `none`, for a zero coefficient (`mu = 0`;
     /// `mu_s = mu_k = 0`; `c_t = 0`) and for an incomplete law.
     pub fn is_active(&self) -> bool {
-        match self.params() {
-            None | Some(FrictionParams::None) => false,
-            Some(FrictionParams::CoulombTanh { mu, .. })
-            | Some(FrictionParams::CoulombLinear { mu, .. }) => mu > 0.0,
-            Some(FrictionParams::RateDependent { mu_s, mu_k, .. }) => mu_s > 0.0 || mu_k > 0.0,
-            Some(FrictionParams::OdenMartins { c_t, .. }) => c_t > 0.0,
-        }
+        self.params().is_some_and(|f| f.is_active())
     }
 
     /// The keys of `[friction]` that belong to `law` (besides `law` itself).
-    pub fn keys_of(law: FrictionLawName) -> &'static [&'static str] {
-        match law {
-            FrictionLawName::None => &[],
-            FrictionLawName::CoulombTanh | FrictionLawName::CoulombLinear => &["mu", "eps"],
-            FrictionLawName::RateDependent => &["mu_s", "mu_k", "v_s", "eps"],
-            FrictionLawName::OdenMartins => &["c_t", "m_t", "eps"],
-        }
+    pub fn keys_of(law: FrictionLawName) -> Vec<&'static str> {
+        law.params().iter().map(|p| p.key).collect()
+    }
+
+    /// The given keys: those of any law in the order of [`FrictionLawName::all_keys`], then
+    /// any others.
+    fn ordered(&self) -> Vec<(&str, f64)> {
+        let known = FrictionLawName::all_keys();
+        let mut out: Vec<(&str, f64)> = known
+            .iter()
+            .filter_map(|k| self.values.get(*k).map(|v| (*k, *v)))
+            .collect();
+        out.extend(
+            self.values
+                .iter()
+                .filter(|(k, _)| !known.contains(&k.as_str()))
+                .map(|(k, v)| (k.as_str(), *v)),
+        );
+        out
     }
 }
 
+impl Serialize for FrictionSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let given = self.ordered();
+        let mut m = s.serialize_map(Some(1 + given.len()))?;
+        m.serialize_entry("law", &self.law)?;
+        for (k, v) in given {
+            m.serialize_entry(k, &v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for FrictionSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        struct Given {
+            #[serde(default)]
+            law: FrictionLawName,
+            #[serde(flatten)]
+            values: BTreeMap<String, f64>,
+        }
+        let g = Given::deserialize(d)?;
+        let known = FrictionLawName::all_keys();
+        if let Some(key) = g.values.keys().find(|k| !known.contains(&k.as_str())) {
+            return Err(serde::de::Error::custom(format!("unknown field `{key}`")));
+        }
+        Ok(FrictionSpec {
+            law: g.law,
+            values: g.values,
+        })
+    }
+}
+
+/// Whether the stick–slip oscillator can use friction law `law`: any law but `none` that
+/// does not need a penetration.
+pub fn stick_slip_law(law: FrictionLawName) -> bool {
+    crate::contact::stick_slip::supports(law)
+}
+
+/// The keywords of the friction laws the stick–slip oscillator can use, in registration order.
+pub fn stick_slip_laws() -> Vec<&'static str> {
+    crate::contact::stick_slip::supported_laws()
+}
+
+/// The checks of `[friction]`, from the law's declared parameters: keys of another law, missing
+/// parameters, values out of their bounds, then the law's own checks between parameters.
 pub(super) fn validate_friction(f: &FrictionSpec, out: &mut Vec<Issue>) {
     let law = f.law;
-    let given: [(&str, Option<f64>); 7] = [
-        ("mu", f.mu),
-        ("eps", f.eps),
-        ("mu_s", f.mu_s),
-        ("mu_k", f.mu_k),
-        ("v_s", f.v_s),
-        ("c_t", f.c_t),
-        ("m_t", f.m_t),
-    ];
     let allowed = FrictionSpec::keys_of(law);
-    for (key, value) in given {
-        if value.is_some() && !allowed.contains(&key) {
+    for (key, _) in f.ordered() {
+        if !allowed.contains(&key) {
             let keys = if allowed.is_empty() {
                 format!("law \"{law}\" takes no other key")
             } else {
@@ -153,135 +147,59 @@ pub(super) fn validate_friction(f: &FrictionSpec, out: &mut Vec<Issue>) {
             ));
         }
     }
-    // (key, value, what, lower bound, whether the bound is strict)
-    let need = |key: &str,
-                v: Option<f64>,
-                what: &str,
-                lo: f64,
-                strict: bool,
-                out: &mut Vec<Issue>| {
-        match v {
+    for p in law.params() {
+        match f.get(p.key) {
             None => out.push(issue(
-                format!("friction.{key}"),
-                format!("required for friction law \"{law}\" ({what})"),
+                format!("friction.{}", p.key),
+                format!("required for friction law \"{law}\" ({})", p.what),
             )),
-            Some(x) if !(x.is_finite() && if strict { x > lo } else { x >= lo }) => {
-                let op = if strict { ">" } else { ">=" };
-                out.push(issue(
-                    format!("friction.{key}"),
-                    format!("{what} must be {op} {lo}, got {x}"),
-                ));
-            }
+            Some(x) if !p.bound.admits(x) => out.push(issue(
+                format!("friction.{}", p.key),
+                format!("{} must be {}, got {x}", p.what, p.bound),
+            )),
             Some(_) => {}
         }
-    };
-    const EPS: &str = "slip-velocity regularisation ε";
-    match law {
-        FrictionLawName::None => {}
-        FrictionLawName::CoulombTanh | FrictionLawName::CoulombLinear => {
-            need("mu", f.mu, "friction coefficient μ", 0.0, false, out);
-            need("eps", f.eps, EPS, 0.0, true, out);
-        }
-        FrictionLawName::RateDependent => {
-            need(
-                "mu_s",
-                f.mu_s,
-                "static friction coefficient μ_s",
-                0.0,
-                false,
-                out,
-            );
-            need(
-                "mu_k",
-                f.mu_k,
-                "kinetic friction coefficient μ_k",
-                0.0,
-                false,
-                out,
-            );
-            need("v_s", f.v_s, "decay velocity v_s", 0.0, true, out);
-            need("eps", f.eps, EPS, 0.0, true, out);
-            if let (Some(mu_s), Some(mu_k)) = (f.mu_s, f.mu_k) {
-                if mu_s >= 0.0 && mu_k >= 0.0 && mu_k > mu_s {
-                    out.push(issue(
-                        "friction.mu_k",
-                        format!(
-                            "kinetic coefficient μ_k = {mu_k} must not exceed the static \
-                             coefficient μ_s = {mu_s}"
-                        ),
-                    ));
-                }
-            }
-        }
-        FrictionLawName::OdenMartins => {
-            need(
-                "c_t",
-                f.c_t,
-                "tangential compliance coefficient c_t",
-                0.0,
-                false,
-                out,
-            );
-            need(
-                "m_t",
-                f.m_t,
-                "tangential compliance exponent m_t",
-                1.0,
-                false,
-                out,
-            );
-            need("eps", f.eps, EPS, 0.0, true, out);
-        }
+    }
+    for (key, message) in law.cross_check(&|k| f.get(k)) {
+        out.push(issue(format!("friction.{key}"), message));
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::laws::{CoulombLinear, OdenMartins};
     use crate::io::scene::tests::*;
 
     #[test]
     fn friction_params_and_is_active() {
-        let mut f = FrictionSpec {
-            law: FrictionLawName::CoulombLinear,
-            mu: Some(0.0),
-            eps: Some(1e-3),
-            ..FrictionSpec::default()
-        };
+        let mut f = FrictionSpec::new(
+            FrictionLawName::CoulombLinear,
+            &[("mu", 0.0), ("eps", 1e-3)],
+        );
         assert_eq!(
             f.params(),
-            Some(FrictionParams::CoulombLinear { mu: 0.0, eps: 1e-3 })
+            Some(Friction::CoulombLinear(CoulombLinear::new(0.0, 1e-3)))
         );
         assert!(!f.is_active(), "zero coefficient");
-        f.mu = Some(0.2);
+        f.set("mu", 0.2);
         assert!(f.is_active());
-        f.eps = None;
+        f.unset("eps");
         assert_eq!(f.params(), None);
         assert!(!f.is_active(), "incomplete");
-        let om = FrictionSpec {
-            law: FrictionLawName::OdenMartins,
-            c_t: Some(5.0),
-            m_t: Some(1.5),
-            eps: Some(1e-3),
-            ..FrictionSpec::default()
-        };
+        let om = FrictionSpec::new(
+            FrictionLawName::OdenMartins,
+            &[("c_t", 5.0), ("m_t", 1.5), ("eps", 1e-3)],
+        );
         assert_eq!(
             om.params(),
-            Some(FrictionParams::OdenMartins {
-                c_t: 5.0,
-                m_t: 1.5,
-                eps: 1e-3
-            })
+            Some(Friction::OdenMartins(OdenMartins::new(5.0, 1.5, 1e-3)))
         );
         assert!(om.is_active());
-        let rd = FrictionSpec {
-            law: FrictionLawName::RateDependent,
-            mu_s: Some(0.0),
-            mu_k: Some(0.0),
-            v_s: Some(1.0),
-            eps: Some(1e-3),
-            ..FrictionSpec::default()
-        };
+        let rd = FrictionSpec::new(
+            FrictionLawName::RateDependent,
+            &[("mu_s", 0.0), ("mu_k", 0.0), ("v_s", 1.0), ("eps", 1e-3)],
+        );
         assert!(!rd.is_active());
         assert_eq!(FrictionSpec::keys_of(FrictionLawName::None), &[] as &[&str]);
         assert_eq!(
@@ -335,11 +253,7 @@ mod tests {
         let s = load(&replace_line(&text, "m_t", "m_t = 1.0")).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
             s.friction.params(),
-            Some(FrictionParams::OdenMartins {
-                c_t: 6.0e4,
-                m_t: 1.0,
-                eps: 0.01
-            })
+            Some(Friction::OdenMartins(OdenMartins::new(6.0e4, 1.0, 0.01)))
         );
         // Missing keys of the law: reported at the [friction] header.
         let text = FRICTIONLESS.replace("law = \"none\"", "law = \"oden_martins\"");

@@ -638,6 +638,16 @@ struct SectionsGiven {
     friction_law: Option<FrictionLawName>,
 }
 
+/// `"a", "b" or "c"`.
+fn or_list(names: &[&str]) -> String {
+    let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
+    match quoted.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        Some((last, _)) => last.clone(),
+        None => String::new(),
+    }
+}
+
 fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue>) {
     const ROAD_MODES: &str = "\"static\" and \"transient\"";
     let unused = |section: &str, used_by: &str, out: &mut Vec<Issue>| {
@@ -720,25 +730,21 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
                 );
             }
             match given.friction_law {
-                Some(
-                    FrictionLawName::CoulombTanh
-                    | FrictionLawName::CoulombLinear
-                    | FrictionLawName::RateDependent,
-                )
-                | None => {}
-                Some(law) => out.push(issue_near(
+                Some(law) if !stick_slip_law(law) => out.push(issue_near(
                     "friction.law",
                     format!(
-                        "analysis mode \"stick_slip\" needs a friction law \"coulomb_tanh\", \
-                         \"coulomb_linear\" or \"rate_dependent\" in [friction], got \"{law}\"{}",
-                        if law == FrictionLawName::OdenMartins {
-                            " (oden_martins needs a penetration, which this mode does not have)"
+                        "analysis mode \"stick_slip\" needs a friction law {} in [friction], got \
+                         \"{law}\"{}",
+                        or_list(&stick_slip_laws()),
+                        if law.needs_penetration() {
+                            format!(" ({law} needs a penetration, which this mode does not have)")
                         } else {
-                            ""
+                            String::new()
                         }
                     ),
                     "analysis.mode",
                 )),
+                _ => {}
             }
         }
         Mode::Transient | Mode::Steady => {

@@ -28,6 +28,7 @@ use super::time::{IntegratorName, MassKind, TimeSpec};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::collections::BTreeSet;
+use std::sync::LazyLock;
 
 use serde_json::{json, Map, Value};
 
@@ -97,32 +98,66 @@ static VISCOELASTIC_FIELDS: &[FieldSchema] = &[
         "Prony terms `[[g, tau], ...]`: g dimensionless >= 0, tau > 0 (time); 1 to 8 terms"),
 ];
 
-pub(super) static SCHEMA: &[SectionSchema] = &[
+/// Keys of `[friction]`: `law`, then every parameter of the registered laws (in the order of
+/// [`FrictionLawName::all_keys`]) with the unit and bound its law declares; the meaning names
+/// the laws that take it.
+fn friction_fields() -> &'static [FieldSchema] {
+    static FIELDS: LazyLock<Vec<FieldSchema>> = LazyLock::new(|| {
+        let mut fields = vec![opt(
+            "law",
+            Kind::Keyword(FrictionLawName::NAMES),
+            NONE,
+            "friction law",
+        )];
+        for key in FrictionLawName::all_keys() {
+            let Some(p) = FrictionLawName::param(key) else {
+                continue;
+            };
+            let laws: Vec<&str> = FrictionLawName::laws_with(key)
+                .iter()
+                .map(|l| l.as_str())
+                .collect();
+            let mut doc = format!("{} ({}), {}", p.what, laws.join(", "), p.bound);
+            if !p.note.is_empty() {
+                doc.push_str("; ");
+                doc.push_str(p.note);
+            }
+            fields.push(opt(key, Kind::Float, p.unit, doc.leak()));
+        }
+        fields
+    });
+    &FIELDS
+}
+
+/// Every section of a scene file with its keys (built once; the keys of `[friction]` come from
+/// the friction laws' declarations, [`friction_fields`]).
+pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
+    vec![
     SectionSchema {
         name: "scene",
         required: true,
         doc: "Name and description of the run.",
-        fields: &[
+        fields: &const { [
             req("name", Kind::Str, NONE, "names the output directory: `[A-Za-z0-9_-]+`"),
             opt("description", Kind::Str, NONE, "free text"),
             opt("units", Kind::Str, NONE,
                 "informational: the consistent unit system `L-F-T` of every number (the program does not convert)"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "geometry",
         required: true,
         doc: "The reference annulus `ri <= |X| <= ro`, bonded to a rigid hub at `|X| = ri`.",
-        fields: &[
+        fields: &const { [
             req("ri", Kind::Float, "L", "inner (hub) radius, > 0"),
             req("ro", Kind::Float, "L", "outer radius, > ri"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "mesh",
         required: false,
         doc: "The structured annular mesh, or a Gmsh `.msh` 4.1 file.",
-        fields: &[
+        fields: &const { [
             opt("n_r", Kind::UInt, NONE, "radial cells, >= 1"),
             opt("n_theta", Kind::UInt, NONE, "circumferential cells, >= 8, even"),
             opt("order", Kind::UInt, NONE, "element order: 1 (Q1) or 2 (Q2)"),
@@ -135,13 +170,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("hub", Kind::Str, NONE, "1D physical group of `file` bonded to the hub (default \"hub\")"),
             opt("contact", Kind::Str, NONE,
                 "1D physical group of `file` where contact can happen (default \"contact\")"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "material",
         required: true,
         doc: "The hyperelastic material (or `[[material]]` with `region = \"<2D physical group>\"`, one per mesh region). Which parameters are required depends on `model`.",
-        fields: &[
+        fields: &const { [
             req("model", Kind::Keyword(MaterialModel::NAMES), NONE, "hyperelastic model"),
             req("rho", Kind::Float, "F·T²/L⁴", "density per unit reference volume, > 0"),
             opt("mu", Kind::Float, "F/L²", "Lamé shear modulus (neo_hookean), > 0"),
@@ -154,19 +189,19 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
                 "incompressibility (mooney_rivlin_incompressible only; default `exact`)"),
             opt("viscoelastic", Kind::Table(VISCOELASTIC_FIELDS), NONE,
                 "`[material.viscoelastic]`: a Prony-series overstress on the elastic law"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "analysis",
         required: true,
         doc: "What to compute.",
-        fields: &[req("mode", Kind::Keyword(Mode::NAMES), NONE, "analysis mode")],
+        fields: &const { [req("mode", Kind::Keyword(Mode::NAMES), NONE, "analysis mode")] },
     },
     SectionSchema {
         name: "motion",
         required: false,
         doc: "Hub rotation (spinning, transient, steady).",
-        fields: &[
+        fields: &const { [
             opt("omega", Kind::Float, "rad/T",
                 "target hub angular speed (counter-clockwise), >= 0; required for spinning and transient"),
             opt("ramp", Kind::Float, "T",
@@ -179,13 +214,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
                 "applied hub torque about +x3 per unit thickness; torque control only"),
             opt("creep", Kind::Float, NONE,
                 "creep ξ = (v0 − ω R_e) / (ω R_e), > −1; control = \"creep\" only"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "road",
         required: false,
         doc: "The rigid road `x2 = −H` below the hub: exactly one of `disp` and `load`.",
-        fields: &[
+        fields: &const { [
             opt("disp", Kind::Float, "L", "final penetration Ro − H, >= 0, < ro − ri (displacement control)"),
             opt("load", Kind::Float, "F/L",
                 "vertical force per unit thickness pushing the cylinder onto the road, > 0 (load control)"),
@@ -193,13 +228,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("ramp", Kind::Float, "T", "time of the smoothstep ramp of disp (or load); transient only"),
             opt("v0_ramp", Kind::Float, "T",
                 "time of the smoothstep ramp of v0 (default: motion.ramp); transient only"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "contact",
         required: false,
         doc: "Normal compliance `t_n = c_n δ^m_n + b_n δ^l_n δ̇` per unit reference length of the outer boundary.",
-        fields: &[
+        fields: &const { [
             req("c_n", Kind::Float, "F/L^(2+m_n)", "compliance coefficient, > 0 (with m_n = 1 the penalty)"),
             opt("m_n", Kind::Float, NONE, "compliance exponent, >= 1"),
             opt("b_n", Kind::Float, "F·T/L^(3+l_n)", "normal damping coefficient, >= 0; 0 in static"),
@@ -211,29 +246,19 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
                 "no-adhesion clamp of t_n: `hard` max(0, ·) or `smooth` (C¹ ramp)"),
             opt("clamp_width", Kind::Float, "F/L²",
                 "width of the smooth clamp, > 0 (default 0.05 × shear modulus); clamp = \"smooth\" only"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "friction",
         required: false,
         doc: "Friction law `t_T = −μ(|w|) t_n φ_ε(w)`, slip velocity `w = ẋ1 − v0`. Which parameters are required depends on `law`.",
-        fields: &[
-            opt("law", Kind::Keyword(FrictionLawName::NAMES), NONE, "friction law"),
-            opt("mu", Kind::Float, NONE, "Coulomb coefficient (coulomb_tanh, coulomb_linear), >= 0"),
-            opt("eps", Kind::Float, "L/T (static: L)",
-                "regularisation of the slip velocity, > 0 (a slip length in static)"),
-            opt("mu_s", Kind::Float, NONE, "static coefficient (rate_dependent), >= 0"),
-            opt("mu_k", Kind::Float, NONE, "kinetic coefficient (rate_dependent), in [0, mu_s]"),
-            opt("v_s", Kind::Float, "L/T (static: L)", "decay velocity of μ from mu_s to mu_k (rate_dependent), > 0"),
-            opt("c_t", Kind::Float, "F/L^(2+m_t)", "Oden–Martins tangential compliance coefficient, >= 0"),
-            opt("m_t", Kind::Float, NONE, "Oden–Martins tangential compliance exponent, >= 1"),
-        ],
+        fields: friction_fields(),
     },
     SectionSchema {
         name: "stick_slip",
         required: false,
         doc: "The one-degree-of-freedom oscillator `mass ẍ = −stiffness x + F_T` on a belt (stick_slip mode).",
-        fields: &[
+        fields: &const { [
             req("mass", Kind::Float, "F·T²/L", "mass, > 0"),
             req("stiffness", Kind::Float, "F/L", "spring stiffness, > 0"),
             req("normal_force", Kind::Float, "F", "normal force on the belt, > 0"),
@@ -244,13 +269,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("x0", Kind::Float, "L", "initial position (spring elongation)"),
             opt("v0", Kind::Float, "L/T", "initial velocity (default: belt_speed, sticking)"),
             opt("output_interval", Kind::Float, "T", "interval between samples, in (0, t_end] (default t_end / 2000)"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "time",
         required: false,
         doc: "Time integration (required in transient; allowed and unused in steady).",
-        fields: &[
+        fields: &const { [
             opt("integrator", Kind::Keyword(IntegratorName::NAMES), NONE, "time integrator"),
             opt("rho_inf", Kind::Float, NONE,
                 "spectral radius at infinity of generalized-α, in [0, 1] (1: no numerical dissipation)"),
@@ -268,13 +293,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("max_steps", Kind::UInt, NONE, "maximum number of time steps, >= 1"),
             opt("strain_rate_damping", Kind::Float, "F·T/L²",
                 "viscous damping η on the Green strain rate, S_v = η Ė, >= 0"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "continuation",
         required: false,
         doc: "Arc-length continuation of the steady solution (steady mode); arc lengths in scaled units.",
-        fields: &[
+        fields: &const { [
             opt("parameter", Kind::Keyword(ContinuationParameter::NAMES), NONE, "continuation parameter"),
             req("target", Kind::Float, "rad/T, F/L, L or –",
                 "final parameter value (omega, load, disp or creep)"),
@@ -283,13 +308,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("max_steps", Kind::UInt, NONE, "maximum number of continuation steps, >= 1"),
             opt("desired_iterations", Kind::UInt, NONE,
                 "corrector iterations aimed at by the step-size control, >= 1"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "solver",
         required: false,
         doc: "Newton with load stepping and cut-backs (in transient: the Newton iterations of each implicit step).",
-        fields: &[
+        fields: &const { [
             opt("tolerance", Kind::Float, NONE, "relative residual tolerance, in (0, 1)"),
             opt("max_iterations", Kind::UInt, NONE, "Newton iterations per load step, >= 1"),
             opt("load_steps", Kind::UInt, NONE, "initial number of load steps, >= 1"),
@@ -301,13 +326,13 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
                 "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve, assembled for continuation)"),
             opt("eps_continuation", Kind::Bool, NONE,
                 "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
-        ],
+        ] },
     },
     SectionSchema {
         name: "output",
         required: false,
         doc: "Which sinks record the run and how often.",
-        fields: &[
+        fields: &const { [
             opt("sinks", Kind::KeywordList(Sink::NAMES), NONE,
                 "output sinks; summary.json is written whether listed or not"),
             opt("every", Kind::UInt, NONE,
@@ -317,9 +342,10 @@ pub(super) static SCHEMA: &[SectionSchema] = &[
             opt("displacement_scale", Kind::Float, NONE, "magnification of the displacement in the Rerun view of the body and in the shape pictures (> 0; the numbers are unchanged)"),
             opt("snapshot_omegas", Kind::FloatList, "rad/T",
                 "steady mode with a continuation in omega and the png sink: speeds (rad/s, at most 12) at which to draw the deformed shape with von Mises stress contours; the branch point nearest to each is drawn to shape_omega_<omega>.png, all of them to shape_montage.png"),
-        ],
+        ] },
     },
-];
+]
+});
 
 pub(super) fn section_schema(name: &str) -> Option<&'static SectionSchema> {
     SCHEMA.iter().find(|s| s.name == name)
@@ -610,7 +636,7 @@ fn object_json(
 pub fn json_schema() -> Value {
     let mut props = Map::new();
     let mut required = Vec::new();
-    for sec in SCHEMA {
+    for sec in SCHEMA.iter() {
         let defaults = section_defaults(sec);
         let mut obj = object_json(sec.fields, &defaults, None);
         if sec.name == "material" {
@@ -712,7 +738,7 @@ pub fn markdown_reference() -> String {
          e.g. `in-lbf-s`); forces, torques and energies per unit thickness. A default `–` \
          means none, or one that follows other keys (the meaning says which).\n",
     );
-    for sec in SCHEMA {
+    for sec in SCHEMA.iter() {
         let defaults = section_defaults(sec);
         out.push_str(&format!(
             "\n### `[{}]` ({})\n\n{}\n\n",

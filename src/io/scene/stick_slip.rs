@@ -102,6 +102,8 @@ pub(super) fn validate_stick_slip(s: &StickSlipSpec, out: &mut Vec<Issue>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::contact::laws::{CoulombLinear, RateDependent};
+    use crate::contact::Friction;
     use crate::io::scene::tests::*;
     use crate::io::scene::*;
 
@@ -133,12 +135,9 @@ mod tests {
         assert!((ss.resolved_output_interval() - 0.01).abs() < 1e-15);
         assert_eq!(
             s.friction.params(),
-            Some(FrictionParams::RateDependent {
-                mu_s: 0.6,
-                mu_k: 0.4,
-                v_s: 1e-4,
-                eps: 1e-7
-            })
+            Some(Friction::RateDependent(RateDependent::new(
+                0.6, 0.4, 1e-4, 1e-7
+            )))
         );
         assert!(s.friction.is_active());
         assert!(s.validate().is_ok());
@@ -193,7 +192,7 @@ mod tests {
             .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(
             s.friction.params(),
-            Some(FrictionParams::CoulombLinear { mu: 0.5, eps: 1e-7 })
+            Some(Friction::CoulombLinear(CoulombLinear::new(0.5, 1e-7)))
         );
     }
 

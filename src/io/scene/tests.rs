@@ -1,6 +1,8 @@
 //! Unit tests of scene loading: parsing, defaults, overrides, every error with its key and line.
 
 use super::*;
+use crate::contact::laws::{CoulombLinear, CoulombTanh};
+use crate::contact::Friction;
 
 pub(super) const INCOMPRESSIBLE: &str =
     include_str!("../../../scenarios/spinning_incompressible.toml");
@@ -496,16 +498,18 @@ pub(super) fn full_contact() -> ContactSpec {
 }
 
 pub(super) fn full_friction() -> FrictionSpec {
-    FrictionSpec {
-        law: FrictionLawName::None,
-        mu: Some(1.0),
-        eps: Some(1.0),
-        mu_s: Some(1.0),
-        mu_k: Some(1.0),
-        v_s: Some(1.0),
-        c_t: Some(1.0),
-        m_t: Some(1.0),
-    }
+    FrictionSpec::new(
+        FrictionLawName::None,
+        &[
+            ("mu", 1.0),
+            ("eps", 1.0),
+            ("mu_s", 1.0),
+            ("mu_k", 1.0),
+            ("v_s", 1.0),
+            ("c_t", 1.0),
+            ("m_t", 1.0),
+        ],
+    )
 }
 
 pub(super) fn full_stick_slip() -> StickSlipSpec {
@@ -637,7 +641,7 @@ fn overrides_of_new_keys() {
     let s = load_with(FRICTION, &["friction.mu=0.5"]).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         s.friction.params(),
-        Some(FrictionParams::CoulombTanh { mu: 0.5, eps: 0.01 })
+        Some(Friction::CoulombTanh(CoulombTanh::new(0.5, 0.01)))
     );
     let s = load_with(
         FRICTIONLESS,
@@ -654,7 +658,7 @@ fn overrides_of_new_keys() {
     .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         s.friction.params(),
-        Some(FrictionParams::CoulombLinear { mu: 0.2, eps: 1e-3 })
+        Some(Friction::CoulombLinear(CoulombLinear::new(0.2, 1e-3)))
     );
     let c = s.contact.unwrap_or_else(|| panic!("no contact"));
     assert_eq!(
@@ -667,7 +671,7 @@ fn overrides_of_new_keys() {
     let s = load_with(STICK_SLIP, &["stick_slip.t_end=5", "friction.mu_k=0.3"])
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.stick_slip.map(|x| x.t_end), Some(5.0));
-    assert_eq!(s.friction.mu_k, Some(0.3));
+    assert_eq!(s.friction.get("mu_k"), Some(0.3));
 
     // Bad override values: (--set) and the key.
     let e = errors_with(FRICTION, &["friction.mu=-1"]);
@@ -748,7 +752,7 @@ fn round_trip_of_optional_new_keys() {
 fn validate_checks_new_sections_of_scenes_built_in_code() {
     let mut s = load(FRICTION).unwrap_or_else(|e| panic!("{e}"));
     assert!(s.validate().is_ok());
-    s.friction.mu = Some(-0.3);
+    s.friction.set("mu", -0.3);
     if let Some(c) = s.contact.as_mut() {
         c.c_n = 0.0;
     }
@@ -838,7 +842,7 @@ fn oden_scene_parses() {
     );
     assert_eq!(
         s.friction.params(),
-        Some(FrictionParams::CoulombTanh { mu: 0.3, eps: 0.5 })
+        Some(Friction::CoulombTanh(CoulombTanh::new(0.3, 0.5)))
     );
     let t = s.time.clone().unwrap_or_else(|| panic!("no [time]"));
     assert_eq!(
