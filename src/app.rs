@@ -17,6 +17,7 @@
 //! summary.json says `converged = false`, `"error": "interrupted"`; [`run`] then returns
 //! [`AppError::Interrupted`] (exit status 130).
 
+use crate::driver::envelope::{conclude, RunClock, RunEnvelope};
 use crate::driver::indentation;
 use crate::driver::results::{
     MeshInfo, ModeSummary, RunStats, SolidMesh, SolidResults, SolidSolver, SolidSummary, Summary,
@@ -26,8 +27,8 @@ use crate::driver::spinning;
 use crate::driver::system::Loading;
 use crate::driver::tables;
 use crate::driver::SolidSystem;
-use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
-use crate::io::record::{self, Recorder, RunEnd, RunMeta};
+use crate::io::output::{ensure_dir, write_csv, OutputError};
+use crate::io::record::Recorder;
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::physics::PressureMode;
 use crate::solver::stepping::StepReport;
@@ -39,25 +40,6 @@ pub use crate::setup::{
     build_contact, build_material, build_material_spec, build_model, build_recorders, build_system,
     linear_kind, solver_options, AppError, RunOptions, RunOutcome,
 };
-
-/// Finish the recorder and report sink errors as warnings (logging never fails a run).
-fn finish_recorders(rec: &mut dyn Recorder, end: &RunEnd) {
-    for e in rec.run_finished(end) {
-        eprintln!("tread: warning: {e}");
-    }
-}
-
-/// Turn the outcome of a solve into the run's result (interrupts first).
-fn solve_outcome(
-    solve: Result<(), SolveError>,
-    outcome: RunOutcome,
-) -> Result<RunOutcome, AppError> {
-    match solve {
-        Ok(()) => Ok(outcome),
-        Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(outcome.out_dir)),
-        Err(e) => Err(AppError::Solve(e, outcome.out_dir)),
-    }
-}
 
 /// Default output directory of a scene: `out/<scene name>/`.
 pub fn default_out_dir(scene: &Scene) -> PathBuf {
@@ -82,25 +64,13 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let kind = linear_kind(scene, &sys);
     let (newton_opts, step_opts) = solver_options(scene, opts.verbose);
     let mut report = StepReport::default();
-    let (mut recorders, warnings) = build_recorders(scene, &opts.out_dir, opts.quiet);
-    for w in warnings {
-        eprintln!("tread: warning: {w}");
-    }
-    let scene_toml = scene.to_toml_string();
-    let mode = scene.analysis.mode.to_string();
-    let omega = scene.motion.omega;
-    recorders.run_started(&RunMeta {
-        scene_name: &scene.scene.name,
-        mode: &mode,
-        scene_toml: &scene_toml,
-        version: env!("CARGO_PKG_VERSION"),
-        features: record::build_features(),
+    let clock = RunClock {
         mesh: Some(&sys.model.mesh),
         time_name: "load_factor",
         time_end: 1.0,
-        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
-    });
-    let rec: &mut dyn Recorder = &mut recorders;
+    };
+    let mut env = RunEnvelope::open(scene, opts, clock, Vec::new())?;
+    let rec: &mut dyn Recorder = &mut env.recorders;
     let solve = match scene.analysis.mode {
         Mode::Static => {
             sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
@@ -200,24 +170,13 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             },
         }),
     );
-    let summary = typed.to_json();
     let error = solve.as_ref().err().map(|e| e.to_string());
-    finish_recorders(
-        &mut recorders,
-        &RunEnd {
-            converged,
-            interrupted,
-            error: error.as_deref(),
-            steps: report.steps.iter().filter(|s| s.converged).count() as u64,
-            wall_time_s: wall,
-            summary: Some(&summary),
-        },
-    );
-    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    let steps = report.steps.iter().filter(|s| s.converged).count() as u64;
+    let summary = env.finish(&typed, steps, wall, error.as_deref(), interrupted)?;
     if scene.output.has(Sink::Csv) {
         write_solid_csv(&sys, &report, &opts.out_dir)?;
     }
-    solve_outcome(
+    conclude(
         solve,
         RunOutcome {
             summary,

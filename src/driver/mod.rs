@@ -18,6 +18,7 @@
 
 pub mod compare;
 pub mod critical;
+pub mod envelope;
 pub mod frame;
 pub mod indentation;
 pub mod resistance;

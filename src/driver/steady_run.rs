@@ -22,6 +22,7 @@
 //! [0, 1]), then one per continuation point (time = the continuation parameter, as in
 //! `branch.csv`).
 
+use super::envelope::{conclude, RunClock, RunEnvelope};
 use super::frame::SolidFrame;
 use super::resistance;
 pub use super::results::{BranchRow, ControlReport};
@@ -35,9 +36,9 @@ use super::steady_recovery;
 use super::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
-use crate::io::output::{ensure_dir, write_csv, write_json};
+use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
-use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo};
+use crate::io::record::{self, Recorder, StepInfo};
 use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::continuation::{
@@ -447,28 +448,16 @@ pub fn run_with_dump(
 ) -> Result<RunOutcome, AppError> {
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
-    let mut warn = warnings(scene);
+    let warn = warnings(scene);
     let mut st = build_steady(scene)?;
-    let (mut recorders, w) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
-    warn.extend(w);
-    for w in &warn {
-        eprintln!("tread: warning: {w}");
-    }
-    let scene_toml = scene.to_toml_string();
-    let mode = scene.analysis.mode.to_string();
-    let omega = scene.motion.omega;
     let n_cont = scene.continuation.as_ref().map_or(0, |c| c.max_steps);
-    recorders.run_started(&RunMeta {
-        scene_name: &scene.scene.name,
-        mode: &mode,
-        scene_toml: &scene_toml,
-        version: env!("CARGO_PKG_VERSION"),
-        features: record::build_features(),
+    let clock = RunClock {
         mesh: Some(&st.sys.model.mesh),
         time_name: "load_factor",
         time_end: 1.0 + n_cont as f64,
-        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
-    });
+    };
+    let mut env = RunEnvelope::open(scene, opts, clock, warn)?;
+    let recorders = &mut env.recorders;
     let mut report = StepReport::default();
     if scene.motion.control != Control::Speed {
         let friction = st
@@ -484,7 +473,7 @@ pub fn run_with_dump(
             )));
         }
     }
-    let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, &mut recorders);
+    let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, recorders);
     let mut control_report: Option<ControlReport> = None;
     if solve.is_ok() && scene.motion.control != Control::Speed {
         match apply_control(scene, &mut st, opts.verbose) {
@@ -542,7 +531,7 @@ pub fn run_with_dump(
                 .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
         }
         let res = if sweep {
-            let rec: &mut dyn Recorder = &mut recorders;
+            let rec: &mut dyn Recorder = recorders;
             creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
                 rows.push(branch_row(s, p));
                 // Time of a branch point: the continuation parameter (ω, load, DISP), as in
@@ -566,7 +555,7 @@ pub fn run_with_dump(
             })
         } else {
             Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
-                let rec: &mut dyn Recorder = &mut recorders;
+                let rec: &mut dyn Recorder = recorders;
                 let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
                     let row = branch_row(s, p);
                     if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
@@ -690,7 +679,7 @@ pub fn run_with_dump(
     };
     let typed = Summary::new(
         &scene.scene.name,
-        &mode,
+        scene.analysis.mode.to_string(),
         st.sys.n_dofs(),
         converged,
         ModeSummary::Steady(Box::new(SteadySummary {
@@ -701,7 +690,7 @@ pub fn run_with_dump(
                 wall_time_s: wall,
                 error: solve.as_ref().err().map(|e| e.to_string()),
             },
-            warnings: warn,
+            warnings: env.warnings.clone(),
             results,
             terms: SteadyTerms {
                 common: Terms {
@@ -733,7 +722,6 @@ pub fn run_with_dump(
             },
         })),
     );
-    let summary = typed.to_json();
     let interrupted = matches!(solve, Err(SolveError::Interrupted { .. }));
     let error = solve.as_ref().err().map(|e| e.to_string());
     let final_info = StepInfo {
@@ -750,19 +738,9 @@ pub fn run_with_dump(
         || st.recovery.as_ref().is_some_and(|r| r.succeeded())
         || st.eps_continuation.as_ref().is_some_and(|a| a.succeeded)
     {
-        st.sys.record_step(&final_info, &mut recorders);
+        st.sys.record_step(&final_info, recorders);
     }
-    for e in recorders.run_finished(&RunEnd {
-        converged,
-        interrupted,
-        error: error.as_deref(),
-        steps: steps as u64,
-        wall_time_s: wall,
-        summary: Some(&summary),
-    }) {
-        eprintln!("tread: warning: {e}");
-    }
-    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    let summary = env.finish(&typed, steps as u64, wall, error.as_deref(), interrupted)?;
     if scene.output.has(Sink::Csv) {
         write_steady_csv(&st.sys, &opts.out_dir)?;
         if !rows.is_empty() {
@@ -888,22 +866,22 @@ pub fn run_with_dump(
                 .collect::<String>()
         ));
     }
-    match solve {
-        Ok(()) => Ok(RunOutcome {
+    let field = st
+        .sys
+        .x
+        .get(..2 * st.sys.model.mesh.n_nodes())
+        .map(<[f64]>::to_vec);
+    conclude(
+        solve,
+        RunOutcome {
             summary,
             typed,
-            field: st
-                .sys
-                .x
-                .get(..2 * st.sys.model.mesh.n_nodes())
-                .map(<[f64]>::to_vec),
+            field,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,
-        }),
-        Err(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
-        Err(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
-    }
+        },
+    )
 }
 
 /// The shape snapshots of `[output] snapshot_omegas` when they apply: PNG output and an

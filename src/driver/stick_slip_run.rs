@@ -8,6 +8,7 @@
 //! so `history.csv` (CSV sink), `run.mcap`, `run.rrd` and `series.png` carry the time history.
 //! An interrupt stops the replay at a sample.
 
+use super::envelope::{RunClock, RunEnvelope};
 use crate::contact::stick_slip::{
     closed_form_cycle, simulate, supported_law_list, Phase, StickSlipSpec,
 };
@@ -15,8 +16,8 @@ use crate::contact::Friction;
 use crate::driver::results::{
     ModeSummary, RunStats, StickSlipResults, StickSlipSummary, Summary, Terms,
 };
-use crate::io::output::{ensure_dir, write_json};
-use crate::io::record::{self, Recorder, RunEnd, RunMeta, StepInfo, StepView};
+use crate::io::output::ensure_dir;
+use crate::io::record::{self, Recorder, StepInfo, StepView};
 use crate::io::scene::{stick_slip_law, Scene};
 use crate::setup::{AppError, RunOptions, RunOutcome};
 use std::time::Instant;
@@ -57,23 +58,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         output_interval: ss.output_interval.unwrap_or(ss.t_end / 2000.0),
         stick_threshold: StickSlipSpec::suggested_stick_threshold(&friction, ss.belt_speed),
     };
-    let (mut recorders, warnings) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
-    for w in warnings {
-        eprintln!("tread: warning: {w}");
-    }
-    let scene_toml = scene.to_toml_string();
-    let mode = scene.analysis.mode.to_string();
-    recorders.run_started(&RunMeta {
-        scene_name: &scene.scene.name,
-        mode: &mode,
-        scene_toml: &scene_toml,
-        version: env!("CARGO_PKG_VERSION"),
-        features: record::build_features(),
+    let clock = RunClock {
         mesh: None,
         time_name: "time",
         time_end: ss.t_end,
-        revolution_period: None,
-    });
+    };
+    let mut env = RunEnvelope::open(scene, opts, clock, Vec::new())?;
+    let recorders = &mut env.recorders;
     let res = simulate(&spec);
     let mut interrupted = false;
     let mut steps = 0u64;
@@ -195,18 +186,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             },
         }),
     );
-    let summary = typed.to_json();
-    for e in recorders.run_finished(&RunEnd {
-        converged,
-        interrupted,
-        error: error.as_deref(),
-        steps,
-        wall_time_s: wall,
-        summary: Some(&summary),
-    }) {
-        eprintln!("tread: warning: {e}");
-    }
-    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    let summary = env.finish(&typed, steps, wall, error.as_deref(), interrupted)?;
     if interrupted {
         return Err(AppError::Interrupted(opts.out_dir.clone()));
     }

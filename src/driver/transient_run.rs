@@ -23,6 +23,7 @@
 //! `ring, pos, X1, X2, u1, u2`, where (X1, X2) is the referential (spatial) node position and
 //! u = χ − X the displacement of the material point that sits there.
 
+use super::envelope::{conclude, RunClock, RunEnvelope};
 use super::frame::nodal_stress_full_at;
 use super::results::{
     MeshInfo, ModeSummary, RunStats, Summary, Terms, TransientResults, TransientSummary,
@@ -37,8 +38,7 @@ use super::transient::{
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::{
-    self, Energy, HubLoads, Recorder, RejectedStep, RunEnd, RunMeta, SteadyReached, StepInfo,
-    StepView,
+    self, Energy, HubLoads, Recorder, RejectedStep, SteadyReached, StepInfo, StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink};
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
@@ -148,24 +148,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         land_on_passages: true,
     };
     let (newton_opts, _) = crate::setup::solver_options(scene, opts.verbose);
-    let (mut recorders, warnings) = crate::setup::build_recorders(scene, &opts.out_dir, opts.quiet);
-    for w in warnings {
-        eprintln!("tread: warning: {w}");
-    }
-    let scene_toml = scene.to_toml_string();
-    let mode = scene.analysis.mode.to_string();
-    let omega = scene.motion.omega;
-    recorders.run_started(&RunMeta {
-        scene_name: &scene.scene.name,
-        mode: &mode,
-        scene_toml: &scene_toml,
-        version: env!("CARGO_PKG_VERSION"),
-        features: record::build_features(),
+    let clock = RunClock {
         mesh: Some(&tr.sys.model.mesh),
         time_name: "time",
         time_end: time_opts.t_end,
-        revolution_period: (omega > 0.0).then(|| 2.0 * std::f64::consts::PI / omega),
-    });
+    };
+    let mut env = RunEnvelope::open(scene, opts, clock, Vec::new())?;
+    let recorders = &mut env.recorders;
     let (mut t_prev, mut its_prev, mut rejections_seen) = (0.0, 0usize, 0usize);
     let on_step = |tr: &Transient, rep: &TransientReport| {
         let index = rep.steps.saturating_sub(1) as u64;
@@ -179,7 +168,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
         rejections_seen = rep.rejections.len();
         record::emit_newton_table(
-            &mut recorders,
+            recorders,
             index,
             tr.t,
             &tr.last_table,
@@ -232,7 +221,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     };
     let res = match ode {
         Some(m) => {
-            let tol = OdeTolerances::from_scene(ts.error_tol, scene.geometry.ro, omega, ts.t_end);
+            let tol = OdeTolerances::from_scene(
+                ts.error_tol,
+                scene.geometry.ro,
+                scene.motion.omega,
+                ts.t_end,
+            );
             integrate_first_order(&mut tr, m, &time_opts, tol, on_step)
         }
         None => integrate(&mut tr, &time_opts, newton_opts, kind, on_step),
@@ -243,7 +237,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Err((e, r)) => (r, Some(e)),
     };
     if let (true, Some(field)) = (rep.steady, tr.steady_field.as_ref()) {
-        record_steady_field(&tr, &rep, field, &mut recorders);
+        record_steady_field(&tr, &rep, field, recorders);
     }
     let samples = tr.contact_samples(&tr.un, &tr.vn);
     let tot = ContactModel::totals(&samples);
@@ -349,20 +343,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             }),
         }),
     );
-    let summary = typed.to_json();
     let interrupted = matches!(err, Some(SolveError::Interrupted { .. }));
     let error = err.as_ref().map(|e| e.to_string());
-    for e in recorders.run_finished(&RunEnd {
-        converged,
+    let summary = env.finish(
+        &typed,
+        rep.steps as u64,
+        wall,
+        error.as_deref(),
         interrupted,
-        error: error.as_deref(),
-        steps: rep.steps as u64,
-        wall_time_s: wall,
-        summary: Some(&summary),
-    }) {
-        eprintln!("tread: warning: {e}");
-    }
-    write_json(&opts.out_dir.join("summary.json"), &summary)?;
+    )?;
     if scene.output.has(Sink::Csv) {
         write_csv(
             &opts.out_dir.join("passages.csv"),
@@ -396,22 +385,22 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         "t = {:.4e} s, {:.3} revolutions, {} steps, {steady_text}; hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}]",
         rep.final_time, rep.revolutions, rep.steps, f[0], f[1], m, tot.x_min, tot.x_max
     )];
-    match err {
-        None => Ok(RunOutcome {
+    let field = tr
+        .steady_field
+        .as_ref()
+        .and_then(|u| u.get(..2 * tr.sys.model.mesh.n_nodes()))
+        .map(<[f64]>::to_vec);
+    conclude(
+        err.map_or(Ok(()), Err),
+        RunOutcome {
             summary,
             typed,
-            field: tr
-                .steady_field
-                .as_ref()
-                .and_then(|u| u.get(..2 * tr.sys.model.mesh.n_nodes()))
-                .map(<[f64]>::to_vec),
+            field,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,
-        }),
-        Some(SolveError::Interrupted { .. }) => Err(AppError::Interrupted(opts.out_dir.clone())),
-        Some(e) => Err(AppError::Solve(e, opts.out_dir.clone())),
-    }
+        },
+    )
 }
 
 /// Send the steady state to the recorder: the referential field extracted at the last node
