@@ -23,6 +23,7 @@ pub mod io;
 pub mod material;
 pub mod math;
 pub mod mesh;
+pub mod params;
 pub mod physics;
 pub mod setup;
 pub mod solver;

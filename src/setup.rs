@@ -14,12 +14,10 @@ use crate::driver::SolidSystem;
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
-    ClampKind, ContactQuadrature, Formulation, LinearChoice, MaterialParams, Mode, Scene, Sink,
+    ClampKind, ContactQuadrature, Formulation, LinearChoice, Mode, Scene, Sink,
     DEFAULT_CLAMP_WIDTH_OVER_G,
 };
-use crate::material::{
-    Hyperelastic, Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean,
-};
+use crate::material::{Hyperelastic, Material};
 use crate::math::Mat2;
 use crate::mesh::{annulus, AnnulusSpec};
 use crate::physics::{PressureMode, SolidModel};
@@ -118,36 +116,21 @@ pub fn build_material(scene: &Scene) -> Result<(Material, PressureMode), AppErro
 pub fn build_material_spec(
     spec: &crate::io::scene::MaterialSpec,
 ) -> Result<(Material, PressureMode), AppError> {
-    let params = spec.params().ok_or_else(|| {
+    let material = spec.params().ok_or_else(|| {
         AppError::Unsupported(
             "material: a parameter required by `material.model` is missing".into(),
         )
     })?;
-    Ok(match params {
-        MaterialParams::NeoHookean { mu, lambda } => (
-            Material::NeoHookean(NeoHookean::new(mu, lambda)),
-            PressureMode::None,
-        ),
-        MaterialParams::MooneyRivlin { c1, c2, kappa } => (
-            Material::MooneyRivlin(MooneyRivlin::new(c1, c2, kappa)),
-            PressureMode::None,
-        ),
-        MaterialParams::MooneyRivlinIncompressible {
-            c1,
-            c2,
-            formulation,
-            kappa,
-        } => {
-            let mat = MooneyRivlinIncompressible::new(c1, c2);
-            // The unconstrained W is not stress free at F = I; the reference pressure p0 makes it so.
-            let p0 = 0.5 * mat.stress(&Mat2::zeros()).trace();
-            let mode = match (formulation, kappa) {
-                (Formulation::Perturbed, Some(kappa)) => PressureMode::Perturbed { kappa, p0 },
-                _ => PressureMode::Exact { p0 },
-            };
-            (Material::MooneyRivlinIncompressible(mat), mode)
-        }
-    })
+    if !material.is_incompressible() {
+        return Ok((material, PressureMode::None));
+    }
+    // The unconstrained W is not stress free at F = I; the reference pressure p0 makes it so.
+    let p0 = 0.5 * material.stress(&Mat2::zeros()).trace();
+    let mode = match (spec.resolved_formulation(), spec.perturbed_kappa()) {
+        (Some(Formulation::Perturbed), Some(kappa)) => PressureMode::Perturbed { kappa, p0 },
+        _ => PressureMode::Exact { p0 },
+    };
+    Ok((material, mode))
 }
 
 /// Build the solid system (mesh, material, dofs, pattern) of a scene.

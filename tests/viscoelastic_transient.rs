@@ -295,3 +295,54 @@ fn unsupported_modes_refuse_viscoelastic_materials() {
         );
     }
 }
+
+/// The energy balance of steady viscoelastic rolling, body against hub: on a frictionless road
+/// without normal damping, the power the hub feeds, T ω, goes into the overstress's dissipation
+/// (`results.viscous_energy`, summed over the quadrature points) and the integrator's numerical
+/// dissipation (generalized-α with ρ∞ = 0.8, small at these steps); nothing else dissipates.
+/// The dissipation rate over [1.6, 2.0] s, once rolling is steady, must match the hub power to
+/// 1 %, and neither model may create energy.
+#[test]
+fn viscous_dissipation_balances_the_hub_power_in_steady_rolling() {
+    let base = scene_text("scenarios/viscoelastic_rolling.toml");
+    let omega = 10.0;
+    for model in ["convolution", "multiplicative"] {
+        let text = base.replace("model = \"convolution\"", &format!("model = \"{model}\""));
+        let run = |t_end: f64| {
+            let t = format!("time.t_end={t_end}");
+            let s = run_rolling(
+                &text,
+                &format!("viscous_balance_{model}"),
+                &[
+                    "contact.b_n=0",
+                    "time.adaptive=false",
+                    "time.dt=5e-4",
+                    "time.stop_at_steady=false",
+                    &t,
+                ],
+            );
+            s["results"].clone()
+        };
+        let (a, b) = (run(1.6), run(2.0));
+        let ve = |r: &serde_json::Value, k: &str| r["viscous_energy"][k].as_f64().unwrap();
+        for r in [&a, &b] {
+            assert_eq!(r["viscous_energy"]["energy_created"], false, "{r}");
+            assert!(ve(r, "min_dissipated") >= 0.0, "{r}");
+        }
+        let dt = b["final_time"].as_f64().unwrap() - a["final_time"].as_f64().unwrap();
+        let rate = (ve(&b, "dissipated") - ve(&a, "dissipated")) / dt;
+        let torque = 0.5
+            * (a["hub_torque_passage_mean"].as_f64().unwrap()
+                + b["hub_torque_passage_mean"].as_f64().unwrap());
+        let power = torque * omega;
+        let rel = (rate - power) / power;
+        eprintln!(
+            "{model}: viscous dissipation rate {rate:.5} against hub power T ω = {power:.5} (rel {rel:+.2e}); stored {:.4}",
+            ve(&b, "stored")
+        );
+        assert!(
+            power > 0.0 && rel.abs() < 0.01,
+            "{model}: {rate} vs {power}"
+        );
+    }
+}

@@ -2,7 +2,7 @@
 //! scenes and classifies every run.
 //!
 //! ```text
-//! cargo run --release --bin tread-stress -- [--smoke] [--out DIR]
+//! cargo run --release --bin tread-stress -- [--smoke] [--factor NAME] [--out DIR]
 //! ```
 //!
 //! Factors (each around a base scene built from `scenarios/` with `--set`-style overrides,
@@ -22,6 +22,7 @@
 //! | `eps_over_v0 (v0=21)` | same near free rolling (v0 = 21 in/s) | steady | ε = 1e-1 … 1e-6 × v0 |
 //! | `m_n` | both | static / steady | 1, 2, 3 with c_n = G / δ_ref^m_n (p = G at δ_ref = 0.01 in) |
 //! | `extreme` | all three | all | a deep indentation, c_n = 1e12, κ = 1e10, ω = 0, ε = 1e-12, a 1 × 8 mesh, undamped runs |
+//! | `viscoelastic` | `viscoelastic_rolling` (2 × 32, 0.6 s), convolution and multiplicative | transient | γ = G and 10 G, ω = 10 and 40 rad/s, DISP = 0.1 and 0.4 in |
 //!
 //! Outcome of each case: `converged` (Ok, no cut-back and no rejected step), `recovered` (Ok with
 //! `solver.cutbacks` or `results.rejected_steps` > 0, or with a steady-mode recovery strategy in
@@ -33,7 +34,12 @@
 //! number text (`NaN`, `nan`, `inf` tokens), which must never be written.
 //!
 //! Writes `OUT/stress_matrix.csv` and `OUT/stress_matrix.md` (default OUT: `out/stress`) and
-//! prints the Markdown. `--smoke` runs a handful of fast cases (tool correctness, for CI).
+//! prints the Markdown. `--smoke` runs a handful of fast cases (tool correctness, for CI);
+//! `--factor NAME` runs one factor's cases only.
+//!
+//! Viscoelastic runs also report the energy balance of the viscous overstress
+//! (`results.viscous_energy`: dissipated energy, lowest cumulative dissipation, and
+//! `ENERGY CREATED` when the overstress created energy) in the `viscous_energy` column.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -46,6 +52,7 @@ const ROLLING: &str = include_str!("../scenarios/rolling_frictionless.toml");
 const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 const SWEEP: &str = include_str!("../scenarios/oden_steady_sweep.toml");
 const INDENT: &str = include_str!("../scenarios/indentation_friction.toml");
+const VISCO: &str = include_str!("../scenarios/viscoelastic_rolling.toml");
 
 /// Shear modulus G = 2 (C1 + C2) of the scenes' rubber (psi) and wall thickness Ro − Ri (in).
 const G: f64 = 200.0;
@@ -65,6 +72,10 @@ enum Base {
     Static,
     /// `oden_steady_sweep.toml`: steady, arc-length continuation in ω from 10 rad/s.
     Sweep,
+    /// `viscoelastic_rolling.toml` (convolution model), transient, 0.6 s.
+    ViscoConvolution,
+    /// The same with the multiplicative model.
+    ViscoMultiplicative,
 }
 
 impl Base {
@@ -74,21 +85,29 @@ impl Base {
             Base::Steady | Base::TransientFriction => "oden_hollow_cylinder",
             Base::Static => "indentation_friction",
             Base::Sweep => "oden_steady_sweep",
+            Base::ViscoConvolution | Base::ViscoMultiplicative => "viscoelastic_rolling",
         }
     }
     fn mode(self) -> &'static str {
         match self {
-            Base::Transient | Base::TransientFriction => "transient",
+            Base::Transient
+            | Base::TransientFriction
+            | Base::ViscoConvolution
+            | Base::ViscoMultiplicative => "transient",
             Base::Steady | Base::Sweep => "steady",
             Base::Static => "static",
         }
     }
-    fn text(self) -> &'static str {
+    fn text(self) -> String {
         match self {
-            Base::Transient => ROLLING,
-            Base::Steady | Base::TransientFriction => ODEN,
-            Base::Static => INDENT,
-            Base::Sweep => SWEEP,
+            Base::Transient => ROLLING.into(),
+            Base::Steady | Base::TransientFriction => ODEN.into(),
+            Base::Static => INDENT.into(),
+            Base::Sweep => SWEEP.into(),
+            Base::ViscoConvolution => VISCO.into(),
+            Base::ViscoMultiplicative => {
+                VISCO.replace("model = \"convolution\"", "model = \"multiplicative\"")
+            }
         }
     }
     /// The small base scene's overrides.
@@ -103,6 +122,9 @@ impl Base {
                 "time.stop_at_steady=false",
             ],
             Base::Steady => vec!["analysis.mode=steady"],
+            Base::ViscoConvolution | Base::ViscoMultiplicative => {
+                vec!["time.t_end=0.6", "time.stop_at_steady=false"]
+            }
             Base::Sweep => vec![],
             Base::Static => vec!["mesh.n_theta=64", "mesh.n_r=4", "solver.tolerance=1e-8"],
         }
@@ -122,6 +144,9 @@ struct Case {
     /// Keys (`key = ` at the start of a line) removed from the scene text before parsing; an
     /// override cannot remove a key (the exact incompressible model rejects `kappa`).
     drop_keys: Vec<&'static str>,
+    /// Text replacements `(from, to)` applied to the scene text (keys of sub-tables such as
+    /// `[material.viscoelastic]`, which an override cannot reach).
+    edits: Vec<(&'static str, &'static str)>,
 }
 
 fn case(factor: &'static str, value: impl ToString, base: Base, set: &[String]) -> Case {
@@ -131,6 +156,7 @@ fn case(factor: &'static str, value: impl ToString, base: Base, set: &[String]) 
         base,
         set: set.to_vec(),
         drop_keys: Vec::new(),
+        edits: Vec::new(),
     }
 }
 
@@ -226,6 +252,7 @@ fn full_cases() -> Vec<Case> {
                     format!("material.kappa={}", rel * G),
                 ],
                 drop_keys: vec!["kappa"],
+                edits: Vec::new(),
             });
         }
         c.push(Case {
@@ -237,6 +264,7 @@ fn full_cases() -> Vec<Case> {
                 "material.formulation=exact".into(),
             ],
             drop_keys: vec!["kappa"],
+            edits: Vec::new(),
         });
     }
     // Friction coefficient.
@@ -333,6 +361,53 @@ fn full_cases() -> Vec<Case> {
         let set: Vec<String> = set.iter().map(|x| x.to_string()).collect();
         c.push(case("extreme", label, base, &set));
     }
+    // Viscoelastic rolling, both models: the scene (γ = G, 10 rad/s, DISP = 0.1), a strong
+    // overstress, a high speed, a deep (large-strain) indentation and all three at once. The
+    // `viscous` column reports each run's energy balance of the overstress.
+    for base in [Base::ViscoConvolution, Base::ViscoMultiplicative] {
+        let strong = ("gamma = 200.0", "gamma = 2000.0");
+        let fast = |s: &mut Vec<String>| s.extend(steady_omega(40.0));
+        let deep = |s: &mut Vec<String>| s.push("road.disp=0.4".into());
+        let mut all = Vec::new();
+        fast(&mut all);
+        deep(&mut all);
+        let mut v = vec![
+            (
+                "scene (gamma = G, omega = 10, disp = 0.1)",
+                Vec::new(),
+                Vec::new(),
+            ),
+            ("gamma = 10 G", Vec::new(), vec![strong]),
+            (
+                "omega = 40",
+                {
+                    let mut s = Vec::new();
+                    fast(&mut s);
+                    s
+                },
+                Vec::new(),
+            ),
+            (
+                "disp = 0.4",
+                {
+                    let mut s = Vec::new();
+                    deep(&mut s);
+                    s
+                },
+                Vec::new(),
+            ),
+        ];
+        v.push(("gamma = 10 G, omega = 40, disp = 0.4", all, vec![strong]));
+        for (label, set, edits) in v {
+            let model = match base {
+                Base::ViscoMultiplicative => "multiplicative",
+                _ => "convolution",
+            };
+            let mut k = case("viscoelastic", format!("{model}: {label}"), base, &set);
+            k.edits = edits;
+            c.push(k);
+        }
+    }
     c
 }
 
@@ -377,6 +452,12 @@ fn smoke_cases() -> Vec<Case> {
             &["contact.c_n=2e5".into()],
         ),
         case(
+            "viscoelastic",
+            "multiplicative, 0.02 s",
+            Base::ViscoMultiplicative,
+            &["time.t_end=0.02".into()],
+        ),
+        case(
             "invalid",
             "mesh.n_r=0",
             Base::Static,
@@ -396,6 +477,8 @@ struct Row {
     wall: f64,
     nan: usize,
     newton: u64,
+    /// Energy balance of the viscous overstress (viscoelastic runs; empty otherwise).
+    viscous: String,
 }
 
 /// Class of a solve error: its innermost cause when it wraps one.
@@ -592,7 +675,10 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         out.join("cases")
             .join(format!("{i:03}_{}_{}", dir_name(c.factor), c.base.mode()));
     let _ = std::fs::remove_dir_all(&dir);
-    let text = drop_keys(c.base.text(), &c.drop_keys);
+    let mut text = drop_keys(&c.base.text(), &c.drop_keys);
+    for (from, to) in &c.edits {
+        text = text.replace(from, to);
+    }
     let mut set = c.base.overrides();
     set.extend(c.set.iter().cloned());
     let mut row = Row {
@@ -606,6 +692,7 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         wall: 0.0,
         nan: 0,
         newton: 0,
+        viscous: String::new(),
     };
     let t0 = Instant::now();
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
@@ -646,7 +733,24 @@ fn run_case(i: usize, c: &Case, out: &Path) -> Row {
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
         .map_or(0, |v| count_key(&v, &["newton_iterations"]));
+    if let RunResult::Finished { summary, .. } = &result {
+        row.viscous = viscous_diagnostic(summary);
+    }
     row
+}
+
+/// `results.viscous_energy` in one cell: the dissipated energy, the lowest cumulative
+/// dissipation and, when the overstress created energy, `ENERGY CREATED`.
+fn viscous_diagnostic(summary: &serde_json::Value) -> String {
+    let ve = &summary["results"]["viscous_energy"];
+    let (Some(d), Some(m)) = (ve["dissipated"].as_f64(), ve["min_dissipated"].as_f64()) else {
+        return String::new();
+    };
+    let mut s = format!("dissipated {d:.4e}, min {m:.2e}");
+    if ve["energy_created"].as_bool() == Some(true) {
+        s += ", ENERGY CREATED";
+    }
+    s
 }
 
 fn csv_field(s: &str) -> String {
@@ -663,11 +767,11 @@ fn md_cell(s: &str) -> String {
 
 fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<String> {
     let mut csv = String::from(
-        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs,newton_iterations\n",
+        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs,newton_iterations,viscous_energy\n",
     );
     for r in rows {
         csv += &format!(
-            "{},{},{},{},{},{},{},{:.3},{},{}\n",
+            "{},{},{},{},{},{},{},{:.3},{},{},{}\n",
             csv_field(&r.factor),
             csv_field(&r.value),
             r.scene,
@@ -677,17 +781,18 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
             csv_field(&r.message),
             r.wall,
             r.nan,
-            r.newton
+            r.newton,
+            csv_field(&r.viscous)
         );
     }
     std::fs::write(out.join("stress_matrix.csv"), csv)?;
 
     let mut md = String::from("# Stress matrix\n\n");
-    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | Newton its | message |\n";
-    md += "|---|---|---|---|---|---|---|---|---|---|\n";
+    md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | Newton its | viscous energy | message |\n";
+    md += "|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in rows {
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {:.2} | {} | {} | {} | {} |\n",
             r.factor,
             md_cell(&r.value),
             r.scene,
@@ -697,6 +802,7 @@ fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<S
             r.wall,
             r.nan,
             r.newton,
+            md_cell(&r.viscous),
             md_cell(&r.message)
         );
     }
@@ -743,6 +849,7 @@ is accurate: compare the summaries (`cases/*/summary.json`) across a sweep.\n";
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let mut smoke = false;
+    let mut factor: Option<String> = None;
     let mut out = PathBuf::from("out/stress");
     let mut i = 1;
     while i < args.len() {
@@ -752,8 +859,14 @@ fn main() {
                 out = PathBuf::from(&args[i + 1]);
                 i += 1;
             }
+            "--factor" if i + 1 < args.len() => {
+                factor = Some(args[i + 1].clone());
+                i += 1;
+            }
             other => {
-                eprintln!("tread-stress: unknown argument `{other}` (use --smoke and --out DIR)");
+                eprintln!(
+                    "tread-stress: unknown argument `{other}` (use --smoke, --factor NAME and --out DIR)"
+                );
                 std::process::exit(2);
             }
         }
@@ -767,7 +880,22 @@ fn main() {
     std::panic::set_hook(Box::new(|info| {
         eprintln!("tread-stress: panic: {info}");
     }));
-    let cases = if smoke { smoke_cases() } else { full_cases() };
+    let mut cases = if smoke { smoke_cases() } else { full_cases() };
+    if let Some(f) = &factor {
+        let known: Vec<&str> = {
+            let mut k: Vec<&str> = cases.iter().map(|c| c.factor).collect();
+            k.dedup();
+            k
+        };
+        if !known.contains(&f.as_str()) {
+            eprintln!(
+                "tread-stress: no factor `{f}`; the factors are {}",
+                known.join(", ")
+            );
+            std::process::exit(2);
+        }
+        cases.retain(|c| c.factor == f);
+    }
     let t0 = Instant::now();
     let mut rows = Vec::new();
     for (k, c) in cases.iter().enumerate() {
@@ -1028,7 +1156,23 @@ mod tests {
             wall: 0.25,
             nan: 0,
             newton: 12,
+            viscous: String::new(),
         }
+    }
+
+    #[test]
+    fn viscous_energy_cell_flags_created_energy() {
+        let summary = |created: bool| {
+            serde_json::json!({"results": {"viscous_energy": {
+                "dissipated": 12.5, "min_dissipated": if created { -0.5 } else { 0.0 },
+                "energy_created": created}}})
+        };
+        assert_eq!(
+            viscous_diagnostic(&summary(false)),
+            "dissipated 1.2500e1, min 0.00e0"
+        );
+        assert!(viscous_diagnostic(&summary(true)).ends_with(", ENERGY CREATED"));
+        assert_eq!(viscous_diagnostic(&serde_json::json!({"results": {}})), "");
     }
 
     /// Fields of one CSV line (RFC 4180 quoting, no embedded newlines).

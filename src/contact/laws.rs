@@ -62,6 +62,7 @@
 //! d/dw [μ(|w|) tanh(w/ε)] = μ'(|w|) tanh(|w|/ε) + μ(|w|) sech²(w/ε)/ε,
 //! which is continuous and even in w; that form is what [`RateDependent::eval`] uses.
 
+pub use crate::params::{Bound, ParamSpec};
 use serde::{Deserialize, Serialize};
 
 /// Error in the parameters of an interface law (the offending parameter is named).
@@ -282,53 +283,6 @@ pub trait FrictionLaw: Send + Sync {
     /// Traction t_T on the body and its derivatives at slip `w`, normal traction `t_n`,
     /// penetration `delta`.
     fn eval(&self, w: f64, t_n: f64, delta: f64) -> FrictionValue;
-}
-
-/// The lower bound of a parameter's admissible range (every parameter must also be finite).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Bound {
-    /// value > lo.
-    Above(f64),
-    /// value ≥ lo.
-    AtLeast(f64),
-}
-
-impl Bound {
-    /// Whether `x` is finite and within the bound.
-    pub fn admits(self, x: f64) -> bool {
-        x.is_finite()
-            && match self {
-                Bound::Above(lo) => x > lo,
-                Bound::AtLeast(lo) => x >= lo,
-            }
-    }
-}
-
-impl std::fmt::Display for Bound {
-    /// `> 0`, `>= 1`: how the scene's messages and reference write the bound.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Bound::Above(lo) => write!(f, "> {lo}"),
-            Bound::AtLeast(lo) => write!(f, ">= {lo}"),
-        }
-    }
-}
-
-/// One parameter of a friction law as a scene file gives it: a number under `key` in
-/// `[friction]`, with what it is, its unit and its bound. The scene's key list, reference and
-/// range checks (with their messages) are all made from these declarations.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ParamSpec {
-    /// Key in `[friction]` (`mu`, `eps`, ...).
-    pub key: &'static str,
-    /// What the value is, as messages name it ("friction coefficient μ").
-    pub what: &'static str,
-    /// Unit in the scene's L-F-T system (`–` for dimensionless).
-    pub unit: &'static str,
-    /// Admissible range.
-    pub bound: Bound,
-    /// More about the value for the scene reference ("" for nothing).
-    pub note: &'static str,
 }
 
 /// The regularisation velocity ε, a parameter of every law.

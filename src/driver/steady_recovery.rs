@@ -51,7 +51,6 @@ pub use super::steady_report::{
 };
 use super::system::Loading;
 use crate::io::record;
-use crate::material::Material;
 use crate::physics::PressureMode;
 use crate::solver::stepping::{StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
@@ -179,7 +178,7 @@ impl Targets {
 fn kappa_of(st: &SteadyRolling) -> Option<f64> {
     match (st.sys.model.pressure, st.sys.model.material) {
         (PressureMode::Perturbed { kappa, .. }, _) => Some(kappa),
-        (PressureMode::None, Material::MooneyRivlin(m)) => Some(m.kappa),
+        (PressureMode::None, m) => m.param("kappa"),
         _ => None,
     }
 }
@@ -201,8 +200,8 @@ pub fn set_parameter(st: &mut SteadyRolling, t: &Targets, p: HomotopyParameter, 
         HomotopyParameter::Kappa => {
             if let PressureMode::Perturbed { kappa, .. } = &mut st.sys.model.pressure {
                 *kappa = value;
-            } else if let Material::MooneyRivlin(m) = &mut st.sys.model.material {
-                m.kappa = value;
+            } else {
+                st.sys.model.material.set_param("kappa", value);
             }
         }
         HomotopyParameter::Eps => {

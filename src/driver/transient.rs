@@ -37,6 +37,7 @@
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
+use super::results::ViscousEnergy;
 use super::system::SolidSystem;
 use super::terms::{CellHook, Inertia, Rates, Terms};
 use crate::assembly::{LocalSystem, SharedMut, FIXED, MAX_LOCAL};
@@ -261,6 +262,9 @@ pub struct Transient {
     pub dt_stable: f64,
     /// The attempted step awaiting [`Self::accept`]: (t_{n+1}, Δt).
     pending: Option<(f64, f64)>,
+    /// Energy account of the viscous overstress over the committed steps (viscoelastic
+    /// materials; `None` when elastic).
+    pub viscous: Option<ViscousEnergy>,
 }
 
 impl Transient {
@@ -328,6 +332,7 @@ impl Transient {
             wall,
             dt_stable: f64::NAN,
             pending: None,
+            viscous: None,
         }
     }
 
@@ -875,7 +880,12 @@ impl Transient {
     pub(crate) fn commit_state(&mut self, t1: f64, history_dt: Option<f64>) {
         if let Some(dt) = history_dt {
             let (dofs, x) = (&self.sys.dofs, &self.sys.x);
-            self.sys.model.commit_history(dofs, x, dt);
+            let step = self.sys.model.commit_history(dofs, x, dt);
+            if self.sys.model.viscoelastic.is_some() {
+                self.viscous
+                    .get_or_insert(ViscousEnergy::start(0.0, self.t))
+                    .add(step.work, step.stored, t1);
+            }
         }
         self.un.copy_from_slice(&self.sys.x);
         self.vn.copy_from_slice(&self.v1);
@@ -1660,7 +1670,11 @@ impl Transient {
         }
         res?;
         let (dofs, x) = (&self.sys.dofs, &self.sys.x);
-        self.sys.model.commit_history(dofs, x, f64::INFINITY);
+        // Relaxed to equilibrium: the energy account of the overstress starts here.
+        let relaxed = self.sys.model.commit_history(dofs, x, f64::INFINITY);
+        if self.sys.model.viscoelastic.is_some() {
+            self.viscous = Some(ViscousEnergy::start(relaxed.stored, self.t));
+        }
         let n_u = self.sys.dofs.n_u;
         self.un.copy_from_slice(&self.sys.x);
         for d in (0..n_u).step_by(2) {

@@ -282,6 +282,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         contact_half_width_moment: 2.0 * tot.pressure_second_moment.sqrt(),
         integrator: ode.map_or(tr.scheme.name(), |m| m.name()).to_string(),
         mass: if lumped { "lumped" } else { "consistent" }.to_string(),
+        viscous_energy: tr.viscous.map(Box::new),
     };
     let friction = tr
         .sys
@@ -305,6 +306,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 _ => "no change over a node passage measured yet".to_string(),
             },
             crate::io::output::fmt_num(ts.steady_tol),
+        ));
+    }
+    if let Some(ve) = tr.viscous.filter(|v| v.energy_created) {
+        warnings.push(format!(
+            "the viscous overstress created energy: cumulative dissipation {} at t = {} s (work {}, stored {}); results.viscous_energy has the balance",
+            crate::io::output::fmt_num(ve.min_dissipated),
+            crate::io::output::fmt_num(ve.min_dissipated_time),
+            crate::io::output::fmt_num(ve.work),
+            crate::io::output::fmt_num(ve.stored),
         ));
     }
     for w in &warnings {

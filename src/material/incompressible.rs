@@ -28,7 +28,7 @@ use super::invariants::{
     dcof_df, inadmissible_stress, inadmissible_tangent, stress_from_invariants,
     stress_tangent_from_invariants, InvariantDerivs, Kinematics,
 };
-use super::Hyperelastic;
+use super::{Hyperelastic, MaterialLawSpec, ParamSpec};
 use crate::math::{cofactor, det_identity_plus_minus_one, Mat2, Tangent};
 
 /// Unconstrained part `c1 (I1 − 3) + c2 (I2 − 3)` of the incompressible Mooney–Rivlin law.
@@ -70,6 +70,34 @@ impl MooneyRivlinIncompressible {
             return f64::NAN;
         }
         super::invariants::sigma33_from_invariants(&k, &self.derivs(&k))
+    }
+}
+
+impl MaterialLawSpec for MooneyRivlinIncompressible {
+    const NAME: &'static str = "mooney_rivlin_incompressible";
+    const SUMMARY: &'static str =
+        "incompressible Mooney–Rivlin c1 (I1 − 3) + c2 (I2 − 3), J = 1 by a pressure field";
+    const PARAMS: &'static [ParamSpec] = &[super::mooney_rivlin::C1, super::mooney_rivlin::C2];
+    const INCOMPRESSIBLE: bool = true;
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.c1, self.c2]
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        2.0 * (self.c1 + self.c2)
+    }
+
+    fn bulk_modulus(&self) -> Option<f64> {
+        None
+    }
+
+    fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+        MooneyRivlinIncompressible::cauchy_33(self, grad_u)
     }
 }
 

@@ -32,6 +32,16 @@
 //! [`Material`] is the closed set of laws used by the element kernels (static dispatch by
 //! `match`); [`fd_check`] holds the finite-difference checker every law passes.
 //!
+//! # Scene description and registration
+//!
+//! Each law declares, next to its physics, how a scene file gives it ([`MaterialLawSpec`]): its
+//! `model` keyword, its parameters ([`ParamSpec`]: key, meaning, unit, bound), how to build it
+//! from their values, its small-strain moduli and any check between parameters. The one list in
+//! `materials!` builds from these entries both [`Material`] with its dispatch and the keyword
+//! enum [`MaterialKind`]; the scene's `[material]` keys, reference, range checks and messages
+//! are made from the declarations. Adding a law is its file with its [`Hyperelastic`] and
+//! [`MaterialLawSpec`] impls, its `mod` line, and its name in that list.
+//!
 //! # State
 //!
 //! [`Constitutive`] is the material interface with state in and state out: the committed
@@ -57,6 +67,7 @@ pub use neo_hookean::NeoHookean;
 pub use viscoelastic::{ViscoModel, Viscoelastic, ViscoelasticMaterial};
 
 use crate::math::{Mat2, Tangent};
+pub use crate::params::{Bound, ParamSpec};
 
 /// A hyperelastic law in plane strain, evaluated from the displacement gradient.
 pub trait Hyperelastic: Send + Sync {
@@ -114,96 +125,308 @@ impl<M: Hyperelastic> Constitutive for M {
     }
 }
 
-/// The closed set of hyperelastic laws, dispatched by `match` in hot loops.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Material {
-    /// Compressible neo-Hookean.
-    NeoHookean(NeoHookean),
-    /// Compressible Mooney–Rivlin with isochoric invariants.
-    MooneyRivlin(MooneyRivlin),
-    /// Unconstrained part only; the element adds the pressure term `−p (J − 1)`.
-    MooneyRivlinIncompressible(MooneyRivlinIncompressible),
+/// How a scene file gives a hyperelastic law, declared next to its physics: its `model`
+/// keyword, its parameters (key, meaning, unit, bound; see [`ParamSpec`]), how to build it from
+/// their values and its small-strain moduli. Registering the type in `materials!` adds it to
+/// [`Material`] (with its dispatch) and to the scene's `[material] model` keywords, keys,
+/// checks and reference.
+pub trait MaterialLawSpec: Hyperelastic + Copy {
+    /// Keyword of `[material] model` (snake_case).
+    const NAME: &'static str;
+    /// One line on the law for the scene reference.
+    const SUMMARY: &'static str;
+    /// Parameters, in the order of [`Self::from_values`] and [`Self::values`] (the density
+    /// `rho` is every material's and is not listed).
+    const PARAMS: &'static [ParamSpec];
+    /// Whether the element must impose `J = 1` with a pressure field. The scene then also
+    /// takes `formulation` (`exact` or `perturbed`) and, for `perturbed`, an optional `kappa`.
+    const INCOMPRESSIBLE: bool = false;
+
+    /// The law from its parameter values in the order of [`Self::PARAMS`] (not range-checked).
+    fn from_values(v: &[f64]) -> Self;
+
+    /// The parameter values in the order of [`Self::PARAMS`].
+    fn values(&self) -> Vec<f64>;
+
+    /// Shear modulus `G` of the small-strain limit.
+    fn shear_modulus(&self) -> f64;
+
+    /// 3D bulk modulus `K` of the small-strain limit (`None` for an incompressible law).
+    fn bulk_modulus(&self) -> Option<f64>;
+
+    /// Out-of-plane Cauchy stress σ33 of plane strain from this law alone (an element pressure
+    /// field adds `−p`); NaN when `J ≤ 0`.
+    fn cauchy_33(&self, grad_u: &Mat2) -> f64;
+
+    /// Checks between parameters beyond their own bounds, on the values a scene gives (any may
+    /// be missing): `(key, message)` for each violation.
+    fn cross_check(_given: &dyn Fn(&str) -> Option<f64>) -> Vec<(&'static str, String)> {
+        Vec::new()
+    }
 }
+
+/// The one list of materials: the [`Material`] enum with its dispatch by `match` and the
+/// keyword enum [`MaterialKind`] of `[material] model`, from the laws' [`MaterialLawSpec`]s.
+macro_rules! materials {
+    ($($law:ident),+ $(,)?) => {
+        /// The closed set of hyperelastic laws, dispatched by `match` in hot loops (scene
+        /// `model =` is each law's [`MaterialLawSpec::NAME`], its keys the law's
+        /// [`MaterialLawSpec::PARAMS`]).
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub enum Material {
+            $(
+                #[doc = concat!("See [`", stringify!($law), "`].")]
+                $law($law),
+            )+
+        }
+
+        /// Which material law, without its parameters: the keyword of `[material] model`.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum MaterialKind {
+            $(
+                #[doc = concat!("[`", stringify!($law), "`].")]
+                $law,
+            )+
+        }
+
+        impl MaterialKind {
+            /// Every kind, in registration order.
+            pub const ALL: &'static [MaterialKind] = &[$(MaterialKind::$law),+];
+            /// The scene keyword of every kind, in the order of [`Self::ALL`].
+            pub const NAMES: &'static [&'static str] = &[$(<$law as MaterialLawSpec>::NAME),+];
+
+            /// The scene keyword of this kind.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $(MaterialKind::$law => <$law as MaterialLawSpec>::NAME,)+
+                }
+            }
+
+            /// One line on the law (see [`MaterialLawSpec::SUMMARY`]).
+            pub fn summary(self) -> &'static str {
+                match self {
+                    $(MaterialKind::$law => <$law as MaterialLawSpec>::SUMMARY,)+
+                }
+            }
+
+            /// The parameters of this kind, in their declared order.
+            pub fn params(self) -> &'static [ParamSpec] {
+                match self {
+                    $(MaterialKind::$law => <$law as MaterialLawSpec>::PARAMS,)+
+                }
+            }
+
+            /// Whether the law needs a pressure field (see [`MaterialLawSpec::INCOMPRESSIBLE`]).
+            pub fn is_incompressible(self) -> bool {
+                match self {
+                    $(MaterialKind::$law => <$law as MaterialLawSpec>::INCOMPRESSIBLE,)+
+                }
+            }
+
+            /// The law's checks between parameters (see [`MaterialLawSpec::cross_check`]).
+            pub fn cross_check(
+                self,
+                given: &dyn Fn(&str) -> Option<f64>,
+            ) -> Vec<(&'static str, String)> {
+                match self {
+                    $(MaterialKind::$law => <$law as MaterialLawSpec>::cross_check(given),)+
+                }
+            }
+
+            /// The law of this kind from its parameter values, in the order of [`Self::params`].
+            ///
+            /// # Panics
+            /// If `values` is shorter than [`Self::params`].
+            pub fn build(self, values: &[f64]) -> Material {
+                match self {
+                    $(MaterialKind::$law => Material::$law(<$law as MaterialLawSpec>::from_values(values)),)+
+                }
+            }
+        }
+
+        impl Material {
+            /// Which law this is.
+            pub fn kind(&self) -> MaterialKind {
+                match self {
+                    $(Material::$law(_) => MaterialKind::$law,)+
+                }
+            }
+
+            /// The parameter values, in the order of [`MaterialKind::params`].
+            pub fn values(&self) -> Vec<f64> {
+                match self {
+                    $(Material::$law(m) => m.values(),)+
+                }
+            }
+
+            /// Shear modulus `G` of the small-strain limit.
+            pub fn small_strain_shear_modulus(&self) -> f64 {
+                match self {
+                    $(Material::$law(m) => m.shear_modulus(),)+
+                }
+            }
+
+            /// 3D bulk modulus `K` of the small-strain limit (`None` for an incompressible law).
+            pub fn small_strain_bulk_modulus(&self) -> Option<f64> {
+                match self {
+                    $(Material::$law(m) => m.bulk_modulus(),)+
+                }
+            }
+
+            /// Out-of-plane Cauchy stress σ33 of plane strain from this law alone (an element
+            /// pressure field adds `−p`); NaN when `J ≤ 0`.
+            pub fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+                match self {
+                    $(Material::$law(m) => m.cauchy_33(grad_u),)+
+                }
+            }
+        }
+
+        impl Hyperelastic for Material {
+            #[inline]
+            fn energy(&self, grad_u: &Mat2) -> f64 {
+                match self {
+                    $(Material::$law(m) => m.energy(grad_u),)+
+                }
+            }
+
+            #[inline]
+            fn stress(&self, grad_u: &Mat2) -> Mat2 {
+                match self {
+                    $(Material::$law(m) => m.stress(grad_u),)+
+                }
+            }
+
+            #[inline]
+            fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+                match self {
+                    $(Material::$law(m) => m.stress_tangent(grad_u),)+
+                }
+            }
+        }
+
+        $(
+            impl From<$law> for Material {
+                fn from(m: $law) -> Self {
+                    Material::$law(m)
+                }
+            }
+        )+
+    };
+}
+
+materials!(NeoHookean, MooneyRivlin, MooneyRivlinIncompressible);
 
 impl Material {
     /// Whether the element must impose `J = 1` with a pressure field.
     pub fn is_incompressible(&self) -> bool {
-        matches!(self, Material::MooneyRivlinIncompressible(_))
+        self.kind().is_incompressible()
     }
 
-    /// Shear modulus `G` of the small-strain limit.
-    pub fn small_strain_shear_modulus(&self) -> f64 {
-        match self {
-            Material::NeoHookean(m) => m.mu,
-            Material::MooneyRivlin(m) => 2.0 * (m.c1 + m.c2),
-            Material::MooneyRivlinIncompressible(m) => 2.0 * (m.c1 + m.c2),
+    /// The scene-file name of the law.
+    pub fn name(&self) -> &'static str {
+        self.kind().as_str()
+    }
+
+    /// The value of the parameter `key`, if the law has one.
+    pub fn param(&self, key: &str) -> Option<f64> {
+        let i = self.kind().params().iter().position(|p| p.key == key)?;
+        self.values().get(i).copied()
+    }
+
+    /// Give the parameter `key` the value `value`; false (and no change) if the law has no
+    /// such parameter. Used by the steady solver's homotopies (e.g. in the bulk modulus).
+    pub fn set_param(&mut self, key: &str, value: f64) -> bool {
+        let kind = self.kind();
+        let Some(i) = kind.params().iter().position(|p| p.key == key) else {
+            return false;
+        };
+        let mut values = self.values();
+        values[i] = value;
+        *self = kind.build(&values);
+        true
+    }
+}
+
+impl MaterialKind {
+    /// Every parameter key of any law, once each, in registration order (the first law that
+    /// declares a key fixes its place).
+    pub fn all_keys() -> Vec<&'static str> {
+        let mut keys: Vec<&'static str> = Vec::new();
+        for kind in Self::ALL {
+            for p in kind.params() {
+                if !keys.contains(&p.key) {
+                    keys.push(p.key);
+                }
+            }
         }
+        keys
     }
 
-    /// Out-of-plane Cauchy stress σ33 of plane strain from this law alone (an element pressure
-    /// field adds `−p`); NaN when `J ≤ 0`.
-    pub fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
-        match self {
-            Material::NeoHookean(m) => m.cauchy_33(grad_u),
-            Material::MooneyRivlin(m) => m.cauchy_33(grad_u),
-            Material::MooneyRivlinIncompressible(m) => m.cauchy_33(grad_u),
-        }
+    /// The declaration of parameter `key` by the first law that has it.
+    pub fn param(key: &str) -> Option<&'static ParamSpec> {
+        Self::ALL
+            .iter()
+            .flat_map(|k| k.params())
+            .find(|p| p.key == key)
     }
 
-    /// 3D bulk modulus `K` of the small-strain limit (`None` for an incompressible law).
-    pub fn small_strain_bulk_modulus(&self) -> Option<f64> {
-        match self {
-            Material::NeoHookean(m) => Some(m.lambda + 2.0 / 3.0 * m.mu),
-            Material::MooneyRivlin(m) => Some(m.kappa),
-            Material::MooneyRivlinIncompressible(_) => None,
+    /// The kinds whose parameters include `key`.
+    pub fn laws_with(key: &str) -> Vec<MaterialKind> {
+        Self::ALL
+            .iter()
+            .copied()
+            .filter(|k| k.params().iter().any(|p| p.key == key))
+            .collect()
+    }
+
+    /// The law of this kind from given values looked up by key; `Err(key)` names the first
+    /// parameter that is missing. The values are not range-checked.
+    pub fn build_from(self, given: impl Fn(&str) -> Option<f64>) -> Result<Material, &'static str> {
+        let values = self
+            .params()
+            .iter()
+            .map(|p| given(p.key).ok_or(p.key))
+            .collect::<Result<Vec<f64>, _>>()?;
+        Ok(self.build(&values))
+    }
+}
+
+impl std::fmt::Display for MaterialKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for MaterialKind {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let s = s.trim();
+        match Self::ALL.iter().find(|k| k.as_str() == s) {
+            Some(k) => Ok(*k),
+            None => Err(format!(
+                "unknown material model \"{s}\"; expected one of {}",
+                Self::NAMES
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
         }
     }
 }
 
-impl Hyperelastic for Material {
-    #[inline]
-    fn energy(&self, grad_u: &Mat2) -> f64 {
-        match self {
-            Material::NeoHookean(m) => m.energy(grad_u),
-            Material::MooneyRivlin(m) => m.energy(grad_u),
-            Material::MooneyRivlinIncompressible(m) => m.energy(grad_u),
-        }
-    }
-
-    #[inline]
-    fn stress(&self, grad_u: &Mat2) -> Mat2 {
-        match self {
-            Material::NeoHookean(m) => m.stress(grad_u),
-            Material::MooneyRivlin(m) => m.stress(grad_u),
-            Material::MooneyRivlinIncompressible(m) => m.stress(grad_u),
-        }
-    }
-
-    #[inline]
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
-        match self {
-            Material::NeoHookean(m) => m.stress_tangent(grad_u),
-            Material::MooneyRivlin(m) => m.stress_tangent(grad_u),
-            Material::MooneyRivlinIncompressible(m) => m.stress_tangent(grad_u),
-        }
+impl serde::Serialize for MaterialKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
     }
 }
 
-impl From<NeoHookean> for Material {
-    fn from(m: NeoHookean) -> Self {
-        Material::NeoHookean(m)
-    }
-}
-
-impl From<MooneyRivlin> for Material {
-    fn from(m: MooneyRivlin) -> Self {
-        Material::MooneyRivlin(m)
-    }
-}
-
-impl From<MooneyRivlinIncompressible> for Material {
-    fn from(m: MooneyRivlinIncompressible) -> Self {
-        Material::MooneyRivlinIncompressible(m)
+impl<'de> serde::Deserialize<'de> for MaterialKind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = <String as serde::Deserialize>::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
     }
 }
 
@@ -397,6 +620,87 @@ mod tests {
             MooneyRivlin::new(80.0, 20.0, 2000.0).into(),
             MooneyRivlinIncompressible::new(80.0, 20.0).into(),
         ]
+    }
+
+    /// Every registered law with parameters `1, 1.5, 2, …` (admissible for every bound above
+    /// or at 0): what a newly registered law is checked with, without a test of its own.
+    fn registered() -> Vec<Material> {
+        MaterialKind::ALL
+            .iter()
+            .map(|k| {
+                let values: Vec<f64> = (0..k.params().len())
+                    .map(|i| 1.0 + 0.5 * i as f64)
+                    .collect();
+                for (p, v) in k.params().iter().zip(&values) {
+                    assert!(p.bound.admits(*v), "{k}: {} = {v}", p.key);
+                }
+                k.build(&values)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_registered_law_passes_the_material_checks() {
+        for m in registered() {
+            let (es, et) = assert_fd_consistent(&m);
+            let asym = assert_tangent_symmetric(&m);
+            let obj = assert_objective(&m);
+            assert_inadmissible_safe(&m);
+            // Small-strain moduli as declared: ∂P12/∂F12 = G, and K = λ + 2G/3 with the
+            // plane-strain λ = ∂P11/∂F22 where the law is compressible.
+            let a = m.stress_tangent(&Mat2::zeros()).1;
+            let g = m.small_strain_shear_modulus();
+            assert!((a[(1, 1)] - g).abs() < 1e-12 * g, "{m:?}");
+            match m.small_strain_bulk_modulus() {
+                Some(k) => {
+                    assert!(!m.is_incompressible(), "{m:?}");
+                    assert!((a[(0, 3)] + 2.0 / 3.0 * g - k).abs() < 1e-12 * k, "{m:?}");
+                    // A compressible law is stress free at F = I.
+                    assert_eq!(m.stress(&Mat2::zeros()), Mat2::zeros(), "{m:?}");
+                }
+                None => assert!(m.is_incompressible(), "{m:?}"),
+            }
+            println!(
+                "{}: fd stress {es:.2e}, fd tangent {et:.2e}, asym {asym:.2e}, obj {obj:.2e}",
+                m.name()
+            );
+        }
+    }
+
+    #[test]
+    fn material_declarations_are_consistent() {
+        // Keywords are distinct, and a key shared by several laws is declared the same by all.
+        let mut names = MaterialKind::NAMES.to_vec();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), MaterialKind::ALL.len());
+        for key in MaterialKind::all_keys() {
+            assert_ne!(
+                key, "rho",
+                "the density is every material's, not a law parameter"
+            );
+            let first = MaterialKind::param(key).copied();
+            for kind in MaterialKind::laws_with(key) {
+                let p = kind.params().iter().find(|p| p.key == key).copied();
+                assert_eq!(p, first, "`{key}` of {kind}");
+            }
+        }
+        // Values go through build/values/param unchanged, in the declared order.
+        for kind in MaterialKind::ALL.iter().copied() {
+            let values: Vec<f64> = (1..=kind.params().len()).map(|i| 0.5 + i as f64).collect();
+            let mut law = kind.build(&values);
+            assert_eq!(law.kind(), kind);
+            assert_eq!(law.values(), values, "{kind}");
+            assert_eq!(kind.as_str().parse::<MaterialKind>(), Ok(kind));
+            for (p, v) in kind.params().iter().zip(&values) {
+                assert_eq!(law.param(p.key), Some(*v));
+                assert!(law.set_param(p.key, 2.0 * v));
+                assert_eq!(law.param(p.key), Some(2.0 * v));
+            }
+            assert!(!law.set_param("no_such_key", 1.0));
+        }
+        let err = "rubber".parse::<MaterialKind>().unwrap_err();
+        assert!(err.contains("\"neo_hookean\""), "{err}");
     }
 
     #[test]

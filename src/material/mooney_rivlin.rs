@@ -25,7 +25,7 @@ use super::invariants::{
     inadmissible_stress, inadmissible_tangent, stress_from_invariants,
     stress_tangent_from_invariants, InvariantDerivs, Kinematics,
 };
-use super::Hyperelastic;
+use super::{Bound, Hyperelastic, MaterialLawSpec, ParamSpec};
 use crate::math::{Mat2, Tangent};
 
 /// Compressible Mooney–Rivlin law `c1 (Ī1 − 3) + c2 (Ī2 − 3) + κ/2 (J − 1)²`.
@@ -80,6 +80,61 @@ impl MooneyRivlin {
             return f64::NAN;
         }
         super::invariants::sigma33_from_invariants(&k, &self.derivs(&k))
+    }
+}
+
+/// Mooney–Rivlin C1, a parameter of both Mooney–Rivlin laws.
+pub(crate) const C1: ParamSpec = ParamSpec {
+    key: "c1",
+    what: "Mooney–Rivlin C1",
+    unit: "F/L²",
+    bound: Bound::Above(0.0),
+    note: "",
+};
+
+/// Mooney–Rivlin C2, a parameter of both Mooney–Rivlin laws.
+pub(crate) const C2: ParamSpec = ParamSpec {
+    key: "c2",
+    what: "Mooney–Rivlin C2",
+    unit: "F/L²",
+    bound: Bound::AtLeast(0.0),
+    note: "may be 0",
+};
+
+impl MaterialLawSpec for MooneyRivlin {
+    const NAME: &'static str = "mooney_rivlin";
+    const SUMMARY: &'static str =
+        "compressible Mooney–Rivlin c1 (Ī1 − 3) + c2 (Ī2 − 3) + κ/2 (J − 1)²";
+    const PARAMS: &'static [ParamSpec] = &[
+        C1,
+        C2,
+        ParamSpec {
+            key: "kappa",
+            what: "bulk modulus",
+            unit: "F/L²",
+            bound: Bound::Above(0.0),
+            note: "",
+        },
+    ];
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1], v[2])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.c1, self.c2, self.kappa]
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        2.0 * (self.c1 + self.c2)
+    }
+
+    fn bulk_modulus(&self) -> Option<f64> {
+        Some(self.kappa)
+    }
+
+    fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+        MooneyRivlin::cauchy_33(self, grad_u)
     }
 }
 

@@ -14,7 +14,7 @@ use super::invariants::{
     inadmissible_stress, inadmissible_tangent, stress_from_invariants,
     stress_tangent_from_invariants, InvariantDerivs, Kinematics,
 };
-use super::Hyperelastic;
+use super::{Bound, Hyperelastic, MaterialLawSpec, ParamSpec};
 use crate::math::{Mat2, Tangent};
 
 /// Compressible neo-Hookean law with Lamé-like constants `mu`, `lambda`.
@@ -56,6 +56,47 @@ impl NeoHookean {
             return f64::NAN;
         }
         super::invariants::sigma33_from_invariants(&k, &self.derivs(&k))
+    }
+}
+
+impl MaterialLawSpec for NeoHookean {
+    const NAME: &'static str = "neo_hookean";
+    const SUMMARY: &'static str = "compressible neo-Hookean μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²";
+    const PARAMS: &'static [ParamSpec] = &[
+        ParamSpec {
+            key: "mu",
+            what: "Lamé shear modulus",
+            unit: "F/L²",
+            bound: Bound::Above(0.0),
+            note: "",
+        },
+        ParamSpec {
+            key: "lambda",
+            what: "Lamé first parameter",
+            unit: "F/L²",
+            bound: Bound::Above(0.0),
+            note: "",
+        },
+    ];
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.mu, self.lambda]
+    }
+
+    fn shear_modulus(&self) -> f64 {
+        self.mu
+    }
+
+    fn bulk_modulus(&self) -> Option<f64> {
+        Some(self.lambda + 2.0 / 3.0 * self.mu)
+    }
+
+    fn cauchy_33(&self, grad_u: &Mat2) -> f64 {
+        NeoHookean::cauchy_33(self, grad_u)
     }
 }
 

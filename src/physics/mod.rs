@@ -15,6 +15,6 @@ pub mod theta_derivative;
 pub mod viscoelastic_steady;
 
 pub use ring_derivative::RingDerivative;
-pub use solid::{PointValues, PressureMode, SolidModel};
+pub use solid::{PointValues, PressureMode, SolidModel, ViscousStep};
 pub use theta_derivative::{NodalThetaDerivative, ThetaDerivativeSource};
 pub use viscoelastic_steady::SteadyHistory;

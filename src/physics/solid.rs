@@ -919,6 +919,17 @@ impl SolidModel {
     }
 }
 
+/// The viscous overstress's energy over one committed step, summed over the body (per unit
+/// thickness, the scene's energy unit): its work `∫ S_v : Ė dV dt` (trapezoidal in time) and
+/// the energy its internal variables hold at the end of the step
+/// ([`Viscoelastic::stored_energy`]). Work minus the change in stored energy is the
+/// dissipation, which a physical model keeps non-negative.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ViscousStep {
+    pub work: f64,
+    pub stored: f64,
+}
+
 // Viscoelastic history: allocation and commit (the kernels only read it).
 impl SolidModel {
     /// Gauss points per direction of the kernels' rule on cell `c` (2 for Q1, 3 for Q2): the
@@ -962,18 +973,24 @@ impl SolidModel {
 
     /// Replace the committed history by the state at the end of a step of length `dt` that
     /// ended at the full state `x` (call once the step has converged). No-op when elastic.
-    pub fn commit_history(&mut self, dofs: &DofMap, x: &[f64], dt: f64) {
+    /// Returns the overstress's work over the step and the energy its internal variables hold
+    /// at the end, summed over the body ([`ViscousStep`]; zeros when elastic).
+    pub fn commit_history(&mut self, dofs: &DofMap, x: &[f64], dt: f64) -> ViscousStep {
         let Some(ve) = self.viscoelastic else {
-            return;
+            return ViscousStep::default();
         };
         let mut hist = std::mem::take(&mut self.history);
+        let mut step = ViscousStep::default();
         for c in 0..self.mesh.n_cells() {
-            match self.mesh.degree[c] {
+            let s = match self.mesh.degree[c] {
                 1 => self.commit_cell::<4>(&self.q1, &ve, c, dofs, x, dt, &mut hist),
                 _ => self.commit_cell::<9>(&self.q2, &ve, c, dofs, x, dt, &mut hist),
-            }
+            };
+            step.work += s.work;
+            step.stored += s.stored;
         }
         self.history = hist;
+        step
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -986,7 +1003,7 @@ impl SolidModel {
         x: &[f64],
         dt: f64,
         hist: &mut QpHistory,
-    ) {
+    ) -> ViscousStep {
         let cd = dofs.cell(c);
         let mut u = [0.0; 18];
         for a in 0..2 * N {
@@ -995,13 +1012,18 @@ impl SolidModel {
         let mut g = [[0.0; 2]; N];
         let mut new = [0.0; MAX_STATE];
         let n = hist.n_state;
+        let mut step = ViscousStep::default();
         for q in 0..tab.len() {
-            if self.point(c, tab, q, &mut g).is_none() {
+            let Some(pg) = self.point(c, tab, q, &mut g) else {
                 continue;
-            }
+            };
             let h = Self::grad_u(&u[..2 * N], &g);
-            ve.overstress(&h, hist.point(c, q), dt, &mut new[..n], false);
+            let old = hist.point(c, q);
+            ve.overstress(&h, old, dt, &mut new[..n], false);
+            step.work += pg.w * ve.step_work(old, &new[..n]);
+            step.stored += pg.w * ve.stored_energy(&new[..n]);
             hist.point_mut(c, q).copy_from_slice(&new[..n]);
         }
+        step
     }
 }

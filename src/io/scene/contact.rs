@@ -303,11 +303,7 @@ mod tests {
         assert_eq!(s.mesh.grading_theta, 0.6);
         assert_eq!(
             s.material.params(),
-            Some(MaterialParams::MooneyRivlin {
-                c1: 80.0,
-                c2: 20.0,
-                kappa: 2000.0
-            })
+            Some(crate::material::MooneyRivlin::new(80.0, 20.0, 2000.0).into())
         );
         assert_eq!(s.material.rho, 0.027);
         assert_eq!(s.motion.omega, 0.0);

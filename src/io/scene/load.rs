@@ -270,17 +270,7 @@ impl Ctx<'_> {
             if k == 0 {
                 regions.push(RegionMaterial {
                     region: region.clone(),
-                    material: MaterialSpec {
-                        model: MaterialModel::NeoHookean,
-                        rho: 0.0,
-                        mu: None,
-                        lambda: None,
-                        c1: None,
-                        c2: None,
-                        kappa: None,
-                        formulation: None,
-                        viscoelastic: None,
-                    },
+                    material: MaterialSpec::new(MaterialModel::ALL[0], 0.0, &[]),
                 });
                 continue;
             }

@@ -1,12 +1,27 @@
 //! `[material]` / `[[material]]`: the hyperelastic model and its parameters (stresses in F/L²,
 //! density in F·T²/L⁴), and the optional `[material.viscoelastic]` Prony overstress.
+//!
+//! The section is `model` (a [`MaterialModel`]), the density `rho` and the law's parameters.
+//! Which keys a law has, what they mean, their units and bounds are declared by the law itself
+//! next to its physics ([`crate::material::MaterialLawSpec`]); this file holds the section as
+//! given (so that every problem can be reported with its key), the generic checks that walk
+//! those declarations, the incompressibility formulation of the laws that need a pressure
+//! field, and the resolution into the physics law [`Material`].
 
 use super::issue::{issue, positive, quoted_list, Issue};
+use crate::material::Material;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
-/// `kappa = PERTURBED_KAPPA_FACTOR * (c1 + c2)` when the perturbed incompressible formulation is
-/// chosen without an explicit `kappa`.
+/// Hyperelastic model (`[material] model`): the keyword enum of the registered laws.
+pub use crate::material::MaterialKind as MaterialModel;
+
+/// `kappa = PERTURBED_KAPPA_FACTOR * (c1 + c2)` (in general: `× G/2`, G the small-strain shear
+/// modulus) when the perturbed incompressible formulation is chosen without an explicit `kappa`.
 pub const PERTURBED_KAPPA_FACTOR: f64 = 1.0e4;
+
+/// The key of the bulk modulus of the perturbed incompressible formulation.
+const PERTURBED_KAPPA: &str = "kappa";
 
 /// One `[[material]]` entry: the material of a mesh region.
 #[derive(Clone, Debug, PartialEq)]
@@ -14,18 +29,6 @@ pub struct RegionMaterial {
     /// Name of a 2D physical group of the mesh file.
     pub region: String,
     pub material: MaterialSpec,
-}
-
-keyword_enum! {
-    /// Hyperelastic model (`[material] model`).
-    MaterialModel, "material model" {
-        /// Compressible neo-Hookean with Lamé constants `mu`, `lambda`.
-        NeoHookean => "neo_hookean",
-        /// Compressible Mooney–Rivlin `c1 (Ī1 − 3) + c2 (Ī2 − 3) + U(J)` with bulk modulus `kappa`.
-        MooneyRivlin => "mooney_rivlin",
-        /// Incompressible Mooney–Rivlin `c1 (I1 − 3) + c2 (I2 − 3)`, J = 1 by a Q2/P1 pressure.
-        MooneyRivlinIncompressible => "mooney_rivlin_incompressible",
-    }
 }
 
 keyword_enum! {
@@ -40,36 +43,22 @@ keyword_enum! {
     }
 }
 
-/// `[material]`. Which of the optional parameters are required depends on `model`; after
-/// [`Scene::from_toml_str`] the model-dependent defaults are filled in (`formulation` for the
-/// incompressible model, `kappa` for the perturbed formulation), and [`MaterialSpec::params`]
-/// gives the resolved parameters as one enum.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// `[material]` as given: the model, the density, the parameter values by key, and for an
+/// incompressible model its formulation. Which parameters are required depends on `model`;
+/// after [`Scene::from_toml_str`](super::Scene::from_toml_str) the model-dependent defaults
+/// are filled in (`formulation` for an incompressible model, `kappa` for the perturbed
+/// formulation), and [`MaterialSpec::params`] gives the physics law.
+#[derive(Clone, Debug, PartialEq)]
 pub struct MaterialSpec {
     pub model: MaterialModel,
     /// Density per unit reference volume.
     pub rho: f64,
-    /// Lamé shear modulus (neo_hookean).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mu: Option<f64>,
-    /// Lamé first parameter (neo_hookean).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub lambda: Option<f64>,
-    /// Mooney–Rivlin C1 (mooney_rivlin, mooney_rivlin_incompressible).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub c1: Option<f64>,
-    /// Mooney–Rivlin C2 (mooney_rivlin, mooney_rivlin_incompressible).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub c2: Option<f64>,
-    /// Bulk modulus (mooney_rivlin; mooney_rivlin_incompressible with the perturbed formulation).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kappa: Option<f64>,
-    /// Incompressibility formulation (mooney_rivlin_incompressible only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Parameter values by key: those of some registered law, and `kappa` of the perturbed
+    /// formulation (a key of another model than `model` is reported by the checks).
+    pub values: BTreeMap<String, f64>,
+    /// Incompressibility formulation (incompressible models only).
     pub formulation: Option<Formulation>,
     /// `[material.viscoelastic]`: a viscoelastic overstress on the elastic law (any model).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub viscoelastic: Option<ViscoelasticSpec>,
 }
 
@@ -105,127 +94,185 @@ impl ViscoelasticSpec {
     }
 }
 
-/// Resolved material parameters, one variant per model.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum MaterialParams {
-    NeoHookean {
-        mu: f64,
-        lambda: f64,
-    },
-    MooneyRivlin {
-        c1: f64,
-        c2: f64,
-        kappa: f64,
-    },
-    MooneyRivlinIncompressible {
-        c1: f64,
-        c2: f64,
-        formulation: Formulation,
-        /// `Some` for the perturbed formulation, `None` for the exact one.
-        kappa: Option<f64>,
-    },
-}
-
 impl MaterialSpec {
-    /// The resolved parameters of the chosen model, with model-dependent defaults applied
-    /// (formulation `exact`; `kappa = 1e4 (c1 + c2)` for `perturbed`). `None` only if a
-    /// parameter the model requires is missing, which cannot happen after validation.
-    pub fn params(&self) -> Option<MaterialParams> {
-        match self.model {
-            MaterialModel::NeoHookean => Some(MaterialParams::NeoHookean {
-                mu: self.mu?,
-                lambda: self.lambda?,
-            }),
-            MaterialModel::MooneyRivlin => Some(MaterialParams::MooneyRivlin {
-                c1: self.c1?,
-                c2: self.c2?,
-                kappa: self.kappa?,
-            }),
-            MaterialModel::MooneyRivlinIncompressible => {
-                let c1 = self.c1?;
-                let c2 = self.c2?;
-                let formulation = self.formulation.unwrap_or_default();
-                let kappa = match formulation {
-                    Formulation::Exact => None,
-                    Formulation::Perturbed => {
-                        Some(self.kappa.unwrap_or(PERTURBED_KAPPA_FACTOR * (c1 + c2)))
-                    }
-                };
-                Some(MaterialParams::MooneyRivlinIncompressible {
-                    c1,
-                    c2,
-                    formulation,
-                    kappa,
-                })
-            }
+    /// A section with `model`, `rho` and the given `(key, value)` pairs.
+    pub fn new(model: MaterialModel, rho: f64, values: &[(&str, f64)]) -> Self {
+        Self {
+            model,
+            rho,
+            values: values.iter().map(|&(k, v)| (k.to_string(), v)).collect(),
+            formulation: None,
+            viscoelastic: None,
         }
     }
 
-    /// Small-strain shear modulus G: `mu`, or `2 (c1 + c2)` for Mooney–Rivlin.
+    /// The value given for `key`.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        self.values.get(key).copied()
+    }
+
+    /// Give `key` the value `value`.
+    pub fn set(&mut self, key: &str, value: f64) {
+        self.values.insert(key.to_string(), value);
+    }
+
+    /// The physics law of `model` from the given values. `None` only if a parameter the model
+    /// requires is missing, which cannot happen after validation.
+    pub fn params(&self) -> Option<Material> {
+        self.model.build_from(|k| self.get(k)).ok()
+    }
+
+    /// Small-strain shear modulus G of the law (`mu`, `2 (c1 + c2)`, ...).
     pub fn shear_modulus(&self) -> Option<f64> {
-        match self.params()? {
-            MaterialParams::NeoHookean { mu, .. } => Some(mu),
-            MaterialParams::MooneyRivlin { c1, c2, .. }
-            | MaterialParams::MooneyRivlinIncompressible { c1, c2, .. } => Some(2.0 * (c1 + c2)),
-        }
+        Some(self.params()?.small_strain_shear_modulus())
     }
 
-    /// Small-strain bulk modulus K: `lambda + 2 mu / 3`, `kappa`; `None` for the exactly
-    /// incompressible formulation (K = ∞).
+    /// Small-strain bulk modulus K; for an incompressible model the perturbed formulation's
+    /// `kappa`, `None` for the exact formulation (K = ∞).
     pub fn bulk_modulus(&self) -> Option<f64> {
-        match self.params()? {
-            MaterialParams::NeoHookean { mu, lambda } => Some(lambda + 2.0 * mu / 3.0),
-            MaterialParams::MooneyRivlin { kappa, .. } => Some(kappa),
-            MaterialParams::MooneyRivlinIncompressible { kappa, .. } => kappa,
+        if self.is_incompressible() {
+            self.perturbed_kappa()
+        } else {
+            self.params()?.small_strain_bulk_modulus()
         }
     }
 
-    /// Whether the model carries a pressure field (incompressible Mooney–Rivlin).
+    /// Whether the model carries a pressure field (an incompressible law).
     pub fn is_incompressible(&self) -> bool {
-        self.model == MaterialModel::MooneyRivlinIncompressible
+        self.model.is_incompressible()
     }
 
-    /// The resolved formulation: `Some` only for the incompressible model.
+    /// The resolved formulation: `Some` only for an incompressible model (default `exact`).
     pub fn resolved_formulation(&self) -> Option<Formulation> {
-        match self.params()? {
-            MaterialParams::MooneyRivlinIncompressible { formulation, .. } => Some(formulation),
-            _ => None,
+        self.is_incompressible()
+            .then(|| self.formulation.unwrap_or_default())
+    }
+
+    /// The bulk modulus of the perturbed formulation (incompressible models with
+    /// `formulation = "perturbed"`): the given `kappa`, or `1e4 · G/2`.
+    pub fn perturbed_kappa(&self) -> Option<f64> {
+        if self.resolved_formulation() != Some(Formulation::Perturbed) {
+            return None;
+        }
+        match self.get(PERTURBED_KAPPA) {
+            Some(k) => Some(k),
+            None => Some(PERTURBED_KAPPA_FACTOR * 0.5 * self.shear_modulus()?),
         }
     }
 
-    /// The resolved bulk modulus used by the model, if it has one (`mooney_rivlin`, or the
-    /// perturbed incompressible formulation).
+    /// The resolved bulk modulus used by the model, if it has one (a law's `kappa`, or the
+    /// perturbed incompressible formulation's).
     pub fn resolved_kappa(&self) -> Option<f64> {
-        match self.params()? {
-            MaterialParams::NeoHookean { .. } => None,
-            MaterialParams::MooneyRivlin { kappa, .. } => Some(kappa),
-            MaterialParams::MooneyRivlinIncompressible { kappa, .. } => kappa,
+        if self.is_incompressible() {
+            self.perturbed_kappa()
+        } else {
+            self.params()?.param(PERTURBED_KAPPA)
         }
     }
 
     /// Fill the model-dependent defaults into the optional fields.
     pub(super) fn resolve(&mut self) {
-        if let Some(MaterialParams::MooneyRivlinIncompressible {
-            formulation, kappa, ..
-        }) = self.params()
-        {
+        if let Some(formulation) = self.resolved_formulation() {
             self.formulation = Some(formulation);
-            self.kappa = kappa;
-        }
-    }
-
-    /// The keys of `[material]` that belong to `model` (besides `model` itself).
-    pub fn keys_of(model: MaterialModel) -> &'static [&'static str] {
-        match model {
-            MaterialModel::NeoHookean => &["rho", "mu", "lambda"],
-            MaterialModel::MooneyRivlin => &["rho", "c1", "c2", "kappa"],
-            MaterialModel::MooneyRivlinIncompressible => {
-                &["rho", "c1", "c2", "formulation", "kappa"]
+            if let Some(kappa) = self.perturbed_kappa() {
+                self.set(PERTURBED_KAPPA, kappa);
             }
         }
     }
+
+    /// The keys of `[material]` that belong to `model` (besides `model` itself): `rho`, the
+    /// law's parameters, and for an incompressible law `formulation` and `kappa`.
+    pub fn keys_of(model: MaterialModel) -> Vec<&'static str> {
+        let mut keys = vec!["rho"];
+        keys.extend(model.params().iter().map(|p| p.key));
+        if model.is_incompressible() {
+            keys.push("formulation");
+            if !keys.contains(&PERTURBED_KAPPA) {
+                keys.push(PERTURBED_KAPPA);
+            }
+        }
+        keys
+    }
+
+    /// Every parameter key a `[material]` can hold: those of the registered laws, then the
+    /// perturbed formulation's `kappa`.
+    pub fn all_value_keys() -> Vec<&'static str> {
+        let mut keys = MaterialModel::all_keys();
+        if !keys.contains(&PERTURBED_KAPPA) {
+            keys.push(PERTURBED_KAPPA);
+        }
+        keys
+    }
+
+    /// The given values: those of the known keys in the order of [`Self::all_value_keys`],
+    /// then any others.
+    fn ordered(&self) -> Vec<(&str, f64)> {
+        let known = Self::all_value_keys();
+        let mut out: Vec<(&str, f64)> = known
+            .iter()
+            .filter_map(|k| self.values.get(*k).map(|v| (*k, *v)))
+            .collect();
+        out.extend(
+            self.values
+                .iter()
+                .filter(|(k, _)| !known.contains(&k.as_str()))
+                .map(|(k, v)| (k.as_str(), *v)),
+        );
+        out
+    }
 }
 
+impl Serialize for MaterialSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let given = self.ordered();
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry("model", &self.model)?;
+        m.serialize_entry("rho", &self.rho)?;
+        for (k, v) in given {
+            m.serialize_entry(k, &v)?;
+        }
+        if let Some(f) = &self.formulation {
+            m.serialize_entry("formulation", f)?;
+        }
+        if let Some(ve) = &self.viscoelastic {
+            m.serialize_entry("viscoelastic", ve)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        struct Given {
+            model: MaterialModel,
+            rho: f64,
+            #[serde(default)]
+            formulation: Option<Formulation>,
+            #[serde(default)]
+            viscoelastic: Option<ViscoelasticSpec>,
+            #[serde(flatten)]
+            values: BTreeMap<String, f64>,
+        }
+        let g = Given::deserialize(d)?;
+        let known = MaterialSpec::all_value_keys();
+        if let Some(key) = g.values.keys().find(|k| !known.contains(&k.as_str())) {
+            return Err(serde::de::Error::custom(format!("unknown field `{key}`")));
+        }
+        Ok(MaterialSpec {
+            model: g.model,
+            rho: g.rho,
+            values: g.values,
+            formulation: g.formulation,
+            viscoelastic: g.viscoelastic,
+        })
+    }
+}
+
+/// The checks of `[material]`, from the law's declared parameters: the viscoelastic
+/// overstress, the density, keys of another model, missing parameters, values out of their
+/// bounds, the law's own checks between parameters, then the incompressibility formulation.
 pub(super) fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
     if let Some(ve) = &m.viscoelastic {
         if let Err(msg) = ve.build() {
@@ -246,17 +293,13 @@ pub(super) fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
             format!("density must be > 0, got {}", m.rho),
         ));
     }
-    let given: [(&str, bool); 6] = [
-        ("mu", m.mu.is_some()),
-        ("lambda", m.lambda.is_some()),
-        ("c1", m.c1.is_some()),
-        ("c2", m.c2.is_some()),
-        ("kappa", m.kappa.is_some()),
-        ("formulation", m.formulation.is_some()),
-    ];
     let allowed = MaterialSpec::keys_of(model);
-    for (key, present) in given {
-        if present && !allowed.contains(&key) {
+    let mut given: Vec<&str> = m.ordered().into_iter().map(|(k, _)| k).collect();
+    if m.formulation.is_some() {
+        given.push("formulation");
+    }
+    for key in given {
+        if !allowed.contains(&key) {
             out.push(issue(
                 format!("material.{key}"),
                 format!(
@@ -266,60 +309,41 @@ pub(super) fn validate_material(m: &MaterialSpec, out: &mut Vec<Issue>) {
             ));
         }
     }
-    let need_positive = |key: &str, v: Option<f64>, what: &str, out: &mut Vec<Issue>| match v {
-        None => out.push(issue(
-            format!("material.{key}"),
-            format!("required for model \"{model}\" ({what})"),
-        )),
-        Some(x) if !positive(x) => out.push(issue(
-            format!("material.{key}"),
-            format!("{what} must be > 0, got {x}"),
-        )),
-        Some(_) => {}
-    };
-    match model {
-        MaterialModel::NeoHookean => {
-            need_positive("mu", m.mu, "Lamé shear modulus", out);
-            need_positive("lambda", m.lambda, "Lamé first parameter", out);
+    for p in model.params() {
+        match m.get(p.key) {
+            None => {
+                let note = if p.note.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {}", p.note)
+                };
+                out.push(issue(
+                    format!("material.{}", p.key),
+                    format!("required for model \"{model}\" ({}{note})", p.what),
+                ));
+            }
+            Some(x) if !p.bound.admits(x) => out.push(issue(
+                format!("material.{}", p.key),
+                format!("{} must be {}, got {x}", p.what, p.bound),
+            )),
+            Some(_) => {}
         }
-        MaterialModel::MooneyRivlin | MaterialModel::MooneyRivlinIncompressible => {
-            need_positive("c1", m.c1, "Mooney–Rivlin C1", out);
-            match m.c2 {
-                None => out.push(issue(
-                    "material.c2",
-                    format!("required for model \"{model}\" (Mooney–Rivlin C2; may be 0)"),
-                )),
-                Some(x) if !(x.is_finite() && x >= 0.0) => out.push(issue(
-                    "material.c2",
-                    format!("Mooney–Rivlin C2 must be >= 0, got {x}"),
-                )),
-                Some(_) => {}
-            }
-            if model == MaterialModel::MooneyRivlin {
-                need_positive("kappa", m.kappa, "bulk modulus", out);
-            } else {
-                match m.formulation.unwrap_or_default() {
-                    Formulation::Perturbed => {
-                        if let Some(k) = m.kappa {
-                            if !positive(k) {
-                                out.push(issue(
-                                    "material.kappa",
-                                    format!("bulk modulus must be > 0, got {k}"),
-                                ));
-                            }
-                        }
-                    }
-                    Formulation::Exact => {
-                        if m.kappa.is_some() {
-                            out.push(issue(
-                                "material.kappa",
-                                "`kappa` is only used with formulation = \"perturbed\" \
-                                 (the exact formulation has no bulk modulus)",
-                            ));
-                        }
-                    }
-                }
-            }
+    }
+    for (key, msg) in model.cross_check(&|k| m.get(k)) {
+        out.push(issue(format!("material.{key}"), msg));
+    }
+    if model.is_incompressible() && !model.params().iter().any(|p| p.key == PERTURBED_KAPPA) {
+        match (m.formulation.unwrap_or_default(), m.get(PERTURBED_KAPPA)) {
+            (Formulation::Perturbed, Some(k)) if !positive(k) => out.push(issue(
+                "material.kappa",
+                format!("bulk modulus must be > 0, got {k}"),
+            )),
+            (Formulation::Exact, Some(_)) => out.push(issue(
+                "material.kappa",
+                "`kappa` is only used with formulation = \"perturbed\" \
+                 (the exact formulation has no bulk modulus)",
+            )),
+            _ => {}
         }
     }
 }
@@ -344,12 +368,7 @@ mod tests {
         assert_eq!(s.material.rho, 0.027);
         assert_eq!(
             s.material.params(),
-            Some(MaterialParams::MooneyRivlinIncompressible {
-                c1: 80.0,
-                c2: 20.0,
-                formulation: Formulation::Exact,
-                kappa: None
-            })
+            Some(crate::material::MooneyRivlinIncompressible::new(80.0, 20.0).into())
         );
         assert_eq!(s.material.formulation, Some(Formulation::Exact));
         assert_eq!(s.material.shear_modulus(), Some(200.0));
@@ -369,10 +388,7 @@ mod tests {
         assert_eq!(s.scene.name, "spinning_neo_hookean");
         assert_eq!(
             s.material.params(),
-            Some(MaterialParams::NeoHookean {
-                mu: 200.0,
-                lambda: 1800.0
-            })
+            Some(crate::material::NeoHookean::new(200.0, 1800.0).into())
         );
         assert_eq!(s.material.rho, 0.027);
         assert_eq!(s.motion.omega, 20.0);
@@ -388,11 +404,7 @@ mod tests {
         assert_eq!(s.scene.name, "spinning_mooney_rivlin");
         assert_eq!(
             s.material.params(),
-            Some(MaterialParams::MooneyRivlin {
-                c1: 80.0,
-                c2: 20.0,
-                kappa: 2000.0
-            })
+            Some(crate::material::MooneyRivlin::new(80.0, 20.0, 2000.0).into())
         );
         assert_eq!(s.material.resolved_kappa(), Some(2000.0));
         assert_eq!(s.material.resolved_formulation(), None);
@@ -420,14 +432,14 @@ omega = 0
 "#;
         let s = load(text).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.material.formulation, Some(Formulation::Perturbed));
-        assert_eq!(s.material.kappa, Some(1e4 * 100.0));
+        assert_eq!(s.material.get("kappa"), Some(1e4 * 100.0));
         assert_eq!(s.material.resolved_kappa(), Some(1e6));
         // Integers are accepted for floats.
         assert_eq!(s.geometry.ri, 1.0);
         assert_eq!(s.motion.omega, 0.0);
         // Explicit kappa wins.
         let s2 = load_with(text, &["material.kappa=5000"]).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(s2.material.kappa, Some(5000.0));
+        assert_eq!(s2.material.get("kappa"), Some(5000.0));
     }
 
     #[test]

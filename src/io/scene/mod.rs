@@ -22,8 +22,9 @@
 //! [geometry]  ri, ro
 //! [mesh]      n_r = 4, n_theta = 32, order = 2, grading_r = 1.0, grading_theta = 0.0
 //!             | file = "tyre.msh", hub = "hub", contact = "contact"   (a Gmsh .msh 4.1 mesh)
-//! [material]  model = "neo_hookean" | "mooney_rivlin" | "mooney_rivlin_incompressible", rho,
-//!             mu, lambda | c1, c2, kappa | c1, c2, formulation = "exact" | "perturbed", kappa
+//! [material]  model (a registered law), rho, and the law's parameters (e.g. neo_hookean: mu,
+//!             lambda); an incompressible law also formulation = "exact" | "perturbed", kappa.
+//!             `docs/reference.md` and `tread check` list every law with its keys
 //! [material.viscoelastic]  model = "convolution" | "multiplicative", gamma, prony = [[g, tau], ...]
 //!             (optional: a Prony-series overstress on the elastic law; `gamma` in stress
 //!             units, `g` dimensionless, `tau` in time units; see `material::viscoelastic`)
@@ -36,8 +37,8 @@
 //! [road]      disp | load, v0 = 0, ramp = 0, v0_ramp = motion.ramp   (static, transient)
 //! [contact]   c_n, m_n = 1, b_n = 0, l_n = 0, quadrature = "lobatto", points = 4
 //!                                                             (static, transient)
-//! [friction]  law = "none" | "coulomb_tanh" | "coulomb_linear" | "rate_dependent" | "oden_martins",
-//!             mu, eps | mu_s, mu_k, v_s, eps | c_t, m_t, eps  (static, stick_slip, transient)
+//! [friction]  law = "none" or a registered law, and its parameters (e.g. coulomb_tanh: mu,
+//!             eps; every law with its keys in `docs/reference.md`)  (static, stick_slip, transient)
 //! [stick_slip] mass, stiffness, normal_force, belt_speed, t_end, rtol = 1e-8, atol = 1e-10,
 //!             x0 = 0, v0, output_interval                     (stick_slip)
 //! [time]      integrator = "generalized_alpha" | "central_difference" | "bdf" | "sdirk",
@@ -56,7 +57,7 @@
 //!
 //! [`Scene::from_toml_str`] parses the text, applies `--set section.key=value` overrides, fills the
 //! defaults, resolves model-dependent defaults (the incompressible formulation and, for the
-//! perturbed Lagrangian, `kappa = 1e4 (c1 + c2)`; `time.mass = "lumped"` for the
+//! perturbed Lagrangian, `kappa = 1e4 G/2`, i.e. `1e4 (c1 + c2)` for Mooney–Rivlin; `time.mass = "lumped"` for the
 //! `central_difference` integrator) and validates. It collects **all** problems it can
 //! find (unknown sections and keys, wrong types, missing required keys, out-of-range values, keys
 //! that do not belong to the chosen material model) and returns them together as [`SceneErrors`],

@@ -129,8 +129,87 @@ fn friction_fields() -> &'static [FieldSchema] {
     &FIELDS
 }
 
-/// Every section of a scene file with its keys (built once; the keys of `[friction]` come from
-/// the friction laws' declarations, [`friction_fields`]).
+/// Keys of `[material]`: `model`, `rho`, then every parameter of the registered laws (in the
+/// order of [`MaterialModel::all_keys`]) with the unit and bound its law declares, the
+/// incompressible formulation's keys, and the viscoelastic sub-table.
+fn material_fields() -> &'static [FieldSchema] {
+    static FIELDS: LazyLock<Vec<FieldSchema>> = LazyLock::new(|| {
+        let incompressible: Vec<&str> = MaterialModel::ALL
+            .iter()
+            .filter(|m| m.is_incompressible())
+            .map(|m| m.as_str())
+            .collect();
+        let perturbed_kappa = format!(
+            "the perturbed formulation's bulk modulus ({}; default 1e4 G/2, G the shear modulus)",
+            incompressible.join(", ")
+        );
+        let mut fields = vec![
+            req(
+                "model",
+                Kind::Keyword(MaterialModel::NAMES),
+                NONE,
+                "hyperelastic model",
+            ),
+            req(
+                "rho",
+                Kind::Float,
+                "F·T²/L⁴",
+                "density per unit reference volume, > 0",
+            ),
+        ];
+        let keys = MaterialModel::all_keys();
+        for key in &keys {
+            let Some(p) = MaterialModel::param(key) else {
+                continue;
+            };
+            let laws: Vec<&str> = MaterialModel::laws_with(key)
+                .iter()
+                .map(|l| l.as_str())
+                .collect();
+            let mut doc = format!("{} ({}), {}", p.what, laws.join(", "), p.bound);
+            if !p.note.is_empty() {
+                doc.push_str("; ");
+                doc.push_str(p.note);
+            }
+            if *key == "kappa" && !incompressible.is_empty() {
+                doc.push_str("; also ");
+                doc.push_str(&perturbed_kappa);
+            }
+            fields.push(opt(p.key, Kind::Float, p.unit, doc.leak()));
+        }
+        if !incompressible.is_empty() {
+            if !keys.contains(&"kappa") {
+                fields.push(opt(
+                    "kappa",
+                    Kind::Float,
+                    "F/L²",
+                    perturbed_kappa.clone().leak(),
+                ));
+            }
+            let doc = format!(
+                "incompressibility ({} only; default `exact`)",
+                incompressible.join(", ")
+            );
+            fields.push(opt(
+                "formulation",
+                Kind::Keyword(Formulation::NAMES),
+                NONE,
+                doc.leak(),
+            ));
+        }
+        fields.push(opt(
+            "viscoelastic",
+            Kind::Table(VISCOELASTIC_FIELDS),
+            NONE,
+            "`[material.viscoelastic]`: a Prony-series overstress on the elastic law",
+        ));
+        fields
+    });
+    &FIELDS
+}
+
+/// Every section of a scene file with its keys (built once; the keys of `[friction]` and
+/// `[material]` come from the laws' declarations, [`friction_fields`], [`material_fields`]).
 pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
     vec![
     SectionSchema {
@@ -176,20 +255,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
         name: "material",
         required: true,
         doc: "The hyperelastic material (or `[[material]]` with `region = \"<2D physical group>\"`, one per mesh region). Which parameters are required depends on `model`.",
-        fields: &const { [
-            req("model", Kind::Keyword(MaterialModel::NAMES), NONE, "hyperelastic model"),
-            req("rho", Kind::Float, "F·T²/L⁴", "density per unit reference volume, > 0"),
-            opt("mu", Kind::Float, "F/L²", "Lamé shear modulus (neo_hookean), > 0"),
-            opt("lambda", Kind::Float, "F/L²", "Lamé first parameter (neo_hookean)"),
-            opt("c1", Kind::Float, "F/L²", "Mooney–Rivlin C1 (mooney_rivlin, mooney_rivlin_incompressible)"),
-            opt("c2", Kind::Float, "F/L²", "Mooney–Rivlin C2 (mooney_rivlin, mooney_rivlin_incompressible)"),
-            opt("kappa", Kind::Float, "F/L²",
-                "bulk modulus (mooney_rivlin; mooney_rivlin_incompressible with `perturbed`, default 1e4 (c1 + c2))"),
-            opt("formulation", Kind::Keyword(Formulation::NAMES), NONE,
-                "incompressibility (mooney_rivlin_incompressible only; default `exact`)"),
-            opt("viscoelastic", Kind::Table(VISCOELASTIC_FIELDS), NONE,
-                "`[material.viscoelastic]`: a Prony-series overstress on the elastic law"),
-        ] },
+        fields: material_fields(),
     },
     SectionSchema {
         name: "analysis",
@@ -876,13 +942,12 @@ mod tests {
             }
         }
         let full_material = MaterialSpec {
-            model: MaterialModel::NeoHookean,
+            model: MaterialModel::ALL[0],
             rho: 1.0,
-            mu: Some(1.0),
-            lambda: Some(1.0),
-            c1: Some(1.0),
-            c2: Some(1.0),
-            kappa: Some(1.0),
+            values: MaterialSpec::all_value_keys()
+                .into_iter()
+                .map(|k| (k.to_string(), 1.0))
+                .collect(),
             formulation: Some(Formulation::Exact),
             viscoelastic: Some(ViscoelasticSpec {
                 model: "convolution".into(),
@@ -972,13 +1037,12 @@ mod tests {
         check(
             "material",
             &MaterialSpec {
-                model: MaterialModel::NeoHookean,
+                model: MaterialModel::ALL[0],
                 rho: 1.0,
-                mu: Some(1.0),
-                lambda: Some(1.0),
-                c1: Some(1.0),
-                c2: Some(1.0),
-                kappa: Some(1.0),
+                values: MaterialSpec::all_value_keys()
+                    .into_iter()
+                    .map(|k| (k.to_string(), 1.0))
+                    .collect(),
                 formulation: Some(Formulation::Exact),
                 viscoelastic: Some(ViscoelasticSpec {
                     model: "multiplicative".into(),

@@ -112,7 +112,7 @@ fn defaults_are_filled() {
     assert_eq!(s.output.sinks, DEFAULT_SINKS);
     assert_eq!(s.output.every, 1);
     assert_eq!(s.material.formulation, None);
-    assert_eq!(s.material.kappa, None);
+    assert_eq!(s.material.get("kappa"), None);
     assert!(s.validate().is_ok());
 }
 
@@ -325,7 +325,7 @@ fn overrides_apply() {
         s.material.resolved_formulation(),
         Some(Formulation::Perturbed)
     );
-    assert_eq!(s.material.kappa, Some(2000.0));
+    assert_eq!(s.material.get("kappa"), Some(2000.0));
 }
 
 #[test]
@@ -795,11 +795,7 @@ fn oden_scene_parses() {
     );
     assert_eq!(
         s.material.params(),
-        Some(MaterialParams::MooneyRivlin {
-            c1: 80.0,
-            c2: 20.0,
-            kappa: 20000.0
-        })
+        Some(crate::material::MooneyRivlin::new(80.0, 20.0, 20000.0).into())
     );
     // Nearly incompressible: κ / G = 100.
     let g = s.material.shear_modulus().unwrap_or(0.0);
