@@ -1226,7 +1226,8 @@ mod tests {
                 "message",
                 "wall_time_s",
                 "nan_in_outputs",
-                "newton_iterations"
+                "newton_iterations",
+                "viscous_energy"
             ]
         );
         let rows: Vec<Vec<String>> = lines.map(csv_fields).collect();

@@ -403,6 +403,9 @@ pub struct BranchRow {
     /// Standing-wave indicator: half the peak-to-peak radial displacement of the outer
     /// surface nodes more than 60° away from the bottom (outside the patch region; length).
     pub wave_amplitude: f64,
+    /// Dominant circumferential wave number on the same arc (windowed Fourier spectrum of u_r,
+    /// n ≥ 4; NaN on a mesh without rings).
+    pub wave_number: f64,
     /// Sign of the tangent's determinant, its negative eigenvalues and the bifurcation test
     /// function.
     pub det_sign: f64,
@@ -419,7 +422,7 @@ pub struct BranchRow {
 }
 
 impl BranchRow {
-    pub const HEADER: [&'static str; 20] = [
+    pub const HEADER: [&'static str; 21] = [
         "step",
         "lambda",
         "omega",
@@ -432,6 +435,7 @@ impl BranchRow {
         "contact_x_max",
         "max_pressure",
         "wave_amplitude",
+        "wave_number",
         "det_sign",
         "negative_eigenvalues",
         "test_function",
@@ -463,6 +467,7 @@ impl BranchRow {
             self.contact_x_max,
             self.max_pressure,
             self.wave_amplitude,
+            self.wave_number,
             self.det_sign,
             self.negative_eigenvalues,
             self.test_function,

@@ -66,6 +66,7 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
         contact_x_max: t.x_max,
         max_pressure: t.max_pressure,
         wave_amplitude: wave_amplitude(&st.sys),
+        wave_number: wave_number(&st.sys),
         det_sign: p.det_sign,
         negative_eigenvalues: p.negative_eigenvalues,
         test_function: p.test_function,
@@ -180,6 +181,97 @@ pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
         hi = hi.max(ur);
     }
     0.5 * (hi - lo)
+}
+
+/// Dominant circumferential wave number of the standing waves, from the outer-ring nodes more
+/// than 60° from the bottom (the arc of [`wave_amplitude`]): the radial displacement less its
+/// least-squares fit by the orders 0 to 3 over the arc (the ovalisation of the pressed ring),
+/// a Hann window `w` over the arc, and the spectrum `A(n) = |∫ w r e^{−i n θ} dθ| / (½ ∫ w dθ)`
+/// of that rest `r` for the whole numbers `n` from 4 to `per_ring / 4` (four Q2 nodes per
+/// wavelength, what the mesh resolves); the `n` of the largest `A(n)`. NaN on a mesh without
+/// rings or with too few nodes on the arc.
+pub fn wave_number(sys: &SolidSystem) -> f64 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let mesh = &sys.model.mesh;
+    let Some(rl) = mesh.rings else {
+        return f64::NAN;
+    };
+    let last = rl.rings - 1;
+    // (angle from the bottom in (π/3, 5π/3), u_r), sorted by angle.
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for pos in 0..rl.per_ring {
+        let n = last * rl.per_ring + pos;
+        let x = mesh.nodes[n];
+        let d = (x[1].atan2(x[0]) + FRAC_PI_2).rem_euclid(2.0 * PI);
+        if !(PI / 3.0..=5.0 * PI / 3.0).contains(&d) {
+            continue;
+        }
+        pts.push((
+            d,
+            (sys.x[2 * n] * x[0] + sys.x[2 * n + 1] * x[1]) / x.norm(),
+        ));
+    }
+    let n_max = rl.per_ring / 4;
+    if pts.len() < 8 || n_max < 4 {
+        return f64::NAN;
+    }
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (a0, a1) = (pts[0].0, pts[pts.len() - 1].0);
+    // Trapezoidal weights in θ times the Hann window.
+    let k = pts.len();
+    let w: Vec<f64> = (0..k)
+        .map(|i| {
+            let lo = if i > 0 { pts[i - 1].0 } else { pts[i].0 };
+            let hi = if i + 1 < k { pts[i + 1].0 } else { pts[i].0 };
+            let hann = (PI * (pts[i].0 - a0) / (a1 - a0)).sin().powi(2);
+            0.5 * (hi - lo) * hann
+        })
+        .collect();
+    let wsum: f64 = w.iter().sum();
+    // Remove the orders 0 to 3 by a least-squares fit over the arc (trapezoidal weights, no
+    // window): on a 240° arc the window's main lobe is 3 orders wide, so the large low-order
+    // shape of the pressed ring would otherwise leak into n = 4 and 5.
+    let basis = |th: f64| -> [f64; 7] {
+        let mut b = [1.0; 7];
+        for m in 1..=3 {
+            let (s, c) = (m as f64 * th).sin_cos();
+            b[2 * m - 1] = c;
+            b[2 * m] = s;
+        }
+        b
+    };
+    let mut ata = nalgebra::SMatrix::<f64, 7, 7>::zeros();
+    let mut atb = nalgebra::SVector::<f64, 7>::zeros();
+    for (i, p) in pts.iter().enumerate() {
+        let lo = if i > 0 { pts[i - 1].0 } else { p.0 };
+        let hi = if i + 1 < k { pts[i + 1].0 } else { p.0 };
+        let q = 0.5 * (hi - lo);
+        let b = nalgebra::SVector::<f64, 7>::from(basis(p.0));
+        ata += b * b.transpose() * q;
+        atb += b * (q * p.1);
+    }
+    let Some(coef) = ata.lu().solve(&atb) else {
+        return f64::NAN;
+    };
+    let rest: Vec<f64> = pts
+        .iter()
+        .map(|p| p.1 - nalgebra::SVector::<f64, 7>::from(basis(p.0)).dot(&coef))
+        .collect();
+    let (mut best, mut best_a) = (f64::NAN, -1.0);
+    for n in 4..=n_max {
+        let (mut re, mut im) = (0.0, 0.0);
+        for ((p, wi), r) in pts.iter().zip(&w).zip(&rest) {
+            let (s, c) = (n as f64 * p.0).sin_cos();
+            re += wi * r * c;
+            im += wi * r * s;
+        }
+        let a = (re * re + im * im).sqrt() / (0.5 * wsum);
+        if a > best_a {
+            best_a = a;
+            best = n as f64;
+        }
+    }
+    best
 }
 
 /// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).

@@ -220,6 +220,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.branch[].contact_x_max", "L", CONT, "upper end of the contact patch"),
     k("results.branch[].max_pressure", "F/L²", CONT, "peak normal traction"),
     k("results.branch[].wave_amplitude", "L", CONT, "half the peak-to-peak u_r of the outer surface more than 60° from the bottom (standing waves)"),
+    k("results.branch[].wave_number", N, CONT, "dominant circumferential wave number n ≥ 4 of u_r on the same arc (Hann-windowed Fourier spectrum, mean removed; up to n_theta / 2, four Q2 nodes per wavelength)"),
     k("results.branch[].det_sign", N, CONT, "sign of the tangent's determinant (symmetric tangent only)"),
     k("results.branch[].negative_eigenvalues", N, CONT, "negative eigenvalues of the tangent (symmetric tangent only)"),
     k("results.branch[].test_function", N, CONT, "smallest-eigenvalue estimate"),
