@@ -11,6 +11,8 @@ pub enum Bound {
     Above(f64),
     /// value ≥ lo.
     AtLeast(f64),
+    /// Any finite value (e.g. a higher-order coefficient that may be negative).
+    Finite,
 }
 
 impl Bound {
@@ -20,16 +22,18 @@ impl Bound {
             && match self {
                 Bound::Above(lo) => x > lo,
                 Bound::AtLeast(lo) => x >= lo,
+                Bound::Finite => true,
             }
     }
 }
 
 impl std::fmt::Display for Bound {
-    /// `> 0`, `>= 1`: how the scene's messages and reference write the bound.
+    /// `> 0`, `>= 1`, `finite`: how the scene's messages and reference write the bound.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Bound::Above(lo) => write!(f, "> {lo}"),
             Bound::AtLeast(lo) => write!(f, ">= {lo}"),
+            Bound::Finite => write!(f, "finite"),
         }
     }
 }
