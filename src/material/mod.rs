@@ -25,6 +25,7 @@
 //! | [`NeoHookean`] `{mu, lambda}` | `μ/2 (I1 − 3) − μ ln J + λ/2 (ln J)²` | `μ` | `λ + 2μ/3` |
 //! | [`MooneyRivlin`] `{c1, c2, kappa}` | `c1 (Ī1 − 3) + c2 (Ī2 − 3) + κ/2 (J − 1)²` | `2(c1 + c2)` | `κ` |
 //! | [`MooneyRivlinIncompressible`] `{c1, c2}` | `c1 (I1 − 3) + c2 (I2 − 3)`, with `J = 1` imposed by the element | `2(c1 + c2)` | — |
+//! | [`Yeoh`] `{c10, c20, c30, kappa}` | `c10 x + c20 x² + c30 x³ + κ/2 (J − 1)²`, `x = Ī1 − 3` | `2 c10` | `κ` |
 //!
 //! with `Ī1 = J^(−2/3) I1`, `Ī2 = J^(−4/3) I2`. The plane-strain small-strain limit of a
 //! compressible law is `σ = λ tr(ε) I + 2G ε` with `λ = K − 2G/3`.
@@ -58,6 +59,7 @@ pub mod mooney_rivlin;
 pub mod neo_hookean;
 pub mod viscoelastic;
 pub mod viscoelastic_ring;
+pub mod yeoh;
 
 pub use fd_check::{check_material, check_stateful, tangent_asymmetry, FdReport, SplitMix};
 pub use incompressible::{pressure_stress_tangent, MooneyRivlinIncompressible};
@@ -65,6 +67,7 @@ pub use invariants::{dcof_df, InvariantDerivs, Kinematics};
 pub use mooney_rivlin::MooneyRivlin;
 pub use neo_hookean::NeoHookean;
 pub use viscoelastic::{ViscoModel, Viscoelastic, ViscoelasticMaterial};
+pub use yeoh::Yeoh;
 
 use crate::math::{Mat2, Tangent};
 pub use crate::params::{Bound, ParamSpec};
@@ -315,7 +318,7 @@ macro_rules! materials {
     };
 }
 
-materials!(NeoHookean, MooneyRivlin, MooneyRivlinIncompressible);
+materials!(NeoHookean, MooneyRivlin, MooneyRivlinIncompressible, Yeoh);
 
 impl Material {
     /// Whether the element must impose `J = 1` with a pressure field.
