@@ -3,7 +3,7 @@
 
     python3 tools/wave_convergence.py --tread target/release/tread \
         [--scene scenarios/oden_figs_9_13.toml] [--meshes 3x64,6x128,12x256] \
-        [--omega 55] [--out out/wave_convergence] [--set KEY=VALUE ...]
+        [--omega 55] [--direct] [--out out/wave_convergence] [--set KEY=VALUE ...]
 
 Runs the scene (steady mode with [continuation] in ω) on each mesh `n_r x n_theta` with the
 summary and CSV sinks, reads its branch.csv and reports, per mesh:
@@ -14,6 +14,11 @@ summary and CSV sinks, reads its branch.csv and reports, per mesh:
   the wave amplitude and the dominant wave number n of the outer surface (`wave_amplitude`,
   `wave_number` of branch.csv), and the wavelength 2π Ro / n;
 - the relative change of each from the previous mesh.
+With --direct the branch is not followed from the scene's ω: each mesh is solved directly at the
+requested ω (road speed scaled with ω as the continuation does, v0 = (v0/ω)_scene · ω) and one
+continuation step is taken, so the values are those of the solution the press-in at that speed
+reaches. (An arc-length path through a limit point can turn back or jump to another sheet,
+depending on its step sizes; the direct solve does not depend on them.)
 Writes OUT/wave_convergence.csv and prints a Markdown table. Standard library only.
 """
 import argparse
@@ -30,6 +35,11 @@ def run_mesh(args, n_r, n_theta):
     cmd = [args.tread, "-q", "run", args.scene, "--out", out,
            "--set", f"mesh.n_r={n_r}", "--set", f"mesh.n_theta={n_theta}",
            "--set", 'output.sinks=["summary","csv"]']
+    if args.direct:
+        cmd += ["--set", f"motion.omega={args.omega}",
+                "--set", f"road.v0={args.v0_ratio * args.omega}",
+                "--set", f"continuation.target={args.omega + 1.0}",
+                "--set", "continuation.max_steps=1"]
     for s in args.set:
         cmd += ["--set", s]
     t0 = time.time()
@@ -55,6 +65,19 @@ def at_omega(rows, omega):
     return None, None
 
 
+def scene_value(path, section, key):
+    """A number `key = value` of `[section]` in a scene file (comments stripped)."""
+    current = None
+    with open(path) as f:
+        for line in f:
+            t = line.split("#")[0].strip()
+            if t.startswith("[") and t.endswith("]"):
+                current = t.strip("[]").strip()
+            elif current == section and "=" in t and t.split("=")[0].strip() == key:
+                return float(t.split("=", 1)[1])
+    sys.exit(f"wave_convergence: {path} has no [{section}] {key}")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--tread", required=True)
@@ -62,15 +85,12 @@ def main():
     p.add_argument("--meshes", default="3x64,6x128,12x256")
     p.add_argument("--omega", type=float, default=55.0)
     p.add_argument("--out", default="out/wave_convergence")
+    p.add_argument("--direct", action="store_true")
     p.add_argument("--set", action="append", default=[])
     args = p.parse_args()
+    args.v0_ratio = scene_value(args.scene, "road", "v0") / scene_value(args.scene, "motion", "omega")
     os.makedirs(args.out, exist_ok=True)
-    ro = None
-    with open(args.scene) as f:
-        for line in f:
-            if line.strip().startswith("ro"):
-                ro = float(line.split("=")[1].split("#")[0])
-                break
+    ro = scene_value(args.scene, "geometry", "ro")
     table = []
     for m in args.meshes.split(","):
         n_r, n_theta = (int(x) for x in m.lower().split("x"))
@@ -101,7 +121,8 @@ def main():
         for e in table:
             w.writerow(["" if (isinstance(e.get(k), float) and math.isnan(e[k])) else e.get(k, "")
                         for k in keys])
-    print(f"\nAt ω = {args.omega} rad/s ({args.scene}):\n")
+    how = "direct solve" if args.direct else "on the branch followed from the scene's ω"
+    print(f"\nAt ω = {args.omega} rad/s ({args.scene}, {how}):\n")
     print("| mesh | ~DOFs | ω of the first negative eigenvalue | F_x | F_y | T | wave amplitude | n | wavelength | wall (s) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     prev = None
