@@ -46,3 +46,66 @@ fn wave_number_and_amplitude_of_known_patterns() {
     let sys = with_radial(64, |_| 0.0);
     assert_eq!(wave_amplitude(&sys), 0.0);
 }
+
+/// The lightly damped branch of `scenarios/oden_figs_9_13.toml` (3 × 64) has a limit point near
+/// 49.8 rad/s: followed with small arc-length steps, the path turns back there, reports the
+/// limit point, and past it the standing wave (n = 5) grows while ω falls (the sheet of large
+/// waves). Measured: limit point at 49.766 rad/s, step 44; amplitude 0.0128 in at 48.9 rad/s on
+/// the way up, 0.034 in at 48.0 rad/s on the way back.
+#[test]
+fn damped_branch_folds_back_onto_a_sheet_of_large_waves() {
+    use fixtures::tempdir::TestDir;
+    let text = scene_text("scenarios/oden_figs_9_13.toml");
+    let set: Vec<String> = [
+        "continuation.ds_max=0.02",
+        "continuation.max_steps=80",
+        "output.sinks=[\"summary\"]",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let scene = tread::io::Scene::from_toml_str(&text, "oden_figs_9_13", &set)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let out = TestDir::new("waves", "fold");
+    let o = tread::app::run(
+        &scene,
+        &tread::app::RunOptions {
+            out_dir: out.to_path_buf(),
+            verbose: false,
+            quiet: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let r = &o.summary["results"];
+    let limit = r["special_points"]
+        .as_array()
+        .and_then(|a| a.iter().find(|p| p["kind"] == "limit_point"))
+        .unwrap_or_else(|| panic!("no limit point: {}", r["special_points"]));
+    let w_fold = limit["lambda"].as_f64().unwrap();
+    let branch = r["branch"].as_array().unwrap();
+    let num = |p: &serde_json::Value, k: &str| p[k].as_f64().unwrap();
+    let top = branch
+        .iter()
+        .map(|p| num(p, "omega"))
+        .fold(f64::NEG_INFINITY, f64::max);
+    eprintln!(
+        "limit point at {w_fold:.4} rad/s, highest ω {top:.4}, last point ω {:.3} amplitude {:.4}",
+        num(branch.last().unwrap(), "omega"),
+        num(branch.last().unwrap(), "wave_amplitude")
+    );
+    assert!((49.0..50.5).contains(&w_fold), "{w_fold}");
+    assert!(top < 50.5, "the path went through: {top}");
+    // Past the fold: lower speed, larger wave, same wave number.
+    let last = branch.last().unwrap();
+    let i_top = branch.iter().position(|p| num(p, "omega") == top).unwrap();
+    let up = branch[..i_top]
+        .iter()
+        .rfind(|p| num(p, "omega") <= num(last, "omega"))
+        .unwrap();
+    assert!(num(last, "omega") < w_fold - 0.5, "{last}");
+    assert!(
+        num(last, "wave_amplitude") > 2.0 * num(up, "wave_amplitude"),
+        "up: {up}, back: {last}"
+    );
+    assert_eq!(num(last, "wave_number"), 5.0, "{last}");
+}
