@@ -183,6 +183,47 @@ pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
     0.5 * (hi - lo)
 }
 
+/// Report a converged branch point to the recorders (`/tread/continuation` in MCAP,
+/// `branch/<measure>` and the `omega` timeline in Rerun), before the body at that point is
+/// recorded as a step.
+fn record_branch_point(
+    rec: &mut dyn Recorder,
+    n0: u64,
+    parameter_name: &str,
+    arc_length: f64,
+    p: &BranchPoint,
+    row: &BranchRow,
+) {
+    let measures = [
+        ("hub_force_x", row.hub_force_x),
+        ("hub_force_y", row.hub_force_y),
+        ("hub_torque", row.hub_torque),
+        ("max_pressure", row.max_pressure),
+        ("wave_amplitude", row.wave_amplitude),
+        ("wave_number", row.wave_number),
+    ];
+    rec.continuation_point(&record::ContinuationPoint {
+        index: n0 + p.step as u64,
+        parameter_name,
+        parameter: p.lambda,
+        arc_length,
+        newton_iterations: p.iterations,
+        det_sign: if p.det_sign > 0.0 {
+            1
+        } else if p.det_sign < 0.0 {
+            -1
+        } else {
+            0
+        },
+        kind: match p.kind {
+            PointKind::Start | PointKind::Regular => record::PointKind::Regular,
+            PointKind::LimitPoint => record::PointKind::LimitPoint,
+            PointKind::Bifurcation => record::PointKind::Bifurcation,
+        },
+        measures: &measures,
+    });
+}
+
 /// Dominant circumferential wave number of the standing waves, from the outer-ring nodes more
 /// than 60° from the bottom (the arc of [`wave_amplitude`]): the radial displacement less its
 /// least-squares fit by the orders 0 to 3 over the arc (the ovalisation of the pressed ring),
@@ -615,6 +656,9 @@ pub fn run_with_dump(
         };
         let n0 = report.steps.len() as u64;
         let mut partial = None;
+        let param_name = cs.parameter.as_str();
+        // Arc length along the branch (scaled units, the sum of the steps' lengths).
+        let mut arc = 0.0;
         let sweep = st.param == SteadyParameter::Creep;
         // Continuation passes limit points and critical speeds, where the matrix-free damping
         // tangent's GMRES iteration can stall: follow branches with the assembled one.
@@ -625,7 +669,10 @@ pub fn run_with_dump(
         let res = if sweep {
             let rec: &mut dyn Recorder = recorders;
             creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
-                rows.push(branch_row(s, p));
+                let row = branch_row(s, p);
+                arc += p.ds.abs() * f64::from(p.step > 0);
+                record_branch_point(rec, n0, param_name, arc, p, &row);
+                rows.push(row);
                 // Time of a branch point: the continuation parameter (ω, load, DISP), as in
                 // branch.csv; the start point (p.step = 0) is the last load step, already
                 // recorded.
@@ -654,6 +701,8 @@ pub fn run_with_dump(
                         let frame = SolidFrame::capture(&s.sys);
                         sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
                     }
+                    arc += p.ds.abs() * f64::from(p.step > 0);
+                    record_branch_point(rec, n0, param_name, arc, p, &row);
                     rows.push(row);
                     // Time of a branch point: the continuation parameter (ω, load, DISP), as
                     // in branch.csv; the start point (p.step = 0) is the last load step.

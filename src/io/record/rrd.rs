@@ -2,7 +2,10 @@
 //! feature `rerun`.
 //!
 //! Timelines: `step` (sequence: the accepted-step index) and `sim_time` (duration: simulated
-//! seconds, or the load factor λ counted as seconds in load stepping); the wall-clock
+//! seconds, or the load factor λ counted as seconds in load stepping; on a continuation branch
+//! the continuation parameter); on an ω-continuation branch also `omega` (duration: the hub
+//! speed in rad/s counted as seconds), so the deformed body and its stresses can be scrubbed by
+//! speed; the wall-clock
 //! `log_time`/`log_tick` timelines are off, so a file depends only on the run. Entities:
 //!
 //! | entity | archetype | content |
@@ -643,6 +646,10 @@ impl Recorder for RrdSink {
     }
     fn continuation_point(&mut self, p: &ContinuationPoint) {
         let Some(rec) = self.rec.clone() else { return };
+        if p.parameter_name == "omega" {
+            // Kept set: the step that follows (the body at this point) is logged on it too.
+            rec.set_duration_secs("omega", super::or_zero(p.parameter));
+        }
         rec.set_time_sequence("branch_point", p.index as i64);
         self.scalar(
             &format!("branch/{}", p.parameter_name),
