@@ -184,8 +184,9 @@ pub fn wave_amplitude(sys: &SolidSystem) -> f64 {
 }
 
 /// Report a converged branch point to the recorders (`/tread/continuation` in MCAP,
-/// `branch/<measure>` and the `omega` timeline in Rerun), before the body at that point is
-/// recorded as a step.
+/// `branch/<measure>` and the `omega` timeline in Rerun, the PNG sink's branch data), before
+/// the body at that point is recorded as a step. (The steady mode then draws its own
+/// `branch.png` over the PNG sink's, with one panel per hub load and the wave amplitude.)
 fn record_branch_point(
     rec: &mut dyn Recorder,
     n0: u64,

@@ -6,6 +6,7 @@
 //! * `energy.png` — strain, kinetic and total energy against time;
 //! * `contact.png` — normal and tangential traction t_n, t_T against x1 at the last recorded
 //!   step (the patch and a margin around it);
+//! * `branch.png` — continuation branch: each measure against the parameter;
 //! * `series.png` — the model's own scalars (e.g. stick-slip x, v) against time.
 //!
 //! A plot without data is not written. Non-finite points are skipped.
@@ -14,12 +15,12 @@
 //! length L, force F, time T; stresses and tractions F/L², forces per unit thickness F/L,
 //! torques and energies per unit thickness F·L/L). Tick labels are plain numbers (`60`, `0.25`,
 //! `1.5e-7` only when the numbers need it). Quantities of different units never share an axis:
-//! `series.png` draws one panel per quantity (the steady mode draws its own `branch.png`). A hub force or torque whose
+//! `series.png` and `branch.png` draw one panel per quantity. A hub force or torque whose
 //! largest magnitude is below [`ROUND_OFF`] times its natural scale (the largest nodal stress
 //! magnitude times the outer radius, squared for the torque) is round-off, not a signal: it is
 //! drawn as a flat line at zero, and its legend says so.
 
-use super::{RecordError, Recorder, RunEnd, RunMeta, StepInfo, StepView};
+use super::{ContinuationPoint, RecordError, Recorder, RunEnd, RunMeta, StepInfo, StepView};
 use crate::contact::ContactSample;
 use plotters::coord::ranged1d::{
     BoldPoints, DefaultFormatting, KeyPointHint, LightPoints, ValueFormatter,
@@ -50,6 +51,8 @@ pub struct PngSink {
     model: Vec<Series>,
     contact: Vec<ContactSample>,
     contact_time: f64,
+    branch_param: String,
+    branch: Vec<Series>,
     units: Units,
     /// Largest nodal stress magnitude seen and the outer radius of the mesh (scales of the
     /// hub resultants).
@@ -67,6 +70,8 @@ impl PngSink {
             model: Vec::new(),
             contact: Vec::new(),
             contact_time: 0.0,
+            branch_param: String::new(),
+            branch: Vec::new(),
             units: Units::default(),
             stress_scale: 0.0,
             radius: 0.0,
@@ -655,6 +660,12 @@ impl Recorder for PngSink {
             self.contact_time = t;
         }
     }
+    fn continuation_point(&mut self, p: &ContinuationPoint) {
+        self.branch_param = p.parameter_name.to_string();
+        for (n, y) in p.measures {
+            push_named(&mut self.branch, n, p.parameter, *y);
+        }
+    }
     fn run_finished(&mut self, _end: &RunEnd) -> Vec<RecordError> {
         let mut errors = Vec::new();
         let mut draw = |name: &str, r: Result<(), String>| {
@@ -747,6 +758,21 @@ impl Recorder for PngSink {
                     &[("t_n", &n), ("t_T", &t)],
                 ),
             );
+        }
+        if !self.branch.is_empty() {
+            let p = self.dir.join("branch.png");
+            let x = with_unit(&self.branch_param, &u.of_scalar(&self.branch_param));
+            let ps: Vec<Panel> = self
+                .branch
+                .iter()
+                .map(|(n, v)| {
+                    (
+                        with_unit(n, &u.of_scalar(n)),
+                        vec![(n.as_str(), v.as_slice())],
+                    )
+                })
+                .collect();
+            draw("branch.png", panels(&p, "Solution branch", &x, &ps));
         }
         if !self.model.is_empty() {
             let p = self.dir.join("series.png");
