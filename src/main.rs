@@ -42,7 +42,8 @@ enum Command {
         /// Output directory (default: out/<scene name>/).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override a scene key, e.g. --set mesh.n_r=8 (repeatable).
+        /// Override a scene key, e.g. --set mesh.n_r=8 or --set material.viscoelastic.gamma=300
+        /// (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// Override the analysis mode of the scene (analysis.mode).

@@ -42,11 +42,18 @@ impl Ctx<'_> {
             };
             let key = raw_key.trim();
             let parts: Vec<&str> = key.split('.').map(str::trim).collect();
-            if parts.len() != 2 || parts.iter().any(|p| p.is_empty()) {
+            if !(2..=3).contains(&parts.len()) || parts.iter().any(|p| p.is_empty()) {
                 self.push_override(
                     key,
-                    format!("malformed override `{ov}`: the key must be `section.key`"),
+                    format!(
+                        "malformed override `{ov}`: the key must be `section.key` (or \
+                         `section.table.key` for a sub-table such as `material.viscoelastic`)"
+                    ),
                 );
+                continue;
+            }
+            if parts.len() == 3 {
+                self.apply_sub_table_override(doc, ov, &parts, raw_value.trim());
                 continue;
             }
             let (sec_name, field_name) = (parts[0], parts[1]);
@@ -89,6 +96,95 @@ impl Ctx<'_> {
                         ),
                     );
                 }
+            }
+        }
+    }
+
+    /// `section.table.key=value`: a key of a sub-table of a section (e.g.
+    /// `material.viscoelastic.gamma`), checked against the sub-table's schema.
+    fn apply_sub_table_override(
+        &mut self,
+        doc: &mut toml::Table,
+        ov: &str,
+        parts: &[&str],
+        raw_value: &str,
+    ) {
+        let (sec_name, sub_name, field_name) = (parts[0], parts[1], parts[2]);
+        let key = parts.join(".");
+        let Some(sec) = section_schema(sec_name) else {
+            self.push_override(
+                key,
+                format!(
+                    "unknown section `[{sec_name}]` in override `{ov}`; sections are {}",
+                    section_list()
+                ),
+            );
+            return;
+        };
+        let sub = match sec.field(sub_name).map(|f| f.kind) {
+            Some(Kind::Table(sub)) => sub,
+            Some(_) => {
+                self.push_override(
+                    key,
+                    format!(
+                        "malformed override `{ov}`: `{sec_name}.{sub_name}` is a value, not a \
+                         table; write `{sec_name}.{sub_name}=value`"
+                    ),
+                );
+                return;
+            }
+            None => {
+                self.push_override(
+                    key,
+                    format!(
+                        "unknown key in override `{ov}`; keys of [{sec_name}] are {}",
+                        sec.key_list()
+                    ),
+                );
+                return;
+            }
+        };
+        let Some(field) = sub.iter().find(|f| f.key == field_name) else {
+            self.push_override(
+                key,
+                format!(
+                    "unknown key in override `{ov}`; keys of [{sec_name}.{sub_name}] are {}",
+                    sub.iter().map(|f| f.key).collect::<Vec<_>>().join(", ")
+                ),
+            );
+            return;
+        };
+        let value = parse_override_value(raw_value, field.kind);
+        let entry = doc
+            .entry(sec_name.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let toml::Value::Table(section) = entry else {
+            let found = describe_value(entry);
+            self.push_override(
+                key,
+                format!(
+                    "cannot apply override `{ov}`: `{sec_name}` in the file is {found}, not a table"
+                ),
+            );
+            return;
+        };
+        let table = section
+            .entry(sub_name.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        match table {
+            toml::Value::Table(t) => {
+                t.insert(field_name.to_string(), value);
+                self.overridden.insert(key);
+            }
+            other => {
+                let found = describe_value(other);
+                self.push_override(
+                    key,
+                    format!(
+                        "cannot apply override `{ov}`: `{sec_name}.{sub_name}` in the file is \
+                         {found}, not a table"
+                    ),
+                );
             }
         }
     }

@@ -559,4 +559,78 @@ t_end = 0.1
         let e = Scene::from_toml_str(&bad, "v.toml", &[]).expect_err("missing");
         assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
     }
+
+    #[test]
+    fn sub_table_keys_can_be_overridden() {
+        let base = r#"
+[scene]
+name = "v"
+[geometry]
+ri = 1.0
+ro = 2.0
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[material.viscoelastic]
+model = "convolution"
+gamma = 200.0
+prony = [[0.7, 0.01], [0.3, 1]]
+[analysis]
+mode = "transient"
+[motion]
+omega = 10.0
+[time]
+dt = 1e-3
+t_end = 0.1
+"#;
+        let set = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let s = Scene::from_toml_str(
+            base,
+            "v.toml",
+            &set(&[
+                "material.viscoelastic.gamma=300",
+                "material.viscoelastic.model=multiplicative",
+                "material.viscoelastic.prony=[[1.0, 0.05]]",
+            ]),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let ve = s.material.viscoelastic.clone().expect("parsed");
+        assert_eq!(
+            (ve.model.as_str(), ve.gamma, ve.prony),
+            ("multiplicative", 300.0, vec![[1.0, 0.05]])
+        );
+        // Every problem at once, each named with its key and `(--set)`.
+        let e = Scene::from_toml_str(
+            base,
+            "v.toml",
+            &set(&[
+                "material.viscoelastic.colour=1",
+                "material.viscoelastic.gamma=big",
+                "mesh.n_r.x=1",
+                "a.b.c.d=1",
+            ]),
+        )
+        .expect_err("invalid overrides");
+        let colour = e
+            .find("material.viscoelastic.colour")
+            .unwrap_or_else(|| panic!("{e}"));
+        assert!(
+            colour
+                .message
+                .contains("keys of [material.viscoelastic] are model, gamma, prony"),
+            "{}",
+            colour.message
+        );
+        assert!(e.has_key("material.viscoelastic.gamma"), "{e}");
+        let n_r = e.find("mesh.n_r.x").unwrap_or_else(|| panic!("{e}"));
+        assert!(
+            n_r.message.contains("is a value, not a table"),
+            "{}",
+            n_r.message
+        );
+        assert!(e.has_key("a.b.c.d"), "{e}");
+        assert!(e.to_string().contains("(--set)"), "{e}");
+    }
 }

@@ -55,7 +55,7 @@
 //!
 //! # Loading
 //!
-//! [`Scene::from_toml_str`] parses the text, applies `--set section.key=value` overrides, fills the
+//! [`Scene::from_toml_str`] parses the text, applies `--set section.key=value` (or `section.table.key=value`) overrides, fills the
 //! defaults, resolves model-dependent defaults (the incompressible formulation and, for the
 //! perturbed Lagrangian, `kappa = 1e4 G/2`, i.e. `1e4 (c1 + c2)` for Mooney–Rivlin; `time.mass = "lumped"` for the
 //! `central_difference` integrator) and validates. It collects **all** problems it can
