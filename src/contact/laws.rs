@@ -62,7 +62,7 @@
 //! d/dw [μ(|w|) tanh(w/ε)] = μ'(|w|) tanh(|w|/ε) + μ(|w|) sech²(w/ε)/ε,
 //! which is continuous and even in w; that form is what [`RateDependent::eval`] uses.
 
-pub use crate::params::{Bound, ParamSpec};
+pub use crate::params::{Bound, LawKind, ParamSpec};
 use serde::{Deserialize, Serialize};
 
 /// Error in the parameters of an interface law (the offending parameter is named).
@@ -773,87 +773,25 @@ macro_rules! friction_laws {
 
 friction_laws!(CoulombTanh, CoulombLinear, RateDependent, OdenMartins);
 
-impl FrictionKind {
-    /// Every parameter key of any law, once each, in registration order (the first law that
-    /// declares a key fixes its place).
-    pub fn all_keys() -> Vec<&'static str> {
-        let mut keys: Vec<&'static str> = Vec::new();
-        for kind in Self::ALL {
-            for p in kind.params() {
-                if !keys.contains(&p.key) {
-                    keys.push(p.key);
-                }
-            }
-        }
-        keys
-    }
+impl LawKind for FrictionKind {
+    type Law = Friction;
+    const WHAT: &'static str = "friction law";
 
-    /// The declaration of parameter `key` by the first law that has it.
-    pub fn param(key: &str) -> Option<&'static ParamSpec> {
+    fn kinds() -> &'static [Self] {
         Self::ALL
-            .iter()
-            .flat_map(|k| k.params())
-            .find(|p| p.key == key)
     }
-
-    /// The kinds whose parameters include `key`.
-    pub fn laws_with(key: &str) -> Vec<FrictionKind> {
-        Self::ALL
-            .iter()
-            .copied()
-            .filter(|k| k.params().iter().any(|p| p.key == key))
-            .collect()
+    fn keyword(self) -> &'static str {
+        self.as_str()
     }
-
-    /// The law of this kind from given values looked up by key; `Err(key)` names the first
-    /// parameter that is missing. The values are not range-checked.
-    pub fn build_from(self, given: impl Fn(&str) -> Option<f64>) -> Result<Friction, &'static str> {
-        let values = self
-            .params()
-            .iter()
-            .map(|p| given(p.key).ok_or(p.key))
-            .collect::<Result<Vec<f64>, _>>()?;
-        Ok(self.build(&values))
+    fn declared(self) -> &'static [ParamSpec] {
+        self.params()
+    }
+    fn build_law(self, values: &[f64]) -> Friction {
+        self.build(values)
     }
 }
 
-impl std::fmt::Display for FrictionKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl std::str::FromStr for FrictionKind {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        let s = s.trim();
-        match Self::ALL.iter().find(|k| k.as_str() == s) {
-            Some(k) => Ok(*k),
-            None => Err(format!(
-                "unknown friction law \"{s}\"; expected one of {}",
-                Self::NAMES
-                    .iter()
-                    .map(|n| format!("\"{n}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )),
-        }
-    }
-}
-
-impl Serialize for FrictionKind {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.as_str())
-    }
-}
-
-impl<'de> Deserialize<'de> for FrictionKind {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        s.parse().map_err(serde::de::Error::custom)
-    }
-}
+crate::params::law_kind_impls!(FrictionKind);
 
 impl Friction {
     /// The scene-file name of the law.

@@ -7,8 +7,9 @@
 //! problem can be reported with its key), the generic checks that walk those declarations, and
 //! the resolution into the physics law [`Friction`].
 
-use super::issue::{issue, Issue};
+use super::issue::{issue, ordered_values, Issue};
 use crate::contact::Friction;
+use crate::params::LawKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -69,18 +70,7 @@ impl FrictionSpec {
     /// The given keys: those of any law in the order of [`FrictionLawName::all_keys`], then
     /// any others.
     fn ordered(&self) -> Vec<(&str, f64)> {
-        let known = FrictionLawName::all_keys();
-        let mut out: Vec<(&str, f64)> = known
-            .iter()
-            .filter_map(|k| self.values.get(*k).map(|v| (*k, *v)))
-            .collect();
-        out.extend(
-            self.values
-                .iter()
-                .filter(|(k, _)| !known.contains(&k.as_str()))
-                .map(|(k, v)| (k.as_str(), *v)),
-        );
-        out
+        ordered_values(&self.values, &FrictionLawName::all_keys())
     }
 }
 

@@ -56,3 +56,22 @@ pub(super) fn quoted_list(names: &[&str]) -> String {
 pub(super) fn table_has(doc: &toml::Table, section: &str, key: &str) -> bool {
     matches!(doc.get(section), Some(toml::Value::Table(t)) if t.contains_key(key))
 }
+
+/// The values of a law's section by key: those of the `known` keys in that order, then any
+/// others (in key order), as the section's messages and serialisation list them.
+pub(super) fn ordered_values<'a>(
+    values: &'a std::collections::BTreeMap<String, f64>,
+    known: &[&'static str],
+) -> Vec<(&'a str, f64)> {
+    let mut out: Vec<(&str, f64)> = known
+        .iter()
+        .filter_map(|k| values.get(*k).map(|v| (*k, *v)))
+        .collect();
+    out.extend(
+        values
+            .iter()
+            .filter(|(k, _)| !known.contains(&k.as_str()))
+            .map(|(k, v)| (k.as_str(), *v)),
+    );
+    out
+}

@@ -8,8 +8,9 @@
 //! those declarations, the incompressibility formulation of the laws that need a pressure
 //! field, and the resolution into the physics law [`Material`].
 
-use super::issue::{issue, positive, quoted_list, Issue};
+use super::issue::{issue, ordered_values, positive, quoted_list, Issue};
 use crate::material::Material;
+use crate::params::LawKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -207,18 +208,7 @@ impl MaterialSpec {
     /// The given values: those of the known keys in the order of [`Self::all_value_keys`],
     /// then any others.
     fn ordered(&self) -> Vec<(&str, f64)> {
-        let known = Self::all_value_keys();
-        let mut out: Vec<(&str, f64)> = known
-            .iter()
-            .filter_map(|k| self.values.get(*k).map(|v| (*k, *v)))
-            .collect();
-        out.extend(
-            self.values
-                .iter()
-                .filter(|(k, _)| !known.contains(&k.as_str()))
-                .map(|(k, v)| (k.as_str(), *v)),
-        );
-        out
+        ordered_values(&self.values, &Self::all_value_keys())
     }
 }
 

@@ -25,6 +25,7 @@ use super::solver::{DampingTangentChoice, LinearChoice, SolverSpec};
 use super::steady::{ContinuationParameter, ContinuationSpec};
 use super::stick_slip::StickSlipSpec;
 use super::time::{IntegratorName, MassKind, TimeSpec};
+use crate::params::LawKind;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::collections::BTreeSet;
@@ -98,6 +99,29 @@ static VISCOELASTIC_FIELDS: &[FieldSchema] = &[
         "Prony terms `[[g, tau], ...]`: g dimensionless >= 0, tau > 0 (time); 1 to 8 terms"),
 ];
 
+/// One optional number per parameter key of a family of laws, in the order of
+/// [`LawKind::all_keys`], with the unit and bound its first law declares; the meaning names the
+/// laws that take it, its note, and `more(key)` where that gives something.
+fn law_param_fields<K: LawKind>(more: impl Fn(&str) -> Option<String>) -> Vec<FieldSchema> {
+    let mut fields = Vec::new();
+    for key in K::all_keys() {
+        let Some(p) = K::param(key) else {
+            continue;
+        };
+        let laws: Vec<&str> = K::laws_with(key).iter().map(|l| l.keyword()).collect();
+        let mut doc = format!("{} ({}), {}", p.what, laws.join(", "), p.bound);
+        for extra in [(!p.note.is_empty()).then(|| p.note.to_string()), more(key)]
+            .into_iter()
+            .flatten()
+        {
+            doc.push_str("; ");
+            doc.push_str(&extra);
+        }
+        fields.push(opt(key, Kind::Float, p.unit, doc.leak()));
+    }
+    fields
+}
+
 /// Keys of `[friction]`: `law`, then every parameter of the registered laws (in the order of
 /// [`FrictionLawName::all_keys`]) with the unit and bound its law declares; the meaning names
 /// the laws that take it.
@@ -109,21 +133,7 @@ fn friction_fields() -> &'static [FieldSchema] {
             NONE,
             "friction law",
         )];
-        for key in FrictionLawName::all_keys() {
-            let Some(p) = FrictionLawName::param(key) else {
-                continue;
-            };
-            let laws: Vec<&str> = FrictionLawName::laws_with(key)
-                .iter()
-                .map(|l| l.as_str())
-                .collect();
-            let mut doc = format!("{} ({}), {}", p.what, laws.join(", "), p.bound);
-            if !p.note.is_empty() {
-                doc.push_str("; ");
-                doc.push_str(p.note);
-            }
-            fields.push(opt(key, Kind::Float, p.unit, doc.leak()));
-        }
+        fields.extend(law_param_fields::<FrictionLawName>(|_| None));
         fields
     });
     &FIELDS
@@ -158,25 +168,10 @@ fn material_fields() -> &'static [FieldSchema] {
             ),
         ];
         let keys = MaterialModel::all_keys();
-        for key in &keys {
-            let Some(p) = MaterialModel::param(key) else {
-                continue;
-            };
-            let laws: Vec<&str> = MaterialModel::laws_with(key)
-                .iter()
-                .map(|l| l.as_str())
-                .collect();
-            let mut doc = format!("{} ({}), {}", p.what, laws.join(", "), p.bound);
-            if !p.note.is_empty() {
-                doc.push_str("; ");
-                doc.push_str(p.note);
-            }
-            if *key == "kappa" && !incompressible.is_empty() {
-                doc.push_str("; also ");
-                doc.push_str(&perturbed_kappa);
-            }
-            fields.push(opt(p.key, Kind::Float, p.unit, doc.leak()));
-        }
+        fields.extend(law_param_fields::<MaterialModel>(|key| {
+            (key == "kappa" && !incompressible.is_empty())
+                .then(|| format!("also {perturbed_kappa}"))
+        }));
         if !incompressible.is_empty() {
             if !keys.contains(&"kappa") {
                 fields.push(opt(
