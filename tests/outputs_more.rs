@@ -240,6 +240,7 @@ fn vtu_keeps_nan_as_nan() {
         stress: &stress,
         sigma_33: &s33,
         stress_recovered: &[],
+        error_indicator: &[],
         pressure: &[],
         contact: &[],
         hub: None,

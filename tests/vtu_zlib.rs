@@ -111,6 +111,7 @@ fn zlib_vtu_decompresses_to_the_raw_arrays() {
         stress: &stress,
         sigma_33: &s33,
         stress_recovered: &[],
+        error_indicator: &[],
         pressure: &[],
         contact: &[],
         hub: None,

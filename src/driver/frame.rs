@@ -30,6 +30,8 @@ pub struct SolidFrame {
     pub pressure: Vec<f64>,
     /// Recovered nodal Cauchy stress `[σ11, σ22, σ12, σ33]` ([`crate::physics::recovery`]).
     pub stress_recovered: Vec<[f64; 4]>,
+    /// Zienkiewicz–Zhu error indicator per cell ([`crate::physics::estimate::recovery`]).
+    pub error_indicator: Vec<f64>,
     pub contact: Vec<ContactSample>,
     pub hub: HubLoads,
     pub energy: Energy,
@@ -80,6 +82,8 @@ impl SolidFrame {
             stress_recovered: crate::physics::recovery::recover_cauchy(
                 &sys.model, &sys.dofs, &sys.x,
             ),
+            error_indicator: crate::physics::estimate::recovery(&sys.model, &sys.dofs, &sys.x)
+                .indicators,
             contact: sys.contact_samples(),
             hub: HubLoads {
                 force: [f[0], f[1]],
@@ -101,6 +105,7 @@ impl SolidFrame {
             sigma_33: &self.sigma_33,
             pressure: &self.pressure,
             stress_recovered: &self.stress_recovered,
+            error_indicator: &self.error_indicator,
             contact: &self.contact,
             hub: Some(self.hub),
             energy: Some(self.energy),

@@ -99,6 +99,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 stress: &[],
                 sigma_33: &[],
                 stress_recovered: &[],
+                error_indicator: &[],
                 pressure: &[],
                 contact: &[],
                 hub: None,

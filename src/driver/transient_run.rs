@@ -195,6 +195,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         let ns = nodal_stress_full_at(&tr.sys, &tr.un);
         let recovered =
             crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.un);
+        let indicator =
+            crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.un).indicators;
         let contact = tr.contact_samples(&tr.un, &tr.vn);
         let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
         let view = StepView {
@@ -203,6 +205,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             stress: &ns.in_plane,
             sigma_33: &ns.sigma_33,
             stress_recovered: &recovered,
+            error_indicator: &indicator,
             pressure: &ns.pressure,
             contact: &contact,
             hub: Some(HubLoads {
@@ -428,6 +431,7 @@ fn record_steady_field(
     x[..n].copy_from_slice(&field[..n]);
     let ns = nodal_stress_full_at(&tr.sys, &x);
     let recovered = crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &x);
+    let indicator = crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &x).indicators;
     let contact = tr.contact_samples(&tr.un, &tr.vn);
     let snap = tr.snapshot();
     let mean = rep
@@ -439,6 +443,7 @@ fn record_steady_field(
         stress: &ns.in_plane,
         sigma_33: &ns.sigma_33,
         stress_recovered: &recovered,
+        error_indicator: &indicator,
         pressure: &ns.pressure,
         contact: &contact,
         hub: Some(HubLoads {

@@ -173,6 +173,9 @@ pub struct StepView<'a> {
     /// Recovered nodal Cauchy stress `[σ11, σ22, σ12, σ33]` (superconvergent patch recovery,
     /// [`crate::physics::recovery`]); empty when not computed.
     pub stress_recovered: &'a [[f64; 4]],
+    /// Error indicator η_K per cell: the Zienkiewicz–Zhu recovery estimator of the energy
+    /// error ([`crate::physics::estimate::recovery`]); empty when not computed.
+    pub error_indicator: &'a [f64],
     /// Nodal pressure p of a mixed (incompressible) formulation, σ = σ_law − p I; empty when the
     /// model has no pressure field.
     pub pressure: &'a [f64],
@@ -643,6 +646,7 @@ mod tests {
                 stress: &[],
                 sigma_33: &[],
                 stress_recovered: &[],
+                error_indicator: &[],
                 pressure: &[],
                 contact: &[],
                 hub: None,

@@ -304,7 +304,7 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
             ));
         }
     }
-    let cell_data = vec![
+    let mut cell_data = vec![
         Array::new("cell_id", 1, Values::I64((0..nc as i64).collect())),
         Array::new(
             "region",
@@ -316,6 +316,13 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
             ),
         ),
     ];
+    if view.error_indicator.len() == nc {
+        cell_data.push(Array::new(
+            "error_indicator",
+            1,
+            Values::F64(view.error_indicator.to_vec()),
+        ));
+    }
     let mut conn = Vec::with_capacity(9 * nc);
     let mut offsets = Vec::with_capacity(nc);
     let mut types = Vec::with_capacity(nc);
