@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Read every output of two scenes back with independent readers (Python mcap + protobuf,
-# meshio, and `rerun rrd verify` when a run.rrd is written; zlib-compressed VTU against the
+# meshio, and `rerun rrd verify` when a run.rrd is written, plus the `omega` timeline of a steady
+# continuation, tools/check_rrd_timeline.py; zlib-compressed VTU against the
 # uncompressed files, tools/check_vtu_zlib.py) and check steps, times and the
 # static friction traction. Installs the readers into a venv ($TREAD_READER_VENV, default
 # target/reader-venv). Without network access the check is SKIPPED (exit 0, message says so).
@@ -29,6 +30,9 @@ RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/free_rolling.toml --out "$OUT/free
 RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$OUT/indentation_friction_zlib" \
     --set mesh.n_r=3 --set mesh.n_theta=48 --set "$SINKS" --set output.vtu_compression=zlib
 "$VENV/bin/python" tools/check_vtu_zlib.py "$OUT/indentation_friction_zlib" "$OUT/indentation_friction"
+# A steady continuation in omega (its branch points on the recording's `omega` timeline).
+RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/oden_figs_9_13.toml --out "$OUT/oden_figs_9_13" \
+    --set continuation.max_steps=6 --set 'output.sinks=["summary","csv","rerun"]'
 # The .rrd files (only in builds with the `rerun` feature).
 rrds=$(find "$OUT" -name run.rrd)
 if [ -z "$rrds" ]; then
@@ -45,3 +49,4 @@ for f in $rrds; do
     "$VENV/bin/rerun" rrd verify "$f"
     echo "read_outputs: rrd verify $f: ok"
 done
+python3 tools/check_rrd_timeline.py "$VENV/bin/rerun" "$OUT/oden_figs_9_13"
