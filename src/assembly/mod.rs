@@ -4,12 +4,14 @@
 //!   (`2·node + i`) followed by optional cell-owned unknowns (e.g. the three discontinuous P1
 //!   pressures of a Q2/P1 cell, `2·n_nodes + 3·cell + m`). Each full dof maps to an equation
 //!   number or to [`FIXED`] (Dirichlet: its value lives in the full vector and never changes
-//!   during a Newton solve). Future linear constraints (hanging nodes) extend this map with an
-//!   expansion table consulted by the scatter; cells carry their own dof lists, so cells of
-//!   different degree coexist.
+//!   during a Newton solve) or to [`CONSTRAINED`]: a hanging node's dof, x_d = Σ w x_m over
+//!   unconstrained masters ([`DofMap::expansion`], from [`crate::mesh::Mesh::constraints`]),
+//!   kept up to date in the full vector by [`DofMap::scatter_free`] / [`DofMap::add_free`].
+//!   Cells carry their own dof lists, so cells of different degree coexist.
 //! * [`Assembler`]: CSC pattern of the free equations (both triangles), a per-cell table of
 //!   value slots for every local (row, col) pair, and a cell colouring. Assembly zero-fills the
-//!   values and scatters cell contributions. Parallel schedule, lock-free: the elements are cut
+//!   values and scatters cell contributions; a constrained row or column is scattered to its
+//!   masters with its weights (Cᵀ K C, Cᵀ r), from per-element tables built once. Parallel schedule, lock-free: the elements are cut
 //!   into contiguous chunks such that chunks two apart share no dof (even chunks in parallel,
 //!   then odd ones: each thread walks contiguous memory), or, when no such cut exists (tiny or
 //!   unstructured meshes), coloured so that elements of one colour share no node. The result is
@@ -30,6 +32,8 @@ pub use qp::{QpData, QpHistory};
 
 /// Marker of a fixed (Dirichlet) dof in [`DofMap::eq`].
 pub const FIXED: u32 = u32::MAX;
+/// Marker of a constrained dof (a hanging node's, [`DofMap::expansion`]) in [`DofMap::eq`].
+pub const CONSTRAINED: u32 = u32::MAX - 1;
 /// Largest local system: Q2 displacements (18) + P1 pressures (3).
 pub const MAX_LOCAL: usize = 21;
 
@@ -41,7 +45,7 @@ pub struct DofMap {
     pub per_cell: usize,
     /// Global unknowns at the end of the full vector.
     pub n_global: usize,
-    /// Equation number of each full dof, or [`FIXED`].
+    /// Equation number of each full dof, or [`FIXED`], or [`CONSTRAINED`].
     pub eq: Vec<u32>,
     /// Number of equations (free dofs).
     pub n_eq: usize,
@@ -51,6 +55,12 @@ pub struct DofMap {
     /// cell-owned dofs.
     pub cell_dofs: Vec<u32>,
     pub cell_offsets: Vec<usize>,
+    /// Constrained dofs (ascending) and their expansions x_d = Σ w x_m over unconstrained
+    /// (free or fixed) full dofs m: `cons_terms[cons_offsets[k]..cons_offsets[k + 1]]` for
+    /// `cons_dofs[k]`. Empty without hanging nodes.
+    pub cons_dofs: Vec<u32>,
+    pub cons_offsets: Vec<usize>,
+    pub cons_terms: Vec<(u32, f64)>,
 }
 
 impl DofMap {
@@ -75,11 +85,31 @@ impl DofMap {
             fixed[2 * n as usize] = true;
             fixed[2 * n as usize + 1] = true;
         }
+        // Hanging nodes (a fixed node stays fixed): both displacement components follow their
+        // masters'.
+        let mut cons_dofs = Vec::new();
+        let mut cons_offsets = vec![0];
+        let mut cons_terms = Vec::new();
+        let mut constrained = vec![false; n_full];
+        for c in &mesh.constraints {
+            for i in 0..2u32 {
+                let d = 2 * c.node + i;
+                if fixed[d as usize] {
+                    continue;
+                }
+                constrained[d as usize] = true;
+                cons_dofs.push(d);
+                cons_terms.extend(c.masters.iter().map(|&(m, w)| (2 * m + i, w)));
+                cons_offsets.push(cons_terms.len());
+            }
+        }
         let mut eq = vec![FIXED; n_full];
         let mut field = Vec::with_capacity(n_full);
         let mut n_eq = 0u32;
         for (d, e) in eq.iter_mut().enumerate() {
-            if !fixed[d] {
+            if constrained[d] {
+                *e = CONSTRAINED;
+            } else if !fixed[d] {
                 *e = n_eq;
                 field.push(if d < n_u {
                     0
@@ -112,6 +142,56 @@ impl DofMap {
             field,
             cell_dofs,
             cell_offsets,
+            cons_dofs,
+            cons_offsets,
+            cons_terms,
+        }
+    }
+
+    /// Equation number of full dof `d`, if it is free.
+    #[inline]
+    pub fn equation(&self, d: usize) -> Option<usize> {
+        let e = self.eq[d];
+        (e < CONSTRAINED).then_some(e as usize)
+    }
+
+    /// Whether the discretisation has constrained (hanging-node) dofs.
+    pub fn has_constraints(&self) -> bool {
+        !self.cons_dofs.is_empty()
+    }
+
+    /// The expansion x_d = Σ w x_m of a constrained dof `d` over unconstrained full dofs.
+    pub fn expansion(&self, d: u32) -> Option<&[(u32, f64)]> {
+        let k = self.cons_dofs.binary_search(&d).ok()?;
+        Some(&self.cons_terms[self.cons_offsets[k]..self.cons_offsets[k + 1]])
+    }
+
+    /// Set every constrained entry of the full vector from its masters.
+    pub fn apply_constraints(&self, full: &mut [f64]) {
+        for (k, &d) in self.cons_dofs.iter().enumerate() {
+            full[d as usize] = self.cons_terms[self.cons_offsets[k]..self.cons_offsets[k + 1]]
+                .iter()
+                .map(|&(m, w)| w * full[m as usize])
+                .sum();
+        }
+    }
+
+    /// The equations and weights an element row/column of full dof `d` adds to: itself, the
+    /// free masters of a constrained dof, or nothing (fixed).
+    fn targets(&self, d: u32, out: &mut Vec<(u32, f64)>) {
+        out.clear();
+        match self.eq[d as usize] {
+            FIXED => {}
+            CONSTRAINED => {
+                if let Some(exp) = self.expansion(d) {
+                    out.extend(
+                        exp.iter()
+                            .filter(|&&(m, _)| self.eq[m as usize] < CONSTRAINED)
+                            .map(|&(m, w)| (self.eq[m as usize], w)),
+                    );
+                }
+            }
+            e => out.push((e, 1.0)),
         }
     }
 
@@ -129,18 +209,20 @@ impl DofMap {
     /// Copy the equation values `x` into the full vector (fixed entries untouched).
     pub fn scatter_free(&self, x: &[f64], full: &mut [f64]) {
         for (d, &e) in self.eq.iter().enumerate() {
-            if e != FIXED {
+            if e < CONSTRAINED {
                 full[d] = x[e as usize];
             }
         }
+        self.apply_constraints(full);
     }
     /// Add `alpha · dx` (equation values) to the full vector.
     pub fn add_free(&self, alpha: f64, dx: &[f64], full: &mut [f64]) {
         for (d, &e) in self.eq.iter().enumerate() {
-            if e != FIXED {
+            if e < CONSTRAINED {
                 full[d] += alpha * dx[e as usize];
             }
         }
+        self.apply_constraints(full);
     }
 }
 
@@ -230,6 +312,13 @@ pub struct Block {
     /// Per element, `nd²` slots (row-major local pairs); `u32::MAX` where a row or column is fixed.
     slots: Vec<u32>,
     slot_offsets: Vec<usize>,
+    /// Elements with constrained dofs (empty without): per element, the matrix entries
+    /// (local pair index a·nd + b, slot, weight) and residual entries (local a, equation,
+    /// weight) of its constrained rows and columns, expanded over their masters.
+    con_k: Vec<(u32, u32, f64)>,
+    con_k_offsets: Vec<usize>,
+    con_r: Vec<(u32, u32, f64)>,
+    con_r_offsets: Vec<usize>,
     /// Element colours (no two elements of one colour share a dof); `None`: assemble serially.
     colors: Option<Vec<Vec<u32>>>,
     /// Contiguous chunks of elements such that chunks two apart share no dof: chunks of even
@@ -337,20 +426,18 @@ impl Assembler {
     pub fn with_blocks(dofs: &DofMap, lists: Vec<(Vec<u32>, Vec<usize>)>) -> Self {
         let n = dofs.n_eq;
         let mut cols: Vec<Vec<u32>> = vec![Vec::new(); n];
+        let mut tgt = Vec::new();
+        let mut eqs: Vec<u32> = Vec::new();
         for (d, o) in &lists {
             for e in 0..o.len().saturating_sub(1) {
                 let el = &d[o[e]..o[e + 1]];
-                for &dj in el {
-                    let ej = dofs.eq[dj as usize];
-                    if ej == FIXED {
-                        continue;
-                    }
-                    let col = &mut cols[ej as usize];
-                    col.extend(
-                        el.iter()
-                            .map(|&di| dofs.eq[di as usize])
-                            .filter(|&ei| ei != FIXED),
-                    );
+                eqs.clear();
+                for &di in el {
+                    dofs.targets(di, &mut tgt);
+                    eqs.extend(tgt.iter().map(|t| t.0));
+                }
+                for &ej in &eqs {
+                    cols[ej as usize].extend_from_slice(&eqs);
                 }
             }
             // Keep memory bounded on large meshes.
@@ -370,39 +457,93 @@ impl Assembler {
         let blocks = lists
             .into_iter()
             .map(|(d, o)| {
+                let slot_of = |ei: u32, ej: u32| -> u32 {
+                    let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
+                    row_idx[s..e]
+                        .binary_search(&(ei as usize))
+                        .map(|p| (s + p) as u32)
+                        .unwrap_or(u32::MAX)
+                };
                 let mut slots = Vec::new();
                 let mut slot_offsets = vec![0];
+                let constrained = dofs.has_constraints();
+                let (mut con_k, mut con_r) = (Vec::new(), Vec::new());
+                let (mut con_k_offsets, mut con_r_offsets) = (vec![0], vec![0]);
+                let (mut ti, mut tj) = (Vec::new(), Vec::new());
                 for e in 0..o.len().saturating_sub(1) {
                     let el = &d[o[e]..o[e + 1]];
-                    for &di in el {
+                    let nd = el.len();
+                    for (a, &di) in el.iter().enumerate() {
                         let ei = dofs.eq[di as usize];
-                        for &dj in el {
+                        if ei == CONSTRAINED {
+                            dofs.targets(di, &mut ti);
+                            con_r.extend(ti.iter().map(|&(q, w)| (a as u32, q, w)));
+                        }
+                        for (b, &dj) in el.iter().enumerate() {
                             let ej = dofs.eq[dj as usize];
-                            if ei == FIXED || ej == FIXED {
+                            if ei >= CONSTRAINED || ej >= CONSTRAINED {
                                 slots.push(u32::MAX);
+                                if ei == CONSTRAINED || ej == CONSTRAINED {
+                                    dofs.targets(di, &mut ti);
+                                    dofs.targets(dj, &mut tj);
+                                    for &(qi, wi) in &ti {
+                                        for &(qj, wj) in &tj {
+                                            con_k.push((
+                                                (a * nd + b) as u32,
+                                                slot_of(qi, qj),
+                                                wi * wj,
+                                            ));
+                                        }
+                                    }
+                                }
                             } else {
-                                let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
-                                let pos = row_idx[s..e]
-                                    .binary_search(&(ei as usize))
-                                    .map(|p| s + p)
-                                    .unwrap_or(usize::MAX);
-                                slots.push(pos as u32);
+                                slots.push(slot_of(ei, ej));
                             }
                         }
                     }
                     slot_offsets.push(slots.len());
+                    if constrained {
+                        con_k_offsets.push(con_k.len());
+                        con_r_offsets.push(con_r.len());
+                    }
                 }
-                let chunks = Block::chunk(&d, &o, dofs.n_full());
+                if !constrained {
+                    (con_k_offsets, con_r_offsets) = (Vec::new(), Vec::new());
+                }
+                // Elements that share a master must not run concurrently: the schedule is
+                // built on the element lists extended by their masters.
+                let (sd, so) = if constrained {
+                    let mut sd = Vec::with_capacity(d.len());
+                    let mut so = vec![0];
+                    for e in 0..o.len().saturating_sub(1) {
+                        for &di in &d[o[e]..o[e + 1]] {
+                            sd.push(di);
+                            if let Some(exp) = dofs.expansion(di) {
+                                sd.extend(exp.iter().map(|t| t.0));
+                            }
+                        }
+                        so.push(sd.len());
+                    }
+                    (sd, so)
+                } else {
+                    (Vec::new(), Vec::new())
+                };
+                let (sd_ref, so_ref) = if constrained { (&sd, &so) } else { (&d, &o) };
+                let chunks = Block::chunk(sd_ref, so_ref, dofs.n_full());
                 let colors = if chunks.is_some() {
                     None
                 } else {
-                    Block::color(&d, &o, dofs.n_full())
+                    Block::color(sd_ref, so_ref, dofs.n_full())
                 };
                 Block {
                     dofs: d,
                     offsets: o,
                     slots,
                     slot_offsets,
+                    con_k,
+                    con_k_offsets,
+                    con_r,
+                    con_r_offsets,
                     colors,
                     chunks,
                 }
@@ -482,7 +623,7 @@ impl Assembler {
             unsafe {
                 for (a, &d) in el.iter().enumerate() {
                     let q = dofs.eq[d as usize];
-                    if q != FIXED {
+                    if q < CONSTRAINED {
                         res.add(q as usize, loc.r[a]);
                         sc.add(q as usize, loc.r[a].abs());
                     }
@@ -492,6 +633,21 @@ impl Assembler {
                     for (slot, &kv) in s.iter().zip(&loc.k[..nd * nd]) {
                         if *slot != u32::MAX {
                             val.add(*slot as usize, kv);
+                        }
+                    }
+                }
+                if !block.con_r_offsets.is_empty() {
+                    let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
+                    for &(a, q, w) in cr {
+                        res.add(q as usize, w * loc.r[a as usize]);
+                        sc.add(q as usize, (w * loc.r[a as usize]).abs());
+                    }
+                    if with_matrix {
+                        let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
+                        for &(ab, slot, w) in ck {
+                            if slot != u32::MAX {
+                                val.add(slot as usize, w * loc.k[ab as usize]);
+                            }
                         }
                     }
                 }
@@ -575,7 +731,7 @@ impl Assembler {
                 let nd = el.len();
                 for (a, &d) in el.iter().enumerate() {
                     let q = dofs.eq[d as usize];
-                    if q != FIXED {
+                    if q < CONSTRAINED {
                         self.residual[q as usize] += s[a];
                         self.scale[q as usize] += s[a].abs();
                     }
@@ -585,6 +741,21 @@ impl Assembler {
                     for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + nd * nd]) {
                         if *slot != u32::MAX {
                             self.values[*slot as usize] += kv;
+                        }
+                    }
+                }
+                if !block.con_r_offsets.is_empty() {
+                    let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
+                    for &(a, q, w) in cr {
+                        self.residual[q as usize] += w * s[a as usize];
+                        self.scale[q as usize] += (w * s[a as usize]).abs();
+                    }
+                    if with_matrix {
+                        let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
+                        for &(ab, slot, w) in ck {
+                            if slot != u32::MAX {
+                                self.values[slot as usize] += w * s[max_nd + ab as usize];
+                            }
                         }
                     }
                 }

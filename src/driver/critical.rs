@@ -58,7 +58,7 @@
 
 use super::steady::SteadyRolling;
 use super::steady_run::{build_steady, solve_steady};
-use crate::assembly::FIXED;
+use crate::assembly::CONSTRAINED;
 use crate::io::Scene;
 use crate::setup::AppError;
 use crate::solver::linear::SparseSolver;
@@ -217,7 +217,7 @@ fn sector_rows(st: &SteadyRolling, rg: &Rings) -> Vec<Vec<(usize, f64)>> {
     let mut slot = vec![usize::MAX; st.sys.n_eq()];
     let mut full_of_eq = vec![0usize; st.sys.n_eq()];
     for (full, &e) in dofs.eq.iter().enumerate() {
-        if e == FIXED {
+        if e >= CONSTRAINED {
             continue;
         }
         full_of_eq[e as usize] = full;
@@ -418,7 +418,7 @@ fn dominant_wave_number(st: &SteadyRolling, v: &[f64]) -> usize {
             let node = last * rl.per_ring + pos;
             let x = mesh.nodes[node];
             let get = |d: usize| match dofs.eq[d] {
-                FIXED => 0.0,
+                e if e >= CONSTRAINED => 0.0,
                 e => v[e as usize],
             };
             (get(2 * node) * x[0] + get(2 * node + 1) * x[1]) / x.norm()
@@ -633,7 +633,7 @@ fn spinning_critical(
             .eq
             .iter()
             .take(st.sys.dofs.n_u)
-            .filter(|&&e| e != FIXED)
+            .filter(|&&e| e < CONSTRAINED)
             .count()
     {
         return Err(AppError::Unsupported(

@@ -18,7 +18,7 @@
 //! nodes are fixed and carry no equation.
 
 use super::terms::{CellForces, CellRate, Rates, Terms};
-use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, FIXED};
+use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, CONSTRAINED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::viscoelastic_steady::RingError;
@@ -585,7 +585,7 @@ impl SolidSystem {
             }
             for r in 0..nu {
                 let e = self.dofs.eq[cd[r] as usize];
-                if e == FIXED {
+                if e >= CONSTRAINED {
                     continue;
                 }
                 let y: f64 = (0..nu).map(|s| a[r * nu + s] * diff[s]).sum();
@@ -727,7 +727,7 @@ impl SolidSystem {
             cells.eval(c, &mut loc, false, None);
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
-                if is_hub[n] && self.dofs.eq[2 * n] == FIXED {
+                if is_hub[n] && self.dofs.eq[2 * n] == crate::assembly::FIXED {
                     let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
                     let xp = mesh.nodes[n] + Vec2::new(x[2 * n], x[2 * n + 1]);
                     force += f;
@@ -774,7 +774,7 @@ impl NonlinearSystem for SolidSystem {
         out.resize(self.dofs.n_eq, 0.0);
         let n_u = self.dofs.n_u;
         for (d, &e) in self.dofs.eq.iter().enumerate() {
-            if e == FIXED {
+            if e >= CONSTRAINED {
                 continue;
             }
             out[e as usize] = if d < n_u {

@@ -40,7 +40,7 @@
 use super::results::ViscousEnergy;
 use super::system::SolidSystem;
 use super::terms::{CellHook, Inertia, Rates, Terms};
-use crate::assembly::{LocalSystem, SharedMut, FIXED, MAX_LOCAL};
+use crate::assembly::{LocalSystem, SharedMut, CONSTRAINED, MAX_LOCAL};
 use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::SolidModel;
@@ -744,7 +744,7 @@ impl Transient {
         if let Some(c) = &self.sys.contact {
             if c.load.is_some() && self.sys.dofs.n_global > 0 {
                 let e = self.sys.dofs.eq[self.sys.dofs.global(0)];
-                if e != FIXED {
+                if e < CONSTRAINED {
                     self.fprev[e as usize] = 0.0;
                 }
             }
@@ -839,7 +839,7 @@ impl Transient {
                 self.a1.copy_from_slice(&self.an);
                 for d in 0..self.un.len() {
                     let e = self.sys.dofs.eq[d];
-                    if e != FIXED && self.ml[d] > 0.0 {
+                    if e < CONSTRAINED && self.ml[d] > 0.0 {
                         self.a1[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
                     }
                 }
@@ -847,7 +847,7 @@ impl Transient {
                 self.prescribe(t1);
                 self.v1.copy_from_slice(&self.vn);
                 for d in 0..self.un.len() {
-                    if self.sys.dofs.eq[d] != FIXED && self.ml[d] > 0.0 {
+                    if self.sys.dofs.eq[d] < CONSTRAINED && self.ml[d] > 0.0 {
                         self.v1[d] += dt * self.a1[d];
                         self.sys.x[d] = self.un[d] + dt * self.v1[d];
                     } else {
@@ -934,7 +934,7 @@ impl Transient {
             let w = cm.boundary_row_sums(&self.sys.model.mesh);
             for (node, wa) in w.iter().enumerate() {
                 let e = self.sys.dofs.eq[2 * node + 1];
-                if e != FIXED && *wa > 0.0 {
+                if e < CONSTRAINED && *wa > 0.0 {
                     kc[e as usize] = nv.d_delta * wa;
                     cc[e as usize] = nv.d_rate * wa;
                 }
@@ -942,7 +942,7 @@ impl Transient {
         }
         let mut ml = vec![0.0; n];
         for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
-            if e != FIXED && d < self.sys.dofs.n_u {
+            if e < CONSTRAINED && d < self.sys.dofs.n_u {
                 ml[e as usize] = self.ml[d];
             }
         }

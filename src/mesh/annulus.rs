@@ -161,6 +161,7 @@ pub fn annulus(spec: &AnnulusSpec) -> Mesh {
         }),
         regions: vec![0; n_cells],
         region_names: vec!["all".to_string()],
+        constraints: Vec::new(),
     }
 }
 

@@ -338,6 +338,7 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
         rings: None,
         regions,
         region_names,
+        constraints: Vec::new(),
     };
     if let Some(c) = first_inverted_cell(&mesh) {
         return Err(err(format!(

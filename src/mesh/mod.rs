@@ -15,11 +15,13 @@
 pub mod annulus;
 pub mod gmsh;
 pub mod locate;
+pub mod refine;
 
 use crate::math::{Mat2, Vec2};
 use std::collections::BTreeMap;
 
 pub use annulus::{annulus, AnnulusSpec};
+pub use refine::{Forest, NodeConstraint};
 
 /// Geometry map of a cell from the reference square [-1, 1]² to the reference configuration.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,6 +141,9 @@ pub struct Mesh {
     pub regions: Vec<u16>,
     /// Region names; the generator's single region is `"all"`.
     pub region_names: Vec<String>,
+    /// Hanging-node constraints of a locally refined mesh ([`refine`]): the displacement of
+    /// each listed node is the given combination of its masters' (none are constrained).
+    pub constraints: Vec<NodeConstraint>,
 }
 
 impl Mesh {

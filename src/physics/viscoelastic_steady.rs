@@ -60,7 +60,7 @@
 //! Units: those of the scene (stress for γ, time for τ_i, rad/s for ω).
 
 use super::SolidModel;
-use crate::assembly::{DofMap, QpHistory, FIXED};
+use crate::assembly::{DofMap, QpHistory, CONSTRAINED};
 use crate::material::viscoelastic::{exp_weights, green_strain, ViscoModel, Viscoelastic};
 use crate::material::viscoelastic_ring::periodic_affine;
 use crate::math::Mat2;
@@ -418,7 +418,7 @@ impl SteadyHistory {
         full.clear();
         full.resize(n_full, 0.0);
         for (d, &q) in dofs.eq.iter().enumerate() {
-            if q != FIXED {
+            if q < CONSTRAINED {
                 full[d] = v[q as usize];
             }
         }
@@ -480,7 +480,7 @@ impl SteadyHistory {
             for a in 0..nn {
                 for comp in 0..2 {
                     let q = dofs.eq[cd[2 * a + comp] as usize];
-                    if q != FIXED {
+                    if q < CONSTRAINED {
                         out[q as usize] +=
                             geo.w * (dp[(comp, 0)] * geo.g[a][0] + dp[(comp, 1)] * geo.g[a][1]);
                     }

@@ -47,7 +47,7 @@
 //!   (restored afterwards).
 
 use super::{SteadyMonitor, TimeOptions, Transient, TransientReport};
-use crate::assembly::FIXED;
+use crate::assembly::CONSTRAINED;
 use crate::solver::SolveError;
 use diffsol::op::unit::UnitCallable;
 use diffsol::op::ParameterisedOp;
@@ -160,7 +160,7 @@ impl<'t> FirstOrder<'t> {
         let n = dofs.n_eq;
         let mut free = vec![0; n];
         for (d, &e) in dofs.eq.iter().enumerate() {
-            if e != FIXED {
+            if e < CONSTRAINED {
                 free[e as usize] = d;
             }
         }
@@ -183,7 +183,7 @@ impl<'t> FirstOrder<'t> {
                             dofs.eq[cd[2 * a + i] as usize],
                             dofs.eq[cd[2 * b + i] as usize],
                         );
-                        if er == FIXED || ec == FIXED {
+                        if er >= CONSTRAINED || ec >= CONSTRAINED {
                             continue;
                         }
                         let (s, e) = (col_ptr[ec as usize], col_ptr[ec as usize + 1]);

@@ -1,0 +1,223 @@
+//! Local refinement of solid meshes with hanging nodes: the forest reproduces an unrefined
+//! mesh, stays one-irregular, constrains every hanging node to its coarse side (exactly for the
+//! isoparametric map), passes the patch test of a homogeneous deformation, and the assembled
+//! tangent of the constrained system equals finite differences of its residual.
+
+use tread::driver::SolidSystem;
+use tread::material::{Material, MooneyRivlin, NeoHookean};
+use tread::math::{Mat2, Vec2};
+use tread::mesh::{annulus, AnnulusSpec, Forest, Mesh};
+use tread::physics::{PressureMode, SolidModel};
+use tread::solver::NonlinearSystem;
+
+fn root(order: usize, n_r: usize, n_theta: usize) -> Mesh {
+    annulus(&AnnulusSpec {
+        ri: 1.0,
+        ro: 2.0,
+        n_r,
+        n_theta,
+        degree: order,
+        grading_r: 1.3,
+        grading_theta: 0.2,
+    })
+}
+
+/// Refine leaf `first`, then the first child of it that touches an unrefined neighbour, so that
+/// the one-irregularity closure has to act.
+fn refined(order: usize, iso: bool) -> (Forest, Mesh) {
+    let mut m = root(order, 2, 8);
+    if iso {
+        m.make_isoparametric();
+    }
+    let mut f = Forest::new(m).unwrap();
+    f.refine(&[9]).unwrap();
+    let n0 = f.leaves().len();
+    // The children of leaf 9 are at its place: 9..13. Refine one of them twice.
+    f.refine(&[9]).unwrap();
+    let n1 = f.leaves().len();
+    assert!(
+        n1 > n0 + 3,
+        "one-irregularity closure split no neighbour ({n0} -> {n1})"
+    );
+    f.refine(&[9]).unwrap();
+    let (mesh, _) = f.mesh();
+    (f, mesh)
+}
+
+#[test]
+fn unrefined_forest_reproduces_the_mesh() {
+    for order in [1, 2] {
+        let m = root(order, 3, 12);
+        let f = Forest::new(m.clone()).unwrap();
+        let (r, origin) = f.mesh();
+        assert_eq!(r.n_nodes(), m.n_nodes());
+        assert_eq!(r.n_cells(), m.n_cells());
+        assert_eq!(origin.len(), r.n_nodes());
+        assert!(r.constraints.is_empty());
+        for name in ["hub", "outer"] {
+            assert_eq!(r.facet_set(name).len(), m.facet_set(name).len(), "{name}");
+            assert_eq!(r.node_set(name).len(), m.node_set(name).len(), "{name}");
+        }
+    }
+}
+
+#[test]
+fn hanging_nodes_lie_on_their_coarse_sides() {
+    for order in [1, 2] {
+        let (f, mesh) = refined(order, true);
+        assert!(!mesh.constraints.is_empty());
+        let constrained: std::collections::HashSet<u32> =
+            mesh.constraints.iter().map(|c| c.node).collect();
+        for c in &mesh.constraints {
+            let sum: f64 = c.masters.iter().map(|m| m.1).sum();
+            assert!((sum - 1.0).abs() < 1e-14, "weights sum {sum}");
+            assert!(c.masters.iter().all(|m| !constrained.contains(&m.0)));
+            let x: Vec2 = c
+                .masters
+                .iter()
+                .fold(Vec2::zeros(), |s, &(m, w)| s + mesh.nodes[m as usize] * w);
+            let err = (x - mesh.nodes[c.node as usize]).norm();
+            assert!(
+                err < 1e-12,
+                "Q{order}: hanging node {} off its side by {err:.2e}",
+                c.node
+            );
+        }
+        // One-irregular: leaves that share a side differ by at most one level.
+        eprintln!(
+            "Q{order}: {} leaves, {} nodes, {} hanging nodes, levels up to {}",
+            f.leaves().len(),
+            mesh.n_nodes(),
+            mesh.constraints.len(),
+            f.leaves().iter().map(|l| l.level).max().unwrap()
+        );
+        // The facets of the outer boundary cover its angle once.
+        let mut angle = 0.0;
+        for fc in mesh.facet_set("outer") {
+            let n = mesh.cell_nodes(fc.cell as usize);
+            let ln = fc.local_nodes(order);
+            let (a, b) = (
+                mesh.nodes[n[ln[0]] as usize],
+                mesh.nodes[n[ln[order]] as usize],
+            );
+            let d = (a[0] * b[1] - a[1] * b[0]).atan2(a.dot(&b)).abs();
+            angle += d;
+        }
+        let two_pi = 2.0 * std::f64::consts::PI;
+        assert!(
+            (angle - two_pi).abs() < 1e-12,
+            "outer facets cover {angle} rad"
+        );
+    }
+}
+
+fn system(mesh: Mesh, material: Material) -> SolidSystem {
+    let model = SolidModel::new(mesh, material, 0.8, PressureMode::None);
+    SolidSystem::new(model, "hub")
+}
+
+/// u = H X on every node: the constrained values are the masters' interpolation of it, and the
+/// residual vanishes at every equation away from the boundary (the refined cells, the hanging
+/// nodes' masters included).
+#[test]
+fn homogeneous_deformation_passes_the_patch_test() {
+    let h = Mat2::new(0.04, -0.02, 0.03, -0.05);
+    for order in [1, 2] {
+        let (_, mesh) = refined(order, true);
+        let mut sys = system(mesh, NeoHookean::new(2.0, 5.0).into());
+        for (n, x) in sys.model.mesh.nodes.iter().enumerate() {
+            let u = h * x;
+            sys.x[2 * n] = u[0];
+            sys.x[2 * n + 1] = u[1];
+        }
+        let before = sys.x.clone();
+        sys.dofs.apply_constraints(&mut sys.x);
+        let moved = before
+            .iter()
+            .zip(&sys.x)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(
+            moved < 1e-14,
+            "constraints moved an affine field by {moved:.2e}"
+        );
+        assert!(sys.evaluate(false));
+        let boundary: std::collections::HashSet<u32> = ["hub", "outer"]
+            .iter()
+            .flat_map(|s| sys.model.mesh.node_set(s).iter().copied())
+            .collect();
+        let scale = sys.asm.scale.iter().fold(0.0f64, |m, v| m.max(*v));
+        let mut worst = 0.0f64;
+        for n in 0..sys.model.mesh.n_nodes() {
+            if boundary.contains(&(n as u32)) {
+                continue;
+            }
+            for i in 0..2 {
+                if let Some(e) = sys.dofs.equation(2 * n + i) {
+                    worst = worst.max(sys.residual()[e].abs());
+                }
+            }
+        }
+        eprintln!("Q{order}: interior residual {worst:.2e} (force scale {scale:.2e})");
+        assert!(
+            worst < 1e-12 * scale,
+            "Q{order}: patch test residual {worst:.3e}"
+        );
+    }
+}
+
+#[test]
+fn tangent_matches_finite_differences_with_hanging_nodes() {
+    for (order, material) in [
+        (1, Material::from(NeoHookean::new(2.0, 5.0))),
+        (2, MooneyRivlin::new(0.8, 0.2, 20.0).into()),
+    ] {
+        let (_, mesh) = refined(order, false);
+        let mut sys = system(mesh, material);
+        sys.model.omega2 = 3.0;
+        sys.model.body_force = Some(Box::new(|x: Vec2| {
+            Vec2::new(0.3 * x[1], -0.2 * x[0] * x[0])
+        }));
+        // A smooth state on the free equations; constrained dofs follow.
+        let n = sys.n_eq();
+        let mut y = vec![0.0; n];
+        for node in 0..sys.model.mesh.n_nodes() {
+            let x = sys.model.mesh.nodes[node];
+            if let Some(e) = sys.dofs.equation(2 * node) {
+                y[e] = 0.05 * (x[0] * 1.3).sin() + 0.02 * x[1];
+            }
+            if let Some(e) = sys.dofs.equation(2 * node + 1) {
+                y[e] = 0.04 * (x[1] * 0.9).cos() * x[0];
+            }
+        }
+        sys.update(1.0, &y);
+        assert!(sys.evaluate(true));
+        let k = sys.asm.to_dense();
+        let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut err = 0.0f64;
+        let mut e = vec![0.0; n];
+        let hstep = 1e-6;
+        for j in 0..n {
+            e.fill(0.0);
+            e[j] = hstep;
+            sys.update(1.0, &e);
+            assert!(sys.evaluate(false));
+            let rp = sys.residual().to_vec();
+            sys.update(-2.0, &e);
+            assert!(sys.evaluate(false));
+            let rm = sys.residual().to_vec();
+            sys.update(1.0, &e);
+            for i in 0..n {
+                err = err.max(((rp[i] - rm[i]) / (2.0 * hstep) - k[i][j]).abs());
+            }
+        }
+        eprintln!(
+            "Q{order}: {n} equations, max |K − K_fd| / max |K| = {:.2e}",
+            err / kmax
+        );
+        assert!(
+            err / kmax < 1e-7,
+            "Q{order}: tangent error {:.3e}",
+            err / kmax
+        );
+    }
+}
