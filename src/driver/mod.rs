@@ -16,6 +16,7 @@
 //! Conventions throughout: forces per unit thickness, ω in rad/s (counter-clockwise > 0), the
 //! road at x2 = −H below the hub centre, units as the scene declares them.
 
+pub mod adaptive;
 pub mod compare;
 pub mod critical;
 pub mod envelope;

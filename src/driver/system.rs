@@ -718,20 +718,42 @@ impl SolidSystem {
         let mut force = Vec2::zeros();
         let mut moment = 0.0;
         let mut loc = Box::new(LocalSystem::new(0));
+        // A hanging node's force goes to its masters with their weights: to the hub where a
+        // master is a hub node.
+        let mut hub_share = vec![Vec::new(); mesh.n_nodes()];
+        for cons in &mesh.constraints {
+            hub_share[cons.node as usize] = cons
+                .masters
+                .iter()
+                .filter(|&&(m, _)| is_hub[m as usize])
+                .copied()
+                .collect();
+        }
+        let touches = |n: u32| is_hub[n as usize] || !hub_share[n as usize].is_empty();
+        let fixed = |n: usize| self.dofs.eq[2 * n] == crate::assembly::FIXED;
         for c in 0..mesh.n_cells() {
             let nodes = mesh.cell_nodes(c);
-            if !nodes.iter().any(|&n| is_hub[n as usize]) {
+            if !nodes.iter().any(|&n| touches(n)) {
                 continue;
             }
             loc.clear(self.dofs.cell(c).len());
             cells.eval(c, &mut loc, false, None);
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
-                if is_hub[n] && self.dofs.eq[2 * n] == crate::assembly::FIXED {
-                    let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
-                    let xp = mesh.nodes[n] + Vec2::new(x[2 * n], x[2 * n + 1]);
-                    force += f;
-                    moment += xp[0] * f[1] - xp[1] * f[0];
+                let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
+                let mut add = |m: usize, w: f64| {
+                    let xp = mesh.nodes[m] + Vec2::new(x[2 * m], x[2 * m + 1]);
+                    force += f * w;
+                    moment += w * (xp[0] * f[1] - xp[1] * f[0]);
+                };
+                if is_hub[n] && fixed(n) {
+                    add(n, 1.0);
+                } else {
+                    for &(m, w) in &hub_share[n] {
+                        if fixed(m as usize) {
+                            add(m as usize, w);
+                        }
+                    }
                 }
             }
         }

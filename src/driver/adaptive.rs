@@ -1,0 +1,243 @@
+//! Adaptive static indentation: solve → estimate → mark → refine → transfer, on a locally
+//! refined annulus with hanging nodes ([`crate::mesh::refine`]).
+//!
+//! 1. **Solve** the static indentation on the current mesh: by load stepping on the first mesh,
+//!    then by Newton at the full load from the transferred state (load stepping from scratch if
+//!    that fails).
+//! 2. **Estimate** the energy error cell by cell with the Zienkiewicz–Zhu recovery estimator
+//!    ([`crate::physics::estimate::recovery`]).
+//! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
+//!    the fraction θ of the total.
+//! 4. **Refine** the marked cells into four, keeping the mesh one-irregular.
+//! 5. **Transfer** the displacement to the new mesh by evaluating the old solution at the new
+//!    nodes (exact for the nodes of unrefined cells and for the children's nodes that the
+//!    parent interpolates).
+//!
+//! The root mesh is the scene's structured annulus with the exact polar cell map, so every
+//! refined cell lies exactly on the circles and the adaptive meshes converge to the true
+//! geometry. Static indentation only (no inertia, no history).
+
+use super::indentation::{self, IndentationResults};
+use super::system::{Loading, SolidSystem};
+use crate::element::{Lagrange2D, Q1, Q2};
+use crate::io::scene::Scene;
+use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
+use crate::physics::estimate;
+use crate::physics::SolidModel;
+use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
+use crate::solver::stepping::{LoadedSystem, StepReport};
+use crate::solver::Newton;
+use std::path::Path;
+use std::time::Instant;
+
+/// Options of the adaptive loop.
+#[derive(Clone, Debug)]
+pub struct AdaptOptions {
+    /// Refinement steps after the first solve.
+    pub steps: usize,
+    /// Dörfler fraction θ ∈ (0, 1]: marked cells carry θ of the squared estimate.
+    pub fraction: f64,
+    /// Stop before a mesh would exceed this many equations.
+    pub max_dofs: usize,
+    /// Stop once the relative estimate η / ‖u_h‖_A is below this.
+    pub tolerance: f64,
+}
+
+impl Default for AdaptOptions {
+    fn default() -> Self {
+        Self {
+            steps: 8,
+            fraction: 0.5,
+            max_dofs: 200_000,
+            tolerance: 0.0,
+        }
+    }
+}
+
+/// One mesh of the adaptive sequence.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AdaptStep {
+    pub step: usize,
+    pub cells: usize,
+    pub dofs: usize,
+    pub hanging_nodes: usize,
+    pub max_level: u8,
+    /// Recovery estimate η and its ratio to the energy norm of the solution.
+    pub estimate: f64,
+    pub relative_estimate: f64,
+    pub hub_force_x: f64,
+    pub hub_force_y: f64,
+    pub newton_iterations: usize,
+    /// Wall time of this step's solve and estimate, and since the start (s).
+    pub wall_step_s: f64,
+    pub wall_total_s: f64,
+}
+
+/// The scene's annulus with the exact polar map (no `make_isoparametric`).
+pub fn polar_root(scene: &Scene) -> Result<Mesh, AppError> {
+    let ms = &scene.mesh;
+    if ms.file.is_some() {
+        return Err(AppError::Unsupported(
+            "adaptive indentation refines the generated annulus ([mesh] n_r, n_theta), not a mesh file".into(),
+        ));
+    }
+    Ok(annulus(&AnnulusSpec {
+        ri: scene.geometry.ri,
+        ro: scene.geometry.ro,
+        n_r: ms.n_r,
+        n_theta: ms.n_theta,
+        degree: ms.order,
+        grading_r: ms.grading_r,
+        grading_theta: ms.grading_theta,
+    }))
+}
+
+/// The scene's static indentation system on `mesh`.
+pub fn indentation_system(scene: &Scene, mesh: Mesh) -> Result<SolidSystem, AppError> {
+    if scene.material.viscoelastic.is_some() {
+        return Err(AppError::Unsupported(
+            "adaptive indentation: viscoelastic materials have no static limit here".into(),
+        ));
+    }
+    let (material, pressure) = build_material(scene)?;
+    let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    let contact = build_contact(scene, &model)?;
+    let mut sys = SolidSystem::with_contact(model, contact);
+    sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
+        Some(load) => Loading::Load { load },
+        None => Loading::Indent {
+            h_touch: scene.geometry.ro,
+            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+        },
+    };
+    Ok(sys)
+}
+
+/// Solve `sys` to the full load: from its current state by Newton when `warm`, else (or if
+/// that fails) by load stepping from the undeformed state. Returns the Newton iterations.
+pub fn solve_static(
+    scene: &Scene,
+    sys: &mut SolidSystem,
+    warm: bool,
+    out_dir: &Path,
+) -> Result<usize, AppError> {
+    let kind = linear_kind(scene, sys);
+    let (newton_opts, step_opts) = solver_options(scene, false);
+    if warm {
+        sys.set_load(1.0);
+        let ro = scene.geometry.ro;
+        sys.set_reference_force(sys.contact_force_scale(ro));
+        let warm_run = Newton::new(sys, kind, newton_opts.clone()).and_then(|mut n| n.solve(sys));
+        match warm_run {
+            Ok(rep) => return Ok(rep.iterations),
+            Err(_) => sys.x = sys.model.initial_state(&sys.dofs),
+        }
+    }
+    let mut report = StepReport::default();
+    indentation::solve_indentation(sys, kind, newton_opts, &step_opts, &mut report, &mut ())
+        .map_err(|e| AppError::Solve(e, out_dir.to_path_buf()))?;
+    Ok(report.total_iterations)
+}
+
+/// Displacement of `mesh` with state `x` at local point (ξ, η) of cell `c`.
+fn displacement_at(mesh: &Mesh, x: &[f64], c: usize, xi: f64, eta: f64) -> [f64; 2] {
+    let nodes = mesh.cell_nodes(c);
+    let mut n = [0.0; 9];
+    let mut dn = [[0.0; 2]; 9];
+    if mesh.degree[c] == 1 {
+        Q1::eval(xi, eta, &mut n[..4], &mut dn[..4]);
+    } else {
+        Q2::eval(xi, eta, &mut n[..9], &mut dn[..9]);
+    }
+    let mut u = [0.0; 2];
+    for (a, &node) in nodes.iter().enumerate() {
+        u[0] += n[a] * x[2 * node as usize];
+        u[1] += n[a] * x[2 * node as usize + 1];
+    }
+    u
+}
+
+/// Run the adaptive loop on the scene (static indentation). `on_step` sees every solved mesh
+/// with its indicators; `out_dir` is where the caller writes (named in errors).
+pub fn run(
+    scene: &Scene,
+    opts: &AdaptOptions,
+    out_dir: &Path,
+    mut on_step: impl FnMut(&SolidSystem, &AdaptStep, &[f64]),
+) -> Result<(SolidSystem, Vec<AdaptStep>), AppError> {
+    if !(opts.fraction > 0.0 && opts.fraction <= 1.0) {
+        return Err(AppError::Unsupported(format!(
+            "adaptive indentation: the Dörfler fraction must be in (0, 1], got {}",
+            opts.fraction
+        )));
+    }
+    let t0 = Instant::now();
+    let mut forest = Forest::new(polar_root(scene)?)
+        .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+    let (mut mesh, _) = forest.mesh();
+    let mut sys = indentation_system(scene, mesh.clone())?;
+    let mut steps = Vec::new();
+    let mut warm = false;
+    for step in 0..=opts.steps {
+        let ts = Instant::now();
+        let iterations = solve_static(scene, &mut sys, warm, out_dir)?;
+        let est = estimate::recovery(&sys.model, &sys.dofs, &sys.x);
+        let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
+        let r: IndentationResults = indentation::results(&sys, scene.geometry.ro);
+        let rec = AdaptStep {
+            step,
+            cells: mesh.n_cells(),
+            dofs: sys.n_dofs(),
+            hanging_nodes: mesh.constraints.len(),
+            max_level: forest.leaves().iter().map(|l| l.level).max().unwrap_or(0),
+            estimate: est.global,
+            relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
+            hub_force_x: r.hub_force_x,
+            hub_force_y: r.hub_force_y,
+            newton_iterations: iterations,
+            wall_step_s: ts.elapsed().as_secs_f64(),
+            wall_total_s: t0.elapsed().as_secs_f64(),
+        };
+        on_step(&sys, &rec, &est.indicators);
+        let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
+        steps.push(rec);
+        if done {
+            break;
+        }
+        // Mark (Dörfler) and refine.
+        let mut order: Vec<usize> = (0..est.indicators.len()).collect();
+        order.sort_by(|&a, &b| est.indicators[b].total_cmp(&est.indicators[a]));
+        let total: f64 = est.indicators.iter().map(|v| v * v).sum();
+        let mut acc = 0.0;
+        let mut marked = Vec::new();
+        for k in order {
+            if acc >= opts.fraction * total {
+                break;
+            }
+            acc += est.indicators[k] * est.indicators[k];
+            marked.push(k);
+        }
+        let old_forest = forest.clone();
+        forest
+            .refine(&marked)
+            .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+        let (new_mesh, origin) = forest.mesh();
+        let mut next = indentation_system(scene, new_mesh.clone())?;
+        if next.n_dofs() > opts.max_dofs {
+            break;
+        }
+        // Transfer.
+        for (node, &(root, xi, eta)) in origin.iter().enumerate() {
+            if let Some((leaf, (a, b))) = old_forest.locate(root, xi, eta) {
+                let u = displacement_at(&mesh, &sys.x, leaf, a, b);
+                next.x[2 * node] = u[0];
+                next.x[2 * node + 1] = u[1];
+            }
+        }
+        next.dofs.apply_constraints(&mut next.x);
+        sys = next;
+        mesh = new_mesh;
+        warm = true;
+    }
+    Ok((sys, steps))
+}
