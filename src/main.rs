@@ -102,6 +102,31 @@ enum Command {
         #[arg(short, long)]
         verbose: bool,
     },
+    /// Adaptive static indentation: solve, estimate (Zienkiewicz–Zhu), mark (Dörfler), refine
+    /// with hanging nodes, transfer, repeat. Writes OUT/adapt.csv and OUT/adapt.json (one row
+    /// per mesh: cells, equations, hanging nodes, estimate, hub forces, times) and
+    /// OUT/adapt_NNN.vtu (each mesh with its `error_indicator`). The scene must be a static
+    /// indentation on the generated annulus (its n_r × n_theta mesh is the coarsest).
+    Adapt {
+        scene: PathBuf,
+        /// Output directory (default: out/<scene name>_adapt/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Refinement steps after the first solve.
+        #[arg(long, default_value_t = 8)]
+        steps: usize,
+        /// Dörfler fraction θ in (0, 1]: the marked cells carry θ of the squared estimate.
+        #[arg(long, default_value_t = 0.5)]
+        fraction: f64,
+        /// Stop before a mesh would have more equations than this.
+        #[arg(long, default_value_t = 200_000)]
+        max_dofs: usize,
+        /// Stop once the relative estimate (estimate / energy norm) is below this.
+        #[arg(long, default_value_t = 0.0)]
+        tolerance: f64,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
     /// Validate a scene and print it with every default filled in.
     Check {
         scene: PathBuf,
@@ -506,6 +531,71 @@ fn main() -> ExitCode {
                         say(&format!(
                             "results written to {}",
                             dir.join("critical.json").display()
+                        ));
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => {
+                        eprintln!("tread: error: {e}");
+                        ExitCode::from(e.exit_code())
+                    }
+                }
+            }
+            Err(e) => {
+                eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
+                ExitCode::from(2)
+            }
+        },
+        Some(Command::Adapt {
+            scene,
+            out,
+            steps,
+            fraction,
+            max_dofs,
+            tolerance,
+            set,
+        }) => match load(&scene, &set) {
+            Ok(s) => {
+                use tread::driver::adaptive;
+                let opts = adaptive::AdaptOptions {
+                    steps,
+                    fraction,
+                    max_dofs,
+                    tolerance,
+                };
+                let dir = out.unwrap_or_else(|| {
+                    app::default_out_dir(&s).with_file_name(format!("{}_adapt", s.scene.name))
+                });
+                let mut vtu_error = None;
+                let res = tread::io::output::ensure_dir(&dir)
+                    .map_err(tread::app::AppError::from)
+                    .and_then(|()| {
+                        adaptive::run(&s, &opts, &dir, |sys, st, _| {
+                            if vtu_error.is_none() {
+                                vtu_error = adaptive::write_vtu(&dir, st.step, sys).err();
+                            }
+                            if !cli.quiet {
+                                say(&format!(
+                                    "  mesh {}: {} cells, {} equations, estimate {:.3e} relative, hub force y {:.9e}",
+                                    st.step, st.cells, st.dofs, st.relative_estimate, st.hub_force_y
+                                ));
+                            }
+                        })
+                    })
+                    .and_then(|(_, steps)| {
+                        adaptive::write(&dir, &opts, &steps)?;
+                        match vtu_error.take() {
+                            Some(e) => Err(e.into()),
+                            None => Ok(steps),
+                        }
+                    });
+                match res {
+                    Ok(steps) => {
+                        if !cli.quiet {
+                            say(&adaptive::headline(&steps));
+                        }
+                        say(&format!(
+                            "results written to {}",
+                            dir.join("adapt.csv").display()
                         ));
                         ExitCode::SUCCESS
                     }

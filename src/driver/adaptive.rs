@@ -20,13 +20,17 @@
 use super::indentation::{self, IndentationResults};
 use super::system::{Loading, SolidSystem};
 use crate::element::{Lagrange2D, Q1, Q2};
+use crate::io::output::{ensure_dir, write_json, OutputError};
+use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::Scene;
+use crate::io::scene::VtuFormat;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::estimate;
 use crate::physics::SolidModel;
 use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
 use crate::solver::stepping::{LoadedSystem, StepReport};
 use crate::solver::Newton;
+use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -171,6 +175,12 @@ pub fn run(
             opts.fraction
         )));
     }
+    if scene.analysis.mode != crate::io::scene::Mode::Static {
+        return Err(AppError::Unsupported(format!(
+            "adaptive indentation needs analysis.mode = \"static\" (the scene's is \"{}\")",
+            scene.analysis.mode
+        )));
+    }
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
         .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
@@ -240,4 +250,77 @@ pub fn run(
         warm = true;
     }
     Ok((sys, steps))
+}
+
+/// Write `DIR/adapt.csv` (one row per mesh), `DIR/adapt.json` (options and steps) and, through
+/// `on_step` of [`run`], `DIR/adapt_<step>.vtu` (the mesh, displacement, stresses and the
+/// `error_indicator` per cell).
+pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
+    ensure_dir(dir)?;
+    let mut csv = String::from(
+        "step,cells,dofs,hanging_nodes,max_level,estimate,relative_estimate,hub_force_x,hub_force_y,newton_iterations,wall_step_s,wall_total_s\n",
+    );
+    for s in steps {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{},{:.6},{:.6}",
+            s.step,
+            s.cells,
+            s.dofs,
+            s.hanging_nodes,
+            s.max_level,
+            s.estimate,
+            s.relative_estimate,
+            s.hub_force_x,
+            s.hub_force_y,
+            s.newton_iterations,
+            s.wall_step_s,
+            s.wall_total_s
+        );
+    }
+    let path = dir.join("adapt.csv");
+    std::fs::write(&path, csv).map_err(|source| OutputError { path, source })?;
+    let json = serde_json::json!({
+        "options": {
+            "steps": opts.steps,
+            "fraction": opts.fraction,
+            "max_dofs": opts.max_dofs,
+            "tolerance": opts.tolerance,
+            "estimator": "recovery",
+            "marking": "doerfler",
+        },
+        "steps": steps,
+    });
+    write_json(&dir.join("adapt.json"), &json)
+}
+
+/// The VTU of one solved mesh, with the cells' error indicators.
+pub fn write_vtu(dir: &Path, step: usize, sys: &SolidSystem) -> Result<(), OutputError> {
+    let frame = super::frame::SolidFrame::capture(sys);
+    let view = frame.view(sys, &[]);
+    let path = dir.join(format!("adapt_{step:03}.vtu"));
+    std::fs::write(
+        &path,
+        vtu_bytes(&sys.model.mesh, &view, step as f64, VtuFormat::Binary),
+    )
+    .map_err(|source| OutputError { path, source })
+}
+
+/// One line on the last mesh.
+pub fn headline(steps: &[AdaptStep]) -> String {
+    match steps.last() {
+        Some(s) => format!(
+            "adaptive indentation: {} meshes, last {} cells, {} equations ({} hanging nodes, level {}), estimate {:.3e} ({:.3e} relative), hub force = ({:.6e}, {:.6e})",
+            steps.len(),
+            s.cells,
+            s.dofs,
+            s.hanging_nodes,
+            s.max_level,
+            s.estimate,
+            s.relative_estimate,
+            s.hub_force_x,
+            s.hub_force_y
+        ),
+        None => "adaptive indentation: no mesh solved".into(),
+    }
 }

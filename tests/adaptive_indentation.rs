@@ -1,0 +1,154 @@
+//! Adaptive static indentation (solve → ZZ estimate → Dörfler marking → refinement with
+//! hanging nodes → transfer) on the paper's cylinder pressed 0.1 in into a frictionless road.
+
+use std::path::Path;
+use std::process::Command;
+use tread::driver::adaptive::{indentation_system, polar_root, run, solve_static, AdaptOptions};
+use tread::driver::indentation;
+use tread::io::Scene;
+
+fn scene(sets: &[&str]) -> Scene {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/indentation_frictionless.toml"),
+    )
+    .unwrap();
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    Scene::from_toml_str(&text, "indentation_frictionless", &sets).unwrap()
+}
+
+/// Equilibrium with hanging nodes (hub force = −contact force), the estimator's optimal rate
+/// N^−1 for Q2, and a hub force that converges faster in the number of equations than on the
+/// uniformly refined structured mesh.
+#[test]
+fn adaptive_indentation_converges_at_the_optimal_rate() {
+    let s = scene(&["mesh.n_r=2", "mesh.n_theta=32", "mesh.grading_theta=0"]);
+    let opts = AdaptOptions {
+        steps: 14,
+        fraction: 0.5,
+        ..Default::default()
+    };
+    let mut equilibrium = 0.0f64;
+    let (_, steps) = run(&s, &opts, Path::new("unused"), |sys, st, ind| {
+        let r = indentation::results(sys, 2.0);
+        let e =
+            (r.hub_force_y + r.contact_force_y).abs() + (r.hub_force_x + r.contact_force_x).abs();
+        equilibrium = equilibrium.max(e / r.contact_force_y.abs());
+        assert_eq!(ind.len(), st.cells);
+        eprintln!(
+            "{:2}: {:5} cells {:6} eqs {:4} hanging level {} eta_rel {:.3e} F_y {:.10e}",
+            st.step,
+            st.cells,
+            st.dofs,
+            st.hanging_nodes,
+            st.max_level,
+            st.relative_estimate,
+            st.hub_force_y
+        );
+    })
+    .unwrap();
+    assert_eq!(steps.len(), 15);
+    assert!(
+        equilibrium < 1e-10,
+        "hub force + contact force = {equilibrium:.2e} relative"
+    );
+    assert!(steps.iter().skip(1).all(|s| s.hanging_nodes > 0));
+    // Estimator rate over the last six meshes: Q2 adaptive, η ∝ N^−1 (measured 0.99).
+    let (a, b) = (&steps[8], &steps[14]);
+    let rate = -(b.estimate / a.estimate).ln() / (b.dofs as f64 / a.dofs as f64).ln();
+    eprintln!("estimator rate in N over steps 8..14: {rate:.3}");
+    assert!((rate - 1.0).abs() < 0.15, "estimator rate {rate:.3}");
+    // Hub force: the adaptive mesh nearest 8k equations against the finest adaptive one, and
+    // the uniform 8 × 128 mesh (8,192 equations) against the same.
+    let fine = steps[14].hub_force_y;
+    let near = steps
+        .iter()
+        .min_by_key(|s| (s.dofs as i64 - 8192).abs())
+        .unwrap();
+    let adaptive_err = (near.hub_force_y - fine).abs() / fine.abs();
+    let u = scene(&["mesh.n_r=8", "mesh.n_theta=128", "mesh.grading_theta=0"]);
+    let mut sys = indentation_system(&u, polar_root(&u).unwrap()).unwrap();
+    solve_static(&u, &mut sys, false, Path::new("unused")).unwrap();
+    let uniform = indentation::results(&sys, 2.0).hub_force_y;
+    let uniform_err = (uniform - fine).abs() / fine.abs();
+    eprintln!(
+        "against the finest adaptive mesh ({} eqs): adaptive {} eqs {adaptive_err:.2e}, uniform {} eqs {uniform_err:.2e}",
+        steps[14].dofs,
+        near.dofs,
+        sys.n_dofs()
+    );
+    assert!(
+        adaptive_err < 5e-5,
+        "adaptive hub force error {adaptive_err:.2e}"
+    );
+    assert!(near.dofs <= sys.n_dofs() + 1000);
+    assert!(
+        uniform_err > 2.0 * adaptive_err,
+        "uniform {uniform_err:.2e} vs adaptive {adaptive_err:.2e}"
+    );
+}
+
+#[test]
+fn tread_adapt_writes_its_table_and_meshes_and_rejects_other_modes() {
+    let dir = std::env::temp_dir().join(format!("tread_adapt_cli_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let bin = env!("CARGO_BIN_EXE_tread");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let out = Command::new(bin)
+        .args(["-q", "adapt"])
+        .arg(scenes.join("indentation_frictionless.toml"))
+        .args([
+            "--steps",
+            "2",
+            "--set",
+            "mesh.n_r=2",
+            "--set",
+            "mesh.n_theta=32",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("adapt.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("step,cells,dofs,hanging_nodes"));
+    assert_eq!(lines.len(), 4, "{csv}");
+    for l in &lines[1..] {
+        assert!(
+            l.split(',')
+                .all(|v| v.parse::<f64>().is_ok_and(f64::is_finite)),
+            "{l}"
+        );
+    }
+    for k in 0..3 {
+        let vtu = std::fs::read(dir.join(format!("adapt_{k:03}.vtu"))).unwrap();
+        assert!(String::from_utf8_lossy(&vtu).contains("Name=\"error_indicator\""));
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("adapt.json")).unwrap()).unwrap();
+    assert_eq!(json["steps"].as_array().unwrap().len(), 3);
+    // Not a static scene: exit 2 with the reason.
+    let out = Command::new(bin)
+        .args(["-q", "adapt"])
+        .arg(scenes.join("spinning_neo_hookean.toml"))
+        .arg("--out")
+        .arg(dir.join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("analysis.mode = \"static\""));
+    let out = Command::new(bin)
+        .args(["-q", "adapt"])
+        .arg(scenes.join("indentation_frictionless.toml"))
+        .args(["--fraction", "0", "--out"])
+        .arg(dir.join("y"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("Dörfler fraction"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
