@@ -182,6 +182,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             summary,
             typed,
             field: None,
+            history: None,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -357,6 +357,10 @@ pub struct RunOutcome {
     /// transient run's field extracted at its last node passage. None for the other modes and
     /// for a transient run that saw no node passage.
     pub field: Option<Vec<f64>>,
+    /// The quadrature-point history of a stateful material on the referential cells: the
+    /// steady solution's, or the transient run's at its last node passage
+    /// ([`crate::driver::transient::SteadyMonitor::history`]). None otherwise.
+    pub history: Option<crate::assembly::QpHistory>,
     pub out_dir: PathBuf,
     pub converged: bool,
     /// Human-readable result lines for the terminal.

@@ -637,3 +637,79 @@ fn resistance_curve_by_arc_length_continuation_brackets_the_peak() {
         href[k]
     );
 }
+
+/// `tread compare` on the viscoelastic scene as shipped (2 × 32, default tolerances; 10 s):
+/// the transient's internal variables at its last node passage, re-indexed to the referential
+/// cells and rotated into the referential frame, against the steady ones along the rings.
+/// Measured: 8.9 % (relative L2; the hub torque differs by 16 % on this coarse setting, see
+/// the ignored test for the tight one). Without the rotation into the referential frame the
+/// difference was 142 %, and a history one cell off differs by 100 % (asserted below): the
+/// bound checks the bookkeeping. The re-indexing is also checked to invert its inverse exactly.
+#[test]
+fn compare_reports_the_internal_variables_along_rings() {
+    use tread::app::RunOptions;
+    use tread::driver::transient::reindex_history;
+    let sc = Scene::from_toml_str(
+        &scene_text(SCENE),
+        "visco_compare_history",
+        &["output.sinks=[\"summary\",\"csv\"]".to_string()],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir::TestDir::new("visco_steady", "compare-history");
+    let out = tread::driver::compare::run(
+        &sc,
+        &RunOptions {
+            out_dir: dir.to_path_buf(),
+            verbose: false,
+            quiet: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let c = &out.summary["results"]["compare"];
+    let h = c["history_rel_l2"].as_f64().expect("history compared");
+    let hm = c["history_rel_max"].as_f64().expect("history compared");
+    eprintln!("internal variables: rel L2 {h:.3e}, rel max {hm:.3e}");
+    assert!(
+        h < 0.15 && hm < 0.15,
+        "history differences {h:.3e} / {hm:.3e}"
+    );
+    let rings = std::fs::read_to_string(dir.join("history_rings.csv")).unwrap();
+    // 2 × 32 Q2: 3 Gauss points per direction, 6 rings.
+    assert_eq!(rings.lines().count(), 7, "{rings}");
+    // The re-indexing inverts exactly.
+    let st = tread::app::run(
+        &{
+            let mut s = sc.clone();
+            s.analysis.mode = tread::io::scene::Mode::Steady;
+            s
+        },
+        &RunOptions {
+            out_dir: dir.join("steady_only"),
+            verbose: false,
+            quiet: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let hs = st.history.expect("steady history");
+    for k in [1i64, 7, 45] {
+        let phi = k as f64 * 2.0 * std::f64::consts::PI / 32.0;
+        let back = reindex_history(&reindex_history(&hs, 32, -k, -phi), 32, k, phi);
+        let err = back
+            .data
+            .iter()
+            .zip(&hs.data)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(err < 1e-15, "k = {k}: {err:.2e}");
+        let d = tread::driver::compare::history_difference(&sc, &back, &hs)
+            .unwrap()
+            .unwrap();
+        assert!(d.rel_l2 < 1e-14);
+    }
+    // A history turned by one cell too many differs.
+    let wrong = reindex_history(&hs, 32, 1, 2.0 * std::f64::consts::PI / 32.0);
+    let d = tread::driver::compare::history_difference(&sc, &wrong, &hs)
+        .unwrap()
+        .unwrap();
+    eprintln!("one cell off: {:.3e}", d.rel_l2);
+    assert!(d.rel_l2 > 0.05);
+}

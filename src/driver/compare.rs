@@ -27,6 +27,7 @@
 use super::results::{CompareResults, CompareSection, CompareSummary, ModeSummary, Summary};
 use super::steady_run;
 use crate::app::{self, AppError, RunOptions, RunOutcome};
+use crate::assembly::QpHistory;
 use crate::element::QuadRule;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::scene::{Mode, Scene, Sink};
@@ -106,6 +107,101 @@ pub fn field_difference(
     Ok((rel, max_d, max_s))
 }
 
+/// The internal variables of a stateful material from both runs, compared along the rings of
+/// quadrature points ([`QpHistory::ring`]) in polar components (rr, θθ, rθ) at each point's
+/// position, which are the same in the transient's material reference frame and in the
+/// referential frame (the two differ by the rotation φ = kΔθ of the last passage).
+#[derive(Clone, Debug, Default)]
+pub struct HistoryComparison {
+    /// (ring, mean radius, ‖ΔQ‖_L2 / ‖Q_s‖_L2 over the ring, max |ΔQ|, max |Q_s|) per ring.
+    pub rings: Vec<[f64; 5]>,
+    /// Over the whole body (quadrature weights).
+    pub rel_l2: f64,
+    pub max_abs: f64,
+    pub rel_max: f64,
+}
+
+/// Compare the quadrature-point histories `h_t` (transient, re-indexed to the referential
+/// cells) and `h_s` (steady) of `scene`'s mesh: every internal-variable tensor (the entries
+/// after the stored strain, three per tensor `[a11, a22, a12]`). `None` when the mesh has no
+/// rings or the layouts differ.
+pub fn history_difference(
+    scene: &Scene,
+    h_t: &QpHistory,
+    h_s: &QpHistory,
+) -> Result<Option<HistoryComparison>, AppError> {
+    if h_t.n_state != h_s.n_state || h_t.data.len() != h_s.data.len() || h_s.n_state < 6 {
+        return Ok(None);
+    }
+    let model = app::build_model(&with_csv(scene, Mode::Steady))?;
+    let Some(layout) = model.mesh.rings else {
+        return Ok(None);
+    };
+    if h_s.offsets.len() != model.mesh.n_cells() + 1 {
+        return Ok(None);
+    }
+    let q = model.qp_per_direction(0);
+    let polar = |a: &[f64], x: Vec2| -> [f64; 3] {
+        let r = x.norm().max(f64::MIN_POSITIVE);
+        let (c, s) = (x[0] / r, x[1] / r);
+        let (a11, a22, a12) = (a[0], a[1], a[2]);
+        [
+            c * c * a11 + s * s * a22 + 2.0 * c * s * a12,
+            s * s * a11 + c * c * a22 - 2.0 * c * s * a12,
+            c * s * (a22 - a11) + (c * c - s * s) * a12,
+        ]
+    };
+    let n_tensors = h_s.n_state / 3;
+    let mut out = HistoryComparison::default();
+    let (mut num, mut den, mut max_s) = (0.0, 0.0, 0.0f64);
+    let mut g = [[0.0; 2]; 9];
+    for ring in 0..QpHistory::n_rings(&layout, q) {
+        let (mut rn, mut rd, mut rmax_d, mut rmax_s, mut radius, mut count) =
+            (0.0, 0.0, 0.0f64, 0.0f64, 0.0, 0.0f64);
+        for (c, pt) in QpHistory::ring(&layout, q, ring) {
+            let Some((x, w)) = model.qp_geometry(c, pt, &mut g) else {
+                continue;
+            };
+            let (a, b) = (h_t.point(c, pt), h_s.point(c, pt));
+            for t in 1..n_tensors {
+                let (pa, pb) = (
+                    polar(&a[3 * t..3 * t + 3], x),
+                    polar(&b[3 * t..3 * t + 3], x),
+                );
+                for i in 0..3 {
+                    let (d, v) = (pa[i] - pb[i], pb[i]);
+                    // The shear component counts twice in the tensor norm.
+                    let m = if i == 2 { 2.0 } else { 1.0 };
+                    rn += m * d * d * w;
+                    rd += m * v * v * w;
+                    rmax_d = rmax_d.max(d.abs());
+                    rmax_s = rmax_s.max(v.abs());
+                }
+            }
+            radius += x.norm();
+            count += 1.0;
+        }
+        num += rn;
+        den += rd;
+        out.max_abs = out.max_abs.max(rmax_d);
+        max_s = max_s.max(rmax_s);
+        let rel = if rd > 0.0 { (rn / rd).sqrt() } else { f64::NAN };
+        out.rings
+            .push([ring as f64, radius / count.max(1.0), rel, rmax_d, rmax_s]);
+    }
+    out.rel_l2 = if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        f64::NAN
+    };
+    out.rel_max = if max_s > 0.0 {
+        out.max_abs / max_s
+    } else {
+        f64::NAN
+    };
+    Ok(Some(out))
+}
+
 fn with_csv(scene: &Scene, mode: Mode) -> Scene {
     let mut s = scene.clone();
     s.analysis.mode = mode;
@@ -171,6 +267,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         ));
     };
     let (rel_l2, max_d, max_s) = field_difference(scene, u_t, u_s)?;
+    // Internal variables along the rings (stateful materials on ring meshes).
+    let history = match (&tr.history, &st.history) {
+        (Some(ht), Some(hs)) => history_difference(scene, ht, hs)?,
+        (None, Some(_)) => {
+            warnings.push(
+                "the internal variables are not compared: the transient run's last node passage \
+                 did not fall on a step end (or the mesh has no rings)"
+                    .into(),
+            );
+            None
+        }
+        _ => None,
+    };
     let nan = f64::NAN;
     let last = (ts.hub_force_x, ts.hub_force_y, ts.hub_torque);
     let mean = (
@@ -207,6 +316,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         field_rel_l2: rel_l2,
         field_max_abs: max_d,
         field_rel_max: if max_s > 0.0 { max_d / max_s } else { nan },
+        history_rel_l2: history.as_ref().map(|h| h.rel_l2),
+        history_rel_max: history.as_ref().map(|h| h.rel_max),
         contact_x_min_transient: ts.contact_x_min,
         contact_x_min_steady: ss.contact_x_min,
         contact_x_max_transient: ts.contact_x_max,
@@ -275,6 +386,26 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         &["quantity", "transient", "steady", "abs_diff"],
         &rows,
     )?;
+    if let Some(h) = &history {
+        let ring_rows: Vec<Vec<String>> = h
+            .rings
+            .iter()
+            .map(|r| {
+                vec![
+                    (r[0] as usize).to_string(),
+                    r[1].to_string(),
+                    r[2].to_string(),
+                    r[3].to_string(),
+                    r[4].to_string(),
+                ]
+            })
+            .collect();
+        write_text_csv(
+            &opts.out_dir.join("history_rings.csv"),
+            &["ring", "radius", "rel_l2", "max_abs_diff", "max_abs_steady"],
+            &ring_rows,
+        )?;
+    }
     if scene.output.has(Sink::Png) {
         contact_plot(
             &tr_opts.out_dir,
@@ -293,6 +424,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "referential field: relative L2 difference {rel_l2:.3e}, max |du| = {max_d:.3e}; wall time transient {wt:.3} s, steady {ws:.3} s (speed-up {:.1})",
             wt / ws
         ),
+        match &history {
+            Some(h) => format!(
+                "internal variables along the rings: relative L2 difference {:.3e}, max {:.3e} relative (history_rings.csv)",
+                h.rel_l2, h.rel_max
+            ),
+            None => "internal variables: none compared".into(),
+        },
         format!(
             "files: {} (summary.json, compare.csv{}), transient run in {}, steady run in {}",
             opts.out_dir.display(),
@@ -309,6 +447,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         summary,
         typed,
         field: None,
+        history: None,
         out_dir: opts.out_dir.clone(),
         converged,
         headline,

@@ -660,6 +660,11 @@ pub struct CompareResults {
     /// max over nodes of |u_t − u_s| (length) and that over max |u_s|.
     pub field_max_abs: f64,
     pub field_rel_max: f64,
+    /// Internal variables of a stateful material compared along the rings of quadrature
+    /// points (polar components): relative L2 difference and max difference over the largest
+    /// steady value. `None` without internal variables to compare.
+    pub history_rel_l2: Option<f64>,
+    pub history_rel_max: Option<f64>,
     /// Contact patch ends (length) and peak pressure of both modes.
     pub contact_x_min_transient: f64,
     pub contact_x_min_steady: f64,

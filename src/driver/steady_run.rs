@@ -1019,6 +1019,7 @@ pub fn run_with_dump(
             summary,
             typed,
             field,
+            history: (!st.sys.model.history.is_empty()).then(|| st.sys.model.history.clone()),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

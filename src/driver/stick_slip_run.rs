@@ -196,6 +196,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             summary,
             typed,
             field: None,
+            history: None,
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -249,6 +249,10 @@ pub struct Transient {
     fprev: Vec<f64>,
     /// Referential field extracted at the last node passage (2 per referential node).
     pub steady_field: Option<Vec<f64>>,
+    /// Quadrature-point history re-indexed to the referential cells at the last node passage
+    /// (ring meshes, stateful materials, a passage landed on by a step; see
+    /// [`SteadyMonitor::history`]).
+    pub steady_history: Option<crate::assembly::QpHistory>,
     /// Newton convergence table of the last implicit step (for the recorder).
     pub last_table: Vec<crate::solver::IterationRecord>,
     /// Torque control (hub angle as an unknown); `None`: speed control (φ(t) prescribed).
@@ -325,6 +329,7 @@ impl Transient {
             ml,
             fprev: Vec::new(),
             steady_field: None,
+            steady_history: None,
             last_table: Vec::new(),
             hub_angle: None,
             is_hub,
@@ -1051,6 +1056,12 @@ pub struct SteadyMonitor {
     pub passages: usize,
     /// Referential displacement field at the last passage (2 per referential node).
     pub field: Vec<f64>,
+    /// The quadrature-point history at the last passage, re-indexed to the referential cells
+    /// (material cell (ring j, position l) sits on referential cell (j, l + k) after k cell
+    /// angles) and with its tensors rotated by φ = kΔθ from the material reference frame into
+    /// the referential one (R A Rᵀ). Only on ring meshes, for a passage that a step landed on
+    /// (the history is not interpolated between steps); `None` otherwise.
+    pub history: Option<crate::assembly::QpHistory>,
     /// One row per passage: t, changes (field, force, torque), hub force x, y, torque, hub
     /// speed ω, change of ω.
     pub log: Vec<[f64; 9]>,
@@ -1089,6 +1100,7 @@ impl SteadyMonitor {
             last_change: (f64::INFINITY, f64::INFINITY, f64::INFINITY, f64::INFINITY),
             passages: 0,
             field: Vec::new(),
+            history: None,
             log: Vec::new(),
             passage_mean: None,
             acc: [0.0; 3],
@@ -1266,9 +1278,47 @@ impl SteadyMonitor {
             self.last_change.3,
         ]);
         self.field = field.clone();
+        let hist = &tr.sys.model.history;
+        self.history = match mesh.rings {
+            Some(rl) if !hist.is_empty() && (1.0 - s).abs() < 1e-6 => {
+                Some(reindex_history(hist, rl.n_theta, k1, target))
+            }
+            _ => None,
+        };
         self.prev = Some((field, snap));
         steady
     }
+}
+
+/// The quadrature-point history `hist` of a ring mesh with `n_theta` cells per ring, seen in
+/// the referential frame after the body turned by `k` cell angles (φ = `phi`): material cell
+/// (j, l) moves to referential cell (j, l + k), and every stored symmetric tensor
+/// `[a11, a22, a12]` (the layout of [`crate::material::Viscoelastic`]) is rotated by φ,
+/// R A Rᵀ.
+pub fn reindex_history(
+    hist: &crate::assembly::QpHistory,
+    n_theta: usize,
+    k: i64,
+    phi: f64,
+) -> crate::assembly::QpHistory {
+    let shift = k.rem_euclid(n_theta as i64) as usize;
+    let mut out = hist.clone();
+    let (sn, cs) = phi.sin_cos();
+    let rotate = |a: &mut [f64]| {
+        let (a11, a22, a12) = (a[0], a[1], a[2]);
+        a[0] = cs * cs * a11 - 2.0 * cs * sn * a12 + sn * sn * a22;
+        a[1] = sn * sn * a11 + 2.0 * cs * sn * a12 + cs * cs * a22;
+        a[2] = cs * sn * (a11 - a22) + (cs * cs - sn * sn) * a12;
+    };
+    for c in 0..hist.offsets.len().saturating_sub(1) {
+        let (j, l) = (c / n_theta, c % n_theta);
+        let dst = out.cell_mut(j * n_theta + (l + shift) % n_theta);
+        dst.copy_from_slice(hist.cell(c));
+        if hist.n_state % 3 == 0 {
+            dst.chunks_exact_mut(3).for_each(rotate);
+        }
+    }
+    out
 }
 
 /// Run statistics.
@@ -1528,6 +1578,7 @@ pub fn integrate(
         rep.passages = m.passages;
         if m.passages > 0 {
             tr.steady_field = Some(m.field.clone());
+            tr.steady_history = m.history.clone();
         }
         rep.passage_log = m.log.clone();
         rep.passage_mean = m.passage_mean;

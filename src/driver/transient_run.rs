@@ -409,6 +409,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             summary,
             typed,
             field,
+            history: tr.steady_history.clone(),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -288,6 +288,8 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.compare.field_rel_l2", N, CMP, "relative FE L2 difference of the referential fields"),
     k("results.compare.field_max_abs", "L", CMP, "largest nodal difference of the referential fields"),
     k("results.compare.field_rel_max", N, CMP, "field_max_abs / largest steady nodal |u|"),
+    k("results.compare.history_rel_l2", N, CMP, "viscoelastic scenes on ring meshes: ‖Q_t − Q_s‖_L2 / ‖Q_s‖_L2 of the internal variables (every Prony term, polar components at each quadrature point, quadrature weights), the transient's at its last node passage re-indexed to the referential cells; null when not compared (the passage fell between steps, or no rings); per ring in `history_rings.csv`"),
+    k("results.compare.history_rel_max", N, CMP, "max |Q_t − Q_s| over the largest steady |Q| component"),
     k("results.compare.contact_x_min_transient", "L", CMP, "transient contact_x_min"),
     k("results.compare.contact_x_min_steady", "L", CMP, "steady contact_x_min"),
     k("results.compare.contact_x_max_transient", "L", CMP, "transient contact_x_max"),
@@ -499,6 +501,17 @@ pub static CSV_FILES: &[CsvFile] = &[
         name: "branch.csv",
         when: "steady with [continuation]; the columns of `results.branch[]` above",
         columns: &[],
+    },
+    CsvFile {
+        name: "history_rings.csv",
+        when: "tread compare on a viscoelastic scene with a ring mesh; one row per ring of quadrature points, innermost first",
+        columns: &[
+            k("ring", N, "", "ring index (radial quadrature-point line)"),
+            k("radius", "L", "", "mean reference radius of the ring's points"),
+            k("rel_l2", N, "", "‖Q_t − Q_s‖ / ‖Q_s‖ over the ring (polar components, quadrature weights)"),
+            k("max_abs_diff", N, "", "max |Q_t − Q_s| over the ring's points and components (the internal variables are strain-like)"),
+            k("max_abs_steady", N, "", "max |Q_s| over the ring"),
+        ],
     },
     CsvFile {
         name: "compare.csv",
