@@ -39,6 +39,15 @@
 //!   error stays bounded under refinement. Div P_h and ∂θθχ_h are evaluated by central
 //!   differences (step 1e-4 of the reference cell) of the exact element fields.
 //!
+//! * [`interpolation`] (the interpolation estimator, with derivatives from the recovered
+//!   gradient): the cell's error is modelled as the interpolation error of its degree-p
+//!   Lagrange interpolant in each reference direction d,
+//!   η_K² = c_p 2^{2p} Σ_d ∫_K (G_d ⊗ n_d) : A : (G_d ⊗ n_d) dX, with G_d = ∂_{ξ_d}^{p+1} u
+//!   taken as ∂_{ξ_d}^p (H* ∂X/∂ξ_d) (H* the recovered gradient, central differences),
+//!   n_d = ∇ξ_d and c_p = ∫_0^1 (ω′)² (c_1 = 1/12, c_2 = 1/720; see
+//!   [`crate::adapt::estimate::interpolation_constant`]). On an axis-aligned square of side h
+//!   it is the scalar estimator's c_p h^{2p} ‖∂^{p+1} u‖², per component. Degrees 1 and 2.
+//!
 //! Scope: the elastic stress of the state. The strain-rate damping and the viscous overstress of
 //! the steady and transient modes, and the contact traction on contact faces, are not part of
 //! the residual (pass only traction-free sets as `free`).
@@ -413,4 +422,77 @@ fn interior_residual(
         r += b(s0.x);
     }
     Some((r, s0.jac.determinant().abs()))
+}
+
+/// The interpolation estimator with recovered derivatives (see the module docs).
+pub fn interpolation(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstimate {
+    let nodal = recover_gradient(model, dofs, x);
+    let mesh = &model.mesh;
+    let h_star = |c: usize, xi: f64, eta: f64| -> Mat2 {
+        let mut n = [0.0; 9];
+        shape_values(mesh.degree[c], xi, eta, &mut n);
+        let mut hs = Mat2::zeros();
+        for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
+            let g = nodal[node as usize];
+            hs += Mat2::new(g[0], g[1], g[2], g[3]) * n[a];
+        }
+        hs
+    };
+    // g_d = ∂u/∂ξ_d = H* ∂X/∂ξ_d along reference direction d.
+    let g = |c: usize, xi: f64, eta: f64, d: usize| -> Option<Vec2> {
+        let jac = model.point_values_geometry(c, xi, eta)?;
+        Some(h_star(c, xi, eta) * jac.column(d))
+    };
+    let sq = (0..mesh.n_cells())
+        .into_par_iter()
+        .map(|c| {
+            let p = mesh.degree[c] as usize;
+            if p > 2 {
+                return 0.0;
+            }
+            let cp = crate::adapt::estimate::interpolation_constant(p) * 4f64.powi(p as i32);
+            let (pts, wts) = gauss_1d(error_rule(p));
+            let mut sum = 0.0;
+            for (l, &eta) in pts.iter().enumerate() {
+                for (i, &xi) in pts.iter().enumerate() {
+                    let Some(s) = point_state(model, dofs, x, c, xi, eta) else {
+                        continue;
+                    };
+                    let Some(inv) = s.jac.try_inverse() else {
+                        continue;
+                    };
+                    let w = wts[i] * wts[l] * s.jac.determinant().abs();
+                    for d in 0..2 {
+                        let at = |t: f64| {
+                            if d == 0 {
+                                g(c, xi + t, eta, d)
+                            } else {
+                                g(c, xi, eta + t, d)
+                            }
+                        };
+                        // ∂^p of g_d by central differences.
+                        let gd = if p == 1 {
+                            const H: f64 = 1e-4;
+                            match (at(H), at(-H)) {
+                                (Some(a), Some(b)) => (a - b) / (2.0 * H),
+                                _ => continue,
+                            }
+                        } else {
+                            const H: f64 = 1e-3;
+                            match (at(H), at(0.0), at(-H)) {
+                                (Some(a), Some(m), Some(b)) => (a - 2.0 * m + b) / (H * H),
+                                _ => continue,
+                            }
+                        };
+                        // n_d = ∇ξ_d: row d of (dX/dξ)⁻¹.
+                        let nd = Vec2::new(inv[(d, 0)], inv[(d, 1)]);
+                        let e = gd * nd.transpose();
+                        sum += cp * w * energy_density(model, c, &s, &e);
+                    }
+                }
+            }
+            sum
+        })
+        .collect();
+    SolidEstimate::from_squares(sq)
 }
