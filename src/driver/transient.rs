@@ -1314,7 +1314,7 @@ pub fn reindex_history(
         let (j, l) = (c / n_theta, c % n_theta);
         let dst = out.cell_mut(j * n_theta + (l + shift) % n_theta);
         dst.copy_from_slice(hist.cell(c));
-        if hist.n_state % 3 == 0 {
+        if hist.n_state.is_multiple_of(3) {
             dst.chunks_exact_mut(3).for_each(rotate);
         }
     }
