@@ -3,7 +3,8 @@
 //!
 //! 1. **Solve** the static indentation on the current mesh: by load stepping on the first mesh,
 //!    then by Newton at the full load from the transferred state (load stepping from scratch if
-//!    that fails).
+//!    that fails). With friction the solution depends on the load path, so every mesh is solved
+//!    by load stepping from the undeformed state.
 //! 2. **Estimate** the energy error cell by cell with the Zienkiewicz–Zhu recovery estimator
 //!    ([`crate::physics::estimate::recovery`]).
 //! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
@@ -247,7 +248,10 @@ pub fn run(
         next.dofs.apply_constraints(&mut next.x);
         sys = next;
         mesh = new_mesh;
-        warm = true;
+        // Friction makes the static solution depend on the load path (the stick anchors are
+        // committed load step by load step): such a scene is solved by load stepping on every
+        // mesh, not from the transferred state at the full load.
+        warm = !sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
     }
     Ok((sys, steps))
 }
