@@ -64,7 +64,7 @@ fn contact_block_time(set: &[&str], repeats: usize) -> (f64, f64) {
             std::process::exit(1);
         };
         let (mesh, dofs, x, xp) = (&sys.model.mesh, &sys.dofs, &sys.x, &sys.x_prev);
-        let kin = match sys.model.steady_omega {
+        let kin = match sys.steady_omega {
             Some(omega) => SlipKinematics::Steady { omega },
             None => SlipKinematics::Static {
                 x_prev: xp,

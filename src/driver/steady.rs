@@ -123,7 +123,7 @@ impl SteadyRolling {
 
     /// ω with its sign (as set by [`Self::set_omega`]).
     pub fn omega_signed(&self) -> f64 {
-        self.sys.model.steady_omega.unwrap_or_else(|| self.omega())
+        self.sys.steady_omega.unwrap_or_else(|| self.omega())
     }
 
     pub fn v0(&self) -> f64 {
@@ -133,7 +133,7 @@ impl SteadyRolling {
     /// Set ω and v0 (inertia ω², contact kinematics).
     pub fn set_omega(&mut self, omega: f64, v0: f64) {
         self.sys.model.omega2 = omega * omega;
-        self.sys.model.steady_omega = Some(omega);
+        self.sys.steady_omega = Some(omega);
         if let Some(c) = &mut self.sys.contact {
             c.v0 = v0;
         }

@@ -67,6 +67,13 @@ pub struct SolidSystem {
     /// Steady mode with a viscoelastic material: the internal variables integrated along the
     /// rings of quadrature points ([`Self::enable_steady_viscoelastic`]).
     pub steady_history: Option<SteadyHistory>,
+    /// Steady rolling at this ω (θ-referential mode), set by the steady driver: the system's
+    /// own evaluation then uses the steady rates, v = ω ∂θχ, and the strain-rate damping acts on
+    /// the material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
+    /// ω ∂θχ ([`crate::physics::NodalThetaDerivative`]); those velocities depend on nodes
+    /// beyond the cell, so this system computes them and assembles with
+    /// [`crate::physics::SolidModel::cell_system_steady_viscous`]. `None` in the other modes.
+    pub steady_omega: Option<f64>,
 }
 
 /// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
@@ -162,6 +169,7 @@ impl SolidSystem {
             facet_visits: (0, 0),
             steady_visc: None,
             steady_history: None,
+            steady_omega: None,
         }
     }
 
@@ -285,7 +293,7 @@ impl SolidSystem {
     /// A_c = ∂r_c/∂v_c, is applied matrix-free ([`NonlinearSystem::tangent_correction`]), so
     /// Newton takes the exact step by GMRES preconditioned with the assembled factorization.
     /// Active in [`NonlinearSystem::evaluate`] and [`Self::hub_reaction`] while
-    /// `model.steady_omega` is set. Returns `false` (and leaves the damping off) when a cell
+    /// `steady_omega` is set. Returns `false` (and leaves the damping off) when a cell
     /// map is degenerate; no effect without damping.
     pub fn enable_steady_viscosity(&mut self) -> bool {
         if self.steady_visc.is_some() || self.model.strain_rate_damping <= 0.0 {
@@ -385,7 +393,7 @@ impl SolidSystem {
     /// per cell, A_c ω (D − D_c) on its extended element, from the A_c of the cell assembly
     /// just made.
     fn add_steady_damping_coupling(&mut self) {
-        let (Some(sv), Some(om)) = (self.steady_visc.as_ref(), self.model.steady_omega) else {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_ref(), self.steady_omega) else {
             return;
         };
         let Some((block, ext, ext_off)) = &sv.assembled else {
@@ -435,7 +443,7 @@ impl SolidSystem {
     /// Nodal velocities ω ∂θχ of the steady mode's damping at the current state (full-length
     /// vector), or `None` when that damping is not active.
     fn steady_velocities(&self) -> Option<(Vec<f64>, f64)> {
-        let (sv, om) = (self.steady_visc.as_ref()?, self.model.steady_omega?);
+        let (sv, om) = (self.steady_visc.as_ref()?, self.steady_omega?);
         if self.model.strain_rate_damping <= 0.0 {
             return None;
         }
@@ -451,9 +459,9 @@ impl SolidSystem {
     }
 
     /// The rates of the system's own evaluation ([`NonlinearSystem::evaluate`]): steady while
-    /// `model.steady_omega` is set, otherwise load stepping.
+    /// `steady_omega` is set, otherwise load stepping.
     pub fn own_rates(&self) -> Rates<'static> {
-        if self.model.steady_omega.is_some() {
+        if self.steady_omega.is_some() {
             Rates::Steady
         } else {
             Rates::Static
@@ -477,7 +485,7 @@ impl SolidSystem {
             };
             let (model, dofs, asm) = (&self.model, &self.dofs, &mut self.asm);
             let mut av_out = None;
-            let rate = match (terms.rates, self.steady_visc.as_mut(), model.steady_omega) {
+            let rate = match (terms.rates, self.steady_visc.as_mut(), self.steady_omega) {
                 (Rates::Dynamic { v, kv, .. }, _, _) => CellRate::Dynamic { v, kv },
                 (Rates::Steady, Some(sv), Some(omega)) if model.strain_rate_damping > 0.0 => {
                     sv.nodal.velocities(&model.mesh, xs, omega, &mut sv.vel);
@@ -533,7 +541,7 @@ impl SolidSystem {
                     dtau: self.dtau,
                 },
                 Rates::Steady => SlipKinematics::Steady {
-                    omega: self.model.steady_omega.unwrap_or(0.0),
+                    omega: self.steady_omega.unwrap_or(0.0),
                 },
                 Rates::Dynamic { v, kv, .. } => SlipKinematics::Dynamic { v, kx: 1.0, kv },
             };
@@ -558,7 +566,7 @@ impl SolidSystem {
     /// `out += (K_exact − K_assembled) v` of the steady damping: Σ_c A_c ω (D δu − D_c δu_c)
     /// (see [`Self::enable_steady_viscosity`]).
     fn steady_viscosity_correction(&mut self, v: &[f64], out: &mut [f64]) {
-        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.model.steady_omega) else {
+        let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.steady_omega) else {
             return;
         };
         if self.model.strain_rate_damping <= 0.0 || sv.assembled.is_some() {
@@ -610,7 +618,7 @@ impl SolidSystem {
     /// Bring the steady history in line with the current state (see
     /// [`Self::enable_steady_viscoelastic`]).
     fn sync_steady_history(&mut self) {
-        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.model.steady_omega) {
+        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.steady_omega) {
             sh.sync(&mut self.model, &self.dofs, &self.x, om);
         }
     }
@@ -636,7 +644,7 @@ impl SolidSystem {
             Some(c) => {
                 let kin = match self.own_rates() {
                     Rates::Steady => SlipKinematics::Steady {
-                        omega: self.model.steady_omega.unwrap_or(0.0),
+                        omega: self.steady_omega.unwrap_or(0.0),
                     },
                     _ => SlipKinematics::Static {
                         x_prev: if self.x_step_start.len() == self.x.len() {
@@ -833,7 +841,7 @@ impl NonlinearSystem for SolidSystem {
         self.sync_steady_history();
     }
     fn has_tangent_correction(&self) -> bool {
-        self.model.steady_omega.is_some()
+        self.steady_omega.is_some()
             && (self.steady_history.is_some()
                 || self.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree))
     }
@@ -844,7 +852,7 @@ impl NonlinearSystem for SolidSystem {
     }
     fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
         self.steady_viscosity_correction(v, out);
-        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.model.steady_omega) {
+        if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.steady_omega) {
             sh.apply_correction(&self.model, &self.dofs, om, v, out);
         }
     }
@@ -870,7 +878,7 @@ impl LoadedSystem for SolidSystem {
         // restore to the converged λ (λ = λ_prev) keeps the last step's Δτ, with which the
         // outputs evaluate that step's slip.
         if self.contact.is_some()
-            && self.model.steady_omega.is_none()
+            && self.steady_omega.is_none()
             && (lambda > self.lambda_prev || self.lambda_prev == 0.0)
         {
             self.dtau = (lambda - self.lambda_prev).max(f64::MIN_POSITIVE);

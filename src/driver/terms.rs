@@ -29,7 +29,7 @@ pub enum Rates<'a> {
     /// Load stepping (static, spinning): no rate-dependent solid forces; friction sees the
     /// pseudo-velocity (x − x_prev)/Δτ of the load step in load-stepping time.
     Static,
-    /// Steady rolling at the model's `steady_omega`: the velocity is v = ω ∂θχ of the state,
+    /// Steady rolling at the system's `steady_omega`: the velocity is v = ω ∂θχ of the state,
     /// for the strain-rate damping, the normal damping and the friction slip.
     Steady,
     /// Transient: the forces are evaluated at the configuration `x` with the velocity field

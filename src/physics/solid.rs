@@ -79,13 +79,6 @@ pub struct SolidModel {
     /// Objective viscous damping on the rate of Green strain, S_v = η Ė (transient mode only;
     /// active when a velocity field is passed to [`Self::cell_system_viscous`]).
     pub strain_rate_damping: f64,
-    /// Steady rolling at this ω (θ-referential mode): the strain-rate damping acts on the
-    /// material rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
-    /// ω ∂θχ ([`crate::physics::NodalThetaDerivative`]). Those velocities depend on nodes
-    /// beyond the cell, so the steady system ([`crate::driver::SolidSystem`]) computes them and
-    /// assembles with [`Self::cell_system_steady_viscous`]. `None` in the transient mode, where
-    /// the velocity is an independent field.
-    pub steady_omega: Option<f64>,
     /// Viscoelastic overstress (`None`: elastic, no history).
     pub viscoelastic: Option<Viscoelastic>,
     /// Committed history at the quadrature points (empty when elastic).
@@ -146,7 +139,6 @@ impl SolidModel {
             pressure,
             body_force: None,
             strain_rate_damping: 0.0,
-            steady_omega: None,
             viscoelastic: None,
             history: QpHistory::none(),
             history_dt: 0.0,
