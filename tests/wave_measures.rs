@@ -109,3 +109,69 @@ fn damped_branch_folds_back_onto_a_sheet_of_large_waves() {
     );
     assert_eq!(num(last, "wave_number"), 5.0, "{last}");
 }
+
+/// Above the critical speed (46.7 rad/s on this mesh), the transient mode of the lightly damped
+/// `oden_figs_9_13` scene (3 × 64) rolls into the same standing-wave state as the steady mode's
+/// direct solve, at 55 and 60 rad/s (1.18 and 1.29 times critical): hub forces within 2 % of
+/// |F| (measured: F_x 1.24 % and 1.61 %, F_y 0.10 % and 0.24 %), the referential field within
+/// 5 % (2.4 %, 3.1 %), the wave amplitude on the outer surface within 5 % (2.2 %, 2.6 %) with
+/// the same wave number. About 35 s per speed.
+#[test]
+fn transient_above_the_critical_speed_matches_the_damped_steady_branch() {
+    use fixtures::tempdir::TestDir;
+    use tread::app::RunOptions;
+    use tread::driver::compare::read_csv;
+    let text = scene_text("scenarios/oden_figs_9_13.toml");
+    for omega in [55.0, 60.0] {
+        let set: Vec<String> = vec![
+            format!("motion.omega={omega}"),
+            format!("road.v0={}", 1.9666667 * omega),
+            "output.sinks=[\"summary\",\"csv\"]".into(),
+        ];
+        let sc = tread::io::Scene::from_toml_str(&text, "above_critical", &set)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let dir = TestDir::new("wave_measures", &format!("compare-{omega}"));
+        let out = tread::driver::compare::run(
+            &sc,
+            &RunOptions {
+                out_dir: dir.to_path_buf(),
+                verbose: false,
+                quiet: true,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let c = &out.summary["results"]["compare"];
+        let g = |k: &str| c[k].as_f64().unwrap_or_else(|| panic!("{k}: {c}"));
+        assert_eq!(c["transient_steady"], true, "{c}");
+        // The wave measures of both referential fields.
+        let measure = |sub: &str| {
+            let (head, rows) = read_csv(&dir.join(sub).join("steady_field.csv")).unwrap();
+            let col = |k: &str| head.iter().position(|h| h == k).unwrap();
+            let (c1, c2) = (col("u1"), col("u2"));
+            let mut sys = tread::app::build_system(&sc).unwrap();
+            assert_eq!(rows.len(), sys.model.mesh.n_nodes());
+            for (n, r) in rows.iter().enumerate() {
+                sys.x[2 * n] = r[c1];
+                sys.x[2 * n + 1] = r[c2];
+            }
+            (wave_amplitude(&sys), wave_number(&sys))
+        };
+        let (at, nt) = measure("transient");
+        let (as_, ns) = measure("steady");
+        let da = (at - as_).abs() / as_;
+        eprintln!(
+            "omega {omega}: F_x diff {:.3e}, F_y diff {:.3e}, field {:.3e}; wave amplitude {at:.4e} / {as_:.4e} ({da:.2e}), n {nt} / {ns}",
+            g("hub_force_x_rel_diff"),
+            g("hub_force_y_rel_diff"),
+            g("field_rel_l2")
+        );
+        assert!(g("hub_force_x_rel_diff") < 0.02 && g("hub_force_y_rel_diff") < 0.02);
+        assert!(g("field_rel_l2") < 0.05);
+        assert!(
+            as_ > 5e-3,
+            "no standing wave in the steady field: {as_:.3e}"
+        );
+        assert!(da < 0.05, "wave amplitude {at:.4e} vs {as_:.4e}");
+        assert_eq!(nt, ns);
+    }
+}
