@@ -124,6 +124,10 @@ enum Command {
         /// Stop once the relative estimate (estimate / energy norm) is below this.
         #[arg(long, default_value_t = 0.0)]
         tolerance: f64,
+        /// The estimator that drives the marking: "recovery" (Zienkiewicz–Zhu) or
+        /// "interpolation" (interpolation error with recovered derivatives).
+        #[arg(long, default_value = "recovery")]
+        estimator: tread::driver::adaptive::SolidEstimator,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -552,11 +556,13 @@ fn main() -> ExitCode {
             fraction,
             max_dofs,
             tolerance,
+            estimator,
             set,
         }) => match load(&scene, &set) {
             Ok(s) => {
                 use tread::driver::adaptive;
                 let opts = adaptive::AdaptOptions {
+                    estimator,
                     steps,
                     fraction,
                     max_dofs,

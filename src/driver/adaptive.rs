@@ -5,8 +5,9 @@
 //!    then by Newton at the full load from the transferred state (load stepping from scratch if
 //!    that fails). With friction the solution depends on the load path, so every mesh is solved
 //!    by load stepping from the undeformed state.
-//! 2. **Estimate** the energy error cell by cell with the Zienkiewicz–Zhu recovery estimator
-//!    ([`crate::physics::estimate::recovery`]).
+//! 2. **Estimate** the energy error cell by cell ([`SolidEstimator`]): the Zienkiewicz–Zhu
+//!    recovery estimator by default, or the interpolation estimator with recovered derivatives
+//!    ([`crate::physics::estimate`]).
 //! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
 //!    the fraction θ of the total.
 //! 4. **Refine** the marked cells into four, keeping the mesh one-irregular.
@@ -35,9 +36,43 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+/// The estimator that drives the marking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SolidEstimator {
+    /// Zienkiewicz–Zhu recovery ([`estimate::recovery`]).
+    Recovery,
+    /// Interpolation error with recovered derivatives ([`estimate::interpolation`]).
+    Interpolation,
+}
+
+impl SolidEstimator {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Self::Recovery => "recovery",
+            Self::Interpolation => "interpolation",
+        }
+    }
+}
+
+impl std::str::FromStr for SolidEstimator {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "recovery" => Ok(Self::Recovery),
+            "interpolation" => Ok(Self::Interpolation),
+            _ => Err(format!(
+                "unknown estimator `{s}` (expected \"recovery\" or \"interpolation\")"
+            )),
+        }
+    }
+}
+
 /// Options of the adaptive loop.
 #[derive(Clone, Debug)]
 pub struct AdaptOptions {
+    /// The estimator that drives the marking.
+    pub estimator: SolidEstimator,
     /// Refinement steps after the first solve.
     pub steps: usize,
     /// Dörfler fraction θ ∈ (0, 1]: marked cells carry θ of the squared estimate.
@@ -51,6 +86,7 @@ pub struct AdaptOptions {
 impl Default for AdaptOptions {
     fn default() -> Self {
         Self {
+            estimator: SolidEstimator::Recovery,
             steps: 8,
             fraction: 0.5,
             max_dofs: 200_000,
@@ -192,7 +228,10 @@ pub fn run(
     for step in 0..=opts.steps {
         let ts = Instant::now();
         let iterations = solve_static(scene, &mut sys, warm, out_dir)?;
-        let est = estimate::recovery(&sys.model, &sys.dofs, &sys.x);
+        let est = match opts.estimator {
+            SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
+            SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
+        };
         let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
         let r: IndentationResults = indentation::results(&sys, scene.geometry.ro);
         let rec = AdaptStep {
@@ -290,7 +329,7 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             "fraction": opts.fraction,
             "max_dofs": opts.max_dofs,
             "tolerance": opts.tolerance,
-            "estimator": "recovery",
+            "estimator": opts.estimator.keyword(),
             "marking": "doerfler",
         },
         "steps": steps,
