@@ -114,7 +114,7 @@ fn real_main() -> Result<(), String> {
             let mut sys =
                 indentation_system(&scene, polar_root(&scene).map_err(|e| e.to_string())?)
                     .map_err(|e| e.to_string())?;
-            solve_static(&scene, &mut sys, false, &out).map_err(|e| e.to_string())?;
+            solve_static(&scene, &mut sys, false, None, &out).map_err(|e| e.to_string())?;
             let time = t.elapsed().as_secs_f64();
             let r = indentation::results(&sys, scene.geometry.ro);
             eprintln!(

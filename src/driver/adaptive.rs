@@ -108,6 +108,8 @@ pub struct AdaptStep {
     pub relative_estimate: f64,
     pub hub_force_x: f64,
     pub hub_force_y: f64,
+    /// Penetration DISP = Ro − H (the unknown of load control).
+    pub penetration: f64,
     pub newton_iterations: usize,
     /// Wall time of this step's solve and estimate, and since the start (s).
     pub wall_step_s: f64,
@@ -155,11 +157,13 @@ pub fn indentation_system(scene: &Scene, mesh: Mesh) -> Result<SolidSystem, AppE
 }
 
 /// Solve `sys` to the full load: from its current state by Newton when `warm`, else (or if
-/// that fails) by load stepping from the undeformed state. Returns the Newton iterations.
+/// that fails) by load stepping from `cold` (the undeformed state of the system as built;
+/// `None`: the current state is that). Returns the Newton iterations.
 pub fn solve_static(
     scene: &Scene,
     sys: &mut SolidSystem,
     warm: bool,
+    cold: Option<&[f64]>,
     out_dir: &Path,
 ) -> Result<usize, AppError> {
     let kind = linear_kind(scene, sys);
@@ -171,7 +175,12 @@ pub fn solve_static(
         let warm_run = Newton::new(sys, kind, newton_opts.clone()).and_then(|mut n| n.solve(sys));
         match warm_run {
             Ok(rep) => return Ok(rep.iterations),
-            Err(_) => sys.x = sys.model.initial_state(&sys.dofs),
+            Err(_) => {
+                if let Some(c) = cold {
+                    sys.x.copy_from_slice(c);
+                }
+                sys.set_load(0.0);
+            }
         }
     }
     let mut report = StepReport::default();
@@ -225,9 +234,10 @@ pub fn run(
     let mut sys = indentation_system(scene, mesh.clone())?;
     let mut steps = Vec::new();
     let mut warm = false;
+    let mut cold = sys.x.clone();
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let iterations = solve_static(scene, &mut sys, warm, out_dir)?;
+        let iterations = solve_static(scene, &mut sys, warm, Some(&cold), out_dir)?;
         let est = match opts.estimator {
             SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
             SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
@@ -244,6 +254,7 @@ pub fn run(
             relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
             hub_force_x: r.hub_force_x,
             hub_force_y: r.hub_force_y,
+            penetration: r.penetration,
             newton_iterations: iterations,
             wall_step_s: ts.elapsed().as_secs_f64(),
             wall_total_s: t0.elapsed().as_secs_f64(),
@@ -276,7 +287,12 @@ pub fn run(
         if next.n_dofs() > opts.max_dofs {
             break;
         }
-        // Transfer.
+        // Transfer: the displacements, and the global unknowns (the road height under load
+        // control).
+        cold = next.x.clone();
+        for k in 0..next.dofs.n_global.min(sys.dofs.n_global) {
+            next.x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
+        }
         for (node, &(root, xi, eta)) in origin.iter().enumerate() {
             if let Some((leaf, (a, b))) = old_forest.locate(root, xi, eta) {
                 let u = displacement_at(&mesh, &sys.x, leaf, a, b);
@@ -301,12 +317,12 @@ pub fn run(
 pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
     ensure_dir(dir)?;
     let mut csv = String::from(
-        "step,cells,dofs,hanging_nodes,max_level,estimate,relative_estimate,hub_force_x,hub_force_y,newton_iterations,wall_step_s,wall_total_s\n",
+        "step,cells,dofs,hanging_nodes,max_level,estimate,relative_estimate,hub_force_x,hub_force_y,penetration,newton_iterations,wall_step_s,wall_total_s\n",
     );
     for s in steps {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{},{:.6},{:.6}",
+            "{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
             s.step,
             s.cells,
             s.dofs,
@@ -316,6 +332,7 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             s.relative_estimate,
             s.hub_force_x,
             s.hub_force_y,
+            s.penetration,
             s.newton_iterations,
             s.wall_step_s,
             s.wall_total_s
