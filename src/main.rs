@@ -124,8 +124,9 @@ enum Command {
         /// Stop once the relative estimate (estimate / energy norm) is below this.
         #[arg(long, default_value_t = 0.0)]
         tolerance: f64,
-        /// The estimator that drives the marking: "recovery" (Zienkiewicz–Zhu) or
-        /// "interpolation" (interpolation error with recovered derivatives).
+        /// The estimator that drives the marking: "recovery" (Zienkiewicz–Zhu),
+        /// "interpolation" (interpolation error with recovered derivatives) or "explicit"
+        /// (explicit residual with the contact traction on the contact facets).
         #[arg(long, default_value = "recovery")]
         estimator: tread::driver::adaptive::SolidEstimator,
         #[arg(long = "set", value_name = "KEY=VALUE")]

@@ -6,7 +6,8 @@
 //!    that fails). With friction the solution depends on the load path, so every mesh is solved
 //!    by load stepping from the undeformed state.
 //! 2. **Estimate** the energy error cell by cell ([`SolidEstimator`]): the Zienkiewicz–Zhu
-//!    recovery estimator by default, or the interpolation estimator with recovered derivatives
+//!    recovery estimator by default, the interpolation estimator with recovered derivatives,
+//!    or the explicit residual with the contact traction as boundary data
 //!    ([`crate::physics::estimate`]).
 //! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
 //!    the fraction θ of the total.
@@ -44,6 +45,10 @@ pub enum SolidEstimator {
     Recovery,
     /// Interpolation error with recovered derivatives ([`estimate::interpolation`]).
     Interpolation,
+    /// Explicit residual with the contact traction on the contact facets
+    /// ([`estimate::explicit_residual_with`]; its constant taken as 1, so its global value is
+    /// an indicator, not an estimate of the error's size).
+    Explicit,
 }
 
 impl SolidEstimator {
@@ -51,6 +56,7 @@ impl SolidEstimator {
         match self {
             Self::Recovery => "recovery",
             Self::Interpolation => "interpolation",
+            Self::Explicit => "explicit",
         }
     }
 }
@@ -61,8 +67,9 @@ impl std::str::FromStr for SolidEstimator {
         match s {
             "recovery" => Ok(Self::Recovery),
             "interpolation" => Ok(Self::Interpolation),
+            "explicit" => Ok(Self::Explicit),
             _ => Err(format!(
-                "unknown estimator `{s}` (expected \"recovery\" or \"interpolation\")"
+                "unknown estimator `{s}` (expected \"recovery\", \"interpolation\" or \"explicit\")"
             )),
         }
     }
@@ -241,6 +248,13 @@ pub fn run(
         let est = match opts.estimator {
             SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
             SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
+            SolidEstimator::Explicit => estimate::explicit_residual_with(
+                &sys.model,
+                &sys.dofs,
+                &sys.x,
+                &[],
+                sys.contact_tractions().as_ref(),
+            ),
         };
         let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
         let r: IndentationResults = indentation::results(&sys, scene.geometry.ro);

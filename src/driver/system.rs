@@ -639,6 +639,23 @@ impl SolidSystem {
     /// Contact traction samples at the current state. In load stepping the slip is that of
     /// the last accepted step, w = (x − x_start)/Δτ (after the commit x_prev = x, which would
     /// report w = 0 and no static friction).
+    /// The contact tractions on the body at the contact rule's points of every contact facet
+    /// (for the explicit error estimator's boundary residual); `None` without contact.
+    pub fn contact_tractions(&self) -> Option<crate::physics::estimate::BoundaryTractions> {
+        let c = self.contact.as_ref()?;
+        let (points, weights) = c.rule.points();
+        let samples = self.contact_samples();
+        if samples.len() != c.facets.len() * points.len() {
+            return None;
+        }
+        Some(crate::physics::estimate::BoundaryTractions {
+            facets: c.facets.clone(),
+            points,
+            weights,
+            traction: samples.iter().map(|s| Vec2::new(s.t_t, s.t_n)).collect(),
+        })
+    }
+
     pub fn contact_samples(&self) -> Vec<ContactSample> {
         match &self.contact {
             Some(c) => {

@@ -27,14 +27,17 @@
 //!   ```text
 //!   η_K² = (1/μ_K) [ (h_K/p_K)² ‖Div P_h + b − ρ ω² ∂θθχ_h‖²_K
 //!                    + ½ Σ_{interior F ⊂ ∂K} (h_F/p_K) ‖[P_h N]‖²_F
-//!                    + Σ_{free F ⊂ ∂K} (h_F/p_K) ‖P_h N‖²_F ],
+//!                    + Σ_{free F ⊂ ∂K} (h_F/p_K) ‖P_h N‖²_F
+//!                    + Σ_{contact F ⊂ ∂K} (h_F/p_K) ‖t_c − P_h N‖²_F ],
 //!   ```
 //!
 //!   μ_K the small-strain shear modulus of the cell's law, h_K the cell's diameter, h_F the
 //!   face's length, b the model's body force and ω² its spin (`SolidModel::omega2`, the
 //!   θ-referential inertia, χ = X + u). "Free" faces are those of the named traction-free facet
 //!   sets (e.g. the outer surface of a body without contact); faces on no named set and not
-//!   shared by two cells (the hub) carry a displacement condition and no term. The unknown
+//!   shared by two cells (the hub) carry a displacement condition and no term. On contact
+//!   facets ([`BoundaryTractions`]) the residual is the contact traction t_c (per reference
+//!   length, at the contact rule's points) minus P_h N. The unknown
 //!   constant of the estimate is taken as 1, so η is an error *indicator* whose ratio to the
 //!   error stays bounded under refinement. Div P_h and ∂θθχ_h are evaluated by central
 //!   differences (step 1e-4 of the reference cell) of the exact element fields.
@@ -49,8 +52,7 @@
 //!   it is the scalar estimator's c_p h^{2p} ‖∂^{p+1} u‖², per component. Degrees 1 and 2.
 //!
 //! Scope: the elastic stress of the state. The strain-rate damping and the viscous overstress of
-//! the steady and transient modes, and the contact traction on contact faces, are not part of
-//! the residual (pass only traction-free sets as `free`).
+//! the steady and transient modes are not part of the residual.
 
 use super::recovery::{recover_nodal, sampling_points, CellSamples, Stress4};
 use super::solid::{PressureMode, SolidModel};
@@ -296,6 +298,18 @@ fn traction(
     Some((st.p * n, len, st.x))
 }
 
+/// Tractions applied on boundary facets (e.g. by the road's contact), sampled at the points
+/// `points` (side parameter s ∈ [−1, 1]) of each facet with weights `weights`:
+/// `traction[f · points.len() + q]` is the force per reference length on the body at point q
+/// of facet f.
+#[derive(Clone, Debug, Default)]
+pub struct BoundaryTractions {
+    pub facets: Vec<Facet>,
+    pub points: Vec<f64>,
+    pub weights: Vec<f64>,
+    pub traction: Vec<Vec2>,
+}
+
 /// The explicit residual estimator (see the module docs). `free` names the traction-free facet
 /// sets of the mesh.
 pub fn explicit_residual(
@@ -303,6 +317,18 @@ pub fn explicit_residual(
     dofs: &DofMap,
     x: &[f64],
     free: &[&str],
+) -> SolidEstimate {
+    explicit_residual_with(model, dofs, x, free, None)
+}
+
+/// [`explicit_residual`] with the tractions `applied` on boundary facets: the residual of
+/// such a side is t − P N (a side both free and loaded counts as free).
+pub fn explicit_residual_with(
+    model: &SolidModel,
+    dofs: &DofMap,
+    x: &[f64],
+    free: &[&str],
+    applied: Option<&BoundaryTractions>,
 ) -> SolidEstimate {
     let mesh = &model.mesh;
     let nc = mesh.n_cells();
@@ -375,6 +401,26 @@ pub fn explicit_residual(
         .collect();
     for (c, v) in face_sq {
         sq[c] += v;
+    }
+    if let Some(bt) = applied {
+        let nq = bt.points.len();
+        for (k, f) in bt.facets.iter().enumerate() {
+            if free_sides.contains(&(f.cell, f.side)) || bt.traction.len() < (k + 1) * nq {
+                continue;
+            }
+            let c = f.cell as usize;
+            let mut sum = 0.0;
+            let mut length = 0.0;
+            for q in 0..nq {
+                let Some((pn, len, _)) = traction(model, dofs, x, f, bt.points[q]) else {
+                    continue;
+                };
+                let r = bt.traction[k * nq + q] - pn;
+                sum += bt.weights[q] * len * r.norm_squared();
+                length += bt.weights[q] * len;
+            }
+            sq[c] += length / f64::from(mesh.degree[c]) * sum / mu[c];
+        }
     }
     SolidEstimate::from_squares(sq)
 }
