@@ -22,11 +22,11 @@
 
 use super::indentation::{self, IndentationResults};
 use super::system::{Loading, SolidSystem};
-use crate::element::{Lagrange2D, Q1, Q2};
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::Scene;
 use crate::io::scene::VtuFormat;
+use crate::mesh::locate::shape_values;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::estimate;
 use crate::physics::SolidModel;
@@ -198,16 +198,10 @@ pub fn solve_static(
 
 /// Displacement of `mesh` with state `x` at local point (ξ, η) of cell `c`.
 fn displacement_at(mesh: &Mesh, x: &[f64], c: usize, xi: f64, eta: f64) -> [f64; 2] {
-    let nodes = mesh.cell_nodes(c);
     let mut n = [0.0; 9];
-    let mut dn = [[0.0; 2]; 9];
-    if mesh.degree[c] == 1 {
-        Q1::eval(xi, eta, &mut n[..4], &mut dn[..4]);
-    } else {
-        Q2::eval(xi, eta, &mut n[..9], &mut dn[..9]);
-    }
+    shape_values(mesh, c, xi, eta, &mut n);
     let mut u = [0.0; 2];
-    for (a, &node) in nodes.iter().enumerate() {
+    for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
         u[0] += n[a] * x[2 * node as usize];
         u[1] += n[a] * x[2 * node as usize + 1];
     }

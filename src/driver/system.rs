@@ -743,19 +743,30 @@ impl SolidSystem {
         let mut force = Vec2::zeros();
         let mut moment = 0.0;
         let mut loc = Box::new(LocalSystem::new(0));
-        // A hanging node's force goes to its masters with their weights: to the hub where a
-        // master is a hub node.
-        let mut hub_share = vec![Vec::new(); mesh.n_nodes()];
-        for cons in &mesh.constraints {
-            hub_share[cons.node as usize] = cons
-                .masters
-                .iter()
-                .filter(|&&(m, _)| is_hub[m as usize])
-                .copied()
-                .collect();
-        }
-        let touches = |n: u32| is_hub[n as usize] || !hub_share[n as usize].is_empty();
-        let fixed = |n: usize| self.dofs.eq[2 * n] == crate::assembly::FIXED;
+        // A constrained (hanging-node) dof's force goes to its masters with their weights, as
+        // in the assembly ([`DofMap::expansion`]): to the hub where a master is a fixed hub dof.
+        let is_hub_dof = |d: usize| is_hub[d / 2] && self.dofs.eq[d] == crate::assembly::FIXED;
+        let touches = |n: u32| {
+            (0..2u32).any(|i| {
+                let d = 2 * n + i;
+                is_hub_dof(d as usize)
+                    || self
+                        .dofs
+                        .expansion(d)
+                        .is_some_and(|e| e.iter().any(|&(m, _)| is_hub_dof(m as usize)))
+            })
+        };
+        let mut add = |m: usize, f: f64| {
+            let node = m / 2;
+            let xp = mesh.nodes[node] + Vec2::new(x[2 * node], x[2 * node + 1]);
+            let fv = if m.is_multiple_of(2) {
+                Vec2::new(f, 0.0)
+            } else {
+                Vec2::new(0.0, f)
+            };
+            force += fv;
+            moment += xp[0] * fv[1] - xp[1] * fv[0];
+        };
         for c in 0..mesh.n_cells() {
             let nodes = mesh.cell_nodes(c);
             if !nodes.iter().any(|&n| touches(n)) {
@@ -764,19 +775,16 @@ impl SolidSystem {
             loc.clear(self.dofs.cell(c).len());
             cells.eval(c, &mut loc, false, None);
             for (a, &n) in nodes.iter().enumerate() {
-                let n = n as usize;
-                let f = Vec2::new(loc.r[2 * a], loc.r[2 * a + 1]);
-                let mut add = |m: usize, w: f64| {
-                    let xp = mesh.nodes[m] + Vec2::new(x[2 * m], x[2 * m + 1]);
-                    force += f * w;
-                    moment += w * (xp[0] * f[1] - xp[1] * f[0]);
-                };
-                if is_hub[n] && fixed(n) {
-                    add(n, 1.0);
-                } else {
-                    for &(m, w) in &hub_share[n] {
-                        if fixed(m as usize) {
-                            add(m as usize, w);
+                for i in 0..2 {
+                    let d = 2 * n as usize + i;
+                    let r = loc.r[2 * a + i];
+                    if is_hub_dof(d) {
+                        add(d, r);
+                    } else if let Some(exp) = self.dofs.expansion(d as u32) {
+                        for &(m, w) in exp {
+                            if is_hub_dof(m as usize) {
+                                add(m as usize, w * r);
+                            }
                         }
                     }
                 }

@@ -166,18 +166,15 @@ impl Forest {
         if let Some((x, _)) = self.root.geometry[c].polar_map(xi, eta) {
             return x;
         }
-        let nodes = self.root.cell_nodes(c);
         let mut n = [0.0; 9];
-        let mut dn = [[0.0; 2]; 9];
-        let k = nodes.len();
-        if self.degree == 1 {
-            Q1::eval(xi, eta, &mut n[..4], &mut dn[..4]);
-        } else {
-            Q2::eval(xi, eta, &mut n[..9], &mut dn[..9]);
-        }
-        (0..k).fold(Vec2::zeros(), |s, a| {
-            s + self.root.nodes[nodes[a] as usize] * n[a]
-        })
+        super::locate::shape_values(&self.root, c, xi, eta, &mut n);
+        self.root
+            .cell_nodes(c)
+            .iter()
+            .zip(&n)
+            .fold(Vec2::zeros(), |s, (&node, &w)| {
+                s + self.root.nodes[node as usize] * w
+            })
     }
 
     fn key(&self, x: Vec2) -> Key {

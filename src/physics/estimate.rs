@@ -58,10 +58,10 @@ use super::recovery::{recover_nodal, sampling_points, CellSamples, Stress4};
 use super::solid::{PressureMode, SolidModel};
 use crate::assembly::DofMap;
 use crate::element::quadrature::gauss_1d;
-use crate::element::{Lagrange2D, Q1, Q2};
 use crate::material::invariants::dcof_df;
 use crate::material::Hyperelastic as _;
 use crate::math::{flatten, Mat2, Vec2};
+use crate::mesh::locate::shape_values;
 use crate::mesh::{Facet, Mesh};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -131,16 +131,6 @@ fn energy_density(model: &SolidModel, c: usize, s: &PointState, d: &Mat2) -> f64
     }
     let dv = flatten(d);
     dv.dot(&(a * dv))
-}
-
-/// Shape function values of cell `c` at (ξ, η) (first `nodes` entries).
-fn shape_values(degree: u8, xi: f64, eta: f64, out: &mut [f64; 9]) {
-    let mut dn = [[0.0; 2]; 9];
-    if degree == 1 {
-        Q1::eval(xi, eta, &mut out[..4], &mut dn[..4]);
-    } else {
-        Q2::eval(xi, eta, &mut out[..9], &mut dn[..9]);
-    }
 }
 
 /// Per-cell squares of the energy norm of `d(c, ξ, η, state)` over the error rule.
@@ -216,19 +206,24 @@ pub fn recover_gradient(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> Vec<Str
     recover_nodal(&model.mesh, &samples)
 }
 
+/// The recovered gradient `nodal` ([`recover_gradient`]) interpolated at (ξ, η) of cell `c`.
+fn recovered_at(mesh: &Mesh, nodal: &[Stress4], c: usize, xi: f64, eta: f64) -> Mat2 {
+    let mut n = [0.0; 9];
+    shape_values(mesh, c, xi, eta, &mut n);
+    let mut hs = Mat2::zeros();
+    for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
+        let g = nodal[node as usize];
+        hs += Mat2::new(g[0], g[1], g[2], g[3]) * n[a];
+    }
+    hs
+}
+
 /// The Zienkiewicz–Zhu recovery estimator (see the module docs).
 pub fn recovery(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstimate {
     let nodal = recover_gradient(model, dofs, x);
     let mesh = &model.mesh;
     SolidEstimate::from_squares(cell_energy(model, dofs, x, |c, xi, eta, s| {
-        let mut n = [0.0; 9];
-        shape_values(mesh.degree[c], xi, eta, &mut n);
-        let mut hs = Mat2::zeros();
-        for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
-            let g = nodal[node as usize];
-            hs += Mat2::new(g[0], g[1], g[2], g[3]) * n[a];
-        }
-        Some(hs - s.h)
+        Some(recovered_at(mesh, &nodal, c, xi, eta) - s.h)
     }))
 }
 
@@ -243,36 +238,28 @@ fn facet_corners(mesh: &Mesh, f: &Facet) -> (u32, u32) {
 
 /// All sides of all cells, paired: `(facet, neighbour facet, same orientation)`.
 fn side_pairs(mesh: &Mesh) -> Vec<(Facet, Option<(Facet, bool)>)> {
-    let mut by_edge: HashMap<(u32, u32), Vec<(Facet, u32)>> = HashMap::new();
-    for c in 0..mesh.n_cells() {
-        for side in 0..4u8 {
-            let f = Facet {
-                cell: c as u32,
-                side,
-            };
-            let (a, b) = facet_corners(mesh, &f);
-            by_edge
-                .entry((a.min(b), a.max(b)))
-                .or_default()
-                .push((f, a));
-        }
+    let sides: Vec<(Facet, (u32, u32))> = (0..mesh.n_cells() as u32)
+        .flat_map(|cell| (0..4u8).map(move |side| Facet { cell, side }))
+        .map(|f| (f, facet_corners(mesh, &f)))
+        .collect();
+    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (k, (_, (a, b))) in sides.iter().enumerate() {
+        by_edge
+            .entry(((*a).min(*b), (*a).max(*b)))
+            .or_default()
+            .push(k);
     }
-    let mut out = Vec::with_capacity(4 * mesh.n_cells());
-    for c in 0..mesh.n_cells() {
-        for side in 0..4u8 {
-            let f = Facet {
-                cell: c as u32,
-                side,
-            };
-            let (a, b) = facet_corners(mesh, &f);
+    sides
+        .iter()
+        .map(|&(f, (a, b))| {
             let other = by_edge[&(a.min(b), a.max(b))]
                 .iter()
+                .map(|&k| sides[k])
                 .find(|(g, _)| g.cell != f.cell)
-                .map(|&(g, first)| (g, first == a));
-            out.push((f, other));
-        }
-    }
-    out
+                .map(|(g, (first, _))| (g, first == a));
+            (f, other)
+        })
+        .collect()
 }
 
 /// P N (N the unit outward normal of the cell) at side parameter `s` of facet `f`, with the
@@ -290,9 +277,10 @@ fn traction(
     let t = st.jac.column(f.tangent_column()).into_owned();
     let len = t.norm();
     let mut n = Vec2::new(t[1], -t[0]) / len;
-    // Outward: away from the cell's centre.
-    let centre = point_state(model, dofs, x, c, 0.0, 0.0)?.x;
-    if n.dot(&(st.x - centre)) < 0.0 {
+    // Outward: along +∂X/∂ξ on side 1, −∂X/∂ξ on side 0 (η likewise on sides 3 and 2).
+    let across = st.jac.column(1 - f.tangent_column()).into_owned();
+    let sign = if f.side % 2 == 1 { 1.0 } else { -1.0 };
+    if n.dot(&across) * sign < 0.0 {
         n = -n;
     }
     Some((st.p * n, len, st.x))
@@ -474,20 +462,10 @@ fn interior_residual(
 pub fn interpolation(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstimate {
     let nodal = recover_gradient(model, dofs, x);
     let mesh = &model.mesh;
-    let h_star = |c: usize, xi: f64, eta: f64| -> Mat2 {
-        let mut n = [0.0; 9];
-        shape_values(mesh.degree[c], xi, eta, &mut n);
-        let mut hs = Mat2::zeros();
-        for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
-            let g = nodal[node as usize];
-            hs += Mat2::new(g[0], g[1], g[2], g[3]) * n[a];
-        }
-        hs
-    };
     // g_d = ∂u/∂ξ_d = H* ∂X/∂ξ_d along reference direction d.
     let g = |c: usize, xi: f64, eta: f64, d: usize| -> Option<Vec2> {
         let jac = model.point_values_geometry(c, xi, eta)?;
-        Some(h_star(c, xi, eta) * jac.column(d))
+        Some(recovered_at(mesh, &nodal, c, xi, eta) * jac.column(d))
     };
     let sq = (0..mesh.n_cells())
         .into_par_iter()
