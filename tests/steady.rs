@@ -692,3 +692,39 @@ fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
         "direct steady solve failed at ω = {failed:?} rad/s"
     );
 }
+
+/// Nested iteration (`[solver] coarse_start`): on the default scene at 8 × 128 the steady state
+/// started from the 2 × 32 → 4 × 64 solutions, interpolated, is the one pressed in from the
+/// undeformed state (hub loads to the Newton tolerance), and Newton on the fine mesh needs at
+/// most 5 full steps from it instead of the press-in's 12 with line search. A mesh it does not
+/// apply to (odd n_r) reports nothing.
+#[test]
+fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
+    let mesh = ["mesh.n_r=8", "mesh.n_theta=128"];
+    let (_, direct) = steady_solution(ODEN, &[&mesh[..], &["solver.coarse_start=false"]].concat());
+    assert!(direct.coarse_start.is_none());
+    let sc = scene(ODEN, &mesh);
+    let mut st = steady_run::build_steady(&sc).unwrap();
+    let mut rep = tread::solver::stepping::StepReport::default();
+    steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
+    let cs = st
+        .coarse_start
+        .clone()
+        .expect("coarse start applies to 8 x 128");
+    assert!(cs.succeeded, "{:?}", cs.error);
+    assert_eq!(cs.meshes, ["2x32", "4x64"]);
+    assert!(cs.coarse_newton_iterations > 0);
+    assert!(
+        cs.newton_iterations <= 5,
+        "{} fine iterations",
+        cs.newton_iterations
+    );
+    assert_eq!(rep.total_iterations, cs.newton_iterations);
+    let (fa, ma) = direct.sys.hub_reaction();
+    let (fb, mb) = st.sys.hub_reaction();
+    let scale = fa.norm();
+    assert!((fa - fb).norm() <= 1e-7 * scale, "{fa:?} vs {fb:?}");
+    assert!((ma - mb).abs() <= 1e-7 * scale * 2.0, "{ma} vs {mb}");
+    let (_, odd) = steady_solution(ODEN, &["mesh.n_r=3", "mesh.n_theta=64"]);
+    assert!(odd.coarse_start.is_none());
+}

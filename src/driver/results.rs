@@ -21,7 +21,7 @@
 use super::indentation::IndentationResults;
 use super::resistance::RollingResistance;
 use super::spinning::SpinningResults;
-use super::steady_report::{Attempt, Recovery};
+use super::steady_report::{Attempt, CoarseStart, Recovery};
 use super::system::SteadyDampingTangent;
 use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
 use crate::io::output::sanitize;
@@ -582,6 +582,8 @@ pub struct SteadySolver {
     pub recovery: Option<Recovery>,
     /// The continuation in the friction regularisation ε before the press-in (null when none).
     pub eps_continuation: Option<Attempt>,
+    /// The start from a coarser mesh's steady state (null when none was tried).
+    pub coarse_start: Option<CoarseStart>,
 }
 
 /// summary.json of the steady mode.

@@ -91,6 +91,9 @@ pub struct SteadyRolling {
     /// of [`super::steady_recovery::continue_in_eps`] (also when it failed and the direct
     /// press-in was tried instead).
     pub eps_continuation: Option<super::steady_report::Attempt>,
+    /// Set when the first solve started from a coarser mesh's steady state
+    /// (`[solver] coarse_start`; also when Newton failed from it).
+    pub coarse_start: Option<super::steady_report::CoarseStart>,
     /// Free-rolling road speed at the current ω (zero hub torque), once solved for
     /// ([`solve_torque`] with target 0); the reference of the creep. NaN until then.
     pub v0_free: f64,
@@ -107,6 +110,7 @@ impl SteadyRolling {
             ro,
             recovery: None,
             eps_continuation: None,
+            coarse_start: None,
             v0_free: f64::NAN,
             damping_fallback: None,
         };

@@ -101,6 +101,25 @@ impl Attempt {
     }
 }
 
+/// How the steady solve started from the steady state of a coarser mesh (`summary.json`:
+/// `solver.coarse_start`; `[solver] coarse_start`).
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct CoarseStart {
+    /// The coarser meshes solved first, coarsest first, as `n_r x n_theta`.
+    pub meshes: Vec<String>,
+    /// Newton iterations on the coarser meshes (all of them).
+    pub coarse_newton_iterations: usize,
+    /// Wall time of the coarser solves and the interpolation.
+    pub coarse_wall_time_s: f64,
+    /// Newton iterations on this mesh from the interpolated state.
+    pub newton_iterations: usize,
+    /// Whether Newton converged from the interpolated state (if not, the press-in from the
+    /// undeformed state followed).
+    pub succeeded: bool,
+    /// Why it did not.
+    pub error: Option<String>,
+}
+
 /// What the recovery did (`summary.json`: `solver.recovery`).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Recovery {

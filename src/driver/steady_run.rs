@@ -33,6 +33,7 @@ use super::results::{
 use super::spinning;
 use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
 use super::steady_recovery;
+use super::steady_report::CoarseStart;
 use super::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
@@ -45,7 +46,7 @@ use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
 use crate::solver::linear::{write_matrix_market, write_vector_market};
-use crate::solver::stepping::StepReport;
+use crate::solver::stepping::{StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -373,6 +374,15 @@ pub fn solve_steady(
     st.sys.save_state(&mut x_init);
     st.recovery = None;
     st.eps_continuation = None;
+    st.coarse_start = None;
+    if let Some(cs) = coarse_start(scene, st, loading, kind, &newton_opts, verbose, report, rec)? {
+        let ok = cs.succeeded;
+        st.coarse_start = Some(cs);
+        if ok {
+            return Ok(());
+        }
+        st.sys.restore_state(&x_init);
+    }
     let eps_leg = steady_recovery::eps_continuation_leg(&steady_recovery::Targets::of(st))
         .filter(|_| scene.solver.eps_continuation);
     if let Some(leg) = eps_leg {
@@ -468,6 +478,163 @@ pub fn solve_steady(
             }
         }
     }
+}
+
+/// The scene on the mesh with half the cells in r and in θ, when [`coarse_start`] applies:
+/// `[solver] coarse_start`, a generated annulus with n_r even ≥ 4 and n_theta a multiple of 4
+/// ≥ 64 (the coarse mesh keeps n_theta even and ≥ 32).
+fn coarse_scene(scene: &Scene) -> Option<Scene> {
+    let m = &scene.mesh;
+    let applies = scene.solver.coarse_start
+        && m.file.is_none()
+        && m.n_r >= 4
+        && m.n_r.is_multiple_of(2)
+        && m.n_theta >= 64
+        && m.n_theta.is_multiple_of(4);
+    applies.then(|| {
+        let mut c = scene.clone();
+        c.mesh.n_r /= 2;
+        c.mesh.n_theta /= 2;
+        c
+    })
+}
+
+/// Nested iteration: solve the steady state on the mesh with half the cells in r and θ (by
+/// [`solve_steady`], so that mesh starts from its own coarser one in turn), interpolate its
+/// displacements (and the road height under load control) to this mesh's nodes, and take
+/// Newton at full load from there (one load step, no cut-back). Most of the Newton iterations
+/// of a press-in from the undeformed state are spent finding the contact patch with damped
+/// steps; on the coarse mesh they are cheap, and from the interpolated state Newton on the
+/// fine mesh converges in a few full steps. `None` when it does not apply (see
+/// [`coarse_scene`]; also without contact or with cell-owned pressures); otherwise what it
+/// did. On failure the state is left for the caller to restore.
+#[allow(clippy::too_many_arguments)]
+fn coarse_start(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    loading: Loading,
+    kind: LinearKind,
+    newton_opts: &crate::solver::NewtonOptions,
+    verbose: bool,
+    report: &mut StepReport,
+    rec: &mut dyn Recorder,
+) -> Result<Option<CoarseStart>, SolveError> {
+    let Some(coarse) = coarse_scene(scene) else {
+        return Ok(None);
+    };
+    if st.sys.contact.is_none() || st.sys.dofs.per_cell != 0 {
+        return Ok(None);
+    }
+    let t0 = Instant::now();
+    let name = format!("{}x{}", coarse.mesh.n_r, coarse.mesh.n_theta);
+    let mut out = CoarseStart::default();
+    let mut cst = match build_steady(&coarse) {
+        Ok(c) => c,
+        Err(e) => {
+            out.meshes.push(name);
+            out.error = Some(format!(
+                "the {} mesh could not be built: {e}",
+                out.meshes[0]
+            ));
+            return Ok(Some(out));
+        }
+    };
+    let mut crep = StepReport::default();
+    let solved = solve_steady(&coarse, &mut cst, false, &mut crep, &mut ());
+    if let Some(inner) = &cst.coarse_start {
+        out.meshes = inner.meshes.clone();
+        out.coarse_newton_iterations = inner.coarse_newton_iterations;
+    }
+    out.meshes.push(name);
+    out.coarse_newton_iterations += crep.total_iterations
+        + cst.recovery.as_ref().map_or(0, |r| r.newton_iterations)
+        + cst
+            .eps_continuation
+            .as_ref()
+            .map_or(0, |a| a.newton_iterations);
+    if let Err(e) = solved {
+        if let SolveError::Interrupted { .. } = e {
+            return Err(e);
+        }
+        out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+        out.error = Some(format!(
+            "the solve on the {} mesh failed: {e}",
+            out.meshes.last().map_or("", |m| m.as_str())
+        ));
+        return Ok(Some(out));
+    }
+    interpolate_state(&cst.sys, &mut st.sys);
+    out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+    if verbose {
+        eprintln!(
+            "  started from the steady state on the {} mesh ({} Newton iterations, {:.3} s)",
+            out.meshes.join(" -> "),
+            out.coarse_newton_iterations,
+            out.coarse_wall_time_s
+        );
+    }
+    let once = StepOptions {
+        initial_steps: 1,
+        max_cutbacks: 0,
+        verbose,
+    };
+    let mut frep = StepReport::default();
+    let res = press(
+        st,
+        loading,
+        kind,
+        newton_opts.clone(),
+        &once,
+        &mut frep,
+        rec,
+    );
+    out.newton_iterations = frep.total_iterations;
+    match res {
+        Ok(()) => {
+            out.succeeded = true;
+            report.steps.extend(frep.steps);
+            report.total_iterations += frep.total_iterations;
+        }
+        Err(e @ SolveError::Interrupted { .. }) => return Err(e),
+        Err(e) => {
+            if verbose {
+                eprintln!("  Newton from the interpolated state failed ({e}): pressing in from the undeformed state");
+            }
+            out.error = Some(format!("Newton from the interpolated state: {e}"));
+        }
+    }
+    Ok(Some(out))
+}
+
+/// Interpolate the displacements of `from` (another mesh of the same body) at the nodes of
+/// `to`, and copy its global unknowns (the road height under load control); fixed dofs of
+/// `to` keep their values.
+fn interpolate_state(from: &SolidSystem, to: &mut SolidSystem) {
+    use crate::assembly::CONSTRAINED;
+    use crate::mesh::locate::{shape_values, PointLocator};
+    let src = &from.model.mesh;
+    let loc = PointLocator::new(src);
+    let mut x = to.x.clone();
+    let mut n = [0.0; 9];
+    for (a, &xa) in to.model.mesh.nodes.iter().enumerate() {
+        let (c, xi, eta) = loc.locate_nearest(src, xa);
+        shape_values(src, c, xi, eta, &mut n);
+        let mut u = [0.0; 2];
+        for (b, &node) in src.cell_nodes(c).iter().enumerate() {
+            for (i, ui) in u.iter_mut().enumerate() {
+                *ui += n[b] * from.x[2 * node as usize + i];
+            }
+        }
+        for (i, &ui) in u.iter().enumerate() {
+            if to.dofs.eq[2 * a + i] < CONSTRAINED {
+                x[2 * a + i] = ui;
+            }
+        }
+    }
+    for k in 0..to.dofs.n_global.min(from.dofs.n_global) {
+        x[to.dofs.global(k)] = from.x[from.dofs.global(k)];
+    }
+    to.restore_state(&x);
 }
 
 /// Relative tolerance of the torque and free-rolling controls: converged when
@@ -861,6 +1028,7 @@ pub fn run_with_dump(
                 threads: rayon::current_num_threads(),
                 recovery: st.recovery.clone(),
                 eps_continuation: st.eps_continuation.clone(),
+                coarse_start: st.coarse_start.clone(),
             },
         })),
     );

@@ -47,6 +47,7 @@ const CMP: &str = "tread compare";
 const SDC: &str = "steady with motion.control other than speed";
 const REC: &str = "steady, when the first solve failed";
 const EPSC: &str = "steady, friction with ε < 1e-2 v_ref";
+const CST: &str = "steady, solver.coarse_start on a generated annulus with n_r even >= 4, n_theta a multiple of 4 >= 64";
 
 /// Every key of `summary.json` (objects are listed with their keys).
 pub static SUMMARY_KEYS: &[OutputKey] = &[
@@ -121,6 +122,13 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("solver.eps_continuation.legs[].reached", "L/T", EPSC, "ε reached"),
     k("solver.eps_continuation.newton_iterations", N, EPSC, "Newton iterations (press-in and ε steps)"),
     k("solver.eps_continuation.wall_time_s", "s", EPSC, "wall time of the continuation"),
+    k("solver.coarse_start", N, SD, "null, or how the steady solve started from the steady state of the mesh with half the cells in r and θ (nested iteration, `[solver] coarse_start`)"),
+    k("solver.coarse_start.meshes", N, CST, "the coarser meshes solved first, coarsest first, as `n_r x n_theta`"),
+    k("solver.coarse_start.coarse_newton_iterations", N, CST, "Newton iterations on the coarser meshes"),
+    k("solver.coarse_start.coarse_wall_time_s", "s", CST, "wall time of the coarser solves and the interpolation"),
+    k("solver.coarse_start.newton_iterations", N, CST, "Newton iterations on the scene's mesh from the interpolated state"),
+    k("solver.coarse_start.succeeded", N, CST, "whether Newton converged from it (if not, the press-in from the undeformed state followed)"),
+    k("solver.coarse_start.error", N, CST, "why it did not (null if it did)"),
     k("solver.recovery.newton_iterations", N, REC, "Newton iterations of the recovery"),
     k("solver.recovery.cutbacks", N, REC, "cut-backs of the recovery"),
     k("solver.recovery.wall_time_s", "s", REC, "wall time of the recovery"),

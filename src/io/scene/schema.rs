@@ -387,6 +387,8 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
                 "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve, assembled for continuation)"),
             opt("eps_continuation", Kind::Bool, NONE,
                 "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
+            opt("coarse_start", Kind::Bool, NONE,
+                "steady mode on a generated annulus (n_r even >= 4, n_theta a multiple of 4 >= 64, no cell pressures): start Newton from the steady state on the mesh with half the cells in r and theta (solved the same way), interpolated; falls back to the press-in from the undeformed state if Newton fails from it. false: always press in from the undeformed state"),
         ] },
     },
     SectionSchema {

@@ -58,6 +58,10 @@ pub struct SolverSpec {
     /// Steady mode with friction: a regularisation ε below 1e-2 v_ref is reached by pressing
     /// in at 1e-2 v_ref and walking ε down (false: press in at the scene's ε directly).
     pub eps_continuation: bool,
+    /// Steady mode on a generated annulus: start Newton from the steady state of the mesh with
+    /// half the cells in r and in θ (itself started the same way), interpolated (false: press
+    /// in from the undeformed state).
+    pub coarse_start: bool,
 }
 
 impl Default for SolverSpec {
@@ -72,6 +76,7 @@ impl Default for SolverSpec {
             line_search: true,
             damping_tangent: DampingTangentChoice::Auto,
             eps_continuation: true,
+            coarse_start: true,
         }
     }
 }
