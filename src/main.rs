@@ -129,6 +129,13 @@ enum Command {
         /// (explicit residual with the contact traction on the contact facets).
         #[arg(long, default_value = "recovery")]
         estimator: tread::driver::adaptive::SolidEstimator,
+        /// Coarsening fraction c >= 0: families of four cells whose squared indicators are
+        /// each below c times the mean merge into their parent (0: no coarsening).
+        #[arg(long, default_value_t = 0.0)]
+        coarsen: f64,
+        /// Uniform refinements of the scene's mesh before the first solve.
+        #[arg(long, default_value_t = 0)]
+        uniform: usize,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -558,6 +565,8 @@ fn main() -> ExitCode {
             max_dofs,
             tolerance,
             estimator,
+            coarsen,
+            uniform,
             set,
         }) => match load(&scene, &set) {
             Ok(s) => {
@@ -568,6 +577,8 @@ fn main() -> ExitCode {
                     fraction,
                     max_dofs,
                     tolerance,
+                    coarsen,
+                    uniform,
                 };
                 let dir = out.unwrap_or_else(|| {
                     app::default_out_dir(&s).with_file_name(format!("{}_adapt", s.scene.name))

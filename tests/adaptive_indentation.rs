@@ -293,3 +293,61 @@ fn tread_adapt_writes_its_table_and_meshes_and_rejects_other_modes() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("Dörfler fraction"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Coarsening: with a Dörfler fraction of 0.95 the loop refines almost every cell; with a
+/// coarsening fraction of 0.1 the families whose indicators have become small merge back. The
+/// coarsened sequence ends with fewer equations and a smaller estimate × equations (the Q2
+/// optimum makes that constant), its hub force stays as close to the reference, and the merged
+/// mesh's transferred state is a good start (few Newton iterations).
+#[test]
+fn coarsening_sheds_cells_whose_error_is_small() {
+    let s = scene(&["mesh.n_r=2", "mesh.n_theta=32", "mesh.grading_theta=0"]);
+    let runs: Vec<_> = [0.0, 0.5]
+        .iter()
+        .map(|&coarsen| {
+            let opts = AdaptOptions {
+                steps: 4,
+                fraction: 0.5,
+                uniform: 2,
+                coarsen,
+                ..Default::default()
+            };
+            let (_, steps) = run(&s, &opts, Path::new("unused"), |_, st, _| {
+                eprintln!(
+                    "c = {coarsen}: {:2}: {:5} cells {:6} eqs merged {:3} eta {:.3e} F_y {:.10e} newton {}",
+                    st.step, st.cells, st.dofs, st.coarsened, st.estimate, st.hub_force_y, st.newton_iterations
+                );
+            })
+            .unwrap();
+            steps
+        })
+        .collect();
+    let (plain, coarse) = (runs[0].last().unwrap(), runs[1].last().unwrap());
+    let merged: usize = runs[1].iter().map(|s| s.coarsened).sum();
+    assert!(merged > 0, "nothing coarsened");
+    assert!(runs[0].iter().all(|s| s.coarsened == 0));
+    assert!(
+        coarse.dofs < plain.dofs,
+        "{} vs {} equations",
+        coarse.dofs,
+        plain.dofs
+    );
+    let work = |s: &tread::driver::adaptive::AdaptStep| s.estimate * s.dofs as f64;
+    assert!(
+        work(coarse) < work(plain),
+        "eta N {:.3e} vs {:.3e}",
+        work(coarse),
+        work(plain)
+    );
+    // Reference hub force: the adaptive extrapolation of the benchmark (-85.978511).
+    let reference = -85.978511;
+    let err =
+        |s: &tread::driver::adaptive::AdaptStep| ((s.hub_force_y - reference) / reference).abs();
+    assert!(
+        err(coarse) < 3.0 * err(plain).max(1e-6),
+        "{:.2e} vs {:.2e}",
+        err(coarse),
+        err(plain)
+    );
+    assert!(runs[1].iter().skip(1).all(|s| s.newton_iterations <= 6));
+}

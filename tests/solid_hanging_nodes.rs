@@ -221,3 +221,71 @@ fn tangent_matches_finite_differences_with_hanging_nodes() {
         );
     }
 }
+
+/// Every leaf's neighbours are at most one level finer: points just outside each side (at side
+/// parameters ±1/4, ±3/4, where only a neighbour two levels finer would have nodes) are located
+/// in the leaf mesh and their cell's level is compared.
+fn assert_one_irregular(f: &Forest) {
+    let (mesh, _) = f.mesh();
+    let loc = tread::mesh::locate::PointLocator::new(&mesh);
+    let out = 1.0 + 1e-6;
+    for l in f.leaves() {
+        for s in [-0.75, -0.25, 0.25, 0.75] {
+            for (a, b) in [(-out, s), (out, s), (s, -out), (s, out)] {
+                let (xi, eta) = l.to_root(a, b);
+                let x = f.root_point(l.root as usize, xi, eta);
+                if let Some((c, _, _)) = loc.locate(&mesh, x) {
+                    let m = f.leaves()[c];
+                    assert!(
+                        m.level <= l.level + 1,
+                        "leaf {l:?} has neighbour {m:?} two levels finer"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Coarsening every leaf round after round undoes the refinement back to the root mesh (no
+/// hanging nodes left), the forest staying one-irregular after every round; a family whose
+/// parent would sit next to leaves two levels finer is not merged.
+#[test]
+fn coarsening_undoes_refinement_and_keeps_one_irregularity() {
+    for order in [1, 2] {
+        let (mut f, _) = refined(order, false);
+        let root_cells = f.root.n_cells();
+        assert_one_irregular(&f);
+        // Only the level-1 leaves: the families next to the level-2 and level-3 leaves must stay.
+        let level1: Vec<usize> = (0..f.leaves().len())
+            .filter(|&k| f.leaves()[k].level == 1)
+            .collect();
+        let families = level1.len() / 4;
+        let merged = f.coarsen(&level1).unwrap();
+        assert_one_irregular(&f);
+        assert!(
+            merged >= 1 && merged < families,
+            "merged {merged} of {families} families"
+        );
+        let deepest = f.leaves().iter().map(|l| l.level).max().unwrap_or(0);
+        let mut rounds = 0;
+        loop {
+            let all: Vec<usize> = (0..f.leaves().len()).collect();
+            let merged = f.coarsen(&all).unwrap();
+            assert_one_irregular(&f);
+            if merged == 0 {
+                break;
+            }
+            rounds += 1;
+        }
+        // One level per round at most.
+        assert!(
+            rounds >= usize::from(deepest),
+            "{rounds} rounds from level {deepest}"
+        );
+        assert_eq!(f.leaves().len(), root_cells);
+        let (m, _) = f.mesh();
+        assert!(m.constraints.is_empty());
+        assert_eq!(m.n_cells(), root_cells);
+        assert!(f.coarsen(&[root_cells]).is_err());
+    }
+}

@@ -11,7 +11,12 @@
 //!    ([`crate::physics::estimate`]).
 //! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
 //!    the fraction θ of the total.
-//! 4. **Refine** the marked cells into four, keeping the mesh one-irregular.
+//! 4. **Refine** the marked cells into four, keeping the mesh one-irregular; with a coarsening
+//!    fraction c > 0, also **coarsen**: a family of four sibling cells, none of them marked,
+//!    merges back into its parent when the parent's predicted indicator is small,
+//!    η_P² ≈ 2^{2p} Σ_children η_K² < c η² / N (the energy error of degree p scales like h^p;
+//!    N cells), and the parent keeps the mesh one-irregular. The scene's mesh is never
+//!    coarsened.
 //! 5. **Transfer** the displacement to the new mesh by evaluating the old solution at the new
 //!    nodes (exact for the nodes of unrefined cells and for the children's nodes that the
 //!    parent interpolates).
@@ -88,6 +93,13 @@ pub struct AdaptOptions {
     pub max_dofs: usize,
     /// Stop once the relative estimate η / ‖u_h‖_A is below this.
     pub tolerance: f64,
+    /// Coarsening fraction c ≥ 0: a family of four unmarked sibling cells merges when its
+    /// predicted parent indicator 2^{2p} Σ η_K² is below c · η² / N (N cells, degree p);
+    /// 0 = no coarsening.
+    pub coarsen: f64,
+    /// Uniform refinements of the scene's mesh before the first solve (which the coarsening
+    /// may then undo where the error is small).
+    pub uniform: usize,
 }
 
 impl Default for AdaptOptions {
@@ -98,6 +110,8 @@ impl Default for AdaptOptions {
             fraction: 0.5,
             max_dofs: 200_000,
             tolerance: 0.0,
+            coarsen: 0.0,
+            uniform: 0,
         }
     }
 }
@@ -110,6 +124,9 @@ pub struct AdaptStep {
     pub dofs: usize,
     pub hanging_nodes: usize,
     pub max_level: u8,
+    /// Families of four cells merged into their parent after the previous mesh (0 on the
+    /// first).
+    pub coarsened: usize,
     /// Recovery estimate η and its ratio to the energy norm of the solution.
     pub estimate: f64,
     pub relative_estimate: f64,
@@ -216,6 +233,12 @@ pub fn run(
     out_dir: &Path,
     mut on_step: impl FnMut(&SolidSystem, &AdaptStep, &[f64]),
 ) -> Result<(SolidSystem, Vec<AdaptStep>), AppError> {
+    if !(opts.coarsen.is_finite() && opts.coarsen >= 0.0) {
+        return Err(AppError::Unsupported(format!(
+            "adaptive indentation: the coarsening fraction must be >= 0, got {}",
+            opts.coarsen
+        )));
+    }
     if !(opts.fraction > 0.0 && opts.fraction <= 1.0) {
         return Err(AppError::Unsupported(format!(
             "adaptive indentation: the Dörfler fraction must be in (0, 1], got {}",
@@ -231,11 +254,18 @@ pub fn run(
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
         .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+    for _ in 0..opts.uniform {
+        let all: Vec<usize> = (0..forest.leaves().len()).collect();
+        forest
+            .refine(&all)
+            .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+    }
     let (mut mesh, _) = forest.mesh();
     let mut sys = indentation_system(scene, mesh.clone())?;
     let mut steps = Vec::new();
     let mut warm = false;
     let mut cold = sys.x.clone();
+    let mut coarsened = 0;
     for step in 0..=opts.steps {
         let ts = Instant::now();
         let iterations = solve_static(scene, &mut sys, warm, Some(&cold), out_dir)?;
@@ -258,6 +288,7 @@ pub fn run(
             dofs: sys.n_dofs(),
             hanging_nodes: mesh.constraints.len(),
             max_level: forest.leaves().iter().map(|l| l.level).max().unwrap_or(0),
+            coarsened,
             estimate: est.global,
             relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
             hub_force_x: r.hub_force_x,
@@ -286,10 +317,26 @@ pub fn run(
             acc += est.indicators[k] * est.indicators[k];
             marked.push(k);
         }
+        // Coarsening candidates, by leaf (indices change with the refinement): the children of
+        // the families whose predicted parent indicator is small.
+        let small = if opts.coarsen > 0.0 {
+            let degree = sys.model.mesh.degree.first().copied().unwrap_or(1);
+            let growth = f64::from(1u32 << (2 * u32::from(degree)));
+            let limit = opts.coarsen * total / est.indicators.len().max(1) as f64;
+            coarsening_candidates(forest.leaves(), &est.indicators, &marked, growth, limit)
+        } else {
+            Default::default()
+        };
         let old_forest = forest.clone();
-        forest
-            .refine(&marked)
-            .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+        let adapt_err = |e| AppError::Unsupported(format!("adaptive indentation: {e}"));
+        forest.refine(&marked).map_err(adapt_err)?;
+        coarsened = 0;
+        if !small.is_empty() {
+            let merge: Vec<usize> = (0..forest.leaves().len())
+                .filter(|&k| small.contains(&forest.leaves()[k]))
+                .collect();
+            coarsened = forest.coarsen(&merge).map_err(adapt_err)?;
+        }
         let (new_mesh, origin) = forest.mesh();
         let mut next = indentation_system(scene, new_mesh.clone())?;
         if next.n_dofs() > opts.max_dofs {
@@ -319,23 +366,58 @@ pub fn run(
     Ok((sys, steps))
 }
 
+/// The leaves of the families (four sibling leaves, none in `marked`) whose predicted parent
+/// indicator `growth · Σ η_K²` is below `limit`.
+fn coarsening_candidates(
+    leaves: &[crate::mesh::refine::Leaf],
+    indicators: &[f64],
+    marked: &[usize],
+    growth: f64,
+    limit: f64,
+) -> std::collections::HashSet<crate::mesh::refine::Leaf> {
+    use std::collections::HashMap;
+    let mut family: HashMap<crate::mesh::refine::Leaf, (usize, f64)> = HashMap::new();
+    let mut is_marked = vec![false; leaves.len()];
+    for &k in marked {
+        is_marked[k] = true;
+    }
+    for (k, l) in leaves.iter().enumerate() {
+        if let Some(p) = l.parent() {
+            let e = family.entry(p).or_default();
+            // A marked child disqualifies its family.
+            e.0 += if is_marked[k] { 5 } else { 1 };
+            e.1 += indicators[k] * indicators[k];
+        }
+    }
+    leaves
+        .iter()
+        .filter(|l| {
+            l.parent()
+                .and_then(|p| family.get(&p))
+                .is_some_and(|&(n, sum)| n == 4 && growth * sum < limit)
+        })
+        .copied()
+        .collect()
+}
+
 /// Write `DIR/adapt.csv` (one row per mesh), `DIR/adapt.json` (options and steps) and, through
 /// `on_step` of [`run`], `DIR/adapt_<step>.vtu` (the mesh, displacement, stresses and the
 /// `error_indicator` per cell).
 pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
     ensure_dir(dir)?;
     let mut csv = String::from(
-        "step,cells,dofs,hanging_nodes,max_level,estimate,relative_estimate,hub_force_x,hub_force_y,penetration,newton_iterations,wall_step_s,wall_total_s\n",
+        "step,cells,dofs,hanging_nodes,max_level,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,penetration,newton_iterations,wall_step_s,wall_total_s\n",
     );
     for s in steps {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
+            "{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
             s.step,
             s.cells,
             s.dofs,
             s.hanging_nodes,
             s.max_level,
+            s.coarsened,
             s.estimate,
             s.relative_estimate,
             s.hub_force_x,
@@ -354,6 +436,8 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             "fraction": opts.fraction,
             "max_dofs": opts.max_dofs,
             "tolerance": opts.tolerance,
+            "coarsen": opts.coarsen,
+            "uniform": opts.uniform,
             "estimator": opts.estimator.keyword(),
             "marking": "doerfler",
         },

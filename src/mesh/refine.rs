@@ -59,6 +59,15 @@ impl Leaf {
             2.0 * ((eta + 1.0) / h - f64::from(self.j)) - 1.0,
         )
     }
+    /// The leaf this one was split from (`None` for a root cell).
+    pub fn parent(&self) -> Option<Leaf> {
+        (self.level > 0).then(|| Leaf {
+            root: self.root,
+            level: self.level - 1,
+            i: self.i / 2,
+            j: self.j / 2,
+        })
+    }
     fn children(&self) -> [Leaf; 4] {
         let l = self.level + 1;
         let (i, j) = (2 * self.i, 2 * self.j);
@@ -245,26 +254,86 @@ impl Forest {
             self.leaves = next;
             // One-irregularity: a leaf with a node of a neighbour two levels finer on a side.
             let keys = self.node_keys();
-            let probes: &[f64] = if self.degree == 1 {
-                &[-0.5, 0.5]
-            } else {
-                &[-0.75, -0.25, 0.25, 0.75]
-            };
             split = self
                 .leaves
                 .iter()
-                .map(|l| {
-                    (0..4u8).any(|side| {
-                        probes.iter().any(|&s| {
-                            let f = Facet { cell: 0, side };
-                            let (a, b) = f.ref_point(s);
-                            keys.contains(&self.key(self.leaf_point(l, a, b)))
-                        })
-                    })
-                })
+                .map(|l| self.too_coarse(&keys, l))
                 .collect();
         }
         Ok(total)
+    }
+
+    /// Whether leaf `l` has, inside one of its sides, a node of a neighbour two or more levels
+    /// finer (`keys`: the node keys of the current leaves): the sides' points at which only such
+    /// a neighbour has nodes (Q1: s = ±1/2; Q2: s = ±1/4, ±3/4).
+    fn too_coarse(&self, keys: &std::collections::HashSet<Key>, l: &Leaf) -> bool {
+        let probes: &[f64] = if self.degree == 1 {
+            &[-0.5, 0.5]
+        } else {
+            &[-0.75, -0.25, 0.25, 0.75]
+        };
+        (0..4u8).any(|side| {
+            probes.iter().any(|&s| {
+                let f = Facet { cell: 0, side };
+                let (a, b) = f.ref_point(s);
+                keys.contains(&self.key(self.leaf_point(l, a, b)))
+            })
+        })
+    }
+
+    /// Merge families of four sibling leaves back into their parent where all four are marked
+    /// (indices into [`Self::leaves`]), except where the parent would break one-irregularity
+    /// (a neighbour more than one level finer than the parent); such families stay split.
+    /// Root cells are never merged. The parent takes the place of its first child in the leaf
+    /// order. Returns the number of families merged.
+    pub fn coarsen(&mut self, marked: &[usize]) -> Result<usize, RefineError> {
+        use std::collections::HashMap;
+        let n = self.leaves.len();
+        let mut mark = vec![false; n];
+        for &k in marked {
+            if k >= n {
+                return Err(RefineError::NoSuchLeaf(k, n));
+            }
+            mark[k] = true;
+        }
+        // Marked children per parent.
+        let mut count: HashMap<Leaf, usize> = HashMap::new();
+        for (l, &m) in self.leaves.iter().zip(&mark) {
+            if let (true, Some(p)) = (m, l.parent()) {
+                *count.entry(p).or_default() += 1;
+            }
+        }
+        let mut merged: std::collections::HashSet<Leaf> = count
+            .into_iter()
+            .filter_map(|(p, c)| (c == 4).then_some(p))
+            .collect();
+        let original = self.leaves.clone();
+        loop {
+            let mut next = Vec::with_capacity(original.len());
+            for l in &original {
+                match l.parent().filter(|p| merged.contains(p)) {
+                    Some(p) => {
+                        if p.children()[0] == *l {
+                            next.push(p);
+                        }
+                    }
+                    None => next.push(*l),
+                }
+            }
+            self.leaves = next;
+            let keys = self.node_keys();
+            let bad: Vec<Leaf> = merged
+                .iter()
+                .filter(|p| self.too_coarse(&keys, p))
+                .copied()
+                .collect();
+            if bad.is_empty() {
+                return Ok(merged.len());
+            }
+            for p in bad {
+                merged.remove(&p);
+            }
+        }
     }
 
     /// The leaf containing root point (ξ, η) of root cell `root`, and the point in its local
