@@ -527,10 +527,17 @@ impl Newton {
                     fresh_products = ks.iterations;
                 }
                 last_products = ks.iterations;
-                // A step far less accurate than asked (or one that does not even halve the
-                // residual of the linear system) is not a Newton step: stop here rather than
-                // wander (the caller may switch to an assembled tangent).
-                if poor(&ks) {
+                // A step far less accurate than asked is still an inexact Newton step when it
+                // leaves at most 1 % of the linear residual: Newton then converges linearly
+                // (by about that factor per iteration) instead of superlinearly, and the
+                // residual test decides convergence as always. (On the damped default scene at
+                // 1M DOFs, GMRES stalled at 4.4e-4 where 3.7e-5 was asked.) A step that leaves
+                // more, or does not even halve the residual of the linear system, is not a
+                // Newton step: stop here rather than wander (the caller may switch to an
+                // assembled tangent).
+                let unusable = !ks.rel_residual.is_finite()
+                    || ks.rel_residual > (10.0 * eta).clamp(1e-2, 0.5);
+                if unusable {
                     sys.tangent_correction_stalled();
                     if self.opts.verbose {
                         eprintln!(
@@ -546,11 +553,16 @@ impl Newton {
                 }
                 if self.opts.verbose {
                     eprintln!(
-                        "         GMRES: {} products, relative residual {:.2e} (asked {eta:.1e}){}",
+                        "         GMRES: {} products, relative residual {:.2e} (asked {eta:.1e}){}{}",
                         ks.iterations,
                         ks.rel_residual,
                         if lagged && fresh_products != ks.iterations {
                             ", lagged LU"
+                        } else {
+                            ""
+                        },
+                        if poor(&ks) {
+                            ", taken as an inexact step"
                         } else {
                             ""
                         }
