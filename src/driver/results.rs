@@ -453,6 +453,7 @@ impl BranchRow {
             PointKind::Regular => 1.0,
             PointKind::LimitPoint => 2.0,
             PointKind::Bifurcation => 3.0,
+            PointKind::Switched => 4.0,
         };
         vec![
             self.step as f64,
@@ -516,6 +517,9 @@ pub struct ContinuationSummary {
     pub cutbacks: usize,
     pub assemblies: usize,
     pub factorizations: usize,
+    /// The step after which the path switched branches (`[continuation] switch_branch`; null
+    /// when it did not).
+    pub switched_at: Option<usize>,
 }
 
 /// `results` of the steady mode (the final state; the keys shared with the transient mode have

@@ -221,6 +221,7 @@ fn record_branch_point(
             PointKind::Start | PointKind::Regular => record::PointKind::Regular,
             PointKind::LimitPoint => record::PointKind::LimitPoint,
             PointKind::Bifurcation => record::PointKind::Bifurcation,
+            PointKind::Switched => record::PointKind::Regular,
         },
         measures: &measures,
     });
@@ -820,6 +821,7 @@ pub fn run_with_dump(
             max_cutbacks: scene.solver.max_cutbacks,
             tol: scene.solver.tolerance,
             test_function: true,
+            switch_branch: cs.switch_branch,
             verbose: opts.verbose,
         };
         let n0 = report.steps.len() as u64;
@@ -969,6 +971,7 @@ pub fn run_with_dump(
             cutbacks: c.cutbacks,
             assemblies: c.assemblies,
             factorizations: c.factorizations,
+            switched_at: c.switched_at,
         }),
     };
     let friction = st

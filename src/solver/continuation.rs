@@ -48,6 +48,15 @@
 //!   annulus). Treat g as a hint; the inertia / det sign, when available, is authoritative. The point is located
 //!   by linear interpolation of g (or of the signed log-determinant). Both are reported in the
 //!   branch table ([`BranchPoint::det_sign`], [`BranchPoint::test_function`]).
+//! * **Branch switching** ([`ContinuationOptions::switch_branch`]): at the first bifurcation
+//!   detected, the path leaves the branch it was on. At the converged point just past the
+//!   crossing the null mode φ of K is estimated by inverse iteration (the eigenvector of the
+//!   eigenvalue of smallest modulus, which is the one that crossed), its part along the
+//!   branch's unit tangent t is removed in the scaled inner product, d = (φ, 0) − ⟨(φ, 0), t⟩ t,
+//!   and the next predictor goes along d / ‖d‖ instead of t. The spherical corrector then lands
+//!   on the bifurcating branch (a pitchfork's second branch meets that sphere near the
+//!   predictor; the old branch meets it only at ±t). The first point of the new branch is
+//!   marked [`PointKind::Switched`]; the path does not switch again.
 //! - **Tangents with a matrix-free part** ([`NonlinearSystem::has_tangent_correction`]: the
 //!   steady damping's coupling beyond the cells, a viscoelastic ring history): every solve
 //!   (tangent, corrector, test function) is made with the exact tangent by GMRES
@@ -111,6 +120,9 @@ pub struct ContinuationOptions {
     pub tol: f64,
     /// Bifurcation test function by inverse iteration when det K is not available.
     pub test_function: bool,
+    /// Leave the branch at the first bifurcation detected, along the null mode (see the
+    /// module docs).
+    pub switch_branch: bool,
     pub verbose: bool,
 }
 
@@ -130,6 +142,7 @@ impl Default for ContinuationOptions {
             max_cutbacks: 8,
             tol: 1e-8,
             test_function: true,
+            switch_branch: false,
             verbose: false,
         }
     }
@@ -146,6 +159,9 @@ pub enum PointKind {
     /// det K (or the test function) changed sign between the previous point and this one
     /// without λ turning back.
     Bifurcation,
+    /// The first point on the branch entered by branch switching
+    /// ([`ContinuationOptions::switch_branch`]).
+    Switched,
 }
 
 /// One converged point of the branch.
@@ -199,6 +215,9 @@ pub struct ContinuationReport {
     pub factorizations: usize,
     /// Why the continuation stopped.
     pub stop_reason: String,
+    /// The point after which the path switched branches
+    /// ([`ContinuationOptions::switch_branch`]; `None`: it did not).
+    pub switched_at: Option<usize>,
 }
 
 /// Arc-length continuation driver (owns the sparse solver and the work vectors).
@@ -342,28 +361,76 @@ impl Continuation {
             .solver
             .negative_eigenvalues()
             .map_or(f64::NAN, |n| n as f64);
-        let mut g = f64::NAN;
-        if self.opts.test_function {
-            for _ in 0..3 {
-                self.z.copy_from_slice(&self.c);
-                exact_solve(sys, &mut self.solver, &mut self.z, 1e-8)?;
-                let cz = dot(&self.c, &self.z);
-                let zn = dot(&self.z, &self.z).sqrt();
-                if !(zn.is_finite() && zn > 0.0) {
-                    break;
-                }
-                g = 1.0 / cz;
-                for (c, z) in self.c.iter_mut().zip(&self.z) {
-                    *c = z / zn;
-                }
-            }
-        }
+        let g = if self.opts.test_function {
+            self.smallest_mode(sys, 3)?
+        } else {
+            f64::NAN
+        };
         let tl = 1.0;
         let norm = self.sdot(&self.tu, tl, &self.tu, tl).sqrt();
         for t in &mut self.tu {
             *t /= norm;
         }
         Ok((tl / norm, sign, logdet, g, fs, neg))
+    }
+
+    /// `iterations` steps of inverse iteration on the factorized K (exact tangent): `self.c`
+    /// becomes the unit estimate of the eigenvector of the eigenvalue of smallest modulus;
+    /// returns the Rayleigh-quotient estimate 1 / (cᵀ K⁻¹ c) of that eigenvalue (NaN if the
+    /// iteration broke down).
+    fn smallest_mode<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        iterations: usize,
+    ) -> Result<f64, SolveError> {
+        let mut g = f64::NAN;
+        for _ in 0..iterations {
+            self.z.copy_from_slice(&self.c);
+            exact_solve(sys, &mut self.solver, &mut self.z, 1e-8)?;
+            let cz = dot(&self.c, &self.z);
+            let zn = dot(&self.z, &self.z).sqrt();
+            if !(zn.is_finite() && zn > 0.0) {
+                break;
+            }
+            g = 1.0 / cz;
+            for (c, z) in self.c.iter_mut().zip(&self.z) {
+                *c = z / zn;
+            }
+        }
+        Ok(g)
+    }
+
+    /// Turn the predictor direction (`self.tu`, `tl`) into the null mode of K with its part
+    /// along the current unit tangent removed (scaled inner product), normalized; K must be
+    /// factorized at the current point. Returns the new λ-component, or `None` when the mode
+    /// is (numerically) the tangent itself.
+    fn switch_direction<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        tl: f64,
+    ) -> Result<Option<f64>, SolveError> {
+        self.smallest_mode(sys, 6)?;
+        // The mode in the arc-length metric: the scaled weight of its displacement part.
+        let cn = self.sdot(&self.c, 0.0, &self.c, 0.0).sqrt();
+        if !(cn.is_finite() && cn > 0.0) {
+            return Ok(None);
+        }
+        let p = self.sdot(&self.c, 0.0, &self.tu, tl) / cn;
+        let mut d: Vec<f64> = self
+            .c
+            .iter()
+            .zip(&self.tu)
+            .map(|(c, t)| c / cn - p * t)
+            .collect();
+        let mut dl = -p * tl;
+        let dn = self.sdot(&d, dl, &d, dl).sqrt();
+        if !(dn.is_finite() && dn > 1e-6) {
+            return Ok(None);
+        }
+        d.iter_mut().for_each(|v| *v /= dn);
+        dl /= dn;
+        self.tu.copy_from_slice(&d);
+        Ok(Some(dl))
     }
 
     /// Follow the branch from the current (converged) state of `sys`. `on_point` is called at
@@ -407,6 +474,9 @@ impl Continuation {
         // Previous step increment (for orientation), as the unit tangent to start.
         let (mut prev_sign, mut prev_g, mut prev_logdet, mut prev_neg) = (sign, g, logdet, neg);
         let mut tangent_l = tl;
+        // Set once the path has switched branches; the next point is the first of the new one.
+        let mut switched = false;
+        let mut just_switched = false;
         for step in 1..=self.opts.max_steps {
             let t0 = Instant::now();
             let lam_n = sys.parameter();
@@ -516,6 +586,10 @@ impl Continuation {
                     detected_by: "test_function",
                 });
             }
+            if just_switched {
+                kind = PointKind::Switched;
+                just_switched = false;
+            }
             let _ = prev_logdet;
             prev_sign = sign;
             prev_g = g;
@@ -577,6 +651,25 @@ impl Continuation {
                 .sqrt()
                 .clamp(0.5, 2.0);
             ds = (ds * f).clamp(self.opts.ds_min, self.opts.ds_max);
+            if kind == PointKind::Bifurcation && self.opts.switch_branch && !switched {
+                // K is factorized at this point (by `tangent`).
+                match self.switch_direction(sys, tangent_l)? {
+                    Some(l) => {
+                        tangent_l = l;
+                        switched = true;
+                        just_switched = true;
+                        rep.switched_at = Some(step);
+                        if self.opts.verbose {
+                            eprintln!("  continuation step {step}: switching branches along the null mode");
+                        }
+                    }
+                    None => {
+                        if self.opts.verbose {
+                            eprintln!("  continuation step {step}: the null mode is the branch's own tangent; no switch");
+                        }
+                    }
+                }
+            }
         }
         rep.stop_reason = format!("max_steps = {} reached", self.opts.max_steps);
         Ok(rep)
@@ -909,5 +1002,129 @@ mod tests {
         assert!(sys.lam >= 10.0 && sys.x > 2.0);
         // det K = 3x² − 3 changes sign at both limit points (and these are not bifurcations).
         assert!(rep.special.iter().all(|s| s.kind != PointKind::Bifurcation));
+    }
+
+    /// A pitchfork: R1 = x1 − λ (the primary response), R2 = x2 (1 − x1) + x2³. On the primary
+    /// branch x2 = 0, det K = 1 − λ changes sign at λ = 1, where the branch x2² = λ − 1
+    /// bifurcates. Without switching the path stays on x2 = 0 and reports the bifurcation
+    /// near λ = 1; with switching every point after the switch lies on x2² = λ − 1, x2 ≠ 0.
+    struct Pitchfork {
+        x: [f64; 2],
+        lam: f64,
+        r: [f64; 2],
+        k: [f64; 4],
+    }
+
+    impl NonlinearSystem for Pitchfork {
+        fn n_eq(&self) -> usize {
+            2
+        }
+        fn fields(&self) -> &[u8] {
+            &[0, 0]
+        }
+        fn field_names(&self) -> &'static [&'static str] {
+            &["x"]
+        }
+        fn reference_norms(&self) -> Vec<f64> {
+            vec![1.0]
+        }
+        fn pattern(&self) -> (&[usize], &[usize]) {
+            (&[0, 2, 4], &[0, 1, 0, 1])
+        }
+        fn evaluate(&mut self, _m: bool) -> bool {
+            let [x1, x2] = self.x;
+            self.r = [x1 - self.lam, x2 * (1.0 - x1) + x2.powi(3)];
+            // Column-major: (0,0), (1,0), (0,1), (1,1).
+            self.k = [1.0, -x2, 0.0, 1.0 - x1 + 3.0 * x2 * x2];
+            true
+        }
+        fn residual(&self) -> &[f64] {
+            &self.r
+        }
+        fn matrix_values(&self) -> &[f64] {
+            &self.k
+        }
+        fn update(&mut self, alpha: f64, dx: &[f64]) {
+            self.x[0] += alpha * dx[0];
+            self.x[1] += alpha * dx[1];
+        }
+        fn save_state(&self, buf: &mut Vec<f64>) {
+            buf.clear();
+            buf.extend_from_slice(&self.x);
+        }
+        fn restore_state(&mut self, buf: &[f64]) {
+            self.x.copy_from_slice(buf);
+        }
+    }
+
+    impl ParametricSystem for Pitchfork {
+        fn parameter(&self) -> f64 {
+            self.lam
+        }
+        fn set_parameter(&mut self, lambda: f64) {
+            self.lam = lambda;
+        }
+    }
+
+    fn follow_pitchfork(switch_branch: bool) -> (ContinuationReport, Vec<[f64; 2]>) {
+        let mut sys = Pitchfork {
+            x: [0.3, 0.0],
+            lam: 0.3,
+            r: [0.0; 2],
+            k: [0.0; 4],
+        };
+        let opts = ContinuationOptions {
+            target: 2.0,
+            ds0: 0.1,
+            ds_max: 0.15,
+            tol: 1e-12,
+            switch_branch,
+            ..Default::default()
+        };
+        let mut cont = Continuation::new(&sys, LinearKind::Lu, opts).unwrap();
+        let mut xs = Vec::new();
+        let rep = cont
+            .run(&mut sys, &mut |s: &Pitchfork, _p| {
+                xs.push(s.x);
+                true
+            })
+            .unwrap();
+        (rep, xs)
+    }
+
+    #[test]
+    fn pitchfork_is_detected_and_switched_onto() {
+        let (plain, xs) = follow_pitchfork(false);
+        assert!(plain.switched_at.is_none());
+        assert!(xs.iter().all(|x| x[1].abs() < 1e-9), "left x2 = 0 unasked");
+        let bif: Vec<f64> = plain
+            .special
+            .iter()
+            .filter(|s| s.kind == PointKind::Bifurcation)
+            .map(|s| s.lambda)
+            .collect();
+        assert_eq!(bif.len(), 1, "{:?}", plain.special);
+        // Located at the midpoint of the step (inertia change of the symmetric K): within
+        // half the largest step.
+        assert!((bif[0] - 1.0).abs() < 0.08, "bifurcation at {}", bif[0]);
+
+        let (rep, xs) = follow_pitchfork(true);
+        let k = rep.switched_at.expect("switched");
+        assert_eq!(rep.points[k].kind, PointKind::Bifurcation);
+        assert_eq!(rep.points[k + 1].kind, PointKind::Switched);
+        for (p, x) in rep.points.iter().zip(&xs).skip(k + 1) {
+            assert!(x[1].abs() > 1e-3, "back on x2 = 0 at lambda = {}", p.lambda);
+            assert!(
+                (x[1] * x[1] - (p.lambda - 1.0)).abs() < 1e-9,
+                "off the bifurcated branch: x2 = {}, lambda = {}",
+                x[1],
+                p.lambda
+            );
+        }
+        assert!(
+            rep.points.last().unwrap().lambda >= 2.0,
+            "{}",
+            rep.stop_reason
+        );
     }
 }

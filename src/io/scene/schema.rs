@@ -369,6 +369,8 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("max_steps", Kind::UInt, NONE, "maximum number of continuation steps, >= 1"),
             opt("desired_iterations", Kind::UInt, NONE,
                 "corrector iterations aimed at by the step-size control, >= 1"),
+            opt("switch_branch", Kind::Bool, NONE,
+                "leave the branch at the first bifurcation detected (det K or inertia change without a turning point), along the null mode of the tangent with its part along the branch removed; the first point of the new branch has kind 4 in branch.csv"),
         ] },
     },
     SectionSchema {

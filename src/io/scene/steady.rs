@@ -42,6 +42,9 @@ pub struct ContinuationSpec {
     pub max_steps: usize,
     /// Corrector iterations aimed at by the step-size control (>= 1).
     pub desired_iterations: usize,
+    /// Leave the branch at the first bifurcation detected, along the null mode of the
+    /// tangent (branch switching).
+    pub switch_branch: bool,
 }
 
 impl Default for ContinuationSpec {
@@ -53,6 +56,7 @@ impl Default for ContinuationSpec {
             ds_max: 0.25,
             max_steps: 200,
             desired_iterations: 4,
+            switch_branch: false,
         }
     }
 }
