@@ -565,6 +565,9 @@ fn coarse_start(
         return Ok(Some(out));
     }
     interpolate_state(&cst.sys, &mut st.sys);
+    // The coarse system (its matrix, factors, work vectors) is not needed any more: free it
+    // before the fine mesh's factorization.
+    drop(cst);
     out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
     if verbose {
         eprintln!(
