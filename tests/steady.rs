@@ -728,3 +728,72 @@ fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
     let (_, odd) = steady_solution(ODEN, &["mesh.n_r=3", "mesh.n_theta=64"]);
     assert!(odd.coarse_start.is_none());
 }
+
+/// Branch switching on the cylinder: frictionless, undamped rolling (a symmetric tangent,
+/// inertia from LBLᵀ) followed in ω from 40 rad/s through the first bifurcation near the
+/// critical speed (46.6–46.7 rad/s on 3 × 64). The path that stays on its branch keeps the
+/// symmetric state (hub torque at round-off); with `switch_branch` the path leaves at the first
+/// bifurcation along the null mode onto a branch whose states are not symmetric about the
+/// vertical (a hub torque without friction or damping, growing along the branch).
+#[test]
+fn branch_switching_leaves_the_symmetric_branch_at_the_first_bifurcation() {
+    let run = |switch: bool| {
+        let sc = scene(
+            FRICTIONLESS,
+            &[
+                "analysis.mode=\"steady\"",
+                "motion.omega=40",
+                "road.v0=78.666668",
+                "contact.b_n=0",
+                "time.strain_rate_damping=0",
+                "continuation.parameter=\"omega\"",
+                "continuation.target=55",
+                "continuation.ds=0.02",
+                "continuation.max_steps=30",
+                &format!("continuation.switch_branch={switch}"),
+                "output.sinks=[\"summary\"]",
+            ],
+        );
+        let dir = tempdir::TestDir::new("steady", &format!("switch-{switch}"));
+        let out = tread::app::run(
+            &sc,
+            &tread::app::RunOptions {
+                out_dir: dir.to_path_buf(),
+                verbose: false,
+                quiet: true,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        out.summary["results"].clone()
+    };
+    let torque_ratio = |p: &serde_json::Value| {
+        p["hub_torque"].as_f64().unwrap().abs() / (p["hub_force_y"].as_f64().unwrap().abs() * 2.0)
+    };
+    let plain = run(false);
+    assert!(plain["continuation"]["switched_at"].is_null());
+    let branch = plain["branch"].as_array().unwrap();
+    let kind = |p: &serde_json::Value| p["kind"].as_str().unwrap().to_string();
+    assert!(
+        branch.iter().any(|p| kind(p) == "bifurcation"),
+        "no bifurcation detected"
+    );
+    assert!(
+        branch.iter().all(|p| torque_ratio(p) < 1e-10),
+        "symmetric branch left unasked"
+    );
+
+    let switched = run(true);
+    let k = switched["continuation"]["switched_at"]
+        .as_u64()
+        .expect("switched") as usize;
+    let branch = switched["branch"].as_array().unwrap();
+    assert_eq!(kind(&branch[k]), "bifurcation");
+    assert_eq!(kind(&branch[k + 1]), "switched");
+    let w = branch[k]["omega"].as_f64().unwrap();
+    assert!((46.0..47.5).contains(&w), "first bifurcation at {w} rad/s");
+    let after: Vec<f64> = branch[k + 1..].iter().map(torque_ratio).collect();
+    println!("switched at {w} rad/s; |T| / (|F_y| Ro) after: {after:?}");
+    assert!(after.len() >= 5);
+    assert!(after.iter().all(|&t| t > 1e-7), "{after:?}");
+    assert!(after.last().unwrap() > &(10.0 * after[0]), "{after:?}");
+}
