@@ -476,9 +476,12 @@ impl Newton {
                 // η_k = 0.9 (‖R_k‖/‖R_k−1‖)², safeguarded by 0.9 η_k−1² while that is large,
                 // at most `krylov_eta_max`. The convergence stays superlinear (quadratic in the
                 // limit) while the early, far-from-solution steps are cheap; no solve is made
-                // finer than the step that reaches a thousandth of the tolerance needs (the convergence
-                // reference can be dominated by one stiff term, e.g. a large bulk modulus, and
-                // hide the other equations' residual).
+                // finer than the step that reaches a tenth of the tolerance needs (the last
+                // step's linear residual then stays ten times below the tolerance; with a
+                // thousandth, the last GMRES solve of the damped default scene at 66k DOFs took
+                // 52 products instead of 26 for the same converged state to 1e-9). Should the
+                // total norm hide one field's residual (one stiff term dominating the
+                // convergence reference), the residual test asks for one more iteration.
                 let r_now = total_norm(&norms);
                 let eta_max = self.opts.krylov_eta_max;
                 let mut eta = match prev_norm {
@@ -495,7 +498,7 @@ impl Newton {
                 };
                 eta = eta
                     .min(eta_max)
-                    .max(1e-3 * self.opts.tol / worst)
+                    .max(1e-1 * self.opts.tol / worst)
                     .clamp(1e-10, eta_max);
                 prev_norm = Some(r_now);
                 prev_eta = eta;
@@ -535,8 +538,8 @@ impl Newton {
                 // more, or does not even halve the residual of the linear system, is not a
                 // Newton step: stop here rather than wander (the caller may switch to an
                 // assembled tangent).
-                let unusable = !ks.rel_residual.is_finite()
-                    || ks.rel_residual > (10.0 * eta).clamp(1e-2, 0.5);
+                let unusable =
+                    !ks.rel_residual.is_finite() || ks.rel_residual > (10.0 * eta).clamp(1e-2, 0.5);
                 if unusable {
                     sys.tangent_correction_stalled();
                     if self.opts.verbose {
