@@ -225,14 +225,7 @@ impl Forest {
     /// Split the leaves with the given indices (into [`Self::leaves`]) into four, then keep the
     /// forest one-irregular. Returns the number of leaves split.
     pub fn refine(&mut self, marked: &[usize]) -> Result<usize, RefineError> {
-        let n = self.leaves.len();
-        let mut split = vec![false; n];
-        for &k in marked {
-            if k >= n {
-                return Err(RefineError::NoSuchLeaf(k, n));
-            }
-            split[k] = true;
-        }
+        let mut split = self.mask(marked)?;
         let mut total = 0;
         loop {
             let count = split.iter().filter(|&&s| s).count();
@@ -263,6 +256,16 @@ impl Forest {
         Ok(total)
     }
 
+    /// One flag per leaf: set for the given leaf indices (an error for an index past the end).
+    fn mask(&self, marked: &[usize]) -> Result<Vec<bool>, RefineError> {
+        let n = self.leaves.len();
+        let mut mask = vec![false; n];
+        for &k in marked {
+            *mask.get_mut(k).ok_or(RefineError::NoSuchLeaf(k, n))? = true;
+        }
+        Ok(mask)
+    }
+
     /// Whether leaf `l` has, inside one of its sides, a node of a neighbour two or more levels
     /// finer (`keys`: the node keys of the current leaves): the sides' points at which only such
     /// a neighbour has nodes (Q1: s = ±1/2; Q2: s = ±1/4, ±3/4).
@@ -288,14 +291,7 @@ impl Forest {
     /// order. Returns the number of families merged.
     pub fn coarsen(&mut self, marked: &[usize]) -> Result<usize, RefineError> {
         use std::collections::HashMap;
-        let n = self.leaves.len();
-        let mut mark = vec![false; n];
-        for &k in marked {
-            if k >= n {
-                return Err(RefineError::NoSuchLeaf(k, n));
-            }
-            mark[k] = true;
-        }
+        let mark = self.mask(marked)?;
         // Marked children per parent.
         let mut count: HashMap<Leaf, usize> = HashMap::new();
         for (l, &m) in self.leaves.iter().zip(&mark) {
