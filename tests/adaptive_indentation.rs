@@ -351,3 +351,31 @@ fn coarsening_sheds_cells_whose_error_is_small() {
     );
     assert!(runs[1].iter().skip(1).all(|s| s.newton_iterations <= 6));
 }
+
+/// Uniform refinements that would outgrow `max_dofs` are refused before any mesh is built
+/// (12 refinements of the scene's 576 cells would be some 7.7e10 equations).
+#[test]
+fn too_many_uniform_refinements_are_refused_up_front() {
+    let s = scene(&[]);
+    let opts = AdaptOptions {
+        uniform: 12,
+        ..Default::default()
+    };
+    let e = run(&s, &opts, Path::new("unused"), |_, _, _| {})
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("uniform refinements") && e.contains("--max-dofs"),
+        "{e}"
+    );
+    let opts = AdaptOptions {
+        uniform: 40,
+        ..Default::default()
+    };
+    let e = run(&s, &opts, Path::new("unused"), |_, _, _| {})
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("too many"), "{e}");
+}

@@ -254,6 +254,21 @@ pub fn run(
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
         .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+    // The uniform refinements must not outgrow --max-dofs (2 p² equations per cell, roughly).
+    let degree = forest.root.degree.first().copied().unwrap_or(1) as usize;
+    let cells = 4usize
+        .checked_pow(u32::try_from(opts.uniform).unwrap_or(u32::MAX))
+        .and_then(|f| f.checked_mul(forest.leaves().len()));
+    let estimate = cells.and_then(|c| c.checked_mul(2 * degree * degree));
+    if estimate.is_none_or(|e| e > opts.max_dofs) {
+        return Err(AppError::Unsupported(format!(
+            "adaptive indentation: {} uniform refinements of the {}-cell mesh give about {} equations, more than the limit of {} (--max-dofs)",
+            opts.uniform,
+            forest.leaves().len(),
+            estimate.map_or("too many".to_string(), |e| e.to_string()),
+            opts.max_dofs
+        )));
+    }
     for _ in 0..opts.uniform {
         let all: Vec<usize> = (0..forest.leaves().len()).collect();
         forest
