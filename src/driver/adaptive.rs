@@ -31,7 +31,7 @@ use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::Scene;
 use crate::io::scene::VtuFormat;
-use crate::mesh::locate::shape_values;
+use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::estimate;
 use crate::physics::SolidModel;
@@ -214,17 +214,6 @@ pub fn solve_static(
 }
 
 /// Displacement of `mesh` with state `x` at local point (ξ, η) of cell `c`.
-fn displacement_at(mesh: &Mesh, x: &[f64], c: usize, xi: f64, eta: f64) -> [f64; 2] {
-    let mut n = [0.0; 9];
-    shape_values(mesh, c, xi, eta, &mut n);
-    let mut u = [0.0; 2];
-    for (a, &node) in mesh.cell_nodes(c).iter().enumerate() {
-        u[0] += n[a] * x[2 * node as usize];
-        u[1] += n[a] * x[2 * node as usize + 1];
-    }
-    u
-}
-
 /// Run the adaptive loop on the scene (static indentation). `on_step` sees every solved mesh
 /// with its indicators; `out_dir` is where the caller writes (named in errors).
 pub fn run(
@@ -365,7 +354,7 @@ pub fn run(
         }
         for (node, &(root, xi, eta)) in origin.iter().enumerate() {
             if let Some((leaf, (a, b))) = old_forest.locate(root, xi, eta) {
-                let u = displacement_at(&mesh, &sys.x, leaf, a, b);
+                let u = vector_at(&mesh, &sys.x, leaf, a, b);
                 next.x[2 * node] = u[0];
                 next.x[2 * node + 1] = u[1];
             }
@@ -391,7 +380,8 @@ fn coarsening_candidates(
     limit: f64,
 ) -> std::collections::HashSet<crate::mesh::refine::Leaf> {
     use std::collections::HashMap;
-    let mut family: HashMap<crate::mesh::refine::Leaf, (usize, f64)> = HashMap::new();
+    // Per parent: children that are leaves, whether one of them is marked, Σ η_K².
+    let mut family: HashMap<crate::mesh::refine::Leaf, (usize, bool, f64)> = HashMap::new();
     let mut is_marked = vec![false; leaves.len()];
     for &k in marked {
         is_marked[k] = true;
@@ -399,9 +389,9 @@ fn coarsening_candidates(
     for (k, l) in leaves.iter().enumerate() {
         if let Some(p) = l.parent() {
             let e = family.entry(p).or_default();
-            // A marked child disqualifies its family.
-            e.0 += if is_marked[k] { 5 } else { 1 };
-            e.1 += indicators[k] * indicators[k];
+            e.0 += 1;
+            e.1 |= is_marked[k];
+            e.2 += indicators[k] * indicators[k];
         }
     }
     leaves
@@ -409,7 +399,7 @@ fn coarsening_candidates(
         .filter(|l| {
             l.parent()
                 .and_then(|p| family.get(&p))
-                .is_some_and(|&(n, sum)| n == 4 && growth * sum < limit)
+                .is_some_and(|&(n, any_marked, sum)| n == 4 && !any_marked && growth * sum < limit)
         })
         .copied()
         .collect()

@@ -615,20 +615,13 @@ fn coarse_start(
 /// `to` keep their values.
 fn interpolate_state(from: &SolidSystem, to: &mut SolidSystem) {
     use crate::assembly::CONSTRAINED;
-    use crate::mesh::locate::{shape_values, PointLocator};
+    use crate::mesh::locate::{vector_at, PointLocator};
     let src = &from.model.mesh;
     let loc = PointLocator::new(src);
     let mut x = to.x.clone();
-    let mut n = [0.0; 9];
     for (a, &xa) in to.model.mesh.nodes.iter().enumerate() {
         let (c, xi, eta) = loc.locate_nearest(src, xa);
-        shape_values(src, c, xi, eta, &mut n);
-        let mut u = [0.0; 2];
-        for (b, &node) in src.cell_nodes(c).iter().enumerate() {
-            for (i, ui) in u.iter_mut().enumerate() {
-                *ui += n[b] * from.x[2 * node as usize + i];
-            }
-        }
+        let u = vector_at(src, &from.x, c, xi, eta);
         for (i, &ui) in u.iter().enumerate() {
             if to.dofs.eq[2 * a + i] < CONSTRAINED {
                 x[2 * a + i] = ui;

@@ -1191,17 +1191,10 @@ impl SteadyMonitor {
                 .map(|i| h00 * u0[i] + h10 * h * v0[i] + h01 * tr.un[i] + h11 * h * tr.vn[i])
                 .collect();
             let (sn, cs) = target.sin_cos();
-            let mut nv = [0.0; 9];
             for (j, y) in mesh.nodes.iter().enumerate() {
                 let xs = crate::math::Vec2::new(cs * y[0] + sn * y[1], -sn * y[0] + cs * y[1]);
                 let (c, xi, eta) = loc.locate_nearest(mesh, xs);
-                crate::mesh::locate::shape_values(mesh, c, xi, eta, &mut nv);
-                let mut u = crate::math::Vec2::zeros();
-                for (a, &n) in mesh.cell_nodes(c).iter().enumerate() {
-                    let n = n as usize;
-                    u += crate::math::Vec2::new(u_ts[2 * n], u_ts[2 * n + 1]) * nv[a];
-                }
-                let chi = xs + u;
+                let chi = xs + crate::mesh::locate::vector_at(mesh, &u_ts, c, xi, eta);
                 field[2 * j] = chi[0] - y[0];
                 field[2 * j + 1] = chi[1] - y[1];
             }

@@ -147,6 +147,20 @@ pub fn shape_values(mesh: &Mesh, c: usize, xi: f64, eta: f64, n: &mut [f64; 9]) 
     }
 }
 
+/// A field with two components per node (`x[2 n + i]`, e.g. displacements) evaluated at
+/// (ξ, η) of cell `c`.
+pub fn vector_at(mesh: &Mesh, x: &[f64], c: usize, xi: f64, eta: f64) -> Vec2 {
+    let mut n = [0.0; 9];
+    shape_values(mesh, c, xi, eta, &mut n);
+    mesh.cell_nodes(c)
+        .iter()
+        .zip(&n)
+        .fold(Vec2::zeros(), |u, (&node, &w)| {
+            let k = 2 * node as usize;
+            u + Vec2::new(x[k], x[k + 1]) * w
+        })
+}
+
 /// Newton inversion of the isoparametric map of cell `c`; `None` if it does not converge.
 pub fn inverse_map(mesh: &Mesh, c: usize, x: Vec2) -> Option<(f64, f64)> {
     let cn = mesh.cell_nodes(c);
