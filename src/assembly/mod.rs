@@ -1,8 +1,9 @@
 //! Degrees of freedom, the global sparsity pattern (built once) and the parallel assembler.
 //!
-//! * [`DofMap`]: the *full* unknown vector holds two displacement components per node
-//!   (`2·node + i`) followed by optional cell-owned unknowns (e.g. the three discontinuous P1
-//!   pressures of a Q2/P1 cell, `2·n_nodes + 3·cell + m`). Each full dof maps to an equation
+//! * [`DofMap`]: the *full* unknown vector holds `n_comp` field components per node
+//!   (`n_comp·node + i`: 2 displacement components for the solid, 1 for a scalar problem such
+//!   as Poisson) followed by optional cell-owned unknowns (e.g. the three discontinuous P1
+//!   pressures of a Q2/P1 cell, `n_comp·n_nodes + 3·cell + m`) and global unknowns. Each full dof maps to an equation
 //!   number or to [`FIXED`] (Dirichlet: its value lives in the full vector and never changes
 //!   during a Newton solve) or to [`CONSTRAINED`]: a hanging node's dof, x_d = Σ w x_m over
 //!   unconstrained masters ([`DofMap::expansion`], from [`crate::mesh::Mesh::constraints`]),
@@ -39,7 +40,9 @@ pub const MAX_LOCAL: usize = 21;
 
 #[derive(Clone, Debug)]
 pub struct DofMap {
-    /// Number of displacement dofs (2 per node).
+    /// Field components per node (2 for the solid's displacements, 1 for a scalar field).
+    pub n_comp: usize,
+    /// Number of nodal dofs (`n_comp` per node).
     pub n_u: usize,
     /// Cell-owned dofs per cell (0 or 3).
     pub per_cell: usize,
@@ -51,8 +54,8 @@ pub struct DofMap {
     pub n_eq: usize,
     /// Field of each equation: 0 displacement, 1 pressure, 2 global unknowns.
     pub field: Vec<u8>,
-    /// Full-dof list of each cell (CSR): displacement dofs in local node order (2a + i), then the
-    /// cell-owned dofs.
+    /// Full-dof list of each cell (CSR): nodal dofs in local node order (`n_comp·a + i`), then
+    /// the cell-owned dofs.
     pub cell_dofs: Vec<u32>,
     pub cell_offsets: Vec<usize>,
     /// Constrained dofs (ascending) and their expansions x_d = Σ w x_m over unconstrained
@@ -64,8 +67,8 @@ pub struct DofMap {
 }
 
 impl DofMap {
-    /// Two displacement dofs per node plus `per_cell` dofs per cell; `fixed_nodes` have both
-    /// displacement components fixed.
+    /// The solid's map: two displacement dofs per node plus `per_cell` dofs per cell;
+    /// `fixed_nodes` have both displacement components fixed.
     pub fn new(mesh: &Mesh, per_cell: usize, fixed_nodes: &[u32]) -> Self {
         Self::with_globals(mesh, per_cell, fixed_nodes, 0)
     }
@@ -78,28 +81,42 @@ impl DofMap {
         fixed_nodes: &[u32],
         n_global: usize,
     ) -> Self {
-        let n_u = 2 * mesh.n_nodes();
+        Self::with_components(mesh, 2, per_cell, fixed_nodes, n_global)
+    }
+
+    /// `n_comp ≥ 1` field components per node, `per_cell` cell-owned dofs per cell and
+    /// `n_global` global unknowns; every component of the `fixed_nodes` is fixed, and every
+    /// component of a hanging node follows the same component of its masters
+    /// ([`crate::mesh::Mesh::constraints`], stated per node).
+    pub fn with_components(
+        mesh: &Mesh,
+        n_comp: usize,
+        per_cell: usize,
+        fixed_nodes: &[u32],
+        n_global: usize,
+    ) -> Self {
+        let nc = n_comp as u32;
+        let n_u = n_comp * mesh.n_nodes();
         let n_full = n_u + per_cell * mesh.n_cells() + n_global;
         let mut fixed = vec![false; n_full];
         for &n in fixed_nodes {
-            fixed[2 * n as usize] = true;
-            fixed[2 * n as usize + 1] = true;
+            let first = n_comp * n as usize;
+            fixed[first..first + n_comp].fill(true);
         }
-        // Hanging nodes (a fixed node stays fixed): both displacement components follow their
-        // masters'.
+        // Hanging nodes (a fixed node stays fixed): each component follows its masters'.
         let mut cons_dofs = Vec::new();
         let mut cons_offsets = vec![0];
         let mut cons_terms = Vec::new();
         let mut constrained = vec![false; n_full];
         for c in &mesh.constraints {
-            for i in 0..2u32 {
-                let d = 2 * c.node + i;
+            for i in 0..nc {
+                let d = nc * c.node + i;
                 if fixed[d as usize] {
                     continue;
                 }
                 constrained[d as usize] = true;
                 cons_dofs.push(d);
-                cons_terms.extend(c.masters.iter().map(|&(m, w)| (2 * m + i, w)));
+                cons_terms.extend(c.masters.iter().map(|&(m, w)| (nc * m + i, w)));
                 cons_offsets.push(cons_terms.len());
             }
         }
@@ -125,8 +142,7 @@ impl DofMap {
         let mut cell_offsets = vec![0];
         for c in 0..mesh.n_cells() {
             for &n in mesh.cell_nodes(c) {
-                cell_dofs.push(2 * n);
-                cell_dofs.push(2 * n + 1);
+                cell_dofs.extend((0..nc).map(|i| nc * n + i));
             }
             for m in 0..per_cell {
                 cell_dofs.push((n_u + per_cell * c + m) as u32);
@@ -134,6 +150,7 @@ impl DofMap {
             cell_offsets.push(cell_dofs.len());
         }
         Self {
+            n_comp,
             n_u,
             per_cell,
             n_global,
@@ -193,6 +210,12 @@ impl DofMap {
             }
             e => out.push((e, 1.0)),
         }
+    }
+
+    /// Full index of component `comp` of node `node`.
+    #[inline]
+    pub fn node_dof(&self, node: usize, comp: usize) -> usize {
+        self.n_comp * node + comp
     }
 
     /// Full index of global unknown `k`.
