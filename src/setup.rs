@@ -246,14 +246,12 @@ fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
         )));
     }
     if let (Some(ts), Mode::Transient) = (&scene.time, scene.analysis.mode) {
-        if matches!(
-            ts.integrator,
-            crate::io::scene::IntegratorName::Bdf | crate::io::scene::IntegratorName::Sdirk
-        ) {
+        if !ts.integrator.carries_history() {
             return Err(AppError::Unsupported(format!(
                 "material.viscoelastic: time.integrator = \"{}\" does not carry a \
-                 viscoelastic history; use \"generalized_alpha\" or \"central_difference\"",
-                ts.integrator
+                 viscoelastic history; use {}",
+                ts.integrator,
+                crate::io::scene::IntegratorName::quoted_with(|i| i.carries_history())
             )));
         }
     }

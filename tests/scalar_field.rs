@@ -214,6 +214,9 @@ fn with_hanging_nodes(root: Mesh, first: usize) -> Mesh {
     mesh
 }
 
+/// A scalar field of the position.
+type Field = dyn Fn(Vec2) -> f64;
+
 #[test]
 fn patch_tests_with_hanging_nodes_are_exact() {
     let on_box = |x: Vec2| {
@@ -226,7 +229,7 @@ fn patch_tests_with_hanging_nodes_are_exact() {
     let lin = |x: Vec2| 1.0 + 2.0 * x[0] - 3.0 * x[1];
     // Q2: u = x² + xy − 2y² + x, −Δu = −(2 − 4) = 2.
     let quad = |x: Vec2| x[0] * x[0] + x[0] * x[1] - 2.0 * x[1] * x[1] + x[0];
-    let cases: [(usize, &dyn Fn(Vec2) -> f64, f64); 2] = [(1, &lin, 0.0), (2, &quad, 2.0)];
+    let cases: [(usize, &Field, f64); 2] = [(1, &lin, 0.0), (2, &quad, 2.0)];
     for (degree, u, f) in cases {
         let mesh = with_hanging_nodes(rectangles(degree, 4), 5);
         let (dofs, full) = solve(&mesh, &move |_| f, u, &on_box);

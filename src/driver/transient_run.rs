@@ -31,10 +31,8 @@ use super::results::{
 };
 use super::system::SolidSystem;
 use super::tables;
-use super::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
-use super::transient::{
-    integrate, GenAlpha, Kinematics, Ramp, Scheme, TimeOptions, Transient, TransientReport,
-};
+use super::transient::ode_first_order::OdeTolerances;
+use super::transient::{Kinematics, Ramp, Setup, TimeOptions, Transient, TransientReport};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::{
@@ -54,16 +52,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "mode \"transient\" needs the [time] section".into(),
         ));
     };
-    // BDF / SDIRK: diffsol on y = (u, v) (`ode`); `scheme` is then unused by the integrator.
-    let ode = match ts.integrator {
-        IntegratorName::Bdf => Some(OdeMethod::Bdf),
-        IntegratorName::Sdirk => Some(OdeMethod::Esdirk34),
-        _ => None,
-    };
-    let scheme = match ts.integrator {
-        IntegratorName::CentralDifference => Scheme::CentralDifference,
-        _ => Scheme::GeneralizedAlpha(GenAlpha::new(ts.rho_inf)),
-    };
+    let integrator = ts.integrator;
+    let scheme = integrator.scheme(ts.rho_inf);
     let mut model = build_model(scene)?;
     model.strain_rate_damping = ts.strain_rate_damping;
     let sys = match (&scene.road, &scene.contact) {
@@ -91,10 +81,11 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 "motion.control = \"torque\" does not support the exact incompressible formulation (use material.formulation = \"perturbed\" or a compressible model)".into(),
             ));
         }
-        if !matches!(scheme, Scheme::GeneralizedAlpha(_)) {
-            return Err(AppError::Unsupported(
-                "motion.control = \"torque\" needs time.integrator = \"generalized_alpha\"".into(),
-            ));
+        if !integrator.torque_control() {
+            return Err(AppError::Unsupported(format!(
+                "motion.control = \"torque\" needs time.integrator = {}",
+                IntegratorName::quoted_with(IntegratorName::torque_control)
+            )));
         }
         tr.enable_torque_control(
             scene.motion.hub_inertia,
@@ -222,18 +213,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         };
         recorders.step(&info, Some(&view));
     };
-    let res = match ode {
-        Some(m) => {
-            let tol = OdeTolerances::from_scene(
-                ts.error_tol,
-                scene.geometry.ro,
-                scene.motion.omega,
-                ts.t_end,
-            );
-            integrate_first_order(&mut tr, m, &time_opts, tol, on_step)
-        }
-        None => integrate(&mut tr, &time_opts, newton_opts, kind, on_step),
+    let setup = Setup {
+        time: time_opts.clone(),
+        newton: newton_opts,
+        linear: kind,
+        ode_tol: OdeTolerances::from_scene(
+            ts.error_tol,
+            scene.geometry.ro,
+            scene.motion.omega,
+            ts.t_end,
+        ),
     };
+    let mut on_step = on_step;
+    let res = integrator.integrate(&mut tr, &setup, &mut on_step);
     let wall = t0.elapsed().as_secs_f64();
     let (rep, err) = match res {
         Ok(r) => (r, None),
@@ -283,7 +275,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         contact_force_y: tot.force_y,
         contact_centroid: tot.centroid,
         contact_half_width_moment: 2.0 * tot.pressure_second_moment.sqrt(),
-        integrator: ode.map_or(tr.scheme.name(), |m| m.name()).to_string(),
+        integrator: integrator.as_str().to_string(),
         mass: if lumped { "lumped" } else { "consistent" }.to_string(),
         viscous_energy: tr.viscous.map(Box::new),
     };

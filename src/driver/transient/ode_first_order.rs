@@ -42,7 +42,7 @@
 //!   accepted step, so everything recorded so far stays valid.
 //! * Limits: pure displacement models only (no cell pressures, no load-control road unknown):
 //!   those make the system differential-algebraic; the function returns a clear error instead.
-//! * Subnormal floats slowed diffsol's sparse solves 8–12× in decaying dynamics (CRATES.md):
+//! * Subnormal floats slowed diffsol's sparse solves 8–12× in decaying dynamics (measured):
 //!   the integration runs with flush-to-zero / denormals-are-zero set on the calling thread
 //!   (restored afterwards).
 

@@ -281,12 +281,13 @@ pub(super) fn validate_motion_control(
                     ),
                 ));
             }
-            if let Some(i) = integrator.filter(|i| *i != IntegratorName::GeneralizedAlpha) {
+            if let Some(i) = integrator.filter(|i| !i.torque_control()) {
                 out.push(issue(
                     "motion.control",
                     format!(
-                        "torque control needs time.integrator = \"generalized_alpha\" (the hub \
-                         angle is solved in the implicit step), got \"{i}\""
+                        "torque control needs time.integrator = {} (the hub angle is solved in \
+                         the implicit step), got \"{i}\"",
+                        IntegratorName::quoted_with(IntegratorName::torque_control)
                     ),
                 ));
             }

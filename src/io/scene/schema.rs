@@ -339,7 +339,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
         fields: &const { [
             opt("integrator", Kind::Keyword(IntegratorName::NAMES), NONE, "time integrator"),
             opt("rho_inf", Kind::Float, NONE,
-                "spectral radius at infinity of generalized-α, in [0, 1] (1: no numerical dissipation)"),
+                "spectral radius at infinity of generalized_alpha, in [0, 1], or of hht_alpha, in [0.5, 1] (1: no numerical dissipation)"),
             req("dt", Kind::Float, "T", "initial time step, > 0, <= t_end"),
             opt("dt_min", Kind::Float, "T", "smallest step, > 0, <= dt (default dt · 1e-4)"),
             opt("dt_max", Kind::Float, "T", "largest step, >= dt (default dt · 10)"),
@@ -813,6 +813,12 @@ pub fn markdown_reference() -> String {
         ));
         out.push_str("| key | type | default | unit | meaning |\n|---|---|---|---|---|\n");
         field_rows(&format!("{}.", sec.name), sec.fields, &defaults, &mut out);
+        if sec.name == "time" {
+            out.push_str("\nThe integrators (`time.integrator`):\n\n");
+            for i in IntegratorName::ALL {
+                out.push_str(&format!("* `{}`: {}\n", i.as_str(), i.about()));
+            }
+        }
     }
     out
 }
@@ -926,7 +932,13 @@ mod tests {
         assert_eq!(MassKind::default(), MassKind::Consistent);
         assert_eq!(
             IntegratorName::NAMES,
-            &["generalized_alpha", "central_difference", "bdf", "sdirk"]
+            &[
+                "generalized_alpha",
+                "central_difference",
+                "bdf",
+                "sdirk",
+                "hht_alpha"
+            ]
         );
         assert_eq!(FrictionLawName::default(), FrictionLawName::None);
         assert_eq!(ContactQuadrature::default(), ContactQuadrature::Lobatto);

@@ -6,24 +6,9 @@ use super::issue::{issue, positive, Issue};
 use super::mesh::MeshSpec;
 use serde::{Deserialize, Serialize};
 
-keyword_enum! {
-    /// Time integrator of the `transient` mode (`[time] integrator`).
-    #[derive(Default)]
-    IntegratorName, "time integrator" {
-        #[default]
-        /// Generalized-α (Chung–Hulbert) on the second-order system, with spectral radius at
-        /// infinity `rho_inf` (1 = trapezoidal / Newmark average acceleration). Implicit.
-        GeneralizedAlpha => "generalized_alpha",
-        /// Explicit central difference with the lumped (HRZ) mass; the step is also bounded by a
-        /// stable-step estimate.
-        CentralDifference => "central_difference",
-        /// Variable-order BDF on the first-order form `y = (u, v)` (diffsol), with its own error
-        /// control.
-        Bdf => "bdf",
-        /// SDIRK on the first-order form `y = (u, v)` (diffsol), with its own error control.
-        Sdirk => "sdirk",
-    }
-}
+/// Time integrator of the `transient` mode (`[time] integrator`): the registered integrators
+/// ([`crate::driver::transient::registry`]).
+pub use crate::driver::transient::IntegratorName;
 
 keyword_enum! {
     /// Mass matrix of the `transient` mode (`[time] mass`).
@@ -49,7 +34,8 @@ pub struct TimeSpec {
     #[serde(default)]
     pub integrator: IntegratorName,
     /// Spectral radius at infinity of generalized-α, in [0, 1] (1 = trapezoidal / Newmark
-    /// average acceleration: no numerical dissipation). Used only by `generalized_alpha`.
+    /// average acceleration: no numerical dissipation), or of HHT-α, in [0.5, 1]. Used only by
+    /// `generalized_alpha` and `hht_alpha`.
     #[serde(default = "default_rho_inf")]
     pub rho_inf: f64,
     /// Initial time step (time, > 0, <= t_end).
@@ -156,17 +142,19 @@ impl TimeSpec {
         self.dt_max.unwrap_or(self.dt * DT_MAX_FACTOR)
     }
 
-    /// The mass matrix actually used: `lumped` for `central_difference`, else `mass`.
+    /// The mass matrix actually used: `lumped` for an integrator that always lumps it
+    /// (`central_difference`), else `mass`.
     pub fn effective_mass(&self) -> MassKind {
-        match self.integrator {
-            IntegratorName::CentralDifference => MassKind::Lumped,
-            _ => self.mass,
+        if self.integrator.lumped_only() {
+            MassKind::Lumped
+        } else {
+            self.mass
         }
     }
 
-    /// Whether the integrator is explicit (`central_difference`).
+    /// Whether the integrator is explicit (always uses the lumped mass: `central_difference`).
     pub fn is_explicit(&self) -> bool {
-        self.integrator == IntegratorName::CentralDifference
+        self.integrator.lumped_only()
     }
 }
 
@@ -194,12 +182,13 @@ pub(super) fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>
             ),
         ));
     }
-    if !(t.rho_inf.is_finite() && (0.0..=1.0).contains(&t.rho_inf)) {
+    let rho_min = t.integrator.rho_inf_min();
+    if !(t.rho_inf.is_finite() && (rho_min..=1.0).contains(&t.rho_inf)) {
         out.push(issue(
             "time.rho_inf",
             format!(
-                "spectral radius at infinity of generalized-α must be in [0, 1], got {}",
-                t.rho_inf
+                "spectral radius at infinity of integrator \"{}\" must be in [{rho_min}, 1], got {}",
+                t.integrator, t.rho_inf
             ),
         ));
     }
@@ -259,14 +248,14 @@ pub(super) fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>
             ),
         ));
     }
-    if mass_given
-        && t.integrator == IntegratorName::CentralDifference
-        && t.mass == MassKind::Consistent
-    {
+    if mass_given && t.integrator.lumped_only() && t.mass == MassKind::Consistent {
         out.push(issue(
             "time.mass",
-            "integrator \"central_difference\" always uses the lumped mass: mass must be \
-             \"lumped\" or omitted, got \"consistent\"",
+            format!(
+                "integrator \"{}\" always uses the lumped mass: mass must be \"lumped\" or \
+                 omitted, got \"consistent\"",
+                t.integrator
+            ),
         ));
     }
 }

@@ -37,7 +37,6 @@
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
-use super::results::ViscousEnergy;
 use super::system::SolidSystem;
 use super::terms::{CellHook, Inertia, Rates, Terms};
 use crate::assembly::{LocalSystem, SharedMut, CONSTRAINED, MAX_LOCAL};
@@ -45,6 +44,7 @@ use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::SolidModel;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
+use energy::ViscousEnergy;
 use std::f64::consts::PI;
 
 /// C² smoothstep s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ on [0, 1], its derivative and its integral.
@@ -545,37 +545,6 @@ impl Transient {
         }
     }
 
-    /// Newmark update of v1, a1 and the α-point vectors from the trial x = u_{n+1}. The hub
-    /// dofs take the exact velocity and acceleration of the prescribed rotation (a Newmark
-    /// recursion on a prescribed history rings at the Nyquist frequency when ρ∞ = 1).
-    fn newmark(&mut self, ga: &GenAlpha) {
-        let dt = self.dt;
-        let (b, g) = (ga.beta, ga.gamma);
-        for d in 0..self.un.len() {
-            let a1 = (self.sys.x[d] - self.un[d] - dt * self.vn[d]) / (b * dt * dt)
-                - (0.5 / b - 1.0) * self.an[d];
-            let v1 = self.vn[d] + dt * ((1.0 - g) * self.an[d] + g * a1);
-            self.a1[d] = a1;
-            self.v1[d] = v1;
-        }
-        // Load control: the road height is massless (quasi-static): no rate, so that the
-        // predictor keeps it where it was.
-        if let Some(ih) = self.road_height_dof() {
-            self.v1[ih] = 0.0;
-            self.a1[ih] = 0.0;
-        }
-        // Under torque control the hub nodes are part of the dynamics (through φ): Newmark
-        // rates like every other node, consistent with the tangent.
-        if self.hub_angle.is_none() {
-            self.hub_rates(self.t + dt);
-        }
-        for d in 0..self.un.len() {
-            self.xa[d] = self.sys.x[d];
-            self.va[d] = self.v1[d];
-            self.aa[d] = (1.0 - ga.am) * self.a1[d] + ga.am * self.an[d];
-        }
-    }
-
     /// Exact velocity and acceleration of the hub nodes at time `t` into v1, a1:
     /// x = Q(φ) X, v = ω e3 × x, a = ω̇ e3 × x − ω² x.
     fn hub_rates(&mut self, t: f64) {
@@ -774,94 +743,9 @@ impl Transient {
     pub fn attempt(&mut self, newton: &mut Newton, dt: f64) -> Result<(f64, usize), SolveError> {
         self.pending = None;
         self.dt = dt;
-        let t1 = self.t + dt;
         match self.scheme {
-            Scheme::GeneralizedAlpha(ga) => {
-                // Predictor: constant acceleration.
-                for d in 0..self.un.len() {
-                    self.sys.x[d] = self.un[d] + dt * self.vn[d] + 0.5 * dt * dt * self.an[d];
-                }
-                self.prescribe(t1);
-                // Viscoelastic history: the kernels evaluate the overstress over this step
-                // from the committed state; it is committed only once Newton has converged.
-                self.sys.model.history_dt = dt;
-                let rep = newton.solve(self);
-                self.sys.model.history_dt = 0.0;
-                let rep = rep?;
-                self.last_table = rep.table;
-                self.newmark(&ga);
-                // Local error relative to the deformation: the displacement from the rigidly
-                // rotated reference Q(φ_{n+1}) X (the step increment, used before, is dominated
-                // by the rigid rotation ωΔt R and made the estimate blind to error_tol). RMS
-                // over the nodes, with a floor of 1e-3 of the wall thickness.
-                let phi1 = match &self.hub_angle {
-                    Some(h) => self.sys.x[h.iphi],
-                    None => self.kin.phi(t1),
-                };
-                let (sn, cs) = phi1.sin_cos();
-                let mut num = 0.0;
-                let mut den = 0.0;
-                let mesh = &self.sys.model.mesh;
-                for n in 0..mesh.n_nodes() {
-                    let xr = mesh.nodes[n];
-                    let rigid = [
-                        cs * xr[0] - sn * xr[1] - xr[0],
-                        sn * xr[0] + cs * xr[1] - xr[1],
-                    ];
-                    for (i, r) in rigid.iter().enumerate() {
-                        let d = 2 * n + i;
-                        let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.a1[d] - self.an[d]);
-                        num += e * e;
-                        let ud = self.sys.x[d] - r;
-                        den += ud * ud;
-                    }
-                }
-                let nd = (2 * mesh.n_nodes()).max(1) as f64;
-                let floor = 1e-3 * self.wall;
-                let err = (num / nd).sqrt() / (den / nd).sqrt().max(floor);
-                self.pending = Some((t1, dt));
-                Ok((err, rep.iterations))
-            }
-            Scheme::CentralDifference => {
-                // v_n ≈ v_{n−1/2} for the contact rates; a_n = −M_L⁻¹ f(u_n).
-                self.sys.x.copy_from_slice(&self.un);
-                self.prescribe(self.t);
-                self.xa.copy_from_slice(&self.sys.x);
-                self.va.copy_from_slice(&self.vn);
-                self.aa.iter_mut().for_each(|v| *v = 0.0);
-                self.t_eval = self.t;
-                if !self.assemble_dynamic(false, 1.0, 0.0, 0.0, 0.0) {
-                    // From an admissible committed state, only an unstable step gets here.
-                    return Err(SolveError::ExplicitUnstable {
-                        t: self.t,
-                        dt,
-                        dt_stable: self.dt_stable,
-                    });
-                }
-                // a_n = −M_L⁻¹ f(u_n) on the free dofs (into a1; the committed a_n stays
-                // until the step is accepted), then v_{n+1/2} = v_{n−1/2} + Δt a_n and
-                // u_{n+1} = u_n + Δt v_{n+1/2}.
-                self.a1.copy_from_slice(&self.an);
-                for d in 0..self.un.len() {
-                    let e = self.sys.dofs.eq[d];
-                    if e < CONSTRAINED && self.ml[d] > 0.0 {
-                        self.a1[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
-                    }
-                }
-                // Prescribed dofs: velocity from the prescribed positions.
-                self.prescribe(t1);
-                self.v1.copy_from_slice(&self.vn);
-                for d in 0..self.un.len() {
-                    if self.sys.dofs.eq[d] < CONSTRAINED && self.ml[d] > 0.0 {
-                        self.v1[d] += dt * self.a1[d];
-                        self.sys.x[d] = self.un[d] + dt * self.v1[d];
-                    } else {
-                        self.v1[d] = (self.sys.x[d] - self.un[d]) / dt;
-                    }
-                }
-                self.pending = Some((t1, dt));
-                Ok((0.0, 0))
-            }
+            Scheme::GeneralizedAlpha(ga) => self.attempt_generalized_alpha(ga, newton, dt),
+            Scheme::CentralDifference => self.attempt_central_difference(dt),
         }
     }
 
@@ -897,97 +781,6 @@ impl Transient {
         self.an.copy_from_slice(&self.a1);
         self.t = t1;
     }
-
-    /// Stable time step of the central-difference scheme with its lagged-velocity damping:
-    /// Δt = (2/ω_max)(√(1 + ξ²) − ξ) (Belytschko), ω_max² the largest eigenvalue of
-    /// M_L⁻¹ (K + K_c) by power iteration on the tangent at the current state plus the contact
-    /// penalty K_c = ∂t_n/∂δ · diag(Σ_b |∫ N_a N_b ds0|) on the x2 dofs of the whole contact
-    /// boundary (every facet may come into contact while rolling; evaluated at the final
-    /// penetration `delta_ref`), and ξ = vᵀ C v / (2 ω_max vᵀ M_L v) on the dominant mode v, with C
-    /// the strain-rate damping matrix (K assembled with ∂v/∂u = 1 minus K) plus the contact
-    /// normal damping ∂t_n/∂δ̇ on the same boundary diagonal. 5 % margin on ω_max (power
-    /// iteration approaches λ_max from below).
-    pub fn stable_step(&mut self, delta_ref: f64) -> f64 {
-        self.sys.x.copy_from_slice(&self.un);
-        self.xa.copy_from_slice(&self.un);
-        self.va.copy_from_slice(&self.vn);
-        self.aa.iter_mut().for_each(|v| *v = 0.0);
-        self.t_eval = self.t;
-        if !self.assemble_dynamic(true, 1.0, 0.0, 0.0, 0.0) {
-            return f64::NAN;
-        }
-        let k = self.sys.asm.values.clone();
-        let n = self.sys.dofs.n_eq;
-        let mut cmat = Vec::new();
-        if self.sys.model.strain_rate_damping > 0.0 {
-            if !self.assemble_dynamic(true, 1.0, 1.0, 0.0, 0.0) {
-                return f64::NAN;
-            }
-            cmat = self
-                .sys
-                .asm
-                .values
-                .iter()
-                .zip(&k)
-                .map(|(a, b)| a - b)
-                .collect();
-        }
-        // Boundary diagonals of the contact penalty and damping (equation numbering).
-        let (mut kc, mut cc) = (vec![0.0; n], vec![0.0; n]);
-        if let Some(cm) = &self.sys.contact {
-            let nv = cm.normal.eval(delta_ref.max(f64::MIN_POSITIVE), 0.0);
-            let w = cm.boundary_row_sums(&self.sys.model.mesh);
-            for (node, wa) in w.iter().enumerate() {
-                let e = self.sys.dofs.eq[2 * node + 1];
-                if e < CONSTRAINED && *wa > 0.0 {
-                    kc[e as usize] = nv.d_delta * wa;
-                    cc[e as usize] = nv.d_rate * wa;
-                }
-            }
-        }
-        let mut ml = vec![0.0; n];
-        for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
-            if e < CONSTRAINED && d < self.sys.dofs.n_u {
-                ml[e as usize] = self.ml[d];
-            }
-        }
-        let minv: Vec<f64> = ml
-            .iter()
-            .map(|&m| if m > 0.0 { 1.0 / m } else { 0.0 })
-            .collect();
-        let mut x: Vec<f64> = (0..n)
-            .map(|i| 1.0 + 0.1 * ((i as f64) * 0.37).sin())
-            .collect();
-        let mut y = vec![0.0; n];
-        let mut lam = 0.0;
-        self.sys.asm.values.copy_from_slice(&k);
-        for _ in 0..80 {
-            self.sys.asm.matvec(&x, &mut y);
-            for i in 0..n {
-                y[i] = (y[i] + kc[i] * x[i]) * minv[i];
-            }
-            let ny = y.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let nx = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-            lam = ny / nx.max(f64::MIN_POSITIVE);
-            for i in 0..n {
-                x[i] = y[i] / ny.max(f64::MIN_POSITIVE);
-            }
-        }
-        let omega = (1.05 * lam).sqrt();
-        // Damping ratio of the dominant mode.
-        let mut xcx: f64 = (0..n).map(|i| cc[i] * x[i] * x[i]).sum();
-        if !cmat.is_empty() {
-            self.sys.asm.values.copy_from_slice(&cmat);
-            self.sys.asm.matvec(&x, &mut y);
-            xcx += x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
-            self.sys.asm.values.copy_from_slice(&k);
-        }
-        let xmx: f64 = (0..n).map(|i| ml[i] * x[i] * x[i]).sum();
-        let xi = (xcx / (2.0 * omega * xmx.max(f64::MIN_POSITIVE))).max(0.0);
-        let dt = (2.0 / omega) * ((1.0 + xi * xi).sqrt() - xi);
-        self.dt_stable = dt;
-        dt
-    }
 }
 
 impl NonlinearSystem for Transient {
@@ -1013,15 +806,11 @@ impl NonlinearSystem for Transient {
         self.sys.pattern()
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        let Scheme::GeneralizedAlpha(ga) = self.scheme else {
-            return false;
-        };
-        self.newmark(&ga);
-        let dt = self.dt;
-        self.t_eval = self.t + dt;
-        let kv = ga.gamma / (ga.beta * dt);
-        let cm = (1.0 - ga.am) / (ga.beta * dt * dt);
-        self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af)
+        match self.scheme {
+            Scheme::GeneralizedAlpha(ga) => self.assemble_generalized_alpha(&ga, with_matrix),
+            // Explicit: no Newton system.
+            Scheme::CentralDifference => false,
+        }
     }
     fn residual(&self) -> &[f64] {
         self.sys.residual()
@@ -1756,4 +1545,17 @@ impl Transient {
 
 /// diffsol's BDF / SDIRK on the first-order form y = (u, v) (a child module: it drives the
 /// private assembly state of [`Transient`]).
+pub mod bdf;
+pub mod central_difference;
+pub mod energy;
+pub mod generalized_alpha;
+pub mod hht_alpha;
+pub mod integrator;
 pub mod ode_first_order;
+pub mod registry;
+pub mod sdirk;
+
+pub use central_difference::CentralDifference;
+pub use generalized_alpha::GeneralizedAlpha;
+pub use integrator::{IntegratorSpec, Setup};
+pub use registry::IntegratorName;

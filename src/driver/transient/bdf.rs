@@ -1,0 +1,30 @@
+//! Variable-order BDF (diffsol) on the first-order form y = (u, v) of the transient model
+//! ([`super::ode_first_order`]).
+
+use super::integrator::{IntegratorSpec, Setup};
+use super::ode_first_order::{integrate_first_order, OdeMethod};
+use super::{GenAlpha, Scheme, Transient, TransientReport};
+use crate::solver::SolveError;
+
+/// The scene's `"bdf"`: [`integrate_first_order`] with [`OdeMethod::Bdf`].
+pub struct Bdf;
+
+impl IntegratorSpec for Bdf {
+    const NAME: &'static str = "bdf";
+    const ABOUT: &'static str =
+        "Variable-order BDF on the first-order form `y = (u, v)` (diffsol), \
+        with its own error control.";
+
+    fn scheme(rho_inf: f64) -> Scheme {
+        // Not stepped by the one-step loop; the model's Newton system is unused.
+        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
+    }
+
+    fn integrate(
+        tr: &mut Transient,
+        setup: &Setup,
+        on_step: &mut dyn FnMut(&Transient, &TransientReport),
+    ) -> Result<TransientReport, (SolveError, TransientReport)> {
+        integrate_first_order(tr, OdeMethod::Bdf, &setup.time, setup.ode_tol, on_step)
+    }
+}

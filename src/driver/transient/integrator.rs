@@ -1,0 +1,48 @@
+//! What a time integrator of the transient mode declares and does ([`IntegratorSpec`]); the
+//! list of integrators is in [`super::registry`].
+
+use super::ode_first_order::OdeTolerances;
+use super::{Scheme, TimeOptions, Transient, TransientReport};
+use crate::solver::{LinearKind, NewtonOptions, SolveError};
+
+/// Everything a run hands to an integrator besides the model: the step and stopping options,
+/// the Newton options and linear solver of the implicit steps, and the tolerances of the
+/// first-order (diffsol) integrators.
+#[derive(Clone, Debug)]
+pub struct Setup {
+    pub time: TimeOptions,
+    pub newton: NewtonOptions,
+    pub linear: LinearKind,
+    pub ode_tol: OdeTolerances,
+}
+
+/// A registered time integrator.
+pub trait IntegratorSpec {
+    /// The scene keyword (`[time] integrator`).
+    const NAME: &'static str;
+    /// What it is, for the scene reference.
+    const ABOUT: &'static str;
+    /// Always uses the lumped mass (an explicit scheme); a scene's `mass = "consistent"` is then
+    /// an error.
+    const LUMPED_ONLY: bool = false;
+    /// Solves the hub angle as an unknown (torque control).
+    const TORQUE_CONTROL: bool = false;
+    /// Carries a quadrature-point history (viscoelastic materials).
+    const HISTORY: bool = false;
+    /// Smallest admissible `[time] rho_inf` (the spectral radius at infinity, at most 1; read
+    /// only by the integrators that have one).
+    const RHO_INF_MIN: f64 = 0.0;
+
+    /// The one-step scheme the [`Transient`] model is built with (its Newton system).
+    fn scheme(rho_inf: f64) -> Scheme;
+
+    /// Integrate from the committed state to the end of the run, calling `on_step` after every
+    /// accepted step. On failure the model holds the last accepted step.
+    // The report of a failed run comes back with its error, once per run.
+    #[allow(clippy::result_large_err)]
+    fn integrate(
+        tr: &mut Transient,
+        setup: &Setup,
+        on_step: &mut dyn FnMut(&Transient, &TransientReport),
+    ) -> Result<TransientReport, (SolveError, TransientReport)>;
+}
