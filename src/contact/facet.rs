@@ -103,7 +103,7 @@ pub enum SlipKinematics<'a> {
     /// and the velocities by `kv` per unit change (e.g. generalized-α: kx = 1 − α_f,
     /// kv = (1 − α_f) γ / (β Δt)). w = v1 − v0, δ̇ = −v2.
     Dynamic { v: &'a [f64], kx: f64, kv: f64 },
-    /// Steady rolling on the referential (spatial) mesh (DESIGN §5): the unknown is the motion
+    /// Steady rolling on the referential (spatial) mesh: the unknown is the motion
     /// χ(r, θ) = X + u, the velocity is v = ω ∂θχ, differentiated along the facet
     /// (∂θ = (d/dη) / (dθ/dη), θ the polar angle of the reference facet point), so
     /// w = ω ∂θχ1 − v0 and δ̇ = −ω ∂θχ2. With [`ContactModel::steady_slip`] set, ∂θu1 in w

@@ -1,6 +1,6 @@
 //! Contact of the cylinder's outer surface with the rigid road.
 //!
-//! Conventions (DESIGN §2): the road is the line x2 = −H moving with speed v0 along +x1 in the
+//! Conventions: the road is the line x2 = −H moving with speed v0 along +x1 in the
 //! hub frame; penetration δ = (−H − x2)_+ ≥ 0, its rate δ̇ = −ẋ2; slip velocity of the body
 //! relative to the road w = ẋ1 − v0. Tractions act on the body per unit **reference** length of
 //! the outer boundary: the normal traction t_n ≥ 0 pushes in +x2, the tangential traction

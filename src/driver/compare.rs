@@ -1,4 +1,4 @@
-//! `tread compare SCENE`: the same scene in both modes (DESIGN §6).
+//! `tread compare SCENE`: the same scene in both modes.
 //!
 //! 1. The transient mode (`analysis.mode = "transient"`, the scene's `[time]`) runs until steady
 //!    into `OUT/transient/` and extracts the referential field at its last node passage.

@@ -1,4 +1,4 @@
-//! Steady rolling in the θ-referential (Eulerian/ALE) description (DESIGN §5; the paper's
+//! Steady rolling in the θ-referential (Eulerian/ALE) description (the paper's
 //! Figs. 2–8).
 //!
 //! The mesh stays in space and material flows through it along the reference circles. The

@@ -1,6 +1,6 @@
 //! The finite-strain plane-strain solid on the reference (θ-referential) mesh.
 //!
-//! Residual, for every test function η vanishing on the hub (DESIGN §3, §5):
+//! Residual, for every test function η vanishing on the hub:
 //!
 //! ```text
 //! R(χ; η) = ∫Ω0 P(∇u) : ∇η dV − ω² ∫Ω0 ρ0 ∂θχ · ∂θη dV − ∫Ω0 b · η dV   (+ pressure terms)

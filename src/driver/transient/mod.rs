@@ -1,5 +1,5 @@
 //! Dynamic Lagrangian (transient) rolling: M ü + f_int(u) + f_c(u, u̇) = 0 on the material mesh,
-//! integrated in time until rolling is steady (DESIGN §4).
+//! integrated in time until rolling is steady.
 //!
 //! * The hub rim follows x = Q(φ(t)) X exactly, φ̇ = ω(t) with ω ramped from rest by a C²
 //!   smoothstep; the road height (or the hub load) and the road speed ramp in the same way.

@@ -1,5 +1,5 @@
 //! diffsol's BDF and SDIRK integrators on the first-order form of the transient model
-//! (DESIGN §4): with y = (u, v) over the **free** displacement dofs,
+//! ([`super`]): with y = (u, v) over the **free** displacement dofs,
 //!
 //! ```text
 //!   u̇ = v
