@@ -140,7 +140,7 @@ fn spin_up(rho: f64, dt: f64, t_end: f64) -> Vec<f64> {
         |_, _| {},
     )
     .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.un.clone()
+    tr.state.u.clone()
 }
 
 #[test]

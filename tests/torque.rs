@@ -64,13 +64,13 @@ fn torque_step_tangent_error(load_control: bool) -> f64 {
     // Committed state: rigid rotation at 10 rad/s (hub angle 0, rate 10, accel 2).
     for n in 0..tr.sys.model.mesh.n_nodes() {
         let x = tr.sys.model.mesh.nodes[n];
-        tr.vn[2 * n] = -10.0 * x[1];
-        tr.vn[2 * n + 1] = 10.0 * x[0];
-        tr.an[2 * n] = -100.0 * x[0];
-        tr.an[2 * n + 1] = -100.0 * x[1];
+        tr.state.v[2 * n] = -10.0 * x[1];
+        tr.state.v[2 * n + 1] = 10.0 * x[0];
+        tr.state.a[2 * n] = -100.0 * x[0];
+        tr.state.a[2 * n + 1] = -100.0 * x[1];
     }
-    tr.vn[iphi] = 10.0;
-    tr.an[iphi] = 2.0;
+    tr.state.v[iphi] = 10.0;
+    tr.state.a[iphi] = 2.0;
     tr.dt = 1e-3;
     // Trial state: hub angle 0.012 (not the rigid ωΔt), body rotated by ωΔt plus a smooth
     // perturbation, so that the hub cells are strained and the patch slides.

@@ -68,16 +68,17 @@ fn time_step_tangent_matches_finite_differences() {
     // rotation), so that the trial state below slides and penetrates.
     for n in 0..tr.sys.model.mesh.n_nodes() {
         let x = tr.sys.model.mesh.nodes[n];
-        tr.vn[2 * n] = -10.0 * x[1];
-        tr.vn[2 * n + 1] = 10.0 * x[0];
-        tr.an[2 * n] = -100.0 * x[0];
-        tr.an[2 * n + 1] = -100.0 * x[1];
+        tr.state.v[2 * n] = -10.0 * x[1];
+        tr.state.v[2 * n + 1] = 10.0 * x[0];
+        tr.state.a[2 * n] = -100.0 * x[0];
+        tr.state.a[2 * n + 1] = -100.0 * x[1];
     }
     tr.dt = 1e-3;
     // A trial state: rigid rotation by ω dt plus a small smooth perturbation.
     let (s, c) = (10.0f64 * 1e-3).sin_cos();
     for n in 0..tr.sys.model.mesh.n_nodes() {
-        let x = tr.sys.model.mesh.nodes[n] + tread::math::Vec2::new(tr.un[2 * n], tr.un[2 * n + 1]);
+        let x = tr.sys.model.mesh.nodes[n]
+            + tread::math::Vec2::new(tr.state.u[2 * n], tr.state.u[2 * n + 1]);
         tr.sys.x[2 * n] = c * x[0] - s * x[1] - tr.sys.model.mesh.nodes[n][0] + 1e-3 * x[1].sin();
         tr.sys.x[2 * n + 1] =
             s * x[0] + c * x[1] - tr.sys.model.mesh.nodes[n][1] + 1e-3 * x[0].cos();
@@ -143,10 +144,10 @@ fn rigid_spin_run(
     );
     tr.start_rigid_spin(omega, LinearKind::Cholesky, discrete_start.then_some(dt))
         .unwrap();
-    let e0 = tr.cell_strains(&tr.un);
+    let e0 = tr.cell_strains(&tr.state.u);
     let emax = e0.iter().map(|e| e.norm()).fold(0.0, f64::max);
     let energy = |tr: &Transient| {
-        tr.kinetic_energy(&tr.vn) + tr.sys.model.strain_energy(&tr.sys.dofs, &tr.un)
+        tr.kinetic_energy(&tr.state.v) + tr.sys.model.strain_energy(&tr.sys.dofs, &tr.state.u)
     };
     let mut energies = vec![energy(&tr)];
     let mut next = period;
@@ -161,10 +162,10 @@ fn rigid_spin_run(
             LinearKind::Cholesky
         },
         |tr, _| {
-            if tr.t >= next - 1e-9 * period {
+            if tr.state.t >= next - 1e-9 * period {
                 next += period;
                 energies.push(energy(tr));
-                let e = tr.cell_strains(&tr.un);
+                let e = tr.cell_strains(&tr.state.u);
                 let d = e
                     .iter()
                     .zip(&e0)
@@ -236,7 +237,7 @@ fn spin_up(scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
         |_, _| {},
     )
     .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.un.clone()
+    tr.state.u.clone()
 }
 
 #[test]
@@ -340,15 +341,16 @@ fn spin_up_reproduces_steady_spinning() {
             .sqrt()
             / n
     };
-    let (u_tr, u_eq, u_st) = (ur(&tr.un), ur(&eq.un), ur(&st.x));
+    let (u_tr, u_eq, u_st) = (ur(&tr.state.u), ur(&eq.state.u), ur(&st.x));
     let d_eq = rel(&u_tr, &u_eq);
     let d_st = rel(&u_tr, &u_st);
     let d_eq_st = rel(&u_eq, &u_st);
     // Residual torsion: mean angle between the body and the hub.
-    let phi = tr.kin.phi(tr.t);
+    let phi = tr.kin.phi(tr.state.t);
     let twist = (0..mesh.n_nodes())
         .map(|n| {
-            let x = mesh.nodes[n] + tread::math::Vec2::new(tr.un[2 * n], tr.un[2 * n + 1]);
+            let x =
+                mesh.nodes[n] + tread::math::Vec2::new(tr.state.u[2 * n], tr.state.u[2 * n + 1]);
             let a = x[1].atan2(x[0]) - mesh.nodes[n][1].atan2(mesh.nodes[n][0]) - phi;
             (a + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
         })
@@ -409,7 +411,7 @@ fn central_difference_stable_step_includes_damping_and_contact() {
         for _ in 0..steps {
             tr.step(&mut newton, dt).map_err(|e| e.to_string())?;
         }
-        let e = tr.kinetic_energy(&tr.vn);
+        let e = tr.kinetic_energy(&tr.state.v);
         if e.is_finite() {
             Ok(e)
         } else {
@@ -453,7 +455,7 @@ fn passages_landed_on_are_counted_at_that_step() {
         &o,
         newton_opts(),
         LinearKind::Cholesky,
-        |tr, rep| seen.push((tr.t, rep.passages)),
+        |tr, rep| seen.push((tr.state.t, rep.passages)),
     )
     .unwrap_or_else(|(e, _)| panic!("{e}"));
     assert!(
@@ -515,7 +517,7 @@ fn rejected_steps_leave_no_trace() {
         o.error_tol = 1e-5;
         let mut accepted = Vec::new();
         let rep = integrate(&mut tr, &o, newton_opts(), LinearKind::Lu, |tr, _| {
-            accepted.push(tr.t)
+            accepted.push(tr.state.t)
         })
         .unwrap_or_else(|(e, _)| panic!("{e}"));
         assert!(
@@ -526,7 +528,7 @@ fn rejected_steps_leave_no_trace() {
         let mut newton =
             tread::solver::Newton::new(&replay.sys, LinearKind::Lu, newton_opts()).unwrap();
         for &t1 in &accepted {
-            let dt = t1 - replay.t;
+            let dt = t1 - replay.state.t;
             replay.step(&mut newton, dt).unwrap();
         }
         let diff = |a: &[f64], b: &[f64]| {
@@ -536,7 +538,10 @@ fn rejected_steps_leave_no_trace() {
                 .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
                 / scale
         };
-        let (du, dv) = (diff(&tr.un, &replay.un), diff(&tr.vn, &replay.vn));
+        let (du, dv) = (
+            diff(&tr.state.u, &replay.state.u),
+            diff(&tr.state.v, &replay.state.v),
+        );
         eprintln!(
             "viscoelastic {visco}: {} accepted, {} rejected steps; replay differs by {du:.2e} \
              (u), {dv:.2e} (v)",

@@ -80,11 +80,11 @@ fn first_order_jacobian_matches_finite_differences() {
     let (s, c) = phi.sin_cos();
     for n in 0..tr.sys.model.mesh.n_nodes() {
         let x = tr.sys.model.mesh.nodes[n];
-        tr.un[2 * n] = c * x[0] - s * x[1] - x[0] + 1e-3 * x[1].sin();
-        tr.un[2 * n + 1] = s * x[0] + c * x[1] - x[1] + 1e-3 * x[0].cos();
-        let p = x + tread::math::Vec2::new(tr.un[2 * n], tr.un[2 * n + 1]);
-        tr.vn[2 * n] = -8.0 * p[1] + 0.3 * p[0].sin();
-        tr.vn[2 * n + 1] = 8.0 * p[0] + 0.2 * p[1].cos();
+        tr.state.u[2 * n] = c * x[0] - s * x[1] - x[0] + 1e-3 * x[1].sin();
+        tr.state.u[2 * n + 1] = s * x[0] + c * x[1] - x[1] + 1e-3 * x[0].cos();
+        let p = x + tread::math::Vec2::new(tr.state.u[2 * n], tr.state.u[2 * n + 1]);
+        tr.state.v[2 * n] = -8.0 * p[1] + 0.3 * p[0].sin();
+        tr.state.v[2 * n + 1] = 8.0 * p[0] + 0.2 * p[1].cos();
     }
     let fo = FirstOrder::new(&mut tr).unwrap_or_else(|e| panic!("{e}"));
     let y = fo.initial_state().to_vec();
@@ -175,11 +175,11 @@ fn spin_up(method: OdeMethod, rtol: f64, t_end: f64) -> (Vec<f64>, TransientRepo
     let rep = integrate_first_order(&mut tr, method, &opts(1e-5, t_end), tol(rtol), |_, _| {})
         .unwrap_or_else(|(e, _)| panic!("{e}"));
     assert!(
-        (tr.t - t_end).abs() < 1e-12,
+        (tr.state.t - t_end).abs() < 1e-12,
         "stopped at {} not {t_end}",
-        tr.t
+        tr.state.t
     );
-    (tr.un.clone(), rep)
+    (tr.state.u.clone(), rep)
 }
 
 fn rel(a: &[f64], b: &[f64]) -> f64 {
@@ -293,10 +293,10 @@ fn rigid_spinning_with_bdf_is_objective() {
     );
     tr.start_rigid_spin(omega, LinearKind::Lu, None)
         .unwrap_or_else(|e| panic!("{e}"));
-    let e0 = tr.cell_strains(&tr.un);
+    let e0 = tr.cell_strains(&tr.state.u);
     let emax = e0.iter().map(|e| e.norm()).fold(0.0, f64::max);
     let energy = |tr: &Transient| {
-        tr.kinetic_energy(&tr.vn) + tr.sys.model.strain_energy(&tr.sys.dofs, &tr.un)
+        tr.kinetic_energy(&tr.state.v) + tr.sys.model.strain_energy(&tr.sys.dofs, &tr.state.u)
     };
     let en0 = energy(&tr);
     let mut ds = 0.0f64;
@@ -308,7 +308,7 @@ fn rigid_spinning_with_bdf_is_objective() {
         &opts(1e-4, revs * period),
         tol(1e-7),
         |tr, _| {
-            let e = tr.cell_strains(&tr.un);
+            let e = tr.cell_strains(&tr.state.u);
             let d = e
                 .iter()
                 .zip(&e0)
@@ -347,8 +347,8 @@ fn failures_are_errors_not_panics() {
                 "expected failure at t = {t}: {message} (after {} steps)",
                 rep.steps
             );
-            assert!((tr.t - rep.final_time).abs() < 1e-15);
-            assert!(tr.un.iter().all(|v| v.is_finite()));
+            assert!((tr.state.t - rep.final_time).abs() < 1e-15);
+            assert!(tr.state.u.iter().all(|v| v.is_finite()));
         }
         Err((e, _)) => panic!("unexpected error {e}"),
         Ok(r) => panic!("expected a failure, got {} steps", r.steps),
@@ -393,7 +393,7 @@ fn rotating_rigid_spin_is_an_exact_solution_of_the_first_order_system() {
         .unwrap();
     let nn = tr.sys.model.mesh.n_nodes();
     let mesh_nodes = tr.sys.model.mesh.nodes.clone();
-    let (u0, v0, a0) = (tr.un.clone(), tr.vn.clone(), tr.an.clone());
+    let (u0, v0, a0) = (tr.state.u.clone(), tr.state.v.clone(), tr.state.a.clone());
     let eq = tr.sys.dofs.eq.clone();
     let fo = FirstOrder::new(&mut tr).unwrap();
     let ns = fo.n_states();

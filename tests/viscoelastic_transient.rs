@@ -82,11 +82,11 @@ fn time_step_tangent_with_history_matches_finite_differences() {
         let dofs = tr.sys.dofs.clone();
         tr.sys.model.commit_history(&dofs, &x0, 0.003);
         assert!(tr.sys.model.history.data.iter().any(|v| v.abs() > 1e-3));
-        tr.un.copy_from_slice(&x0);
+        tr.state.u.copy_from_slice(&x0);
         for n in 0..nn {
             let x = tr.sys.model.mesh.nodes[n];
-            tr.vn[2 * n] = -10.0 * x[1];
-            tr.vn[2 * n + 1] = 10.0 * x[0];
+            tr.state.v[2 * n] = -10.0 * x[1];
+            tr.state.v[2 * n + 1] = 10.0 * x[0];
         }
         tr.dt = 1e-3;
         tr.sys.model.history_dt = 1e-3;
@@ -159,19 +159,19 @@ fn history_is_committed_only_on_convergence() {
         before.iter().any(|v| v.abs() > 1e-6),
         "no history after spin-up steps"
     );
-    let t = tr.t;
+    let t = tr.state.t;
     assert!(tr.step(&mut failing, 1e-3).is_err());
     assert_eq!(tr.sys.model.history.data, before);
     assert_eq!(tr.sys.model.history_dt, 0.0);
-    assert_eq!(tr.t, t);
+    assert_eq!(tr.state.t, t);
     // A converged step changes it, and equals a recomputation from the committed state.
-    let x_before = tr.un.clone();
+    let x_before = tr.state.u.clone();
     tr.step(&mut good, 1e-3).unwrap();
     assert_ne!(tr.sys.model.history.data, before);
     let mut check = tr.sys.model.history.clone();
     check.data.copy_from_slice(&before);
     std::mem::swap(&mut tr.sys.model.history, &mut check);
-    let x1 = tr.un.clone();
+    let x1 = tr.state.u.clone();
     tr.sys.model.commit_history(&dofs, &x1, 1e-3);
     std::mem::swap(&mut tr.sys.model.history, &mut check);
     assert_eq!(check.data, tr.sys.model.history.data);
@@ -195,7 +195,7 @@ fn spin_up(scheme: Scheme, model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
         |_, _| {},
     )
     .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.un.clone()
+    tr.state.u.clone()
 }
 
 #[test]

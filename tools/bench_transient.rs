@@ -485,14 +485,14 @@ fn half_width(tr: &Transient, x: &[f64], v: &[f64]) -> f64 {
 fn extract(tr: &Transient, rep: &TransientReport, part: Part) -> [f64; 4] {
     if part == Part::B {
         if let (Some(row), Some(field)) = (rep.passage_log.last(), tr.steady_field.as_ref()) {
-            if field.len() == tr.un.len() {
+            if field.len() == tr.state.u.len() {
                 let zero = vec![0.0; field.len()];
                 return [row[4], row[5], row[6], half_width(tr, field, &zero)];
             }
         }
     }
     let (f, m) = tr.hub_reaction();
-    [f[0], f[1], m, half_width(tr, &tr.un, &tr.vn)]
+    [f[0], f[1], m, half_width(tr, &tr.state.u, &tr.state.v)]
 }
 
 fn run_repeated(

@@ -161,38 +161,38 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         record::emit_newton_table(
             recorders,
             index,
-            tr.t,
+            tr.state.t,
             &tr.last_table,
             crate::solver::NonlinearSystem::field_names(tr),
         );
         let info = StepInfo {
             index,
-            time: tr.t,
-            dt: tr.t - t_prev,
+            time: tr.state.t,
+            dt: tr.state.t - t_prev,
             newton_iterations: rep.newton_iterations - its_prev,
             residual: final_residual(&tr.last_table),
             // The integration loop's own end conditions.
-            is_final: tr.t >= time_opts.t_end - 1e-12 * time_opts.t_end
+            is_final: tr.state.t >= time_opts.t_end - 1e-12 * time_opts.t_end
                 || rep.steps >= time_opts.max_steps
                 || (rep.steady && time_opts.stop_at_steady),
         };
-        t_prev = tr.t;
+        t_prev = tr.state.t;
         its_prev = rep.newton_iterations;
         if !recorders.wants_view(&info) {
             recorders.step(&info, None);
             return;
         }
         let snap = tr.snapshot();
-        let ns = nodal_stress_full_at(&tr.sys, &tr.un);
+        let ns = nodal_stress_full_at(&tr.sys, &tr.state.u);
         let recovered =
-            crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.un);
+            crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.state.u);
         let indicator =
-            crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.un).indicators;
-        let contact = tr.contact_samples(&tr.un, &tr.vn);
+            crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.state.u).indicators;
+        let contact = tr.contact_samples(&tr.state.u, &tr.state.v);
         let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
         let view = StepView {
             mesh: Some(&tr.sys.model.mesh),
-            x: &tr.un,
+            x: &tr.state.u,
             stress: &ns.in_plane,
             sigma_33: &ns.sigma_33,
             stress_recovered: &recovered,
@@ -234,15 +234,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     if let (true, Some(field)) = (rep.steady, tr.steady_field.as_ref()) {
         record_steady_field(&tr, &rep, field, recorders);
     }
-    let samples = tr.contact_samples(&tr.un, &tr.vn);
+    let samples = tr.contact_samples(&tr.state.u, &tr.state.v);
     let tot = ContactModel::totals(&samples);
     let (f, m) = tr.hub_reaction();
     let omega_hub = tr.omega_now();
-    let v0_end = tr.kin.v0.value(tr.t);
+    let v0_end = tr.kin.v0.value(tr.state.t);
     let results = TransientResults {
         control: scene.motion.control.as_str().to_string(),
         omega_steady: omega_hub,
-        applied_torque: tr.applied_torque(tr.t),
+        applied_torque: tr.applied_torque(tr.state.t),
         rolling_radius: if omega_hub != 0.0 {
             v0_end / omega_hub
         } else {
@@ -419,13 +419,13 @@ fn record_steady_field(
     field: &[f64],
     recorders: &mut dyn Recorder,
 ) {
-    let mut x = tr.un.clone();
+    let mut x = tr.state.u.clone();
     let n = field.len().min(x.len());
     x[..n].copy_from_slice(&field[..n]);
     let ns = nodal_stress_full_at(&tr.sys, &x);
     let recovered = crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &x);
     let indicator = crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &x).indicators;
-    let contact = tr.contact_samples(&tr.un, &tr.vn);
+    let contact = tr.contact_samples(&tr.state.u, &tr.state.v);
     let snap = tr.snapshot();
     let mean = rep
         .passage_mean
@@ -456,7 +456,7 @@ fn record_steady_field(
     ];
     recorders.steady_reached(
         &SteadyReached {
-            time: rep.time_to_steady.unwrap_or(tr.t),
+            time: rep.time_to_steady.unwrap_or(tr.state.t),
             change: rep.last_change.iter().copied().fold(0.0, f64::max),
             results: &results,
         },

@@ -36,41 +36,41 @@ impl Transient {
         &mut self,
         dt: f64,
     ) -> Result<(f64, usize), SolveError> {
-        let t1 = self.t + dt;
+        let t1 = self.state.t + dt;
         // v_n ≈ v_{n−1/2} for the contact rates; a_n = −M_L⁻¹ f(u_n).
-        self.sys.x.copy_from_slice(&self.un);
-        self.prescribe(self.t);
+        self.sys.x.copy_from_slice(&self.state.u);
+        self.prescribe(self.state.t);
         self.xa.copy_from_slice(&self.sys.x);
-        self.va.copy_from_slice(&self.vn);
+        self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
-        self.t_eval = self.t;
+        self.t_eval = self.state.t;
         if !self.assemble_dynamic(false, 1.0, 0.0, 0.0, 0.0) {
             // From an admissible committed state, only an unstable step gets here.
             return Err(SolveError::ExplicitUnstable {
-                t: self.t,
+                t: self.state.t,
                 dt,
                 dt_stable: self.dt_stable,
             });
         }
-        // a_n = −M_L⁻¹ f(u_n) on the free dofs (into a1; the committed a_n stays
+        // a_n = −M_L⁻¹ f(u_n) on the free dofs (into next.a; the committed a_n stays
         // until the step is accepted), then v_{n+1/2} = v_{n−1/2} + Δt a_n and
         // u_{n+1} = u_n + Δt v_{n+1/2}.
-        self.a1.copy_from_slice(&self.an);
-        for d in 0..self.un.len() {
+        self.next.a.copy_from_slice(&self.state.a);
+        for d in 0..self.state.u.len() {
             let e = self.sys.dofs.eq[d];
             if e < CONSTRAINED && self.ml[d] > 0.0 {
-                self.a1[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
+                self.next.a[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
             }
         }
         // Prescribed dofs: velocity from the prescribed positions.
         self.prescribe(t1);
-        self.v1.copy_from_slice(&self.vn);
-        for d in 0..self.un.len() {
+        self.next.v.copy_from_slice(&self.state.v);
+        for d in 0..self.state.u.len() {
             if self.sys.dofs.eq[d] < CONSTRAINED && self.ml[d] > 0.0 {
-                self.v1[d] += dt * self.a1[d];
-                self.sys.x[d] = self.un[d] + dt * self.v1[d];
+                self.next.v[d] += dt * self.next.a[d];
+                self.sys.x[d] = self.state.u[d] + dt * self.next.v[d];
             } else {
-                self.v1[d] = (self.sys.x[d] - self.un[d]) / dt;
+                self.next.v[d] = (self.sys.x[d] - self.state.u[d]) / dt;
             }
         }
         self.pending = Some((t1, dt));
@@ -87,11 +87,11 @@ impl Transient {
     /// normal damping ∂t_n/∂δ̇ on the same boundary diagonal. 5 % margin on ω_max (power
     /// iteration approaches λ_max from below).
     pub fn stable_step(&mut self, delta_ref: f64) -> f64 {
-        self.sys.x.copy_from_slice(&self.un);
-        self.xa.copy_from_slice(&self.un);
-        self.va.copy_from_slice(&self.vn);
+        self.sys.x.copy_from_slice(&self.state.u);
+        self.xa.copy_from_slice(&self.state.u);
+        self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
-        self.t_eval = self.t;
+        self.t_eval = self.state.t;
         if !self.assemble_dynamic(true, 1.0, 0.0, 0.0, 0.0) {
             return f64::NAN;
         }

@@ -51,10 +51,11 @@ impl Transient {
         newton: &mut Newton,
         dt: f64,
     ) -> Result<(f64, usize), SolveError> {
-        let t1 = self.t + dt;
+        let t1 = self.state.t + dt;
         // Predictor: constant acceleration.
-        for d in 0..self.un.len() {
-            self.sys.x[d] = self.un[d] + dt * self.vn[d] + 0.5 * dt * dt * self.an[d];
+        for d in 0..self.state.u.len() {
+            self.sys.x[d] =
+                self.state.u[d] + dt * self.state.v[d] + 0.5 * dt * dt * self.state.a[d];
         }
         self.prescribe(t1);
         // Viscoelastic history: the kernels evaluate the overstress over this step
@@ -85,7 +86,7 @@ impl Transient {
             ];
             for (i, r) in rigid.iter().enumerate() {
                 let d = 2 * n + i;
-                let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.a1[d] - self.an[d]);
+                let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.next.a[d] - self.state.a[d]);
                 num += e * e;
                 let ud = self.sys.x[d] - r;
                 den += ud * ud;
@@ -99,45 +100,45 @@ impl Transient {
     }
 
     /// The step's residual (and tangent) at the trial x = u_{n+1}: Newmark rates, then
-    /// R = M a_{n+1−αm} + (1 − αf) f(x, v1) + αf f_n with ∂v/∂x = γ/(βΔt) and
+    /// R = M a_{n+1−αm} + (1 − αf) f(x, v_{n+1}) + αf f_n with ∂v/∂x = γ/(βΔt) and
     /// ∂a/∂x = 1/(βΔt²).
     pub(super) fn assemble_generalized_alpha(&mut self, ga: &GenAlpha, with_matrix: bool) -> bool {
         self.newmark(ga);
         let dt = self.dt;
-        self.t_eval = self.t + dt;
+        self.t_eval = self.state.t + dt;
         let kv = ga.gamma / (ga.beta * dt);
         let cm = (1.0 - ga.am) / (ga.beta * dt * dt);
         self.assemble_dynamic(with_matrix, 1.0 - ga.af, kv, cm, ga.af)
     }
 
-    /// Newmark update of v1, a1 and the α-point vectors from the trial x = u_{n+1}. The hub
+    /// Newmark update of next.v, next.a and the α-point vectors from the trial x = u_{n+1}. The hub
     /// dofs take the exact velocity and acceleration of the prescribed rotation (a Newmark
     /// recursion on a prescribed history rings at the Nyquist frequency when ρ∞ = 1).
     fn newmark(&mut self, ga: &GenAlpha) {
         let dt = self.dt;
         let (b, g) = (ga.beta, ga.gamma);
-        for d in 0..self.un.len() {
-            let a1 = (self.sys.x[d] - self.un[d] - dt * self.vn[d]) / (b * dt * dt)
-                - (0.5 / b - 1.0) * self.an[d];
-            let v1 = self.vn[d] + dt * ((1.0 - g) * self.an[d] + g * a1);
-            self.a1[d] = a1;
-            self.v1[d] = v1;
+        for d in 0..self.state.u.len() {
+            let a1 = (self.sys.x[d] - self.state.u[d] - dt * self.state.v[d]) / (b * dt * dt)
+                - (0.5 / b - 1.0) * self.state.a[d];
+            let v1 = self.state.v[d] + dt * ((1.0 - g) * self.state.a[d] + g * a1);
+            self.next.a[d] = a1;
+            self.next.v[d] = v1;
         }
         // Load control: the road height is massless (quasi-static): no rate, so that the
         // predictor keeps it where it was.
         if let Some(ih) = self.road_height_dof() {
-            self.v1[ih] = 0.0;
-            self.a1[ih] = 0.0;
+            self.next.v[ih] = 0.0;
+            self.next.a[ih] = 0.0;
         }
         // Under torque control the hub nodes are part of the dynamics (through φ): Newmark
         // rates like every other node, consistent with the tangent.
         if self.hub_angle.is_none() {
-            self.hub_rates(self.t + dt);
+            self.hub_rates(self.state.t + dt);
         }
-        for d in 0..self.un.len() {
+        for d in 0..self.state.u.len() {
             self.xa[d] = self.sys.x[d];
-            self.va[d] = self.v1[d];
-            self.aa[d] = (1.0 - ga.am) * self.a1[d] + ga.am * self.an[d];
+            self.va[d] = self.next.v[d];
+            self.aa[d] = (1.0 - ga.am) * self.next.a[d] + ga.am * self.state.a[d];
         }
     }
 }

@@ -233,13 +233,14 @@ pub struct Transient {
     mass: Vec<f64>,
     mass_off: Vec<usize>,
     hub: Vec<u32>,
-    pub t: f64,
+    /// Length of the current (last attempted) step.
     pub dt: f64,
-    pub un: Vec<f64>,
-    pub vn: Vec<f64>,
-    pub an: Vec<f64>,
-    pub v1: Vec<f64>,
-    pub a1: Vec<f64>,
+    /// The committed state (t_n, u_n, v_n, a_n).
+    pub state: State,
+    /// The attempted step's state (t_{n+1}, u_{n+1}, v_{n+1}, a_{n+1}): filled by the
+    /// integrator (u is the Newton iterate `sys.x` until the step is accepted), committed by
+    /// [`Self::accept`].
+    pub next: State,
     xa: Vec<f64>,
     va: Vec<f64>,
     aa: Vec<f64>,
@@ -274,7 +275,7 @@ pub struct Transient {
 impl Transient {
     /// `sys` must have been built with the hub fixed (its hub values are overwritten by the
     /// prescribed rotation). Initial state: at rest (u = v = a = 0) unless the caller changes
-    /// `un`, `vn`, `an` and `sys.x` before the first step.
+    /// `state` and `sys.x` before the first step.
     pub fn new(sys: SolidSystem, scheme: Scheme, kin: Kinematics, lumped: bool) -> Self {
         let n = sys.dofs.n_full();
         let mut mass = Vec::new();
@@ -316,13 +317,9 @@ impl Transient {
             mass,
             mass_off,
             hub,
-            t: 0.0,
             dt: 0.0,
-            un,
-            vn: z.clone(),
-            an: z.clone(),
-            v1: z.clone(),
-            a1: z.clone(),
+            next: State::at_rest(0.0, un.clone()),
+            state: State::at_rest(0.0, un),
             xa: z.clone(),
             va: z.clone(),
             aa: z,
@@ -354,21 +351,13 @@ impl Transient {
     /// not with cell-owned (exact pressure) dofs (the coupling block would exceed MAX_LOCAL).
     pub fn enable_torque_control(&mut self, inertia: f64, torque: Ramp, omega0: f64) {
         let (iphi, block) = self.sys.add_hub_angle();
-        for v in [
-            &mut self.un,
-            &mut self.vn,
-            &mut self.an,
-            &mut self.v1,
-            &mut self.a1,
-            &mut self.xa,
-            &mut self.va,
-            &mut self.aa,
-            &mut self.ml,
-        ] {
+        self.state.push(0.0);
+        self.next.push(0.0);
+        for v in [&mut self.xa, &mut self.va, &mut self.aa, &mut self.ml] {
             v.push(0.0);
         }
-        self.vn[iphi] = omega0;
-        self.v1[iphi] = omega0;
+        self.state.v[iphi] = omega0;
+        self.next.v[iphi] = omega0;
         let mesh = &self.sys.model.mesh;
         let mut hub_slot = vec![u32::MAX; mesh.n_cells()];
         let mut n_hub_cells = 0;
@@ -399,16 +388,16 @@ impl Transient {
     /// Hub angle of the committed state.
     pub fn phi_now(&self) -> f64 {
         match &self.hub_angle {
-            Some(h) => self.un[h.iphi],
-            None => self.kin.phi(self.t),
+            Some(h) => self.state.u[h.iphi],
+            None => self.kin.phi(self.state.t),
         }
     }
 
     /// Hub angular speed of the committed state.
     pub fn omega_now(&self) -> f64 {
         match &self.hub_angle {
-            Some(h) => self.vn[h.iphi],
-            None => self.kin.omega.value(self.t),
+            Some(h) => self.state.v[h.iphi],
+            None => self.kin.omega.value(self.state.t),
         }
     }
 
@@ -421,8 +410,8 @@ impl Transient {
     /// Hub angular acceleration of the committed state.
     pub fn hub_accel(&self) -> f64 {
         match &self.hub_angle {
-            Some(h) => self.an[h.iphi],
-            None => self.kin.omega.rate(self.t),
+            Some(h) => self.state.a[h.iphi],
+            None => self.kin.omega.rate(self.state.t),
         }
     }
 
@@ -496,21 +485,21 @@ impl Transient {
     }
 
     /// Hub reaction (force and moment of the hub on the body) at the end-of-step state
-    /// (x, v1, a1): internal (elastic and viscous), contact-free cell residual plus inertia at
+    /// (x, next.v, next.a): internal (elastic and viscous), contact-free cell residual plus inertia at
     /// the hub nodes.
     pub fn hub_reaction(&self) -> (Vec2, f64) {
         // With the viscous (strain-rate) stress: it is part of what the hub transmits.
         self.sys.hub_reaction_with(&Terms {
             rates: Rates::Dynamic {
                 x: &self.sys.x,
-                v: &self.v1,
+                v: &self.next.v,
                 kv: 0.0,
             },
             force_scale: 1.0,
             inertia: Some(Inertia {
                 mass: &self.mass,
                 offsets: &self.mass_off,
-                acc: &self.a1,
+                acc: &self.next.a,
                 ca: 0.0,
             }),
             cell_hook: None,
@@ -534,18 +523,18 @@ impl Transient {
     pub fn snapshot(&self) -> Snapshot {
         let (f, m) = self.hub_reaction();
         Snapshot {
-            t: self.t,
+            t: self.state.t,
             phi: self.phi_now(),
             hub_force_x: f[0],
             hub_force_y: f[1],
             hub_torque: m,
             omega: self.omega_now(),
-            kinetic_energy: self.kinetic_energy(&self.vn),
-            strain_energy: self.sys.model.strain_energy(&self.sys.dofs, &self.un),
+            kinetic_energy: self.kinetic_energy(&self.state.v),
+            strain_energy: self.sys.model.strain_energy(&self.sys.dofs, &self.state.u),
         }
     }
 
-    /// Exact velocity and acceleration of the hub nodes at time `t` into v1, a1:
+    /// Exact velocity and acceleration of the hub nodes at time `t` into next.v, next.a:
     /// x = Q(φ) X, v = ω e3 × x, a = ω̇ e3 × x − ω² x.
     fn hub_rates(&mut self, t: f64) {
         let phi = self.kin.phi(t);
@@ -555,10 +544,10 @@ impl Transient {
             let xr = self.sys.model.mesh.nodes[n as usize];
             let x = Vec2::new(c * xr[0] - s * xr[1], s * xr[0] + c * xr[1]);
             let n = n as usize;
-            self.v1[2 * n] = -w * x[1];
-            self.v1[2 * n + 1] = w * x[0];
-            self.a1[2 * n] = -wd * x[1] - w * w * x[0];
-            self.a1[2 * n + 1] = wd * x[0] - w * w * x[1];
+            self.next.v[2 * n] = -w * x[1];
+            self.next.v[2 * n + 1] = w * x[0];
+            self.next.a[2 * n] = -wd * x[1] - w * w * x[0];
+            self.next.a[2 * n + 1] = wd * x[0] - w * w * x[1];
         }
     }
 
@@ -702,12 +691,12 @@ impl Transient {
 
     /// Static forces f(u_n, v_n) of the committed state into `fprev`.
     fn update_fprev(&mut self) -> bool {
-        self.t_eval = self.t;
-        self.xa.copy_from_slice(&self.un);
-        self.va.copy_from_slice(&self.vn);
+        self.t_eval = self.state.t;
+        self.xa.copy_from_slice(&self.state.u);
+        self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
         let saved_x = std::mem::take(&mut self.sys.x);
-        self.sys.x = self.un.clone();
+        self.sys.x = self.state.u.clone();
         let ok = self.assemble_dynamic(false, 1.0, 0.0, 0.0, 0.0);
         self.sys.x = saved_x;
         self.fprev.clear();
@@ -726,7 +715,7 @@ impl Transient {
         ok
     }
 
-    /// Advance one step of size `dt` from the committed state (t, un, vn, an): [`Self::attempt`]
+    /// Advance one step of size `dt` from the committed `state`: [`Self::attempt`]
     /// then [`Self::accept`]. Returns the local error estimate (generalized-α) and the Newton
     /// iterations.
     pub fn step(&mut self, newton: &mut Newton, dt: f64) -> Result<(f64, usize), SolveError> {
@@ -735,8 +724,8 @@ impl Transient {
         Ok(out)
     }
 
-    /// Attempt one step of size `dt` from the committed state (t, un, vn, an): the new state is
-    /// left in (`sys.x`, `v1`, `a1`) and nothing committed, so that the caller may still
+    /// Attempt one step of size `dt` from the committed `state`: the new state is left in
+    /// (`sys.x`, `next.v`, `next.a`) and nothing committed, so that the caller may still
     /// reject it (restore `sys` with [`NonlinearSystem::restore_state`]) or keep it with
     /// [`Self::accept`]. Returns the local error estimate (generalized-α) and the Newton
     /// iterations.
@@ -750,7 +739,7 @@ impl Transient {
     }
 
     /// Commit the step of the last successful [`Self::attempt`]: the quadrature-point history,
-    /// (t, un, vn, an) ← (t_{n+1}, x, v1, a1) and, for generalized-α, the forces f(u_n, v_n)
+    /// `state` ← `next` = (t_{n+1}, x, next.v, next.a) and, for generalized-α, the forces f(u_n, v_n)
     /// of the new committed state that the next step averages with. No effect without a
     /// pending step.
     pub fn accept(&mut self) {
@@ -763,23 +752,22 @@ impl Transient {
         }
     }
 
-    /// The one commit of the transient state: (t, un, vn, an) ← (t1, x, v1, a1), and the
-    /// quadrature-point history over a step `history_dt` (`None`: the integrator evaluated no
-    /// history increment, so none is committed).
+    /// The one commit of the transient state: `next` ← (t1, sys.x, next.v, next.a) becomes the
+    /// committed `state`, and the quadrature-point history advances over a step `history_dt`
+    /// (`None`: the integrator evaluated no history increment, so none is committed).
     pub(crate) fn commit_state(&mut self, t1: f64, history_dt: Option<f64>) {
         if let Some(dt) = history_dt {
             let (dofs, x) = (&self.sys.dofs, &self.sys.x);
             let step = self.sys.model.commit_history(dofs, x, dt);
             if self.sys.model.viscoelastic.is_some() {
                 self.viscous
-                    .get_or_insert(ViscousEnergy::start(0.0, self.t))
+                    .get_or_insert(ViscousEnergy::start(0.0, self.state.t))
                     .add(step.work, step.stored, t1);
             }
         }
-        self.un.copy_from_slice(&self.sys.x);
-        self.vn.copy_from_slice(&self.v1);
-        self.an.copy_from_slice(&self.a1);
-        self.t = t1;
+        self.next.t = t1;
+        self.next.u.copy_from_slice(&self.sys.x);
+        self.state.clone_from(&self.next);
     }
 }
 
@@ -916,13 +904,13 @@ impl SteadyMonitor {
         tol: f64,
         phi_at: &dyn Fn(f64) -> f64,
     ) -> bool {
-        let q = phi_at(tr.t) / self.dtheta;
+        let q = phi_at(tr.state.t) / self.dtheta;
         let k1 = (q + 1e-9 * q.abs().max(1.0)).floor() as i64;
         // Hub loads linear in time within the step, for the passage average.
         let loads = |s: &Snapshot| [s.hub_force_x, s.hub_force_y, s.hub_torque];
         let (l0, l1) = (loads(snap0), loads(snap1));
         let integral = |a: f64, b: f64| {
-            let h = tr.t - t0;
+            let h = tr.state.t - t0;
             let at = |t: f64| {
                 let s = if h > 0.0 { (t - t0) / h } else { 1.0 };
                 [0, 1, 2].map(|i| l0[i] + s * (l1[i] - l0[i]))
@@ -936,7 +924,7 @@ impl SteadyMonitor {
         }
         if k1 <= self.last_k {
             if self.acc_t0.is_some() {
-                let d = integral(t0, tr.t);
+                let d = integral(t0, tr.state.t);
                 (0..3).for_each(|i| self.acc[i] += d[i]);
             }
             return false;
@@ -944,7 +932,7 @@ impl SteadyMonitor {
         self.last_k = k1;
         let target = k1 as f64 * self.dtheta;
         // Bisection for φ(t*) = kΔθ in [t0, t1] (φ is monotone).
-        let (mut lo, mut hi) = (t0, tr.t);
+        let (mut lo, mut hi) = (t0, tr.state.t);
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
             if phi_at(mid) < target {
@@ -961,9 +949,9 @@ impl SteadyMonitor {
                 self.passage_mean = Some(self.acc.map(|v| v / (ts - tp)));
             }
         }
-        self.acc = integral(ts, tr.t);
+        self.acc = integral(ts, tr.state.t);
         self.acc_t0 = Some(ts);
-        let h = tr.t - t0;
+        let h = tr.state.t - t0;
         let s = if h > 0.0 { (ts - t0) / h } else { 1.0 };
         // Cubic Hermite basis on [0, 1].
         let h00 = 2.0 * s * s * s - 3.0 * s * s + 1.0;
@@ -977,7 +965,9 @@ impl SteadyMonitor {
             // Interpolation: χ(Y_j) = X* + u(X*) with X* = Q(−φ) Y_j.
             let n2 = 2 * mesh.n_nodes();
             let u_ts: Vec<f64> = (0..n2)
-                .map(|i| h00 * u0[i] + h10 * h * v0[i] + h01 * tr.un[i] + h11 * h * tr.vn[i])
+                .map(|i| {
+                    h00 * u0[i] + h10 * h * v0[i] + h01 * tr.state.u[i] + h11 * h * tr.state.v[i]
+                })
                 .collect();
             let (sn, cs) = target.sin_cos();
             for (j, y) in mesh.nodes.iter().enumerate() {
@@ -1001,8 +991,8 @@ impl SteadyMonitor {
                 for c in 0..2 {
                     let u = h00 * u0[2 * i + c]
                         + h10 * h * v0[2 * i + c]
-                        + h01 * tr.un[2 * i + c]
-                        + h11 * h * tr.vn[2 * i + c];
+                        + h01 * tr.state.u[2 * i + c]
+                        + h11 * h * tr.state.v[2 * i + c];
                     let xi = mesh.nodes[i][c] + u;
                     field[2 * j + c] = xi - mesh.nodes[j][c];
                 }
@@ -1163,16 +1153,16 @@ pub fn integrate(
         if c.load.is_some() && tr.sys.dofs.n_global > 0 {
             let ih = tr.sys.dofs.global(0);
             let lowest = tr
-                .contact_samples(&tr.un, &tr.vn)
+                .contact_samples(&tr.state.u, &tr.state.v)
                 .iter()
                 .map(|s| s.x2)
                 .fold(f64::INFINITY, f64::min);
             let h0 = -lowest - 1e-6 * tr.wall;
-            tr.un[ih] = h0;
+            tr.state.u[ih] = h0;
             tr.sys.x[ih] = h0;
         }
     }
-    tr.prescribe(tr.t);
+    tr.prescribe(tr.state.t);
     if !tr.update_fprev() {
         return Err((SolveError::InadmissibleStart, rep));
     }
@@ -1191,29 +1181,30 @@ pub fn integrate(
     };
     let mut snap0 = tr.snapshot();
     rep.history.push(snap0);
-    let (mut u0, mut v0) = (tr.un.clone(), tr.vn.clone());
+    let (mut u0, mut v0) = (tr.state.u.clone(), tr.state.v.clone());
     let mut saved = Vec::new();
-    while tr.t < opts.t_end - 1e-12 * opts.t_end && rep.steps < opts.max_steps {
+    while tr.state.t < opts.t_end - 1e-12 * opts.t_end && rep.steps < opts.max_steps {
         // Ctrl-C: stop at this step boundary (the committed state is the last accepted step).
         if crate::io::record::interrupted() {
-            return Err((SolveError::Interrupted { at: tr.t }, rep));
+            return Err((SolveError::Interrupted { at: tr.state.t }, rep));
         }
         dt = dt
-            .min(opts.t_end - tr.t)
-            .max(opts.dt_min.min(opts.t_end - tr.t));
+            .min(opts.t_end - tr.state.t)
+            .max(opts.dt_min.min(opts.t_end - tr.state.t));
         // Land exactly on the next node passage once the ramps are done, so that the
         // referential field and the hub forces are sampled from a computed state (the hub force
         // varies quickly within a passage as nodes enter the patch: interpolating it is noisy).
         let mut dt_step = dt;
         if let (Some(m), true) = (&monitor, opts.land_on_passages) {
-            if tr.t >= tr.ramps_done() && tr.omega_now() > 0.0 {
+            if tr.state.t >= tr.ramps_done() && tr.omega_now() > 0.0 {
                 let q = tr.phi_now() / m.dtheta;
                 let k = (q + 1e-9 * q.abs().max(1.0)).floor() + 1.0;
                 let target = k * m.dtheta;
                 // Predicted hub angle: exact under speed control; under torque control the
                 // quadratic φ_n + φ̇_n τ + ½ φ̈_n τ² from the committed state (the monitor
                 // interpolates the passage it actually lands near).
-                let (t_n, phi_n, w_n, wd_n) = (tr.t, tr.phi_now(), tr.omega_now(), tr.hub_accel());
+                let (t_n, phi_n, w_n, wd_n) =
+                    (tr.state.t, tr.phi_now(), tr.omega_now(), tr.hub_accel());
                 let torque = tr.hub_angle.is_some();
                 let phi_pred = |t: f64| {
                     if torque {
@@ -1224,11 +1215,11 @@ pub fn integrate(
                     }
                 };
                 // Time of the next passage (φ is monotone) within a generous bracket.
-                let mut hi = tr.t + dt;
+                let mut hi = tr.state.t + dt;
                 while phi_pred(hi) < target && hi < opts.t_end {
                     hi += dt;
                 }
-                let mut lo = tr.t;
+                let mut lo = tr.state.t;
                 for _ in 0..80 {
                     let mid = 0.5 * (lo + hi);
                     if phi_pred(mid) < target {
@@ -1239,7 +1230,7 @@ pub fn integrate(
                 }
                 // Equal steps up to the passage: every passage is then computed with the
                 // same step pattern, so a steady state is exactly periodic between passages.
-                let remaining = hi - tr.t;
+                let remaining = hi - tr.state.t;
                 if remaining > 1e-3 * dt {
                     let m = (remaining / dt - 1e-9).ceil().max(1.0);
                     dt_step = remaining / m;
@@ -1248,9 +1239,9 @@ pub fn integrate(
         }
         let h = dt_step;
         let shortened = h < dt;
-        let t0 = tr.t;
-        u0.copy_from_slice(&tr.un);
-        v0.copy_from_slice(&tr.vn);
+        let t0 = tr.state.t;
+        u0.copy_from_slice(&tr.state.u);
+        v0.copy_from_slice(&tr.state.v);
         tr.sys.save_state(&mut saved);
         if newton.opts.verbose {
             // A header above the Newton table of this step.
@@ -1290,11 +1281,15 @@ pub fn integrate(
                 if let Some(m) = &mut monitor {
                     // Hub angle on [t0, t1]: prescribed, or the cubic Hermite interpolant of
                     // (φ, φ̇) at the two ends under torque control.
-                    let hermite = tr
-                        .hub_angle
-                        .as_ref()
-                        .map(|h| (u0[h.iphi], v0[h.iphi], tr.un[h.iphi], tr.vn[h.iphi]));
-                    let (t1, kin) = (tr.t, &tr.kin);
+                    let hermite = tr.hub_angle.as_ref().map(|h| {
+                        (
+                            u0[h.iphi],
+                            v0[h.iphi],
+                            tr.state.u[h.iphi],
+                            tr.state.v[h.iphi],
+                        )
+                    });
+                    let (t1, kin) = (tr.state.t, &tr.kin);
                     let phi_at = |t: f64| match hermite {
                         Some((p0, w0, p1, w1)) => {
                             let hh = t1 - t0;
@@ -1307,12 +1302,12 @@ pub fn integrate(
                         }
                         None => kin.phi(t),
                     };
-                    if tr.t >= tr.ramps_done()
+                    if tr.state.t >= tr.ramps_done()
                         && m.check(tr, t0, &u0, &v0, &snap0, &snap1, opts.steady_tol, &phi_at)
                         && !rep.steady
                     {
                         rep.steady = true;
-                        rep.time_to_steady = Some(tr.t);
+                        rep.time_to_steady = Some(tr.state.t);
                     }
                     rep.passages = m.passages;
                     rep.last_change = [
@@ -1323,7 +1318,7 @@ pub fn integrate(
                     ];
                 }
                 snap0 = snap1;
-                rep.final_time = tr.t;
+                rep.final_time = tr.state.t;
                 rep.revolutions = tr.phi_now() / (2.0 * PI);
                 on_step(tr, &rep);
                 if rep.steady && opts.stop_at_steady {
@@ -1349,7 +1344,7 @@ pub fn integrate(
                 if dt <= opts.dt_min * (1.0 + 1e-12)
                     || matches!(tr.scheme, Scheme::CentralDifference)
                 {
-                    rep.final_time = tr.t;
+                    rep.final_time = tr.state.t;
                     return Err((e, rep));
                 }
                 dt = (0.5 * dt).max(opts.dt_min);
@@ -1374,7 +1369,7 @@ impl Transient {
     pub fn snapshot_light(&self) -> Snapshot {
         let (f, m) = self.hub_reaction();
         Snapshot {
-            t: self.t,
+            t: self.state.t,
             phi: self.phi_now(),
             hub_force_x: f[0],
             hub_force_y: f[1],
@@ -1419,7 +1414,7 @@ impl NonlinearSystem for RigidSpin<'_> {
     fn evaluate(&mut self, with_matrix: bool) -> bool {
         let tr = &mut *self.tr;
         let n_u = tr.sys.dofs.n_u;
-        for d in 0..tr.un.len() {
+        for d in 0..tr.state.u.len() {
             tr.xa[d] = tr.sys.x[d];
             tr.va[d] = 0.0;
             tr.aa[d] = if d < n_u {
@@ -1506,28 +1501,28 @@ impl Transient {
         // Relaxed to equilibrium: the energy account of the overstress starts here.
         let relaxed = self.sys.model.commit_history(dofs, x, f64::INFINITY);
         if self.sys.model.viscoelastic.is_some() {
-            self.viscous = Some(ViscousEnergy::start(relaxed.stored, self.t));
+            self.viscous = Some(ViscousEnergy::start(relaxed.stored, self.state.t));
         }
         let n_u = self.sys.dofs.n_u;
-        self.un.copy_from_slice(&self.sys.x);
+        self.state.u.copy_from_slice(&self.sys.x);
         for d in (0..n_u).step_by(2) {
             let p = self.sys.model.mesh.nodes[d / 2] + Vec2::new(self.sys.x[d], self.sys.x[d + 1]);
-            self.vn[d] = -cv * p[1];
-            self.vn[d + 1] = cv * p[0];
-            self.an[d] = -ca * p[0];
-            self.an[d + 1] = -ca * p[1];
+            self.state.v[d] = -cv * p[1];
+            self.state.v[d + 1] = cv * p[0];
+            self.state.a[d] = -ca * p[0];
+            self.state.a[d + 1] = -ca * p[1];
         }
         // The hub nodes carry the exact rates of the prescribed rotation, as during stepping.
-        self.v1.copy_from_slice(&self.vn);
-        self.a1.copy_from_slice(&self.an);
-        self.hub_rates(self.t);
+        self.next.v.copy_from_slice(&self.state.v);
+        self.next.a.copy_from_slice(&self.state.a);
+        self.hub_rates(self.state.t);
         if let Some(h) = &self.hub_angle {
             // The hub spins with the body: φ = 0, φ̇ = ω (the discrete rate with Δt given).
-            self.v1[h.iphi] = cv;
-            self.a1[h.iphi] = 0.0;
+            self.next.v[h.iphi] = cv;
+            self.next.a[h.iphi] = 0.0;
         }
-        self.vn.copy_from_slice(&self.v1);
-        self.an.copy_from_slice(&self.a1);
+        self.state.v.copy_from_slice(&self.next.v);
+        self.state.a.copy_from_slice(&self.next.a);
         Ok(())
     }
 
@@ -1554,8 +1549,10 @@ pub mod integrator;
 pub mod ode_first_order;
 pub mod registry;
 pub mod sdirk;
+pub mod state;
 
 pub use central_difference::CentralDifference;
 pub use generalized_alpha::GeneralizedAlpha;
 pub use integrator::{IntegratorSpec, Setup};
 pub use registry::IntegratorName;
+pub use state::State;

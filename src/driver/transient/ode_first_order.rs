@@ -149,7 +149,7 @@ impl<'t> FirstOrder<'t> {
         let dofs = &tr.sys.dofs;
         if dofs.per_cell > 0 || dofs.n_global > 0 || dofs.field.iter().any(|&f| f != 0) {
             return Err(SolveError::Integrator {
-                t: tr.t,
+                t: tr.state.t,
                 message: "BDF/SDIRK on y = (u, v) need a pure displacement model: cell pressures \
                           (material.formulation exact) or the load-controlled road height \
                           (road.load) make the system differential-algebraic; use \
@@ -223,8 +223,8 @@ impl<'t> FirstOrder<'t> {
         let mass_sparsity = SymbolicSparseColMat::new_checked(2 * n, 2 * n, mcp, None, mri);
         let mut y0 = vec![0.0; 2 * n];
         for (e, &d) in free.iter().enumerate() {
-            y0[e] = tr.un[d];
-            y0[n + e] = tr.vn[d];
+            y0[e] = tr.state.u[d];
+            y0[n + e] = tr.state.v[d];
         }
         Ok(Self {
             tr: RefCell::new(tr),
@@ -264,8 +264,8 @@ impl<'t> FirstOrder<'t> {
             tr.sys.x[d] = y[e];
         }
         tr.xa.copy_from_slice(&tr.sys.x);
-        tr.va.copy_from_slice(&tr.v1);
-        tr.aa.copy_from_slice(&tr.a1);
+        tr.va.copy_from_slice(&tr.next.v);
+        tr.aa.copy_from_slice(&tr.next.a);
         for (e, &d) in self.free.iter().enumerate() {
             tr.va[d] = y[n + e];
             tr.aa[d] = 0.0;
@@ -412,8 +412,8 @@ impl<'t> FirstOrder<'t> {
         tr.hub_rates(t);
         for (e, &d) in self.free.iter().enumerate() {
             tr.sys.x[d] = y[e];
-            tr.v1[d] = y[n + e];
-            tr.a1[d] = dy[n + e];
+            tr.next.v[d] = y[n + e];
+            tr.next.a[d] = dy[n + e];
         }
         // The first-order integrators evaluate no history increment (elastic forces only).
         tr.commit_state(t, None);
@@ -629,11 +629,11 @@ pub fn integrate_first_order(
     };
     let fail = |t: f64, message: String| SolveError::Integrator { t, message };
     let mut monitor = SteadyMonitor::new(&tr.sys);
-    tr.sys.x.copy_from_slice(&tr.un);
-    tr.prescribe(tr.t);
+    tr.sys.x.copy_from_slice(&tr.state.u);
+    tr.prescribe(tr.state.t);
     let snap0 = tr.snapshot();
     rep.history.push(snap0);
-    let t0 = tr.t;
+    let t0 = tr.state.t;
     let dtheta = monitor.as_ref().map(|m| m.dtheta);
     let kin = tr.kin.clone();
     let fo = match FirstOrder::new(tr) {
@@ -723,7 +723,7 @@ pub fn integrate_first_order(
     let (mut y_prev, mut dy_prev) = (fo.y0.clone(), dy0.clone());
     let (mut u0, mut v0) = {
         let tr = fo.tr.borrow();
-        (tr.un.clone(), tr.vn.clone())
+        (tr.state.u.clone(), tr.state.v.clone())
     };
     let mut snap0 = snap0;
     let mut t_prev = t0;
@@ -769,7 +769,7 @@ pub fn integrate_first_order(
             let tr = fo.tr.borrow();
             let snap1 = tr.snapshot_light();
             if let Some(m) = &mut monitor {
-                if tr.t >= ramps_done
+                if tr.state.t >= ramps_done
                     && m.check(
                         &tr,
                         t_prev,
@@ -783,7 +783,7 @@ pub fn integrate_first_order(
                     && !rep.steady
                 {
                     rep.steady = true;
-                    rep.time_to_steady = Some(tr.t);
+                    rep.time_to_steady = Some(tr.state.t);
                 }
                 rep.passages = m.passages;
                 rep.last_change = [
@@ -794,11 +794,11 @@ pub fn integrate_first_order(
                 ];
             }
             snap0 = snap1;
-            rep.final_time = tr.t;
-            rep.revolutions = tr.kin.phi(tr.t) / (2.0 * PI);
+            rep.final_time = tr.state.t;
+            rep.revolutions = tr.kin.phi(tr.state.t) / (2.0 * PI);
             on_step(&tr, &rep);
-            u0.copy_from_slice(&tr.un);
-            v0.copy_from_slice(&tr.vn);
+            u0.copy_from_slice(&tr.state.u);
+            v0.copy_from_slice(&tr.state.v);
         }
         t_prev = t;
         if rep.steady && opts.stop_at_steady {
