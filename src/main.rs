@@ -102,11 +102,12 @@ enum Command {
         #[arg(short, long)]
         verbose: bool,
     },
-    /// Adaptive static indentation: solve, estimate (Zienkiewicz–Zhu), mark (Dörfler), refine
-    /// with hanging nodes, transfer, repeat. Writes OUT/adapt.csv and OUT/adapt.json (one row
-    /// per mesh: cells, equations, hanging nodes, estimate, hub forces, times) and
-    /// OUT/adapt_NNN.vtu (each mesh with its `error_indicator`). The scene must be a static
-    /// indentation on the generated annulus (its n_r × n_theta mesh is the coarsest).
+    /// Adaptive static indentation or steady rolling: solve, estimate (Zienkiewicz–Zhu), mark
+    /// (Dörfler), refine with hanging nodes, transfer, repeat. Writes OUT/adapt.csv and
+    /// OUT/adapt.json (one row per mesh: cells, equations, hanging nodes, estimate, hub forces
+    /// and torque, times) and OUT/adapt_NNN.vtu (each mesh with its `error_indicator`). The
+    /// scene must be a static indentation or a steady rolling scene (`analysis.mode` "static"
+    /// or "steady") on the generated annulus (its n_r × n_theta mesh is the coarsest).
     Adapt {
         scene: PathBuf,
         /// Output directory (default: out/<scene name>_adapt/).
@@ -609,7 +610,12 @@ fn main() -> ExitCode {
                 match res {
                     Ok(steps) => {
                         if !cli.quiet {
-                            say(&adaptive::headline(&steps));
+                            let what = if s.analysis.mode == tread::io::scene::Mode::Steady {
+                                "adaptive steady rolling"
+                            } else {
+                                "adaptive indentation"
+                            };
+                            say(&adaptive::headline(what, &steps));
                         }
                         say(&format!(
                             "results written to {}",

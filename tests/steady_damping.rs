@@ -146,6 +146,68 @@ fn damped_steady_tangent_is_exact_in_both_modes_with_and_without_rings() {
     }
 }
 
+/// The system of [`tiny`] on the exact polar annulus with the cells below the axis refined
+/// once and one of their children once more: hanging nodes on the contact boundary and
+/// inside, no rings.
+fn tiny_refined() -> SteadyRolling {
+    let sc = scene(
+        ODEN,
+        "tiny",
+        &[
+            "analysis.mode=\"steady\"",
+            "mesh.n_r=1",
+            "mesh.n_theta=8",
+            "time.strain_rate_damping=3.0",
+            "motion.omega=20",
+            "road.v0=39",
+        ],
+    );
+    let root = tread::driver::adaptive::polar_root(&sc).unwrap_or_else(|e| panic!("{e}"));
+    let mut forest = tread::mesh::Forest::new(root).unwrap();
+    let below: Vec<usize> = (0..forest.leaves().len())
+        .filter(|&c| forest.root_point(c, 0.0, 0.0)[1] < 0.0)
+        .collect();
+    forest.refine(&below).unwrap();
+    forest.refine(&[below[0]]).unwrap();
+    let (mesh, _) = forest.mesh();
+    assert!(!mesh.constraints.is_empty() && mesh.rings.is_none());
+    let (material, pressure) = tread::setup::build_material(&sc).unwrap_or_else(|e| panic!("{e}"));
+    let mut model = tread::physics::SolidModel::new(mesh, material, sc.material.rho, pressure);
+    model.strain_rate_damping = 3.0;
+    let contact = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
+    let sys = tread::driver::SolidSystem::with_contact(model, contact);
+    let mut st = SteadyRolling::new(sys, 20.0, 2.0);
+    let mesh = st.sys.model.mesh.clone();
+    for nd in 0..mesh.n_nodes() {
+        let x = mesh.nodes[nd];
+        if st.sys.dofs.eq[2 * nd] < tread::assembly::CONSTRAINED {
+            let (r, th) = (x.norm(), x[1].atan2(x[0]));
+            st.sys.x[2 * nd] += 0.02 * (r - 1.0) * (th.sin() + 0.5 * (2.0 * th).cos());
+            st.sys.x[2 * nd + 1] += 0.03 * (r - 1.0) * (0.3 + th.cos() * th.cos()) + 0.01;
+        }
+    }
+    st.sys.dofs.apply_constraints(&mut st.sys.x);
+    if let Some(c) = st.sys.contact.as_mut() {
+        c.h = 1.97;
+    }
+    st
+}
+
+#[test]
+fn damped_frictional_steady_tangent_is_exact_with_hanging_nodes() {
+    let mut st = tiny_refined();
+    assert!(st.sys.dofs.has_constraints());
+    let (err_mf, corr) = fd_errors(&mut st);
+    st.sys
+        .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+    let (err_as, _) = fd_errors(&mut st);
+    println!(
+        "hanging nodes: FD error matrix-free {err_mf:.2e} (matrix-free part {corr:.2e}), assembled {err_as:.2e}"
+    );
+    assert!(err_mf < 1e-6 && err_as < 1e-6, "{err_mf:e} {err_as:e}");
+    assert!(corr > 1e-3, "{corr:e}");
+}
+
 fn hub_force(st: &SteadyRolling) -> (f64, f64) {
     let (f, _) = st.sys.hub_reaction();
     (f[0], f[1])

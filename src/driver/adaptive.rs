@@ -1,10 +1,17 @@
-//! Adaptive static indentation: solve → estimate → mark → refine → transfer, on a locally
-//! refined annulus with hanging nodes ([`crate::mesh::refine`]).
+//! Adaptive static indentation and adaptive steady rolling: solve → estimate → mark → refine →
+//! transfer, on a locally refined annulus with hanging nodes ([`crate::mesh::refine`]).
 //!
-//! 1. **Solve** the static indentation on the current mesh: by load stepping on the first mesh,
-//!    then by Newton at the full load from the transferred state (load stepping from scratch if
-//!    that fails). With friction the solution depends on the load path, so every mesh is solved
-//!    by load stepping from the undeformed state.
+//! 1. **Solve** on the current mesh.
+//!    * Static indentation (`analysis.mode = "static"`): by load stepping on the first mesh,
+//!      then by Newton at the full load from the transferred state (load stepping from scratch
+//!      if that fails). With friction the solution depends on the load path, so every mesh is
+//!      solved by load stepping from the undeformed state.
+//!    * Steady rolling (`analysis.mode = "steady"`): the θ-referential problem on the spatial
+//!      mesh, which does not turn with the body, so the refinement stays where the contact
+//!      patch is. The first mesh is solved like `tread run` solves it (press-in, recovery
+//!      strategies, the scene's rolling control); every later one by Newton at the full load
+//!      from the transferred steady state (which, unlike a static frictional state, does not
+//!      depend on a load path), then the rolling control; from scratch if that fails.
 //! 2. **Estimate** the energy error cell by cell ([`SolidEstimator`]): the Zienkiewicz–Zhu
 //!    recovery estimator by default, the interpolation estimator with recovered derivatives,
 //!    or the explicit residual with the contact traction as boundary data
@@ -23,21 +30,24 @@
 //!
 //! The root mesh is the scene's structured annulus with the exact polar cell map, so every
 //! refined cell lies exactly on the circles and the adaptive meshes converge to the true
-//! geometry. Static indentation only (no inertia, no history).
+//! geometry. No quadrature-point history (viscoelastic materials) is transferred: such scenes
+//! are refused.
 
 use super::indentation::{self, IndentationResults};
+use super::steady::SteadyRolling;
+use super::steady_run;
 use super::system::{Loading, SolidSystem};
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
-use crate::io::scene::Scene;
 use crate::io::scene::VtuFormat;
+use crate::io::scene::{Mode, Scene};
 use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::estimate;
 use crate::physics::SolidModel;
 use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
 use crate::solver::stepping::{LoadedSystem, StepReport};
-use crate::solver::Newton;
+use crate::solver::{Newton, NonlinearSystem, SolveError};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -132,6 +142,8 @@ pub struct AdaptStep {
     pub relative_estimate: f64,
     pub hub_force_x: f64,
     pub hub_force_y: f64,
+    /// Hub torque (the driving torque of steady rolling).
+    pub hub_torque: f64,
     /// Penetration DISP = Ro − H (the unknown of load control).
     pub penetration: f64,
     pub newton_iterations: usize,
@@ -145,7 +157,8 @@ pub fn polar_root(scene: &Scene) -> Result<Mesh, AppError> {
     let ms = &scene.mesh;
     if ms.file.is_some() {
         return Err(AppError::Unsupported(
-            "adaptive indentation refines the generated annulus ([mesh] n_r, n_theta), not a mesh file".into(),
+            "tread adapt refines the generated annulus ([mesh] n_r, n_theta), not a mesh file"
+                .into(),
         ));
     }
     Ok(annulus(&AnnulusSpec {
@@ -213,9 +226,107 @@ pub fn solve_static(
     Ok(report.total_iterations)
 }
 
-/// Displacement of `mesh` with state `x` at local point (ξ, η) of cell `c`.
-/// Run the adaptive loop on the scene (static indentation). `on_step` sees every solved mesh
-/// with its indicators; `out_dir` is where the caller writes (named in errors).
+/// The system an adaptive run solves on each mesh.
+enum Problem {
+    Static(SolidSystem),
+    Steady(Box<SteadyRolling>),
+}
+
+impl Problem {
+    /// The scene's problem on `mesh`.
+    fn build(scene: &Scene, mesh: Mesh) -> Result<Self, AppError> {
+        match scene.analysis.mode {
+            Mode::Steady => {
+                if scene.material.viscoelastic.is_some() {
+                    return Err(AppError::Unsupported(
+                        "tread adapt: the viscoelastic history lives on the rings of a \
+                         structured mesh; adaptive steady rolling takes elastic materials"
+                            .into(),
+                    ));
+                }
+                if scene.road.is_none() || scene.contact.is_none() {
+                    return Err(AppError::Unsupported(
+                        "tread adapt: steady rolling needs [road] and [contact]".into(),
+                    ));
+                }
+                let (material, pressure) = build_material(scene)?;
+                let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+                Ok(Self::Steady(Box::new(steady_run::steady_on(scene, model)?)))
+            }
+            _ => Ok(Self::Static(indentation_system(scene, mesh)?)),
+        }
+    }
+
+    fn sys(&self) -> &SolidSystem {
+        match self {
+            Self::Static(s) => s,
+            Self::Steady(st) => &st.sys,
+        }
+    }
+
+    fn sys_mut(&mut self) -> &mut SolidSystem {
+        match self {
+            Self::Static(s) => s,
+            Self::Steady(st) => &mut st.sys,
+        }
+    }
+
+    fn into_sys(self) -> SolidSystem {
+        match self {
+            Self::Static(s) => s,
+            Self::Steady(st) => st.sys,
+        }
+    }
+
+    /// Solve on the current mesh (see the module docs); `warm`: start from the current,
+    /// transferred state; `cold`: the state as built, to fall back to. Returns the Newton
+    /// iterations.
+    fn solve(
+        &mut self,
+        scene: &Scene,
+        warm: bool,
+        cold: &[f64],
+        out_dir: &Path,
+    ) -> Result<usize, AppError> {
+        match self {
+            Self::Static(sys) => solve_static(scene, sys, warm, Some(cold), out_dir),
+            Self::Steady(st) => solve_rolling(scene, st, warm, cold, out_dir),
+        }
+    }
+}
+
+/// Steady rolling on one mesh of the adaptive sequence: Newton at the full load from the
+/// current state when `warm` (else, or if that fails, the whole steady solve from `cold`), then
+/// the scene's rolling control.
+fn solve_rolling(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    warm: bool,
+    cold: &[f64],
+    out_dir: &Path,
+) -> Result<usize, AppError> {
+    let fail = |e: SolveError| AppError::Solve(e, out_dir.to_path_buf());
+    let mut report = StepReport::default();
+    let mut solved = false;
+    if warm {
+        match steady_run::press_once(scene, st, false, &mut report, &mut ()) {
+            Ok(()) => solved = true,
+            Err(e @ SolveError::Interrupted { .. }) => return Err(fail(e)),
+            Err(_) => st.sys.restore_state(cold),
+        }
+    }
+    if !solved {
+        steady_run::solve_steady(scene, st, false, &mut report, &mut ()).map_err(fail)?;
+    }
+    let control = steady_run::apply_control(scene, st, false).map_err(fail)?;
+    Ok(report.total_iterations
+        + control.newton_iterations
+        + st.recovery.as_ref().map_or(0, |r| r.newton_iterations))
+}
+
+/// Run the adaptive loop on the scene (static indentation or steady rolling). `on_step` sees
+/// every solved mesh with its indicators; `out_dir` is where the caller writes (named in
+/// errors).
 pub fn run(
     scene: &Scene,
     opts: &AdaptOptions,
@@ -224,25 +335,26 @@ pub fn run(
 ) -> Result<(SolidSystem, Vec<AdaptStep>), AppError> {
     if !(opts.coarsen.is_finite() && opts.coarsen >= 0.0) {
         return Err(AppError::Unsupported(format!(
-            "adaptive indentation: the coarsening fraction must be >= 0, got {}",
+            "tread adapt: the coarsening fraction must be >= 0, got {}",
             opts.coarsen
         )));
     }
     if !(opts.fraction > 0.0 && opts.fraction <= 1.0) {
         return Err(AppError::Unsupported(format!(
-            "adaptive indentation: the Dörfler fraction must be in (0, 1], got {}",
+            "tread adapt: the Dörfler fraction must be in (0, 1], got {}",
             opts.fraction
         )));
     }
-    if scene.analysis.mode != crate::io::scene::Mode::Static {
+    if !matches!(scene.analysis.mode, Mode::Static | Mode::Steady) {
         return Err(AppError::Unsupported(format!(
-            "adaptive indentation needs analysis.mode = \"static\" (the scene's is \"{}\")",
+            "tread adapt needs analysis.mode = \"static\" (indentation) or \"steady\" \
+             (steady rolling); the scene's is \"{}\"",
             scene.analysis.mode
         )));
     }
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
-        .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+        .map_err(|e| AppError::Unsupported(format!("tread adapt: {e}")))?;
     // The uniform refinements must not outgrow --max-dofs (2 p² equations per cell, roughly).
     let degree = forest.root.degree.first().copied().unwrap_or(1) as usize;
     let cells = 4usize
@@ -251,7 +363,7 @@ pub fn run(
     let estimate = cells.and_then(|c| c.checked_mul(2 * degree * degree));
     if estimate.is_none_or(|e| e > opts.max_dofs) {
         return Err(AppError::Unsupported(format!(
-            "adaptive indentation: {} uniform refinements of the {}-cell mesh give about {} equations, more than the limit of {} (--max-dofs)",
+            "tread adapt: {} uniform refinements of the {}-cell mesh give about {} equations, more than the limit of {} (--max-dofs)",
             opts.uniform,
             forest.leaves().len(),
             estimate.map_or("too many".to_string(), |e| e.to_string()),
@@ -262,17 +374,18 @@ pub fn run(
         let all: Vec<usize> = (0..forest.leaves().len()).collect();
         forest
             .refine(&all)
-            .map_err(|e| AppError::Unsupported(format!("adaptive indentation: {e}")))?;
+            .map_err(|e| AppError::Unsupported(format!("tread adapt: {e}")))?;
     }
     let (mut mesh, _) = forest.mesh();
-    let mut sys = indentation_system(scene, mesh.clone())?;
+    let mut problem = Problem::build(scene, mesh.clone())?;
     let mut steps = Vec::new();
     let mut warm = false;
-    let mut cold = sys.x.clone();
+    let mut cold = problem.sys().x.clone();
     let mut coarsened = 0;
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let iterations = solve_static(scene, &mut sys, warm, Some(&cold), out_dir)?;
+        let iterations = problem.solve(scene, warm, &cold, out_dir)?;
+        let sys = problem.sys();
         let est = match opts.estimator {
             SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
             SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
@@ -297,12 +410,13 @@ pub fn run(
             relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
             hub_force_x: r.hub_force_x,
             hub_force_y: r.hub_force_y,
+            hub_torque: r.hub_torque,
             penetration: r.penetration,
             newton_iterations: iterations,
             wall_step_s: ts.elapsed().as_secs_f64(),
             wall_total_s: t0.elapsed().as_secs_f64(),
         };
-        on_step(&sys, &rec, &est.indicators);
+        on_step(sys, &rec, &est.indicators);
         let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
         steps.push(rec);
         if done {
@@ -332,7 +446,7 @@ pub fn run(
             Default::default()
         };
         let old_forest = forest.clone();
-        let adapt_err = |e| AppError::Unsupported(format!("adaptive indentation: {e}"));
+        let adapt_err = |e| AppError::Unsupported(format!("tread adapt: {e}"));
         forest.refine(&marked).map_err(adapt_err)?;
         coarsened = 0;
         if !small.is_empty() {
@@ -342,32 +456,38 @@ pub fn run(
             coarsened = forest.coarsen(&merge).map_err(adapt_err)?;
         }
         let (new_mesh, origin) = forest.mesh();
-        let mut next = indentation_system(scene, new_mesh.clone())?;
-        if next.n_dofs() > opts.max_dofs {
+        let mut next_problem = Problem::build(scene, new_mesh.clone())?;
+        if next_problem.sys().n_dofs() > opts.max_dofs {
             break;
         }
         // Transfer: the displacements, and the global unknowns (the road height under load
         // control).
+        let next = next_problem.sys_mut();
         cold = next.x.clone();
+        let mut x = next.x.clone();
         for k in 0..next.dofs.n_global.min(sys.dofs.n_global) {
-            next.x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
+            x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
         }
         for (node, &(root, xi, eta)) in origin.iter().enumerate() {
             if let Some((leaf, (a, b))) = old_forest.locate(root, xi, eta) {
                 let u = vector_at(&mesh, &sys.x, leaf, a, b);
-                next.x[2 * node] = u[0];
-                next.x[2 * node + 1] = u[1];
+                x[2 * node] = u[0];
+                x[2 * node + 1] = u[1];
             }
         }
-        next.dofs.apply_constraints(&mut next.x);
-        sys = next;
+        next.dofs.apply_constraints(&mut x);
+        next.restore_state(&x);
+        problem = next_problem;
         mesh = new_mesh;
         // Friction makes the static solution depend on the load path (the stick anchors are
         // committed load step by load step): such a scene is solved by load stepping on every
-        // mesh, not from the transferred state at the full load.
-        warm = !sys.contact.as_ref().is_some_and(|c| c.friction.is_active());
+        // mesh, not from the transferred state at the full load. A steady state has no path.
+        warm = match &problem {
+            Problem::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
+            Problem::Steady(_) => true,
+        };
     }
-    Ok((sys, steps))
+    Ok((problem.into_sys(), steps))
 }
 
 /// The leaves of the families (four sibling leaves, none in `marked`) whose predicted parent
@@ -411,12 +531,12 @@ fn coarsening_candidates(
 pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
     ensure_dir(dir)?;
     let mut csv = String::from(
-        "step,cells,dofs,hanging_nodes,max_level,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,penetration,newton_iterations,wall_step_s,wall_total_s\n",
+        "step,cells,dofs,hanging_nodes,max_level,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,hub_torque,penetration,newton_iterations,wall_step_s,wall_total_s\n",
     );
     for s in steps {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
+            "{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
             s.step,
             s.cells,
             s.dofs,
@@ -427,6 +547,7 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             s.relative_estimate,
             s.hub_force_x,
             s.hub_force_y,
+            s.hub_torque,
             s.penetration,
             s.newton_iterations,
             s.wall_step_s,
@@ -463,11 +584,11 @@ pub fn write_vtu(dir: &Path, step: usize, sys: &SolidSystem) -> Result<(), Outpu
     .map_err(|source| OutputError { path, source })
 }
 
-/// One line on the last mesh.
-pub fn headline(steps: &[AdaptStep]) -> String {
+/// One line on the last mesh (`what`: "adaptive indentation", "adaptive steady rolling").
+pub fn headline(what: &str, steps: &[AdaptStep]) -> String {
     match steps.last() {
         Some(s) => format!(
-            "adaptive indentation: {} meshes, last {} cells, {} equations ({} hanging nodes, level {}), estimate {:.3e} ({:.3e} relative), hub force = ({:.6e}, {:.6e})",
+            "{what}: {} meshes, last {} cells, {} equations ({} hanging nodes, level {}), estimate {:.3e} ({:.3e} relative), hub force = ({:.6e}, {:.6e}), torque {:.6e}",
             steps.len(),
             s.cells,
             s.dofs,
@@ -476,8 +597,9 @@ pub fn headline(steps: &[AdaptStep]) -> String {
             s.estimate,
             s.relative_estimate,
             s.hub_force_x,
-            s.hub_force_y
+            s.hub_force_y,
+            s.hub_torque
         ),
-        None => "adaptive indentation: no mesh solved".into(),
+        None => format!("{what}: no mesh solved"),
     }
 }

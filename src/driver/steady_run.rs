@@ -41,6 +41,7 @@ use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
 use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
+use crate::physics::SolidModel;
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
@@ -320,7 +321,12 @@ pub fn wave_number(sys: &SolidSystem) -> f64 {
 
 /// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).
 pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
-    let mut model = build_model(scene)?;
+    steady_on(scene, build_model(scene)?)
+}
+
+/// The scene's steady system on `model`, whose mesh may differ from the scene's (an adaptively
+/// refined one).
+pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, AppError> {
     model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
     let mut sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
@@ -364,19 +370,13 @@ pub fn solve_steady(
             rec,
         );
     }
-    let loading = match scene.road.as_ref().and_then(|r| r.load) {
-        Some(load) => Loading::Load { load },
-        None => Loading::Indent {
-            h_touch: scene.geometry.ro,
-            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
-        },
-    };
+    let loading = scene_loading(scene);
     let mut x_init = Vec::new();
     st.sys.save_state(&mut x_init);
     st.recovery = None;
     st.eps_continuation = None;
     st.coarse_start = None;
-    if let Some(cs) = coarse_start(scene, st, loading, kind, &newton_opts, verbose, report, rec)? {
+    if let Some(cs) = coarse_start(scene, st, verbose, report, rec)? {
         let ok = cs.succeeded;
         st.coarse_start = Some(cs);
         if ok {
@@ -481,6 +481,44 @@ pub fn solve_steady(
     }
 }
 
+/// The road of a scene: its load (load control) or its penetration (displacement control).
+pub fn scene_loading(scene: &Scene) -> Loading {
+    match scene.road.as_ref().and_then(|r| r.load) {
+        Some(load) => Loading::Load { load },
+        None => Loading::Indent {
+            h_touch: scene.geometry.ro,
+            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+        },
+    }
+}
+
+/// Newton at the full load from the current state (an interpolated steady state), without
+/// load steps or cutbacks; the load steps and iterations go into `report`.
+pub fn press_once(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    verbose: bool,
+    report: &mut StepReport,
+    rec: &mut dyn Recorder,
+) -> Result<(), SolveError> {
+    let kind = linear_kind(scene, &st.sys);
+    let (newton_opts, _) = crate::setup::solver_options(scene, verbose);
+    let once = StepOptions {
+        initial_steps: 1,
+        max_cutbacks: 0,
+        verbose,
+    };
+    press(
+        st,
+        scene_loading(scene),
+        kind,
+        newton_opts,
+        &once,
+        report,
+        rec,
+    )
+}
+
 /// The scene on the mesh with half the cells in r and in θ, when [`coarse_start`] applies:
 /// `[solver] coarse_start`, a generated annulus with n_r even ≥ 4 and n_theta a multiple of 4
 /// ≥ 64 (the coarse mesh keeps n_theta even and ≥ 32).
@@ -513,9 +551,6 @@ fn coarse_scene(scene: &Scene) -> Option<Scene> {
 fn coarse_start(
     scene: &Scene,
     st: &mut SteadyRolling,
-    loading: Loading,
-    kind: LinearKind,
-    newton_opts: &crate::solver::NewtonOptions,
     verbose: bool,
     report: &mut StepReport,
     rec: &mut dyn Recorder,
@@ -577,21 +612,8 @@ fn coarse_start(
             out.coarse_wall_time_s
         );
     }
-    let once = StepOptions {
-        initial_steps: 1,
-        max_cutbacks: 0,
-        verbose,
-    };
     let mut frep = StepReport::default();
-    let res = press(
-        st,
-        loading,
-        kind,
-        newton_opts.clone(),
-        &once,
-        &mut frep,
-        rec,
-    );
+    let res = press_once(scene, st, verbose, &mut frep, rec);
     out.newton_iterations = frep.total_iterations;
     match res {
         Ok(()) => {

@@ -18,7 +18,7 @@
 //! nodes are fixed and carry no equation.
 
 use super::terms::{CellForces, CellRate, Rates, Terms};
-use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, CONSTRAINED};
+use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, CONSTRAINED, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::physics::viscoelastic_steady::RingError;
@@ -593,11 +593,21 @@ impl SolidSystem {
             }
             for r in 0..nu {
                 let e = self.dofs.eq[cd[r] as usize];
-                if e >= CONSTRAINED {
+                if e == FIXED {
                     continue;
                 }
                 let y: f64 = (0..nu).map(|s| a[r * nu + s] * diff[s]).sum();
-                out[e as usize] += y;
+                if e < CONSTRAINED {
+                    out[e as usize] += y;
+                } else {
+                    // A hanging node's row goes to its free masters with their weights (Cᵀ).
+                    for &(m, w) in self.dofs.expansion(cd[r]).unwrap_or(&[]) {
+                        let em = self.dofs.eq[m as usize];
+                        if em < CONSTRAINED {
+                            out[em as usize] += w * y;
+                        }
+                    }
+                }
             }
         }
     }
