@@ -106,12 +106,8 @@ fn adaptive_steady_rolling_beats_uniform_refinement() {
     assert_eq!(steps.len(), 6);
     assert!(last.hanging_nodes > 0 && sys.dofs.has_constraints());
     assert!(last.dofs < n_uniform, "{} vs {n_uniform}", last.dofs);
-    for k in 0..3 {
-        assert!(
-            e_ad[k] < 3e-3,
-            "component {k}: adaptive error {:.3e}",
-            e_ad[k]
-        );
+    for (k, e) in e_ad.iter().enumerate() {
+        assert!(*e < 3e-3, "component {k}: adaptive error {e:.3e}");
     }
     // Force x and torque (the rolling resistance): several times closer than the uniform mesh
     // with more equations.

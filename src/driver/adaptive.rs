@@ -228,7 +228,7 @@ pub fn solve_static(
 
 /// The system an adaptive run solves on each mesh.
 enum Problem {
-    Static(SolidSystem),
+    Static(Box<SolidSystem>),
     Steady(Box<SteadyRolling>),
 }
 
@@ -253,27 +253,27 @@ impl Problem {
                 let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
                 Ok(Self::Steady(Box::new(steady_run::steady_on(scene, model)?)))
             }
-            _ => Ok(Self::Static(indentation_system(scene, mesh)?)),
+            _ => Ok(Self::Static(Box::new(indentation_system(scene, mesh)?))),
         }
     }
 
     fn sys(&self) -> &SolidSystem {
         match self {
-            Self::Static(s) => s,
+            Self::Static(s) => s.as_ref(),
             Self::Steady(st) => &st.sys,
         }
     }
 
     fn sys_mut(&mut self) -> &mut SolidSystem {
         match self {
-            Self::Static(s) => s,
+            Self::Static(s) => s.as_mut(),
             Self::Steady(st) => &mut st.sys,
         }
     }
 
     fn into_sys(self) -> SolidSystem {
         match self {
-            Self::Static(s) => s,
+            Self::Static(s) => *s,
             Self::Steady(st) => st.sys,
         }
     }
@@ -398,7 +398,7 @@ pub fn run(
             ),
         };
         let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
-        let r: IndentationResults = indentation::results(&sys, scene.geometry.ro);
+        let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
         let rec = AdaptStep {
             step,
             cells: mesh.n_cells(),
