@@ -7,6 +7,7 @@ mod fixtures;
 use fixtures::*;
 
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
 use tread::driver::SolidSystem;
 use tread::material::{ViscoModel, Viscoelastic};
@@ -276,23 +277,127 @@ fn viscoelastic_scene_rolls_to_steady_state() {
     );
 }
 
-/// Modes and integrators without a history path refuse a viscoelastic material with a clear
-/// error instead of silently dropping the overstress.
+/// Modes without a history path refuse a viscoelastic material with a clear error instead of
+/// silently dropping the overstress.
 #[test]
 fn unsupported_modes_refuse_viscoelastic_materials() {
-    let text = scene_text("scenarios/viscoelastic_rolling.toml");
-    for (set, needle) in [
-        (vec!["time.integrator=bdf"], "time.integrator"),
-        (vec!["time.integrator=sdirk"], "time.integrator"),
+    let section = "\n[material.viscoelastic]\nmodel = \"convolution\"\ngamma = 200.0\n\
+                   prony = [[1.0, 0.03]]\n";
+    for (file, mode) in [
+        ("scenarios/spinning_neo_hookean.toml", "spinning"),
+        ("scenarios/indentation_frictionless.toml", "static"),
     ] {
-        let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        let scene = tread::io::Scene::from_toml_str(&text, "v", &set).unwrap();
+        let text = scene_text(file) + section;
+        let scene = tread::io::Scene::from_toml_str(&text, file, &[])
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
         let e = tread::app::build_model(&scene).err().expect("refused");
         let msg = e.to_string();
         assert!(
-            msg.contains("material.viscoelastic") && msg.contains(needle),
+            msg.contains("material.viscoelastic") && msg.contains(mode),
             "{msg}"
         );
+    }
+}
+
+/// u at t_end of the viscoelastic spin-up with diffsol's BDF or SDIRK at relative tolerance
+/// `rtol` (strain-rate damping η = 1 as in the first-order tests: BDF's high orders need it).
+fn spin_up_first_order(
+    method: OdeMethod,
+    model: ViscoModel,
+    viscous: bool,
+    rtol: f64,
+    t_end: f64,
+) -> Vec<f64> {
+    let mut m = if viscous {
+        visco_annulus(2, 16, model)
+    } else {
+        neo_hookean_annulus(2, 16)
+    };
+    m.strain_rate_damping = 1.0;
+    let mut tr = Transient::new(
+        SolidSystem::new(m, "hub"),
+        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        spin_kinematics(20.0, 0.03),
+        false,
+    );
+    let o = TimeOptions {
+        dt: 1e-5,
+        dt_min: 1e-12,
+        dt_max: f64::INFINITY,
+        adaptive: true,
+        ..opts(1e-5, t_end)
+    };
+    let tol = OdeTolerances {
+        rtol,
+        atol_u: rtol * 1e-2,
+        atol_v: rtol * 0.2,
+    };
+    integrate_first_order(&mut tr, method, &o, tol, |_, _| {})
+        .unwrap_or_else(|(e, _)| panic!("{e}"));
+    assert!((tr.state.t - t_end).abs() < 1e-12);
+    tr.state.u.clone()
+}
+
+/// The same spin-up with generalized-α (ρ∞ = 1) at a small fixed step, η = 1.
+fn spin_up_reference(model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
+    let mut m = visco_annulus(2, 16, model);
+    m.strain_rate_damping = 1.0;
+    let mut tr = Transient::new(
+        SolidSystem::new(m, "hub"),
+        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        spin_kinematics(20.0, 0.03),
+        false,
+    );
+    integrate(
+        &mut tr,
+        &opts(dt, t_end),
+        newton_opts(),
+        LinearKind::Cholesky,
+        |_, _| {},
+    )
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
+    tr.state.u.clone()
+}
+
+/// BDF and SDIRK carry the history: as their tolerance tightens they converge to the
+/// generalized-α solution at a small step (second order, independent code path: the one-step
+/// Newmark loop), and the overstress matters (the elastic solution is far from both).
+#[test]
+fn first_order_integrators_carry_the_history() {
+    let t_end = 0.04;
+    for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+        let reference = spin_up_reference(model, 1e-3 / 64.0, t_end);
+        let rel = |u: &[f64]| {
+            let n = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
+            u.iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum::<f64>()
+                .sqrt()
+                / n
+        };
+        let elastic = rel(&spin_up_first_order(
+            OdeMethod::Bdf,
+            model,
+            false,
+            1e-7,
+            t_end,
+        ));
+        for method in [OdeMethod::Bdf, OdeMethod::Esdirk34] {
+            let errs: Vec<f64> = [1e-4, 1e-6, 1e-8]
+                .iter()
+                .map(|&r| rel(&spin_up_first_order(method, model, true, r, t_end)))
+                .collect();
+            eprintln!(
+                "{model:?}, {}: errors against generalized-α {:?} (rtol 1e-4, 1e-6, 1e-8); \
+                 the elastic solution is {elastic:.2e} away",
+                method.name(),
+                errs.iter().map(|e| format!("{e:.2e}")).collect::<Vec<_>>()
+            );
+            assert!(errs[2] < 2e-4, "{model:?} {}: {errs:?}", method.name());
+            assert!(errs[2] < errs[0], "{model:?} {}: {errs:?}", method.name());
+            assert!(elastic > 50.0 * errs[2], "{elastic:e} vs {errs:?}");
+        }
     }
 }
 

@@ -14,6 +14,7 @@ impl IntegratorSpec for Bdf {
     const ABOUT: &'static str =
         "Variable-order BDF on the first-order form `y = (u, v)` (diffsol), \
         with its own error control.";
+    const HISTORY: bool = true;
 
     fn scheme(rho_inf: f64) -> Scheme {
         // Not stepped by the one-step loop; the model's Newton system is unused.

@@ -13,6 +13,7 @@ impl IntegratorSpec for Sdirk {
     const NAME: &'static str = "sdirk";
     const ABOUT: &'static str = "SDIRK on the first-order form `y = (u, v)` (diffsol), with its \
         own error control.";
+    const HISTORY: bool = true;
 
     fn scheme(rho_inf: f64) -> Scheme {
         Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
