@@ -12,10 +12,10 @@ use fixtures::*;
 
 use nalgebra::Matrix3;
 use tread::driver::transient::hht_alpha::hht_parameters;
-use tread::driver::transient::{integrate, GenAlpha, IntegratorName, TimeOptions, Transient};
+use tread::driver::transient::{integrate, GenAlpha, IntegratorName, Transient};
 use tread::driver::SolidSystem;
 use tread::io::scene::Scene;
-use tread::solver::{LinearKind, NewtonOptions};
+use tread::solver::LinearKind;
 
 /// Amplification matrix of (u, h v, h² a) for ü + ω² u = 0, Ω = ω h, of the step
 /// (1 − αm) a₁ + αm a₀ + Ω²/h² [(1 − αf) u₁ + αf u₀] = 0 with the Newmark relations.
@@ -102,22 +102,6 @@ fn hht_parameters_have_the_classical_properties() {
     );
 }
 
-fn opts(dt: f64, t_end: f64) -> TimeOptions {
-    TimeOptions {
-        dt,
-        dt_min: dt,
-        dt_max: dt,
-        t_end,
-        adaptive: false,
-        error_tol: 1e-4,
-        steady_tol: 1e-12,
-        stop_at_steady: false,
-        max_steps: 1_000_000,
-        lumped: false,
-        land_on_passages: false,
-    }
-}
-
 /// u at t_end of a spin-up from rest (ramp to 20 rad/s over 0.03 s, no contact) with the
 /// registered integrator's scheme.
 fn spin_up(rho: f64, dt: f64, t_end: f64) -> Vec<f64> {
@@ -127,15 +111,10 @@ fn spin_up(rho: f64, dt: f64, t_end: f64) -> Vec<f64> {
         spin_kinematics(20.0, 0.03),
         false,
     );
-    let newton = NewtonOptions {
-        tol: 1e-11,
-        max_iterations: 20,
-        ..Default::default()
-    };
     integrate(
         &mut tr,
-        &opts(dt, t_end),
-        newton,
+        &fixed_step_options(dt, t_end),
+        tight_newton_options(),
         LinearKind::Cholesky,
         |_, _| {},
     )

@@ -8,34 +8,10 @@ use fixtures::*;
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::spinning::solve_spinning;
-use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
+use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, Transient};
 use tread::driver::SolidSystem;
 use tread::solver::stepping::{StepOptions, StepReport};
-use tread::solver::{LinearKind, NewtonOptions, NonlinearSystem};
-
-fn opts(dt: f64, t_end: f64) -> TimeOptions {
-    TimeOptions {
-        dt,
-        dt_min: dt,
-        dt_max: dt,
-        t_end,
-        adaptive: false,
-        error_tol: 1e-4,
-        steady_tol: 1e-12,
-        stop_at_steady: false,
-        max_steps: 1_000_000,
-        lumped: false,
-        land_on_passages: false,
-    }
-}
-
-fn newton_opts() -> NewtonOptions {
-    NewtonOptions {
-        tol: 1e-11,
-        max_iterations: 20,
-        ..Default::default()
-    }
-}
+use tread::solver::{LinearKind, NonlinearSystem};
 
 #[test]
 fn time_step_tangent_matches_finite_differences() {
@@ -154,8 +130,8 @@ fn rigid_spin_run(
     let mut max_strain_change = 0.0f64;
     let rep = integrate(
         &mut tr,
-        &opts(dt, revs as f64 * period),
-        newton_opts(),
+        &fixed_step_options(dt, revs as f64 * period),
+        tight_newton_options(),
         if damping > 0.0 {
             LinearKind::Lu
         } else {
@@ -231,8 +207,8 @@ fn spin_up(scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
     );
     integrate(
         &mut tr,
-        &opts(dt, t_end),
-        newton_opts(),
+        &fixed_step_options(dt, t_end),
+        tight_newton_options(),
         LinearKind::Cholesky,
         |_, _| {},
     )
@@ -293,9 +269,15 @@ fn spin_up_reproduces_steady_spinning() {
         spin_kinematics(omega, 0.3),
         false,
     );
-    let o = opts(2e-3, 0.4);
-    integrate(&mut tr, &o, newton_opts(), LinearKind::Cholesky, |_, _| {})
-        .unwrap_or_else(|(e, _)| panic!("{e}"));
+    let o = fixed_step_options(2e-3, 0.4);
+    integrate(
+        &mut tr,
+        &o,
+        tight_newton_options(),
+        LinearKind::Cholesky,
+        |_, _| {},
+    )
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
     // Compare rotation-invariant quantities: the radial displacement |X + u| − |X| of every
     // node (a residual torsional oscillation after the ramp only turns the body).
     let mesh = &tr.sys.model.mesh;
@@ -322,7 +304,7 @@ fn spin_up_reproduces_steady_spinning() {
         &mut st,
         omega,
         LinearKind::Cholesky,
-        newton_opts(),
+        tight_newton_options(),
         &StepOptions {
             initial_steps: 2,
             max_cutbacks: 4,
@@ -406,8 +388,9 @@ fn central_difference_stable_step_includes_damping_and_contact() {
     assert!(dt_new < 0.5 * dt_plain, "{dt_new:.3e} vs {dt_plain:.3e}");
     // March `steps` explicit steps of `dt` from rest with the road 0.02 in deep.
     let march = |tr: &mut Transient, dt: f64, steps: usize| -> Result<f64, String> {
-        let mut newton = tread::solver::Newton::new(&tr.sys, LinearKind::Lu, newton_opts())
-            .map_err(|e| e.to_string())?;
+        let mut newton =
+            tread::solver::Newton::new(&tr.sys, LinearKind::Lu, tight_newton_options())
+                .map_err(|e| e.to_string())?;
         for _ in 0..steps {
             tr.step(&mut newton, dt).map_err(|e| e.to_string())?;
         }
@@ -447,13 +430,13 @@ fn passages_landed_on_are_counted_at_that_step() {
     tr.start_rigid_spin(omega, LinearKind::Cholesky, None)
         .unwrap();
     let dtheta = 2.0 * std::f64::consts::PI / 16.0;
-    let mut o = opts(dtheta / omega / 7.0, 0.6);
+    let mut o = fixed_step_options(dtheta / omega / 7.0, 0.6);
     o.land_on_passages = true;
     let mut seen = Vec::new();
     let rep = integrate(
         &mut tr,
         &o,
-        newton_opts(),
+        tight_newton_options(),
         LinearKind::Cholesky,
         |tr, rep| seen.push((tr.state.t, rep.passages)),
     )
@@ -510,15 +493,19 @@ fn rejected_steps_leave_no_trace() {
             )
         };
         let mut tr = build();
-        let mut o = opts(0.01, 0.08);
+        let mut o = fixed_step_options(0.01, 0.08);
         o.adaptive = true;
         o.dt_min = 1e-6;
         o.dt_max = 0.02;
         o.error_tol = 1e-5;
         let mut accepted = Vec::new();
-        let rep = integrate(&mut tr, &o, newton_opts(), LinearKind::Lu, |tr, _| {
-            accepted.push(tr.state.t)
-        })
+        let rep = integrate(
+            &mut tr,
+            &o,
+            tight_newton_options(),
+            LinearKind::Lu,
+            |tr, _| accepted.push(tr.state.t),
+        )
         .unwrap_or_else(|(e, _)| panic!("{e}"));
         assert!(
             rep.rejected > 0,
@@ -526,7 +513,8 @@ fn rejected_steps_leave_no_trace() {
         );
         let mut replay = build();
         let mut newton =
-            tread::solver::Newton::new(&replay.sys, LinearKind::Lu, newton_opts()).unwrap();
+            tread::solver::Newton::new(&replay.sys, LinearKind::Lu, tight_newton_options())
+                .unwrap();
         for &t1 in &accepted {
             let dt = t1 - replay.state.t;
             replay.step(&mut newton, dt).unwrap();

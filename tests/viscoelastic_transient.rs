@@ -14,30 +14,6 @@ use tread::material::{ViscoModel, Viscoelastic};
 use tread::physics::SolidModel;
 use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};
 
-fn opts(dt: f64, t_end: f64) -> TimeOptions {
-    TimeOptions {
-        dt,
-        dt_min: dt,
-        dt_max: dt,
-        t_end,
-        adaptive: false,
-        error_tol: 1e-4,
-        steady_tol: 1e-12,
-        stop_at_steady: false,
-        max_steps: 1_000_000,
-        lumped: false,
-        land_on_passages: false,
-    }
-}
-
-fn newton_opts() -> NewtonOptions {
-    NewtonOptions {
-        tol: 1e-11,
-        max_iterations: 20,
-        ..Default::default()
-    }
-}
-
 /// Neo-Hookean annulus (G∞ = 200) with a two-term overstress (instantaneous extra shear
 /// modulus 150) of the given model.
 fn visco_annulus(n_r: usize, n_theta: usize, model: ViscoModel) -> SolidModel {
@@ -151,7 +127,7 @@ fn history_is_committed_only_on_convergence() {
         },
     )
     .unwrap();
-    let mut good = Newton::new(&tr.sys, LinearKind::Cholesky, newton_opts()).unwrap();
+    let mut good = Newton::new(&tr.sys, LinearKind::Cholesky, tight_newton_options()).unwrap();
     for _ in 0..5 {
         tr.step(&mut good, 1e-3).unwrap();
     }
@@ -190,8 +166,8 @@ fn spin_up(scheme: Scheme, model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
     );
     integrate(
         &mut tr,
-        &opts(dt, t_end),
-        newton_opts(),
+        &fixed_step_options(dt, t_end),
+        tight_newton_options(),
         LinearKind::Cholesky,
         |_, _| {},
     )
@@ -325,7 +301,7 @@ fn spin_up_first_order(
         dt_min: 1e-12,
         dt_max: f64::INFINITY,
         adaptive: true,
-        ..opts(1e-5, t_end)
+        ..fixed_step_options(1e-5, t_end)
     };
     let tol = OdeTolerances {
         rtol,
@@ -350,8 +326,8 @@ fn spin_up_reference(model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
     );
     integrate(
         &mut tr,
-        &opts(dt, t_end),
-        newton_opts(),
+        &fixed_step_options(dt, t_end),
+        tight_newton_options(),
         LinearKind::Cholesky,
         |_, _| {},
     )

@@ -3,11 +3,12 @@
 //! `fixtures::tempdir`, the scratch-directory guard of `tempdir.rs`).
 
 use tread::app::{run, RunOptions};
-use tread::driver::transient::{Kinematics, Ramp};
+use tread::driver::transient::{Kinematics, Ramp, TimeOptions};
 use tread::io::Scene;
 use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};
+use tread::solver::NewtonOptions;
 
 #[path = "tempdir.rs"]
 pub mod tempdir;
@@ -51,6 +52,32 @@ pub fn spin_kinematics(omega: f64, ramp: f64) -> Kinematics {
             target: 0.0,
             time: 0.0,
         },
+    }
+}
+
+/// Fixed steps `dt` to `t_end`: no step control, no landing on passages, no stop at steady.
+pub fn fixed_step_options(dt: f64, t_end: f64) -> TimeOptions {
+    TimeOptions {
+        dt,
+        dt_min: dt,
+        dt_max: dt,
+        t_end,
+        adaptive: false,
+        error_tol: 1e-4,
+        steady_tol: 1e-12,
+        stop_at_steady: false,
+        max_steps: 1_000_000,
+        lumped: false,
+        land_on_passages: false,
+    }
+}
+
+/// Newton to 1e-11, at most 20 iterations.
+pub fn tight_newton_options() -> NewtonOptions {
+    NewtonOptions {
+        tol: 1e-11,
+        max_iterations: 20,
+        ..Default::default()
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::integrator::{IntegratorSpec, Setup};
 use super::ode_first_order::{integrate_first_order, OdeMethod};
-use super::{GenAlpha, Scheme, Transient, TransientReport};
+use super::{Transient, TransientReport};
 use crate::solver::SolveError;
 
 /// The scene's `"bdf"`: [`integrate_first_order`] with [`OdeMethod::Bdf`].
@@ -15,11 +15,6 @@ impl IntegratorSpec for Bdf {
         "Variable-order BDF on the first-order form `y = (u, v)` (diffsol), \
         with its own error control.";
     const HISTORY: bool = true;
-
-    fn scheme(rho_inf: f64) -> Scheme {
-        // Not stepped by the one-step loop; the model's Newton system is unused.
-        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
-    }
 
     fn integrate(
         tr: &mut Transient,

@@ -2,12 +2,12 @@
 //! v_{n+1/2} = v_{n−1/2} + Δt a_n, u_{n+1} = u_n + Δt v_{n+1/2}. The step is bounded by a
 //! stable-step estimate ([`Transient::stable_step`]).
 
-use super::integrator::{IntegratorSpec, Setup};
-use super::{integrate, Scheme, Transient, TransientReport};
+use super::integrator::IntegratorSpec;
+use super::{Scheme, Transient};
 use crate::assembly::CONSTRAINED;
 use crate::solver::SolveError;
 
-/// The scene's `"central_difference"`: the one-step loop of [`integrate`], lumped mass.
+/// The scene's `"central_difference"`: the one-step loop of [`super::integrate`], lumped mass.
 pub struct CentralDifference;
 
 impl IntegratorSpec for CentralDifference {
@@ -19,14 +19,6 @@ impl IntegratorSpec for CentralDifference {
 
     fn scheme(_rho_inf: f64) -> Scheme {
         Scheme::CentralDifference
-    }
-
-    fn integrate(
-        tr: &mut Transient,
-        setup: &Setup,
-        on_step: &mut dyn FnMut(&Transient, &TransientReport),
-    ) -> Result<TransientReport, (SolveError, TransientReport)> {
-        integrate(tr, &setup.time, setup.newton.clone(), setup.linear, on_step)
     }
 }
 

@@ -13,11 +13,11 @@
 //! local error estimate e = (β − 1/6) Δt² (a_{n+1} − a_n) (Zienkiewicz–Xie) drives the
 //! adaptive step.
 
-use super::integrator::{IntegratorSpec, Setup};
-use super::{integrate, GenAlpha, Scheme, Transient, TransientReport};
+use super::integrator::IntegratorSpec;
+use super::{GenAlpha, Transient};
 use crate::solver::{Newton, SolveError};
 
-/// The scene's `"generalized_alpha"`: the one-step loop of [`integrate`] with [`GenAlpha`].
+/// The scene's `"generalized_alpha"`: the one-step loop of [`super::integrate`] with [`GenAlpha`].
 pub struct GeneralizedAlpha;
 
 impl IntegratorSpec for GeneralizedAlpha {
@@ -27,18 +27,6 @@ impl IntegratorSpec for GeneralizedAlpha {
         Implicit.";
     const TORQUE_CONTROL: bool = true;
     const HISTORY: bool = true;
-
-    fn scheme(rho_inf: f64) -> Scheme {
-        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
-    }
-
-    fn integrate(
-        tr: &mut Transient,
-        setup: &Setup,
-        on_step: &mut dyn FnMut(&Transient, &TransientReport),
-    ) -> Result<TransientReport, (SolveError, TransientReport)> {
-        integrate(tr, &setup.time, setup.newton.clone(), setup.linear, on_step)
-    }
 }
 
 impl Transient {

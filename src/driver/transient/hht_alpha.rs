@@ -13,11 +13,10 @@
 //! Hilber, Hughes & Taylor, Earthquake Eng. Struct. Dyn. 5 (1977) 283–292, written in the
 //! notation of Chung & Hulbert, J. Appl. Mech. 60 (1993) 371–375 (α_m = 0, α_f = α).
 
-use super::integrator::{IntegratorSpec, Setup};
-use super::{integrate, GenAlpha, Scheme, Transient, TransientReport};
-use crate::solver::SolveError;
+use super::integrator::IntegratorSpec;
+use super::{GenAlpha, Scheme};
 
-/// The scene's `"hht_alpha"`: the one-step loop of [`integrate`] with the HHT parameters.
+/// The scene's `"hht_alpha"`: the one-step loop of [`super::integrate`] with the HHT parameters.
 pub struct HhtAlpha;
 
 /// The HHT-α parameters for spectral radius at infinity `rho_inf` (clamped to [1/2, 1]).
@@ -43,13 +42,5 @@ impl IntegratorSpec for HhtAlpha {
 
     fn scheme(rho_inf: f64) -> Scheme {
         Scheme::GeneralizedAlpha(hht_parameters(rho_inf))
-    }
-
-    fn integrate(
-        tr: &mut Transient,
-        setup: &Setup,
-        on_step: &mut dyn FnMut(&Transient, &TransientReport),
-    ) -> Result<TransientReport, (SolveError, TransientReport)> {
-        integrate(tr, &setup.time, setup.newton.clone(), setup.linear, on_step)
     }
 }

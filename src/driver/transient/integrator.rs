@@ -2,7 +2,7 @@
 //! list of integrators is in [`super::registry`].
 
 use super::ode_first_order::OdeTolerances;
-use super::{Scheme, TimeOptions, Transient, TransientReport};
+use super::{integrate, GenAlpha, Scheme, TimeOptions, Transient, TransientReport};
 use crate::solver::{LinearKind, NewtonOptions, SolveError};
 
 /// Everything a run hands to an integrator besides the model: the step and stopping options,
@@ -33,16 +33,24 @@ pub trait IntegratorSpec {
     /// only by the integrators that have one).
     const RHO_INF_MIN: f64 = 0.0;
 
-    /// The one-step scheme the [`Transient`] model is built with (its Newton system).
-    fn scheme(rho_inf: f64) -> Scheme;
+    /// The one-step scheme the [`Transient`] model is built with (its Newton system). By
+    /// default generalized-α with `rho_inf`, which an integrator with its own loop (BDF, SDIRK)
+    /// leaves unused.
+    fn scheme(rho_inf: f64) -> Scheme {
+        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
+    }
 
     /// Integrate from the committed state to the end of the run, calling `on_step` after every
-    /// accepted step. On failure the model holds the last accepted step.
+    /// accepted step. On failure the model holds the last accepted step. By default the
+    /// one-step loop of [`integrate`] (passages, steady-state detection, step control) with
+    /// [`Self::scheme`]'s step.
     // The report of a failed run comes back with its error, once per run.
     #[allow(clippy::result_large_err)]
     fn integrate(
         tr: &mut Transient,
         setup: &Setup,
         on_step: &mut dyn FnMut(&Transient, &TransientReport),
-    ) -> Result<TransientReport, (SolveError, TransientReport)>;
+    ) -> Result<TransientReport, (SolveError, TransientReport)> {
+        integrate(tr, &setup.time, setup.newton.clone(), setup.linear, on_step)
+    }
 }

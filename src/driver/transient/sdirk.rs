@@ -3,7 +3,7 @@
 
 use super::integrator::{IntegratorSpec, Setup};
 use super::ode_first_order::{integrate_first_order, OdeMethod};
-use super::{GenAlpha, Scheme, Transient, TransientReport};
+use super::{Transient, TransientReport};
 use crate::solver::SolveError;
 
 /// The scene's `"sdirk"`: [`integrate_first_order`] with [`OdeMethod::Esdirk34`].
@@ -14,10 +14,6 @@ impl IntegratorSpec for Sdirk {
     const ABOUT: &'static str = "SDIRK on the first-order form `y = (u, v)` (diffsol), with its \
         own error control.";
     const HISTORY: bool = true;
-
-    fn scheme(rho_inf: f64) -> Scheme {
-        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
-    }
 
     fn integrate(
         tr: &mut Transient,
