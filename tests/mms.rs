@@ -10,7 +10,7 @@ use nalgebra::{Matrix2, Vector2};
 use tread::driver::SolidSystem;
 use tread::material::{Hyperelastic, Material, NeoHookean};
 use tread::math::v;
-use tread::mesh::{annulus, AnnulusSpec};
+use tread::mesh::{annulus, AnnulusSpec, Forest};
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, Newton, NewtonOptions};
 
@@ -50,6 +50,12 @@ fn exact_hess(x: Vector2<f64>) -> [[[f64; 2]; 2]; 2] {
 }
 
 fn errors(order: usize, n_r: usize, iso: bool) -> (f64, f64, usize) {
+    errors_on(order, n_r, iso, false)
+}
+
+/// As [`errors`]; with `refine_quadrant`, the cells of the quadrant x1, x2 > 0 are split once
+/// more (non-conforming: hanging nodes on the quadrant's edges, constrained to the coarse sides).
+fn errors_on(order: usize, n_r: usize, iso: bool, refine_quadrant: bool) -> (f64, f64, usize) {
     let mut mesh = annulus(&AnnulusSpec {
         ri: 1.0,
         ro: 2.0,
@@ -61,6 +67,18 @@ fn errors(order: usize, n_r: usize, iso: bool) -> (f64, f64, usize) {
     });
     if iso {
         mesh.make_isoparametric();
+    }
+    if refine_quadrant {
+        let mut forest = Forest::new(mesh).expect("forest");
+        let marked: Vec<usize> = (0..forest.leaves().len())
+            .filter(|&c| {
+                let x = forest.root_point(c, 0.0, 0.0);
+                x[0] > 0.0 && x[1] > 0.0
+            })
+            .collect();
+        forest.refine(&marked).expect("refine");
+        mesh = forest.mesh().0;
+        assert!(!mesh.constraints.is_empty());
     }
     let mat = Material::NeoHookean(NeoHookean::new(1.0, 2.0));
     let mut model = SolidModel::new(mesh, mat, 1.0, PressureMode::None);
@@ -162,4 +180,34 @@ fn q2_isoparametric_rates_l2_3_h1_2() {
     let (l2, h1) = *r.last().unwrap();
     assert!((l2 - 3.0).abs() <= 0.15, "Q2 iso L2 rate {l2}");
     assert!((h1 - 2.0).abs() <= 0.15, "Q2 iso H1 rate {h1}");
+}
+
+#[test]
+fn q2_rates_unchanged_by_non_conforming_refinement() {
+    // One quadrant refined once more at every level: hanging nodes on its edges, constrained to
+    // the coarse sides; the rates stay those of Q2 and the errors do not grow.
+    let levels = [2, 4, 8];
+    let refined: Vec<(f64, f64, usize)> = levels
+        .iter()
+        .map(|&n| errors_on(2, n, false, true))
+        .collect();
+    let uniform: Vec<(f64, f64, usize)> = levels.iter().map(|&n| errors(2, n, false)).collect();
+    for (n, (r, u)) in levels.iter().zip(refined.iter().zip(&uniform)) {
+        eprintln!(
+            "Q2 n_r={n}: refined quadrant dofs={} L2={:.4e} H1={:.4e}; uniform dofs={} L2={:.4e} H1={:.4e}",
+            r.2, r.0, r.1, u.2, u.0, u.1
+        );
+        assert!(
+            r.2 > u.2 && r.0 <= u.0 && r.1 <= u.1,
+            "refinement made it worse"
+        );
+    }
+    let k = refined.len() - 1;
+    let (l2, h1) = (
+        (refined[k - 1].0 / refined[k].0).log2(),
+        (refined[k - 1].1 / refined[k].1).log2(),
+    );
+    eprintln!("Q2 with hanging nodes: observed rates L2 {l2:.3}, H1 {h1:.3}");
+    assert!((l2 - 3.0).abs() <= 0.15, "Q2 L2 rate {l2}");
+    assert!((h1 - 2.0).abs() <= 0.15, "Q2 H1 rate {h1}");
 }
