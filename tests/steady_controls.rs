@@ -328,6 +328,8 @@ fn no_arguments_compares_the_default_scene_in_both_modes() {
         stdout.contains("compared the transient and steady modes"),
         "{stdout}"
     );
+    // The converged 8 × 128 mesh (17 × 256 nodes, the hub ring fixed).
+    assert!(stdout.contains("dofs = 8192"), "{stdout}");
     for q in [
         "hub_force_x",
         "hub_force_y",
