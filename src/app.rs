@@ -24,7 +24,6 @@ use crate::driver::results::{
     Terms,
 };
 use crate::driver::spinning;
-use crate::driver::system::Loading;
 use crate::driver::tables;
 use crate::driver::SolidSystem;
 use crate::io::output::{ensure_dir, write_csv, OutputError};
@@ -73,13 +72,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let rec: &mut dyn Recorder = &mut env.recorders;
     let solve = match scene.analysis.mode {
         Mode::Static => {
-            sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
-                Some(load) => Loading::Load { load },
-                None => Loading::Indent {
-                    h_touch: scene.geometry.ro,
-                    disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
-                },
-            };
+            sys.loading = crate::driver::steady_run::scene_loading(scene);
             indentation::solve_indentation(
                 &mut sys,
                 kind,

@@ -36,7 +36,7 @@
 use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
 use super::steady_run;
-use super::system::{Loading, SolidSystem};
+use super::system::SolidSystem;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
@@ -183,13 +183,7 @@ pub fn indentation_system(scene: &Scene, mesh: Mesh) -> Result<SolidSystem, AppE
     let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
     let contact = build_contact(scene, &model)?;
     let mut sys = SolidSystem::with_contact(model, contact);
-    sys.loading = match scene.road.as_ref().and_then(|r| r.load) {
-        Some(load) => Loading::Load { load },
-        None => Loading::Indent {
-            h_touch: scene.geometry.ro,
-            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
-        },
-    };
+    sys.loading = steady_run::scene_loading(scene);
     Ok(sys)
 }
 

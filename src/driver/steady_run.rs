@@ -481,7 +481,8 @@ pub fn solve_steady(
     }
 }
 
-/// The road of a scene: its load (load control) or its penetration (displacement control).
+/// The road of a scene: its load (load control) or its penetration (displacement control), as
+/// the load factor's target in static indentation and in the steady press.
 pub fn scene_loading(scene: &Scene) -> Loading {
     match scene.road.as_ref().and_then(|r| r.load) {
         Some(load) => Loading::Load { load },
