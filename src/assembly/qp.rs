@@ -7,7 +7,9 @@
 //! ([`crate::element::QuadRule::gauss_2d`]): point `l · q + i` sits at `(ξ_i, η_l)`, `i` along ξ
 //! (radial on the annulus) and `l` along η (counter-clockwise).
 
-use crate::mesh::RingLayout;
+use crate::element::gauss_1d;
+use crate::mesh::locate::{point_at, PointLocator};
+use crate::mesh::{Mesh, RingLayout};
 
 #[derive(Clone, Debug)]
 pub struct QpData<T> {
@@ -136,6 +138,102 @@ impl QpHistory {
     }
 }
 
+/// Why a history cannot be moved to another mesh ([`QpHistory::transferred`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum TransferError {
+    /// A cell of the source holds another number of points than the tensor Gauss rule of its
+    /// degree ((p + 1)² for degree p), or the source does not match its mesh.
+    NotTensorGauss { cell: usize, points: usize },
+}
+
+impl std::fmt::Display for TransferError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotTensorGauss { cell, points } => write!(
+                f,
+                "cell {cell} of the source mesh holds {points} history points, not the tensor \
+                 Gauss rule of its degree"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for TransferError {}
+
+/// Lagrange basis through the points `nodes` at `s`, into `out`.
+fn lagrange(nodes: &[f64], s: f64, out: &mut [f64]) {
+    for (i, (o, &si)) in out.iter_mut().zip(nodes).enumerate() {
+        *o = nodes
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, &sj)| (s - sj) / (si - sj))
+            .product();
+    }
+}
+
+impl QpHistory {
+    /// The history on another mesh `to` of the same body (a refined or coarsened one): every
+    /// point of `to` (the tensor Gauss rule of its cell's degree p, q = p + 1 points per
+    /// direction, as the element kernels use) takes the value at its position of the
+    /// tensor-product Lagrange interpolant through the points of the `from` cell that holds it
+    /// (degree q − 1 in each reference direction). Exact for states that are such polynomials
+    /// of the `from` cell's reference coordinates (in particular when `to` refines or coarsens
+    /// `from` by whole cells and the state is one polynomial per parent cell; constants
+    /// always); otherwise an interpolation error of order h^q. Tensor states are moved
+    /// component by component in the common Cartesian frame.
+    pub fn transferred(&self, from: &Mesh, to: &Mesh) -> Result<QpHistory, TransferError> {
+        if self.is_empty() {
+            return Ok(Self::none());
+        }
+        let q_of = |mesh: &Mesh, c: usize| usize::from(mesh.degree[c]) + 1;
+        if self.offsets.len() != from.n_cells() + 1 {
+            return Err(TransferError::NotTensorGauss {
+                cell: 0,
+                points: self.offsets.len().saturating_sub(1),
+            });
+        }
+        for c in 0..from.n_cells() {
+            let q = q_of(from, c);
+            if self.points_in_cell(c) != q * q {
+                return Err(TransferError::NotTensorGauss {
+                    cell: c,
+                    points: self.points_in_cell(c),
+                });
+            }
+        }
+        let init = vec![0.0; self.n_state];
+        let mut out = Self::new((0..to.n_cells()).map(|c| q_of(to, c).pow(2)), &init);
+        let locator = PointLocator::new(from);
+        let (mut lx, mut ly) = ([0.0; 4], [0.0; 4]);
+        for c in 0..to.n_cells() {
+            let q = q_of(to, c);
+            let (g, _) = gauss_1d(q);
+            for l in 0..q {
+                for i in 0..q {
+                    let x = point_at(to, c, g[i], g[l]);
+                    let (src, xi, eta) = locator.locate_nearest(from, x);
+                    let qs = q_of(from, src);
+                    let (gs, _) = gauss_1d(qs);
+                    lagrange(&gs, xi, &mut lx[..qs]);
+                    lagrange(&gs, eta, &mut ly[..qs]);
+                    let n = self.n_state;
+                    let dst = out.point_mut(c, l * q + i);
+                    for (ls, wy) in ly[..qs].iter().enumerate() {
+                        for (is, wx) in lx[..qs].iter().enumerate() {
+                            let v = self.point(src, ls * qs + is);
+                            for k in 0..n {
+                                dst[k] += wx * wy * v[k];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -200,5 +298,83 @@ mod tests {
         // Elastic: no storage at all.
         let e = QpHistory::new((0..mesh.n_cells()).map(|_| 9), &[]);
         assert!(e.is_empty() && e.data.capacity() == 0 && e.offsets.is_empty());
+    }
+
+    /// A state that is one polynomial of degree q − 1 per direction in each root cell's
+    /// reference coordinates moves exactly to the refined mesh and back; a constant moves
+    /// exactly to an unrelated mesh.
+    #[test]
+    fn history_transfer_is_exact_for_the_interpolated_polynomials() {
+        use crate::mesh::Forest;
+        let spec = |n_theta| AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 2,
+            n_theta,
+            degree: 2,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+        };
+        let mut root = annulus(&spec(8));
+        root.make_isoparametric();
+        let p = |c: usize, xi: f64, eta: f64| -> [f64; 2] {
+            let c = c as f64;
+            [
+                1.0 + c + xi - 2.0 * eta + 0.5 * xi * eta + xi * xi - 0.25 * eta * eta * xi,
+                -3.0,
+            ]
+        };
+        let (g, _) = gauss_1d(3);
+        let mut h = QpHistory::new((0..root.n_cells()).map(|_| 9), &[0.0, 0.0]);
+        for c in 0..root.n_cells() {
+            for l in 0..3 {
+                for i in 0..3 {
+                    h.point_mut(c, l * 3 + i).copy_from_slice(&p(c, g[i], g[l]));
+                }
+            }
+        }
+        let mut forest = Forest::new(root.clone()).unwrap();
+        forest.refine(&[0, 3, 4]).unwrap();
+        forest.refine(&[0]).unwrap();
+        let (fine, _) = forest.mesh();
+        assert!(!fine.constraints.is_empty());
+        let hf = h.transferred(&root, &fine).unwrap();
+        let mut worst = 0.0f64;
+        for (c, leaf) in forest.leaves().iter().enumerate() {
+            for l in 0..3 {
+                for i in 0..3 {
+                    let (a, b) = leaf.to_root(g[i], g[l]);
+                    let want = p(leaf.root as usize, a, b);
+                    let got = hf.point(c, l * 3 + i);
+                    worst = worst
+                        .max((got[0] - want[0]).abs())
+                        .max((got[1] - want[1]).abs());
+                }
+            }
+        }
+        assert!(worst < 1e-11, "refined: {worst:e}");
+        // Back to the root mesh: the children's polynomials are the parent's.
+        let back = hf.transferred(&fine, &root).unwrap();
+        let diff = back
+            .data
+            .iter()
+            .zip(&h.data)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(diff < 1e-11, "back: {diff:e}");
+        // A constant onto an unrelated mesh.
+        let c = QpHistory::new((0..root.n_cells()).map(|_| 9), &[2.5, -1.0, 0.0]);
+        let mut other = annulus(&spec(12));
+        other.make_isoparametric();
+        let co = c.transferred(&root, &other).unwrap();
+        assert_eq!(co.data.len(), other.n_cells() * 9 * 3);
+        assert!(co.data.chunks(3).all(|v| (v[0] - 2.5).abs() < 1e-12
+            && (v[1] + 1.0).abs() < 1e-12
+            && v[2].abs() < 1e-12));
+        // A history that does not fit the mesh is refused.
+        let wrong = QpHistory::new((0..root.n_cells()).map(|_| 4), &[1.0]);
+        assert_eq!(
+            wrong.transferred(&root, &other).err(),
+            Some(TransferError::NotTensorGauss { cell: 0, points: 4 })
+        );
     }
 }

@@ -147,6 +147,22 @@ pub fn shape_values(mesh: &Mesh, c: usize, xi: f64, eta: f64, n: &mut [f64; 9]) 
     }
 }
 
+/// Position of reference point (ξ, η) of cell `c`: the exact polar map of a polar cell, the
+/// interpolation of the node positions otherwise.
+pub fn point_at(mesh: &Mesh, c: usize, xi: f64, eta: f64) -> Vec2 {
+    if let Some((x, _)) = mesh.geometry[c].polar_map(xi, eta) {
+        return x;
+    }
+    let mut n = [0.0; 9];
+    shape_values(mesh, c, xi, eta, &mut n);
+    mesh.cell_nodes(c)
+        .iter()
+        .zip(&n)
+        .fold(Vec2::zeros(), |s, (&node, &w)| {
+            s + mesh.nodes[node as usize] * w
+        })
+}
+
 /// A field with two components per node (`x[2 n + i]`, e.g. displacements) evaluated at
 /// (ξ, η) of cell `c`.
 pub fn vector_at(mesh: &Mesh, x: &[f64], c: usize, xi: f64, eta: f64) -> Vec2 {

@@ -172,18 +172,7 @@ impl Forest {
 
     /// Position of root point (ξ, η) of root cell `c`.
     pub fn root_point(&self, c: usize, xi: f64, eta: f64) -> Vec2 {
-        if let Some((x, _)) = self.root.geometry[c].polar_map(xi, eta) {
-            return x;
-        }
-        let mut n = [0.0; 9];
-        super::locate::shape_values(&self.root, c, xi, eta, &mut n);
-        self.root
-            .cell_nodes(c)
-            .iter()
-            .zip(&n)
-            .fold(Vec2::zeros(), |s, (&node, &w)| {
-                s + self.root.nodes[node as usize] * w
-            })
+        super::locate::point_at(&self.root, c, xi, eta)
     }
 
     fn key(&self, x: Vec2) -> Key {
