@@ -12,10 +12,8 @@ use fixtures::*;
 
 use nalgebra::Matrix3;
 use tread::driver::transient::hht_alpha::hht_parameters;
-use tread::driver::transient::{integrate, GenAlpha, IntegratorName, Transient};
-use tread::driver::SolidSystem;
+use tread::driver::transient::{GenAlpha, IntegratorName};
 use tread::io::scene::Scene;
-use tread::solver::LinearKind;
 
 /// Amplification matrix of (u, h v, h² a) for ü + ω² u = 0, Ω = ω h, of the step
 /// (1 − αm) a₁ + αm a₀ + Ω²/h² [(1 − αf) u₁ + αf u₀] = 0 with the Newmark relations.
@@ -105,41 +103,15 @@ fn hht_parameters_have_the_classical_properties() {
 /// u at t_end of a spin-up from rest (ramp to 20 rad/s over 0.03 s, no contact) with the
 /// registered integrator's scheme.
 fn spin_up(rho: f64, dt: f64, t_end: f64) -> Vec<f64> {
-    let mut tr = Transient::new(
-        SolidSystem::new(neo_hookean_annulus(2, 16), "hub"),
-        IntegratorName::HhtAlpha.scheme(rho),
-        spin_kinematics(20.0, 0.03),
-        false,
-    );
-    integrate(
-        &mut tr,
-        &fixed_step_options(dt, t_end),
-        tight_newton_options(),
-        LinearKind::Cholesky,
-        |_, _| {},
-    )
-    .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.state.u.clone()
+    let scheme = IntegratorName::HhtAlpha.scheme(rho);
+    spin_up_fixed(neo_hookean_annulus(2, 16), scheme, dt, t_end)
 }
 
 #[test]
 fn hht_alpha_converges_at_second_order_on_the_spin_up() {
     let (t_end, dt0) = (0.04, 1e-3);
     for rho in [0.6, 0.9] {
-        let reference = spin_up(rho, dt0 / 32.0, t_end);
-        let norm = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let errs: Vec<f64> = [1.0, 2.0, 4.0]
-            .iter()
-            .map(|f| {
-                let u = spin_up(rho, dt0 / f, t_end);
-                u.iter()
-                    .zip(&reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt()
-                    / norm
-            })
-            .collect();
+        let errs = step_errors(|dt| spin_up(rho, dt, t_end), dt0);
         let p = (errs[1] / errs[2]).log2();
         eprintln!("HHT ρ∞ = {rho}: errors {errs:?}, observed order {p:.2}");
         assert!((p - 2.0).abs() < 0.3, "ρ∞ = {rho}: observed order {p:.2}");

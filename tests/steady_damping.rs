@@ -9,7 +9,7 @@
 //! - A Gmsh mesh refined at the footprint (no rings) solves the damped frictional scene, and
 //!   its hub force agrees with the structured mesh's.
 
-use tread::assembly::FIXED;
+use tread::assembly::CONSTRAINED;
 use tread::driver::steady::SteadyRolling;
 use tread::driver::steady_run::{build_steady, solve_steady};
 use tread::driver::SteadyDampingTangent;
@@ -65,6 +65,25 @@ fn fd_errors(st: &mut SteadyRolling) -> (f64, f64) {
     (err / kmax, corr / kmax)
 }
 
+/// A smooth, non-symmetric displacement on the free nodes (hanging nodes follow their masters)
+/// and the road raised into contact: a state to check tangents at.
+fn pressed_by_hand(mut st: SteadyRolling) -> SteadyRolling {
+    let mesh = st.sys.model.mesh.clone();
+    for nd in 0..mesh.n_nodes() {
+        let x = mesh.nodes[nd];
+        if st.sys.dofs.eq[2 * nd] < CONSTRAINED {
+            let (r, th) = (x.norm(), x[1].atan2(x[0]));
+            st.sys.x[2 * nd] += 0.02 * (r - 1.0) * (th.sin() + 0.5 * (2.0 * th).cos());
+            st.sys.x[2 * nd + 1] += 0.03 * (r - 1.0) * (0.3 + th.cos() * th.cos()) + 0.01;
+        }
+    }
+    st.sys.dofs.apply_constraints(&mut st.sys.x);
+    if let Some(c) = st.sys.contact.as_mut() {
+        c.h = 1.97;
+    }
+    st
+}
+
 /// A small damped frictional steady system pressed into the road by hand (no solve): a
 /// smooth, non-symmetric state with contact.
 fn tiny(rings: bool) -> SteadyRolling {
@@ -87,20 +106,7 @@ fn tiny(rings: bool) -> SteadyRolling {
     }
     let contact = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
     let sys = tread::driver::SolidSystem::with_contact(model, contact);
-    let mut st = SteadyRolling::new(sys, 20.0, 2.0);
-    let mesh = st.sys.model.mesh.clone();
-    for nd in 0..mesh.n_nodes() {
-        let x = mesh.nodes[nd];
-        if st.sys.dofs.eq[2 * nd] != FIXED {
-            let (r, th) = (x.norm(), x[1].atan2(x[0]));
-            st.sys.x[2 * nd] += 0.02 * (r - 1.0) * (th.sin() + 0.5 * (2.0 * th).cos());
-            st.sys.x[2 * nd + 1] += 0.03 * (r - 1.0) * (0.3 + th.cos() * th.cos()) + 0.01;
-        }
-    }
-    if let Some(c) = st.sys.contact.as_mut() {
-        c.h = 1.97;
-    }
-    st
+    pressed_by_hand(SteadyRolling::new(sys, 20.0, 2.0))
 }
 
 #[test]
@@ -176,21 +182,7 @@ fn tiny_refined() -> SteadyRolling {
     model.strain_rate_damping = 3.0;
     let contact = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
     let sys = tread::driver::SolidSystem::with_contact(model, contact);
-    let mut st = SteadyRolling::new(sys, 20.0, 2.0);
-    let mesh = st.sys.model.mesh.clone();
-    for nd in 0..mesh.n_nodes() {
-        let x = mesh.nodes[nd];
-        if st.sys.dofs.eq[2 * nd] < tread::assembly::CONSTRAINED {
-            let (r, th) = (x.norm(), x[1].atan2(x[0]));
-            st.sys.x[2 * nd] += 0.02 * (r - 1.0) * (th.sin() + 0.5 * (2.0 * th).cos());
-            st.sys.x[2 * nd + 1] += 0.03 * (r - 1.0) * (0.3 + th.cos() * th.cos()) + 0.01;
-        }
-    }
-    st.sys.dofs.apply_constraints(&mut st.sys.x);
-    if let Some(c) = st.sys.contact.as_mut() {
-        c.h = 1.97;
-    }
-    st
+    pressed_by_hand(SteadyRolling::new(sys, 20.0, 2.0))
 }
 
 #[test]

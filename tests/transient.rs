@@ -199,21 +199,7 @@ fn rigid_spinning_is_objective_and_conserves_energy() {
 
 /// u at t_end of a spin-up from rest (ramp to 20 rad/s over 0.03 s, no contact).
 fn spin_up(scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
-    let mut tr = Transient::new(
-        SolidSystem::new(neo_hookean_annulus(2, 16), "hub"),
-        scheme,
-        spin_kinematics(20.0, 0.03),
-        matches!(scheme, Scheme::CentralDifference),
-    );
-    integrate(
-        &mut tr,
-        &fixed_step_options(dt, t_end),
-        tight_newton_options(),
-        LinearKind::Cholesky,
-        |_, _| {},
-    )
-    .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.state.u.clone()
+    spin_up_fixed(neo_hookean_annulus(2, 16), scheme, dt, t_end)
 }
 
 #[test]
@@ -233,20 +219,7 @@ fn integrators_converge_at_their_order() {
         ),
         ("central difference", Scheme::CentralDifference, 1e-4),
     ] {
-        let reference = spin_up(scheme, dt0 / 32.0, t_end);
-        let norm = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let errs: Vec<f64> = [1.0, 2.0, 4.0]
-            .iter()
-            .map(|f| {
-                let u = spin_up(scheme, dt0 / f, t_end);
-                u.iter()
-                    .zip(&reference)
-                    .map(|(a, b)| (a - b) * (a - b))
-                    .sum::<f64>()
-                    .sqrt()
-                    / norm
-            })
-            .collect();
+        let errs = step_errors(|dt| spin_up(scheme, dt, t_end), dt0);
         let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
         eprintln!("{name}: dt = {dt0:.1e}/(1, 2, 4): relative errors {errs:?}, observed orders {orders:.2?}");
         table.push((name, orders));
@@ -314,15 +287,7 @@ fn spin_up_reproduces_steady_spinning() {
         &mut (),
     )
     .unwrap();
-    let rel = |a: &[f64], b: &[f64]| {
-        let n = b.iter().map(|v| v * v).sum::<f64>().sqrt();
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| (x - y) * (x - y))
-            .sum::<f64>()
-            .sqrt()
-            / n
-    };
+    let rel = relative_l2;
     let (u_tr, u_eq, u_st) = (ur(&tr.state.u), ur(&eq.state.u), ur(&st.x));
     let d_eq = rel(&u_tr, &u_eq);
     let d_st = rel(&u_tr, &u_st);

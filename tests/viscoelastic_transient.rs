@@ -8,7 +8,7 @@ use fixtures::*;
 
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
-use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, TimeOptions, Transient};
+use tread::driver::transient::{GenAlpha, Ramp, Scheme, TimeOptions, Transient};
 use tread::driver::SolidSystem;
 use tread::material::{ViscoModel, Viscoelastic};
 use tread::physics::SolidModel;
@@ -158,21 +158,7 @@ fn history_is_committed_only_on_convergence() {
 /// u at t_end of a spin-up from rest with a viscoelastic material (relaxation times 4 ms and
 /// 50 ms, comparable to the 30 ms ramp).
 fn spin_up(scheme: Scheme, model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
-    let mut tr = Transient::new(
-        SolidSystem::new(visco_annulus(2, 16, model), "hub"),
-        scheme,
-        spin_kinematics(20.0, 0.03),
-        matches!(scheme, Scheme::CentralDifference),
-    );
-    integrate(
-        &mut tr,
-        &fixed_step_options(dt, t_end),
-        tight_newton_options(),
-        LinearKind::Cholesky,
-        |_, _| {},
-    )
-    .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.state.u.clone()
+    spin_up_fixed(visco_annulus(2, 16, model), scheme, dt, t_end)
 }
 
 #[test]
@@ -193,20 +179,7 @@ fn integrators_keep_their_order_with_history() {
             ),
             ("central difference", Scheme::CentralDifference, 1e-4),
         ] {
-            let reference = spin_up(scheme, model, dt0 / 32.0, t_end);
-            let norm = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
-            let errs: Vec<f64> = [1.0, 2.0, 4.0]
-                .iter()
-                .map(|f| {
-                    let u = spin_up(scheme, model, dt0 / f, t_end);
-                    u.iter()
-                        .zip(&reference)
-                        .map(|(a, b)| (a - b) * (a - b))
-                        .sum::<f64>()
-                        .sqrt()
-                        / norm
-                })
-                .collect();
+            let errs = step_errors(|dt| spin_up(scheme, model, dt, t_end), dt0);
             let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
             eprintln!(
                 "{model:?}, {name}: relative errors {:?}, observed orders {orders:.2?}",
@@ -318,21 +291,7 @@ fn spin_up_first_order(
 fn spin_up_reference(model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
     let mut m = visco_annulus(2, 16, model);
     m.strain_rate_damping = 1.0;
-    let mut tr = Transient::new(
-        SolidSystem::new(m, "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
-        spin_kinematics(20.0, 0.03),
-        false,
-    );
-    integrate(
-        &mut tr,
-        &fixed_step_options(dt, t_end),
-        tight_newton_options(),
-        LinearKind::Cholesky,
-        |_, _| {},
-    )
-    .unwrap_or_else(|(e, _)| panic!("{e}"));
-    tr.state.u.clone()
+    spin_up_fixed(m, Scheme::GeneralizedAlpha(GenAlpha::new(1.0)), dt, t_end)
 }
 
 /// BDF and SDIRK carry the history: as their tolerance tightens they converge to the
@@ -343,15 +302,7 @@ fn first_order_integrators_carry_the_history() {
     let t_end = 0.04;
     for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
         let reference = spin_up_reference(model, 1e-3 / 64.0, t_end);
-        let rel = |u: &[f64]| {
-            let n = reference.iter().map(|v| v * v).sum::<f64>().sqrt();
-            u.iter()
-                .zip(&reference)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>()
-                .sqrt()
-                / n
-        };
+        let rel = |u: &[f64]| relative_l2(u, &reference);
         let elastic = rel(&spin_up_first_order(
             OdeMethod::Bdf,
             model,

@@ -3,12 +3,13 @@
 //! `fixtures::tempdir`, the scratch-directory guard of `tempdir.rs`).
 
 use tread::app::{run, RunOptions};
-use tread::driver::transient::{Kinematics, Ramp, TimeOptions};
+use tread::driver::transient::{integrate, Kinematics, Ramp, Scheme, TimeOptions, Transient};
+use tread::driver::SolidSystem;
 use tread::io::Scene;
 use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};
-use tread::solver::NewtonOptions;
+use tread::solver::{LinearKind, NewtonOptions};
 
 #[path = "tempdir.rs"]
 pub mod tempdir;
@@ -79,6 +80,46 @@ pub fn tight_newton_options() -> NewtonOptions {
         max_iterations: 20,
         ..Default::default()
     }
+}
+
+/// u at `t_end` of a spin-up of `model` from rest (ω ramped to 20 rad/s over 0.03 s, no contact)
+/// with the one-step `scheme` at fixed steps `dt` (the lumped mass for central difference).
+pub fn spin_up_fixed(model: SolidModel, scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
+    let mut tr = Transient::new(
+        SolidSystem::new(model, "hub"),
+        scheme,
+        spin_kinematics(20.0, 0.03),
+        matches!(scheme, Scheme::CentralDifference),
+    );
+    integrate(
+        &mut tr,
+        &fixed_step_options(dt, t_end),
+        tight_newton_options(),
+        LinearKind::Cholesky,
+        |_, _| {},
+    )
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
+    tr.state.u.clone()
+}
+
+/// ‖a − b‖ / ‖b‖ (Euclidean).
+pub fn relative_l2(a: &[f64], b: &[f64]) -> f64 {
+    let n = b.iter().map(|v| v * v).sum::<f64>().sqrt();
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+        / n
+}
+
+/// Relative errors of `run(dt)` at dt = dt0, dt0/2, dt0/4 against `run(dt0/32)`.
+pub fn step_errors(run: impl Fn(f64) -> Vec<f64>, dt0: f64) -> Vec<f64> {
+    let reference = run(dt0 / 32.0);
+    [1.0, 2.0, 4.0]
+        .iter()
+        .map(|f| relative_l2(&run(dt0 / f), &reference))
+        .collect()
 }
 
 /// A scene file of the repository, as text.
