@@ -116,7 +116,7 @@ fn steady_jacobian_with_ring_history_matches_finite_differences() {
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         // Clockwise spin (the scene accepts ω ≥ 0 only): the rings run the other way.
         st.set_omega(omega, 1.95 * omega);
-        let dev = st.sys.steady_history.as_ref().unwrap().radius_deviation;
+        let dev = st.sys.steady_history.as_ref().unwrap().radius_deviation();
         let (err, corr) = fd_error(&mut st);
         println!("{model}, omega = {omega}, grading {grading}: FD rel err {err:.2e}, ring-coupling part {corr:.2e} of max |K| (ring radius deviation {dev:.1e})");
         assert!(err < 1e-6, "{model} omega {omega}: {err}");

@@ -40,7 +40,10 @@ use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
-use crate::io::scene::{ContinuationParameter, Control, DampingTangentChoice, Scene, Sink};
+use crate::io::scene::{
+    ContinuationParameter, Control, DampingTangentChoice, Scene, Sink, SteadyHistoryChoice,
+};
+use crate::physics::viscoelastic_steady::StreamlineScheme;
 use crate::physics::SolidModel;
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::continuation::{
@@ -335,8 +338,13 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
         }
         _ => SolidSystem::new(model, "hub"),
     };
-    sys.enable_steady_viscoelastic()
-        .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
+    let scheme = match scene.solver.steady_history {
+        SteadyHistoryChoice::Auto => StreamlineScheme::Auto,
+        SteadyHistoryChoice::Rings => StreamlineScheme::Rings,
+        SteadyHistoryChoice::Upwind => StreamlineScheme::Upwind,
+    };
+    sys.enable_steady_viscoelastic(scheme)
+        .map_err(|e| AppError::Unsupported(format!("solver.steady_history: {e}")))?;
     let mut st = SteadyRolling::new(sys, scene.motion.omega, scene.geometry.ro);
     if scene.solver.damping_tangent == DampingTangentChoice::Assembled {
         st.sys

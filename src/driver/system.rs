@@ -21,7 +21,7 @@ use super::terms::{CellForces, CellRate, Rates, Terms};
 use crate::assembly::{Assembler, DofMap, LocalSystem, SharedMut, CONSTRAINED, FIXED};
 use crate::contact::{ContactModel, ContactSample, SlipKinematics};
 use crate::math::Vec2;
-use crate::physics::viscoelastic_steady::RingError;
+use crate::physics::viscoelastic_steady::{StreamlineError, StreamlineScheme};
 use crate::physics::{NodalThetaDerivative, SolidModel, SteadyHistory};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
@@ -613,15 +613,18 @@ impl SolidSystem {
     }
 
     /// Steady (θ-referential) mode with a viscoelastic material: before every evaluation the
-    /// history of the quadrature points is replaced by the periodic steady states along the
-    /// rings at the current state and ω ([`SteadyHistory`]), and Newton takes the exact step
-    /// with the ring coupling applied matrix-free. No effect for an elastic material; an error
-    /// when the mesh has no rings.
-    pub fn enable_steady_viscoelastic(&mut self) -> Result<(), RingError> {
+    /// history of the quadrature points is replaced by the steady states along the
+    /// streamlines at the current state and ω ([`SteadyHistory`], discretised by `scheme`),
+    /// and Newton takes the exact step with the streamline coupling applied matrix-free. No
+    /// effect for an elastic material; an error when the mesh cannot carry the scheme.
+    pub fn enable_steady_viscoelastic(
+        &mut self,
+        scheme: StreamlineScheme,
+    ) -> Result<(), StreamlineError> {
         if self.model.viscoelastic.is_none() || self.steady_history.is_some() {
             return Ok(());
         }
-        self.steady_history = Some(SteadyHistory::new(&self.model)?);
+        self.steady_history = Some(SteadyHistory::new(&self.model, scheme)?);
         Ok(())
     }
 

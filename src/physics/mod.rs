@@ -12,6 +12,7 @@ pub mod estimate;
 pub mod recovery;
 pub mod ring_derivative;
 pub mod solid;
+pub mod streamline_upwind;
 pub mod theta_derivative;
 pub mod viscoelastic_steady;
 

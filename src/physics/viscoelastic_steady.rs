@@ -59,42 +59,71 @@
 //!
 //! Units: those of the scene (stress for γ, time for τ_i, rad/s for ω).
 
+use super::streamline_upwind::{UpwindError, UpwindTransport};
 use super::SolidModel;
 use crate::assembly::{DofMap, QpHistory, CONSTRAINED};
 use crate::material::viscoelastic::{exp_weights, green_strain, ViscoModel, Viscoelastic};
 use crate::material::viscoelastic_ring::periodic_affine;
-use crate::math::Mat2;
+use crate::math::{Mat2, Vec2};
+
+/// How the steady internal variables are integrated along the streamlines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum StreamlineScheme {
+    /// Exact rings where the mesh has them (the generated annulus), upwind otherwise.
+    #[default]
+    Auto,
+    /// Exact integration along closed rings of quadrature points (ring-structured meshes).
+    Rings,
+    /// Upwind discontinuous Galerkin on the quadrature points ([`UpwindTransport`]): any mesh.
+    Upwind,
+}
+
+impl StreamlineScheme {
+    /// The scheme's keyword (`"auto"`, `"rings"`, `"upwind"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Rings => "rings",
+            Self::Upwind => "upwind",
+        }
+    }
+}
 
 /// Why a mesh cannot carry the steady viscoelastic history.
 #[derive(Clone, Debug, PartialEq)]
-pub enum RingError {
-    /// The mesh has no ring structure (e.g. a Gmsh mesh).
+pub enum StreamlineError {
+    /// Rings were asked for on a mesh without ring structure (e.g. a Gmsh mesh).
     NoRings,
-    /// Cells of different polynomial degree (different Gauss rules).
+    /// Rings were asked for on cells of different polynomial degree (different Gauss rules).
     MixedDegree,
     /// The points of a ring do not lie on one circle or do not go once around it.
     NotACircle { ring: usize },
+    /// The upwind operator could not be built.
+    Upwind(UpwindError),
 }
 
-impl std::fmt::Display for RingError {
+impl std::fmt::Display for StreamlineError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::NoRings => write!(
                 f,
-                "the steady mode integrates the viscoelastic internal variables exactly along \
-                 closed rings of quadrature points (the streamlines of steady rolling), which \
-                 needs the ring-structured generated annulus; this mesh (mesh.file) has no \
-                 rings. Use the generated mesh ([mesh] n_r, n_theta) or the transient mode"
+                "the \"rings\" streamline scheme integrates the viscoelastic internal variables \
+                 exactly along closed rings of quadrature points, which needs the ring-structured \
+                 generated annulus; this mesh (mesh.file or a refined mesh) has no rings. Use \
+                 [solver] steady_history = \"upwind\" (or \"auto\")"
             ),
             Self::MixedDegree => write!(
                 f,
-                "the steady viscoelastic rings need cells of one polynomial degree"
+                "the \"rings\" streamline scheme needs cells of one polynomial degree; use \
+                 [solver] steady_history = \"upwind\" (or \"auto\")"
             ),
             Self::NotACircle { ring } => write!(
                 f,
                 "the quadrature points of ring {ring} do not lie on one circle in order: the \
-                 steady viscoelastic streamline integration needs the generated annulus"
+                 \"rings\" streamline scheme needs the generated annulus; use [solver] \
+                 steady_history = \"upwind\" (or \"auto\")"
             ),
+            Self::Upwind(e) => write!(f, "upwind streamline scheme: {e}"),
         }
     }
 }
@@ -106,19 +135,37 @@ struct QpGeo {
     g: [[f64; 2]; 9],
 }
 
-/// The steady viscoelastic history of a ring-structured model (see the module docs).
+/// The closed rings of quadrature points of a ring-structured mesh.
 #[derive(Clone, Debug)]
-pub struct SteadyHistory {
-    /// Largest relative deviation of a ring's points from its first point's radius.
-    pub radius_deviation: f64,
-    /// Nodes per cell.
-    nn: usize,
+struct Rings {
     /// Points of each ring, counter-clockwise, as global point indices (history order).
     rings: Vec<Vec<u32>>,
-    /// Cell of each global point.
-    cell_of: Vec<u32>,
     /// Angle from point k to point k + 1 of each ring (counter-clockwise; the last wraps).
     dtheta: Vec<Vec<f64>>,
+    /// Largest relative deviation of a ring's points from its first point's radius.
+    radius_deviation: f64,
+    /// Ring scratch: a, φ, c, x.
+    a: Vec<f64>,
+    phi: Vec<f64>,
+    c: Vec<f64>,
+    x: Vec<f64>,
+}
+
+/// The discretisation of the streamline ODE.
+#[derive(Clone, Debug)]
+enum Streamlines {
+    Rings(Rings),
+    Upwind(Box<UpwindTransport>),
+}
+
+/// The steady viscoelastic history of a model (see the module docs).
+#[derive(Clone, Debug)]
+pub struct SteadyHistory {
+    streamlines: Streamlines,
+    /// Nodes of each cell.
+    nn: Vec<u8>,
+    /// Cell of each global point.
+    cell_of: Vec<u32>,
     geo: Vec<QpGeo>,
     /// Deformation gradient at each point at the last [`Self::sync`].
     f: Vec<Mat2>,
@@ -130,11 +177,8 @@ pub struct SteadyHistory {
     de: Vec<[f64; 3]>,
     /// (cos φ, sin φ) of each point's polar angle φ (the polar basis e_r, e_θ).
     rot: Vec<(f64, f64)>,
-    /// Ring scratch: a, φ, c, x.
-    a: Vec<f64>,
-    phi: Vec<f64>,
-    c: Vec<f64>,
-    x: Vec<f64>,
+    /// Per-point scratch of the upwind solves.
+    rhs: Vec<f64>,
     /// Full-length scratch for a vector in equation numbering expanded to full dofs.
     full: Vec<f64>,
     /// Ring-operator output per point, term and component: scratch.
@@ -171,47 +215,23 @@ fn flow(j: usize, m: usize, forward: bool) -> (usize, usize) {
     }
 }
 
-impl SteadyHistory {
-    /// Rings of quadrature points of `model` (which must be viscoelastic, with its history
-    /// allocated by [`SolidModel::set_viscoelastic`]).
-    pub fn new(model: &SolidModel) -> Result<Self, RingError> {
+impl Rings {
+    /// The rings of quadrature points of `model` (point positions `pos`), or why it has none.
+    fn new(model: &SolidModel, pos: &[Vec2]) -> Result<Self, StreamlineError> {
         let mesh = &model.mesh;
-        let layout = mesh.rings.as_ref().ok_or(RingError::NoRings)?;
+        let layout = mesh.rings.as_ref().ok_or(StreamlineError::NoRings)?;
         let deg = mesh.degree.first().copied().unwrap_or(2);
         if mesh.degree.iter().any(|&d| d != deg) {
-            return Err(RingError::MixedDegree);
+            return Err(StreamlineError::MixedDegree);
         }
         let nc = mesh.n_cells();
         if nc == 0 || layout.n_r * layout.n_theta != nc {
-            return Err(RingError::NoRings);
+            return Err(StreamlineError::NoRings);
         }
         let q = model.qp_per_direction(0);
         let hist = &model.history;
-        let n_pts = hist.offsets.last().copied().unwrap_or(0);
         if hist.offsets.len() != nc + 1 || (0..nc).any(|c| hist.points_in_cell(c) != q * q) {
-            return Err(RingError::NoRings);
-        }
-        let nn = mesh.cell_nodes(0).len();
-        let mut geo = vec![
-            QpGeo {
-                w: 0.0,
-                g: [[0.0; 2]; 9]
-            };
-            n_pts
-        ];
-        let mut pos = vec![crate::math::Vec2::zeros(); n_pts];
-        let mut cell_of = vec![0u32; n_pts];
-        for c in 0..nc {
-            for p in 0..q * q {
-                let i = hist.offsets[c] + p;
-                let mut g = [[0.0; 2]; 9];
-                let (x, w) = model
-                    .qp_geometry(c, p, &mut g)
-                    .ok_or(RingError::NotACircle { ring: 0 })?;
-                geo[i] = QpGeo { w, g };
-                pos[i] = x;
-                cell_of[i] = c as u32;
-            }
+            return Err(StreamlineError::NoRings);
         }
         let n_rings = QpHistory::n_rings(layout, q);
         let mut rings = Vec::with_capacity(n_rings);
@@ -234,7 +254,7 @@ impl SteadyHistory {
                 // that and below a cell size tells a ring mesh from anything else.
                 dev = dev.max((b.norm() - r0).abs() / r0);
                 if (b.norm() - r0).abs() > 1e-2 * r0 {
-                    return Err(RingError::NotACircle { ring: r });
+                    return Err(StreamlineError::NotACircle { ring: r });
                 }
                 let mut t = b[1].atan2(b[0]) - a[1].atan2(a[0]);
                 if t <= 0.0 {
@@ -244,18 +264,118 @@ impl SteadyHistory {
                 d.push(t);
             }
             if (total - 2.0 * std::f64::consts::PI).abs() > 1e-9 {
-                return Err(RingError::NotACircle { ring: r });
+                return Err(StreamlineError::NotACircle { ring: r });
             }
             max_m = max_m.max(m);
             rings.push(pts);
             dtheta.push(d);
         }
         Ok(Self {
-            radius_deviation: dev,
-            nn,
             rings,
-            cell_of,
             dtheta,
+            radius_deviation: dev,
+            a: vec![0.0; max_m],
+            phi: vec![0.0; max_m],
+            c: vec![0.0; max_m],
+            x: vec![0.0; max_m],
+        })
+    }
+
+    /// For each ring, Prony term and strain component, the periodic solution `X = L_i e` of
+    /// the exact step recurrence driven by the per-point strains `e`, handed to
+    /// `out(point, term, component, X)`.
+    fn sweep(
+        &mut self,
+        e: &[[f64; 3]],
+        ve: &Viscoelastic,
+        omega: f64,
+        out: &mut impl FnMut(usize, usize, usize, f64),
+    ) {
+        let forward = omega >= 0.0;
+        let w = omega.abs();
+        for (pts, dth) in self.rings.iter().zip(&self.dtheta) {
+            let m = pts.len();
+            for (i, &(g, tau)) in ve.prony().iter().enumerate() {
+                for j in 0..m {
+                    let (_, s) = flow(j, m, forward);
+                    let (a, phi) = exp_weights(dth[s] / (w * tau));
+                    self.a[j] = a;
+                    self.phi[j] = phi;
+                }
+                for comp in 0..3 {
+                    for j in 0..m {
+                        let (k0, _) = flow(j, m, forward);
+                        let (k1, _) = flow((j + 1) % m, m, forward);
+                        let (e0, e1) = (e[pts[k0] as usize][comp], e[pts[k1] as usize][comp]);
+                        let (a, phi) = (self.a[j], self.phi[j]);
+                        self.c[j] = match ve.model {
+                            ViscoModel::Convolution => g * phi * (e1 - e0),
+                            ViscoModel::Multiplicative => (phi - a) * e0 + (1.0 - phi) * e1,
+                        };
+                    }
+                    periodic_affine(&self.a[..m], &self.c[..m], &mut self.x[..m]);
+                    for j in 0..m {
+                        let (k, _) = flow(j, m, forward);
+                        out(pts[k] as usize, i, comp, self.x[j]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl SteadyHistory {
+    /// The streamlines of the quadrature points of `model` (which must be viscoelastic, with
+    /// its history allocated by [`SolidModel::set_viscoelastic`]), discretised by `scheme`.
+    pub fn new(model: &SolidModel, scheme: StreamlineScheme) -> Result<Self, StreamlineError> {
+        let mesh = &model.mesh;
+        let nc = mesh.n_cells();
+        let hist = &model.history;
+        let n_pts = hist.offsets.last().copied().unwrap_or(0);
+        let degenerate = |cell| StreamlineError::Upwind(UpwindError::Degenerate { cell });
+        let mut geo = vec![
+            QpGeo {
+                w: 0.0,
+                g: [[0.0; 2]; 9]
+            };
+            n_pts
+        ];
+        let mut pos = vec![Vec2::zeros(); n_pts];
+        let mut cell_of = vec![0u32; n_pts];
+        for c in 0..nc {
+            let q = model.qp_per_direction(c);
+            if hist.points_in_cell(c) != q * q {
+                return Err(StreamlineError::Upwind(UpwindError::NotTensorGauss {
+                    cell: c,
+                    points: hist.points_in_cell(c),
+                }));
+            }
+            for p in 0..q * q {
+                let i = hist.offsets[c] + p;
+                let mut g = [[0.0; 2]; 9];
+                let (x, w) = model.qp_geometry(c, p, &mut g).ok_or(degenerate(c))?;
+                geo[i] = QpGeo { w, g };
+                pos[i] = x;
+                cell_of[i] = c as u32;
+            }
+        }
+        let upwind = || -> Result<Streamlines, StreamlineError> {
+            let op =
+                UpwindTransport::new(mesh, &hist.offsets, true).map_err(StreamlineError::Upwind)?;
+            Ok(Streamlines::Upwind(Box::new(op)))
+        };
+        let streamlines = match scheme {
+            StreamlineScheme::Rings => Streamlines::Rings(Rings::new(model, &pos)?),
+            StreamlineScheme::Upwind => upwind()?,
+            StreamlineScheme::Auto => match Rings::new(model, &pos) {
+                Ok(r) => Streamlines::Rings(r),
+                Err(_) => upwind()?,
+            },
+        };
+        Ok(Self {
+            streamlines,
+            nn: (0..nc).map(|c| mesh.cell_nodes(c).len() as u8).collect(),
+            cell_of,
             geo,
             f: vec![Mat2::identity(); n_pts],
             e: vec![[0.0; 3]; n_pts],
@@ -268,13 +388,35 @@ impl SteadyHistory {
                     (x[0] / r, x[1] / r)
                 })
                 .collect(),
-            a: vec![0.0; max_m],
-            phi: vec![0.0; max_m],
-            c: vec![0.0; max_m],
-            x: vec![0.0; max_m],
+            rhs: Vec::new(),
             full: Vec::new(),
             dxs: Vec::new(),
         })
+    }
+
+    /// The scheme in use: [`StreamlineScheme::Rings`] or [`StreamlineScheme::Upwind`].
+    pub fn scheme(&self) -> StreamlineScheme {
+        match self.streamlines {
+            Streamlines::Rings(_) => StreamlineScheme::Rings,
+            Streamlines::Upwind(_) => StreamlineScheme::Upwind,
+        }
+    }
+
+    /// Largest relative deviation of a ring's points from its first point's radius (0 for the
+    /// upwind scheme).
+    pub fn radius_deviation(&self) -> f64 {
+        match &self.streamlines {
+            Streamlines::Rings(r) => r.radius_deviation,
+            Streamlines::Upwind(_) => 0.0,
+        }
+    }
+
+    /// The upwind operator, when that scheme is in use.
+    pub fn upwind(&self) -> Option<&UpwindTransport> {
+        match &self.streamlines {
+            Streamlines::Upwind(op) => Some(op),
+            Streamlines::Rings(_) => None,
+        }
     }
 
     /// Dissipation rate `∫ D dV` of the multiplicative model over the body at the state of
@@ -292,21 +434,28 @@ impl SteadyHistory {
         Some(d)
     }
 
-    /// Number of rings.
+    /// Number of rings (0 for the upwind scheme).
     pub fn n_rings(&self) -> usize {
-        self.rings.len()
+        match &self.streamlines {
+            Streamlines::Rings(r) => r.rings.len(),
+            Streamlines::Upwind(_) => 0,
+        }
     }
 
-    /// Global point indices of ring `r`, counter-clockwise.
+    /// Global point indices of ring `r`, counter-clockwise (the rings scheme only).
     pub fn ring_points(&self, r: usize) -> &[u32] {
-        &self.rings[r]
+        match &self.streamlines {
+            Streamlines::Rings(rings) => &rings.rings[r],
+            Streamlines::Upwind(_) => &[],
+        }
     }
 
     /// ∇u at every point of the model from the full state `x` into `self.f` (as F = I + ∇u).
     fn deformation(&mut self, dofs: &DofMap, x: &[f64]) {
-        let nn = self.nn;
         for (i, (geo, f)) in self.geo.iter().zip(self.f.iter_mut()).enumerate() {
-            let cd = dofs.cell(self.cell_of[i] as usize);
+            let c = self.cell_of[i] as usize;
+            let nn = usize::from(self.nn[c]);
+            let cd = dofs.cell(c);
             let mut h = Mat2::zeros();
             for a in 0..nn {
                 let (ux, uy) = (x[cd[2 * a] as usize], x[cd[2 * a + 1] as usize]);
@@ -319,45 +468,52 @@ impl SteadyHistory {
         }
     }
 
-    /// The ring sweeps: for each ring, Prony term and strain component, the periodic solution
-    /// `X = L_i e` of the exact step recurrence driven by the per-point strains `e`, handed to
-    /// `out(point, term, component, X)`.
+    /// For each Prony term and strain component, `X = L_i e` along the streamlines for the
+    /// per-point polar strains in `self.e`, handed to `out(point, term, component, X)`. A
+    /// failed upwind factorisation gives NaN (the residual then tells Newton).
     fn sweep(
         &mut self,
+        model: &SolidModel,
         ve: &Viscoelastic,
         omega: f64,
         mut out: impl FnMut(usize, usize, usize, f64),
     ) {
-        let forward = omega >= 0.0;
-        let w = omega.abs();
-        for (pts, dth) in self.rings.iter().zip(&self.dtheta) {
-            let m = pts.len();
-            for (i, &(g, tau)) in ve.prony().iter().enumerate() {
-                for j in 0..m {
-                    let (_, s) = flow(j, m, forward);
-                    let (a, phi) = exp_weights(dth[s] / (w * tau));
-                    self.a[j] = a;
-                    self.phi[j] = phi;
+        let op = match &mut self.streamlines {
+            Streamlines::Rings(r) => return r.sweep(&self.e, ve, omega, &mut out),
+            Streamlines::Upwind(op) => op,
+        };
+        if op.forward() != (omega >= 0.0) {
+            match UpwindTransport::new(&model.mesh, &model.history.offsets, omega >= 0.0) {
+                Ok(o) => **op = o,
+                Err(_) => {
+                    return (0..self.e.len()).for_each(|p| {
+                        (0..ve.prony().len())
+                            .for_each(|i| (0..3).for_each(|c| out(p, i, c, f64::NAN)))
+                    })
                 }
-                for comp in 0..3 {
-                    for j in 0..m {
-                        let (k0, _) = flow(j, m, forward);
-                        let (k1, _) = flow((j + 1) % m, m, forward);
-                        let (e0, e1) = (
-                            self.e[pts[k0] as usize][comp],
-                            self.e[pts[k1] as usize][comp],
-                        );
-                        let (a, phi) = (self.a[j], self.phi[j]);
-                        self.c[j] = match ve.model {
-                            ViscoModel::Convolution => g * phi * (e1 - e0),
-                            ViscoModel::Multiplicative => (phi - a) * e0 + (1.0 - phi) * e1,
-                        };
-                    }
-                    periodic_affine(&self.a[..m], &self.c[..m], &mut self.x[..m]);
-                    for j in 0..m {
-                        let (k, _) = flow(j, m, forward);
-                        out(pts[k] as usize, i, comp, self.x[j]);
-                    }
+            }
+        }
+        let taus: Vec<f64> = ve.prony().iter().map(|&(_, tau)| tau).collect();
+        let n = self.e.len();
+        for (i, &(g, tau)) in ve.prony().iter().enumerate() {
+            for comp in 0..3 {
+                // β·∇Y + Y/τ = s: convolution X = g E + Y with s = −g E/τ; multiplicative
+                // X = Y with s = E/τ.
+                let scale = match ve.model {
+                    ViscoModel::Convolution => -g / tau,
+                    ViscoModel::Multiplicative => 1.0 / tau,
+                };
+                self.rhs.clear();
+                self.rhs.extend(self.e.iter().map(|e| scale * e[comp]));
+                if op.solve(omega, &taus, i, &mut self.rhs).is_err() {
+                    self.rhs.iter_mut().for_each(|v| *v = f64::NAN);
+                }
+                for p in 0..n {
+                    let x = match ve.model {
+                        ViscoModel::Convolution => g * self.e[p][comp] + self.rhs[p],
+                        ViscoModel::Multiplicative => self.rhs[p],
+                    };
+                    out(p, i, comp, x);
                 }
             }
         }
@@ -377,18 +533,18 @@ impl SteadyHistory {
             *e = [g[(0, 0)], g[(1, 1)], 0.5 * (g[(0, 1)] + g[(1, 0)])];
         }
         let ns = model.history.n_state;
-        let data = &mut model.history.data;
         for (i, e) in self.e.iter_mut().enumerate() {
-            data[i * ns..i * ns + 3].copy_from_slice(e);
-            // The ring ODE holds for polar components (see the module docs).
+            model.history.data[i * ns..i * ns + 3].copy_from_slice(e);
+            // The streamline ODE holds for polar components (see the module docs).
             *e = to_polar(*e, self.rot[i]);
         }
         let mut xs = std::mem::take(&mut self.dxs);
         let n_terms = ve.prony().len();
         xs.resize(self.e.len() * 3 * n_terms, 0.0);
-        self.sweep(&ve, omega, |pt, term, comp, v| {
+        self.sweep(model, &ve, omega, |pt, term, comp, v| {
             xs[(pt * n_terms + term) * 3 + comp] = v;
         });
+        let data = &mut model.history.data;
         for (pt, rot) in self.rot.iter().enumerate() {
             for term in 0..n_terms {
                 let o = (pt * n_terms + term) * 3;
@@ -423,9 +579,10 @@ impl SteadyHistory {
             }
         }
         // δE = sym(Fᵀ ∇δu) per point.
-        let nn = self.nn;
         for (i, geo) in self.geo.iter().enumerate() {
-            let cd = dofs.cell(self.cell_of[i] as usize);
+            let c = self.cell_of[i] as usize;
+            let nn = usize::from(self.nn[c]);
+            let cd = dofs.cell(c);
             let mut dh = Mat2::zeros();
             for a in 0..nn {
                 let (ux, uy) = (full[cd[2 * a] as usize], full[cd[2 * a + 1] as usize]);
@@ -448,7 +605,7 @@ impl SteadyHistory {
         let n_terms = ve.prony().len();
         let mut dxs = std::mem::take(&mut self.dxs);
         dxs.resize(self.e.len() * 3 * n_terms, 0.0);
-        self.sweep(&ve, omega, |pt, term, comp, val| {
+        self.sweep(model, &ve, omega, |pt, term, comp, val| {
             dxs[(pt * n_terms + term) * 3 + comp] = val;
         });
         for (pt, ds) in self.ds.iter_mut().enumerate() {
@@ -476,7 +633,9 @@ impl SteadyHistory {
         // out_{a i} += Σ_q w (F δS)_{iJ} ∂N_a/∂X_J.
         for (i, geo) in self.geo.iter().enumerate() {
             let dp = self.f[i] * self.ds[i];
-            let cd = dofs.cell(self.cell_of[i] as usize);
+            let c = self.cell_of[i] as usize;
+            let nn = usize::from(self.nn[c]);
+            let cd = dofs.cell(c);
             for a in 0..nn {
                 for comp in 0..2 {
                     let q = dofs.eq[cd[2 * a + comp] as usize];

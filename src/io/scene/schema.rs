@@ -21,7 +21,7 @@ use super::material::{Formulation, MaterialModel, MaterialSpec};
 use super::mesh::MeshSpec;
 use super::motion::{Control, Motion};
 use super::output::{OutputSpec, Sink, VtuCompression, VtuFormat};
-use super::solver::{DampingTangentChoice, LinearChoice, SolverSpec};
+use super::solver::{DampingTangentChoice, LinearChoice, SolverSpec, SteadyHistoryChoice};
 use super::steady::{ContinuationParameter, ContinuationSpec};
 use super::stick_slip::StickSlipSpec;
 use super::time::{IntegratorName, MassKind, TimeSpec};
@@ -391,6 +391,8 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
                 "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
             opt("coarse_start", Kind::Bool, NONE,
                 "steady mode on a generated annulus (n_r even >= 4, n_theta a multiple of 4 >= 64, no cell pressures): start Newton from the steady state on the mesh with half the cells in r and theta (solved the same way), interpolated; falls back to the press-in from the undeformed state if Newton fails from it. false: always press in from the undeformed state"),
+            opt("steady_history", Kind::Keyword(SteadyHistoryChoice::NAMES), NONE,
+                "steady mode with [material.viscoelastic]: how the internal variables are integrated along the streamlines (rings: exact along closed rings of quadrature points, generated annulus only; upwind: upwind discontinuous Galerkin on the quadrature points, any mesh; auto: rings when the mesh has them, upwind otherwise)"),
         ] },
     },
     SectionSchema {

@@ -33,6 +33,22 @@ keyword_enum! {
     }
 }
 
+keyword_enum! {
+    /// Discretisation of the steady viscoelastic history along the streamlines
+    /// (`[solver] steady_history`).
+    #[derive(Default)]
+    SteadyHistoryChoice, "steady history scheme" {
+        #[default]
+        /// Exact rings on the generated annulus, upwind on any other mesh.
+        Auto => "auto",
+        /// The internal variables integrated exactly along closed rings of quadrature points
+        /// (the generated annulus only).
+        Rings => "rings",
+        /// Upwind discontinuous Galerkin on the quadrature points: any mesh (Gmsh, refined).
+        Upwind => "upwind",
+    }
+}
+
 /// `[solver]`: Newton with load stepping (in ω² for `spinning`; in the road penetration or the
 /// road load for `static`) and cutbacks. In `transient`: the Newton iterations of each implicit
 /// time step, a failed step being retried with half the step (`load_steps` unused). Not used by
@@ -62,6 +78,9 @@ pub struct SolverSpec {
     /// half the cells in r and in θ (itself started the same way), interpolated (false: press
     /// in from the undeformed state).
     pub coarse_start: bool,
+    /// Steady mode with a viscoelastic material: how the internal variables are integrated
+    /// along the streamlines.
+    pub steady_history: SteadyHistoryChoice,
 }
 
 impl Default for SolverSpec {
@@ -77,6 +96,7 @@ impl Default for SolverSpec {
             damping_tangent: DampingTangentChoice::Auto,
             eps_continuation: true,
             coarse_start: true,
+            steady_history: SteadyHistoryChoice::Auto,
         }
     }
 }
