@@ -231,8 +231,11 @@ impl UpwindTransport {
                     .filter(|_| det > 0.0)
                     .ok_or(UpwindError::Degenerate { cell: c })?;
                 mass[k] = w[ik] * w[lk] * det;
-                // Reference direction of β: inv · β.
+                // Reference direction of β: inv · β (a component at round-off level, e.g. the
+                // radial one in a polar cell, is zero: it would only widen the pattern).
                 let bref = inv * beta(x);
+                let bmax = bref.amax();
+                let bref = bref.map(|v| if v.abs() < 1e-13 * bmax { 0.0 } else { v });
                 lagrange_with_derivative(&g, g[ik], &mut l[0][..q], &mut dl[0][..q]);
                 lagrange_with_derivative(&g, g[lk], &mut l[1][..q], &mut dl[1][..q]);
                 trip.push((off + k, off + k, 0.0));
@@ -280,6 +283,13 @@ impl UpwindTransport {
                     let mut lnb = [[0.0; 4]; 2];
                     lagrange_with_derivative(&gn, xn, &mut lnb[0][..qn], &mut scratch[..qn]);
                     lagrange_with_derivative(&gn, en, &mut lnb[1][..qn], &mut scratch[..qn]);
+                    // Weights at round-off level (a face point at a Gauss abscissa of the
+                    // neighbour, located to 1e-16) are zeros.
+                    for v in lnb.iter_mut().flat_map(|r| r.iter_mut()) {
+                        if v.abs() < 1e-12 {
+                            *v = 0.0;
+                        }
+                    }
                     let offn = offsets[cn];
                     for k in 0..q * q {
                         let lk = ln[0][k % q] * ln[1][k / q];
