@@ -220,7 +220,7 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
 
 /// The scene's `[material.viscoelastic]` overstress on `model` (history at every quadrature
 /// point), after checking that the mode carries a history.
-fn attach_viscoelastic(scene: &Scene, model: &mut SolidModel) -> Result<(), AppError> {
+pub fn attach_viscoelastic(scene: &Scene, model: &mut SolidModel) -> Result<(), AppError> {
     if let Some(vs) = &scene.material.viscoelastic {
         let ve = vs
             .build()
@@ -232,11 +232,9 @@ fn attach_viscoelastic(scene: &Scene, model: &mut SolidModel) -> Result<(), AppE
 }
 
 /// The modes and integrators that carry a viscoelastic history so far: the transient mode with
-/// generalized-α or central difference (history committed per accepted step) and the steady
-/// mode (internal variables integrated along the rings of quadrature points, see
-/// `physics::viscoelastic_steady`; ring-structured meshes only). The ODE integrators (BDF,
-/// SDIRK) would need the internal variables in their state vector; the static and spinning
-/// modes would need the relaxed limit.
+/// an integrator that carries it (history committed per accepted step) and the steady mode
+/// (internal variables integrated along the streamlines, see `physics::viscoelastic_steady`).
+/// The static and spinning modes would need the relaxed limit.
 fn check_viscoelastic_mode(scene: &Scene) -> Result<(), AppError> {
     if !matches!(scene.analysis.mode, Mode::Transient | Mode::Steady) {
         return Err(AppError::Unsupported(format!(

@@ -30,8 +30,10 @@
 //!
 //! The root mesh is the scene's structured annulus with the exact polar cell map, so every
 //! refined cell lies exactly on the circles and the adaptive meshes converge to the true
-//! geometry. No quadrature-point history (viscoelastic materials) is transferred: such scenes
-//! are refused.
+//! geometry. A viscoelastic material needs no transfer in steady rolling: its internal
+//! variables are a function of the steady state, integrated along the streamlines by the
+//! upwind scheme on the refined (non-ring) meshes (`physics::streamline_upwind`). Static
+//! indentation refuses viscoelastic materials (no relaxed limit there).
 
 use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
@@ -40,7 +42,7 @@ use super::system::SolidSystem;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
-use crate::io::scene::{Mode, Scene};
+use crate::io::scene::{Mode, Scene, SteadyHistoryChoice};
 use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::estimate;
@@ -231,21 +233,25 @@ impl Problem {
     fn build(scene: &Scene, mesh: Mesh) -> Result<Self, AppError> {
         match scene.analysis.mode {
             Mode::Steady => {
-                if scene.material.viscoelastic.is_some() {
-                    return Err(AppError::Unsupported(
-                        "tread adapt: the viscoelastic history lives on the rings of a \
-                         structured mesh; adaptive steady rolling takes elastic materials"
-                            .into(),
-                    ));
-                }
                 if scene.road.is_none() || scene.contact.is_none() {
                     return Err(AppError::Unsupported(
                         "tread adapt: steady rolling needs [road] and [contact]".into(),
                     ));
                 }
                 let (material, pressure) = build_material(scene)?;
-                let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
-                Ok(Self::Steady(Box::new(steady_run::steady_on(scene, model)?)))
+                let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+                // A viscoelastic history is a function of the steady state (integrated along
+                // the streamlines at every evaluation): nothing to transfer between meshes.
+                // One discretisation of it on every mesh of the loop: the upwind scheme, unless
+                // the scene asks for the rings (which the refined meshes do not have).
+                crate::setup::attach_viscoelastic(scene, &mut model)?;
+                let mut scene = scene.clone();
+                if scene.solver.steady_history == SteadyHistoryChoice::Auto {
+                    scene.solver.steady_history = SteadyHistoryChoice::Upwind;
+                }
+                Ok(Self::Steady(Box::new(steady_run::steady_on(
+                    &scene, model,
+                )?)))
             }
             _ => Ok(Self::Static(Box::new(indentation_system(scene, mesh)?))),
         }

@@ -573,11 +573,8 @@ impl SteadyHistory {
         let mut full = std::mem::take(&mut self.full);
         full.clear();
         full.resize(n_full, 0.0);
-        for (d, &q) in dofs.eq.iter().enumerate() {
-            if q < CONSTRAINED {
-                full[d] = v[q as usize];
-            }
-        }
+        // Hanging-node values from their masters.
+        dofs.scatter_free(v, &mut full);
         // δE = sym(Fᵀ ∇δu) per point.
         for (i, geo) in self.geo.iter().enumerate() {
             let c = self.cell_of[i] as usize;
@@ -638,10 +635,19 @@ impl SteadyHistory {
             let cd = dofs.cell(c);
             for a in 0..nn {
                 for comp in 0..2 {
-                    let q = dofs.eq[cd[2 * a + comp] as usize];
+                    let d = cd[2 * a + comp];
+                    let q = dofs.eq[d as usize];
+                    let y = geo.w * (dp[(comp, 0)] * geo.g[a][0] + dp[(comp, 1)] * geo.g[a][1]);
                     if q < CONSTRAINED {
-                        out[q as usize] +=
-                            geo.w * (dp[(comp, 0)] * geo.g[a][0] + dp[(comp, 1)] * geo.g[a][1]);
+                        out[q as usize] += y;
+                    } else {
+                        // A hanging node's row goes to its free masters with their weights.
+                        for &(m, w) in dofs.expansion(d).unwrap_or(&[]) {
+                            let em = dofs.eq[m as usize];
+                            if em < CONSTRAINED {
+                                out[em as usize] += w * y;
+                            }
+                        }
                     }
                 }
             }
