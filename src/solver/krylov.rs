@@ -57,6 +57,29 @@ pub fn gmres<S: NonlinearSystem + ?Sized>(
     restart: usize,
     max_it: usize,
 ) -> Result<KrylovStats, LinearError> {
+    gmres_with(
+        |v, y| apply(sys, v, y),
+        |z| lu.solve_in_place(z),
+        b,
+        x,
+        rtol,
+        restart,
+        max_it,
+    )
+}
+
+/// Restarted GMRES(`restart`) for A x = b with the product `apply(v, y)`: y = A v and the
+/// right preconditioner `precond(z)`: z ← M⁻¹ z (a fixed linear map); `x` holds the initial
+/// guess on entry. Stops at ‖b − A x‖ ≤ `rtol` ‖b‖ or after `max_it` products.
+pub fn gmres_with<E>(
+    mut apply: impl FnMut(&[f64], &mut [f64]),
+    mut precond: impl FnMut(&mut [f64]) -> Result<(), E>,
+    b: &[f64],
+    x: &mut [f64],
+    rtol: f64,
+    restart: usize,
+    max_it: usize,
+) -> Result<KrylovStats, E> {
     let n = b.len();
     let bnorm = dot(b, b).sqrt();
     let mut stats = KrylovStats::default();
@@ -72,7 +95,7 @@ pub fn gmres<S: NonlinearSystem + ?Sized>(
     let mut h = vec![vec![0.0; m]; m + 1];
     let (mut cs, mut sn, mut g) = (vec![0.0; m], vec![0.0; m], vec![0.0; m + 1]);
     loop {
-        apply(sys, x, &mut w);
+        apply(x, &mut w);
         stats.iterations += 1;
         for i in 0..n {
             r[i] = b[i] - w[i];
@@ -90,8 +113,8 @@ pub fn gmres<S: NonlinearSystem + ?Sized>(
         let mut k_done = 0;
         for j in 0..m {
             let mut z = vs[j].clone();
-            lu.solve_in_place(&mut z)?;
-            apply(sys, &z, &mut w);
+            precond(&mut z)?;
+            apply(&z, &mut w);
             stats.iterations += 1;
             zs.push(z);
             for i in 0..=j {
