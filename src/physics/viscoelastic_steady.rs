@@ -1,5 +1,6 @@
-//! Steady rolling with a viscoelastic material: the internal variables integrated exactly along
-//! the closed rings of quadrature points, and the ring coupling of the consistent tangent.
+//! Steady rolling with a viscoelastic material: the internal variables integrated along the
+//! streamlines (exactly along closed rings of quadrature points, or by an upwind scheme on any
+//! mesh), and the streamline coupling of the consistent tangent.
 //!
 //! # Equations
 //!
@@ -56,6 +57,19 @@
 //! preconditioned with the factorization of the assembled (sparse) part
 //! ([`crate::solver::newton`]). The sparsity pattern and the direct solver's fill are those of the
 //! elastic problem.
+//!
+//! # Meshes without rings
+//!
+//! Gmsh meshes, adaptively refined meshes (hanging nodes) and meshes of mixed degree have no
+//! closed rings of points. There the same ODE, written for `Y = X − g E` (convolution) or
+//! `Y = X` (multiplicative) as the transport–reaction equation `β·∇Y + Y/τ_i = s(E)` with the
+//! rigid rotation field `β = ω (−X₂, X₁)` and a source without derivatives
+//! (`s = −g E/τ_i` or `E/τ_i`), is discretised by upwind discontinuous Galerkin on the
+//! quadrature points ([`crate::physics::streamline_upwind`]): order q = degree + 1 at the
+//! points on any mesh, exact for constants. `X = L_i E` is again linear in the strains, so the
+//! tangent correction above applies unchanged, with `L_i` a sparse solve instead of the ring
+//! sweeps. [`StreamlineScheme`] chooses (`[solver] steady_history`): `Auto` takes the rings
+//! where the mesh has them.
 //!
 //! Units: those of the scene (stress for γ, time for τ_i, rad/s for ω).
 
