@@ -239,6 +239,10 @@ impl UpwindTransport {
     /// The operator for the points of `mesh` numbered by `offsets` (cell c owns the points
     /// `offsets[c]..offsets[c + 1]`, q × q Gauss points in tensor order, ξ fastest), for
     /// counter-clockwise flow (`forward`, ω > 0) or clockwise.
+    #[allow(
+        clippy::needless_range_loop,
+        reason = "point k indexes the mass, the tensor factors k % q and k / q and the rows together"
+    )]
     pub fn new(mesh: &Mesh, offsets: &[usize], forward: bool) -> Result<Self, UpwindError> {
         let nc = mesh.n_cells();
         let q_of = |c: usize| usize::from(mesh.degree[c]) + 1;
@@ -643,9 +647,9 @@ impl UpwindTransport {
     /// `T v` (for tests: the transport operator applied to point values).
     pub fn apply_transport(&self, v: &[f64], out: &mut [f64]) {
         out.iter_mut().for_each(|o| *o = 0.0);
-        for c in 0..self.n {
+        for (c, &vc) in v.iter().enumerate().take(self.n) {
             for p in self.col_ptr[c]..self.col_ptr[c + 1] {
-                out[self.row_idx[p]] += self.t[p] * v[c];
+                out[self.row_idx[p]] += self.t[p] * vc;
             }
         }
     }

@@ -298,6 +298,10 @@ impl Rings {
     /// For each ring, Prony term and strain component, the periodic solution `X = L_i e` of
     /// the exact step recurrence driven by the per-point strains `e`, handed to
     /// `out(point, term, component, X)`.
+    #[allow(
+        clippy::needless_range_loop,
+        reason = "the strain component indexes the per-point strains of two ring points"
+    )]
     fn sweep(
         &mut self,
         e: &[[f64; 3]],
