@@ -74,7 +74,7 @@ pub struct SolidEstimate {
 }
 
 impl SolidEstimate {
-    fn from_squares(sq: Vec<f64>) -> Self {
+    pub(super) fn from_squares(sq: Vec<f64>) -> Self {
         let sq: Vec<f64> = sq
             .into_iter()
             .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
@@ -92,14 +92,14 @@ fn error_rule(p: usize) -> usize {
 }
 
 /// Displacement gradient, first Piola–Kirchhoff stress, tangent A and geometry at (ξ, η).
-struct PointState {
-    x: Vec2,
-    h: Mat2,
-    p: Mat2,
-    jac: Mat2,
+pub(super) struct PointState {
+    pub(super) x: Vec2,
+    pub(super) h: Mat2,
+    pub(super) p: Mat2,
+    pub(super) jac: Mat2,
 }
 
-fn point_state(
+pub(super) fn point_state(
     model: &SolidModel,
     dofs: &DofMap,
     x: &[f64],
@@ -121,6 +121,13 @@ fn point_state(
 
 /// The quadratic form d : A : d of the linearised problem at the point state `s` of cell `c`.
 fn energy_density(model: &SolidModel, c: usize, s: &PointState, d: &Mat2) -> f64 {
+    let dv = flatten(d);
+    dv.dot(&(tangent(model, c, s) * dv))
+}
+
+/// The tangent A = ∂P/∂F of the linearised problem at the point state `s` of cell `c`
+/// (including −p ∂cof F/∂F of a mixed formulation), in the order of [`flatten`].
+pub(super) fn tangent(model: &SolidModel, c: usize, s: &PointState) -> crate::math::Tangent {
     let law = model.material_of(c);
     let (p_law, mut a) = law.stress_tangent(&s.h);
     if !matches!(model.pressure, PressureMode::None) {
@@ -129,8 +136,7 @@ fn energy_density(model: &SolidModel, c: usize, s: &PointState, d: &Mat2) -> f64
         let pres = ((p_law - s.p) * f.transpose()).trace() / (2.0 * f.determinant());
         a -= dcof_df() * pres;
     }
-    let dv = flatten(d);
-    dv.dot(&(a * dv))
+    a
 }
 
 /// Per-cell squares of the energy norm of `d(c, ξ, η, state)` over the error rule.
@@ -237,7 +243,7 @@ fn facet_corners(mesh: &Mesh, f: &Facet) -> (u32, u32) {
 }
 
 /// All sides of all cells, paired: `(facet, neighbour facet, same orientation)`.
-fn side_pairs(mesh: &Mesh) -> Vec<(Facet, Option<(Facet, bool)>)> {
+pub(super) fn side_pairs(mesh: &Mesh) -> Vec<(Facet, Option<(Facet, bool)>)> {
     let sides: Vec<(Facet, (u32, u32))> = (0..mesh.n_cells() as u32)
         .flat_map(|cell| (0..4u8).map(move |side| Facet { cell, side }))
         .map(|f| (f, facet_corners(mesh, &f)))
@@ -264,7 +270,7 @@ fn side_pairs(mesh: &Mesh) -> Vec<(Facet, Option<(Facet, bool)>)> {
 
 /// P N (N the unit outward normal of the cell) at side parameter `s` of facet `f`, with the
 /// face's length element |dX/ds| and the point X.
-fn traction(
+pub(super) fn traction(
     model: &SolidModel,
     dofs: &DofMap,
     x: &[f64],

@@ -8,6 +8,7 @@
 //! damping uses (v = ω ∂θχ). Quantities are in the scene's
 //! units, per unit thickness (plane strain).
 
+pub mod equilibrated;
 pub mod estimate;
 pub mod recovery;
 pub mod ring_derivative;

@@ -88,7 +88,7 @@ pub const LONG_MEMORY: f64 = 2.0;
 pub const SLOW_SWEEPS: usize = 60;
 
 /// Lagrange basis through `nodes` at `s`: values into `l`, derivatives into `dl`.
-fn lagrange_with_derivative(nodes: &[f64], s: f64, l: &mut [f64], dl: &mut [f64]) {
+pub(crate) fn lagrange_with_derivative(nodes: &[f64], s: f64, l: &mut [f64], dl: &mut [f64]) {
     let q = nodes.len();
     for i in 0..q {
         let mut v = 1.0;

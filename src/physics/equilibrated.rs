@@ -1,0 +1,583 @@
+//! The implicit (equilibrated residual) error estimator of the finite-strain solid: local
+//! Neumann problems on every cell with equilibrated boundary tractions (Ainsworth–Oden).
+//!
+//! # Equations
+//!
+//! The error is measured in the energy norm of the problem linearised about the converged
+//! state, `‖e‖²_A = Σ_K ∫_K ∇e : A : ∇e` (see [`super::estimate`]). With the total stress of the
+//! state `Σ_h = P_h − ρ ω² (∂θχ_h ⊗ t)` (`t = (−X₂, X₁)`; the second term is the θ-referential
+//! inertia of the steady and spinning modes, in the weak form the element kernels use), the
+//! residual of a cell K against tractions `g_K` on its sides is
+//!
+//! ```text
+//! R_K(v) = ∫_K (b · v − Σ_h : ∇v) dX + ∮_{∂K} g_K · v dS.
+//! ```
+//!
+//! 1. **Averaged tractions.** On an interior side `g = ½ (Σ_h N)⁻ − ½ (Σ_h N)⁺` (out of the
+//!    side's first cell, the negative for the other); on a traction-free side `g = 0`; on a side
+//!    with applied tractions (contact) `g = t`; on a side with a displacement condition (the hub)
+//!    the one-sided `Σ_h N`, which the equilibration may change freely.
+//! 2. **Equilibration.** For every vertex n with its bilinear hat θ_n and each direction e_i,
+//!    linear corrections Δg on the sides at n (moments `μ_F^n = ∫_F Δg_i θ_n`) are chosen, of
+//!    minimum norm, such that `R_K(θ_n e_i) = 0` in every cell K around n. The conditions are
+//!    solvable because the global residual vanishes against θ_n e_i (the state is converged and
+//!    the hats lie in the finite element space); the sides' linear corrections follow from
+//!    their two end moments.
+//! 3. **Local Neumann problems.** In every cell, `φ_K` in vector Q_{p+2} (Lagrange on
+//!    Gauss–Lobatto points, p the cell's degree, at most 4) with `φ_K = 0` on sides with a
+//!    displacement condition solves `∫_K ∇v : A : ∇φ_K = R_K(v)` for all such v; the
+//!    components of R_K along the null space of the local form (translations, and rotations of
+//!    an unstressed cell) are dropped (they vanish up to round-off after the equilibration, on
+//!    cells with a bilinear map exactly). The indicator is `η_K² = ∫_K ∇φ_K : A : ∇φ_K`.
+//!
+//! For a linear problem with exact local solutions, `Σ_K η_K² ≥ ‖e‖²` (a guaranteed upper
+//! bound); here the local space is finite (p + 2). Measured on a manufactured solution of the
+//! static solid (`tests/mms.rs`): effectivity 1.09–1.20 (Q1) and 1.26–1.50 (Q2). With a spin,
+//! the linearised operator of the θ-referential problem has the inertia part
+//! `−ρ ω² ∫ (∇e t)·(∇v t)`, which the local problems (and the error measure) omit: while
+//! `ρ ω² R²` is small next to the shear modulus the effectivity is that of the static solid;
+//! when it is comparable (fast spinning: 5.9 μ at the rim in `tests/solid_estimators.rs`) the
+//! estimator overestimates the material-norm error by a factor of 2–4, most in the cells at the
+//! hub. The volume terms of the equilibration use the element kernels' Gauss rule, so the
+//! moments of a converged state balance to round-off. Scope: conforming meshes (no hanging
+//! nodes); the elastic stress of the state (not the strain-rate damping or a viscous
+//! overstress).
+
+use super::estimate::{
+    point_state, side_pairs, tangent, BoundaryTractions, PointState, SolidEstimate,
+};
+use super::solid::SolidModel;
+use super::streamline_upwind::lagrange_with_derivative;
+use crate::assembly::DofMap;
+use crate::element::quadrature::gauss_1d;
+use crate::math::{Mat2, Vec2};
+use crate::mesh::locate::point_at;
+use crate::mesh::{Facet, Mesh};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use std::collections::{HashMap, HashSet};
+
+/// Why the equilibrated estimator cannot run on a model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EquilibratedError {
+    /// The mesh has hanging nodes (not supported yet).
+    HangingNodes,
+}
+
+impl std::fmt::Display for EquilibratedError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::HangingNodes => write!(
+                f,
+                "the equilibrated residual estimator needs a conforming mesh (this one has \
+                 hanging nodes); use the recovery or explicit residual estimator"
+            ),
+        }
+    }
+}
+
+/// The moments of one vertex patch: (side, moment per component).
+type PatchMoments = Vec<(usize, [f64; 2])>;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Interior,
+    Free,
+    Dirichlet,
+    Loaded(usize),
+}
+
+/// One side of the mesh: its first cell's facet, the other cell's (with the orientation of its
+/// side parameter), the vertices at s = −1 and s = +1 of the first facet, and per quadrature
+/// point (s, w |dX/ds|, averaged traction out of the first cell).
+struct Side {
+    minus: Facet,
+    plus: Option<(Facet, bool)>,
+    kind: Kind,
+    ends: [usize; 2],
+    points: Vec<(f64, f64, Vec2)>,
+}
+
+/// Σ_h = P_h − ρ ω² (∂θχ_h ⊗ t) at a point state of cell `c`.
+fn total_stress(model: &SolidModel, c: usize, s: &PointState) -> Mat2 {
+    let rw2 = model.rho_of(c) * model.omega2;
+    if rw2 == 0.0 {
+        return s.p;
+    }
+    let t = Vec2::new(-s.x[1], s.x[0]);
+    let dth = t + s.h * t;
+    s.p - dth * t.transpose() * rw2
+}
+
+/// Σ_h N (N the cell's outward unit normal) at parameter `s` of facet `f`, with |dX/ds|.
+fn side_traction(
+    model: &SolidModel,
+    dofs: &DofMap,
+    x: &[f64],
+    f: &Facet,
+    s: f64,
+) -> Option<(Vec2, f64)> {
+    let c = f.cell as usize;
+    let (xi, eta) = f.ref_point(s);
+    let st = point_state(model, dofs, x, c, xi, eta)?;
+    let t = st.jac.column(f.tangent_column()).into_owned();
+    let len = t.norm();
+    let mut n = Vec2::new(t[1], -t[0]) / len;
+    let across = st.jac.column(1 - f.tangent_column()).into_owned();
+    let sign = if f.side % 2 == 1 { 1.0 } else { -1.0 };
+    if n.dot(&across) * sign < 0.0 {
+        n = -n;
+    }
+    Some((total_stress(model, c, &st) * n, len))
+}
+
+/// Corner nodes of cell `c` in the order of the bilinear hats (ξ, η) = (−,−), (+,−), (−,+), (+,+).
+fn corners(mesh: &Mesh, c: usize) -> [u32; 4] {
+    let p = usize::from(mesh.degree[c]);
+    let m = p + 1;
+    let nodes = mesh.cell_nodes(c);
+    [0, p, m * p, m * p + p].map(|a| nodes[a])
+}
+
+/// Bilinear hats at (ξ, η) and their reference gradients.
+fn hats(xi: f64, eta: f64) -> ([f64; 4], [[f64; 2]; 4]) {
+    let (a, da) = ([0.5 * (1.0 - xi), 0.5 * (1.0 + xi)], [-0.5, 0.5]);
+    let (b, db) = ([0.5 * (1.0 - eta), 0.5 * (1.0 + eta)], [-0.5, 0.5]);
+    let mut n = [0.0; 4];
+    let mut dn = [[0.0; 2]; 4];
+    for k in 0..4 {
+        let (i, j) = (k % 2, k / 2);
+        n[k] = a[i] * b[j];
+        dn[k] = [da[i] * b[j], a[i] * db[j]];
+    }
+    (n, dn)
+}
+
+/// Gauss–Lobatto points of degree q (q + 1 points), 1 ≤ q ≤ 4.
+fn lobatto(q: usize) -> Vec<f64> {
+    match q {
+        1 => vec![-1.0, 1.0],
+        2 => vec![-1.0, 0.0, 1.0],
+        3 => {
+            let a = 1.0 / 5f64.sqrt();
+            vec![-1.0, -a, a, 1.0]
+        }
+        _ => {
+            let a = (3.0f64 / 7.0).sqrt();
+            vec![-1.0, -a, 0.0, a, 1.0]
+        }
+    }
+}
+
+/// The equilibrated residual estimator (see the module docs). `free` names the traction-free
+/// facet sets; `applied` gives tractions on boundary facets (e.g. the road's contact); every
+/// other boundary side carries a displacement condition.
+pub fn equilibrated(
+    model: &SolidModel,
+    dofs: &DofMap,
+    x: &[f64],
+    free: &[&str],
+    applied: Option<&BoundaryTractions>,
+) -> Result<SolidEstimate, EquilibratedError> {
+    let mesh = &model.mesh;
+    if !mesh.constraints.is_empty() || dofs.has_constraints() {
+        return Err(EquilibratedError::HangingNodes);
+    }
+    let nc = mesh.n_cells();
+    let mut free_sides: HashSet<(u32, u8)> = HashSet::new();
+    for name in free {
+        for f in mesh.facet_set(name) {
+            free_sides.insert((f.cell, f.side));
+        }
+    }
+    let loaded: HashMap<(u32, u8), usize> = applied
+        .map(|bt| {
+            bt.facets
+                .iter()
+                .enumerate()
+                .map(|(k, f)| ((f.cell, f.side), k))
+                .collect()
+        })
+        .unwrap_or_default();
+    // Vertices: the corner nodes, numbered compactly.
+    let mut vertex_of: HashMap<u32, usize> = HashMap::new();
+    let cell_vertices: Vec<[usize; 4]> = (0..nc)
+        .map(|c| {
+            corners(mesh, c).map(|n| {
+                let next = vertex_of.len();
+                *vertex_of.entry(n).or_insert(next)
+            })
+        })
+        .collect();
+    let nv = vertex_of.len();
+    // Sides with their quadrature and averaged tractions.
+    let mut sides: Vec<Side> = side_pairs(mesh)
+        .into_iter()
+        .filter(|(f, other)| other.is_none_or(|(g, _)| f.cell < g.cell))
+        .map(|(f, other)| {
+            let c = f.cell as usize;
+            let p = usize::from(mesh.degree[c]);
+            let nodes = mesh.cell_nodes(c);
+            let ln = f.local_nodes(p);
+            let ends = [ln[0], ln[p]].map(|a| vertex_of[&nodes[a]]);
+            let kind = match other {
+                Some(_) => Kind::Interior,
+                None if free_sides.contains(&(f.cell, f.side)) => Kind::Free,
+                None => match loaded.get(&(f.cell, f.side)) {
+                    Some(&k) => Kind::Loaded(k),
+                    None => Kind::Dirichlet,
+                },
+            };
+            Side {
+                minus: f,
+                plus: other,
+                kind,
+                ends,
+                points: Vec::new(),
+            }
+        })
+        .collect();
+    sides.par_iter_mut().for_each(|sd| {
+        let c = sd.minus.cell as usize;
+        let p = usize::from(mesh.degree[c]);
+        let rule: Vec<(f64, f64)> = match (sd.kind, applied) {
+            (Kind::Loaded(_), Some(bt)) => bt
+                .points
+                .iter()
+                .copied()
+                .zip(bt.weights.iter().copied())
+                .collect(),
+            _ => {
+                let (s, w) = gauss_1d(p + 3);
+                s.into_iter().zip(w).collect()
+            }
+        };
+        for (q, (s, w)) in rule.into_iter().enumerate() {
+            let Some((tm, len)) = side_traction(model, dofs, x, &sd.minus, s) else {
+                continue;
+            };
+            let g = match sd.kind {
+                Kind::Interior => {
+                    let Some((fp, same)) = sd.plus else { continue };
+                    let s2 = if same { s } else { -s };
+                    match side_traction(model, dofs, x, &fp, s2) {
+                        Some((tp, _)) => (tm - tp) * 0.5,
+                        None => tm,
+                    }
+                }
+                Kind::Free => Vec2::zeros(),
+                Kind::Dirichlet => tm,
+                Kind::Loaded(k) => applied.map_or(Vec2::zeros(), |bt| {
+                    bt.traction
+                        .get(k * bt.points.len() + q)
+                        .copied()
+                        .unwrap_or_default()
+                }),
+            };
+            sd.points.push((s, w * len, g));
+        }
+    });
+    let sides_of_cell = {
+        let mut v: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nc];
+        for (k, sd) in sides.iter().enumerate() {
+            v[sd.minus.cell as usize].push((k, 1.0));
+            if let Some((fp, _)) = sd.plus {
+                v[fp.cell as usize].push((k, -1.0));
+            }
+        }
+        v
+    };
+    // Moments b_K^n = R_K(θ_n e_i) with the averaged tractions, per cell and corner.
+    let mut moments: Vec<[[f64; 2]; 4]> = (0..nc)
+        .into_par_iter()
+        .map(|c| {
+            let mut b = [[0.0; 2]; 4];
+            // The kernels' rule: the moments of a converged state then sum to zero around
+            // every free vertex.
+            let (pts, wts) = gauss_1d(usize::from(mesh.degree[c]) + 1);
+            for (l, &eta) in pts.iter().enumerate() {
+                for (i, &xi) in pts.iter().enumerate() {
+                    let Some(st) = point_state(model, dofs, x, c, xi, eta) else {
+                        continue;
+                    };
+                    let Some(inv) = st.jac.try_inverse() else {
+                        continue;
+                    };
+                    let w = wts[i] * wts[l] * st.jac.determinant().abs();
+                    let sig = total_stress(model, c, &st);
+                    let bf = model.body_force.as_ref().map_or(Vec2::zeros(), |f| f(st.x));
+                    let (n, dn) = hats(xi, eta);
+                    for a in 0..4 {
+                        let g = inv.transpose() * Vec2::new(dn[a][0], dn[a][1]);
+                        let r = bf * n[a] - sig * g;
+                        b[a][0] += w * r[0];
+                        b[a][1] += w * r[1];
+                    }
+                }
+            }
+            b
+        })
+        .collect();
+    for sd in &sides {
+        for &(s, wl, g) in &sd.points {
+            let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
+            for (cell, sgn) in std::iter::once((sd.minus.cell as usize, 1.0))
+                .chain(sd.plus.map(|(fp, _)| (fp.cell as usize, -1.0)))
+            {
+                for (e, &v) in sd.ends.iter().enumerate() {
+                    if let Some(a) = cell_vertices[cell].iter().position(|&u| u == v) {
+                        moments[cell][a][0] += sgn * wl * g[0] * th[e];
+                        moments[cell][a][1] += sgn * wl * g[1] * th[e];
+                    }
+                }
+            }
+        }
+    }
+    // Patch problems per vertex: minimum-norm moments μ with A μ = −b.
+    let mut node_cells: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nv];
+    for (c, vs) in cell_vertices.iter().enumerate() {
+        for (a, &v) in vs.iter().enumerate() {
+            node_cells[v].push((c, a));
+        }
+    }
+    let mut node_sides: Vec<Vec<usize>> = vec![Vec::new(); nv];
+    for (k, sd) in sides.iter().enumerate() {
+        if matches!(sd.kind, Kind::Interior | Kind::Dirichlet) {
+            for &v in &sd.ends {
+                node_sides[v].push(k);
+            }
+        }
+    }
+    // μ per side: [end][component].
+    let mut mu: Vec<[[f64; 2]; 2]> = vec![[[0.0; 2]; 2]; sides.len()];
+    let patches: Vec<(usize, PatchMoments)> = (0..nv)
+        .into_par_iter()
+        .filter_map(|v| {
+            let cells = &node_cells[v];
+            let sl = &node_sides[v];
+            if cells.is_empty() || sl.is_empty() {
+                return None;
+            }
+            let mut a = DMatrix::<f64>::zeros(cells.len(), sl.len());
+            let mut b = DMatrix::<f64>::zeros(cells.len(), 2);
+            for (ci, &(c, corner)) in cells.iter().enumerate() {
+                b[(ci, 0)] = -moments[c][corner][0];
+                b[(ci, 1)] = -moments[c][corner][1];
+                for (j, &k) in sl.iter().enumerate() {
+                    if sides[k].minus.cell as usize == c {
+                        a[(ci, j)] += 1.0;
+                    }
+                    if sides[k].plus.is_some_and(|(fp, _)| fp.cell as usize == c) {
+                        a[(ci, j)] -= 1.0;
+                    }
+                }
+            }
+            // Least weighted norm: a side with a displacement condition takes its correction
+            // freely (its traction does not enter its cell's local problem), the others as
+            // little as the balance needs.
+            let d = DVector::from_iterator(
+                sl.len(),
+                sl.iter().map(|&k| {
+                    if sides[k].kind == Kind::Dirichlet {
+                        1e3
+                    } else {
+                        1.0
+                    }
+                }),
+            );
+            let ad = DMatrix::from_fn(cells.len(), sl.len(), |i, j| a[(i, j)] * d[j]);
+            let lam = (&ad * ad.transpose()).pseudo_inverse(1e-12).ok()? * b;
+            let m = DMatrix::from_fn(sl.len(), 2, |j, i| d[j] * (ad.transpose() * &lam)[(j, i)]);
+            Some((
+                v,
+                sl.iter()
+                    .enumerate()
+                    .map(|(j, &k)| (k, [m[(j, 0)], m[(j, 1)]]))
+                    .collect(),
+            ))
+        })
+        .collect();
+    for (v, list) in patches {
+        for (k, m) in list {
+            let e = if sides[k].ends[0] == v { 0 } else { 1 };
+            mu[k][e] = m;
+        }
+    }
+    // Linear corrections per side: Δg = α₀ ψ₀ + α₁ ψ₁ (ψ the side's hats) with the moments μ.
+    let corr: Vec<[Vec2; 2]> = sides
+        .iter()
+        .zip(&mu)
+        .map(|(sd, m)| {
+            if !matches!(sd.kind, Kind::Interior | Kind::Dirichlet) {
+                return [Vec2::zeros(); 2];
+            }
+            let mut g = Mat2::zeros();
+            for &(s, wl, _) in &sd.points {
+                let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
+                for e in 0..2 {
+                    for k in 0..2 {
+                        g[(e, k)] += wl * th[e] * th[k];
+                    }
+                }
+            }
+            let Some(gi) = g.try_inverse() else {
+                return [Vec2::zeros(); 2];
+            };
+            let mut out = [Vec2::zeros(); 2];
+            for (i, o) in [0usize, 1].iter().enumerate() {
+                let al = gi * Vec2::new(m[0][*o], m[1][*o]);
+                out[0][i] = al[0];
+                out[1][i] = al[1];
+            }
+            out
+        })
+        .collect();
+    // Local Neumann problems.
+    let sq: Vec<f64> = (0..nc)
+        .into_par_iter()
+        .map(|c| local_problem(model, dofs, x, c, &sides, &sides_of_cell[c], &corr))
+        .collect();
+    Ok(SolidEstimate::from_squares(sq))
+}
+
+/// η_K² of cell `c` from its local Neumann problem in vector Q_{p+2}.
+fn local_problem(
+    model: &SolidModel,
+    dofs: &DofMap,
+    x: &[f64],
+    c: usize,
+    sides: &[Side],
+    mine: &[(usize, f64)],
+    corr: &[[Vec2; 2]],
+) -> f64 {
+    let mesh = &model.mesh;
+    let p = usize::from(mesh.degree[c]);
+    let q = (p + 2).min(4);
+    let nodes1 = lobatto(q);
+    let m = q + 1;
+    let nb = m * m;
+    let n = 2 * nb;
+    let mut kmat = DMatrix::<f64>::zeros(n, n);
+    let mut rhs = DVector::<f64>::zeros(n);
+    let mut lx = [0.0; 5];
+    let mut dlx = [0.0; 5];
+    let mut ly = [0.0; 5];
+    let mut dly = [0.0; 5];
+    let (pts, wts) = gauss_1d(q + 2);
+    let mut grads = vec![Vec2::zeros(); nb];
+    let mut vals = vec![0.0; nb];
+    for (l, &eta) in pts.iter().enumerate() {
+        for (i, &xi) in pts.iter().enumerate() {
+            let Some(st) = point_state(model, dofs, x, c, xi, eta) else {
+                continue;
+            };
+            let Some(inv) = st.jac.try_inverse() else {
+                continue;
+            };
+            let w = wts[i] * wts[l] * st.jac.determinant().abs();
+            let a = tangent(model, c, &st);
+            let sig = total_stress(model, c, &st);
+            let bf = model.body_force.as_ref().map_or(Vec2::zeros(), |f| f(st.x));
+            lagrange_with_derivative(&nodes1, xi, &mut lx[..m], &mut dlx[..m]);
+            lagrange_with_derivative(&nodes1, eta, &mut ly[..m], &mut dly[..m]);
+            for k in 0..nb {
+                let (kx, ky) = (k % m, k / m);
+                vals[k] = lx[kx] * ly[ky];
+                grads[k] = inv.transpose() * Vec2::new(dlx[kx] * ly[ky], lx[kx] * dly[ky]);
+            }
+            for ka in 0..nb {
+                let ga = grads[ka];
+                for i in 0..2 {
+                    let r = bf[i] * vals[ka] - (sig[(i, 0)] * ga[0] + sig[(i, 1)] * ga[1]);
+                    rhs[2 * ka + i] += w * r;
+                    for kb in 0..nb {
+                        let gb = grads[kb];
+                        for j in 0..2 {
+                            let mut v = 0.0;
+                            for jj in 0..2 {
+                                for ll in 0..2 {
+                                    v += ga[jj] * a[(2 * i + jj, 2 * j + ll)] * gb[ll];
+                                }
+                            }
+                            kmat[(2 * ka + i, 2 * kb + j)] += w * v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Side tractions; DOFs on sides with a displacement condition are removed.
+    let mut fixed = vec![false; n];
+    for &(k, sgn) in mine {
+        let sd = &sides[k];
+        let (facet, flip) = if sgn > 0.0 {
+            (sd.minus, false)
+        } else {
+            match sd.plus {
+                Some((fp, same)) => (fp, !same),
+                None => continue,
+            }
+        };
+        if sd.kind == Kind::Dirichlet {
+            for kk in 0..nb {
+                let (kx, ky) = (kk % m, kk / m);
+                let on = match facet.side {
+                    0 => kx == 0,
+                    1 => kx == q,
+                    2 => ky == 0,
+                    _ => ky == q,
+                };
+                if on {
+                    fixed[2 * kk] = true;
+                    fixed[2 * kk + 1] = true;
+                }
+            }
+            continue;
+        }
+        for &(s, wl, g) in &sd.points {
+            let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
+            let flux = (g + corr[k][0] * th[0] + corr[k][1] * th[1]) * sgn;
+            let sc = if flip { -s } else { s };
+            let (xi, eta) = facet.ref_point(sc);
+            lagrange_with_derivative(&nodes1, xi, &mut lx[..m], &mut dlx[..m]);
+            lagrange_with_derivative(&nodes1, eta, &mut ly[..m], &mut dly[..m]);
+            for kk in 0..nb {
+                let v = lx[kk % m] * ly[kk / m];
+                rhs[2 * kk] += wl * flux[0] * v;
+                rhs[2 * kk + 1] += wl * flux[1] * v;
+            }
+        }
+    }
+    let keep: Vec<usize> = (0..n).filter(|&i| !fixed[i]).collect();
+    let mut kr = DMatrix::from_fn(keep.len(), keep.len(), |i, j| kmat[(keep[i], keep[j])]);
+    let mut rr = DVector::from_fn(keep.len(), |i, _| rhs[keep[i]]);
+    if keep.len() == n {
+        // A floating cell: its data is balanced against translations by the equilibration,
+        // and against the rotation only up to the cell's curvature (the hats span the
+        // rotation on a bilinear map). The local problem is solved orthogonally to the rigid
+        // modes, so a stressed cell's weak rotational stiffness does not turn that imbalance
+        // into a spurious rotation.
+        let mut rm = DMatrix::<f64>::zeros(n, 3);
+        for kk in 0..nb {
+            let xk = point_at(mesh, c, nodes1[kk % m], nodes1[kk / m]);
+            rm[(2 * kk, 0)] = 1.0;
+            rm[(2 * kk + 1, 1)] = 1.0;
+            rm[(2 * kk, 2)] = -xk[1];
+            rm[(2 * kk + 1, 2)] = xk[0];
+        }
+        let q = rm.qr().q();
+        let proj = DMatrix::<f64>::identity(n, n) - &q * q.transpose();
+        kr = &proj * kr * &proj;
+        rr = &proj * rr;
+    }
+    let eig = nalgebra::SymmetricEigen::new(kr);
+    let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
+    let mut e2 = 0.0;
+    for (j, &lam) in eig.eigenvalues.iter().enumerate() {
+        if lam > 1e-10 * lmax {
+            let proj = eig.eigenvectors.column(j).dot(&rr);
+            e2 += proj * proj / lam;
+        }
+    }
+    e2
+}
