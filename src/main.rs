@@ -129,8 +129,9 @@ enum Command {
         #[arg(long, default_value_t = 0.0)]
         tolerance: f64,
         /// The estimator that drives the marking: "recovery" (Zienkiewicz–Zhu),
-        /// "interpolation" (interpolation error with recovered derivatives) or "explicit"
-        /// (explicit residual with the contact traction on the contact facets).
+        /// "interpolation" (interpolation error with recovered derivatives), "explicit"
+        /// (explicit residual with the contact traction on the contact facets) or
+        /// "equilibrated" (local Neumann problems with equilibrated tractions).
         #[arg(long, default_value = "recovery")]
         estimator: tread::driver::adaptive::SolidEstimator,
         /// Coarsening fraction c >= 0: families of four cells whose squared indicators are

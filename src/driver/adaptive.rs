@@ -45,8 +45,8 @@ use crate::io::scene::VtuFormat;
 use crate::io::scene::{Mode, Scene, SteadyHistoryChoice};
 use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
-use crate::physics::estimate;
 use crate::physics::SolidModel;
+use crate::physics::{equilibrated, estimate};
 use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
 use crate::solver::stepping::{LoadedSystem, StepReport};
 use crate::solver::{Newton, NonlinearSystem, SolveError};
@@ -66,6 +66,9 @@ pub enum SolidEstimator {
     /// ([`estimate::explicit_residual_with`]; its constant taken as 1, so its global value is
     /// an indicator, not an estimate of the error's size).
     Explicit,
+    /// Equilibrated residual with local Neumann problems ([`equilibrated::equilibrated`]; an
+    /// upper bound of the energy error of the static solid).
+    Equilibrated,
 }
 
 impl SolidEstimator {
@@ -74,6 +77,7 @@ impl SolidEstimator {
             Self::Recovery => "recovery",
             Self::Interpolation => "interpolation",
             Self::Explicit => "explicit",
+            Self::Equilibrated => "equilibrated",
         }
     }
 }
@@ -85,8 +89,10 @@ impl std::str::FromStr for SolidEstimator {
             "recovery" => Ok(Self::Recovery),
             "interpolation" => Ok(Self::Interpolation),
             "explicit" => Ok(Self::Explicit),
+            "equilibrated" => Ok(Self::Equilibrated),
             _ => Err(format!(
-                "unknown estimator `{s}` (expected \"recovery\", \"interpolation\" or \"explicit\")"
+                "unknown estimator `{s}` (expected \"recovery\", \"interpolation\", \"explicit\" \
+                 or \"equilibrated\")"
             )),
         }
     }
@@ -390,6 +396,13 @@ pub fn run(
             SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
             SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
             SolidEstimator::Explicit => estimate::explicit_residual_with(
+                &sys.model,
+                &sys.dofs,
+                &sys.x,
+                &[],
+                sys.contact_tractions().as_ref(),
+            ),
+            SolidEstimator::Equilibrated => equilibrated::equilibrated(
                 &sys.model,
                 &sys.dofs,
                 &sys.x,

@@ -39,44 +39,88 @@
 //! when it is comparable (fast spinning: 5.9 μ at the rim in `tests/solid_estimators.rs`) the
 //! estimator overestimates the material-norm error by a factor of 2–4, most in the cells at the
 //! hub. The volume terms of the equilibration use the element kernels' Gauss rule, so the
-//! moments of a converged state balance to round-off. Scope: conforming meshes (no hanging
-//! nodes); the elastic stress of the state (not the strain-rate damping or a viscous
+//! moments of a converged state balance to round-off.
+//!
+//! **Hanging nodes** (one-irregular refinement): a small cell's side against half of a big
+//! cell's side is a side of its own, the big cell's parameter an affine map of the small one's;
+//! the hat of a hanging vertex is its big side's end hats at its position (the conforming
+//! bilinear space, as the displacement constraints make it), so its moments go to those two
+//! vertices. Scope: the elastic stress of the state (not the strain-rate damping or a viscous
 //! overstress).
 
 use super::estimate::{
     point_state, side_pairs, tangent, BoundaryTractions, PointState, SolidEstimate,
 };
 use super::solid::SolidModel;
-use super::streamline_upwind::lagrange_with_derivative;
+use super::streamline_upwind::{lagrange_with_derivative, reference_of};
 use crate::assembly::DofMap;
 use crate::element::quadrature::gauss_1d;
 use crate::math::{Mat2, Vec2};
-use crate::mesh::locate::point_at;
+use crate::mesh::locate::{point_at, PointLocator};
 use crate::mesh::{Facet, Mesh};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 
-/// Why the equilibrated estimator cannot run on a model.
-#[derive(Clone, Debug, PartialEq)]
-pub enum EquilibratedError {
-    /// The mesh has hanging nodes (not supported yet).
-    HangingNodes,
+/// What lies across a side without a partner of the same corners.
+enum Across {
+    /// Nothing: a boundary side.
+    Boundary,
+    /// A big side covered by two small cells' sides.
+    Covered,
+    /// This is a small side on the big cell's facet `big`, whose parameter is `a s + b`.
+    Half { big: Facet, a: f64, b: f64 },
 }
 
-impl std::fmt::Display for EquilibratedError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::HangingNodes => write!(
-                f,
-                "the equilibrated residual estimator needs a conforming mesh (this one has \
-                 hanging nodes); use the recovery or explicit residual estimator"
-            ),
+/// Classify the unpartnered side `f` (see [`Across`]) by locating a point just outside it at
+/// s = ½ and reading its two ends in the cell found there.
+fn across(mesh: &Mesh, locator: &PointLocator, f: &Facet) -> Across {
+    let c = f.cell as usize;
+    let (xi, eta) = f.ref_point(0.5);
+    let x = point_at(mesh, c, xi, eta);
+    // Outward: from the cell's centre through the point, a small step.
+    let centre = point_at(mesh, c, 0.0, 0.0);
+    let step = (x - centre) * 1e-6;
+    let Some((other, _, _)) = locator.locate(mesh, x + step).filter(|l| l.0 != c) else {
+        return Across::Boundary;
+    };
+    let ends = [-1.0, 1.0].map(|s| {
+        let (a, b) = f.ref_point(s);
+        point_at(mesh, c, a, b)
+    });
+    let Some(r) = ends
+        .iter()
+        .map(|&p| reference_of(mesh, other, p))
+        .collect::<Option<Vec<(f64, f64)>>>()
+    else {
+        return Across::Covered;
+    };
+    let tol = 1e-6;
+    let on = |v: f64, w: f64| (v - w).abs() < tol;
+    let inside = |v: f64| v.abs() <= 1.0 + tol;
+    for side in 0..4u8 {
+        let (fixed, free): (fn(&(f64, f64)) -> f64, fn(&(f64, f64)) -> f64) = if side < 2 {
+            (|p| p.0, |p| p.1)
+        } else {
+            (|p| p.1, |p| p.0)
+        };
+        let target = if side % 2 == 0 { -1.0 } else { 1.0 };
+        if r.iter().all(|p| on(fixed(p), target) && inside(free(p))) {
+            let (s0, s1) = (free(&r[0]), free(&r[1]));
+            return Across::Half {
+                big: Facet {
+                    cell: other as u32,
+                    side,
+                },
+                a: 0.5 * (s1 - s0),
+                b: 0.5 * (s0 + s1),
+            };
         }
     }
+    Across::Covered
 }
 
-/// The moments of one vertex patch: (side, moment per component).
+/// Moments per (side or vertex) index and component.
 type PatchMoments = Vec<(usize, [f64; 2])>;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,15 +131,29 @@ enum Kind {
     Loaded(usize),
 }
 
-/// One side of the mesh: its first cell's facet, the other cell's (with the orientation of its
-/// side parameter), the vertices at s = −1 and s = +1 of the first facet, and per quadrature
-/// point (s, w |dX/ds|, averaged traction out of the first cell).
+/// One side of the mesh: its first cell's facet; the other cell's facet with the affine map of
+/// the side parameter onto it (`s⁺ = a s + b`: a = ±1 between equal cells, ±½ from a small
+/// cell onto the half of a big cell's side it covers); the vertices whose (conforming) hat does
+/// not vanish on the side, with the hat's values at s = −1 and s = +1; per quadrature point
+/// (s, w |dX/ds|, averaged traction out of the first cell).
 struct Side {
     minus: Facet,
-    plus: Option<(Facet, bool)>,
+    plus: Option<(Facet, f64, f64)>,
     kind: Kind,
-    ends: [usize; 2],
+    theta: Vec<(usize, f64, f64)>,
     points: Vec<(f64, f64, Vec2)>,
+}
+
+impl Side {
+    /// The hat of vertex `v` at parameter s (0 if it vanishes on the side).
+    fn theta_at(&self, v: usize, s: f64) -> f64 {
+        self.theta
+            .iter()
+            .find(|t| t.0 == v)
+            .map_or(0.0, |&(_, t0, t1)| {
+                0.5 * (1.0 - s) * t0 + 0.5 * (1.0 + s) * t1
+            })
+    }
 }
 
 /// Σ_h = P_h − ρ ω² (∂θχ_h ⊗ t) at a point state of cell `c`.
@@ -178,11 +236,8 @@ pub fn equilibrated(
     x: &[f64],
     free: &[&str],
     applied: Option<&BoundaryTractions>,
-) -> Result<SolidEstimate, EquilibratedError> {
+) -> SolidEstimate {
     let mesh = &model.mesh;
-    if !mesh.constraints.is_empty() || dofs.has_constraints() {
-        return Err(EquilibratedError::HangingNodes);
-    }
     let nc = mesh.n_cells();
     let mut free_sides: HashSet<(u32, u8)> = HashSet::new();
     for name in free {
@@ -210,29 +265,92 @@ pub fn equilibrated(
         })
         .collect();
     let nv = vertex_of.len();
-    // Sides with their quadrature and averaged tractions.
-    let mut sides: Vec<Side> = side_pairs(mesh)
+    let ends_of = |f: &Facet| -> [usize; 2] {
+        let c = f.cell as usize;
+        let p = usize::from(mesh.degree[c]);
+        let ln = f.local_nodes(p);
+        let nodes = mesh.cell_nodes(c);
+        [ln[0], ln[p]].map(|a| vertex_of[&nodes[a]])
+    };
+    // Sides. A side without a partner of the same corners is a boundary side, a small cell's
+    // side against half of a big cell's (one-irregular refinement), or that big side (covered
+    // by the small ones, skipped): told apart by locating a point just outside it.
+    let locator = PointLocator::new(mesh);
+    // Hanging vertices: (vertex, [(master, weight)]).
+    let mut hanging: HashMap<usize, Vec<(usize, f64)>> = HashMap::new();
+    let mut raw: Vec<(Facet, Option<(Facet, f64, f64)>, Kind)> = Vec::new();
+    for (f, other) in side_pairs(mesh) {
+        if let Some((g, same)) = other {
+            if f.cell < g.cell {
+                raw.push((
+                    f,
+                    Some((g, if same { 1.0 } else { -1.0 }, 0.0)),
+                    Kind::Interior,
+                ));
+            }
+            continue;
+        }
+        if free_sides.contains(&(f.cell, f.side)) {
+            raw.push((f, None, Kind::Free));
+            continue;
+        }
+        if let Some(&k) = loaded.get(&(f.cell, f.side)) {
+            raw.push((f, None, Kind::Loaded(k)));
+            continue;
+        }
+        match across(mesh, &locator, &f) {
+            Across::Boundary => raw.push((f, None, Kind::Dirichlet)),
+            Across::Covered => {}
+            Across::Half { big, a, b } => {
+                // The end inside the big side is a hanging vertex: its hat is the big side's
+                // end hats at its parameter there.
+                let ends = ends_of(&f);
+                let big_ends = ends_of(&big);
+                for (e, sb) in [(0, b - a), (1, b + a)] {
+                    if sb.abs() < 1.0 - 1e-6 {
+                        hanging.insert(
+                            ends[e],
+                            vec![
+                                (big_ends[0], 0.5 * (1.0 - sb)),
+                                (big_ends[1], 0.5 * (1.0 + sb)),
+                            ],
+                        );
+                    }
+                }
+                raw.push((f, Some((big, a, b)), Kind::Interior));
+            }
+        }
+    }
+    let expand = |v: usize| -> Vec<(usize, f64)> {
+        hanging.get(&v).cloned().unwrap_or_else(|| vec![(v, 1.0)])
+    };
+    let mut sides: Vec<Side> = raw
         .into_iter()
-        .filter(|(f, other)| other.is_none_or(|(g, _)| f.cell < g.cell))
-        .map(|(f, other)| {
-            let c = f.cell as usize;
-            let p = usize::from(mesh.degree[c]);
-            let nodes = mesh.cell_nodes(c);
-            let ln = f.local_nodes(p);
-            let ends = [ln[0], ln[p]].map(|a| vertex_of[&nodes[a]]);
-            let kind = match other {
-                Some(_) => Kind::Interior,
-                None if free_sides.contains(&(f.cell, f.side)) => Kind::Free,
-                None => match loaded.get(&(f.cell, f.side)) {
-                    Some(&k) => Kind::Loaded(k),
-                    None => Kind::Dirichlet,
-                },
-            };
+        .map(|(f, plus, kind)| {
+            let ends = ends_of(&f);
+            let mut theta: Vec<(usize, f64, f64)> = Vec::new();
+            for (e, &v) in ends.iter().enumerate() {
+                for (n, w) in expand(v) {
+                    let ent = match theta.iter().position(|t| t.0 == n) {
+                        Some(i) => &mut theta[i],
+                        None => {
+                            theta.push((n, 0.0, 0.0));
+                            let last = theta.len() - 1;
+                            &mut theta[last]
+                        }
+                    };
+                    if e == 0 {
+                        ent.1 += w;
+                    } else {
+                        ent.2 += w;
+                    }
+                }
+            }
             Side {
                 minus: f,
-                plus: other,
+                plus,
                 kind,
-                ends,
+                theta,
                 points: Vec::new(),
             }
         })
@@ -258,9 +376,8 @@ pub fn equilibrated(
             };
             let g = match sd.kind {
                 Kind::Interior => {
-                    let Some((fp, same)) = sd.plus else { continue };
-                    let s2 = if same { s } else { -s };
-                    match side_traction(model, dofs, x, &fp, s2) {
+                    let Some((fp, a, b)) = sd.plus else { continue };
+                    match side_traction(model, dofs, x, &fp, a * s + b) {
                         Some((tp, _)) => (tm - tp) * 0.5,
                         None => tm,
                     }
@@ -281,14 +398,15 @@ pub fn equilibrated(
         let mut v: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nc];
         for (k, sd) in sides.iter().enumerate() {
             v[sd.minus.cell as usize].push((k, 1.0));
-            if let Some((fp, _)) = sd.plus {
+            if let Some((fp, _, _)) = sd.plus {
                 v[fp.cell as usize].push((k, -1.0));
             }
         }
         v
     };
-    // Moments b_K^n = R_K(θ_n e_i) with the averaged tractions, per cell and corner.
-    let mut moments: Vec<[[f64; 2]; 4]> = (0..nc)
+    // Moments b_K^n = R_K(θ_n e_i) with the averaged tractions, per cell and (conforming)
+    // vertex: the local hats' moments, a hanging corner's given to its masters.
+    let local: Vec<[[f64; 2]; 4]> = (0..nc)
         .into_par_iter()
         .map(|c| {
             let mut b = [[0.0; 2]; 4];
@@ -318,38 +436,55 @@ pub fn equilibrated(
             b
         })
         .collect();
+    let mut moments: Vec<Vec<(usize, [f64; 2])>> = vec![Vec::new(); nc];
+    let add = |list: &mut Vec<(usize, [f64; 2])>, n: usize, v: [f64; 2]| match list
+        .iter_mut()
+        .find(|e| e.0 == n)
+    {
+        Some(e) => {
+            e.1[0] += v[0];
+            e.1[1] += v[1];
+        }
+        None => list.push((n, v)),
+    };
+    for c in 0..nc {
+        for a in 0..4 {
+            for (n, w) in expand(cell_vertices[c][a]) {
+                add(&mut moments[c], n, [w * local[c][a][0], w * local[c][a][1]]);
+            }
+        }
+    }
     for sd in &sides {
         for &(s, wl, g) in &sd.points {
-            let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
             for (cell, sgn) in std::iter::once((sd.minus.cell as usize, 1.0))
-                .chain(sd.plus.map(|(fp, _)| (fp.cell as usize, -1.0)))
+                .chain(sd.plus.map(|(fp, _, _)| (fp.cell as usize, -1.0)))
             {
-                for (e, &v) in sd.ends.iter().enumerate() {
-                    if let Some(a) = cell_vertices[cell].iter().position(|&u| u == v) {
-                        moments[cell][a][0] += sgn * wl * g[0] * th[e];
-                        moments[cell][a][1] += sgn * wl * g[1] * th[e];
-                    }
+                for &(n, _, _) in &sd.theta {
+                    let th = sd.theta_at(n, s);
+                    add(
+                        &mut moments[cell],
+                        n,
+                        [sgn * wl * g[0] * th, sgn * wl * g[1] * th],
+                    );
                 }
             }
         }
     }
-    // Patch problems per vertex: minimum-norm moments μ with A μ = −b.
-    let mut node_cells: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nv];
-    for (c, vs) in cell_vertices.iter().enumerate() {
-        for (a, &v) in vs.iter().enumerate() {
-            node_cells[v].push((c, a));
+    // Patch problems per vertex: moments μ of least (weighted) norm with A μ = −b.
+    let mut node_cells: Vec<Vec<(usize, [f64; 2])>> = vec![Vec::new(); nv];
+    for (c, list) in moments.iter().enumerate() {
+        for &(n, b) in list {
+            node_cells[n].push((c, b));
         }
     }
     let mut node_sides: Vec<Vec<usize>> = vec![Vec::new(); nv];
     for (k, sd) in sides.iter().enumerate() {
         if matches!(sd.kind, Kind::Interior | Kind::Dirichlet) {
-            for &v in &sd.ends {
-                node_sides[v].push(k);
+            for &(n, _, _) in &sd.theta {
+                node_sides[n].push(k);
             }
         }
     }
-    // μ per side: [end][component].
-    let mut mu: Vec<[[f64; 2]; 2]> = vec![[[0.0; 2]; 2]; sides.len()];
     let patches: Vec<(usize, PatchMoments)> = (0..nv)
         .into_par_iter()
         .filter_map(|v| {
@@ -358,76 +493,87 @@ pub fn equilibrated(
             if cells.is_empty() || sl.is_empty() {
                 return None;
             }
-            let mut a = DMatrix::<f64>::zeros(cells.len(), sl.len());
-            let mut b = DMatrix::<f64>::zeros(cells.len(), 2);
-            for (ci, &(c, corner)) in cells.iter().enumerate() {
-                b[(ci, 0)] = -moments[c][corner][0];
-                b[(ci, 1)] = -moments[c][corner][1];
-                for (j, &k) in sl.iter().enumerate() {
-                    if sides[k].minus.cell as usize == c {
-                        a[(ci, j)] += 1.0;
-                    }
-                    if sides[k].plus.is_some_and(|(fp, _)| fp.cell as usize == c) {
-                        a[(ci, j)] -= 1.0;
-                    }
-                }
-            }
             // Least weighted norm: a side with a displacement condition takes its correction
             // freely (its traction does not enter its cell's local problem), the others as
             // little as the balance needs.
-            let d = DVector::from_iterator(
-                sl.len(),
-                sl.iter().map(|&k| {
+            let d: Vec<f64> = sl
+                .iter()
+                .map(|&k| {
                     if sides[k].kind == Kind::Dirichlet {
                         1e3
                     } else {
                         1.0
                     }
-                }),
-            );
-            let ad = DMatrix::from_fn(cells.len(), sl.len(), |i, j| a[(i, j)] * d[j]);
+                })
+                .collect();
+            let mut ad = DMatrix::<f64>::zeros(cells.len(), sl.len());
+            let mut b = DMatrix::<f64>::zeros(cells.len(), 2);
+            for (ci, &(c, bc)) in cells.iter().enumerate() {
+                b[(ci, 0)] = -bc[0];
+                b[(ci, 1)] = -bc[1];
+                for (j, &k) in sl.iter().enumerate() {
+                    if sides[k].minus.cell as usize == c {
+                        ad[(ci, j)] += d[j];
+                    }
+                    if sides[k]
+                        .plus
+                        .is_some_and(|(fp, _, _)| fp.cell as usize == c)
+                    {
+                        ad[(ci, j)] -= d[j];
+                    }
+                }
+            }
             let lam = (&ad * ad.transpose()).pseudo_inverse(1e-12).ok()? * b;
-            let m = DMatrix::from_fn(sl.len(), 2, |j, i| d[j] * (ad.transpose() * &lam)[(j, i)]);
+            let y = ad.transpose() * lam;
             Some((
                 v,
                 sl.iter()
                     .enumerate()
-                    .map(|(j, &k)| (k, [m[(j, 0)], m[(j, 1)]]))
+                    .map(|(j, &k)| (k, [d[j] * y[(j, 0)], d[j] * y[(j, 1)]]))
                     .collect(),
             ))
         })
         .collect();
+    // μ per side: (vertex, moment per component).
+    let mut mu: Vec<PatchMoments> = vec![Vec::new(); sides.len()];
     for (v, list) in patches {
         for (k, m) in list {
-            let e = if sides[k].ends[0] == v { 0 } else { 1 };
-            mu[k][e] = m;
+            mu[k].push((v, m));
         }
     }
-    // Linear corrections per side: Δg = α₀ ψ₀ + α₁ ψ₁ (ψ the side's hats) with the moments μ.
+    // Linear corrections per side: Δg = α₀ ψ₀ + α₁ ψ₁ (ψ the side's end hats), the moments
+    // ∫ Δg θ_n = μ_n matched (in least squares when a hanging end gives three vertices).
     let corr: Vec<[Vec2; 2]> = sides
         .iter()
         .zip(&mu)
         .map(|(sd, m)| {
-            if !matches!(sd.kind, Kind::Interior | Kind::Dirichlet) {
+            if !matches!(sd.kind, Kind::Interior | Kind::Dirichlet) || sd.theta.is_empty() {
                 return [Vec2::zeros(); 2];
             }
-            let mut g = Mat2::zeros();
+            let nt = sd.theta.len();
+            let mut g = DMatrix::<f64>::zeros(nt, 2);
             for &(s, wl, _) in &sd.points {
-                let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
-                for e in 0..2 {
-                    for k in 0..2 {
-                        g[(e, k)] += wl * th[e] * th[k];
-                    }
+                let psi = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
+                for (i, &(n, _, _)) in sd.theta.iter().enumerate() {
+                    let th = sd.theta_at(n, s);
+                    g[(i, 0)] += wl * th * psi[0];
+                    g[(i, 1)] += wl * th * psi[1];
                 }
             }
-            let Some(gi) = g.try_inverse() else {
+            let Ok(gi) = g.pseudo_inverse(1e-14) else {
                 return [Vec2::zeros(); 2];
             };
             let mut out = [Vec2::zeros(); 2];
-            for (i, o) in [0usize, 1].iter().enumerate() {
-                let al = gi * Vec2::new(m[0][*o], m[1][*o]);
-                out[0][i] = al[0];
-                out[1][i] = al[1];
+            for comp in 0..2 {
+                let rhs = DVector::from_iterator(
+                    nt,
+                    sd.theta
+                        .iter()
+                        .map(|t| m.iter().find(|e| e.0 == t.0).map_or(0.0, |e| e.1[comp])),
+                );
+                let al = &gi * rhs;
+                out[0][comp] = al[0];
+                out[1][comp] = al[1];
             }
             out
         })
@@ -437,7 +583,7 @@ pub fn equilibrated(
         .into_par_iter()
         .map(|c| local_problem(model, dofs, x, c, &sides, &sides_of_cell[c], &corr))
         .collect();
-    Ok(SolidEstimate::from_squares(sq))
+    SolidEstimate::from_squares(sq)
 }
 
 /// η_K² of cell `c` from its local Neumann problem in vector Q_{p+2}.
@@ -510,11 +656,11 @@ fn local_problem(
     let mut fixed = vec![false; n];
     for &(k, sgn) in mine {
         let sd = &sides[k];
-        let (facet, flip) = if sgn > 0.0 {
-            (sd.minus, false)
+        let (facet, map) = if sgn > 0.0 {
+            (sd.minus, (1.0, 0.0))
         } else {
             match sd.plus {
-                Some((fp, same)) => (fp, !same),
+                Some((fp, a, b)) => (fp, (a, b)),
                 None => continue,
             }
         };
@@ -537,8 +683,7 @@ fn local_problem(
         for &(s, wl, g) in &sd.points {
             let th = [0.5 * (1.0 - s), 0.5 * (1.0 + s)];
             let flux = (g + corr[k][0] * th[0] + corr[k][1] * th[1]) * sgn;
-            let sc = if flip { -s } else { s };
-            let (xi, eta) = facet.ref_point(sc);
+            let (xi, eta) = facet.ref_point(map.0 * s + map.1);
             lagrange_with_derivative(&nodes1, xi, &mut lx[..m], &mut dlx[..m]);
             lagrange_with_derivative(&nodes1, eta, &mut ly[..m], &mut dly[..m]);
             for kk in 0..nb {
@@ -569,7 +714,18 @@ fn local_problem(
         let proj = DMatrix::<f64>::identity(n, n) - &q * q.transpose();
         kr = &proj * kr * &proj;
         rr = &proj * rr;
+        // The rigid modes, now a null space of kr and orthogonal to rr, get a unit-scale
+        // stiffness: the Cholesky solve then returns the solution orthogonal to them.
+        let scale = (0..n).map(|i| kr[(i, i)]).sum::<f64>() / n as f64;
+        let mut spd = kr.clone();
+        spd += &q * q.transpose() * scale;
+        if let Some(ch) = spd.cholesky() {
+            return rr.dot(&ch.solve(&rr));
+        }
+    } else if let Some(ch) = kr.clone().cholesky() {
+        return rr.dot(&ch.solve(&rr));
     }
+    // Not positive definite (a loss of ellipticity of the tangent): the positive part.
     let eig = nalgebra::SymmetricEigen::new(kr);
     let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
     let mut e2 = 0.0;

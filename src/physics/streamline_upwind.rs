@@ -136,7 +136,7 @@ fn cell_map(mesh: &Mesh, c: usize, xi: f64, eta: f64) -> (Vec2, Mat2) {
 
 /// Reference coordinates of the point `x` in cell `c`: exact for a polar cell (the angle taken
 /// on the branch nearest the cell), Newton on the isoparametric map otherwise.
-fn reference_of(mesh: &Mesh, c: usize, x: Vec2) -> Option<(f64, f64)> {
+pub(crate) fn reference_of(mesh: &Mesh, c: usize, x: Vec2) -> Option<(f64, f64)> {
     match mesh.geometry[c] {
         CellGeometry::Polar { r0, r1, t0, t1 } => {
             let tm = 0.5 * (t0 + t1);
