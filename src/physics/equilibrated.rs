@@ -99,14 +99,14 @@ fn across(mesh: &Mesh, locator: &PointLocator, f: &Facet) -> Across {
     let on = |v: f64, w: f64| (v - w).abs() < tol;
     let inside = |v: f64| v.abs() <= 1.0 + tol;
     for side in 0..4u8 {
-        let (fixed, free): (fn(&(f64, f64)) -> f64, fn(&(f64, f64)) -> f64) = if side < 2 {
-            (|p| p.0, |p| p.1)
-        } else {
-            (|p| p.1, |p| p.0)
-        };
+        // (coordinate fixed on the side, the side's parameter) of a reference point.
+        let split = |p: &(f64, f64)| if side < 2 { (p.0, p.1) } else { (p.1, p.0) };
         let target = if side % 2 == 0 { -1.0 } else { 1.0 };
-        if r.iter().all(|p| on(fixed(p), target) && inside(free(p))) {
-            let (s0, s1) = (free(&r[0]), free(&r[1]));
+        if r.iter().all(|p| {
+            let (fixed, free) = split(p);
+            on(fixed, target) && inside(free)
+        }) {
+            let (s0, s1) = (split(&r[0]).1, split(&r[1]).1);
             return Across::Half {
                 big: Facet {
                     cell: other as u32,
@@ -119,6 +119,9 @@ fn across(mesh: &Mesh, locator: &PointLocator, f: &Facet) -> Across {
     }
     Across::Covered
 }
+
+/// A side before its hats and quadrature: first facet, the other with its parameter map, kind.
+type RawSide = (Facet, Option<(Facet, f64, f64)>, Kind);
 
 /// Moments per (side or vertex) index and component.
 type PatchMoments = Vec<(usize, [f64; 2])>;
@@ -278,7 +281,7 @@ pub fn equilibrated(
     let locator = PointLocator::new(mesh);
     // Hanging vertices: (vertex, [(master, weight)]).
     let mut hanging: HashMap<usize, Vec<(usize, f64)>> = HashMap::new();
-    let mut raw: Vec<(Facet, Option<(Facet, f64, f64)>, Kind)> = Vec::new();
+    let mut raw: Vec<RawSide> = Vec::new();
     for (f, other) in side_pairs(mesh) {
         if let Some((g, same)) = other {
             if f.cell < g.cell {
@@ -563,19 +566,16 @@ pub fn equilibrated(
             let Ok(gi) = g.pseudo_inverse(1e-14) else {
                 return [Vec2::zeros(); 2];
             };
-            let mut out = [Vec2::zeros(); 2];
-            for comp in 0..2 {
+            let al = [0, 1].map(|comp| {
                 let rhs = DVector::from_iterator(
                     nt,
                     sd.theta
                         .iter()
                         .map(|t| m.iter().find(|e| e.0 == t.0).map_or(0.0, |e| e.1[comp])),
                 );
-                let al = &gi * rhs;
-                out[0][comp] = al[0];
-                out[1][comp] = al[1];
-            }
-            out
+                &gi * rhs
+            });
+            [Vec2::new(al[0][0], al[1][0]), Vec2::new(al[0][1], al[1][1])]
         })
         .collect();
     // Local Neumann problems.
