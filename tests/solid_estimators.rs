@@ -24,6 +24,18 @@ fn system(material: &str, mesh: &str) -> SolidSystem {
     build_system(&common::spinning_scene(material, mesh)).expect("system")
 }
 
+/// The system on isoparametric cells (which represent u = H X exactly) at u = H X.
+fn homogeneous(material: &str, mesh: &str, h: &Mat2) -> SolidSystem {
+    let mut sys = system(material, mesh);
+    sys.model.mesh.make_isoparametric();
+    for (n, x) in sys.model.mesh.nodes.iter().enumerate() {
+        let u = h * x;
+        sys.x[2 * n] = u[0];
+        sys.x[2 * n + 1] = u[1];
+    }
+    sys
+}
+
 fn solve(sys: &mut SolidSystem, omega: f64) {
     let mut rep = StepReport::default();
     let opts = NewtonOptions {
@@ -75,13 +87,7 @@ fn estimators_vanish_on_a_homogeneous_deformation() {
             "n_r = 2\nn_theta = 16\norder = 2",
             "n_r = 1\nn_theta = 8\norder = 2",
         ] {
-            let mut sys = system(material, mesh);
-            sys.model.mesh.make_isoparametric();
-            for (n, x) in sys.model.mesh.nodes.iter().enumerate() {
-                let u = h * x;
-                sys.x[2 * n] = u[0];
-                sys.x[2 * n + 1] = u[1];
-            }
+            let sys = homogeneous(material, mesh, &h);
             let norm = energy_norm(&sys.model, &sys.dofs, &sys.x);
             let zz = recovery(&sys.model, &sys.dofs, &sys.x).global / norm;
             let ex = explicit_residual(&sys.model, &sys.dofs, &sys.x, &[]).global / norm;
@@ -242,13 +248,7 @@ fn equilibrated_estimator_bounds_the_error() {
             "n_r = 2\nn_theta = 16\norder = 1",
             "n_r = 1\nn_theta = 8\norder = 2",
         ] {
-            let mut sys = system(material, mesh);
-            sys.model.mesh.make_isoparametric();
-            for (n, x) in sys.model.mesh.nodes.iter().enumerate() {
-                let u = h * x;
-                sys.x[2 * n] = u[0];
-                sys.x[2 * n + 1] = u[1];
-            }
+            let sys = homogeneous(material, mesh, &h);
             let norm = energy_norm(&sys.model, &sys.dofs, &sys.x);
             let eq = equilibrated(&sys.model, &sys.dofs, &sys.x, &[], None).global / norm;
             let eq_free =

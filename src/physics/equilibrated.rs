@@ -49,7 +49,7 @@
 //! overstress).
 
 use super::estimate::{
-    point_state, side_pairs, tangent, BoundaryTractions, PointState, SolidEstimate,
+    point_state, side_pairs, side_state, tangent, BoundaryTractions, PointState, SolidEstimate,
 };
 use super::solid::SolidModel;
 use super::streamline_upwind::{lagrange_with_derivative, reference_of};
@@ -178,18 +178,8 @@ fn side_traction(
     f: &Facet,
     s: f64,
 ) -> Option<(Vec2, f64)> {
-    let c = f.cell as usize;
-    let (xi, eta) = f.ref_point(s);
-    let st = point_state(model, dofs, x, c, xi, eta)?;
-    let t = st.jac.column(f.tangent_column()).into_owned();
-    let len = t.norm();
-    let mut n = Vec2::new(t[1], -t[0]) / len;
-    let across = st.jac.column(1 - f.tangent_column()).into_owned();
-    let sign = if f.side % 2 == 1 { 1.0 } else { -1.0 };
-    if n.dot(&across) * sign < 0.0 {
-        n = -n;
-    }
-    Some((total_stress(model, c, &st) * n, len))
+    let (st, n, len) = side_state(model, dofs, x, f, s)?;
+    Some((total_stress(model, f.cell as usize, &st) * n, len))
 }
 
 /// Corner nodes of cell `c` in the order of the bilinear hats (ξ, η) = (−,−), (+,−), (−,+), (+,+).

@@ -277,6 +277,19 @@ pub(super) fn traction(
     f: &Facet,
     s: f64,
 ) -> Option<(Vec2, f64, Vec2)> {
+    let (st, n, len) = side_state(model, dofs, x, f, s)?;
+    Some((st.p * n, len, st.x))
+}
+
+/// The point state at side parameter `s` of facet `f`, the cell's unit outward normal N there
+/// and the length element |dX/ds|.
+pub(super) fn side_state(
+    model: &SolidModel,
+    dofs: &DofMap,
+    x: &[f64],
+    f: &Facet,
+    s: f64,
+) -> Option<(PointState, Vec2, f64)> {
     let c = f.cell as usize;
     let (xi, eta) = f.ref_point(s);
     let st = point_state(model, dofs, x, c, xi, eta)?;
@@ -289,7 +302,7 @@ pub(super) fn traction(
     if n.dot(&across) * sign < 0.0 {
         n = -n;
     }
-    Some((st.p * n, len, st.x))
+    Some((st, n, len))
 }
 
 /// Tractions applied on boundary facets (e.g. by the road's contact), sampled at the points
