@@ -9,6 +9,9 @@
 //! - A Gmsh mesh refined at the footprint (no rings) solves the damped frictional scene, and
 //!   its hub force agrees with the structured mesh's.
 
+#[path = "common/fixtures.rs"]
+mod fixtures;
+
 use tread::assembly::CONSTRAINED;
 use tread::driver::steady::SteadyRolling;
 use tread::driver::steady_run::{build_steady, solve_steady};
@@ -168,15 +171,7 @@ fn tiny_refined() -> SteadyRolling {
             "road.v0=39",
         ],
     );
-    let root = tread::driver::adaptive::polar_root(&sc).unwrap_or_else(|e| panic!("{e}"));
-    let mut forest = tread::mesh::Forest::new(root).unwrap();
-    let below: Vec<usize> = (0..forest.leaves().len())
-        .filter(|&c| forest.root_point(c, 0.0, 0.0)[1] < 0.0)
-        .collect();
-    forest.refine(&below).unwrap();
-    forest.refine(&[below[0]]).unwrap();
-    let (mesh, _) = forest.mesh();
-    assert!(!mesh.constraints.is_empty() && mesh.rings.is_none());
+    let mesh = fixtures::refined_below_hub(&sc);
     let (material, pressure) = tread::setup::build_material(&sc).unwrap_or_else(|e| panic!("{e}"));
     let mut model = tread::physics::SolidModel::new(mesh, material, sc.material.rho, pressure);
     model.strain_rate_damping = 3.0;

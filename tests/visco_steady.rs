@@ -317,15 +317,7 @@ fn steady_jacobian_with_upwind_history_matches_finite_differences() {
 #[test]
 fn steady_jacobian_with_upwind_history_is_exact_with_hanging_nodes() {
     let sc = scene_with(&["mesh.n_r=1", "mesh.n_theta=8"], "convolution", 0.03);
-    let root = tread::driver::adaptive::polar_root(&sc).unwrap_or_else(|e| panic!("{e}"));
-    let mut forest = tread::mesh::Forest::new(root).unwrap();
-    let below: Vec<usize> = (0..forest.leaves().len())
-        .filter(|&c| forest.root_point(c, 0.0, 0.0)[1] < 0.0)
-        .collect();
-    forest.refine(&below).unwrap();
-    forest.refine(&[below[0]]).unwrap();
-    let (mesh, _) = forest.mesh();
-    assert!(!mesh.constraints.is_empty() && mesh.rings.is_none());
+    let mesh = fixtures::refined_below_hub(&sc);
     let (material, pressure) = tread::setup::build_material(&sc).unwrap_or_else(|e| panic!("{e}"));
     let mut model = tread::physics::SolidModel::new(mesh, material, sc.material.rho, pressure);
     tread::setup::attach_viscoelastic(&sc, &mut model).unwrap_or_else(|e| panic!("{e}"));

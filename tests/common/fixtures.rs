@@ -147,3 +147,19 @@ pub fn run_rolling(text: &str, name: &str, set: &[&str]) -> serde_json::Value {
     assert!(out.join("steady_field.csv").exists() && out.join("passages.csv").exists());
     o.summary
 }
+
+/// The scene's polar root mesh refined below the hub (every cell whose centre has y < 0) and
+/// once more in the first of those: one-irregular, with hanging nodes and no rings. The scene
+/// must have a generated annulus.
+pub fn refined_below_hub(sc: &Scene) -> tread::mesh::Mesh {
+    let root = tread::driver::adaptive::polar_root(sc).unwrap_or_else(|e| panic!("{e}"));
+    let mut forest = tread::mesh::Forest::new(root).unwrap_or_else(|e| panic!("{e}"));
+    let below: Vec<usize> = (0..forest.leaves().len())
+        .filter(|&c| forest.root_point(c, 0.0, 0.0)[1] < 0.0)
+        .collect();
+    forest.refine(&below).unwrap_or_else(|e| panic!("{e}"));
+    forest.refine(&[below[0]]).unwrap_or_else(|e| panic!("{e}"));
+    let (mesh, _) = forest.mesh();
+    assert!(!mesh.constraints.is_empty() && mesh.rings.is_none());
+    mesh
+}
