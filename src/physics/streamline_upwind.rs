@@ -179,6 +179,7 @@ pub struct UpwindTransport {
     values: Vec<f64>,
     /// Scratch of the iterative solve.
     rhs: Vec<f64>,
+    x: Vec<f64>,
     sweep: Vec<f64>,
     /// (|ω| bits, term) whose iterative solve needed more than [`SLOW_SWEEPS`] products.
     slow_terms: Vec<(u64, usize)>,
@@ -225,6 +226,7 @@ impl Clone for UpwindTransport {
             factored_for: None,
             values: Vec::new(),
             rhs: Vec::new(),
+            x: Vec::new(),
             sweep: Vec::new(),
             slow_terms: Vec::new(),
             last_iterations: 0,
@@ -439,6 +441,7 @@ impl UpwindTransport {
             factored_for: None,
             values: Vec::new(),
             rhs: Vec::new(),
+            x: Vec::new(),
             sweep: Vec::new(),
             slow_terms: Vec::new(),
             last_iterations: 0,
@@ -569,7 +572,9 @@ impl UpwindTransport {
         let mut rhs = std::mem::take(&mut self.rhs);
         rhs.clear();
         rhs.extend_from_slice(s);
-        let mut x = vec![0.0; self.n];
+        let mut x = std::mem::take(&mut self.x);
+        x.clear();
+        x.resize(self.n, 0.0);
         let mut scratch = std::mem::take(&mut self.sweep);
         let stats = {
             let this = &mut *self;
@@ -624,6 +629,7 @@ impl UpwindTransport {
             self.solve_direct(omega, taus, term, s)?;
         }
         self.rhs = rhs;
+        self.x = x;
         Ok(())
     }
 
