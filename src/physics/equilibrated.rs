@@ -715,7 +715,10 @@ fn local_problem(
     } else if let Some(ch) = kr.clone().cholesky() {
         return rr.dot(&ch.solve(&rr));
     }
-    // Not positive definite (a loss of ellipticity of the tangent): the positive part.
+    // Not positive definite: in a compressed cell the initial-stress part of the tangent makes
+    // rotation-like local modes slightly negative (a third of the cells along an adaptive
+    // indentation), and a tangent may lose ellipticity. The local problem keeps its positive
+    // part (an eigen-decomposition, several times the cost of the Cholesky solve).
     let eig = nalgebra::SymmetricEigen::new(kr);
     let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
     let mut e2 = 0.0;
