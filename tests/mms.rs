@@ -222,7 +222,8 @@ fn q2_rates_unchanged_by_non_conforming_refinement() {
 /// the manufactured solution, isoparametric Q1 and Q2 annuli refined uniformly: an upper bound
 /// of the energy error of the linearised problem, with an effectivity in [1, 2] that settles
 /// (measured Q1 1.09, 1.15, 1.18, 1.20; Q2 1.50, 1.48, 1.36, 1.26), and the error's rate; and
-/// the same with hanging nodes.
+/// the same with hanging nodes (the nodal interpolant of the exact solution, the start, is not
+/// consistent with the hanging-node constraints: the assembly makes it so).
 #[test]
 fn equilibrated_estimator_bounds_the_manufactured_error() {
     use tread::physics::equilibrated::equilibrated;
@@ -254,7 +255,7 @@ fn equilibrated_estimator_bounds_the_manufactured_error() {
         );
     }
     // Hanging nodes: one quadrant refined once more (big sides against two small ones).
-    for (order, n_r) in [(1usize, 2usize), (2, 2), (2, 4), (2, 8)] {
+    for (order, n_r) in [(1usize, 2usize), (1, 4), (2, 2), (2, 4), (2, 8)] {
         let sys = solved(order, n_r, false, true);
         assert!(sys.dofs.has_constraints());
         let err = energy_error(&sys.model, &sys.dofs, &sys.x, &exact_grad).global;

@@ -474,6 +474,12 @@ impl SolidSystem {
     /// then the contact facets at the same rates. Returns whether the state is admissible
     /// (no J ≤ 0) and the residual finite.
     pub fn assemble(&mut self, terms: &Terms, with_matrix: bool) -> bool {
+        // Hanging-node values follow their masters: a state set from outside (an interpolated
+        // start) may not, and Newton's first step would then be taken from a state its update
+        // does not continue. Idempotent on a consistent state.
+        if self.dofs.has_constraints() {
+            self.dofs.apply_constraints(&mut self.x);
+        }
         let steady = matches!(terms.rates, Rates::Steady);
         if steady {
             self.sync_steady_history();
