@@ -170,6 +170,44 @@ fn total_stress(model: &SolidModel, c: usize, s: &PointState) -> Mat2 {
     s.p - dth * t.transpose() * rw2
 }
 
+/// What the residual and the local problem use at a Gauss point of a cell: its reference
+/// coordinates, state, inverse Jacobian, weight w det J, total stress and body force.
+struct CellPoint {
+    xi: f64,
+    eta: f64,
+    st: PointState,
+    inv: Mat2,
+    w: f64,
+    sig: Mat2,
+    bf: Vec2,
+}
+
+/// The points of the n × n Gauss rule of cell `c` (degenerate points left out).
+fn cell_points(model: &SolidModel, dofs: &DofMap, x: &[f64], c: usize, n: usize) -> Vec<CellPoint> {
+    let (pts, wts) = gauss_1d(n);
+    let mut out = Vec::with_capacity(n * n);
+    for (l, &eta) in pts.iter().enumerate() {
+        for (i, &xi) in pts.iter().enumerate() {
+            let Some(st) = point_state(model, dofs, x, c, xi, eta) else {
+                continue;
+            };
+            let Some(inv) = st.jac.try_inverse() else {
+                continue;
+            };
+            out.push(CellPoint {
+                xi,
+                eta,
+                inv,
+                w: wts[i] * wts[l] * st.jac.determinant().abs(),
+                sig: total_stress(model, c, &st),
+                bf: model.body_force.as_ref().map_or(Vec2::zeros(), |f| f(st.x)),
+                st,
+            });
+        }
+    }
+    out
+}
+
 /// Σ_h N (N the cell's outward unit normal) at parameter `s` of facet `f`, with |dX/ds|.
 fn side_traction(
     model: &SolidModel,
@@ -405,25 +443,13 @@ pub fn equilibrated(
             let mut b = [[0.0; 2]; 4];
             // The kernels' rule: the moments of a converged state then sum to zero around
             // every free vertex.
-            let (pts, wts) = gauss_1d(usize::from(mesh.degree[c]) + 1);
-            for (l, &eta) in pts.iter().enumerate() {
-                for (i, &xi) in pts.iter().enumerate() {
-                    let Some(st) = point_state(model, dofs, x, c, xi, eta) else {
-                        continue;
-                    };
-                    let Some(inv) = st.jac.try_inverse() else {
-                        continue;
-                    };
-                    let w = wts[i] * wts[l] * st.jac.determinant().abs();
-                    let sig = total_stress(model, c, &st);
-                    let bf = model.body_force.as_ref().map_or(Vec2::zeros(), |f| f(st.x));
-                    let (n, dn) = hats(xi, eta);
-                    for a in 0..4 {
-                        let g = inv.transpose() * Vec2::new(dn[a][0], dn[a][1]);
-                        let r = bf * n[a] - sig * g;
-                        b[a][0] += w * r[0];
-                        b[a][1] += w * r[1];
-                    }
+            for cp in cell_points(model, dofs, x, c, usize::from(mesh.degree[c]) + 1) {
+                let (n, dn) = hats(cp.xi, cp.eta);
+                for a in 0..4 {
+                    let g = cp.inv.transpose() * Vec2::new(dn[a][0], dn[a][1]);
+                    let r = cp.bf * n[a] - cp.sig * g;
+                    b[a][0] += cp.w * r[0];
+                    b[a][1] += cp.w * r[1];
                 }
             }
             b
@@ -599,44 +625,41 @@ fn local_problem(
     let mut dlx = [0.0; 5];
     let mut ly = [0.0; 5];
     let mut dly = [0.0; 5];
-    let (pts, wts) = gauss_1d(q + 2);
     let mut grads = vec![Vec2::zeros(); nb];
     let mut vals = vec![0.0; nb];
-    for (l, &eta) in pts.iter().enumerate() {
-        for (i, &xi) in pts.iter().enumerate() {
-            let Some(st) = point_state(model, dofs, x, c, xi, eta) else {
-                continue;
-            };
-            let Some(inv) = st.jac.try_inverse() else {
-                continue;
-            };
-            let w = wts[i] * wts[l] * st.jac.determinant().abs();
-            let a = tangent(model, c, &st);
-            let sig = total_stress(model, c, &st);
-            let bf = model.body_force.as_ref().map_or(Vec2::zeros(), |f| f(st.x));
-            lagrange_with_derivative(&nodes1, xi, &mut lx[..m], &mut dlx[..m]);
-            lagrange_with_derivative(&nodes1, eta, &mut ly[..m], &mut dly[..m]);
-            for k in 0..nb {
-                let (kx, ky) = (k % m, k / m);
-                vals[k] = lx[kx] * ly[ky];
-                grads[k] = inv.transpose() * Vec2::new(dlx[kx] * ly[ky], lx[kx] * dly[ky]);
-            }
-            for ka in 0..nb {
-                let ga = grads[ka];
-                for i in 0..2 {
-                    let r = bf[i] * vals[ka] - (sig[(i, 0)] * ga[0] + sig[(i, 1)] * ga[1]);
-                    rhs[2 * ka + i] += w * r;
-                    for kb in 0..nb {
-                        let gb = grads[kb];
-                        for j in 0..2 {
-                            let mut v = 0.0;
-                            for jj in 0..2 {
-                                for ll in 0..2 {
-                                    v += ga[jj] * a[(2 * i + jj, 2 * j + ll)] * gb[ll];
-                                }
+    for cp in cell_points(model, dofs, x, c, q + 2) {
+        let a = tangent(model, c, &cp.st);
+        let CellPoint {
+            xi,
+            eta,
+            inv,
+            w,
+            sig,
+            bf,
+            ..
+        } = cp;
+        lagrange_with_derivative(&nodes1, xi, &mut lx[..m], &mut dlx[..m]);
+        lagrange_with_derivative(&nodes1, eta, &mut ly[..m], &mut dly[..m]);
+        for k in 0..nb {
+            let (kx, ky) = (k % m, k / m);
+            vals[k] = lx[kx] * ly[ky];
+            grads[k] = inv.transpose() * Vec2::new(dlx[kx] * ly[ky], lx[kx] * dly[ky]);
+        }
+        for ka in 0..nb {
+            let ga = grads[ka];
+            for i in 0..2 {
+                let r = bf[i] * vals[ka] - (sig[(i, 0)] * ga[0] + sig[(i, 1)] * ga[1]);
+                rhs[2 * ka + i] += w * r;
+                for kb in 0..nb {
+                    let gb = grads[kb];
+                    for j in 0..2 {
+                        let mut v = 0.0;
+                        for jj in 0..2 {
+                            for ll in 0..2 {
+                                v += ga[jj] * a[(2 * i + jj, 2 * j + ll)] * gb[ll];
                             }
-                            kmat[(2 * ka + i, 2 * kb + j)] += w * v;
                         }
+                        kmat[(2 * ka + i, 2 * kb + j)] += w * v;
                     }
                 }
             }

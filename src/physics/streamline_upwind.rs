@@ -150,6 +150,7 @@ pub(crate) fn reference_of(mesh: &Mesh, c: usize, x: Vec2) -> Option<(f64, f64)>
 }
 
 /// The upwind transport operator of a mesh (see the module docs).
+#[derive(Clone)]
 pub struct UpwindTransport {
     n: usize,
     col_ptr: Vec<usize>,
@@ -168,21 +169,8 @@ pub struct UpwindTransport {
     t_rows: Vec<f64>,
     /// Offset of each cell's dense diagonal block in `block_inv[term]`.
     block_off: Vec<usize>,
-    /// Per time constant: the inverses of the diagonal blocks `|ω| T_cc + I/τ`, row-major,
-    /// valid for `blocks_for`.
-    block_inv: Vec<Vec<f64>>,
-    blocks_for: Option<(f64, Vec<f64>)>,
-    /// Sparse LU per time constant (the fallback when the sweeps converge slowly), valid for
-    /// `factored_for`.
-    solvers: Vec<SparseSolver>,
-    factored_for: Option<(f64, Vec<f64>)>,
-    values: Vec<f64>,
-    /// Scratch of the iterative solve.
-    rhs: Vec<f64>,
-    x: Vec<f64>,
-    sweep: Vec<f64>,
-    /// (|ω| bits, term) whose iterative solve needed more than [`SLOW_SWEEPS`] products.
-    slow_terms: Vec<(u64, usize)>,
+    /// Factorisations and scratch of the solves (not cloned).
+    work: Solves,
     /// Iterations of the last iterative solve (matrix products), and whether it fell back to
     /// the sparse LU.
     pub last_iterations: usize,
@@ -205,35 +193,30 @@ impl std::fmt::Debug for UpwindTransport {
     }
 }
 
-impl Clone for UpwindTransport {
-    /// The operator without its factorisations (they are rebuilt on first use).
+/// The factorisations and scratch of [`UpwindTransport::solve`]; a clone starts empty (they are
+/// rebuilt on first use).
+#[derive(Default)]
+struct Solves {
+    /// Per time constant: the inverses of the diagonal blocks `|ω| T_cc + I/τ`, row-major,
+    /// valid for `blocks_for`.
+    block_inv: Vec<Vec<f64>>,
+    blocks_for: Option<(f64, Vec<f64>)>,
+    /// Sparse LU per time constant (the fallback when the sweeps converge slowly), valid for
+    /// `factored_for`.
+    solvers: Vec<SparseSolver>,
+    factored_for: Option<(f64, Vec<f64>)>,
+    values: Vec<f64>,
+    /// Scratch of the iterative solve.
+    rhs: Vec<f64>,
+    x: Vec<f64>,
+    sweep: Vec<f64>,
+    /// (|ω| bits, term) whose iterative solve needed more than [`SLOW_SWEEPS`] products.
+    slow_terms: Vec<(u64, usize)>,
+}
+
+impl Clone for Solves {
     fn clone(&self) -> Self {
-        Self {
-            n: self.n,
-            col_ptr: self.col_ptr.clone(),
-            row_idx: self.row_idx.clone(),
-            t: self.t.clone(),
-            diag: self.diag.clone(),
-            cell_off: self.cell_off.clone(),
-            order: self.order.clone(),
-            row_ptr: self.row_ptr.clone(),
-            col_idx: self.col_idx.clone(),
-            t_rows: self.t_rows.clone(),
-            block_off: self.block_off.clone(),
-            block_inv: Vec::new(),
-            blocks_for: None,
-            solvers: Vec::new(),
-            factored_for: None,
-            values: Vec::new(),
-            rhs: Vec::new(),
-            x: Vec::new(),
-            sweep: Vec::new(),
-            slow_terms: Vec::new(),
-            last_iterations: 0,
-            lu_fallbacks: 0,
-            boundary_inflow: self.boundary_inflow,
-            forward: self.forward,
-        }
+        Self::default()
     }
 }
 
@@ -435,15 +418,7 @@ impl UpwindTransport {
             col_idx,
             t_rows,
             block_off,
-            block_inv: Vec::new(),
-            blocks_for: None,
-            solvers: Vec::new(),
-            factored_for: None,
-            values: Vec::new(),
-            rhs: Vec::new(),
-            x: Vec::new(),
-            sweep: Vec::new(),
-            slow_terms: Vec::new(),
+            work: Solves::default(),
             last_iterations: 0,
             lu_fallbacks: 0,
             boundary_inflow: if inflow_all > 0.0 {
@@ -473,16 +448,16 @@ impl UpwindTransport {
     /// Factorise `|ω| T + I/τ_i` for every time constant (kept until ω or the τ change).
     fn factor(&mut self, omega: f64, taus: &[f64]) -> Result<(), UpwindError> {
         let w = omega.abs();
-        if let Some((o, t)) = &self.factored_for {
+        if let Some((o, t)) = &self.work.factored_for {
             if *o == w && t.as_slice() == taus {
                 return Ok(());
             }
         }
-        self.factored_for = None;
-        if self.solvers.len() != taus.len() {
-            self.solvers.clear();
+        self.work.factored_for = None;
+        if self.work.solvers.len() != taus.len() {
+            self.work.solvers.clear();
             for _ in taus {
-                self.solvers.push(SparseSolver::new(
+                self.work.solvers.push(SparseSolver::new(
                     self.n,
                     &self.col_ptr,
                     &self.row_idx,
@@ -490,30 +465,30 @@ impl UpwindTransport {
                 )?);
             }
         }
-        for (solver, &tau) in self.solvers.iter_mut().zip(taus) {
-            self.values.clear();
-            self.values.extend(self.t.iter().map(|v| v * w));
+        for (solver, &tau) in self.work.solvers.iter_mut().zip(taus) {
+            self.work.values.clear();
+            self.work.values.extend(self.t.iter().map(|v| v * w));
             for &d in &self.diag {
-                self.values[d] += 1.0 / tau;
+                self.work.values[d] += 1.0 / tau;
             }
-            solver.factorize(&self.values)?;
+            solver.factorize(&self.work.values)?;
         }
-        self.factored_for = Some((w, taus.to_vec()));
+        self.work.factored_for = Some((w, taus.to_vec()));
         Ok(())
     }
 
     /// Invert the diagonal blocks `|ω| T_cc + I/τ_i` of every cell for every time constant.
     fn factor_blocks(&mut self, omega: f64, taus: &[f64]) -> Result<(), UpwindError> {
         let w = omega.abs();
-        if let Some((o, t)) = &self.blocks_for {
+        if let Some((o, t)) = &self.work.blocks_for {
             if *o == w && t.as_slice() == taus {
                 return Ok(());
             }
         }
-        self.blocks_for = None;
+        self.work.blocks_for = None;
         let nc = self.cell_off.len() - 1;
-        self.block_inv.resize(taus.len(), Vec::new());
-        for (inv, &tau) in self.block_inv.iter_mut().zip(taus) {
+        self.work.block_inv.resize(taus.len(), Vec::new());
+        for (inv, &tau) in self.work.block_inv.iter_mut().zip(taus) {
             inv.clear();
             inv.resize(self.block_off[nc], 0.0);
             for c in 0..nc {
@@ -540,7 +515,7 @@ impl UpwindTransport {
                 }
             }
         }
-        self.blocks_for = Some((w, taus.to_vec()));
+        self.work.blocks_for = Some((w, taus.to_vec()));
         Ok(())
     }
 
@@ -563,19 +538,19 @@ impl UpwindTransport {
         let w = omega.abs();
         // A memory longer than a third of a revolution, or a term whose sweeps were slow at
         // this ω: the sparse LU.
-        if w * taus[term] > LONG_MEMORY || self.slow_terms.contains(&(w.to_bits(), term)) {
+        if w * taus[term] > LONG_MEMORY || self.work.slow_terms.contains(&(w.to_bits(), term)) {
             self.last_iterations = 0;
             return self.solve_direct(omega, taus, term, s);
         }
         self.factor_blocks(omega, taus)?;
         let inv_tau = 1.0 / taus[term];
-        let mut rhs = std::mem::take(&mut self.rhs);
+        let mut rhs = std::mem::take(&mut self.work.rhs);
         rhs.clear();
         rhs.extend_from_slice(s);
-        let mut x = std::mem::take(&mut self.x);
+        let mut x = std::mem::take(&mut self.work.x);
         x.clear();
         x.resize(self.n, 0.0);
-        let mut scratch = std::mem::take(&mut self.sweep);
+        let mut scratch = std::mem::take(&mut self.work.sweep);
         let stats = {
             let this = &mut *self;
             let (col_ptr, row_idx, t) = (&this.col_ptr, &this.row_idx, &this.t);
@@ -600,7 +575,7 @@ impl UpwindTransport {
                 col_idx: &this.col_idx,
                 t_rows: &this.t_rows,
                 block_off: &this.block_off,
-                inv: &this.block_inv[term],
+                inv: &this.work.block_inv[term],
                 y: &mut scratch,
                 w,
             };
@@ -617,10 +592,10 @@ impl UpwindTransport {
                 200,
             )?
         };
-        self.sweep = scratch;
+        self.work.sweep = scratch;
         self.last_iterations = stats.iterations;
         if stats.iterations > SLOW_SWEEPS {
-            self.slow_terms.push((w.to_bits(), term));
+            self.work.slow_terms.push((w.to_bits(), term));
         }
         if stats.rel_residual.is_finite() && stats.rel_residual <= 1e-12 {
             s.copy_from_slice(&x);
@@ -628,8 +603,8 @@ impl UpwindTransport {
             self.lu_fallbacks += 1;
             self.solve_direct(omega, taus, term, s)?;
         }
-        self.rhs = rhs;
-        self.x = x;
+        self.work.rhs = rhs;
+        self.work.x = x;
         Ok(())
     }
 
@@ -646,7 +621,7 @@ impl UpwindTransport {
             return Ok(());
         }
         self.factor(omega, taus)?;
-        self.solvers[term].solve_in_place(s)?;
+        self.work.solvers[term].solve_in_place(s)?;
         Ok(())
     }
 
