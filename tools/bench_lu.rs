@@ -4,7 +4,7 @@
 //! ```text
 //! cargo run --release --no-default-features --bin tread-bench-lu -- \
 //!     [--mesh 8x256,16x512,32x1024] [--scene FILE] [--set KEY=VALUE]... \
-//!     [--dump DIR] [--peer PYTHON] [--orderings colamd,amd]
+//!     [--dump DIR] [--peer PYTHON] [--orderings colamd,symmetric,amd]
 //! ```
 //!
 //! For each mesh (n_r × n_theta of the scene, default `scenarios/oden_hollow_cylinder.toml` in
@@ -14,7 +14,8 @@
 //! 2. at the converged state, times the parts of one Newton iteration: the assembly of residual
 //!    and tangent, one numeric LU factorization and one solve;
 //! 3. factorizes the same tangent with each LU column ordering ([`LuOrdering::Colamd`], faer's
-//!    default, and [`LuOrdering::Amd`], AMD on A + Aᵀ): symbolic time, numeric time (median of
+//!    default, [`LuOrdering::Symmetric`], the multifrontal LU on the pattern of A + Aᵀ, and on
+//!    request [`LuOrdering::Amd`], faer's LU with AMD on A + Aᵀ): symbolic time, numeric time (median of
 //!    3), solve time, stored factor entries nnz(L+U) and fill nnz(L+U)/nnz(A), the heap held by
 //!    the factors and the heap peak during the first factorization (counting allocator), and
 //!    the relative residual ‖A x − b‖ / ‖b‖;
@@ -142,7 +143,7 @@ const ODEN: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");
 fn usage() -> ! {
     eprintln!(
         "usage: tread-bench-lu [--mesh 8x256,16x512,32x1024] [--scene FILE] [--set KEY=VALUE]... \
-         [--dump DIR] [--peer PYTHON] [--orderings colamd,amd]"
+         [--dump DIR] [--peer PYTHON] [--orderings colamd,symmetric,amd]"
     );
     std::process::exit(2);
 }
@@ -166,7 +167,7 @@ fn main() {
     let mut sets: Vec<String> = Vec::new();
     let mut dump: Option<std::path::PathBuf> = None;
     let mut peer: Option<String> = None;
-    let mut orderings = vec![LuOrdering::Colamd, LuOrdering::Amd];
+    let mut orderings = vec![LuOrdering::Colamd, LuOrdering::Symmetric];
     let mut i = 1;
     while i < args.len() {
         let val = || args.get(i + 1).cloned().unwrap_or_else(|| usage());
@@ -199,6 +200,7 @@ fn main() {
                     .map(|o| match o.trim() {
                         "colamd" => LuOrdering::Colamd,
                         "amd" => LuOrdering::Amd,
+                        "symmetric" => LuOrdering::Symmetric,
                         _ => usage(),
                     })
                     .collect();

@@ -112,10 +112,9 @@ pub enum LinearKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum LuOrdering {
     /// faer's own `factorize_symbolic_lu`: COLAMD on the columns of A (an ordering made for
-    /// the Cholesky factor of AᵀA). The default: measured on the steady tangent of the rolling
-    /// cylinder (16k DOFs), fill nnz(L+U)/nnz(A) = 10.7 against 48.8 with [`LuOrdering::Amd`],
-    /// and a numeric factorization 8× faster (`tread-bench-lu`).
-    #[default]
+    /// the Cholesky factor of AᵀA). Measured on the steady tangent of the rolling cylinder (16k
+    /// DOFs), fill nnz(L+U)/nnz(A) = 10.7 against 48.8 with [`LuOrdering::Amd`], and a numeric
+    /// factorization 8× faster (`tread-bench-lu`); [`LuOrdering::Symmetric`] fills 3.6.
     Colamd,
     /// AMD on the pattern of A + Aᵀ (`faer::sparse::linalg::amd::order`), the ordering a
     /// symmetric-pattern solver would use; then faer's supernodal symbolic and numeric LU with
@@ -123,6 +122,13 @@ pub enum LuOrdering {
     /// ordering sees the mesh graph directly; but faer's partial-pivoting LU takes its
     /// structure from AᵀA, whose fill this ordering does not minimise (see `Colamd`).
     Amd,
+    /// AMD on A + Aᵀ and a multifrontal LU on that symmetric pattern with row pivoting
+    /// restricted to each supernode ([`super::multifrontal`]): the factors have exactly the
+    /// Cholesky structure of A + Aᵀ. A matrix that this pivoting cannot factorize (a zero
+    /// pivot: saddle points with zero diagonal blocks, singular matrices) is handed to the
+    /// COLAMD LU for good. The default.
+    #[default]
+    Symmetric,
 }
 
 /// Errors of the sparse direct solver.
@@ -569,6 +575,13 @@ enum Backend {
     Cholesky(Box<CholeskyState>),
     Lu(Box<LuState>),
     LuCustom(Box<LuCustomState>),
+    Symmetric(Box<SymmetricState>),
+}
+
+/// [`LuOrdering::Symmetric`]: the factorization and the determinant's LBLᵀ.
+struct SymmetricState {
+    lu: super::multifrontal::SymmetricLu,
+    det: LbltDet,
 }
 
 impl Backend {
@@ -594,6 +607,7 @@ impl Backend {
                     par,
                 ),
             ),
+            Backend::Symmetric(_) => StackReq::EMPTY,
         }
     }
 }
@@ -824,6 +838,12 @@ impl SparseSolver {
             LinearKind::Lu if ordering == LuOrdering::Amd => {
                 Backend::LuCustom(Box::new(LuCustomState::new(&pattern)?))
             }
+            LinearKind::Lu if ordering == LuOrdering::Symmetric => {
+                let lu = super::multifrontal::SymmetricLu::new(n, col_ptr, row_idx)
+                    .map_err(|e| LinearError::Symbolic(e.to_string()))?;
+                let det = LbltDet::new(&pattern)?;
+                Backend::Symmetric(Box::new(SymmetricState { lu, det }))
+            }
             LinearKind::Lu => {
                 let params = LuSymbolicParams {
                     supernodal_flop_ratio_threshold: threshold,
@@ -997,9 +1017,49 @@ impl SparseSolver {
                     self.lu_determinant(values);
                 }
             }
+            Backend::Symmetric(st) => {
+                // A pivot that the pivoting within supernodes could not make nonzero (a zero
+                // diagonal block, a singular matrix): hand over to the partial-pivoting LU.
+                let ok = st.lu.factorize(values, par).is_ok() && st.lu.perturbed() == 0;
+                if !ok {
+                    return self.fall_back_to_colamd(values);
+                }
+                if self.track_det {
+                    self.lu_determinant(values);
+                }
+            }
         }
         self.status = Status::Ready;
         Ok(())
+    }
+
+    /// Replace the multifrontal LU by faer's COLAMD LU (partial pivoting) for good, and
+    /// factorize with it.
+    fn fall_back_to_colamd(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        let params = LuSymbolicParams::default();
+        let symbolic = match factorize_symbolic_lu(self.pattern.as_ref(), params) {
+            Ok(s) => s,
+            Err(e) => {
+                let err = map_faer_err(e);
+                self.status = Status::Other(err.to_string());
+                return Err(err);
+            }
+        };
+        let det = match LbltDet::new(&self.pattern) {
+            Ok(d) => d,
+            Err(e) => {
+                self.status = Status::Other(e.to_string());
+                return Err(e);
+            }
+        };
+        self.backend = Backend::Lu(Box::new(LuState {
+            symbolic,
+            numeric: NumericLu::new(),
+            det,
+        }));
+        let req = self.backend.scratch(self.par);
+        grow_scratch(&mut self.mem, &mut self.mem_req, req);
+        self.factorize(values)
     }
 
     /// LBLᵀ determinant for symmetric values in LU mode (sets `self.det`, `self.neg_eigs`).
@@ -1009,6 +1069,7 @@ impl SparseSolver {
         let det = match &mut self.backend {
             Backend::Lu(st) => &mut st.det,
             Backend::LuCustom(st) => &mut st.det,
+            Backend::Symmetric(st) => &mut st.det,
             Backend::Cholesky(_) => return,
         };
         // Always sequential: faer's parallel dense Bunch–Kaufman on the many small supernodes
@@ -1050,6 +1111,14 @@ impl SparseSolver {
         }
         let n = self.n;
         let par = self.par;
+        if let Backend::Symmetric(st) = &mut self.backend {
+            st.lu.solve_in_place(rhs);
+            return if rhs.iter().all(|v| v.is_finite()) {
+                Ok(())
+            } else {
+                Err(LinearError::Singular)
+            };
+        }
         let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
         let stack = MemStack::new(&mut self.mem);
         match &self.backend {
@@ -1075,6 +1144,7 @@ impl SparseSolver {
                 st.numeric
                     .solve_in_place_with_conj(row_perm, col_perm, Conj::No, x, par, stack);
             }
+            Backend::Symmetric(_) => {} // solved above
         }
         if rhs.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -1113,6 +1183,7 @@ impl SparseSolver {
             Backend::Cholesky(st) => st.factor_nnz,
             Backend::Lu(st) => (2 * st.det.l_nnz).saturating_sub(self.n),
             Backend::LuCustom(st) => (2 * st.det.l_nnz).saturating_sub(self.n),
+            Backend::Symmetric(st) => st.lu.factor_entries(),
         }
     }
 
@@ -1122,6 +1193,7 @@ impl SparseSolver {
             Backend::Cholesky(_) => None,
             Backend::Lu(_) => Some(LuOrdering::Colamd),
             Backend::LuCustom(_) => Some(LuOrdering::Amd),
+            Backend::Symmetric(_) => Some(LuOrdering::Symmetric),
         }
     }
 
@@ -1137,6 +1209,7 @@ impl SparseSolver {
             Backend::Cholesky(_) => None,
             Backend::Lu(st) => supernodal_entries(&st.numeric),
             Backend::LuCustom(st) => supernodal_entries(&st.numeric),
+            Backend::Symmetric(st) => Some(st.lu.factor_entries()),
         }
     }
 }
@@ -1393,12 +1466,14 @@ mod tests {
         a
     }
 
-    /// faer's COLAMD LU (automatic, simplicial, supernodal) and the AMD-ordered LU.
-    const THRESHOLDS: [(SupernodalThreshold, LuOrdering); 4] = [
+    /// faer's COLAMD LU (automatic, simplicial, supernodal), the AMD-ordered LU and the
+    /// multifrontal LU on the symmetric pattern.
+    const THRESHOLDS: [(SupernodalThreshold, LuOrdering); 5] = [
         (SupernodalThreshold::AUTO, LuOrdering::Colamd),
         (SupernodalThreshold::FORCE_SIMPLICIAL, LuOrdering::Colamd),
         (SupernodalThreshold::FORCE_SUPERNODAL, LuOrdering::Colamd),
         (SupernodalThreshold::AUTO, LuOrdering::Amd),
+        (SupernodalThreshold::AUTO, LuOrdering::Symmetric),
     ];
 
     impl SparseSolver {
@@ -1542,6 +1617,8 @@ mod tests {
             let mut x = b.clone();
             s.solve_in_place(&mut x).unwrap();
             assert!(max_diff(&x, &xd) < 1e-10, "{th:?}");
+            // Factorized on the symmetric pattern, not handed over.
+            assert_eq!(s.lu_ordering(), Some(th.1), "{th:?}");
             // Unsymmetric: no determinant.
             let (sign, logdet) = s.det_sign_log();
             assert!(sign.is_nan() && logdet.is_nan());

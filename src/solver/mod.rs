@@ -7,6 +7,7 @@
 pub mod continuation;
 pub mod krylov;
 pub mod linear;
+pub mod multifrontal;
 pub mod newton;
 pub mod observe;
 pub mod stepping;
