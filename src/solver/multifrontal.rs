@@ -24,6 +24,8 @@
 //! allocates nothing (the factor storage, the front and the update stack are sized by the
 //! symbolic phase).
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
 use faer::linalg::matmul::matmul;
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_unit_lower_triangular_in_place,
@@ -39,8 +41,58 @@ use faer::{Accum, MatMut, Par, Side};
 /// [`SymmetricLu::perturbed`]): it is zero up to round-off.
 pub const TINY: f64 = 1e2 * f64::EPSILON;
 
+/// Diagonal blocks up to this size are factorized by a plain loop, larger ones by faer's
+/// blocked dense LU.
+const SMALL_BLOCK: usize = 12;
+
+/// LU with partial pivoting of the leading w × w block of the column-major m × m `front`,
+/// in place (unit L below the diagonal, U on and above), rows interchanged within the block
+/// only; `perm[i]` is the row that ends at position i. Returns the number of interchanges.
+fn naive_lu(front: &mut [f64], m: usize, w: usize, perm: &mut [usize]) -> usize {
+    for (i, p) in perm.iter_mut().enumerate() {
+        *p = i;
+    }
+    let mut swaps = 0;
+    for k in 0..w {
+        let mut p = k;
+        let mut best = front[k + k * m].abs();
+        for i in k + 1..w {
+            let a = front[i + k * m].abs();
+            if a > best {
+                best = a;
+                p = i;
+            }
+        }
+        if p != k {
+            swaps += 1;
+            perm.swap(k, p);
+            for j in 0..w {
+                front.swap(k + j * m, p + j * m);
+            }
+        }
+        let d = front[k + k * m];
+        if d == 0.0 {
+            continue; // counted by the caller; the column below stays as it is
+        }
+        let inv_d = 1.0 / d;
+        for i in k + 1..w {
+            front[i + k * m] *= inv_d;
+        }
+        for j in k + 1..w {
+            let a = front[k + j * m];
+            if a != 0.0 {
+                let (lo, hi) = front.split_at_mut(j * m);
+                let (cj, ck) = (&mut hi[..w], &lo[k * m..k * m + w]);
+                for i in k + 1..w {
+                    cj[i] -= ck[i] * a;
+                }
+            }
+        }
+    }
+    swaps
+}
+
 /// Symbolic analysis and numeric factors of [`SymmetricLu`].
-#[derive(Debug)]
 pub struct SymmetricLu {
     n: usize,
     /// `fwd[new] = old` (the AMD permutation, applied to rows and columns).
@@ -65,9 +117,13 @@ pub struct SymmetricLu {
     /// U11), then U12 (ns × r), then L21 (r × ns), all column-major.
     fac_off: Vec<usize>,
     factors: Vec<f64>,
-    /// Row interchanges within each supernode (LAPACK style: at step k, row k swapped with
-    /// `piv[begin + k]`, both local), at the permuted positions of its columns.
-    piv: Vec<u32>,
+    /// Row order within each supernode: position i of its diagonal block holds its local row
+    /// `perm[begin + i]`.
+    perm: Vec<usize>,
+    /// Scratch: the inverse of one supernode's row order, one column, and the dense LU's.
+    perm_inv: Vec<usize>,
+    tmp: Vec<f64>,
+    lu_mem: MemBuffer,
     front: Vec<f64>,
     stack: Vec<f64>,
     /// Number of pivots replaced in the last factorization.
@@ -104,6 +160,17 @@ impl std::fmt::Display for SymmetricLuError {
 }
 
 impl std::error::Error for SymmetricLuError {}
+
+impl std::fmt::Debug for SymmetricLu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SymmetricLu")
+            .field("n", &self.n)
+            .field("supernodes", &(self.begin.len() - 1))
+            .field("factor_entries", &self.factors.len())
+            .field("perturbed", &self.perturbed)
+            .finish()
+    }
+}
 
 impl SymmetricLu {
     /// Analyse the CSC pattern of an n × n matrix (rows sorted within each column, no
@@ -266,11 +333,13 @@ impl SymmetricLu {
         let mut fac_off = Vec::with_capacity(ns + 1);
         fac_off.push(0usize);
         let mut max_front = 0usize;
+        let mut max_w = 0usize;
         for s in 0..ns {
             let w = begin[s + 1] - begin[s];
             let r = rows_ptr[s + 1] - rows_ptr[s];
             fac_off.push(fac_off[s] + w * w + 2 * w * r);
             max_front = max_front.max((w + r) * (w + r));
+            max_w = max_w.max(w);
         }
         let (mut depth, mut peak) = (0usize, 0usize);
         let mut sizes: Vec<usize> = Vec::new();
@@ -348,7 +417,15 @@ impl SymmetricLu {
             amap_ptr,
             fac_off,
             factors: vec![0.0; nf],
-            piv: vec![0; n],
+            perm: vec![0; n],
+            perm_inv: vec![0; max_w],
+            tmp: vec![0.0; max_w],
+            lu_mem: MemBuffer::new(lu_in_place_scratch::<usize, f64>(
+                max_w,
+                max_w,
+                Par::Seq,
+                Default::default(),
+            )),
             front: vec![0.0; max_front],
             stack: vec![0.0; peak],
             perturbed: 0,
@@ -382,7 +459,8 @@ impl SymmetricLu {
         8 * (self.factors.len() + self.front.len() + self.stack.len() + self.work.len())
             + 8 * self.amap.len()
             + 8 * (self.rows.len() + self.fwd.len())
-            + 4 * (self.rel.len() + self.piv.len())
+            + 4 * self.rel.len()
+            + 8 * (self.perm.len() + self.perm_inv.len() + self.tmp.len())
     }
 
     /// Numeric factorization with these values (in the order of the analysed pattern).
@@ -425,51 +503,49 @@ impl SymmetricLu {
                 }
                 top = off;
             }
-            // Diagonal block: LU with pivoting among the supernode's rows.
-            let piv = &mut self.piv[b..e];
+            // Diagonal block: LU with pivoting among the supernode's rows; `perm[i]` is the
+            // local row that ends up at position i.
+            let perm = &mut self.perm[b..e];
+            let swaps = if w <= SMALL_BLOCK {
+                naive_lu(front, m, w, perm)
+            } else {
+                let f11 =
+                    MatMut::from_column_major_slice_mut(front, m, m).submatrix_mut(0, 0, w, w);
+                let (info, _) = lu_in_place(
+                    f11,
+                    perm,
+                    &mut self.perm_inv[..w],
+                    par,
+                    MemStack::new(&mut self.lu_mem),
+                    Default::default(),
+                );
+                info.transposition_count
+            };
+            if swaps % 2 == 1 {
+                sign = -sign;
+            }
             for k in 0..w {
-                let mut p = k;
-                let mut best = front[k + k * m].abs();
-                for i in k + 1..w {
-                    let a = front[i + k * m].abs();
-                    if a > best {
-                        best = a;
-                        p = i;
-                    }
-                }
-                piv[k] = p as u32;
-                if p != k {
-                    sign = -sign;
-                    for j in 0..m {
-                        front.swap(k + j * m, p + j * m);
-                    }
-                }
-                let mut d = front[k + k * m];
-                if d.abs() < tiny {
-                    d = if d < 0.0 { -tiny } else { tiny };
-                    front[k + k * m] = d;
+                let d = front[k + k * m];
+                if !(d.abs() >= tiny) {
+                    // Zero up to round-off (or not finite after a zero pivot): counted, and
+                    // replaced so that the factors stay finite.
+                    front[k + k * m] = if d < 0.0 { -tiny } else { tiny };
                     perturbed += 1;
                 }
+                let d = front[k + k * m];
                 if d < 0.0 {
                     sign = -sign;
                 }
                 logdet += d.abs().ln();
-                let inv_d = 1.0 / d;
-                for i in k + 1..w {
-                    front[i + k * m] *= inv_d;
+            }
+            // The same row order in F12.
+            let tmp = &mut self.tmp[..w];
+            for j in w..m {
+                let col = &mut front[j * m..j * m + w];
+                for (t, &p) in tmp.iter_mut().zip(perm.iter()) {
+                    *t = col[p];
                 }
-                for j in k + 1..w {
-                    let a = front[k + j * m];
-                    if a != 0.0 {
-                        let (cj, ck) = {
-                            let (lo, hi) = front.split_at_mut(j * m);
-                            (&mut hi[..w], &lo[k * m..k * m + w])
-                        };
-                        for i in k + 1..w {
-                            cj[i] -= ck[i] * a;
-                        }
-                    }
-                }
+                col.copy_from_slice(tmp);
             }
             if r > 0 {
                 let fm = MatMut::from_column_major_slice_mut(front, m, m);
@@ -534,12 +610,11 @@ impl SymmetricLu {
             let w = e - b;
             let r = self.rows_ptr[s + 1] - self.rows_ptr[s];
             let fac = &self.factors[self.fac_off[s]..self.fac_off[s + 1]];
-            for k in 0..w {
-                let p = self.piv[b + k] as usize;
-                if p != k {
-                    x.swap(b + k, b + p);
-                }
+            let tmp = &mut self.tmp[..w];
+            for (t, &p) in tmp.iter_mut().zip(&self.perm[b..e]) {
+                *t = x[b + p];
             }
+            x[b..e].copy_from_slice(tmp);
             // L11 y = x_s (unit lower).
             for k in 0..w {
                 let xk = x[b + k];
