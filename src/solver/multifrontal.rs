@@ -123,6 +123,8 @@ pub struct SymmetricLu {
     /// Scratch: the inverse of one supernode's row order, one column, and the dense LU's.
     perm_inv: Vec<usize>,
     tmp: Vec<f64>,
+    /// Scratch of the solves: one supernode's rows below its diagonal block.
+    rtmp: Vec<f64>,
     lu_mem: MemBuffer,
     front: Vec<f64>,
     stack: Vec<f64>,
@@ -334,12 +336,14 @@ impl SymmetricLu {
         fac_off.push(0usize);
         let mut max_front = 0usize;
         let mut max_w = 0usize;
+        let mut max_r = 0usize;
         for s in 0..ns {
             let w = begin[s + 1] - begin[s];
             let r = rows_ptr[s + 1] - rows_ptr[s];
             fac_off.push(fac_off[s] + w * w + 2 * w * r);
             max_front = max_front.max((w + r) * (w + r));
             max_w = max_w.max(w);
+            max_r = max_r.max(r);
         }
         let (mut depth, mut peak) = (0usize, 0usize);
         let mut sizes: Vec<usize> = Vec::new();
@@ -420,6 +424,7 @@ impl SymmetricLu {
             perm: vec![0; n],
             perm_inv: vec![0; max_w],
             tmp: vec![0.0; max_w],
+            rtmp: vec![0.0; max_r],
             lu_mem: MemBuffer::new(lu_in_place_scratch::<usize, f64>(
                 max_w,
                 max_w,
@@ -460,7 +465,7 @@ impl SymmetricLu {
             + 8 * self.amap.len()
             + 8 * (self.rows.len() + self.fwd.len())
             + 4 * self.rel.len()
-            + 8 * (self.perm.len() + self.perm_inv.len() + self.tmp.len())
+            + 8 * (self.perm.len() + self.perm_inv.len() + self.tmp.len() + self.rtmp.len())
     }
 
     /// Numeric factorization with these values (in the order of the analysed pattern).
@@ -625,17 +630,22 @@ impl SymmetricLu {
                     }
                 }
             }
-            // x_R −= L21 y.
+            // x_R −= L21 y: the product in contiguous scratch, then one scatter.
             let l21 = w * w + w * r;
             let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
+            let t = &mut self.rtmp[..r];
+            t.fill(0.0);
             for k in 0..w {
                 let xk = x[b + k];
                 if xk != 0.0 {
                     let col = &fac[l21 + k * r..l21 + (k + 1) * r];
-                    for (i, &row) in rows.iter().enumerate() {
-                        x[row] -= col[i] * xk;
+                    for (ti, &c) in t.iter_mut().zip(col) {
+                        *ti += c * xk;
                     }
                 }
+            }
+            for (&row, &ti) in rows.iter().zip(t.iter()) {
+                x[row] -= ti;
             }
         }
         for s in (0..ns).rev() {
@@ -645,15 +655,18 @@ impl SymmetricLu {
             let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
             // x_s −= U12 x_R.
             let u12 = w * w;
+            let xs = &mut self.tmp[..w];
+            xs.copy_from_slice(&x[b..e]);
             for (j, &row) in rows.iter().enumerate() {
                 let xr = x[row];
                 if xr != 0.0 {
                     let col = &fac[u12 + j * w..u12 + (j + 1) * w];
-                    for i in 0..w {
-                        x[b + i] -= col[i] * xr;
+                    for (xi, &c) in xs.iter_mut().zip(col) {
+                        *xi -= c * xr;
                     }
                 }
             }
+            x[b..e].copy_from_slice(xs);
             // U11 x_s = y.
             for k in (0..w).rev() {
                 let col = &fac[k * w..(k + 1) * w];
