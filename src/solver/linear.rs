@@ -11,8 +11,12 @@
 //! - Cholesky: `faer::sparse::linalg::cholesky::factorize_symbolic_cholesky(A, Side::Lower,
 //!   SymmetricOrdering::Amd, CholeskySymbolicParams::default())` (faer picks the simplicial or the
 //!   supernodal variant from its flop estimate; FE matrices of useful size end up supernodal).
-//! - LU: `faer::sparse::linalg::lu::factorize_symbolic_lu(A, LuSymbolicParams::default())`
-//!   (COLAMD column ordering, supernodal or simplicial chosen by faer), plus — for the
+//! - LU (default, [`LuOrdering::Symmetric`]): [`super::multifrontal::SymmetricLu`], AMD on
+//!   A + Aᵀ through `factorize_symbolic_cholesky` (supernodal), a multifrontal numeric phase
+//!   with faer's dense kernels; a zero pivot hands the matrix to the COLAMD LU below.
+//! - LU ([`LuOrdering::Colamd`]): `faer::sparse::linalg::lu::factorize_symbolic_lu(A,
+//!   LuSymbolicParams::default())` (COLAMD column ordering, supernodal or simplicial chosen by
+//!   faer), plus — for the
 //!   determinant of symmetric matrices, see below — a supernodal `factorize_symbolic_cholesky`
 //!   of the same pattern with `SupernodalThreshold::FORCE_SUPERNODAL`.
 //! - Scratch: `SymbolicCholesky::factorize_numeric_llt_scratch`,
@@ -43,7 +47,10 @@
 //!   the scratch memory and the diagonal position table are allocated once in `new`.
 //! - Cholesky, parallel: ~3 500 small allocations (~75 KB) per call, made by rayon task
 //!   spawning inside faer's parallel dense kernels.
-//! - LU: the factor storage inside `NumericLu` is reused (it only grows), but faer's supernodal
+//! - LU (multifrontal, the default): the factors, the front, the update stack and the dense
+//!   LU's scratch are sized by the symbolic analysis; `factorize` and `solve_in_place` allocate
+//!   nothing with `Par::Seq` (faer's dense kernels may set up their thread-local buffers once).
+//! - LU (COLAMD): the factor storage inside `NumericLu` is reused (it only grows), but faer's supernodal
 //!   numeric LU (`lu::supernodal::factorize_supernodal_numeric_lu`) allocates internally on
 //!   every call (~1 700 allocations, ~47 MB at n = 20 000, sequential): one `Vec` of
 //!   per-supernode contribution blocks and, per supernode, the dense contribution block and its

@@ -128,6 +128,8 @@ pub struct SymmetricLu {
     lu_mem: MemBuffer,
     front: Vec<f64>,
     stack: Vec<f64>,
+    /// The update matrices on the stack: (supernode, offset, rows).
+    pending: Vec<(usize, usize, usize)>,
     /// Number of pivots replaced in the last factorization.
     perturbed: usize,
     /// Sign and log|det A| of the last factorization.
@@ -433,6 +435,7 @@ impl SymmetricLu {
             )),
             front: vec![0.0; max_front],
             stack: vec![0.0; peak],
+            pending: Vec::with_capacity(ns),
             perturbed: 0,
             det: (f64::NAN, f64::NAN),
             work: vec![0.0; n],
@@ -480,7 +483,8 @@ impl SymmetricLu {
         let tiny = TINY * amax;
         let (mut sign, mut logdet, mut perturbed) = (1.0f64, 0.0f64, 0usize);
         let mut top = 0usize; // stack height
-        let mut pending: Vec<(usize, usize, usize)> = Vec::new(); // (supernode, offset, r)
+        let mut pending = std::mem::take(&mut self.pending);
+        pending.clear();
         for oi in 0..self.order.len() {
             let s = self.order[oi];
             let (b, e) = (self.begin[s], self.begin[s + 1]);
@@ -597,6 +601,7 @@ impl SymmetricLu {
                 top += r * r;
             }
         }
+        self.pending = pending;
         self.perturbed = perturbed;
         self.det = (sign, logdet);
         Ok(())
