@@ -147,6 +147,27 @@ fn damped_steady_tangent_is_exact_in_both_modes_with_and_without_rings() {
         // The coupling beyond the cells is a visible part of the tangent.
         assert!(corr > 1e-3, "{corr:e}");
         assert_eq!(none, 0.0);
+        // Banded: three-point ring differences in the matrix, the rest matrix-free (rings
+        // only; without them the system stays as it is).
+        st.sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Banded);
+        if rings {
+            assert_eq!(
+                st.sys.steady_damping_tangent(),
+                Some(SteadyDampingTangent::Banded)
+            );
+            assert!(st.has_tangent_correction());
+            let (err_b, corr_b) = fd_errors(&mut st);
+            println!("banded: FD error {err_b:.2e} (matrix-free part {corr_b:.2e})");
+            assert!(err_b < 1e-6, "{err_b:e}");
+            // Its matrix-free part is smaller than the cells-only split's.
+            assert!(corr_b > 0.0 && corr_b < corr, "{corr_b:e} vs {corr:e}");
+        } else {
+            assert_eq!(
+                st.sys.steady_damping_tangent(),
+                Some(SteadyDampingTangent::Assembled)
+            );
+        }
         // Back to matrix-free: the same sparsity as without damping again.
         let nnz_as = st.sys.asm.nnz();
         st.sys
@@ -213,6 +234,7 @@ fn matrix_free_and_assembled_reach_the_same_state() {
     for mode in [
         SteadyDampingTangent::MatrixFree,
         SteadyDampingTangent::Assembled,
+        SteadyDampingTangent::Banded,
     ] {
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         st.sys.set_steady_damping_tangent(mode);
@@ -222,15 +244,17 @@ fn matrix_free_and_assembled_reach_the_same_state() {
         assert_eq!(st.sys.steady_damping_tangent(), Some(mode));
         out.push((hub_force(&st), st.sys.x.clone()));
     }
-    let ((a, xa), (b, xb)) = (&out[0], &out[1]);
-    let du = xa
-        .iter()
-        .zip(xb)
-        .map(|(p, q)| (p - q).abs())
-        .fold(0.0, f64::max);
-    println!("hub force matrix-free {a:?}, assembled {b:?}; max |du| = {du:.2e}");
-    assert!((a.0 - b.0).abs() < 1e-6 * a.1.abs() && (a.1 - b.1).abs() < 1e-6 * a.1.abs());
-    assert!(du < 1e-7, "{du:e}");
+    let (a, xa) = &out[0];
+    for (b, xb) in &out[1..] {
+        let du = xa
+            .iter()
+            .zip(xb)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f64::max);
+        println!("hub force matrix-free {a:?}, other {b:?}; max |du| = {du:.2e}");
+        assert!((a.0 - b.0).abs() < 1e-6 * a.1.abs() && (a.1 - b.1).abs() < 1e-6 * a.1.abs());
+        assert!(du < 1e-7, "{du:e}");
+    }
 }
 
 /// Damping on an imported mesh without rings (Gmsh, refined at the footprint): the nodal
@@ -354,7 +378,8 @@ fn ring_and_cell_average_velocities_converge_together() {
 }
 
 /// `[solver] damping_tangent` selects the Newton matrix; `auto` (the default) starts
-/// matrix-free, and without damping there is none to choose.
+/// matrix-free on small meshes (banded from `BANDED_MIN_EQUATIONS` on), and without damping
+/// there is none to choose.
 #[test]
 fn damping_tangent_scene_key() {
     let base = ["analysis.mode=\"steady\"", "mesh.n_theta=16", "mesh.n_r=1"];
@@ -363,6 +388,7 @@ fn damping_tangent_scene_key() {
         (Some("auto"), Some(SteadyDampingTangent::MatrixFree)),
         (Some("matrix_free"), Some(SteadyDampingTangent::MatrixFree)),
         (Some("assembled"), Some(SteadyDampingTangent::Assembled)),
+        (Some("banded"), Some(SteadyDampingTangent::Banded)),
     ] {
         let mut set: Vec<String> = base.iter().map(|s| s.to_string()).collect();
         if let Some(v) = value {

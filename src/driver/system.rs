@@ -100,6 +100,11 @@ pub struct SteadyViscosity {
     /// block, and per cell its extended nodes (the cell's, then the other nodes of their
     /// derivative stencils) at `ext_off[c]..ext_off[c + 1]`.
     assembled: Option<(usize, Vec<u32>, Vec<usize>)>,
+    /// Banded mode ([`SteadyDampingTangent::Banded`]): the three-point ring differences whose
+    /// coupling is in the matrix (`assembled` then holds their extended elements), and the
+    /// scratch for their product.
+    banded: Option<NodalThetaDerivative>,
+    dv3: Vec<f64>,
     /// Set when a GMRES solve with the matrix-free coupling did not reach its tolerance.
     pub stalled: bool,
 }
@@ -116,6 +121,12 @@ pub enum SteadyDampingTangent {
     /// a direct solve of the exact tangent, robust where the GMRES iteration is not (near the
     /// critical speed, extreme stiffness ratios).
     Assembled,
+    /// The coupling of three-point ring differences assembled (one node passage beyond the
+    /// cells instead of two) and the rest, ω A_c (D − D₃), applied matrix-free: a
+    /// preconditioner whose damping differs from the exact one by a factor 1–5/3 at every
+    /// wave number along the rings, where the cells' own derivatives miss the grid scale.
+    /// Ring meshes only.
+    Banded,
 }
 
 impl SolidSystem {
@@ -324,6 +335,8 @@ impl SolidSystem {
             du: vec![0.0; n_full],
             dv: vec![0.0; n_full],
             assembled: None,
+            banded: None,
+            dv3: vec![0.0; n_full],
             stalled: false,
         });
         true
@@ -332,24 +345,37 @@ impl SolidSystem {
     /// The Newton matrix of the steady damping (`None` when that damping is not active).
     pub fn steady_damping_tangent(&self) -> Option<SteadyDampingTangent> {
         let sv = self.steady_visc.as_ref()?;
-        (self.model.strain_rate_damping > 0.0).then_some(if sv.assembled.is_some() {
-            SteadyDampingTangent::Assembled
-        } else {
-            SteadyDampingTangent::MatrixFree
-        })
+        (self.model.strain_rate_damping > 0.0).then_some(
+            match (sv.assembled.is_some(), sv.banded.is_some()) {
+                (true, true) => SteadyDampingTangent::Banded,
+                (true, false) => SteadyDampingTangent::Assembled,
+                _ => SteadyDampingTangent::MatrixFree,
+            },
+        )
     }
 
     /// Switch the steady damping's Newton matrix (no effect without that damping). The
     /// assembler is rebuilt (a new sparsity), so solvers made for the old one must be made
     /// again.
     pub fn set_steady_damping_tangent(&mut self, mode: SteadyDampingTangent) {
+        let Some(current) = self.steady_damping_tangent() else {
+            return;
+        };
+        if current == mode {
+            return;
+        }
+        let banded = match mode {
+            SteadyDampingTangent::Banded => {
+                match NodalThetaDerivative::three_point(&self.model.mesh) {
+                    Some(d) => Some(d),
+                    None => return, // no rings: stay as it is
+                }
+            }
+            _ => None,
+        };
         let Some(sv) = self.steady_visc.as_mut() else {
             return;
         };
-        let want = mode == SteadyDampingTangent::Assembled;
-        if want == sv.assembled.is_some() {
-            return;
-        }
         let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
             .asm
             .blocks
@@ -358,7 +384,10 @@ impl SolidSystem {
             .collect();
         if let Some((block, _, _)) = sv.assembled.take() {
             lists.truncate(block);
-        } else {
+        }
+        sv.banded = banded;
+        if mode != SteadyDampingTangent::MatrixFree {
+            let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
             let mesh = &self.model.mesh;
             let (mut ext, mut ext_off) = (Vec::new(), vec![0]);
             let (mut list, mut off) = (Vec::new(), vec![0]);
@@ -368,7 +397,7 @@ impl SolidSystem {
                 ext.extend_from_slice(nodes);
                 for &a in nodes {
                     let a = a as usize;
-                    for &b in &sv.nodal.idx[sv.nodal.ptr[a]..sv.nodal.ptr[a + 1]] {
+                    for &b in &stencil.idx[stencil.ptr[a]..stencil.ptr[a + 1]] {
                         if !ext[start..].contains(&b) {
                             ext.push(b);
                         }
@@ -412,14 +441,15 @@ impl SolidSystem {
                 let nd = 2 * ex.len();
                 let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
                 let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
+                let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
                 let mut w = vec![0.0f64; ex.len()];
                 for m in 0..nn {
-                    // Row m of ω (D − D_c) over the extended nodes.
+                    // Row m of ω (D − D_c) (or ω (D₃ − D_c)) over the extended nodes.
                     w.fill(0.0);
                     let node = nodes[m] as usize;
-                    for p in sv.nodal.ptr[node]..sv.nodal.ptr[node + 1] {
-                        if let Some(e) = ex.iter().position(|&q| q == sv.nodal.idx[p]) {
-                            w[e] += om * sv.nodal.w[p];
+                    for p in stencil.ptr[node]..stencil.ptr[node + 1] {
+                        if let Some(e) = ex.iter().position(|&q| q == stencil.idx[p]) {
+                            w[e] += om * stencil.w[p];
                         }
                     }
                     for b in 0..nn {
@@ -575,12 +605,21 @@ impl SolidSystem {
         let (Some(sv), Some(om)) = (self.steady_visc.as_mut(), self.steady_omega) else {
             return;
         };
-        if self.model.strain_rate_damping <= 0.0 || sv.assembled.is_some() {
+        if self.model.strain_rate_damping <= 0.0 || (sv.assembled.is_some() && sv.banded.is_none())
+        {
             return;
         }
         sv.du.fill(0.0);
         self.dofs.scatter_free(v, &mut sv.du);
         sv.nodal.apply(&sv.du, om, &mut sv.dv);
+        if let Some(d3) = &sv.banded {
+            // Banded: the matrix holds ω D₃; the rest is ω (D − D₃) at the cell's nodes.
+            d3.apply(&sv.du, om, &mut sv.dv3);
+            for (d, d3) in sv.dv.iter_mut().zip(&sv.dv3) {
+                *d -= d3;
+            }
+        }
+        let banded = sv.banded.is_some();
         let mesh = &self.model.mesh;
         for c in 0..mesh.n_cells() {
             let nodes = mesh.cell_nodes(c);
@@ -591,9 +630,13 @@ impl SolidSystem {
             let mut diff = [0.0; 18];
             for m in 0..nn {
                 for i in 0..2 {
-                    let loc: f64 = (0..nn)
-                        .map(|b| d[m * nn + b] * sv.du[cd[2 * b + i] as usize])
-                        .sum();
+                    let loc: f64 = if banded {
+                        0.0
+                    } else {
+                        (0..nn)
+                            .map(|b| d[m * nn + b] * sv.du[cd[2 * b + i] as usize])
+                            .sum()
+                    };
                     diff[2 * m + i] = sv.dv[cd[2 * m + i] as usize] - om * loc;
                 }
             }
@@ -887,7 +930,10 @@ impl NonlinearSystem for SolidSystem {
     fn has_tangent_correction(&self) -> bool {
         self.steady_omega.is_some()
             && (self.steady_history.is_some()
-                || self.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree))
+                || matches!(
+                    self.steady_damping_tangent(),
+                    Some(SteadyDampingTangent::MatrixFree | SteadyDampingTangent::Banded)
+                ))
     }
     fn tangent_correction_stalled(&mut self) {
         if let Some(sv) = self.steady_visc.as_mut() {

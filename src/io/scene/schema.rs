@@ -386,7 +386,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("threads", Kind::UInt, NONE, "worker threads; 0 = all cores"),
             opt("line_search", Kind::Bool, NONE, "backtracking line search on the residual norm"),
             opt("damping_tangent", Kind::Keyword(DampingTangentChoice::NAMES), NONE,
-                "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve, assembled for continuation)"),
+                "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve below 60,000 equations, banded from there on ring meshes, assembled for continuation)"),
             opt("eps_continuation", Kind::Bool, NONE,
                 "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
             opt("coarse_start", Kind::Bool, NONE,

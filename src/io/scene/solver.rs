@@ -30,6 +30,9 @@ keyword_enum! {
         MatrixFree => "matrix_free",
         /// The whole coupling assembled (wider sparsity, more LU fill): a direct solve.
         Assembled => "assembled",
+        /// The coupling of three-point ring differences assembled (one node passage beyond
+        /// the cells), the rest matrix-free (GMRES); ring meshes only (others: matrix-free).
+        Banded => "banded",
     }
 }
 
