@@ -387,8 +387,8 @@ impl SymmetricLu {
             let (b, e) = (begin[s], begin[s + 1]);
             let below = &rows[rows_ptr[s]..rows_ptr[s + 1]];
             let m = (e - b + below.len()) as u32;
-            for i in b..e {
-                loc[i] = (i - b) as u32;
+            for (k, l) in loc[b..e].iter_mut().enumerate() {
+                *l = k as u32;
             }
             for (k, &i) in below.iter().enumerate() {
                 loc[i] = (e - b + k) as u32;
@@ -535,7 +535,8 @@ impl SymmetricLu {
             }
             for k in 0..w {
                 let d = front[k + k * m];
-                if !(d.abs() >= tiny) {
+                // (A NaN after a zero pivot counts as tiny too.)
+                if d.is_nan() || d.abs() < tiny {
                     // Zero up to round-off (or not finite after a zero pivot): counted, and
                     // replaced so that the factors stay finite.
                     front[k + k * m] = if d < 0.0 { -tiny } else { tiny };
@@ -712,10 +713,11 @@ mod tests {
             let d = m[k][k];
             sign *= d.signum();
             log += d.abs().ln();
+            let pivot_row = m[k].clone();
             for i in k + 1..n {
                 let f = m[i][k] / d;
-                for j in k..n {
-                    m[i][j] -= f * m[k][j];
+                for (mij, &mkj) in m[i][k..].iter_mut().zip(&pivot_row[k..]) {
+                    *mij -= f * mkj;
                 }
                 x[i] -= f * x[k];
             }
