@@ -458,11 +458,16 @@ pub fn solve_steady(
             )
             && scene.solver.damping_tangent == DampingTangentChoice::Auto
         {
-            // The matrix-free damping tangent is the fast path; the assembled one is the
-            // robust one. Try it before any homotopy.
+            // The matrix-free and banded damping tangents are the fast paths; the assembled
+            // one is the robust one. Try it before any homotopy.
             let why = format!(
-                "the press with the matrix-free damping tangent failed ({e}); solved again \
-                 with the assembled tangent"
+                "the press with the {} damping tangent failed ({e}); solved again with the \
+                 assembled tangent",
+                if st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::Banded) {
+                    "banded"
+                } else {
+                    "matrix-free"
+                }
             );
             if verbose {
                 eprintln!("  {why}");
