@@ -13,8 +13,9 @@
 //! rows (which keeps the structure), and its Schur complement goes to the parent. A pivot
 //! that stays zero up to round-off ([`TINY`] max|A|: a zero diagonal block whose pivot lies
 //! outside the supernode, or a singular matrix) is replaced by that value with its sign and
-//! counted ([`SymmetricLu::perturbed`]); [`super::SparseSolver`] then hands the matrix to
-//! faer's partial-pivoting LU instead.
+//! counted ([`SymmetricLu::perturbed`]), and so is a multiplier of L above [`GROWTH`] (a pivot
+//! small against its column outside the supernode); [`super::SparseSolver`] then hands the
+//! matrix to faer's partial-pivoting LU instead.
 //!
 //! Measured on the steady tangent of the rolling cylinder (`tread-bench-lu`, one thread): the
 //! numeric factorization is 5.8× faster than faer's COLAMD LU at 66k DOFs without damping
@@ -40,6 +41,10 @@ use faer::{Accum, MatMut, Par, Side};
 /// A pivot below this fraction of max|A| is replaced (and counted in
 /// [`SymmetricLu::perturbed`]): it is zero up to round-off.
 pub const TINY: f64 = 1e2 * f64::EPSILON;
+
+/// A multiplier of L below the diagonal blocks above this is counted in
+/// [`SymmetricLu::perturbed`] (an unstable pivot; partial pivoting would keep it at most 1).
+pub const GROWTH: f64 = 1e6;
 
 /// Diagonal blocks up to this size are factorized by a plain loop, larger ones by faer's
 /// blocked dense LU.
@@ -452,7 +457,9 @@ impl SymmetricLu {
         self.factors.len()
     }
 
-    /// Pivots replaced by ±[`TINY`] max|A| in the last factorization.
+    /// Pivots replaced by ±[`TINY`] max|A|, and supernodes whose multipliers exceeded
+    /// [`GROWTH`], in the last factorization: 0 when the factors are those of A, computed
+    /// stably.
     pub fn perturbed(&self) -> usize {
         self.perturbed
     }
@@ -575,6 +582,19 @@ impl SymmetricLu {
                     -1.0,
                     par,
                 );
+            }
+            // Growth: restricted pivoting bounds the multipliers of L11 by 1 but not those of
+            // L21. A multiplier above GROWTH means a pivot that is small against entries of its
+            // column outside the supernode: counted like a tiny pivot (the caller then uses a
+            // partial-pivoting LU).
+            let mut lmax = 0.0f64;
+            for j in 0..w {
+                for &l in &front[j * m + w..(j + 1) * m] {
+                    lmax = lmax.max(l.abs());
+                }
+            }
+            if lmax.is_nan() || lmax > GROWTH {
+                perturbed += 1;
             }
             // Store the factors, push the update matrix.
             let off = self.fac_off[s];
@@ -825,6 +845,47 @@ mod tests {
             })
             .collect();
         check(&a, "dense zero diagonal");
+    }
+
+    /// A pivot that is small against its column below the supernode: large multipliers are
+    /// reported (a chain whose first diagonal entry is 1e-9 against couplings of 1, so that
+    /// the first supernode holds one column unless the analysis merges the chain).
+    #[test]
+    fn large_multipliers_are_reported() {
+        let n = 40;
+        let mut a = vec![vec![None; n]; n];
+        for i in 0..n {
+            a[i][i] = Some(if i == 0 { 1e-9 } else { 4.0 });
+            if i + 1 < n {
+                a[i][i + 1] = Some(1.0);
+                a[i + 1][i] = Some(1.0);
+            }
+        }
+        let (cp, ri, v) = csc(&a);
+        let mut lu = SymmetricLu::new(n, &cp, &ri).unwrap();
+        lu.factorize(&v, Par::Seq).unwrap();
+        // Either node 0 was pivoted with its neighbour inside one supernode (then no large
+        // multiplier arises and the solve is accurate) or the growth is reported.
+        let mut x: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
+        let b = x.clone();
+        lu.solve_in_place(&mut x);
+        let res: f64 = (0..n)
+            .map(|i| {
+                let mut r = b[i] - a[i][i].unwrap() * x[i];
+                if i > 0 {
+                    r -= x[i - 1];
+                }
+                if i + 1 < n {
+                    r -= x[i + 1];
+                }
+                r.abs()
+            })
+            .fold(0.0, f64::max);
+        assert!(lu.perturbed() > 0 || res < 1e-9, "residual {res:e}");
+        // Well-scaled, the same chain factorizes stably.
+        let v2: Vec<f64> = v.iter().map(|&x| if x == 1e-9 { 4.0 } else { x }).collect();
+        lu.factorize(&v2, Par::Seq).unwrap();
+        assert_eq!(lu.perturbed(), 0);
     }
 
     /// A zero pivot that only a row outside the supernode could fix is replaced and counted;
