@@ -442,7 +442,16 @@ impl SolidSystem {
                 let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
                 let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
                 let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
-                let mut w = vec![0.0f64; ex.len()];
+                // Row weights over the extended nodes: on the stack for the usual sizes (a Q2
+                // cell and its ring stencils: at most 21 nodes).
+                let mut stack = [0.0f64; 64];
+                let mut heap = Vec::new();
+                let w: &mut [f64] = if ex.len() <= stack.len() {
+                    &mut stack[..ex.len()]
+                } else {
+                    heap.resize(ex.len(), 0.0);
+                    &mut heap
+                };
                 for m in 0..nn {
                     // Row m of ω (D − D_c) (or ω (D₃ − D_c)) over the extended nodes.
                     w.fill(0.0);
