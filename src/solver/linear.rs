@@ -401,6 +401,25 @@ struct LuState {
     det: LbltDet,
 }
 
+impl LuState {
+    /// faer's COLAMD LU of this pattern, and the determinant's LBLᵀ analysis.
+    fn new(
+        pattern: &SymbolicSparseColMat<usize>,
+        threshold: SupernodalThreshold,
+    ) -> Result<Self, LinearError> {
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: threshold,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(pattern.as_ref(), params).map_err(map_faer_err)?;
+        Ok(Self {
+            symbolic,
+            numeric: NumericLu::new(),
+            det: LbltDet::new(pattern)?,
+        })
+    }
+}
+
 /// LU with a column ordering computed here ([`LuOrdering::Amd`]): faer's supernodal symbolic
 /// and numeric LU driven directly (its `factorize_symbolic_lu` always uses COLAMD).
 struct LuCustomState {
@@ -585,10 +604,12 @@ enum Backend {
     Symmetric(Box<SymmetricState>),
 }
 
-/// [`LuOrdering::Symmetric`]: the factorization and the determinant's LBLᵀ.
+/// [`LuOrdering::Symmetric`]: the factorization and the determinant's LBLᵀ, analysed on the
+/// first factorization that tracks the determinant (Newton does not: its solves then make one
+/// symbolic analysis, not two).
 struct SymmetricState {
     lu: super::multifrontal::SymmetricLu,
-    det: LbltDet,
+    det: Option<LbltDet>,
 }
 
 impl Backend {
@@ -848,23 +869,9 @@ impl SparseSolver {
             LinearKind::Lu if ordering == LuOrdering::Symmetric => {
                 let lu = super::multifrontal::SymmetricLu::new(n, col_ptr, row_idx)
                     .map_err(|e| LinearError::Symbolic(e.to_string()))?;
-                let det = LbltDet::new(&pattern)?;
-                Backend::Symmetric(Box::new(SymmetricState { lu, det }))
+                Backend::Symmetric(Box::new(SymmetricState { lu, det: None }))
             }
-            LinearKind::Lu => {
-                let params = LuSymbolicParams {
-                    supernodal_flop_ratio_threshold: threshold,
-                    ..Default::default()
-                };
-                let symbolic =
-                    factorize_symbolic_lu(pattern.as_ref(), params).map_err(map_faer_err)?;
-                let det = LbltDet::new(&pattern)?;
-                Backend::Lu(Box::new(LuState {
-                    symbolic,
-                    numeric: NumericLu::new(),
-                    det,
-                }))
-            }
+            LinearKind::Lu => Backend::Lu(Box::new(LuState::new(&pattern, threshold)?)),
         };
         let req = backend.scratch(Par::Seq);
         Ok(Self {
@@ -1043,27 +1050,13 @@ impl SparseSolver {
     /// Replace the multifrontal LU by faer's COLAMD LU (partial pivoting) for good, and
     /// factorize with it.
     fn fall_back_to_colamd(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        let params = LuSymbolicParams::default();
-        let symbolic = match factorize_symbolic_lu(self.pattern.as_ref(), params) {
-            Ok(s) => s,
-            Err(e) => {
-                let err = map_faer_err(e);
-                self.status = Status::Other(err.to_string());
-                return Err(err);
-            }
-        };
-        let det = match LbltDet::new(&self.pattern) {
-            Ok(d) => d,
+        match LuState::new(&self.pattern, SupernodalThreshold::AUTO) {
+            Ok(st) => self.backend = Backend::Lu(Box::new(st)),
             Err(e) => {
                 self.status = Status::Other(e.to_string());
                 return Err(e);
             }
-        };
-        self.backend = Backend::Lu(Box::new(LuState {
-            symbolic,
-            numeric: NumericLu::new(),
-            det,
-        }));
+        }
         let req = self.backend.scratch(self.par);
         grow_scratch(&mut self.mem, &mut self.mem_req, req);
         self.factorize(values)
@@ -1076,7 +1069,13 @@ impl SparseSolver {
         let det = match &mut self.backend {
             Backend::Lu(st) => &mut st.det,
             Backend::LuCustom(st) => &mut st.det,
-            Backend::Symmetric(st) => &mut st.det,
+            Backend::Symmetric(st) => match &mut st.det {
+                Some(d) => d,
+                None => match LbltDet::new(&self.pattern) {
+                    Ok(d) => st.det.insert(d),
+                    Err(_) => return,
+                },
+            },
             Backend::Cholesky(_) => return,
         };
         // Always sequential: faer's parallel dense Bunch–Kaufman on the many small supernodes

@@ -447,11 +447,6 @@ impl SymmetricLu {
         })
     }
 
-    /// System size.
-    pub fn n(&self) -> usize {
-        self.n
-    }
-
     /// Entries stored in L and U (the diagonal once).
     pub fn factor_entries(&self) -> usize {
         self.factors.len()
@@ -467,15 +462,6 @@ impl SymmetricLu {
     /// Sign and log|det A| of the last factorization (with any replaced pivots).
     pub fn det_sign_log(&self) -> (f64, f64) {
         self.det
-    }
-
-    /// Heap bytes held by the factors, the front, the update stack and the maps.
-    pub fn heap_bytes(&self) -> usize {
-        8 * (self.factors.len() + self.front.len() + self.stack.len() + self.work.len())
-            + 8 * self.amap.len()
-            + 8 * (self.rows.len() + self.fwd.len())
-            + 4 * self.rel.len()
-            + 8 * (self.perm.len() + self.perm_inv.len() + self.tmp.len() + self.rtmp.len())
     }
 
     /// Numeric factorization with these values (in the order of the analysed pattern).
