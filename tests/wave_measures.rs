@@ -59,6 +59,7 @@ fn damped_branch_folds_back_onto_a_sheet_of_large_waves() {
     let set: Vec<String> = [
         "continuation.ds_max=0.02",
         "continuation.max_steps=80",
+        "continuation.on_limit=follow",
         "output.sinks=[\"summary\"]",
     ]
     .iter()
@@ -108,6 +109,113 @@ fn damped_branch_folds_back_onto_a_sheet_of_large_waves() {
         "up: {up}, back: {last}"
     );
     assert_eq!(num(last, "wave_number"), 5.0, "{last}");
+}
+
+/// Runs `scene` with the `--set` overrides `set`; returns the summary.
+fn run_scene(scene: &str, name: &str, set: &[&str]) -> serde_json::Value {
+    use fixtures::tempdir::TestDir;
+    let text = scene_text(scene);
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let scene =
+        tread::io::Scene::from_toml_str(&text, "scene", &set).unwrap_or_else(|e| panic!("{e}"));
+    let out = TestDir::new("waves", name);
+    tread::app::run(
+        &scene,
+        &tread::app::RunOptions {
+            out_dir: out.to_path_buf(),
+            verbose: false,
+            quiet: true,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+    .summary
+}
+
+/// The same damped branch with the same small steps and `on_limit = "jump"`: at the limit point
+/// (49.77 rad/s) a direct solve about 1 rad/s beyond lands on the upper sheet (smaller wave,
+/// same n = 5), and the path goes on from there to the target, ω increasing, with no second
+/// limit point. The landing point and the last point are checked against separate direct
+/// solves at their speeds (the upper sheet, found without the continuation), and against the
+/// branch before the fold. Measured: jump 49.766 → 50.806 rad/s; at the landing F_y −83.904,
+/// amplitude 0.01303 in, against 0.01640 in at the limit point.
+#[test]
+fn damped_branch_jumps_past_its_limit_point_onto_the_upper_sheet() {
+    let r = run_scene(
+        "scenarios/oden_figs_9_13.toml",
+        "jump",
+        &[
+            "continuation.ds_max=0.02",
+            "continuation.on_limit=jump",
+            "output.sinks=[\"summary\"]",
+        ],
+    );
+    let r = &r["results"];
+    let cont = &r["continuation"];
+    assert!(
+        cont["stop_reason"].as_str().unwrap().contains("target"),
+        "{cont}"
+    );
+    let jumps = cont["jumps"].as_array().unwrap();
+    assert_eq!(jumps.len(), 1, "{cont}");
+    let (step, limit, landed) = (
+        jumps[0]["step"].as_u64().unwrap() as usize,
+        jumps[0]["limit"].as_f64().unwrap(),
+        jumps[0]["landed"].as_f64().unwrap(),
+    );
+    eprintln!("jump at step {step}: {limit:.4} -> {landed:.4} rad/s");
+    assert!((49.0..50.5).contains(&limit), "{limit}");
+    // ds_max = 0.02 of |62 - 10| per jump distance: 1.04 rad/s (or 2×, 4× on a retry).
+    assert!(landed > limit && landed < limit + 4.2, "{landed}");
+    let branch = r["branch"].as_array().unwrap();
+    let num = |p: &serde_json::Value, k: &str| p[k].as_f64().unwrap();
+    let i = branch
+        .iter()
+        .position(|p| p["step"].as_u64() == Some(step as u64))
+        .unwrap();
+    assert_eq!(branch[i]["kind"], "jump", "{}", branch[i]);
+    assert_eq!(branch[i - 1]["kind"], "limit_point", "{}", branch[i - 1]);
+    let specials = r["special_points"].as_array().unwrap();
+    assert_eq!(specials.len(), 1, "{specials:?}");
+    assert!(
+        branch[i..]
+            .windows(2)
+            .all(|w| num(&w[1], "omega") > num(&w[0], "omega")),
+        "omega not increasing after the jump"
+    );
+    let last = branch.last().unwrap();
+    assert!(num(last, "omega") >= 62.0, "{last}");
+    // The landing point: the upper sheet (a smaller wave than at the fold), n = 5.
+    assert!(
+        num(&branch[i], "wave_amplitude") < 0.9 * num(&branch[i - 1], "wave_amplitude"),
+        "{} vs {}",
+        branch[i],
+        branch[i - 1]
+    );
+    assert_eq!(num(&branch[i], "wave_number"), 5.0);
+    // Separate direct solves at the landing and the last speed agree with the branch.
+    for p in [&branch[i], last] {
+        let w = num(p, "omega");
+        let v0 = num(p, "v0");
+        let d = run_scene(
+            "scenarios/oden_figs_9_13.toml",
+            &format!("direct_{}", w.round()),
+            &[
+                &format!("motion.omega={w}"),
+                &format!("road.v0={v0}"),
+                "continuation.target=1000",
+                "continuation.max_steps=1",
+                "output.sinks=[\"summary\"]",
+            ],
+        );
+        let first = &d["results"]["branch"][0];
+        for k in ["hub_force_x", "hub_force_y", "hub_torque"] {
+            let (a, b) = (num(first, k), num(p, k));
+            assert!(
+                (a - b).abs() < 1e-6 * b.abs().max(1.0),
+                "{k} at {w}: direct {a}, branch {b}"
+            );
+        }
+    }
 }
 
 /// Above the critical speed (46.7 rad/s on this mesh), the transient mode of the lightly damped

@@ -394,6 +394,7 @@ impl BranchRow {
             PointKind::LimitPoint => 2.0,
             PointKind::Bifurcation => 3.0,
             PointKind::Switched => 4.0,
+            PointKind::Jump => 5.0,
         };
         vec![
             self.step as f64,
@@ -460,6 +461,21 @@ pub struct ContinuationSummary {
     /// The step after which the path switched branches (`[continuation] switch_branch`; null
     /// when it did not).
     pub switched_at: Option<usize>,
+    /// Jumps past limit points (`[continuation] on_limit = "jump"`), in order.
+    pub jumps: Vec<LimitJump>,
+    /// Parameter values of the limit points past which no jump found a steady solution (the
+    /// path followed the branch back there).
+    pub failed_jumps: Vec<f64>,
+}
+
+/// A jump of the continuation past a limit point onto another sheet of solutions.
+#[derive(Clone, Debug, Serialize)]
+pub struct LimitJump {
+    /// Step of the first point after the jump (kind 5 in `branch.csv`).
+    pub step: usize,
+    /// Estimated parameter value of the limit point, and the value the direct solve landed at.
+    pub limit: f64,
+    pub landed: f64,
 }
 
 /// `results` of the steady mode (the final state; the keys shared with the transient mode have

@@ -27,7 +27,7 @@ use super::frame::SolidFrame;
 use super::resistance;
 pub use super::results::{BranchRow, ControlReport};
 use super::results::{
-    ContinuationSummary, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
+    ContinuationSummary, LimitJump, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
     SteadySummary, SteadyTerms, Summary, Terms,
 };
 use super::spinning;
@@ -41,7 +41,8 @@ use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
 use crate::io::scene::{
-    ContinuationParameter, Control, DampingTangentChoice, Scene, Sink, SteadyHistoryChoice,
+    ContinuationParameter, Control, DampingTangentChoice, LimitAction, Scene, Sink,
+    SteadyHistoryChoice,
 };
 use crate::physics::viscoelastic_steady::StreamlineScheme;
 use crate::physics::SolidModel;
@@ -225,7 +226,7 @@ fn record_branch_point(
             PointKind::Start | PointKind::Regular => record::PointKind::Regular,
             PointKind::LimitPoint => record::PointKind::LimitPoint,
             PointKind::Bifurcation => record::PointKind::Bifurcation,
-            PointKind::Switched => record::PointKind::Regular,
+            PointKind::Switched | PointKind::Jump => record::PointKind::Regular,
         },
         measures: &measures,
     });
@@ -794,6 +795,96 @@ pub fn dump_tangent(st: &mut SteadyRolling, path: &Path) -> Result<(PathBuf, Pat
     Ok((a, b))
 }
 
+/// The scene with its continuation parameter (ω with v0 / ω kept, the hub load, DISP) set
+/// to `lambda`.
+fn scene_at(scene: &Scene, st: &SteadyRolling, lambda: f64) -> Scene {
+    let mut s = scene.clone();
+    match st.param {
+        SteadyParameter::Omega => {
+            s.motion.omega = lambda;
+            if let Some(r) = &mut s.road {
+                r.v0 = st.v0_per_omega * lambda;
+            }
+        }
+        SteadyParameter::Load => {
+            if let Some(r) = &mut s.road {
+                r.load = Some(lambda);
+            }
+        }
+        SteadyParameter::Disp => {
+            if let Some(r) = &mut s.road {
+                r.disp = Some(lambda);
+            }
+        }
+        SteadyParameter::Creep => {}
+    }
+    s
+}
+
+/// `[continuation] on_limit = "jump"`: a direct steady solve (the first solve's path, from the
+/// undeformed state `x0`) at λ = `at` + `step`, retried at `at` + 2 `step` and `at` + 4 `step`
+/// (never past `target`). On success `st` is at the new state and the Newton iterations are
+/// returned; on failure `st`'s parameter is left at a tried value (the caller restores the
+/// state) and `None` is returned. What the first solve recorded about its path (recovery,
+/// coarse start, ε continuation, damping fallback) is kept.
+fn jump_past_limit(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    x0: &[f64],
+    at: f64,
+    step: f64,
+    target: f64,
+    verbose: bool,
+) -> Option<usize> {
+    use crate::solver::continuation::ParametricSystem;
+    let kept = (
+        st.recovery.take(),
+        st.eps_continuation.take(),
+        st.coarse_start.take(),
+        st.damping_fallback.clone(),
+        st.sys.steady_damping_tangent(),
+    );
+    let mut landed = None;
+    for k in 0..3 {
+        let mut lambda = at + step * f64::from(1 << k);
+        let last = (lambda - target) * step.signum() >= 0.0;
+        if last {
+            lambda = target;
+        }
+        st.sys.restore_state(x0);
+        st.set_parameter(lambda);
+        let direct = scene_at(scene, st, lambda);
+        let mut report = StepReport::default();
+        let r = solve_steady(&direct, st, false, &mut report, &mut ());
+        if verbose {
+            eprintln!(
+                "  direct solve past the limit point at {at:.6e}: parameter {lambda:.6e}: {}",
+                match &r {
+                    Ok(()) => "converged".to_string(),
+                    Err(e) => format!("failed ({e})"),
+                }
+            );
+        }
+        if r.is_ok() {
+            landed = Some(report.total_iterations);
+            break;
+        }
+        if last {
+            break;
+        }
+    }
+    if let Some(t) = kept.4 {
+        st.sys.set_steady_damping_tangent(t);
+    }
+    (
+        st.recovery,
+        st.eps_continuation,
+        st.coarse_start,
+        st.damping_fallback,
+    ) = (kept.0, kept.1, kept.2, kept.3);
+    landed
+}
+
 /// [`run`], and with `dump` = Some(PATH) the converged tangent written by [`dump_tangent`].
 pub fn run_with_dump(
     scene: &Scene,
@@ -804,6 +895,9 @@ pub fn run_with_dump(
     ensure_dir(&opts.out_dir)?;
     let warn = warnings(scene);
     let mut st = build_steady(scene)?;
+    // The undeformed state: the start of a direct solve past a limit point.
+    let mut x_undeformed = Vec::new();
+    st.sys.save_state(&mut x_undeformed);
     let n_cont = scene.continuation.as_ref().map_or(0, |c| c.max_steps);
     let clock = RunClock {
         mesh: Some(&st.sys.model.mesh),
@@ -874,8 +968,12 @@ pub fn run_with_dump(
             tol: scene.solver.tolerance,
             test_function: true,
             switch_branch: cs.switch_branch,
+            stop_at_limit: cs.on_limit == LimitAction::Jump,
             verbose: opts.verbose,
         };
+        let jump_distance = cs.jump * copts.lambda_scale;
+        let jump_direction = copts.direction;
+        let jump_target = copts.target;
         let n0 = report.steps.len() as u64;
         let mut partial = None;
         let param_name = cs.parameter.as_str();
@@ -915,9 +1013,20 @@ pub fn run_with_dump(
                 !record::interrupted()
             })
         } else {
+            let mut jump = |s: &mut SteadyRolling, at: f64| {
+                jump_past_limit(
+                    scene,
+                    s,
+                    &x_undeformed,
+                    at,
+                    jump_direction * jump_distance,
+                    jump_target,
+                    opts.verbose,
+                )
+            };
             Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
                 let rec: &mut dyn Recorder = recorders;
-                let r = c.run(&mut st, &mut |s: &SteadyRolling, p: &BranchPoint| {
+                let on_point = &mut |s: &SteadyRolling, p: &BranchPoint| {
                     let row = branch_row(s, p);
                     if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
                         let frame = SolidFrame::capture(&s.sys);
@@ -943,7 +1052,8 @@ pub fn run_with_dump(
                         s.sys.record_step(&info, rec);
                     }
                     !record::interrupted()
-                });
+                };
+                let r = c.run_with_jumps(&mut st, on_point, Some(&mut jump));
                 partial = c.partial.take();
                 r
             })
@@ -1024,6 +1134,16 @@ pub fn run_with_dump(
             assemblies: c.assemblies,
             factorizations: c.factorizations,
             switched_at: c.switched_at,
+            jumps: c
+                .jumps
+                .iter()
+                .map(|&(step, limit, landed)| LimitJump {
+                    step,
+                    limit,
+                    landed,
+                })
+                .collect(),
+            failed_jumps: c.failed_jumps.clone(),
         }),
     };
     let friction = st

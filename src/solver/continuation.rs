@@ -57,6 +57,12 @@
 //!   on the bifurcating branch (a pitchfork's second branch meets that sphere near the
 //!   predictor; the old branch meets it only at ±t). The first point of the new branch is
 //!   marked [`PointKind::Switched`]; the path does not switch again.
+//! - **Jumps past limit points** ([`ContinuationOptions::stop_at_limit`],
+//!   [`Continuation::run_with_jumps`]): where λ turns back before the target, the caller's
+//!   direct solve looks for a state beyond the limit (another sheet of solutions, e.g. the
+//!   steady mode's first-solve path at λ_limit + Δλ); the path goes on from it toward the
+//!   target, its first point marked [`PointKind::Jump`]. If it finds none, the state is
+//!   restored and the path follows the branch back (at most four tries per run).
 //! - **Tangents with a matrix-free part** ([`NonlinearSystem::has_tangent_correction`]: the
 //!   steady damping's coupling beyond the cells, a viscoelastic ring history): every solve
 //!   (tangent, corrector, test function) is made with the exact tangent by GMRES
@@ -123,6 +129,10 @@ pub struct ContinuationOptions {
     /// Leave the branch at the first bifurcation detected, along the null mode (see the
     /// module docs).
     pub switch_branch: bool,
+    /// Stop at a limit point that turns the path back before the target (instead of following
+    /// the branch back): [`ContinuationReport::limit_stop`] says where, and the caller may
+    /// jump to another sheet of solutions beyond it and continue from there.
+    pub stop_at_limit: bool,
     pub verbose: bool,
 }
 
@@ -143,6 +153,7 @@ impl Default for ContinuationOptions {
             tol: 1e-8,
             test_function: true,
             switch_branch: false,
+            stop_at_limit: false,
             verbose: false,
         }
     }
@@ -162,6 +173,9 @@ pub enum PointKind {
     /// The first point on the branch entered by branch switching
     /// ([`ContinuationOptions::switch_branch`]).
     Switched,
+    /// The first point after a jump past a limit point onto another sheet of solutions (a
+    /// direct solve beyond the limit; see [`ContinuationOptions::stop_at_limit`]).
+    Jump,
 }
 
 /// One converged point of the branch.
@@ -218,6 +232,14 @@ pub struct ContinuationReport {
     /// The point after which the path switched branches
     /// ([`ContinuationOptions::switch_branch`]; `None`: it did not).
     pub switched_at: Option<usize>,
+    /// With [`ContinuationOptions::stop_at_limit`]: the estimated λ of the limit point at which
+    /// the path stopped because the branch turned back before the target.
+    pub limit_stop: Option<f64>,
+    /// Jumps past limit points: (step of the first point after the jump, λ of the limit,
+    /// λ landed on).
+    pub jumps: Vec<(usize, f64, f64)>,
+    /// λ of the limit points past which no jump found a steady solution.
+    pub failed_jumps: Vec<f64>,
 }
 
 /// Arc-length continuation driver (owns the sparse solver and the work vectors).
@@ -242,6 +264,13 @@ pub struct Continuation {
     /// unknowns): the arc length is measured on the displacements and λ.
     weight: Vec<f64>,
 }
+
+/// The direct solve past a limit point of [`Continuation::run_with_jumps`]: given the system
+/// and λ of the limit point, a converged state beyond it and its Newton iterations, or `None`.
+pub type JumpFn<'a, S> = &'a mut dyn FnMut(&mut S, f64) -> Option<usize>;
+
+/// Jumps past limit points tried in one run ([`Continuation::run_with_jumps`]).
+const MAX_JUMPS: usize = 4;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
@@ -440,6 +469,22 @@ impl Continuation {
         sys: &mut S,
         on_point: &mut dyn FnMut(&S, &BranchPoint) -> bool,
     ) -> Result<ContinuationReport, SolveError> {
+        self.run_with_jumps(sys, on_point, None)
+    }
+
+    /// [`Self::run`] with a jump past limit points. With [`ContinuationOptions::stop_at_limit`]
+    /// and a `jump`, a limit point that turns the path back before the target calls
+    /// `jump(sys, λ_limit)`: it must leave `sys` at a converged state beyond the limit (λ on
+    /// the target's side) and return its Newton iterations, or return `None` (the state is then
+    /// restored and the path follows the branch back). After a jump the path goes on from the
+    /// new state toward the target; its first point has kind [`PointKind::Jump`]. Without a
+    /// `jump`, the path stops at such a limit point ([`ContinuationReport::limit_stop`]).
+    pub fn run_with_jumps<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        on_point: &mut dyn FnMut(&S, &BranchPoint) -> bool,
+        mut jump: Option<JumpFn<'_, S>>,
+    ) -> Result<ContinuationReport, SolveError> {
         let mut rep = ContinuationReport::default();
         let t_start = Instant::now();
         let (mut tl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
@@ -477,7 +522,10 @@ impl Continuation {
         // Set once the path has switched branches; the next point is the first of the new one.
         let mut switched = false;
         let mut just_switched = false;
-        for step in 1..=self.opts.max_steps {
+        let mut step = 0;
+        let mut jump_attempts = 0;
+        while step < self.opts.max_steps {
+            step += 1;
             let t0 = Instant::now();
             let lam_n = sys.parameter();
             sys.save_state(&mut self.saved);
@@ -638,6 +686,93 @@ impl Continuation {
                     );
                     self.partial = Some(std::mem::take(&mut rep));
                     return Err(SolveError::ContinuationCycles { lambda: lam });
+                }
+            }
+            if kind == PointKind::LimitPoint
+                && self.opts.stop_at_limit
+                && tangent_l * self.opts.direction < 0.0
+                && (self.opts.target - lam) * self.opts.direction > 0.0
+            {
+                let at = rep.special.last().map_or(lam, |s| s.lambda);
+                let Some(jump) = jump.as_deref_mut().filter(|_| jump_attempts < MAX_JUMPS) else {
+                    rep.limit_stop = Some(at);
+                    rep.stop_reason = format!(
+                        "limit point at lambda = {at:.6e}: the branch turns back before the target"
+                    );
+                    if !rep.failed_jumps.is_empty() {
+                        rep.stop_reason += &format!(
+                            " (no steady solution found past the {} limit points before it, at lambda = {})",
+                            rep.failed_jumps.len(),
+                            rep.failed_jumps
+                                .iter()
+                                .map(|l| format!("{l:.6e}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        );
+                    }
+                    return Ok(rep);
+                };
+                jump_attempts += 1;
+                let tj = Instant::now();
+                sys.save_state(&mut self.saved);
+                let landed = jump(sys, at).filter(|_| {
+                    (sys.parameter() - at) * self.opts.direction > 0.0
+                        && sys.residual().iter().all(|r| r.is_finite())
+                });
+                match landed {
+                    Some(iterations) => {
+                        let (mut jtl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
+                        rep.factorizations += 1;
+                        rep.assemblies += 3;
+                        if jtl * self.opts.direction < 0.0 {
+                            jtl = -jtl;
+                            self.tu.iter_mut().for_each(|t| *t = -*t);
+                        }
+                        step += 1;
+                        let point = BranchPoint {
+                            step,
+                            lambda: sys.parameter(),
+                            kind: PointKind::Jump,
+                            iterations,
+                            cutbacks: 0,
+                            ds: 0.0,
+                            dlambda_ds: jtl,
+                            det_sign: sign,
+                            log_abs_det: logdet,
+                            negative_eigenvalues: neg,
+                            test_function: g,
+                            wall_time_s: tj.elapsed().as_secs_f64(),
+                            factor_solve_s: fs,
+                        };
+                        rep.total_iterations += iterations;
+                        rep.jumps.push((step, at, point.lambda));
+                        if self.opts.verbose {
+                            eprintln!(
+                                "  continuation step {step}: jumped past the limit point at lambda = {at:.6e} to lambda = {:.6e}",
+                                point.lambda
+                            );
+                        }
+                        let go_on = on_point(sys, &point);
+                        rep.points.push(point);
+                        if !go_on {
+                            rep.stop_reason = "stopped by the caller".into();
+                            return Ok(rep);
+                        }
+                        (prev_sign, prev_g, prev_logdet, prev_neg) = (sign, g, logdet, neg);
+                        tangent_l = jtl;
+                        ds = self.opts.ds0;
+                        continue;
+                    }
+                    None => {
+                        rep.failed_jumps.push(at);
+                        sys.restore_state(&self.saved);
+                        sys.set_parameter(lam);
+                        if self.opts.verbose {
+                            eprintln!(
+                                "  continuation step {step}: no jump past the limit point at lambda = {at:.6e}; following the branch back"
+                            );
+                        }
+                    }
                 }
             }
             if (lam - self.opts.target) * self.opts.direction >= 0.0
@@ -1002,6 +1137,96 @@ mod tests {
         assert!(sys.lam >= 10.0 && sys.x > 2.0);
         // det K = 3x² − 3 changes sign at both limit points (and these are not bifurcations).
         assert!(rep.special.iter().all(|s| s.kind != PointKind::Bifurcation));
+    }
+
+    /// The cubic's S curve with jumps: at the first limit point (λ = 2) a direct solve by
+    /// Newton from x = 3 at λ = 2 + 0.5 lands on the upper sheet (x > 1), and the path goes
+    /// on from there to the target without the backward sheet (the second limit point is
+    /// never reached). A jump that finds nothing (here: refused) leaves the path to follow
+    /// the branch back, as without jumps, and is reported.
+    #[test]
+    fn cubic_jumps_past_its_limit_point() {
+        let opts = ContinuationOptions {
+            target: 10.0,
+            ds0: 0.2,
+            ds_max: 0.25,
+            tol: 1e-12,
+            max_steps: 500,
+            stop_at_limit: true,
+            ..Default::default()
+        };
+        let start = || Cubic {
+            x: -2.0,
+            lam: -2.0,
+            r: [0.0],
+            k: [0.0],
+        };
+        let mut sys = start();
+        let mut cont = Continuation::new(&sys, LinearKind::Lu, opts.clone()).unwrap();
+        let mut xs = Vec::new();
+        let mut jump = |s: &mut Cubic, at: f64| {
+            s.lam = at + 0.5;
+            s.x = 3.0;
+            let mut it = 0;
+            while (s.x.powi(3) - 3.0 * s.x - s.lam).abs() > 1e-13 && it < 50 {
+                s.x -= (s.x.powi(3) - 3.0 * s.x - s.lam) / (3.0 * s.x * s.x - 3.0);
+                it += 1;
+            }
+            Some(it)
+        };
+        let rep = cont
+            .run_with_jumps(
+                &mut sys,
+                &mut |s: &Cubic, _p| {
+                    xs.push(s.x);
+                    true
+                },
+                Some(&mut jump),
+            )
+            .unwrap();
+        for (p, x) in rep.points.iter().zip(&xs) {
+            assert!(
+                (x.powi(3) - 3.0 * x - p.lambda).abs() < 1e-9,
+                "off the curve"
+            );
+        }
+        assert_eq!(rep.jumps.len(), 1, "{:?}", rep.jumps);
+        let (step, limit, landed) = rep.jumps[0];
+        assert!((limit - 2.0).abs() < 0.01, "limit at {limit}");
+        assert!((landed - limit - 0.5).abs() < 1e-12);
+        let i = rep.points.iter().position(|p| p.step == step).unwrap();
+        assert_eq!(rep.points[i].kind, PointKind::Jump);
+        assert_eq!(rep.points[i - 1].kind, PointKind::LimitPoint);
+        // From the jump on: the upper sheet, λ increasing, no further special point.
+        assert!(xs[i..].iter().all(|&x| x > 1.0));
+        assert!(rep.points[i..]
+            .windows(2)
+            .all(|w| w[1].lambda > w[0].lambda));
+        assert_eq!(rep.special.len(), 1, "{:?}", rep.special);
+        assert!(sys.lam >= 10.0 && sys.x > 2.0, "{} {}", sys.lam, sys.x);
+        assert!(rep.stop_reason.contains("target"), "{}", rep.stop_reason);
+
+        // A refused jump: the path follows the branch back through both limit points.
+        let mut sys = start();
+        let mut cont = Continuation::new(&sys, LinearKind::Lu, opts.clone()).unwrap();
+        let mut refuse = |s: &mut Cubic, _at: f64| {
+            s.x = f64::NAN;
+            None
+        };
+        let rep = cont
+            .run_with_jumps(&mut sys, &mut |_: &Cubic, _p| true, Some(&mut refuse))
+            .unwrap();
+        assert!(rep.jumps.is_empty());
+        assert_eq!(rep.failed_jumps.len(), 1, "{:?}", rep.failed_jumps);
+        assert!(sys.lam >= 10.0 && sys.x > 2.0, "{} {}", sys.lam, sys.x);
+
+        // No jump given: the path stops at the limit point and says where.
+        let mut sys = start();
+        let mut cont = Continuation::new(&sys, LinearKind::Lu, opts).unwrap();
+        let rep = cont.run(&mut sys, &mut |_: &Cubic, _p| true).unwrap();
+        let at = rep.limit_stop.expect("stopped at the limit point");
+        assert!((at - 2.0).abs() < 0.01, "{at}");
+        assert!(sys.lam < 2.0 + 1e-9, "{}", sys.lam);
     }
 
     /// A pitchfork: R1 = x1 − λ (the primary response), R2 = x2 (1 − x1) + x2³. On the primary

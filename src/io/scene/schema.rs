@@ -22,7 +22,7 @@ use super::mesh::MeshSpec;
 use super::motion::{Control, Motion};
 use super::output::{OutputSpec, Sink, VtuCompression, VtuFormat};
 use super::solver::{DampingTangentChoice, LinearChoice, SolverSpec, SteadyHistoryChoice};
-use super::steady::{ContinuationParameter, ContinuationSpec};
+use super::steady::{ContinuationParameter, ContinuationSpec, LimitAction};
 use super::stick_slip::StickSlipSpec;
 use super::time::{IntegratorName, MassKind, TimeSpec};
 use crate::params::LawKind;
@@ -371,6 +371,9 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
                 "corrector iterations aimed at by the step-size control, >= 1"),
             opt("switch_branch", Kind::Bool, NONE,
                 "leave the branch at the first bifurcation detected (det K or inertia change without a turning point), along the null mode of the tangent with its part along the branch removed; the first point of the new branch has kind 4 in branch.csv"),
+            opt("on_limit", Kind::Keyword(LimitAction::NAMES), NONE,
+                "at a limit point that turns the branch back before the target: follow it back, or jump past it (a direct steady solve at the limit's parameter + jump · |target − start|, retried at 2× and 4× that distance) and continue from the sheet it lands on; the first point after a jump has kind 5 in branch.csv"),
+            opt("jump", Kind::Float, NONE, "distance of the jump past a limit point, as a fraction of |target − start|, in (0, 1]"),
         ] },
     },
     SectionSchema {

@@ -24,6 +24,21 @@ keyword_enum! {
     }
 }
 
+keyword_enum! {
+    /// What the continuation does at a limit point that turns the branch back before the
+    /// target (`[continuation] on_limit`).
+    #[derive(Default)]
+    LimitAction, "limit-point action" {
+        #[default]
+        /// Follow the branch back through the limit point (arc length).
+        Follow => "follow",
+        /// Jump past the limit point: a direct steady solve at λ_limit + `jump` · |target −
+        /// start| (retried at 2×, 4× that distance), then continue from the sheet it lands
+        /// on; if every jump fails, follow the branch back.
+        Jump => "jump",
+    }
+}
+
 /// `[continuation]` (`steady` mode): Riks–Crisfield arc-length continuation from the first
 /// steady solution to `target`. Arc lengths are in scaled units: ‖Δu‖ / u_s and Δλ / λ_s with
 /// u_s the norm of the first solution's displacement vector and λ_s = |target − start|, so
@@ -45,6 +60,11 @@ pub struct ContinuationSpec {
     /// Leave the branch at the first bifurcation detected, along the null mode of the
     /// tangent (branch switching).
     pub switch_branch: bool,
+    /// At a limit point that turns the branch back before the target: follow it back, or jump
+    /// past it onto another sheet of solutions.
+    pub on_limit: LimitAction,
+    /// Distance of the jump past the limit point, as a fraction of |target − start| (> 0).
+    pub jump: f64,
 }
 
 impl Default for ContinuationSpec {
@@ -57,6 +77,8 @@ impl Default for ContinuationSpec {
             max_steps: 200,
             desired_iterations: 4,
             switch_branch: false,
+            on_limit: LimitAction::Follow,
+            jump: 0.02,
         }
     }
 }
@@ -109,6 +131,22 @@ pub(super) fn validate_continuation(
                 "largest arc length must be >= ds = {}, got {}",
                 c.ds, c.ds_max
             ),
+        ));
+    }
+    if !(positive(c.jump) && c.jump <= 1.0) {
+        out.push(issue(
+            "continuation.jump",
+            format!(
+                "jump past a limit point must be in (0, 1] (a fraction of |target - start|), got {}",
+                c.jump
+            ),
+        ));
+    }
+    if c.on_limit == LimitAction::Jump && c.parameter == ContinuationParameter::Creep {
+        out.push(issue(
+            "continuation.on_limit",
+            "\"jump\" applies to arc-length continuation (omega, load, disp); the creep sweep \
+             has natural-parameter steps",
         ));
     }
     if c.max_steps < 1 {
