@@ -141,6 +141,10 @@ enum Command {
         /// Uniform refinements of the scene's mesh before the first solve.
         #[arg(long, default_value_t = 0)]
         uniform: usize,
+        /// How marked cells are refined: "h" (split into four), "p" (degree 1 -> 2; start
+        /// from mesh.order = 1) or "hp" (degree-1 cells raised, degree-2 cells split).
+        #[arg(long, default_value = "h")]
+        refine: tread::driver::adaptive::Refinement,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -585,6 +589,7 @@ fn main() -> ExitCode {
             estimator,
             coarsen,
             uniform,
+            refine,
             set,
         }) => match load(&scene, &set) {
             Ok(s) => {
@@ -597,6 +602,7 @@ fn main() -> ExitCode {
                     tolerance,
                     coarsen,
                     uniform,
+                    refinement: refine,
                 };
                 let dir = out.unwrap_or_else(|| {
                     app::default_out_dir(&s).with_file_name(format!("{}_adapt", s.scene.name))

@@ -98,6 +98,44 @@ impl std::str::FromStr for SolidEstimator {
     }
 }
 
+/// How marked cells are refined (`tread adapt --refine`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Refinement {
+    /// Split into four (quadtree, hanging nodes).
+    #[default]
+    H,
+    /// Raise the degree from 1 to 2 (the solid's elements are Lagrange Q1 and Q2; transitions
+    /// between degrees are constrained to the lower degree's trace, the minimum rule). Cells
+    /// already of degree 2 are left: the loop stops when no marked cell can be raised.
+    P,
+    /// Raise marked cells of degree 1 to 2, split marked cells of degree 2.
+    Hp,
+}
+
+impl Refinement {
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Self::H => "h",
+            Self::P => "p",
+            Self::Hp => "hp",
+        }
+    }
+}
+
+impl std::str::FromStr for Refinement {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "h" => Ok(Self::H),
+            "p" => Ok(Self::P),
+            "hp" => Ok(Self::Hp),
+            _ => Err(format!(
+                "unknown refinement `{s}` (expected \"h\", \"p\" or \"hp\")"
+            )),
+        }
+    }
+}
+
 /// Options of the adaptive loop.
 #[derive(Clone, Debug)]
 pub struct AdaptOptions {
@@ -118,6 +156,8 @@ pub struct AdaptOptions {
     /// Uniform refinements of the scene's mesh before the first solve (which the coarsening
     /// may then undo where the error is small).
     pub uniform: usize,
+    /// How marked cells are refined: h, p (degree 1 → 2) or hp.
+    pub refinement: Refinement,
 }
 
 impl Default for AdaptOptions {
@@ -130,6 +170,7 @@ impl Default for AdaptOptions {
             tolerance: 0.0,
             coarsen: 0.0,
             uniform: 0,
+            refinement: Refinement::H,
         }
     }
 }
@@ -142,6 +183,8 @@ pub struct AdaptStep {
     pub dofs: usize,
     pub hanging_nodes: usize,
     pub max_level: u8,
+    /// Cells of degree 2 (the rest are of degree 1).
+    pub degree2_cells: usize,
     /// Families of four cells merged into their parent after the previous mesh (0 on the
     /// first).
     pub coarsened: usize,
@@ -418,6 +461,7 @@ pub fn run(
             dofs: sys.n_dofs(),
             hanging_nodes: mesh.constraints.len(),
             max_level: forest.leaves().iter().map(|l| l.level).max().unwrap_or(0),
+            degree2_cells: forest.degrees().iter().filter(|&&d| d == 2).count(),
             coarsened,
             estimate: est.global,
             relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
@@ -451,7 +495,7 @@ pub fn run(
         // Coarsening candidates, by leaf (indices change with the refinement): the children of
         // the families whose predicted parent indicator is small.
         let small = if opts.coarsen > 0.0 {
-            let degree = sys.model.mesh.degree.first().copied().unwrap_or(1);
+            let degree = forest.degrees().iter().copied().max().unwrap_or(1);
             let growth = f64::from(1u32 << (2 * u32::from(degree)));
             let limit = opts.coarsen * total / est.indicators.len().max(1) as f64;
             coarsening_candidates(forest.leaves(), &est.indicators, &marked, growth, limit)
@@ -460,7 +504,19 @@ pub fn run(
         };
         let old_forest = forest.clone();
         let adapt_err = |e| AppError::Unsupported(format!("tread adapt: {e}"));
-        forest.refine(&marked).map_err(adapt_err)?;
+        // p: raise degree-1 cells; h: split; hp: raise the degree-1 cells, split the others.
+        // Raising keeps the leaf indices, so the split uses the same ones.
+        let (raise, split): (Vec<usize>, Vec<usize>) = match opts.refinement {
+            Refinement::H => (Vec::new(), marked.clone()),
+            Refinement::P => (marked.clone(), Vec::new()),
+            Refinement::Hp => marked.iter().partition(|&&k| forest.degrees()[k] == 1),
+        };
+        let raised = forest.raise_degree(&raise).map_err(adapt_err)?;
+        let split_count = forest.refine(&split).map_err(adapt_err)?;
+        if raised + split_count == 0 {
+            // p-refinement with every marked cell already of degree 2: nothing left to do.
+            break;
+        }
         coarsened = 0;
         if !small.is_empty() {
             let merge: Vec<usize> = (0..forest.leaves().len())
@@ -544,17 +600,18 @@ fn coarsening_candidates(
 pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
     ensure_dir(dir)?;
     let mut csv = String::from(
-        "step,cells,dofs,hanging_nodes,max_level,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,hub_torque,penetration,newton_iterations,wall_step_s,wall_total_s\n",
+        "step,cells,dofs,hanging_nodes,max_level,degree2_cells,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,hub_torque,penetration,newton_iterations,wall_step_s,wall_total_s\n",
     );
     for s in steps {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
+            "{},{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
             s.step,
             s.cells,
             s.dofs,
             s.hanging_nodes,
             s.max_level,
+            s.degree2_cells,
             s.coarsened,
             s.estimate,
             s.relative_estimate,
@@ -578,6 +635,7 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             "coarsen": opts.coarsen,
             "uniform": opts.uniform,
             "estimator": opts.estimator.keyword(),
+            "refinement": opts.refinement.keyword(),
             "marking": "doerfler",
         },
         "steps": steps,

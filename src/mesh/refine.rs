@@ -131,7 +131,8 @@ pub const MAX_LEVEL: u8 = 20;
 pub struct Forest {
     pub root: Mesh,
     leaves: Vec<Leaf>,
-    degree: u8,
+    /// Element degree of each leaf (1 or 2), parallel to `leaves`.
+    degrees: Vec<u8>,
     tol: f64,
 }
 
@@ -149,7 +150,7 @@ impl Forest {
             .map(|x| x.norm())
             .fold(0.0, f64::max)
             .max(1e-300);
-        let leaves = (0..root.n_cells() as u32)
+        let leaves: Vec<Leaf> = (0..root.n_cells() as u32)
             .map(|c| Leaf {
                 root: c,
                 level: 0,
@@ -158,9 +159,9 @@ impl Forest {
             })
             .collect();
         Ok(Self {
+            degrees: vec![degree; leaves.len()],
             root,
             leaves,
-            degree,
             tol: 1e-10 * size,
         })
     }
@@ -168,6 +169,25 @@ impl Forest {
     /// The leaves, in the cell order of [`Self::mesh`].
     pub fn leaves(&self) -> &[Leaf] {
         &self.leaves
+    }
+
+    /// The element degree of each leaf (1 or 2), in the order of [`Self::leaves`].
+    pub fn degrees(&self) -> &[u8] {
+        &self.degrees
+    }
+
+    /// p-refinement: raise the degree of the given leaves (indices into [`Self::leaves`]) from 1
+    /// to 2. Leaves already of degree 2 are left as they are. Returns the number raised.
+    pub fn raise_degree(&mut self, marked: &[usize]) -> Result<usize, RefineError> {
+        let mask = self.mask(marked)?;
+        let mut raised = 0;
+        for (d, m) in self.degrees.iter_mut().zip(mask) {
+            if m && *d < 2 {
+                *d = 2;
+                raised += 1;
+            }
+        }
+        Ok(raised)
     }
 
     /// Position of root point (ξ, η) of root cell `c`.
@@ -187,26 +207,14 @@ impl Forest {
         self.root_point(l.root as usize, a, b)
     }
 
-    /// Reference coordinates of the local nodes of a leaf (tensor order).
-    fn local_nodes(&self) -> Vec<(f64, f64)> {
-        let n = (usize::from(self.degree) + 1).pow(2);
-        (0..n)
-            .map(|a| {
-                if self.degree == 1 {
-                    Q1::node_ref(a)
-                } else {
-                    Q2::node_ref(a)
-                }
-            })
-            .collect()
-    }
-
-    /// Keys of every leaf node.
-    fn node_keys(&self) -> std::collections::HashSet<Key> {
-        let refs = self.local_nodes();
+    /// Keys of every leaf corner (the one-irregularity test looks for the corners of finer
+    /// neighbours, whatever the degrees).
+    fn corner_keys(&self) -> std::collections::HashSet<Key> {
         self.leaves
             .iter()
-            .flat_map(|l| refs.iter().map(move |&(a, b)| (l, a, b)))
+            .flat_map(|l| {
+                [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(a, b)| (l, a, b))
+            })
             .map(|(l, a, b)| self.key(self.leaf_point(l, a, b)))
             .collect()
     }
@@ -223,19 +231,23 @@ impl Forest {
             }
             total += count;
             let mut next = Vec::with_capacity(self.leaves.len() + 3 * count);
-            for (l, &s) in self.leaves.iter().zip(&split) {
+            let mut degrees = Vec::with_capacity(next.capacity());
+            for ((l, &s), &d) in self.leaves.iter().zip(&split).zip(&self.degrees) {
                 if s {
                     if l.level >= MAX_LEVEL {
                         return Err(RefineError::TooDeep(MAX_LEVEL));
                     }
                     next.extend(l.children());
+                    degrees.extend([d; 4]);
                 } else {
                     next.push(*l);
+                    degrees.push(d);
                 }
             }
             self.leaves = next;
-            // One-irregularity: a leaf with a node of a neighbour two levels finer on a side.
-            let keys = self.node_keys();
+            self.degrees = degrees;
+            // One-irregularity: a leaf with a corner of a neighbour two levels finer on a side.
+            let keys = self.corner_keys();
             split = self
                 .leaves
                 .iter()
@@ -255,17 +267,12 @@ impl Forest {
         Ok(mask)
     }
 
-    /// Whether leaf `l` has, inside one of its sides, a node of a neighbour two or more levels
-    /// finer (`keys`: the node keys of the current leaves): the sides' points at which only such
-    /// a neighbour has nodes (Q1: s = ±1/2; Q2: s = ±1/4, ±3/4).
+    /// Whether leaf `l` has, inside one of its sides, a corner of a neighbour two or more
+    /// levels finer (`keys`: the corner keys of the current leaves): s = ±1/2, where only such
+    /// a neighbour has corners.
     fn too_coarse(&self, keys: &std::collections::HashSet<Key>, l: &Leaf) -> bool {
-        let probes: &[f64] = if self.degree == 1 {
-            &[-0.5, 0.5]
-        } else {
-            &[-0.75, -0.25, 0.25, 0.75]
-        };
         (0..4u8).any(|side| {
-            probes.iter().any(|&s| {
+            [-0.5, 0.5].iter().any(|&s| {
                 let f = Facet { cell: 0, side };
                 let (a, b) = f.ref_point(s);
                 keys.contains(&self.key(self.leaf_point(l, a, b)))
@@ -293,20 +300,35 @@ impl Forest {
             .filter_map(|(p, c)| (c == 4).then_some(p))
             .collect();
         let original = self.leaves.clone();
+        let original_degrees = self.degrees.clone();
+        // A merged parent takes the highest degree of its children.
+        let mut parent_degree: HashMap<Leaf, u8> = HashMap::new();
+        for (l, &d) in original.iter().zip(&original_degrees) {
+            if let Some(p) = l.parent() {
+                let e = parent_degree.entry(p).or_insert(d);
+                *e = (*e).max(d);
+            }
+        }
         loop {
             let mut next = Vec::with_capacity(original.len());
-            for l in &original {
+            let mut degrees = Vec::with_capacity(original.len());
+            for (l, &d) in original.iter().zip(&original_degrees) {
                 match l.parent().filter(|p| merged.contains(p)) {
                     Some(p) => {
                         if p.children()[0] == *l {
                             next.push(p);
+                            degrees.push(parent_degree[&p]);
                         }
                     }
-                    None => next.push(*l),
+                    None => {
+                        next.push(*l);
+                        degrees.push(d);
+                    }
                 }
             }
             self.leaves = next;
-            let keys = self.node_keys();
+            self.degrees = degrees;
+            let keys = self.corner_keys();
             let bad: Vec<Leaf> = merged
                 .iter()
                 .filter(|p| self.too_coarse(&keys, p))
@@ -337,16 +359,28 @@ impl Forest {
     /// The leaf mesh with its hanging-node constraints, and for every node one (root cell,
     /// root ξ, root η) where it lies.
     pub fn mesh(&self) -> (Mesh, Vec<(u32, f64, f64)>) {
-        let p = usize::from(self.degree);
-        let refs = self.local_nodes();
+        let refs = |p: u8| -> Vec<(f64, f64)> {
+            let n = (usize::from(p) + 1).pow(2);
+            (0..n)
+                .map(|a| {
+                    if p == 1 {
+                        Q1::node_ref(a)
+                    } else {
+                        Q2::node_ref(a)
+                    }
+                })
+                .collect()
+        };
+        let refs = [refs(1), refs(2)];
+        let refs_of = |p: u8| &refs[usize::from(p.clamp(1, 2)) - 1];
         let mut ids: HashMap<Key, u32> = HashMap::new();
         let mut nodes: Vec<Vec2> = Vec::new();
         let mut origin: Vec<(u32, f64, f64)> = Vec::new();
-        let mut conn = Vec::with_capacity(self.leaves.len() * refs.len());
+        let mut conn = Vec::with_capacity(self.leaves.len() * 9);
         let mut offsets = vec![0];
         let mut geometry = Vec::with_capacity(self.leaves.len());
-        for l in &self.leaves {
-            for &(a, b) in &refs {
+        for (l, &p) in self.leaves.iter().zip(&self.degrees) {
+            for &(a, b) in refs_of(p) {
                 let x = self.leaf_point(l, a, b);
                 let id = *ids.entry(self.key(x)).or_insert_with(|| {
                     nodes.push(x);
@@ -371,6 +405,7 @@ impl Forest {
                 CellGeometry::Isoparametric => CellGeometry::Isoparametric,
             });
         }
+        let cell = |k: usize| &conn[offsets[k]..offsets[k + 1]];
         // Facet sets from the roots' and node sets of the same names.
         let mut by_root: Vec<Vec<u32>> = vec![Vec::new(); self.root.n_cells()];
         for (k, l) in self.leaves.iter().enumerate() {
@@ -388,7 +423,8 @@ impl Forest {
                             cell: k,
                             side: f.side,
                         };
-                        let cn = &conn[offsets[k as usize]..offsets[k as usize + 1]];
+                        let p = usize::from(self.degrees[k as usize]);
+                        let cn = cell(k as usize);
                         set.extend(nf.local_nodes(p)[..=p].iter().map(|&a| cn[a]));
                         out.push(nf);
                     }
@@ -409,18 +445,22 @@ impl Forest {
                 node_sets.insert(name.clone(), mapped);
             }
         }
-        // Hanging nodes: fine nodes inside a leaf's side.
-        let probes: &[f64] = if p == 1 { &[0.0] } else { &[-0.5, 0.5] };
+        // Continuity across sides (the minimum rule). (1) A node of another leaf inside a
+        // leaf's side (a finer neighbour's, or the midside node of a same-size neighbour of
+        // higher degree) follows the side's trace: u = Σ L_k(s) u_k over the side's nodes.
+        // Neighbours are at most one level finer and of degree ≤ 2, so their nodes inside the
+        // side lie at s ∈ {0, ±1/4, ±1/2, ±3/4}.
         let mut raw: BTreeMap<u32, Vec<(u32, f64)>> = BTreeMap::new();
-        for (k, l) in self.leaves.iter().enumerate() {
-            let cn = &conn[offsets[k]..offsets[k + 1]];
+        for (k, (l, &pk)) in self.leaves.iter().zip(&self.degrees).enumerate() {
+            let p = usize::from(pk);
+            let cn = cell(k);
             for side in 0..4u8 {
                 let f = Facet {
                     cell: k as u32,
                     side,
                 };
                 let side_nodes = f.local_nodes(p);
-                for &s in probes {
+                for s in [-0.75, -0.5, -0.25, 0.0, 0.25, 0.5, 0.75] {
                     let (a, b) = f.ref_point(s);
                     let Some(&h) = ids.get(&self.key(self.leaf_point(l, a, b))) else {
                         continue;
@@ -434,12 +474,48 @@ impl Forest {
                 }
             }
         }
+        // (2) A degree-2 leaf whose side meets degree-1 neighbours of its size or finer (the
+        // same side midpoint, or the midpoints of the two halves) has a linear trace there: its
+        // midside node is the mean of the side's ends.
+        let mut side_degrees: HashMap<Key, Vec<(usize, u8)>> = HashMap::new();
+        for (k, (l, &pk)) in self.leaves.iter().zip(&self.degrees).enumerate() {
+            for side in 0..4u8 {
+                let (a, b) = Facet { cell: 0, side }.ref_point(0.0);
+                side_degrees
+                    .entry(self.key(self.leaf_point(l, a, b)))
+                    .or_default()
+                    .push((k, pk));
+            }
+        }
+        for (k, (l, &pk)) in self.leaves.iter().zip(&self.degrees).enumerate() {
+            if pk != 2 {
+                continue;
+            }
+            let cn = cell(k);
+            for side in 0..4u8 {
+                let f = Facet {
+                    cell: k as u32,
+                    side,
+                };
+                let linear = [-0.5, 0.0, 0.5].iter().any(|&s| {
+                    let (a, b) = f.ref_point(s);
+                    side_degrees
+                        .get(&self.key(self.leaf_point(l, a, b)))
+                        .is_some_and(|v| v.iter().any(|&(j, d)| j != k && d == 1))
+                });
+                if linear {
+                    let sn = f.local_nodes(2);
+                    raw.entry(cn[sn[1]])
+                        .or_insert_with(|| vec![(cn[sn[0]], 0.5), (cn[sn[2]], 0.5)]);
+                }
+            }
+        }
         let constraints = resolve_chains(raw);
         let mesh = Mesh {
             nodes,
             conn,
             offsets,
-            degree: vec![self.degree; self.leaves.len()],
+            degree: self.degrees.clone(),
             geometry,
             node_sets,
             facet_sets,
