@@ -404,6 +404,23 @@ pub fn run(
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
         .map_err(|e| AppError::Unsupported(format!("tread adapt: {e}")))?;
+    if opts.refinement != Refinement::H {
+        let r = opts.refinement.keyword();
+        if scene.mesh.order != 1 {
+            return Err(AppError::Unsupported(format!(
+                "tread adapt --refine {r} raises cells from degree 1 to 2: start from mesh.order = 1 (the scene has {})",
+                scene.mesh.order
+            )));
+        }
+        if !matches!(
+            crate::setup::build_material(scene)?.1,
+            crate::physics::PressureMode::None
+        ) {
+            return Err(AppError::Unsupported(format!(
+                "tread adapt --refine {r}: an incompressible material needs Q2 displacements (with P1 pressures) in every cell; use --refine h with mesh.order = 2"
+            )));
+        }
+    }
     // The uniform refinements must not outgrow --max-dofs (2 p² equations per cell, roughly).
     let degree = forest.root.degree.first().copied().unwrap_or(1) as usize;
     let cells = 4usize

@@ -319,7 +319,7 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
         cells
             .iter()
             .map(|&c| mesh.degree[c as usize] as usize)
-            .max()
+            .min()
             .unwrap_or(1)
     };
     // Interior patches.
