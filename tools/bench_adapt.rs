@@ -21,7 +21,9 @@
 
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
-use tread::adapt::driver::{run, AdaptOptions, EstimatorKind, Solver, StepRecord, Strategy};
+use tread::adapt::driver::{
+    run, AdaptOptions, EstimatorKind, Marking, Solver, StepRecord, Strategy,
+};
 use tread::adapt::poisson::{lshape_energy_sq, LShape};
 use tread::adapt::quadtree::Quadtree;
 use tread::element::hierarchical::Basis1d;
@@ -184,15 +186,23 @@ fn real_main() -> Result<(), String> {
     let mut out = PathBuf::from("out/bench_adapt");
     let mut venv: Option<PathBuf> = None;
     let mut smoke = false;
+    let mut fraction = 0.5;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--out" => out = PathBuf::from(args.next().ok_or("--out needs a directory")?),
             "--venv" => venv = Some(PathBuf::from(args.next().ok_or("--venv needs a path")?)),
             "--smoke" => smoke = true,
+            "--fraction" => {
+                fraction = args
+                    .next()
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .filter(|f| *f > 0.0 && *f <= 1.0)
+                    .ok_or("--fraction needs a number in (0, 1]")?
+            }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (use --out, --venv, --smoke)"
+                    "unknown argument `{other}` (use --out, --venv, --smoke, --fraction)"
                 ))
             }
         }
@@ -207,6 +217,7 @@ fn real_main() -> Result<(), String> {
         o.target_rel_error = target;
         o.max_dofs = cap;
         o.max_steps = 200;
+        o.marking = Marking::Dorfler(fraction);
         o
     };
     series.push(case("h Q1, Jacobi-CG", h(1, Solver::Cg { tol: 1e-6 }, t1))?);
@@ -281,15 +292,17 @@ fn real_main() -> Result<(), String> {
         ) else {
             continue;
         };
-        // Error of each at the peer's last N (log-interpolated along ours).
-        let Some(&(nb, eb, tb, _)) = b.steps.last() else {
+        // Errors of both at the largest N both reached (log-interpolated along each).
+        let (Some(&(na, _, ta, _)), Some(&(nb, _, tb, _))) = (a.steps.last(), b.steps.last())
+        else {
             continue;
         };
-        let ea = interp_at(a, nb as f64);
-        let per_step_a = a.steps.last().map_or(f64::NAN, |r| r.2) / a.steps.len() as f64;
+        let n = na.min(nb);
+        let (ea, eb) = (interp_at(a, n as f64), interp_at(b, n as f64));
+        let per_step_a = ta / a.steps.len() as f64;
         let per_step_b = tb / b.steps.len() as f64;
         println!(
-            "peer ratio {ours} vs {theirs}: error at N = {nb}: {ea:.3e} vs {eb:.3e} (ratio {:.2}); mean time per adaptive step {per_step_a:.4} s vs {per_step_b:.4} s (ratio {:.2})",
+            "peer ratio {ours} vs {theirs}: error at N = {n}: {ea:.3e} vs {eb:.3e} (ratio {:.2}); mean time per adaptive step {per_step_a:.4} s vs {per_step_b:.4} s (ratio {:.2})",
             ea / eb,
             per_step_a / per_step_b
         );
@@ -304,6 +317,10 @@ fn real_main() -> Result<(), String> {
 /// Relative error of series `s` at `n` equations (log–log interpolation between steps).
 fn interp_at(s: &Series, n: f64) -> f64 {
     let pts = &s.steps;
+    if let Some(&(nl, el, _, _)) = pts.last().filter(|p| p.0 as f64 == n) {
+        let _ = nl;
+        return el;
+    }
     for w in pts.windows(2) {
         let (n0, e0) = (w[0].0 as f64, w[0].1);
         let (n1, e1) = (w[1].0 as f64, w[1].1);
