@@ -403,6 +403,24 @@ impl Continuation {
         Ok((tl / norm, sign, logdet, g, fs, neg))
     }
 
+    /// [`Self::tangent`] at a point without a previous step (the start, the landing of a
+    /// jump), oriented so that λ moves toward the target; counts its work in `rep`.
+    #[allow(clippy::type_complexity)]
+    fn tangent_toward_target<S: ParametricSystem>(
+        &mut self,
+        sys: &mut S,
+        rep: &mut ContinuationReport,
+    ) -> Result<(f64, f64, f64, f64, f64, f64), SolveError> {
+        let (mut tl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
+        rep.factorizations += 1;
+        rep.assemblies += 3;
+        if tl * self.opts.direction < 0.0 {
+            tl = -tl;
+            self.tu.iter_mut().for_each(|t| *t = -*t);
+        }
+        Ok((tl, sign, logdet, g, fs, neg))
+    }
+
     /// `iterations` steps of inverse iteration on the factorized K (exact tangent): `self.c`
     /// becomes the unit estimate of the eigenvector of the eigenvalue of smallest modulus;
     /// returns the Rayleigh-quotient estimate 1 / (cᵀ K⁻¹ c) of that eigenvalue (NaN if the
@@ -487,13 +505,7 @@ impl Continuation {
     ) -> Result<ContinuationReport, SolveError> {
         let mut rep = ContinuationReport::default();
         let t_start = Instant::now();
-        let (mut tl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
-        rep.factorizations += 1;
-        rep.assemblies += 3;
-        if tl * self.opts.direction < 0.0 {
-            tl = -tl;
-            self.tu.iter_mut().for_each(|t| *t = -*t);
-        }
+        let (tl, sign, logdet, g, fs, neg) = self.tangent_toward_target(sys, &mut rep)?;
         let start = BranchPoint {
             step: 0,
             lambda: sys.parameter(),
@@ -721,13 +733,8 @@ impl Continuation {
                 });
                 match landed {
                     Some(iterations) => {
-                        let (mut jtl, sign, logdet, g, fs, neg) = self.tangent(sys)?;
-                        rep.factorizations += 1;
-                        rep.assemblies += 3;
-                        if jtl * self.opts.direction < 0.0 {
-                            jtl = -jtl;
-                            self.tu.iter_mut().for_each(|t| *t = -*t);
-                        }
+                        let (jtl, sign, logdet, g, fs, neg) =
+                            self.tangent_toward_target(sys, &mut rep)?;
                         step += 1;
                         let point = BranchPoint {
                             step,

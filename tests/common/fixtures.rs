@@ -163,3 +163,31 @@ pub fn refined_below_hub(sc: &Scene) -> tread::mesh::Mesh {
     assert!(!mesh.constraints.is_empty() && mesh.rings.is_none());
     mesh
 }
+
+/// Largest |K − K_fd| / max |K| of the assembled tangent of `sys` at its current state against
+/// central differences (step 1e-6) of its residual, column by column (a tiny system).
+pub fn tangent_fd_error(sys: &mut SolidSystem) -> f64 {
+    use tread::solver::NonlinearSystem;
+    let n = sys.n_eq();
+    assert!(sys.evaluate(true));
+    let k = sys.asm.to_dense();
+    let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut err = 0.0f64;
+    let mut e = vec![0.0; n];
+    let h = 1e-6;
+    for j in 0..n {
+        e.fill(0.0);
+        e[j] = h;
+        sys.update(1.0, &e);
+        assert!(sys.evaluate(false));
+        let rp = sys.residual().to_vec();
+        sys.update(-2.0, &e);
+        assert!(sys.evaluate(false));
+        let rm = sys.residual().to_vec();
+        sys.update(1.0, &e);
+        for i in 0..n {
+            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
+        }
+    }
+    err / kmax
+}
