@@ -191,3 +191,39 @@ pub fn tangent_fd_error(sys: &mut SolidSystem) -> f64 {
     }
     err / kmax
 }
+
+/// The affine patch test on `sys`: u = H X at every node, then (the largest change the
+/// constraints made to it, the largest residual at an equation away from the `hub` and `outer`
+/// nodes relative to the force scale).
+pub fn affine_patch_test(sys: &mut SolidSystem, h: &tread::math::Mat2) -> (f64, f64) {
+    use tread::solver::NonlinearSystem;
+    for (n, x) in sys.model.mesh.nodes.iter().enumerate() {
+        let u = h * x;
+        sys.x[2 * n] = u[0];
+        sys.x[2 * n + 1] = u[1];
+    }
+    let before = sys.x.clone();
+    sys.dofs.apply_constraints(&mut sys.x);
+    let moved = before
+        .iter()
+        .zip(&sys.x)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(sys.evaluate(false));
+    let boundary: std::collections::HashSet<u32> = ["hub", "outer"]
+        .iter()
+        .flat_map(|s| sys.model.mesh.node_set(s).iter().copied())
+        .collect();
+    let scale = sys.asm.scale.iter().fold(0.0f64, |m, v| m.max(*v));
+    let mut worst = 0.0f64;
+    for n in 0..sys.model.mesh.n_nodes() {
+        if boundary.contains(&(n as u32)) {
+            continue;
+        }
+        for i in 0..2 {
+            if let Some(e) = sys.dofs.equation(2 * n + i) {
+                worst = worst.max(sys.residual()[e].abs());
+            }
+        }
+    }
+    (moved, worst / scale)
+}
