@@ -15,8 +15,9 @@
 //! The code is serial.
 //!
 //! With `--venv`, `tools/peer_adapt_skfem.py` is run with that venv's python: the same problem
-//! with scikit-fem (adaptive P1 and P2 triangles, its residual estimator, Dörfler θ = 0.5), and
-//! its error per DOF and time per adaptive step are compared in the same table.
+//! with scikit-fem (adaptive P1 and P2 triangles, its residual estimator, the same Dörfler
+//! fraction θ = `--fraction`, 0.5 by default), and its error per DOF and time per adaptive step
+//! are compared in the same table.
 //! Default `DIR = out/bench_adapt`.
 
 use plotters::prelude::*;
@@ -136,12 +137,16 @@ fn plot(path: &Path, series: &[Series], by_time: bool) -> Result<(), String> {
     root.present().map_err(|x| e(&x))
 }
 
-fn peer(venv: &Path, out: &Path, smoke: bool) -> Result<Vec<Series>, String> {
+fn peer(venv: &Path, out: &Path, smoke: bool, fraction: f64) -> Result<Vec<Series>, String> {
     let py = venv.join("bin").join("python");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/peer_adapt_skfem.py");
     let json = out.join("peer_skfem.json");
     let mut cmd = std::process::Command::new(&py);
-    cmd.arg(&script).arg("--out").arg(&json);
+    cmd.arg(&script)
+        .arg("--out")
+        .arg(&json)
+        .arg("--fraction")
+        .arg(fraction.to_string());
     if smoke {
         cmd.arg("--smoke");
     }
@@ -243,7 +248,7 @@ fn real_main() -> Result<(), String> {
     hp.max_steps = 200;
     series.push(case("hp (equilibrated)", hp)?);
     if let Some(v) = &venv {
-        match peer(v, &out, smoke) {
+        match peer(v, &out, smoke, fraction) {
             Ok(s) => series.extend(s),
             Err(e) => eprintln!("peer comparison skipped: {e}"),
         }
