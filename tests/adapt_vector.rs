@@ -5,11 +5,11 @@
 //! component, the scalar space's solution for the same data, and reproduce a component that the
 //! space represents exactly.
 
-use tread::adapt::poisson::{assemble, solve_direct, Exact, LShape};
+use tread::adapt::poisson::{assemble, reference_stiffness, solve_direct, Exact, LShape};
 use tread::adapt::quadtree::Quadtree;
-use tread::adapt::space::{shape_values, Space, MAX_LOCAL_SCALAR};
+use tread::adapt::space::Space;
 use tread::assembly::constraints::CondenseScratch;
-use tread::element::hierarchical::{gauss_legendre, Basis1d};
+use tread::element::hierarchical::Basis1d;
 use tread::solver::{LinearKind, SparseSolver};
 
 /// An L-shape mesh refined toward the corner and elsewhere (hanging nodes), with the degrees
@@ -26,26 +26,6 @@ fn mesh() -> Quadtree {
         t.cells[c as usize].degree = 1 + (k * 7 % 4) as u8;
     }
     t
-}
-
-/// Element stiffness ∫ ∇φ_a · ∇φ_b of a square cell (size-independent in 2D), degree p.
-fn stiffness(basis: Basis1d, p: usize) -> Vec<f64> {
-    let (x, w) = gauss_legendre(p + 1);
-    let nl = (p + 1) * (p + 1);
-    let mut k = vec![0.0; nl * nl];
-    let mut n = [0.0; MAX_LOCAL_SCALAR];
-    let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
-    for (i, &xi) in x.iter().enumerate() {
-        for (j, &eta) in x.iter().enumerate() {
-            shape_values(basis, p, 2.0, xi, eta, &mut n, &mut dn);
-            for a in 0..nl {
-                for b in 0..nl {
-                    k[a * nl + b] += w[i] * w[j] * (dn[a][0] * dn[b][0] + dn[a][1] * dn[b][1]);
-                }
-            }
-        }
-    }
-    k
 }
 
 #[test]
@@ -73,7 +53,7 @@ fn two_components_solve_as_two_scalar_problems() {
             if p == 0 {
                 Vec::new()
             } else {
-                stiffness(basis, p)
+                reference_stiffness(basis, p)
             }
         })
         .collect();

@@ -146,23 +146,8 @@ fn tangent_matches_finite_differences_with_hanging_nodes() {
     ] {
         let (_, mesh) = refined(order, false);
         let mut sys = system(mesh, material);
-        sys.model.omega2 = 3.0;
-        sys.model.body_force = Some(Box::new(|x: Vec2| {
-            Vec2::new(0.3 * x[1], -0.2 * x[0] * x[0])
-        }));
-        // A smooth state on the free equations; constrained dofs follow.
+        fixtures::smooth_loaded_state(&mut sys);
         let n = sys.n_eq();
-        let mut y = vec![0.0; n];
-        for node in 0..sys.model.mesh.n_nodes() {
-            let x = sys.model.mesh.nodes[node];
-            if let Some(e) = sys.dofs.equation(2 * node) {
-                y[e] = 0.05 * (x[0] * 1.3).sin() + 0.02 * x[1];
-            }
-            if let Some(e) = sys.dofs.equation(2 * node + 1) {
-                y[e] = 0.04 * (x[1] * 0.9).cos() * x[0];
-            }
-        }
-        sys.update(1.0, &y);
         let err = fixtures::tangent_fd_error(&mut sys);
         eprintln!("Q{order}: {n} equations, max |K − K_fd| / max |K| = {err:.2e}");
         assert!(err < 1e-7, "Q{order}: tangent error {err:.3e}");

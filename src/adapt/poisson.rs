@@ -72,8 +72,9 @@ fn theta(x: [f64; 2]) -> f64 {
     }
 }
 
-/// Element stiffness of the reference square for one degree (row-major).
-fn reference_stiffness(basis: Basis1d, p: usize) -> Vec<f64> {
+/// Element stiffness ∫ ∇φ_a · ∇φ_b of a square cell for one degree (row-major; the same for
+/// every size in 2D).
+pub fn reference_stiffness(basis: Basis1d, p: usize) -> Vec<f64> {
     let (x, w) = gauss_legendre(p + 1);
     let nl = (p + 1) * (p + 1);
     let mut k = vec![0.0; nl * nl];

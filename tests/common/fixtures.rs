@@ -227,3 +227,25 @@ pub fn affine_patch_test(sys: &mut SolidSystem, h: &tread::math::Mat2) -> (f64, 
     }
     (moved, worst / scale)
 }
+
+/// Spin (ω² = 3), a body force and a smooth displacement on the free equations of `sys` (its
+/// constrained dofs following their masters): the state of the tangent checks.
+pub fn smooth_loaded_state(sys: &mut SolidSystem) {
+    use tread::math::Vec2;
+    use tread::solver::NonlinearSystem;
+    sys.model.omega2 = 3.0;
+    sys.model.body_force = Some(Box::new(|x: Vec2| {
+        Vec2::new(0.3 * x[1], -0.2 * x[0] * x[0])
+    }));
+    let mut y = vec![0.0; sys.n_eq()];
+    for node in 0..sys.model.mesh.n_nodes() {
+        let x = sys.model.mesh.nodes[node];
+        if let Some(e) = sys.dofs.equation(2 * node) {
+            y[e] = 0.05 * (x[0] * 1.3).sin() + 0.02 * x[1];
+        }
+        if let Some(e) = sys.dofs.equation(2 * node + 1) {
+            y[e] = 0.04 * (x[1] * 0.9).cos() * x[0];
+        }
+    }
+    sys.update(1.0, &y);
+}
