@@ -334,7 +334,12 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
     model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
     let mut sys = match (&scene.road, &scene.contact) {
         (Some(_), Some(_)) => {
-            let c = build_contact(scene, &model)?;
+            let mut c = build_contact(scene, &model)?;
+            // The steady slip's contact elements before the assembler is built (otherwise
+            // `SteadyRolling::new` builds it a second time for them).
+            if c.friction.is_active() {
+                c.enable_steady_slip(&model.mesh);
+            }
             SolidSystem::with_contact(model, c)
         }
         _ => SolidSystem::new(model, "hub"),
@@ -672,12 +677,22 @@ fn coarse_start(
 /// `to` keep their values.
 fn interpolate_state(from: &SolidSystem, to: &mut SolidSystem) {
     use crate::assembly::CONSTRAINED;
-    use crate::mesh::locate::{vector_at, PointLocator};
+    use crate::mesh::locate::{inverse_map, vector_at, PointLocator};
     let src = &from.model.mesh;
     let loc = PointLocator::new(src);
     let mut x = to.x.clone();
+    // Consecutive nodes mostly lie in one cell: try the last node's cell first.
+    let mut hint: Option<usize> = None;
+    let inside = |r: &(f64, f64)| r.0.abs() <= 1.0 + 1e-12 && r.1.abs() <= 1.0 + 1e-12;
     for (a, &xa) in to.model.mesh.nodes.iter().enumerate() {
-        let (c, xi, eta) = loc.locate_nearest(src, xa);
+        let (c, xi, eta) = hint
+            .and_then(|c| {
+                inverse_map(src, c, xa)
+                    .filter(inside)
+                    .map(|(xi, eta)| (c, xi, eta))
+            })
+            .unwrap_or_else(|| loc.locate_nearest(src, xa));
+        hint = Some(c);
         let u = vector_at(src, &from.x, c, xi, eta);
         for (i, &ui) in u.iter().enumerate() {
             if to.dofs.eq[2 * a + i] < CONSTRAINED {
