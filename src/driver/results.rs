@@ -26,7 +26,7 @@ use super::system::SteadyDampingTangent;
 pub use super::transient::energy::{ViscousEnergy, ENERGY_CREATED_TOL};
 use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
 use crate::io::output::sanitize;
-use crate::solver::continuation::{PointKind, SpecialPoint};
+use crate::solver::continuation::{LimitJump, PointKind, SpecialPoint};
 use serde::Serialize;
 
 /// The whole `summary.json` of a run: the keys every mode writes and the mode's own part.
@@ -461,21 +461,13 @@ pub struct ContinuationSummary {
     /// The step after which the path switched branches (`[continuation] switch_branch`; null
     /// when it did not).
     pub switched_at: Option<usize>,
-    /// Jumps past limit points (`[continuation] on_limit = "jump"`), in order.
+    /// Jumps past limit points (`[continuation] on_limit = "jump"`), in order: the step of the
+    /// first point after the jump (kind 5 in `branch.csv`), the limit point's parameter and the
+    /// parameter the direct solve landed at.
     pub jumps: Vec<LimitJump>,
     /// Parameter values of the limit points past which no jump found a steady solution (the
     /// path followed the branch back there).
     pub failed_jumps: Vec<f64>,
-}
-
-/// A jump of the continuation past a limit point onto another sheet of solutions.
-#[derive(Clone, Debug, Serialize)]
-pub struct LimitJump {
-    /// Step of the first point after the jump (kind 5 in `branch.csv`).
-    pub step: usize,
-    /// Estimated parameter value of the limit point, and the value the direct solve landed at.
-    pub limit: f64,
-    pub landed: f64,
 }
 
 /// `results` of the steady mode (the final state; the keys shared with the transient mode have

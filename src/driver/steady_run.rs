@@ -27,7 +27,7 @@ use super::frame::SolidFrame;
 use super::resistance;
 pub use super::results::{BranchRow, ControlReport};
 use super::results::{
-    ContinuationSummary, LimitJump, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
+    ContinuationSummary, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
     SteadySummary, SteadyTerms, Summary, Terms,
 };
 use super::spinning;
@@ -1149,15 +1149,7 @@ pub fn run_with_dump(
             assemblies: c.assemblies,
             factorizations: c.factorizations,
             switched_at: c.switched_at,
-            jumps: c
-                .jumps
-                .iter()
-                .map(|&(step, limit, landed)| LimitJump {
-                    step,
-                    limit,
-                    landed,
-                })
-                .collect(),
+            jumps: c.jumps.clone(),
             failed_jumps: c.failed_jumps.clone(),
         }),
     };

@@ -235,11 +235,21 @@ pub struct ContinuationReport {
     /// With [`ContinuationOptions::stop_at_limit`]: the estimated λ of the limit point at which
     /// the path stopped because the branch turned back before the target.
     pub limit_stop: Option<f64>,
-    /// Jumps past limit points: (step of the first point after the jump, λ of the limit,
-    /// λ landed on).
-    pub jumps: Vec<(usize, f64, f64)>,
+    /// Jumps past limit points, in order.
+    pub jumps: Vec<LimitJump>,
     /// λ of the limit points past which no jump found a steady solution.
     pub failed_jumps: Vec<f64>,
+}
+
+/// A jump of the path past a limit point onto another sheet of solutions
+/// ([`Continuation::run_with_jumps`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct LimitJump {
+    /// Step of the first point after the jump ([`PointKind::Jump`]).
+    pub step: usize,
+    /// Estimated λ of the limit point, and the λ the jump landed at.
+    pub limit: f64,
+    pub landed: f64,
 }
 
 /// Arc-length continuation driver (owns the sparse solver and the work vectors).
@@ -752,7 +762,11 @@ impl Continuation {
                             factor_solve_s: fs,
                         };
                         rep.total_iterations += iterations;
-                        rep.jumps.push((step, at, point.lambda));
+                        rep.jumps.push(LimitJump {
+                            step,
+                            limit: at,
+                            landed: point.lambda,
+                        });
                         if self.opts.verbose {
                             eprintln!(
                                 "  continuation step {step}: jumped past the limit point at lambda = {at:.6e} to lambda = {:.6e}",
@@ -1198,7 +1212,11 @@ mod tests {
             );
         }
         assert_eq!(rep.jumps.len(), 1, "{:?}", rep.jumps);
-        let (step, limit, landed) = rep.jumps[0];
+        let LimitJump {
+            step,
+            limit,
+            landed,
+        } = rep.jumps[0];
         assert!((limit - 2.0).abs() < 0.01, "limit at {limit}");
         assert!((landed - limit - 0.5).abs() < 1e-12);
         let i = rep.points.iter().position(|p| p.step == step).unwrap();
