@@ -51,22 +51,7 @@ fn fd_errors(st: &mut SteadyRolling) -> (f64, f64) {
         }
     }
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let (mut err, h) = (0.0f64, 1e-7);
-    let mut e = vec![0.0; n];
-    for j in 0..n {
-        e.fill(0.0);
-        e[j] = h;
-        st.update(1.0, &e);
-        assert!(st.evaluate(false));
-        let rp = st.residual().to_vec();
-        st.update(-2.0, &e);
-        assert!(st.evaluate(false));
-        let rm = st.residual().to_vec();
-        st.update(1.0, &e);
-        for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
-        }
-    }
+    let err = fixtures::fd_max_error(st, 1e-7, |i, j| k[i][j]);
     (err / kmax, corr / kmax)
 }
 

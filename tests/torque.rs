@@ -103,23 +103,7 @@ fn torque_step_tangent_error(load_control: bool) -> f64 {
         .filter(|&i| i != eq_phi && k[i][eq_phi] != 0.0)
         .count();
     assert!(col_phi > 10, "φ column has only {col_phi} entries");
-    let mut err = 0.0f64;
-    let mut e = vec![0.0; n];
-    let h = 1e-7;
-    for j in 0..n {
-        e.fill(0.0);
-        e[j] = h;
-        tr.update(1.0, &e);
-        assert!(tr.evaluate(false));
-        let rp = tr.residual().to_vec();
-        tr.update(-2.0, &e);
-        assert!(tr.evaluate(false));
-        let rm = tr.residual().to_vec();
-        tr.update(1.0, &e);
-        for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
-        }
-    }
+    let err = fixtures::fd_max_error(&mut tr, 1e-7, |i, j| k[i][j]);
     eprintln!(
         "torque-control step tangent (load control {load_control}): {in_contact} contact points, max|K − K_fd|/max|K| = {:.2e}",
         err / kmax

@@ -68,25 +68,8 @@ fn time_step_tangent_matches_finite_differences() {
         .count();
     assert!(in_contact > 3, "no contact in the test state");
     let k = tr.sys.asm.to_dense();
-    let n = tr.n_eq();
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let mut err = 0.0f64;
-    let mut e = vec![0.0; n];
-    let h = 1e-7;
-    for j in 0..n {
-        e.fill(0.0);
-        e[j] = h;
-        tr.update(1.0, &e);
-        assert!(tr.evaluate(false));
-        let rp = tr.residual().to_vec();
-        tr.update(-2.0, &e);
-        assert!(tr.evaluate(false));
-        let rm = tr.residual().to_vec();
-        tr.update(1.0, &e);
-        for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
-        }
-    }
+    let err = fixtures::fd_max_error(&mut tr, 1e-7, |i, j| k[i][j]);
     eprintln!(
         "time-step tangent: {in_contact} contact points, max|K − K_fd|/max|K| = {:.2e}",
         err / kmax

@@ -63,7 +63,7 @@ fn fd_error(st: &mut SteadyRolling) -> (f64, f64) {
     assert!(st.has_tangent_correction());
     let k = st.sys.asm.to_dense();
     let n = st.n_eq();
-    let (mut err, mut kmax, mut corr_max) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut kmax, mut corr_max) = (0.0f64, 0.0f64);
     let mut cols = Vec::with_capacity(n);
     for j in 0..n {
         let c = exact_column(st, &k, j);
@@ -73,23 +73,7 @@ fn fd_error(st: &mut SteadyRolling) -> (f64, f64) {
         }
         cols.push(c);
     }
-    let h = 1e-6;
-    let mut e = vec![0.0; n];
-    for (j, col) in cols.iter().enumerate() {
-        e.fill(0.0);
-        e[j] = h;
-        st.update(1.0, &e);
-        assert!(st.evaluate(false));
-        let rp = st.residual().to_vec();
-        st.update(-2.0, &e);
-        assert!(st.evaluate(false));
-        let rm = st.residual().to_vec();
-        st.update(1.0, &e);
-        for i in 0..n {
-            let fd = (rp[i] - rm[i]) / (2.0 * h);
-            err = err.max((fd - col[i]).abs());
-        }
-    }
+    let err = fixtures::fd_max_error(st, 1e-6, |i, j| cols[j][i]);
     (err / kmax, corr_max / kmax)
 }
 

@@ -75,25 +75,8 @@ fn time_step_tangent_with_history_matches_finite_differences() {
         let saved = tr.sys.model.history.data.clone();
         assert!(tr.evaluate(true));
         let k = tr.sys.asm.to_dense();
-        let n = tr.n_eq();
         let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        let mut err = 0.0f64;
-        let mut e = vec![0.0; n];
-        let h = 1e-7;
-        for j in 0..n {
-            e.fill(0.0);
-            e[j] = h;
-            tr.update(1.0, &e);
-            assert!(tr.evaluate(false));
-            let rp = tr.residual().to_vec();
-            tr.update(-2.0, &e);
-            assert!(tr.evaluate(false));
-            let rm = tr.residual().to_vec();
-            tr.update(1.0, &e);
-            for i in 0..n {
-                err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
-            }
-        }
+        let err = fixtures::fd_max_error(&mut tr, 1e-7, |i, j| k[i][j]);
         // Assembly only reads the history.
         assert_eq!(saved, tr.sys.model.history.data);
         eprintln!(

@@ -85,17 +85,38 @@ impl SolidEstimator {
 impl std::str::FromStr for SolidEstimator {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "recovery" => Ok(Self::Recovery),
-            "interpolation" => Ok(Self::Interpolation),
-            "explicit" => Ok(Self::Explicit),
-            "equilibrated" => Ok(Self::Equilibrated),
-            _ => Err(format!(
-                "unknown estimator `{s}` (expected \"recovery\", \"interpolation\", \"explicit\" \
-                 or \"equilibrated\")"
-            )),
-        }
+        parse_keyword(
+            "estimator",
+            &[
+                Self::Recovery,
+                Self::Interpolation,
+                Self::Explicit,
+                Self::Equilibrated,
+            ],
+            Self::keyword,
+            s,
+        )
     }
+}
+
+/// The option of `all` whose keyword is `s`, or an error naming `what` and the keywords.
+fn parse_keyword<T: Copy>(
+    what: &str,
+    all: &[T],
+    keyword: fn(T) -> &'static str,
+    s: &str,
+) -> Result<T, String> {
+    if let Some(&v) = all.iter().find(|&&v| keyword(v) == s) {
+        return Ok(v);
+    }
+    let names: Vec<String> = all.iter().map(|&v| format!("\"{}\"", keyword(v))).collect();
+    let (last, rest) = names
+        .split_last()
+        .map_or(("", &[][..]), |(l, r)| (l.as_str(), r));
+    Err(format!(
+        "unknown {what} `{s}` (expected {} or {last})",
+        rest.join(", ")
+    ))
 }
 
 /// How marked cells are refined (`tread adapt --refine`).
@@ -125,14 +146,12 @@ impl Refinement {
 impl std::str::FromStr for Refinement {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "h" => Ok(Self::H),
-            "p" => Ok(Self::P),
-            "hp" => Ok(Self::Hp),
-            _ => Err(format!(
-                "unknown refinement `{s}` (expected \"h\", \"p\" or \"hp\")"
-            )),
-        }
+        parse_keyword(
+            "refinement",
+            &[Self::H, Self::P, Self::Hp],
+            Self::keyword,
+            s,
+        )
     }
 }
 

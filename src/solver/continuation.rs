@@ -1107,22 +1107,32 @@ mod tests {
         }
     }
 
-    #[test]
-    fn cubic_passes_both_limit_points() {
-        let mut sys = Cubic {
+    /// The cubic at (x, λ) = (−2, −2), on its lower sheet.
+    fn cubic_start() -> Cubic {
+        Cubic {
             x: -2.0,
             lam: -2.0,
             r: [0.0],
             k: [0.0],
-        };
-        let opts = ContinuationOptions {
+        }
+    }
+
+    /// From λ = −2 toward λ = 10 in steps of at most 0.25.
+    fn cubic_options() -> ContinuationOptions {
+        ContinuationOptions {
             target: 10.0,
             ds0: 0.2,
             ds_max: 0.25,
             tol: 1e-12,
             max_steps: 500,
             ..Default::default()
-        };
+        }
+    }
+
+    #[test]
+    fn cubic_passes_both_limit_points() {
+        let mut sys = cubic_start();
+        let opts = cubic_options();
         let mut cont = Continuation::new(&sys, LinearKind::Lu, opts).unwrap();
         let mut xs = Vec::new();
         let rep = cont
@@ -1168,21 +1178,10 @@ mod tests {
     #[test]
     fn cubic_jumps_past_its_limit_point() {
         let opts = ContinuationOptions {
-            target: 10.0,
-            ds0: 0.2,
-            ds_max: 0.25,
-            tol: 1e-12,
-            max_steps: 500,
             stop_at_limit: true,
-            ..Default::default()
+            ..cubic_options()
         };
-        let start = || Cubic {
-            x: -2.0,
-            lam: -2.0,
-            r: [0.0],
-            k: [0.0],
-        };
-        let mut sys = start();
+        let mut sys = cubic_start();
         let mut cont = Continuation::new(&sys, LinearKind::Lu, opts.clone()).unwrap();
         let mut xs = Vec::new();
         let mut jump = |s: &mut Cubic, at: f64| {
@@ -1232,7 +1231,7 @@ mod tests {
         assert!(rep.stop_reason.contains("target"), "{}", rep.stop_reason);
 
         // A refused jump: the path follows the branch back through both limit points.
-        let mut sys = start();
+        let mut sys = cubic_start();
         let mut cont = Continuation::new(&sys, LinearKind::Lu, opts.clone()).unwrap();
         let mut refuse = |s: &mut Cubic, _at: f64| {
             s.x = f64::NAN;
@@ -1246,7 +1245,7 @@ mod tests {
         assert!(sys.lam >= 10.0 && sys.x > 2.0, "{} {}", sys.lam, sys.x);
 
         // No jump given: the path stops at the limit point and says where.
-        let mut sys = start();
+        let mut sys = cubic_start();
         let mut cont = Continuation::new(&sys, LinearKind::Lu, opts).unwrap();
         let rep = cont.run(&mut sys, &mut |_: &Cubic, _p| true).unwrap();
         let at = rep.limit_stop.expect("stopped at the limit point");

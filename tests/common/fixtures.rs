@@ -164,17 +164,17 @@ pub fn refined_below_hub(sc: &Scene) -> tread::mesh::Mesh {
     mesh
 }
 
-/// Largest |K − K_fd| / max |K| of the assembled tangent of `sys` at its current state against
-/// central differences (step 1e-6) of its residual, column by column (a tiny system).
-pub fn tangent_fd_error(sys: &mut SolidSystem) -> f64 {
-    use tread::solver::NonlinearSystem;
+/// Largest |K − K_fd| of a tangent K (entry (i, j) given by `k`) against central differences
+/// of the residual of `sys` at its current state with step `h`, column by column (a tiny
+/// system). The state is restored after each column.
+pub fn fd_max_error<S: tread::solver::NonlinearSystem>(
+    sys: &mut S,
+    h: f64,
+    k: impl Fn(usize, usize) -> f64,
+) -> f64 {
     let n = sys.n_eq();
-    assert!(sys.evaluate(true));
-    let k = sys.asm.to_dense();
-    let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut err = 0.0f64;
     let mut e = vec![0.0; n];
-    let h = 1e-6;
     for j in 0..n {
         e.fill(0.0);
         e[j] = h;
@@ -186,10 +186,20 @@ pub fn tangent_fd_error(sys: &mut SolidSystem) -> f64 {
         let rm = sys.residual().to_vec();
         sys.update(1.0, &e);
         for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
+            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k(i, j)).abs());
         }
     }
-    err / kmax
+    err
+}
+
+/// Largest |K − K_fd| / max |K| of the assembled tangent of `sys` at its current state against
+/// central differences (step 1e-6) of its residual ([`fd_max_error`]).
+pub fn tangent_fd_error(sys: &mut SolidSystem) -> f64 {
+    use tread::solver::NonlinearSystem;
+    assert!(sys.evaluate(true));
+    let k = sys.asm.to_dense();
+    let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    fd_max_error(sys, 1e-6, |i, j| k[i][j]) / kmax
 }
 
 /// The affine patch test on `sys`: u = H X at every node, then (the largest change the
