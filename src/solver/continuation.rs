@@ -88,7 +88,7 @@ fn exact_solve<S: NonlinearSystem + ?Sized>(
     }
     let b = x.to_vec();
     lu.solve_in_place(x)?;
-    let st = super::krylov::gmres(sys, lu, &b, x, rtol, 40, 200)?;
+    let st = super::krylov::gmres(sys, lu, &b, x, rtol, 40, 200, false)?;
     if st.rel_residual.is_nan() || st.rel_residual > 10.0 * rtol.max(1e-8) {
         sys.tangent_correction_stalled();
         return Err(SolveError::KrylovStalled {

@@ -503,8 +503,16 @@ impl Newton {
                 prev_norm = Some(r_now);
                 prev_eta = eta;
                 let b: Vec<f64> = sys.residual().iter().map(|r| -r).collect();
-                let mut ks =
-                    super::krylov::gmres(sys, &mut self.solver, &b, &mut self.dx, eta, 40, 160)?;
+                let mut ks = super::krylov::gmres(
+                    sys,
+                    &mut self.solver,
+                    &b,
+                    &mut self.dx,
+                    eta,
+                    40,
+                    160,
+                    !lagged,
+                )?;
                 rep.krylov_iterations += ks.iterations;
                 let poor = |ks: &super::krylov::KrylovStats| {
                     !ks.rel_residual.is_finite() || ks.rel_residual > (10.0 * eta).min(0.5)
@@ -523,6 +531,7 @@ impl Newton {
                         eta,
                         40,
                         160,
+                        true,
                     )?;
                     rep.krylov_iterations += ks.iterations;
                     fresh_products = ks.iterations;
