@@ -419,6 +419,134 @@ impl Block {
     }
 }
 
+/// CSC pattern (`col_ptr`, sorted `row_idx`) of the element blocks `lists` (dof lists and
+/// offsets in full-dof numbering), constrained dofs expanded to their free masters. Each
+/// column is gathered once from the elements that hold it, deduplicated with a marker, and
+/// only its distinct rows sorted.
+fn block_pattern(dofs: &DofMap, lists: &[(Vec<u32>, Vec<usize>)]) -> (Vec<usize>, Vec<usize>) {
+    let n = dofs.n_eq;
+    // Every element's free equations, flat.
+    let (mut el_eq, mut el_off) = (Vec::<u32>::new(), vec![0usize]);
+    let mut tgt = Vec::new();
+    for (d, o) in lists {
+        for e in 0..o.len().saturating_sub(1) {
+            for &di in &d[o[e]..o[e + 1]] {
+                dofs.targets(di, &mut tgt);
+                el_eq.extend(tgt.iter().map(|t| t.0));
+            }
+            el_off.push(el_eq.len());
+        }
+    }
+    // Equation → elements (CSR).
+    let n_el = el_off.len() - 1;
+    let mut inc_ptr = vec![0usize; n + 1];
+    for &q in &el_eq {
+        inc_ptr[q as usize + 1] += 1;
+    }
+    for i in 0..n {
+        inc_ptr[i + 1] += inc_ptr[i];
+    }
+    let mut fill = inc_ptr[..n].to_vec();
+    let mut inc = vec![0u32; el_eq.len()];
+    for e in 0..n_el {
+        for &q in &el_eq[el_off[e]..el_off[e + 1]] {
+            inc[fill[q as usize]] = e as u32;
+            fill[q as usize] += 1;
+        }
+    }
+    let mut mark = vec![u32::MAX; n];
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    col_ptr.push(0usize);
+    let mut row_idx = Vec::new();
+    for j in 0..n {
+        let start = row_idx.len();
+        for &e in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
+            let e = e as usize;
+            for &q in &el_eq[el_off[e]..el_off[e + 1]] {
+                if mark[q as usize] != j as u32 {
+                    mark[q as usize] = j as u32;
+                    row_idx.push(q as usize);
+                }
+            }
+        }
+        row_idx[start..].sort_unstable();
+        col_ptr.push(row_idx.len());
+    }
+    (col_ptr, row_idx)
+}
+
+/// Per block, the `nd²` matrix slots of each element (row-major local pairs, `u32::MAX` where
+/// the row or the column is not a free equation) and their offsets, in the pattern
+/// (`col_ptr`, `row_idx`) of [`block_pattern`]. One sweep over the columns: the rows of a
+/// column are scattered into a position map once, and every element entry in that column
+/// reads its slot from it.
+fn block_slots(
+    dofs: &DofMap,
+    lists: &[(Vec<u32>, Vec<usize>)],
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Vec<(Vec<u32>, Vec<usize>)> {
+    let n = dofs.n_eq;
+    let mut out: Vec<(Vec<u32>, Vec<usize>)> = lists
+        .iter()
+        .map(|(_, o)| {
+            let mut off = Vec::with_capacity(o.len());
+            off.push(0usize);
+            for e in 0..o.len().saturating_sub(1) {
+                let nd = o[e + 1] - o[e];
+                off.push(off[e] + nd * nd);
+            }
+            (vec![u32::MAX; off[off.len() - 1]], off)
+        })
+        .collect();
+    // Free equation j → (block, element, local column b) with eq(b) = j.
+    let mut ptr = vec![0usize; n + 1];
+    for (d, _) in lists {
+        for &di in d {
+            let q = dofs.eq[di as usize];
+            if q < CONSTRAINED {
+                ptr[q as usize + 1] += 1;
+            }
+        }
+    }
+    for i in 0..n {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr[..n].to_vec();
+    let mut inc = vec![(0u32, 0u32, 0u32); ptr[n]];
+    for (bi, (d, o)) in lists.iter().enumerate() {
+        for e in 0..o.len().saturating_sub(1) {
+            for (b, &di) in d[o[e]..o[e + 1]].iter().enumerate() {
+                let q = dofs.eq[di as usize];
+                if q < CONSTRAINED {
+                    inc[fill[q as usize]] = (bi as u32, e as u32, b as u32);
+                    fill[q as usize] += 1;
+                }
+            }
+        }
+    }
+    let mut pos = vec![0u32; n];
+    for j in 0..n {
+        for p in col_ptr[j]..col_ptr[j + 1] {
+            pos[row_idx[p]] = p as u32;
+        }
+        for &(bi, e, b) in &inc[ptr[j]..ptr[j + 1]] {
+            let (d, o) = &lists[bi as usize];
+            let el = &d[o[e as usize]..o[e as usize + 1]];
+            let nd = el.len();
+            let (slots, off) = &mut out[bi as usize];
+            let base = off[e as usize] + b as usize;
+            for (a, &di) in el.iter().enumerate() {
+                let q = dofs.eq[di as usize];
+                if q < CONSTRAINED {
+                    slots[base + a * nd] = pos[q as usize];
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Global sparse pattern (union over all blocks), per-block slot tables and colourings; the
 /// value and residual buffers.
 pub struct Assembler {
@@ -448,35 +576,8 @@ impl Assembler {
     /// numbering. Block indices follow the order given.
     pub fn with_blocks(dofs: &DofMap, lists: Vec<(Vec<u32>, Vec<usize>)>) -> Self {
         let n = dofs.n_eq;
-        let mut cols: Vec<Vec<u32>> = vec![Vec::new(); n];
-        let mut tgt = Vec::new();
-        let mut eqs: Vec<u32> = Vec::new();
-        for (d, o) in &lists {
-            for e in 0..o.len().saturating_sub(1) {
-                let el = &d[o[e]..o[e + 1]];
-                eqs.clear();
-                for &di in el {
-                    dofs.targets(di, &mut tgt);
-                    eqs.extend(tgt.iter().map(|t| t.0));
-                }
-                for &ej in &eqs {
-                    cols[ej as usize].extend_from_slice(&eqs);
-                }
-            }
-            // Keep memory bounded on large meshes.
-            for col in cols.iter_mut() {
-                col.sort_unstable();
-                col.dedup();
-            }
-        }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        col_ptr.push(0usize);
-        let mut row_idx = Vec::new();
-        for col in &mut cols {
-            row_idx.extend(col.iter().map(|&r| r as usize));
-            col_ptr.push(row_idx.len());
-            *col = Vec::new();
-        }
+        let (col_ptr, row_idx) = block_pattern(dofs, &lists);
+        let mut all_slots = block_slots(dofs, &lists, &col_ptr, &row_idx).into_iter();
         let blocks = lists
             .into_iter()
             .map(|(d, o)| {
@@ -487,13 +588,15 @@ impl Assembler {
                         .map(|p| (s + p) as u32)
                         .unwrap_or(u32::MAX)
                 };
-                let mut slots = Vec::new();
-                let mut slot_offsets = vec![0];
+                let (slots, slot_offsets) = all_slots.next().unwrap_or_default();
                 let constrained = dofs.has_constraints();
                 let (mut con_k, mut con_r) = (Vec::new(), Vec::new());
                 let (mut con_k_offsets, mut con_r_offsets) = (vec![0], vec![0]);
                 let (mut ti, mut tj) = (Vec::new(), Vec::new());
                 for e in 0..o.len().saturating_sub(1) {
+                    if !constrained {
+                        break;
+                    }
                     let el = &d[o[e]..o[e + 1]];
                     let nd = el.len();
                     for (a, &di) in el.iter().enumerate() {
@@ -504,31 +607,19 @@ impl Assembler {
                         }
                         for (b, &dj) in el.iter().enumerate() {
                             let ej = dofs.eq[dj as usize];
-                            if ei >= CONSTRAINED || ej >= CONSTRAINED {
-                                slots.push(u32::MAX);
-                                if ei == CONSTRAINED || ej == CONSTRAINED {
-                                    dofs.targets(di, &mut ti);
-                                    dofs.targets(dj, &mut tj);
-                                    for &(qi, wi) in &ti {
-                                        for &(qj, wj) in &tj {
-                                            con_k.push((
-                                                (a * nd + b) as u32,
-                                                slot_of(qi, qj),
-                                                wi * wj,
-                                            ));
-                                        }
+                            if ei == CONSTRAINED || ej == CONSTRAINED {
+                                dofs.targets(di, &mut ti);
+                                dofs.targets(dj, &mut tj);
+                                for &(qi, wi) in &ti {
+                                    for &(qj, wj) in &tj {
+                                        con_k.push(((a * nd + b) as u32, slot_of(qi, qj), wi * wj));
                                     }
                                 }
-                            } else {
-                                slots.push(slot_of(ei, ej));
                             }
                         }
                     }
-                    slot_offsets.push(slots.len());
-                    if constrained {
-                        con_k_offsets.push(con_k.len());
-                        con_r_offsets.push(con_r.len());
-                    }
+                    con_k_offsets.push(con_k.len());
+                    con_r_offsets.push(con_r.len());
                 }
                 if !constrained {
                     (con_k_offsets, con_r_offsets) = (Vec::new(), Vec::new());
