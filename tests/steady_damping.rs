@@ -244,6 +244,89 @@ fn matrix_free_and_assembled_reach_the_same_state() {
     }
 }
 
+/// (assembled matrix, exact tangent = matrix + matrix-free part), dense, at the current state.
+fn matrix_and_tangent(st: &mut SteadyRolling) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    assert!(st.evaluate(true));
+    let a = st.sys.asm.to_dense();
+    let mut k = a.clone();
+    let n = st.n_eq();
+    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
+    for j in 0..n {
+        e.fill(0.0);
+        e[j] = 1.0;
+        col.fill(0.0);
+        st.tangent_correction(&e, &mut col);
+        for i in 0..n {
+            k[i][j] += col[i];
+        }
+    }
+    (a, k)
+}
+
+fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
+}
+
+/// `[solver] damping_cell_weight` changes the assembled part of the matrix-free damping
+/// tangent (GMRES's preconditioner) and nothing else: at one state the exact tangent is the
+/// same for every weight, and the steady solves reach the same state. Out-of-range weights
+/// are refused by name.
+#[test]
+fn damping_cell_weight_changes_only_the_preconditioner() {
+    let base = [
+        "analysis.mode=\"steady\"",
+        "mesh.n_theta=48",
+        "mesh.n_r=2",
+        "solver.damping_tangent=\"matrix_free\"",
+    ];
+    let mut runs = Vec::new();
+    for w in ["1.0", "0.4"] {
+        let key = format!("solver.damping_cell_weight={w}");
+        let sc = scene(ODEN, "weight", &[&base[..], &[key.as_str()]].concat());
+        let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
+        let mut rep = Default::default();
+        solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(st.damping_fallback.is_none() && st.recovery.is_none());
+        assert_eq!(
+            st.sys.steady_damping_tangent(),
+            Some(SteadyDampingTangent::MatrixFree)
+        );
+        runs.push(st);
+    }
+    let (f1, f4) = (hub_force(&runs[0]), hub_force(&runs[1]));
+    let du = runs[0]
+        .sys
+        .x
+        .iter()
+        .zip(&runs[1].sys.x)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    println!("hub force with weight 1 {f1:?}, 0.4 {f4:?}; max |du| = {du:.2e}");
+    assert!((f1.0 - f4.0).abs() < 1e-6 * f1.1.abs() && (f1.1 - f4.1).abs() < 1e-6 * f1.1.abs());
+    assert!(du < 1e-7, "{du:e}");
+    // The same state in both systems.
+    let x = runs[0].sys.x.clone();
+    runs[1].sys.x.copy_from_slice(&x);
+    let (a1, k1) = matrix_and_tangent(&mut runs[0]);
+    let (a4, k4) = matrix_and_tangent(&mut runs[1]);
+    let kmax = k1.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (da, dk) = (max_diff(&a1, &a4) / kmax, max_diff(&k1, &k4) / kmax);
+    println!("relative to max |K|: assembled parts differ by {da:.2e}, exact tangents by {dk:.2e}");
+    assert!(da > 1e-3, "the weight did not reach the matrix: {da:e}");
+    assert!(dk < 1e-12, "{dk:e}");
+    for bad in ["0.0", "1.5", "-0.2"] {
+        let e = Scene::from_toml_str(
+            ODEN,
+            "weight",
+            &[format!("solver.damping_cell_weight={bad}")],
+        )
+        .expect_err("refused");
+        assert!(e.to_string().contains("solver.damping_cell_weight"), "{e}");
+    }
+}
+
 /// Damping on an imported mesh without rings (Gmsh, refined at the footprint): the nodal
 /// velocities come from cell averages. It solves, and its hub force differs from the
 /// structured ring mesh's no more than the two meshes already differ without damping.

@@ -36,5 +36,5 @@ pub mod terms;
 pub mod transient;
 pub mod transient_run;
 
-pub use system::{SolidSystem, SteadyDampingTangent};
+pub use system::{SolidSystem, SteadyDampingTangent, DEFAULT_DAMPING_CELL_WEIGHT};
 pub use terms::{Inertia, Rates, Terms};

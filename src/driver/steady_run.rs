@@ -352,6 +352,8 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
     sys.enable_steady_viscoelastic(scheme)
         .map_err(|e| AppError::Unsupported(format!("solver.steady_history: {e}")))?;
     let mut st = SteadyRolling::new(sys, scene.motion.omega, scene.geometry.ro);
+    st.sys
+        .set_steady_damping_cell_weight(scene.solver.damping_cell_weight);
     match scene.solver.damping_tangent {
         DampingTangentChoice::Assembled => st
             .sys

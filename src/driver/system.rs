@@ -107,7 +107,26 @@ pub struct SteadyViscosity {
     dv3: Vec<f64>,
     /// Set when a GMRES solve with the matrix-free coupling did not reach its tolerance.
     pub stalled: bool,
+    /// Weight of the cells' own derivative in the matrix-free tangent's assembled part
+    /// ([`SolidSystem::set_steady_damping_cell_weight`]).
+    cell_weight: f64,
 }
+
+impl SteadyViscosity {
+    /// The weight α of the cells' own derivative in the assembled tangent: the scene's with
+    /// the matrix-free tangent, 1 when the coupling beyond the cells is assembled (banded,
+    /// assembled), whose extended elements complete exactly that linearisation.
+    fn cell_weight(&self) -> f64 {
+        if self.assembled.is_some() {
+            1.0
+        } else {
+            self.cell_weight
+        }
+    }
+}
+
+/// Default of [`SolidSystem::set_steady_damping_cell_weight`] (`[solver] damping_cell_weight`).
+pub const DEFAULT_DAMPING_CELL_WEIGHT: f64 = 0.4;
 
 /// How the Newton matrix of the steady damping is formed (see
 /// [`SolidSystem::enable_steady_viscosity`]).
@@ -338,6 +357,7 @@ impl SolidSystem {
             banded: None,
             dv3: vec![0.0; n_full],
             stalled: false,
+            cell_weight: DEFAULT_DAMPING_CELL_WEIGHT,
         });
         true
     }
@@ -352,6 +372,27 @@ impl SolidSystem {
                 _ => SteadyDampingTangent::MatrixFree,
             },
         )
+    }
+
+    /// Weight α in (0, 1] of each cell's own θ-derivative in the assembled part of the
+    /// matrix-free damping tangent (default [`DEFAULT_DAMPING_CELL_WEIGHT`]): the matrix
+    /// linearises the velocities as α ω D_c, and GMRES applies the rest, ω (D − α D_c), so
+    /// the Newton step is the exact one for every α; only the preconditioner changes. The
+    /// cells' own derivatives are one-sided at the cell edges and respond at the grid scale,
+    /// where the nodal differences of the residual vanish, so the full weight over-damps the
+    /// preconditioner's short waves. Measured, GMRES products of a whole steady solve with
+    /// α = 1 against 0.4 (`tread run … --mode steady -v --set solver.damping_cell_weight=W`):
+    /// default scene 50 → 36 (16k DOFs), 88 → 67 (66k), 173 → 127 (262k, 23.3 s → 17.9 s);
+    /// frictionless rolling 67 → 52, braking 102 → 95, free rolling 97 → 93 (37k); the
+    /// products are flat for α in 0.2–0.5. With η ω / G = 30 % (η = 3, ω = 20, 66k) α = 1
+    /// and 0.7 stall and need a recovery (347 s and 61 s) where 0.2–0.5 solve directly in
+    /// 16–17 s. No effect without damping or with another tangent.
+    pub fn set_steady_damping_cell_weight(&mut self, alpha: f64) {
+        if let Some(sv) = self.steady_visc.as_mut() {
+            if alpha.is_finite() && alpha > 0.0 && alpha <= 1.0 {
+                sv.cell_weight = alpha;
+            }
+        }
     }
 
     /// Switch the steady damping's Newton matrix (no effect without that damping). The
@@ -534,10 +575,11 @@ impl SolidSystem {
                 (Rates::Dynamic { v, kv, .. }, _, _) => CellRate::Dynamic { v, kv },
                 (Rates::Steady, Some(sv), Some(omega)) if model.strain_rate_damping > 0.0 => {
                     sv.nodal.velocities(&model.mesh, xs, omega, &mut sv.vel);
+                    let alpha = sv.cell_weight();
                     av_out = Some((SharedMut::new(&mut sv.av), &sv.av_off));
                     CellRate::Steady {
                         vel: &sv.vel,
-                        omega,
+                        omega: alpha * omega,
                         local: &sv.local,
                         local_off: &sv.local_off,
                     }
@@ -629,6 +671,7 @@ impl SolidSystem {
             }
         }
         let banded = sv.banded.is_some();
+        let alpha = sv.cell_weight();
         let mesh = &self.model.mesh;
         for c in 0..mesh.n_cells() {
             let nodes = mesh.cell_nodes(c);
@@ -646,7 +689,7 @@ impl SolidSystem {
                             .map(|b| d[m * nn + b] * sv.du[cd[2 * b + i] as usize])
                             .sum()
                     };
-                    diff[2 * m + i] = sv.dv[cd[2 * m + i] as usize] - om * loc;
+                    diff[2 * m + i] = sv.dv[cd[2 * m + i] as usize] - alpha * om * loc;
                 }
             }
             for r in 0..nu {

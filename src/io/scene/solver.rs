@@ -74,6 +74,10 @@ pub struct SolverSpec {
     pub line_search: bool,
     /// Newton matrix of the steady mode's strain-rate damping.
     pub damping_tangent: DampingTangentChoice,
+    /// Matrix-free damping tangent: weight, in (0, 1], of the cells' own θ-derivative with
+    /// which the assembled part (GMRES's preconditioner) linearises the velocities; the
+    /// Newton step is the exact one whatever the weight.
+    pub damping_cell_weight: f64,
     /// Steady mode with friction: a regularisation ε below 1e-2 v_ref is reached by pressing
     /// in at 1e-2 v_ref and walking ε down (false: press in at the scene's ε directly).
     pub eps_continuation: bool,
@@ -97,6 +101,7 @@ impl Default for SolverSpec {
             threads: 0,
             line_search: true,
             damping_tangent: DampingTangentChoice::Auto,
+            damping_cell_weight: crate::driver::DEFAULT_DAMPING_CELL_WEIGHT,
             eps_continuation: true,
             coarse_start: true,
             steady_history: SteadyHistoryChoice::Auto,
@@ -116,5 +121,12 @@ pub(super) fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
     }
     if s.load_steps < 1 {
         out.push(issue("solver.load_steps", "must be >= 1, got 0"));
+    }
+    let w = s.damping_cell_weight;
+    if !(w.is_finite() && w > 0.0 && w <= 1.0) {
+        out.push(issue(
+            "solver.damping_cell_weight",
+            format!("must be in (0, 1], got {w}"),
+        ));
     }
 }
