@@ -33,11 +33,20 @@ fn scene(text: &str, name: &str, set: &[&str]) -> Scene {
 /// max |K − K_fd| / max |K| with K the exact tangent (assembled matrix plus the matrix-free
 /// part), and max |matrix-free part| / max |K|.
 fn fd_errors(st: &mut SteadyRolling) -> (f64, f64) {
+    let (a, k) = matrix_and_tangent(st);
+    let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let corr = max_diff(&a, &k);
+    let err = fixtures::fd_max_error(st, 1e-7, |i, j| k[i][j]);
+    (err / kmax, corr / kmax)
+}
+
+/// (assembled matrix, exact tangent = matrix + matrix-free part), dense, at the current state.
+fn matrix_and_tangent(st: &mut SteadyRolling) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     assert!(st.evaluate(true));
-    let mut k = st.sys.asm.to_dense();
-    let n = st.n_eq();
-    let mut corr = 0.0f64;
+    let a = st.sys.asm.to_dense();
+    let mut k = a.clone();
     if st.has_tangent_correction() {
+        let n = st.n_eq();
         let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
         for j in 0..n {
             e.fill(0.0);
@@ -46,13 +55,17 @@ fn fd_errors(st: &mut SteadyRolling) -> (f64, f64) {
             st.tangent_correction(&e, &mut col);
             for i in 0..n {
                 k[i][j] += col[i];
-                corr = corr.max(col[i].abs());
             }
         }
     }
-    let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    let err = fixtures::fd_max_error(st, 1e-7, |i, j| k[i][j]);
-    (err / kmax, corr / kmax)
+    (a, k)
+}
+
+fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
 }
 
 /// A smooth, non-symmetric displacement on the free nodes (hanging nodes follow their masters)
@@ -242,32 +255,6 @@ fn matrix_free_and_assembled_reach_the_same_state() {
         assert!((a.0 - b.0).abs() < 1e-6 * a.1.abs() && (a.1 - b.1).abs() < 1e-6 * a.1.abs());
         assert!(du < 1e-7, "{du:e}");
     }
-}
-
-/// (assembled matrix, exact tangent = matrix + matrix-free part), dense, at the current state.
-fn matrix_and_tangent(st: &mut SteadyRolling) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    assert!(st.evaluate(true));
-    let a = st.sys.asm.to_dense();
-    let mut k = a.clone();
-    let n = st.n_eq();
-    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
-    for j in 0..n {
-        e.fill(0.0);
-        e[j] = 1.0;
-        col.fill(0.0);
-        st.tangent_correction(&e, &mut col);
-        for i in 0..n {
-            k[i][j] += col[i];
-        }
-    }
-    (a, k)
-}
-
-fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
-    a.iter()
-        .flatten()
-        .zip(b.iter().flatten())
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
 }
 
 /// `[solver] damping_cell_weight` changes the assembled part of the matrix-free damping
