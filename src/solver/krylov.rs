@@ -53,6 +53,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// Then each Arnoldi product (K + C) M⁻¹ v is v + C M⁻¹ v, up to the solve's round-off, and
 /// the sparse product with K is left out of it; the residual that decides convergence (at
 /// every restart and at the end) is always formed with the full product.
+#[allow(clippy::too_many_arguments)]
 pub fn gmres<S: NonlinearSystem + ?Sized>(
     sys: &mut S,
     lu: &mut SparseSolver,
@@ -275,9 +276,9 @@ mod tests {
         /// (K + C) x.
         fn product(&self, x: &[f64]) -> Vec<f64> {
             let mut y: Vec<f64> = self.c.iter().map(|row| dot(row, x)).collect();
-            for j in 0..x.len() {
+            for (j, xj) in x.iter().enumerate() {
                 for p in self.col_ptr[j]..self.col_ptr[j + 1] {
-                    y[self.row_idx[p]] += self.k[p] * x[j];
+                    y[self.row_idx[p]] += self.k[p] * xj;
                 }
             }
             y
