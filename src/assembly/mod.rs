@@ -419,6 +419,27 @@ impl Block {
     }
 }
 
+/// Counting sort of (key, value) pairs into CSR: the values of key k, in the order `visit`
+/// gives them, are `vals[ptr[k]..ptr[k + 1]]`. `visit` is called twice (count, then fill) and
+/// must give the same pairs both times; keys are below `n`.
+fn bucket<T: Copy + Default>(
+    n: usize,
+    visit: impl Fn(&mut dyn FnMut(usize, T)),
+) -> (Vec<usize>, Vec<T>) {
+    let mut ptr = vec![0usize; n + 1];
+    visit(&mut |k, _| ptr[k + 1] += 1);
+    for i in 0..n {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr[..n].to_vec();
+    let mut vals = vec![T::default(); ptr[n]];
+    visit(&mut |k, v| {
+        vals[fill[k]] = v;
+        fill[k] += 1;
+    });
+    (ptr, vals)
+}
+
 /// CSC pattern (`col_ptr`, sorted `row_idx`) of the element blocks `lists` (dof lists and
 /// offsets in full-dof numbering), constrained dofs expanded to their free masters. Each
 /// column is gathered once from the elements that hold it, deduplicated with a marker, and
@@ -437,23 +458,14 @@ fn block_pattern(dofs: &DofMap, lists: &[(Vec<u32>, Vec<usize>)]) -> (Vec<usize>
             el_off.push(el_eq.len());
         }
     }
-    // Equation → elements (CSR).
-    let n_el = el_off.len() - 1;
-    let mut inc_ptr = vec![0usize; n + 1];
-    for &q in &el_eq {
-        inc_ptr[q as usize + 1] += 1;
-    }
-    for i in 0..n {
-        inc_ptr[i + 1] += inc_ptr[i];
-    }
-    let mut fill = inc_ptr[..n].to_vec();
-    let mut inc = vec![0u32; el_eq.len()];
-    for e in 0..n_el {
-        for &q in &el_eq[el_off[e]..el_off[e + 1]] {
-            inc[fill[q as usize]] = e as u32;
-            fill[q as usize] += 1;
+    // Equation → elements.
+    let (inc_ptr, inc) = bucket(n, |f| {
+        for e in 0..el_off.len() - 1 {
+            for &q in &el_eq[el_off[e]..el_off[e + 1]] {
+                f(q as usize, e as u32);
+            }
         }
-    }
+    });
     let mut mark = vec![u32::MAX; n];
     let mut col_ptr = Vec::with_capacity(n + 1);
     col_ptr.push(0usize);
@@ -500,31 +512,18 @@ fn block_slots(
         })
         .collect();
     // Free equation j → (block, element, local column b) with eq(b) = j.
-    let mut ptr = vec![0usize; n + 1];
-    for (d, _) in lists {
-        for &di in d {
-            let q = dofs.eq[di as usize];
-            if q < CONSTRAINED {
-                ptr[q as usize + 1] += 1;
-            }
-        }
-    }
-    for i in 0..n {
-        ptr[i + 1] += ptr[i];
-    }
-    let mut fill = ptr[..n].to_vec();
-    let mut inc = vec![(0u32, 0u32, 0u32); ptr[n]];
-    for (bi, (d, o)) in lists.iter().enumerate() {
-        for e in 0..o.len().saturating_sub(1) {
-            for (b, &di) in d[o[e]..o[e + 1]].iter().enumerate() {
-                let q = dofs.eq[di as usize];
-                if q < CONSTRAINED {
-                    inc[fill[q as usize]] = (bi as u32, e as u32, b as u32);
-                    fill[q as usize] += 1;
+    let (ptr, inc) = bucket(n, |f| {
+        for (bi, (d, o)) in lists.iter().enumerate() {
+            for e in 0..o.len().saturating_sub(1) {
+                for (b, &di) in d[o[e]..o[e + 1]].iter().enumerate() {
+                    let q = dofs.eq[di as usize];
+                    if q < CONSTRAINED {
+                        f(q as usize, (bi as u32, e as u32, b as u32));
+                    }
                 }
             }
         }
-    }
+    });
     let mut pos = vec![0u32; n];
     for j in 0..n {
         for p in col_ptr[j]..col_ptr[j + 1] {
@@ -591,12 +590,20 @@ impl Assembler {
                 let (slots, slot_offsets) = all_slots.next().unwrap_or_default();
                 let constrained = dofs.has_constraints();
                 let (mut con_k, mut con_r) = (Vec::new(), Vec::new());
-                let (mut con_k_offsets, mut con_r_offsets) = (vec![0], vec![0]);
+                // Constrained rows and columns, expanded over their masters (none without
+                // constraints: empty offsets).
+                let (mut con_k_offsets, mut con_r_offsets) = if constrained {
+                    (vec![0], vec![0])
+                } else {
+                    (Vec::new(), Vec::new())
+                };
                 let (mut ti, mut tj) = (Vec::new(), Vec::new());
-                for e in 0..o.len().saturating_sub(1) {
-                    if !constrained {
-                        break;
-                    }
+                let n_con = if constrained {
+                    o.len().saturating_sub(1)
+                } else {
+                    0
+                };
+                for e in 0..n_con {
                     let el = &d[o[e]..o[e + 1]];
                     let nd = el.len();
                     for (a, &di) in el.iter().enumerate() {
@@ -620,9 +627,6 @@ impl Assembler {
                     }
                     con_k_offsets.push(con_k.len());
                     con_r_offsets.push(con_r.len());
-                }
-                if !constrained {
-                    (con_k_offsets, con_r_offsets) = (Vec::new(), Vec::new());
                 }
                 // Elements that share a master must not run concurrently: the schedule is
                 // built on the element lists extended by their masters.

@@ -503,27 +503,13 @@ impl Newton {
                 prev_norm = Some(r_now);
                 prev_eta = eta;
                 let b: Vec<f64> = sys.residual().iter().map(|r| -r).collect();
-                let mut ks = super::krylov::gmres(
-                    sys,
-                    &mut self.solver,
-                    &b,
-                    &mut self.dx,
-                    eta,
-                    40,
-                    160,
-                    !lagged,
-                )?;
-                rep.krylov_iterations += ks.iterations;
                 let poor = |ks: &super::krylov::KrylovStats| {
                     !ks.rel_residual.is_finite() || ks.rel_residual > (10.0 * eta).min(0.5)
                 };
-                if lagged && poor(&ks) {
-                    // Lagged factors that no longer precondition: refactorize and retry.
-                    self.solver.factorize(sys.matrix_values())?;
-                    rep.factorizations += 1;
-                    self.dx.copy_from_slice(&b);
-                    self.solver.solve_in_place(&mut self.dx)?;
-                    ks = super::krylov::gmres(
+                // With lagged factors that no longer precondition: refactorize and retry once.
+                let mut fresh = !lagged;
+                let ks = loop {
+                    let ks = super::krylov::gmres(
                         sys,
                         &mut self.solver,
                         &b,
@@ -531,13 +517,21 @@ impl Newton {
                         eta,
                         40,
                         160,
-                        true,
+                        fresh,
                     )?;
                     rep.krylov_iterations += ks.iterations;
-                    fresh_products = ks.iterations;
-                } else if !lagged {
-                    fresh_products = ks.iterations;
-                }
+                    if fresh {
+                        fresh_products = ks.iterations;
+                    }
+                    if fresh || !poor(&ks) {
+                        break ks;
+                    }
+                    self.solver.factorize(sys.matrix_values())?;
+                    rep.factorizations += 1;
+                    self.dx.copy_from_slice(&b);
+                    self.solver.solve_in_place(&mut self.dx)?;
+                    fresh = true;
+                };
                 last_products = ks.iterations;
                 // A step far less accurate than asked is still an inexact Newton step when it
                 // leaves at most 1 % of the linear residual: Newton then converges linearly
