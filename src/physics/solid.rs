@@ -617,6 +617,10 @@ impl SolidModel {
         let material = self.material_of(c);
         // Kup for condensation (perturbed): 18 × 3.
         let mut kup = [[0.0f64; 3]; 18];
+        // The displacement block of the cell matrix and ∂r/∂v of the steady damping
+        // (2N × 2N), accumulated over the points in the layout ((a, i, k), b).
+        let mut kb = [0.0f64; 324];
+        let mut avl = [0.0f64; 324];
         let mut g = [[0.0; 2]; N];
         for q in 0..tab.len() {
             let Some(pg) = self.point(c, tab, q, &mut g) else {
@@ -720,67 +724,92 @@ impl SolidModel {
             if !with_k {
                 continue;
             }
-            // Kuu: Σ G_aJ A_{iJ,kL} G_bL − ρω² T_a T_b δ_ik.
+            // Kuu: Σ G_aJ A_{iJ,kL} G_bL − ρω² T_a T_b δ_ik, into the blocked layout of `kb`
+            // (row (a, i, k), column b: contiguous in b, so that the inner loops vectorise).
+            let (mut gx, mut gy, mut tg) = ([0.0; N], [0.0; N], [0.0; N]);
+            for b in 0..N {
+                gx[b] = g[b][0];
+                gy[b] = g[b][1];
+                tg[b] = t[0] * g[b][0] + t[1] * g[b][1];
+            }
             for a in 0..N {
-                let ta = t[0] * g[a][0] + t[1] * g[a][1];
-                // ga_a[i][(k,L)] = Σ_J G_aJ A[v(i,J), v(k,L)]
-                let mut ga = [[0.0; 4]; 2];
                 for i in 0..2 {
-                    for kl in 0..4 {
-                        ga[i][kl] = g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)];
+                    // ga[(k, L)] = w Σ_J G_aJ A[v(i, J), v(k, L)]
+                    let mut ga = [0.0; 4];
+                    for (kl, gv) in ga.iter_mut().enumerate() {
+                        *gv = (g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)]) * w;
                     }
-                }
-                for b in 0..N {
-                    let tb = t[0] * g[b][0] + t[1] * g[b][1];
-                    let inertia = rw2 * ta * tb * w;
-                    for i in 0..2 {
-                        let row = (2 * a + i) * nd;
-                        for k in 0..2 {
-                            let val = ga[i][v(k, 0)] * g[b][0] + ga[i][v(k, 1)] * g[b][1];
-                            let mut kv = val * w;
-                            if i == k {
-                                kv -= inertia;
+                    for k in 0..2 {
+                        let (c0, c1) = (ga[v(k, 0)], ga[v(k, 1)]);
+                        let o = ((2 * a + i) * 2 + k) * N;
+                        let row = &mut kb[o..o + N];
+                        if i == k {
+                            let ci = -rw2 * tg[a] * w;
+                            for b in 0..N {
+                                row[b] += c0 * gx[b] + c1 * gy[b] + ci * tg[b];
                             }
-                            loc.k[row + 2 * b + k] += kv;
+                        } else {
+                            for b in 0..N {
+                                row[b] += c0 * gx[b] + c1 * gy[b];
+                            }
                         }
                     }
                 }
             }
-            if let Some(d) = steady_d {
-                // Steady damping through the velocities: K_ab += Σ_J G_aJ A^L_{iJ,kL} G̃_bL with
-                // G̃_b = ω Σ_m d_mb G_m (the gradient of the velocity interpolant per δu_b);
-                // `av` gets the same with G_b (per δv_b).
-                let mut gt = [[0.0; 2]; N];
-                for m in 0..N {
-                    for b in 0..N {
-                        let dm = omega * d[m * N + b];
-                        gt[b][0] += dm * g[m][0];
-                        gt[b][1] += dm * g[m][1];
+            if steady_d.is_some() {
+                // Steady damping through the velocities, per nodal velocity:
+                // A_ab = Σ_J G_aJ A^L_{iJ,kL} G_bL (the derivative of the cell residual with
+                // respect to the cell's nodal velocities, same layout as `kb`); its product
+                // with the velocities' dependence on the displacements is added after the
+                // quadrature loop.
+                for a in 0..N {
+                    for i in 0..2 {
+                        let mut gl = [0.0; 4];
+                        for (kl, gv) in gl.iter_mut().enumerate() {
+                            *gv =
+                                (g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)]) * w;
+                        }
+                        for k in 0..2 {
+                            let (c0, c1) = (gl[v(k, 0)], gl[v(k, 1)]);
+                            let o = ((2 * a + i) * 2 + k) * N;
+                            let row = &mut avl[o..o + N];
+                            for b in 0..N {
+                                row[b] += c0 * gx[b] + c1 * gy[b];
+                            }
+                        }
                     }
                 }
-                for a in 0..N {
-                    let mut gl = [[0.0; 4]; 2];
-                    for i in 0..2 {
-                        for kl in 0..4 {
-                            gl[i][kl] = g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)];
+            }
+        }
+        if with_k {
+            if let Some(d) = steady_d {
+                // K_ab += Σ_m A_am ω d_mb: the velocities' gradient per δu_b is
+                // G̃_b = ω Σ_m d_mb G_m (the gradient of the velocity interpolant).
+                for r in 0..2 * nu {
+                    let (arow, krow) = (&avl[r * N..(r + 1) * N], &mut kb[r * N..(r + 1) * N]);
+                    for m in 0..N {
+                        let am = omega * arow[m];
+                        let dm = &d[m * N..(m + 1) * N];
+                        for b in 0..N {
+                            krow[b] += am * dm[b];
                         }
                     }
-                    for b in 0..N {
-                        for i in 0..2 {
-                            let row = (2 * a + i) * nd;
+                }
+                if let Some(avm) = av.as_deref_mut() {
+                    for r in 0..nu {
+                        for b in 0..N {
                             for k in 0..2 {
-                                let val = gl[i][v(k, 0)] * gt[b][0] + gl[i][v(k, 1)] * gt[b][1];
-                                loc.k[row + 2 * b + k] += val * w;
+                                avm[r * nu + 2 * b + k] = avl[(r * 2 + k) * N + b];
                             }
                         }
-                        if let Some(avm) = av.as_deref_mut() {
-                            for i in 0..2 {
-                                for k in 0..2 {
-                                    let val = gl[i][v(k, 0)] * g[b][0] + gl[i][v(k, 1)] * g[b][1];
-                                    avm[(2 * a + i) * nu + 2 * b + k] += val * w;
-                                }
-                            }
-                        }
+                    }
+                }
+            }
+            for r in 0..nu {
+                let krow = &mut loc.k[r * nd..r * nd + nu];
+                for b in 0..N {
+                    for k in 0..2 {
+                        krow[2 * b + k] += kb[(r * 2 + k) * N + b];
                     }
                 }
             }
