@@ -766,8 +766,7 @@ impl SolidModel {
                     for i in 0..2 {
                         let mut gl = [0.0; 4];
                         for (kl, gv) in gl.iter_mut().enumerate() {
-                            *gv =
-                                (g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)]) * w;
+                            *gv = (g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)]) * w;
                         }
                         for k in 0..2 {
                             let (c0, c1) = (gl[v(k, 0)], gl[v(k, 1)]);

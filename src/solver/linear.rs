@@ -928,6 +928,21 @@ impl SparseSolver {
         self.track_det = on;
     }
 
+    /// Symmetric-pattern LU only: keep the factors in single precision from the next
+    /// factorization on ([`super::multifrontal::SymmetricLu::set_single_precision_factors`]),
+    /// for factors that only precondition an iterative solve. No effect on other backends.
+    pub fn set_single_precision_factors(&mut self, on: bool) {
+        if let Backend::Symmetric(st) = &mut self.backend {
+            st.lu.set_single_precision_factors(on);
+        }
+    }
+
+    /// Whether the factors are kept in single precision
+    /// ([`Self::set_single_precision_factors`] on a symmetric-pattern LU).
+    pub fn single_precision_factors(&self) -> bool {
+        matches!(&self.backend, Backend::Symmetric(st) if st.lu.single_precision_factors())
+    }
+
     /// Numeric factorization of the matrix with these values (same order as row_idx).
     ///
     /// # Panics

@@ -122,6 +122,10 @@ pub struct SymmetricLu {
     /// U11), then U12 (ns × r), then L21 (r × ns), all column-major.
     fac_off: Vec<usize>,
     factors: Vec<f64>,
+    /// The factors rounded to single precision, in place of `factors`, when
+    /// [`SymmetricLu::set_single_precision_factors`] is on (a preconditioner's factors).
+    factors32: Vec<f32>,
+    single: bool,
     /// Row order within each supernode: position i of its diagonal block holds its local row
     /// `perm[begin + i]`.
     perm: Vec<usize>,
@@ -175,7 +179,7 @@ impl std::fmt::Debug for SymmetricLu {
         f.debug_struct("SymmetricLu")
             .field("n", &self.n)
             .field("supernodes", &(self.begin.len() - 1))
-            .field("factor_entries", &self.factors.len())
+            .field("factor_entries", &self.factor_entries())
             .field("perturbed", &self.perturbed)
             .finish()
     }
@@ -428,6 +432,8 @@ impl SymmetricLu {
             amap_ptr,
             fac_off,
             factors: vec![0.0; nf],
+            factors32: Vec::new(),
+            single: false,
             perm: vec![0; n],
             perm_inv: vec![0; max_w],
             tmp: vec![0.0; max_w],
@@ -449,7 +455,32 @@ impl SymmetricLu {
 
     /// Entries stored in L and U (the diagonal once).
     pub fn factor_entries(&self) -> usize {
-        self.factors.len()
+        self.fac_off.last().copied().unwrap_or(0)
+    }
+
+    /// Whether the factors are kept in single precision.
+    pub fn single_precision_factors(&self) -> bool {
+        self.single
+    }
+
+    /// Keep the factors in single precision from the next factorization on (the
+    /// factorization itself, its fronts and update matrices stay in double precision): half
+    /// the factors' memory and half the memory traffic of a solve, for factors that only
+    /// precondition an iterative solve (whose residuals are formed in double precision). A
+    /// direct solve with them is accurate to about 1e-7 κ(A) only.
+    pub fn set_single_precision_factors(&mut self, on: bool) {
+        if on == self.single {
+            return;
+        }
+        self.single = on;
+        let nf = self.factor_entries();
+        if on {
+            self.factors = Vec::new();
+            self.factors32 = vec![0.0; nf];
+        } else {
+            self.factors32 = Vec::new();
+            self.factors = vec![0.0; nf];
+        }
     }
 
     /// Pivots replaced by ±[`TINY`] max|A|, and supernodes whose multipliers exceeded
@@ -584,19 +615,11 @@ impl SymmetricLu {
             }
             // Store the factors, push the update matrix.
             let off = self.fac_off[s];
-            let fac = &mut self.factors[off..self.fac_off[s + 1]];
-            for j in 0..w {
-                fac[j * w..(j + 1) * w].copy_from_slice(&front[j * m..j * m + w]);
-            }
-            let u12 = w * w;
-            for j in 0..r {
-                let src = &front[(w + j) * m..(w + j) * m + w];
-                fac[u12 + j * w..u12 + (j + 1) * w].copy_from_slice(src);
-            }
-            let l21 = u12 + w * r;
-            for j in 0..w {
-                let src = &front[j * m + w..(j + 1) * m];
-                fac[l21 + j * r..l21 + (j + 1) * r].copy_from_slice(src);
+            let end = self.fac_off[s + 1];
+            if self.single {
+                store_factors(&mut self.factors32[off..end], front, m, w, r);
+            } else {
+                store_factors(&mut self.factors[off..end], front, m, w, r);
             }
             if r > 0 && self.rel[self.rows_ptr[s]] != u32::MAX {
                 let dst = &mut self.stack[top..top + r * r];
@@ -616,8 +639,28 @@ impl SymmetricLu {
 
     /// Solve A x = b in place with the last factorization.
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let (mut work, mut tmp, mut rtmp) = (
+            std::mem::take(&mut self.work),
+            std::mem::take(&mut self.tmp),
+            std::mem::take(&mut self.rtmp),
+        );
+        if self.single {
+            self.solve_with(&self.factors32, rhs, &mut work, &mut tmp, &mut rtmp);
+        } else {
+            self.solve_with(&self.factors, rhs, &mut work, &mut tmp, &mut rtmp);
+        }
+        (self.work, self.tmp, self.rtmp) = (work, tmp, rtmp);
+    }
+
+    fn solve_with<T: Copy + Into<f64>>(
+        &self,
+        factors: &[T],
+        rhs: &mut [f64],
+        x: &mut [f64],
+        tmp: &mut [f64],
+        rtmp: &mut [f64],
+    ) {
         let n = self.n;
-        let x = &mut self.work;
         for k in 0..n {
             x[k] = rhs[self.fwd[k]];
         }
@@ -626,8 +669,8 @@ impl SymmetricLu {
             let (b, e) = (self.begin[s], self.begin[s + 1]);
             let w = e - b;
             let r = self.rows_ptr[s + 1] - self.rows_ptr[s];
-            let fac = &self.factors[self.fac_off[s]..self.fac_off[s + 1]];
-            let tmp = &mut self.tmp[..w];
+            let fac = &factors[self.fac_off[s]..self.fac_off[s + 1]];
+            let tmp = &mut tmp[..w];
             for (t, &p) in tmp.iter_mut().zip(&self.perm[b..e]) {
                 *t = x[b + p];
             }
@@ -638,21 +681,21 @@ impl SymmetricLu {
                 if xk != 0.0 {
                     let col = &fac[k * w..(k + 1) * w];
                     for i in k + 1..w {
-                        x[b + i] -= col[i] * xk;
+                        x[b + i] -= col[i].into() * xk;
                     }
                 }
             }
             // x_R −= L21 y: the product in contiguous scratch, then one scatter.
             let l21 = w * w + w * r;
             let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
-            let t = &mut self.rtmp[..r];
+            let t = &mut rtmp[..r];
             t.fill(0.0);
             for k in 0..w {
                 let xk = x[b + k];
                 if xk != 0.0 {
                     let col = &fac[l21 + k * r..l21 + (k + 1) * r];
                     for (ti, &c) in t.iter_mut().zip(col) {
-                        *ti += c * xk;
+                        *ti += c.into() * xk;
                     }
                 }
             }
@@ -663,18 +706,18 @@ impl SymmetricLu {
         for s in (0..ns).rev() {
             let (b, e) = (self.begin[s], self.begin[s + 1]);
             let w = e - b;
-            let fac = &self.factors[self.fac_off[s]..self.fac_off[s + 1]];
+            let fac = &factors[self.fac_off[s]..self.fac_off[s + 1]];
             let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
             // x_s −= U12 x_R.
             let u12 = w * w;
-            let xs = &mut self.tmp[..w];
+            let xs = &mut tmp[..w];
             xs.copy_from_slice(&x[b..e]);
             for (j, &row) in rows.iter().enumerate() {
                 let xr = x[row];
                 if xr != 0.0 {
                     let col = &fac[u12 + j * w..u12 + (j + 1) * w];
                     for (xi, &c) in xs.iter_mut().zip(col) {
-                        *xi -= c * xr;
+                        *xi -= c.into() * xr;
                     }
                 }
             }
@@ -682,11 +725,11 @@ impl SymmetricLu {
             // U11 x_s = y.
             for k in (0..w).rev() {
                 let col = &fac[k * w..(k + 1) * w];
-                let xk = x[b + k] / col[k];
+                let xk = x[b + k] / col[k].into();
                 x[b + k] = xk;
                 if xk != 0.0 {
                     for i in 0..k {
-                        x[b + i] -= col[i] * xk;
+                        x[b + i] -= col[i].into() * xk;
                     }
                 }
             }
@@ -813,6 +856,80 @@ mod tests {
         assert!(lu.factor_entries() >= n);
     }
 
+    /// Single-precision factors: the same pivots and determinant as the double-precision ones
+    /// (the factorization is in double precision), a solve accurate to single precision times
+    /// the condition number, refined to double precision by a few residual corrections in
+    /// double precision, and back to double-precision solves when turned off.
+    #[test]
+    fn single_precision_factors_precondition() {
+        let side = 9;
+        let n = side * side;
+        let mut a = vec![vec![None; n]; n];
+        for i in 0..side {
+            for j in 0..side {
+                let k = i * side + j;
+                a[k][k] = Some(4.5);
+                if i > 0 {
+                    a[k][k - side] = Some(-1.0 - 0.5);
+                }
+                if i + 1 < side {
+                    a[k][k + side] = Some(-1.0 + 0.5);
+                }
+                if j > 0 {
+                    a[k][k - 1] = Some(-1.2);
+                }
+                if j + 1 < side {
+                    a[k][k + 1] = Some(-0.8);
+                }
+            }
+        }
+        let (cp, ri, v) = csc(&a);
+        let full: Vec<Vec<f64>> = a
+            .iter()
+            .map(|r| r.iter().map(|x| x.unwrap_or(0.0)).collect())
+            .collect();
+        let b: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).cos() + 0.1).collect();
+        let (xd, sd, ld) = dense(&full, &b);
+        let scale = xd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = |x: &[f64]| {
+            x.iter()
+                .zip(&xd)
+                .map(|(p, q)| (p - q).abs())
+                .fold(0.0, f64::max)
+                / scale
+        };
+        let mut lu = SymmetricLu::new(n, &cp, &ri).unwrap();
+        let entries = lu.factor_entries();
+        lu.set_single_precision_factors(true);
+        assert!(lu.single_precision_factors());
+        lu.factorize(&v, Par::Seq).unwrap();
+        assert_eq!(lu.factor_entries(), entries);
+        assert_eq!(lu.det_sign_log().0, sd);
+        assert!((lu.det_sign_log().1 - ld).abs() <= 1e-9 * ld.abs());
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x);
+        let e1 = err(&x);
+        assert!(
+            e1 < 1e-5 && e1 > 1e-12,
+            "single-precision solve: error {e1:e}"
+        );
+        // Iterative refinement: x += A⁻¹ (b − A x) with the residual in double precision.
+        for _ in 0..4 {
+            let mut r: Vec<f64> = (0..n)
+                .map(|i| b[i] - (0..n).map(|j| full[i][j] * x[j]).sum::<f64>())
+                .collect();
+            lu.solve_in_place(&mut r);
+            x.iter_mut().zip(&r).for_each(|(xi, ri)| *xi += ri);
+        }
+        let e2 = err(&x);
+        assert!(e2 < 1e-13, "refined: error {e2:e} (first solve {e1:e})");
+        lu.set_single_precision_factors(false);
+        lu.factorize(&v, Par::Seq).unwrap();
+        let mut x = b.clone();
+        lu.solve_in_place(&mut x);
+        assert!(err(&x) < 1e-13, "double again: error {:e}", err(&x));
+    }
+
     /// A dense block whose diagonal is zero: one supernode, solved only by pivoting inside it.
     #[test]
     fn zero_diagonal_inside_one_supernode_is_pivoted() {
@@ -903,5 +1020,46 @@ mod tests {
             lu.factorize(&[f64::NAN; 5], Par::Seq),
             Err(SymmetricLuError::NonFinite)
         );
+    }
+}
+
+/// One supernode's factors from its front (column-major, m × m, w pivots, r rows below): the
+/// w × w block, then U12 (w × r), then L21 (r × w), as [`SymmetricLu::solve_in_place`] reads
+/// them.
+fn store_factors<T: From<Round>>(fac: &mut [T], front: &[f64], m: usize, w: usize, r: usize) {
+    let put = |dst: &mut [T], src: &[f64]| {
+        for (d, &v) in dst.iter_mut().zip(src) {
+            *d = T::from(Round(v));
+        }
+    };
+    for j in 0..w {
+        put(&mut fac[j * w..(j + 1) * w], &front[j * m..j * m + w]);
+    }
+    let u12 = w * w;
+    for j in 0..r {
+        put(
+            &mut fac[u12 + j * w..u12 + (j + 1) * w],
+            &front[(w + j) * m..(w + j) * m + w],
+        );
+    }
+    let l21 = u12 + w * r;
+    for j in 0..w {
+        put(
+            &mut fac[l21 + j * r..l21 + (j + 1) * r],
+            &front[j * m + w..(j + 1) * m],
+        );
+    }
+}
+
+/// A factor entry on its way to storage (rounded to nearest for single precision).
+struct Round(f64);
+impl From<Round> for f64 {
+    fn from(r: Round) -> f64 {
+        r.0
+    }
+}
+impl From<Round> for f32 {
+    fn from(r: Round) -> f32 {
+        r.0 as f32
     }
 }

@@ -226,6 +226,17 @@ pub struct NewtonOptions {
     /// is unchanged; a factorization costs as much as 12 (16k DOFs) to 18 (66k DOFs) GMRES
     /// products. A stalled GMRES with lagged factors refactorizes and tries once more.
     pub reuse_factorization: bool,
+    /// When the tangent has a matrix-free part, keep the LU factors of the assembled part,
+    /// which only precondition GMRES there, in single precision (the factorization itself in
+    /// double): half the factors' memory and half the memory traffic of each preconditioner
+    /// solve, while GMRES forms its residuals in double precision, so the Newton step and
+    /// the converged state are those of double-precision factors to the forcing term's
+    /// accuracy. When fresh single-precision factors precondition poorly (a nearly singular
+    /// assembled part), the step is retried with double-precision factors, kept for the rest
+    /// of the solve. On the damped default scene at 66k and 262k DOFs the GMRES products
+    /// were the same in number, and the converged loads the same to all printed digits, as
+    /// with double precision.
+    pub single_precision_preconditioner: bool,
 }
 
 /// Extra GMRES products (over the count right after a factorization) that a lagged
@@ -244,6 +255,7 @@ impl Default for NewtonOptions {
             verbose: false,
             krylov_eta_max: 0.3,
             reuse_factorization: true,
+            single_precision_preconditioner: true,
         }
     }
 }
@@ -394,6 +406,8 @@ impl Newton {
         // Lagged preconditioner bookkeeping (tangents with a matrix-free part only).
         let (mut lu_ready, mut full_step) = (false, false);
         let (mut fresh_products, mut last_products) = (0usize, 0usize);
+        // Single-precision factors for the GMRES preconditioner while they precondition well.
+        let mut single_ok = self.opts.single_precision_preconditioner;
         for it in 0..=self.opts.max_iterations {
             let rel: Vec<f64> = norms
                 .iter()
@@ -462,6 +476,8 @@ impl Newton {
                 && full_step
                 && last_products <= fresh_products + REUSE_EXTRA_PRODUCTS;
             if !lagged {
+                self.solver
+                    .set_single_precision_factors(correction && single_ok);
                 self.solver.factorize(sys.matrix_values())?;
                 rep.factorizations += 1;
                 lu_ready = true;
@@ -523,9 +539,15 @@ impl Newton {
                     if fresh {
                         fresh_products = ks.iterations;
                     }
-                    if fresh || !poor(&ks) {
+                    if !poor(&ks) || (fresh && !self.solver.single_precision_factors()) {
                         break ks;
                     }
+                    // Lagged factors: fresh ones. Fresh single-precision ones: double
+                    // precision, for the rest of this solve.
+                    if fresh {
+                        single_ok = false;
+                    }
+                    self.solver.set_single_precision_factors(single_ok);
                     self.solver.factorize(sys.matrix_values())?;
                     rep.factorizations += 1;
                     self.dx.copy_from_slice(&b);
@@ -647,6 +669,7 @@ impl Newton {
     /// an order of magnitude for the diagnostics of a failed solve. `None` if the tangent cannot
     /// be factorized.
     fn condition_estimate<S: NonlinearSystem>(&mut self, sys: &S) -> Option<f64> {
+        self.solver.set_single_precision_factors(false);
         self.solver.factorize(sys.matrix_values()).ok()?;
         let (cp, ri) = sys.pattern();
         let vals = sys.matrix_values();
