@@ -794,7 +794,7 @@ impl SolidModel {
                         }
                     }
                 }
-                if let Some(avm) = av.as_deref_mut() {
+                if let Some(avm) = av {
                     for r in 0..nu {
                         for b in 0..N {
                             for k in 0..2 {

@@ -740,6 +740,47 @@ impl SymmetricLu {
     }
 }
 
+/// One supernode's factors from its front (column-major, m × m, w pivots, r rows below): the
+/// w × w block, then U12 (w × r), then L21 (r × w), as [`SymmetricLu::solve_in_place`] reads
+/// them.
+fn store_factors<T: From<Round>>(fac: &mut [T], front: &[f64], m: usize, w: usize, r: usize) {
+    let put = |dst: &mut [T], src: &[f64]| {
+        for (d, &v) in dst.iter_mut().zip(src) {
+            *d = T::from(Round(v));
+        }
+    };
+    for j in 0..w {
+        put(&mut fac[j * w..(j + 1) * w], &front[j * m..j * m + w]);
+    }
+    let u12 = w * w;
+    for j in 0..r {
+        put(
+            &mut fac[u12 + j * w..u12 + (j + 1) * w],
+            &front[(w + j) * m..(w + j) * m + w],
+        );
+    }
+    let l21 = u12 + w * r;
+    for j in 0..w {
+        put(
+            &mut fac[l21 + j * r..l21 + (j + 1) * r],
+            &front[j * m + w..(j + 1) * m],
+        );
+    }
+}
+
+/// A factor entry on its way to storage (rounded to nearest for single precision).
+struct Round(f64);
+impl From<Round> for f64 {
+    fn from(r: Round) -> f64 {
+        r.0
+    }
+}
+impl From<Round> for f32 {
+    fn from(r: Round) -> f32 {
+        r.0 as f32
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1020,46 +1061,5 @@ mod tests {
             lu.factorize(&[f64::NAN; 5], Par::Seq),
             Err(SymmetricLuError::NonFinite)
         );
-    }
-}
-
-/// One supernode's factors from its front (column-major, m × m, w pivots, r rows below): the
-/// w × w block, then U12 (w × r), then L21 (r × w), as [`SymmetricLu::solve_in_place`] reads
-/// them.
-fn store_factors<T: From<Round>>(fac: &mut [T], front: &[f64], m: usize, w: usize, r: usize) {
-    let put = |dst: &mut [T], src: &[f64]| {
-        for (d, &v) in dst.iter_mut().zip(src) {
-            *d = T::from(Round(v));
-        }
-    };
-    for j in 0..w {
-        put(&mut fac[j * w..(j + 1) * w], &front[j * m..j * m + w]);
-    }
-    let u12 = w * w;
-    for j in 0..r {
-        put(
-            &mut fac[u12 + j * w..u12 + (j + 1) * w],
-            &front[(w + j) * m..(w + j) * m + w],
-        );
-    }
-    let l21 = u12 + w * r;
-    for j in 0..w {
-        put(
-            &mut fac[l21 + j * r..l21 + (j + 1) * r],
-            &front[j * m + w..(j + 1) * m],
-        );
-    }
-}
-
-/// A factor entry on its way to storage (rounded to nearest for single precision).
-struct Round(f64);
-impl From<Round> for f64 {
-    fn from(r: Round) -> f64 {
-        r.0
-    }
-}
-impl From<Round> for f32 {
-    fn from(r: Round) -> f32 {
-        r.0 as f32
     }
 }
