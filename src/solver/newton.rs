@@ -763,3 +763,167 @@ fn unreachable_guard() -> Result<NewtonReport, SolveError> {
         stagnation: None,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// R(x) = (K + C) x − b with K block diagonal of 2 × 2 blocks [[1, a], [a, a² + s]]
+    /// (assembled; nearly singular, s = 1e-12: its factors rounded to single precision
+    /// reproduce a² + s only to about 1e-8, ten thousand times the block's small pivot) and C
+    /// a weak dense coupling (matrix-free).
+    struct NearlySingular {
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+        k: Vec<f64>,
+        c: Vec<Vec<f64>>,
+        b: Vec<f64>,
+        x: Vec<f64>,
+        r: Vec<f64>,
+        fields: Vec<u8>,
+    }
+
+    impl NearlySingular {
+        fn new(blocks: usize) -> Self {
+            let n = 2 * blocks;
+            let (mut col_ptr, mut row_idx, mut k) = (vec![0], Vec::new(), Vec::new());
+            for blk in 0..blocks {
+                let a = 1.0 / 3.0 + 0.0137 * blk as f64;
+                let block = [[1.0, a], [a, a * a + 1e-12]];
+                for j in 0..2 {
+                    for (i, row) in block.iter().enumerate() {
+                        row_idx.push(2 * blk + i);
+                        k.push(row[j]);
+                    }
+                    col_ptr.push(row_idx.len());
+                }
+            }
+            let c: Vec<Vec<f64>> = (0..n)
+                .map(|i| {
+                    (0..n)
+                        .map(|j| 1e-12 * ((i * 7 + j * 3) % 11) as f64 / n as f64)
+                        .collect()
+                })
+                .collect();
+            let mut s = Self {
+                col_ptr,
+                row_idx,
+                k,
+                c,
+                b: vec![0.0; n],
+                x: vec![0.0; n],
+                r: vec![0.0; n],
+                fields: vec![0; n],
+            };
+            // b = (K + C) x* for a moderate x*, so that the residual can reach round-off.
+            let xs: Vec<f64> = (0..n).map(|i| (0.7 * i as f64).sin()).collect();
+            s.b = s.product(&xs);
+            s
+        }
+
+        fn product(&self, x: &[f64]) -> Vec<f64> {
+            let mut y: Vec<f64> = self
+                .c
+                .iter()
+                .map(|row| row.iter().zip(x).map(|(a, b)| a * b).sum())
+                .collect();
+            for (j, xj) in x.iter().enumerate() {
+                for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                    y[self.row_idx[p]] += self.k[p] * xj;
+                }
+            }
+            y
+        }
+    }
+
+    impl NonlinearSystem for NearlySingular {
+        fn n_eq(&self) -> usize {
+            self.x.len()
+        }
+        fn fields(&self) -> &[u8] {
+            &self.fields
+        }
+        fn field_names(&self) -> &'static [&'static str] {
+            &["u"]
+        }
+        fn reference_norms(&self) -> Vec<f64> {
+            vec![self.b.iter().map(|v| v * v).sum::<f64>().sqrt()]
+        }
+        fn pattern(&self) -> (&[usize], &[usize]) {
+            (&self.col_ptr, &self.row_idx)
+        }
+        fn evaluate(&mut self, _with_matrix: bool) -> bool {
+            let y = self.product(&self.x);
+            for ((r, y), b) in self.r.iter_mut().zip(y).zip(&self.b) {
+                *r = y - b;
+            }
+            true
+        }
+        fn residual(&self) -> &[f64] {
+            &self.r
+        }
+        fn matrix_values(&self) -> &[f64] {
+            &self.k
+        }
+        fn update(&mut self, alpha: f64, dx: &[f64]) {
+            self.x.iter_mut().zip(dx).for_each(|(x, d)| *x += alpha * d);
+        }
+        fn save_state(&self, buf: &mut Vec<f64>) {
+            buf.clear();
+            buf.extend_from_slice(&self.x);
+        }
+        fn restore_state(&mut self, buf: &[f64]) {
+            self.x.copy_from_slice(buf);
+        }
+        fn has_tangent_correction(&self) -> bool {
+            true
+        }
+        fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+            for (o, row) in out.iter_mut().zip(&self.c) {
+                *o += row.iter().zip(v).map(|(a, b)| a * b).sum::<f64>();
+            }
+        }
+    }
+
+    /// Single-precision factors that do not precondition (a nearly singular assembled part)
+    /// are replaced by double-precision ones, and Newton converges.
+    #[test]
+    fn poor_single_precision_factors_fall_back_to_double() {
+        let solve = |single: bool| {
+            let mut sys = NearlySingular::new(150);
+            let opts = NewtonOptions {
+                single_precision_preconditioner: single,
+                ..Default::default()
+            };
+            let mut newton = Newton::new(&sys, LinearKind::Lu, opts).unwrap();
+            let rep = newton.solve(&mut sys).unwrap();
+            let err = sys
+                .x
+                .iter()
+                .enumerate()
+                .map(|(i, x)| (x - (0.7 * i as f64).sin()).abs())
+                .fold(0.0, f64::max);
+            (rep, err, newton.linear_solver().single_precision_factors())
+        };
+        let (rep_d, err_d, single_d) = solve(false);
+        let (rep_s, err_s, single_s) = solve(true);
+        // (The errors against x* only show the conditioning: κ(K) ≈ 1e12.)
+        println!(
+            "double: {} iterations, {} factorizations, {} products, error {err_d:e}; \
+             single first: {} iterations, {} factorizations, {} products, error {err_s:e}",
+            rep_d.iterations,
+            rep_d.factorizations,
+            rep_d.krylov_iterations,
+            rep_s.iterations,
+            rep_s.factorizations,
+            rep_s.krylov_iterations
+        );
+        // Without the fallback GMRES stalls on the single-precision factors and the solve
+        // fails (the unwrap above).
+        assert!(
+            !single_d && !single_s,
+            "double-precision factors at the end"
+        );
+        assert!(rep_s.factorizations > rep_d.factorizations);
+    }
+}
