@@ -732,52 +732,14 @@ impl SolidModel {
                 gy[b] = g[b][1];
                 tg[b] = t[0] * g[b][0] + t[1] * g[b][1];
             }
-            for a in 0..N {
-                for i in 0..2 {
-                    // ga[(k, L)] = w Σ_J G_aJ A[v(i, J), v(k, L)]
-                    let mut ga = [0.0; 4];
-                    for (kl, gv) in ga.iter_mut().enumerate() {
-                        *gv = (g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)]) * w;
-                    }
-                    for k in 0..2 {
-                        let (c0, c1) = (ga[v(k, 0)], ga[v(k, 1)]);
-                        let o = ((2 * a + i) * 2 + k) * N;
-                        let row = &mut kb[o..o + N];
-                        if i == k {
-                            let ci = -rw2 * tg[a] * w;
-                            for b in 0..N {
-                                row[b] += c0 * gx[b] + c1 * gy[b] + ci * tg[b];
-                            }
-                        } else {
-                            for b in 0..N {
-                                row[b] += c0 * gx[b] + c1 * gy[b];
-                            }
-                        }
-                    }
-                }
-            }
+            add_gag(&mut kb, &a_t, &g, &gx, &gy, w, Some((rw2, &tg)));
             if steady_d.is_some() {
                 // Steady damping through the velocities, per nodal velocity:
                 // A_ab = Σ_J G_aJ A^L_{iJ,kL} G_bL (the derivative of the cell residual with
                 // respect to the cell's nodal velocities, same layout as `kb`); its product
                 // with the velocities' dependence on the displacements is added after the
                 // quadrature loop.
-                for a in 0..N {
-                    for i in 0..2 {
-                        let mut gl = [0.0; 4];
-                        for (kl, gv) in gl.iter_mut().enumerate() {
-                            *gv = (g[a][0] * a_l[(v(i, 0), kl)] + g[a][1] * a_l[(v(i, 1), kl)]) * w;
-                        }
-                        for k in 0..2 {
-                            let (c0, c1) = (gl[v(k, 0)], gl[v(k, 1)]);
-                            let o = ((2 * a + i) * 2 + k) * N;
-                            let row = &mut avl[o..o + N];
-                            for b in 0..N {
-                                row[b] += c0 * gx[b] + c1 * gy[b];
-                            }
-                        }
-                    }
-                }
+                add_gag(&mut avl, &a_l, &g, &gx, &gy, w, None);
             }
         }
         if with_k {
@@ -1045,5 +1007,48 @@ impl SolidModel {
             hist.point_mut(c, q).copy_from_slice(&new[..n]);
         }
         step
+    }
+}
+
+/// Adds one quadrature point's Σ_JL G_aJ A_{iJ,kL} G_bL w to `dst` in the layout of
+/// `cell_generic`'s blocks (row (a, i, k), column b, contiguous in b), and with
+/// `inertia` = (ρω², T·G) also −ρω² (T·G_a)(T·G_b) w on the blocks i = k.
+#[inline(always)]
+#[allow(clippy::needless_range_loop)] // Index loops spell out the index notation of the kernel.
+fn add_gag<const N: usize>(
+    dst: &mut [f64; 324],
+    a_t: &Tangent,
+    g: &[[f64; 2]; N],
+    gx: &[f64; N],
+    gy: &[f64; N],
+    w: f64,
+    inertia: Option<(f64, &[f64; N])>,
+) {
+    for a in 0..N {
+        for i in 0..2 {
+            // ga[(k, L)] = w Σ_J G_aJ A[v(i, J), v(k, L)]
+            let mut ga = [0.0; 4];
+            for (kl, gv) in ga.iter_mut().enumerate() {
+                *gv = (g[a][0] * a_t[(v(i, 0), kl)] + g[a][1] * a_t[(v(i, 1), kl)]) * w;
+            }
+            for k in 0..2 {
+                let (c0, c1) = (ga[v(k, 0)], ga[v(k, 1)]);
+                let o = ((2 * a + i) * 2 + k) * N;
+                let row = &mut dst[o..o + N];
+                match inertia {
+                    Some((rw2, tg)) if i == k => {
+                        let ci = -rw2 * tg[a] * w;
+                        for b in 0..N {
+                            row[b] += c0 * gx[b] + c1 * gy[b] + ci * tg[b];
+                        }
+                    }
+                    _ => {
+                        for b in 0..N {
+                            row[b] += c0 * gx[b] + c1 * gy[b];
+                        }
+                    }
+                }
+            }
+        }
     }
 }
