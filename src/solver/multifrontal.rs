@@ -867,6 +867,38 @@ mod tests {
         lu
     }
 
+    /// A convection–diffusion operator on a side × side grid: diagonal `diag(i, j)`, couplings
+    /// −1 ∓ `conv` across rows, −1.3 to the left, and −0.7 to the right where `right(i, j)`
+    /// (elsewhere absent: a structurally unsymmetric pattern).
+    fn grid_operator(
+        side: usize,
+        diag: impl Fn(usize, usize) -> f64,
+        conv: f64,
+        right: impl Fn(usize, usize) -> bool,
+    ) -> Vec<Vec<Option<f64>>> {
+        let n = side * side;
+        let mut a = vec![vec![None; n]; n];
+        for i in 0..side {
+            for j in 0..side {
+                let k = i * side + j;
+                a[k][k] = Some(diag(i, j));
+                if i > 0 {
+                    a[k][k - side] = Some(-1.0 - conv);
+                }
+                if i + 1 < side {
+                    a[k][k + side] = Some(-1.0 + conv);
+                }
+                if j > 0 {
+                    a[k][k - 1] = Some(-1.3);
+                }
+                if j + 1 < side && right(i, j) {
+                    a[k][k + 1] = Some(-0.7);
+                }
+            }
+        }
+        a
+    }
+
     /// An unsymmetric convection–diffusion operator on a grid with a structurally unsymmetric
     /// pattern (one-sided couplings) and rows whose diagonal is small against their
     /// off-diagonals, so that the pivoting inside supernodes is exercised.
@@ -874,25 +906,12 @@ mod tests {
     fn unsymmetric_grid_operator_matches_dense_elimination() {
         let side = 9;
         let n = side * side;
-        let mut a = vec![vec![None; n]; n];
-        for i in 0..side {
-            for j in 0..side {
-                let k = i * side + j;
-                a[k][k] = Some(if (i + j) % 5 == 0 { 0.05 } else { 4.0 });
-                if i > 0 {
-                    a[k][k - side] = Some(-1.0 - 2.5);
-                }
-                if i + 1 < side {
-                    a[k][k + side] = Some(-1.0 + 2.5);
-                }
-                if j > 0 {
-                    a[k][k - 1] = Some(-1.3);
-                }
-                if j + 1 < side && (i + j) % 3 != 0 {
-                    a[k][k + 1] = Some(-0.7); // only one direction: unsymmetric pattern
-                }
-            }
-        }
+        let a = grid_operator(
+            side,
+            |i, j| if (i + j) % 5 == 0 { 0.05 } else { 4.0 },
+            2.5,
+            |i, j| (i + j) % 3 != 0,
+        );
         let lu = check(&a, "grid");
         assert!(lu.factor_entries() >= n);
     }
@@ -905,25 +924,7 @@ mod tests {
     fn single_precision_factors_precondition() {
         let side = 9;
         let n = side * side;
-        let mut a = vec![vec![None; n]; n];
-        for i in 0..side {
-            for j in 0..side {
-                let k = i * side + j;
-                a[k][k] = Some(4.5);
-                if i > 0 {
-                    a[k][k - side] = Some(-1.0 - 0.5);
-                }
-                if i + 1 < side {
-                    a[k][k + side] = Some(-1.0 + 0.5);
-                }
-                if j > 0 {
-                    a[k][k - 1] = Some(-1.2);
-                }
-                if j + 1 < side {
-                    a[k][k + 1] = Some(-0.8);
-                }
-            }
-        }
+        let a = grid_operator(side, |_, _| 4.5, 0.5, |_, _| true);
         let (cp, ri, v) = csc(&a);
         let full: Vec<Vec<f64>> = a
             .iter()
