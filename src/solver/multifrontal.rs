@@ -835,7 +835,20 @@ mod tests {
         (cp, ri, v)
     }
 
-    fn check(a: &[Vec<Option<f64>>], label: &str) -> SymmetricLu {
+    /// The CSC of `a`, the dense matrix, a right-hand side and the dense elimination's
+    /// solution, determinant sign and log|det|.
+    struct Reference {
+        cp: Vec<usize>,
+        ri: Vec<usize>,
+        v: Vec<f64>,
+        full: Vec<Vec<f64>>,
+        b: Vec<f64>,
+        x: Vec<f64>,
+        sign: f64,
+        logdet: f64,
+    }
+
+    fn reference(a: &[Vec<Option<f64>>]) -> Reference {
         let n = a.len();
         let (cp, ri, v) = csc(a);
         let full: Vec<Vec<f64>> = a
@@ -843,7 +856,31 @@ mod tests {
             .map(|r| r.iter().map(|x| x.unwrap_or(0.0)).collect())
             .collect();
         let b: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).cos() + 0.1).collect();
-        let (xd, sd, ld) = dense(&full, &b);
+        let (x, sign, logdet) = dense(&full, &b);
+        Reference {
+            cp,
+            ri,
+            v,
+            full,
+            b,
+            x,
+            sign,
+            logdet,
+        }
+    }
+
+    fn check(a: &[Vec<Option<f64>>], label: &str) -> SymmetricLu {
+        let n = a.len();
+        let Reference {
+            cp,
+            ri,
+            v,
+            b,
+            x: xd,
+            sign: sd,
+            logdet: ld,
+            ..
+        } = reference(a);
         let mut lu = SymmetricLu::new(n, &cp, &ri).unwrap();
         for round in 0..2 {
             lu.factorize(&v, Par::Seq).unwrap();
@@ -925,13 +962,16 @@ mod tests {
         let side = 9;
         let n = side * side;
         let a = grid_operator(side, |_, _| 4.5, 0.5, |_, _| true);
-        let (cp, ri, v) = csc(&a);
-        let full: Vec<Vec<f64>> = a
-            .iter()
-            .map(|r| r.iter().map(|x| x.unwrap_or(0.0)).collect())
-            .collect();
-        let b: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).cos() + 0.1).collect();
-        let (xd, sd, ld) = dense(&full, &b);
+        let Reference {
+            cp,
+            ri,
+            v,
+            full,
+            b,
+            x: xd,
+            sign: sd,
+            logdet: ld,
+        } = reference(&a);
         let scale = xd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let err = |x: &[f64]| {
             x.iter()
