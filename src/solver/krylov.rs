@@ -283,6 +283,28 @@ mod tests {
             }
             y
         }
+        /// ‖(K + C) x − b‖ / ‖b‖.
+        fn rel_residual(&self, x: &[f64], b: &[f64]) -> f64 {
+            let r: Vec<f64> = self.product(x).iter().zip(b).map(|(a, b)| a - b).collect();
+            dot(&r, &r).sqrt() / dot(b, b).sqrt()
+        }
+    }
+
+    fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// The 60-unknown system, its right-hand side and the LU of its K.
+    fn setup() -> (Linear, Vec<f64>, SparseSolver) {
+        let n = 60;
+        let sys = Linear::new(n, 3.0);
+        let b: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).sin() + 0.5).collect();
+        let mut lu = SparseSolver::new(n, &sys.col_ptr, &sys.row_idx, LinearKind::Lu).unwrap();
+        lu.factorize(&sys.k).unwrap();
+        (sys, b, lu)
     }
 
     impl NonlinearSystem for Linear {
@@ -341,17 +363,10 @@ mod tests {
     /// the true one.
     #[test]
     fn fresh_factors_skip_the_assembled_product() {
-        let n = 60;
-        let mut sys = Linear::new(n, 3.0);
-        let b: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).sin() + 0.5).collect();
-        let mut lu = SparseSolver::new(n, &sys.col_ptr, &sys.row_idx, LinearKind::Lu).unwrap();
-        lu.factorize(&sys.k).unwrap();
+        let (mut sys, b, mut lu) = setup();
         let (x_fresh, st_fresh) = solve(&mut sys, &mut lu, &b, true);
         let (x_full, st_full) = solve(&mut sys, &mut lu, &b, false);
-        let res = |sys: &Linear, x: &[f64]| {
-            let r: Vec<f64> = sys.product(x).iter().zip(&b).map(|(a, b)| a - b).collect();
-            dot(&r, &r).sqrt() / dot(&b, &b).sqrt()
-        };
+        let res = |sys: &Linear, x: &[f64]| sys.rel_residual(x, &b);
         println!(
             "products: shortcut {}, full {}",
             st_fresh.iterations, st_full.iterations
@@ -360,11 +375,7 @@ mod tests {
         assert!(st_fresh.iterations > 4, "{st_fresh:?}");
         assert!(res(&sys, &x_fresh) < 1e-10 && res(&sys, &x_full) < 1e-10);
         assert!((st_fresh.rel_residual - res(&sys, &x_fresh)).abs() < 1e-12);
-        let dx = x_fresh
-            .iter()
-            .zip(&x_full)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let dx = max_diff(&x_fresh, &x_full);
         assert!(dx < 1e-9, "{dx}");
         // Factors of K + 0.5 I (lagged): the full products converge; the shortcut would
         // minimise the wrong residual, and its final report says by how much.
@@ -386,19 +397,14 @@ mod tests {
     /// product, at the solution of the double-precision factors.
     #[test]
     fn single_precision_factors_reach_double_precision_residuals() {
-        let n = 60;
-        let mut sys = Linear::new(n, 3.0);
-        let b: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).sin() + 0.5).collect();
-        let mut lu = SparseSolver::new(n, &sys.col_ptr, &sys.row_idx, LinearKind::Lu).unwrap();
-        lu.factorize(&sys.k).unwrap();
+        let (mut sys, b, mut lu) = setup();
         let (x_double, st_double) = solve(&mut sys, &mut lu, &b, true);
         lu.set_single_precision_factors(true);
         assert!(lu.single_precision_factors());
         lu.factorize(&sys.k).unwrap();
         for fresh in [true, false] {
             let (x, st) = solve(&mut sys, &mut lu, &b, fresh);
-            let r: Vec<f64> = sys.product(&x).iter().zip(&b).map(|(a, b)| a - b).collect();
-            let res = dot(&r, &r).sqrt() / dot(&b, &b).sqrt();
+            let res = sys.rel_residual(&x, &b);
             println!(
                 "single precision, shortcut {fresh}: {} products (double: {}), residual {res:e}",
                 st.iterations, st_double.iterations
@@ -406,11 +412,7 @@ mod tests {
             assert!(res < 1e-10, "{st:?}");
             assert!((st.rel_residual - res).abs() < 1e-12);
             assert!(st.iterations <= st_double.iterations + 6, "{st:?}");
-            let dx = x
-                .iter()
-                .zip(&x_double)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let dx = max_diff(&x, &x_double);
             assert!(dx < 1e-9, "{dx}");
         }
     }
