@@ -325,7 +325,8 @@ fn sigma_33_matches_the_three_dimensional_energy() {
 // run.sta
 // ---------------------------------------------------------------------------------------------
 
-/// One data line of a `run.sta`: (step, status, time, dt, newton, residual).
+/// One data line of a `run.sta`: (step, status, time, dt, newton, residual; 0 and NaN for
+/// `-`, unknown figures).
 type StaRow = (u64, String, f64, f64, usize, f64);
 
 /// Comment lines and data lines of a `run.sta`.
@@ -346,9 +347,23 @@ fn read_sta(path: &Path) -> (Vec<String>, Vec<StaRow>) {
             w[2].to_string(),
             w[3].parse().unwrap(),
             w[4].parse().unwrap(),
-            w[5].parse().unwrap(),
-            w[6].parse().unwrap(),
+            match w[5] {
+                "-" => 0,
+                n => n
+                    .parse()
+                    .unwrap_or_else(|e| panic!("newton {n:?} ({e}) in {l:?}")),
+            },
+            match w[6] {
+                "-" => f64::NAN,
+                r => r
+                    .parse()
+                    .unwrap_or_else(|e| panic!("residual {r:?} ({e}) in {l:?}")),
+            },
         ));
+        assert!(
+            !data.contains("NaN") && !data.contains("inf"),
+            "no non-finite number in {l:?}"
+        );
     }
     (comments, rows)
 }
@@ -453,6 +468,42 @@ fn run_sta_lists_time_steps_and_rejections_and_verbose_shows_step_headers() {
         headers >= rows.len(),
         "{headers} headers for {} lines",
         rows.len()
+    );
+}
+
+#[test]
+fn run_sta_cutback_lines_carry_the_attempts_newton_figures() {
+    // The free-rolling scene's time-step controller rejects its fifth step (local error above
+    // 4 × error_tol): the rejected attempt converged, so its line carries its Newton
+    // iterations and final residual, and the run total counts them.
+    let d = TestDir::new("outputs_more", "sta_cutback");
+    let out = d.join("out");
+    run_ok(
+        &scene("free_rolling.toml"),
+        &out,
+        &[r#"output.sinks=["summary","csv"]"#, "time.t_end=0.03"],
+    );
+    let (_, rows) = read_sta(&out.join("run.sta"));
+    let text = std::fs::read_to_string(out.join("run.sta")).unwrap();
+    let cut: Vec<_> = rows.iter().filter(|r| r.1 == "cutback").collect();
+    assert!(!cut.is_empty(), "a rejected step expected:\n{text}");
+    for r in &cut {
+        assert!(r.4 >= 1, "Newton iterations of the attempt: {r:?}\n{text}");
+        assert!(
+            r.5.is_finite() && r.5 < 1e-6,
+            "converged residual: {r:?}\n{text}"
+        );
+    }
+    let newton_sum: usize = rows.iter().map(|r| r.4).sum();
+    let total: usize = text
+        .lines()
+        .rfind(|l| !l.starts_with('#'))
+        .and_then(|l| l.split_whitespace().nth(9))
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("newton_total of the last line:\n{text}"));
+    assert_eq!(
+        total, newton_sum,
+        "newton_total counts every attempt:\n{text}"
     );
 }
 

@@ -10,6 +10,7 @@ import argparse
 import glob
 import os
 import random
+import re
 import resource
 import shutil
 import subprocess
@@ -52,6 +53,33 @@ def mutate_text(text, rng):
         else:
             lines[i] = lines[i][: rng.randrange(len(lines[i]) + 1)]
     return "\n".join(lines) + "\n"
+
+
+# A non-finite number as a writer prints it (Rust's `NaN`, `inf`, `-inf`; `nan`, `Infinity`), as
+# a whole token: not a part of a word such as "info" or "inflation", nor of base64 data (whose
+# alphabet adds `+`, `/` and `=`).
+NON_FINITE = re.compile(rb"(?<![A-Za-z0-9_.+/=])[-+]?(NaN|nan|inf|Infinity)(?![A-Za-z0-9_+/=])")
+TEXT_OUTPUTS = (".csv", ".json", ".vtu", ".pvd", ".sta", ".txt")
+
+
+def non_finite_outputs(out):
+    """The text output files under `out` that contain a non-finite number, with the first
+    offending line of each."""
+    hits = []
+    for root, _, files in os.walk(out):
+        for f in files:
+            if not f.endswith(TEXT_OUTPUTS):
+                continue
+            path = os.path.join(root, f)
+            with open(path, "rb") as fh:
+                data = fh.read()
+            # A VTU file's raw appended data are binary: only its XML part is text.
+            data = data.split(b"<AppendedData", 1)[0]
+            for line in data.splitlines():
+                if NON_FINITE.search(line):
+                    hits.append(f"{os.path.relpath(path, out)}: {line.strip()[:160].decode(errors='replace')}")
+                    break
+    return hits
 
 
 def limit(memory_mb):
@@ -106,8 +134,12 @@ def main():
                 kind = f"exit {p.returncode}"
         except subprocess.TimeoutExpired:
             kind, err = "hang", ""
+        if sub == "run" and kind not in ("panic", "hang") and not kind.startswith("signal"):
+            bad = non_finite_outputs(out)
+            if bad:
+                kind, err = "non-finite output", "\n".join(bad)
         counts[kind] = counts.get(kind, 0) + 1
-        if kind in ("panic", "hang") or kind.startswith("signal"):
+        if kind in ("panic", "hang", "non-finite output") or kind.startswith("signal"):
             keep = os.path.join(work, f"finding_{n}.toml")
             shutil.copy(path, keep)
             findings.append((kind, cmd[:3] + [keep] + cmd[4:], err.strip().splitlines()[-3:]))

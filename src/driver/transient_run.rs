@@ -149,12 +149,14 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let (mut t_prev, mut its_prev, mut rejections_seen) = (0.0, 0usize, 0usize);
     let on_step = |tr: &Transient, rep: &TransientReport| {
         let index = rep.steps.saturating_sub(1) as u64;
-        for (time, dt, reason) in rep.rejections.iter().skip(rejections_seen) {
+        for r in rep.rejections.iter().skip(rejections_seen) {
             recorders.step_rejected(&RejectedStep {
                 index,
-                time: *time,
-                dt: *dt,
-                reason,
+                time: r.time,
+                dt: r.dt,
+                reason: &r.reason,
+                newton_iterations: r.newton_iterations,
+                residual: r.residual,
             });
         }
         rejections_seen = rep.rejections.len();

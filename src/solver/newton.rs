@@ -170,6 +170,19 @@ pub struct Stagnation {
     pub condition: f64,
 }
 
+impl SolveError {
+    /// Newton iterations of the failed solve, when the error carries them (Newton ran out of
+    /// iterations).
+    pub fn newton_iterations(&self) -> Option<usize> {
+        match self {
+            SolveError::NotConverged { iterations, .. } => Some(*iterations),
+            SolveError::TooManyCutbacks { last, .. }
+            | SolveError::ContinuationStalled { last, .. } => last.newton_iterations(),
+            _ => None,
+        }
+    }
+}
+
 fn not_converged_text(iterations: usize, residual: f64, st: Option<&Stagnation>) -> String {
     let head = format!(
         "Newton did not converge in {iterations} iterations (relative residual {residual:.3e})"

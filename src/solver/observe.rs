@@ -37,6 +37,11 @@ pub struct RejectedStep<'a> {
     pub time: f64,
     pub dt: f64,
     pub reason: &'a str,
+    /// Newton iterations of the attempt, when known.
+    pub newton_iterations: Option<usize>,
+    /// Largest relative residual over the fields at the attempt's last Newton iteration, when
+    /// known.
+    pub residual: Option<f64>,
 }
 
 /// Receives the events of a solve of a system `S`. Every method has a default that ignores

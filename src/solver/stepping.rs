@@ -111,6 +111,10 @@ pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
                     time: target,
                     dt: target - lambda,
                     reason: &reason,
+                    newton_iterations: e.newton_iterations(),
+                    // The error's residual is relative to the physical reference, not to the
+                    // first residual.
+                    residual: None,
                 });
                 report.cutbacks += 1;
                 report.steps.push(StepRecord {

@@ -1115,8 +1115,19 @@ pub struct TransientReport {
     /// ([`SteadyMonitor::passage_mean`]).
     pub passage_mean: Option<[f64; 3]>,
     pub history: Vec<Snapshot>,
-    /// Rejected steps in order: (target time, step size, reason).
-    pub rejections: Vec<(f64, f64, String)>,
+    /// Rejected steps in order.
+    pub rejections: Vec<Rejection>,
+}
+
+/// A rejected time step: its target time and size, why it was rejected, and the Newton
+/// iterations and last residual of the attempt when known.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Rejection {
+    pub time: f64,
+    pub dt: f64,
+    pub reason: String,
+    pub newton_iterations: Option<usize>,
+    pub residual: Option<f64>,
 }
 
 /// Integrate until steady (or t_end). `on_step` is called after each accepted step.
@@ -1263,11 +1274,14 @@ pub fn integrate(
                     // Nothing was committed: only the iterate goes back.
                     tr.sys.restore_state(&saved);
                     rep.rejected += 1;
-                    rep.rejections.push((
-                        t0 + h,
-                        h,
-                        format!("local error {err:.3e} > 4 × error_tol"),
-                    ));
+                    rep.rejections.push(Rejection {
+                        time: t0 + h,
+                        dt: h,
+                        reason: format!("local error {err:.3e} > 4 × error_tol"),
+                        newton_iterations: Some(its),
+                        residual: Some(crate::solver::stepping::final_residual(&tr.last_table))
+                            .filter(|r| r.is_finite()),
+                    });
                     dt = (h * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.2, 0.9))
                         .max(opts.dt_min);
                     continue;
@@ -1339,7 +1353,13 @@ pub fn integrate(
             Err(e) => {
                 tr.sys.restore_state(&saved);
                 rep.rejected += 1;
-                rep.rejections.push((t0 + h, h, e.to_string()));
+                rep.rejections.push(Rejection {
+                    time: t0 + h,
+                    dt: h,
+                    reason: e.to_string(),
+                    newton_iterations: e.newton_iterations(),
+                    residual: None,
+                });
                 dt = h;
                 if dt <= opts.dt_min * (1.0 + 1e-12)
                     || matches!(tr.scheme, Scheme::CentralDifference)

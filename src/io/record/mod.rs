@@ -52,7 +52,9 @@
 //!             }
 //!             Err(e) => {
 //!                 let reason = e.to_string();
-//!                 rec.step_rejected(&RejectedStep { index, time: t + dt, dt, reason: &reason });
+//!                 rec.step_rejected(&RejectedStep { index, time: t + dt, dt, reason: &reason,
+//!                                                   newton_iterations: e.newton_iterations(),
+//!                                                   residual: None });
 //!                 // … cut dt and retry
 //!             }
 //!         }

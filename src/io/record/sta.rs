@@ -12,11 +12,11 @@
 //! | `status` | `accepted`, or `cutback` (the attempt failed and is retried with a smaller increment) |
 //! | `time` | simulated time (s, or the scene's time unit) in a transient; the load factor λ (dimensionless) in load stepping; the continuation parameter in a continuation |
 //! | `dt` | increment of `time` of the attempt |
-//! | `newton` | Newton iterations of the attempt |
-//! | `residual` | largest relative residual ‖R_f‖/‖R_f⁰‖ over the fields at the last Newton iteration (dimensionless; `NaN` when unknown) |
+//! | `newton` | Newton iterations of the attempt (`-` when unknown: a cut-back attempt whose solver failed before reporting them) |
+//! | `residual` | largest relative residual ‖R_f‖/‖R_f⁰‖ over the fields at the last Newton iteration (dimensionless; `-` when unknown) |
 //! | `cutbacks` | cut-backs of this step so far (`attempt − 1`) |
 //! | `rejected` | rejected attempts of the whole run so far |
-//! | `newton_total` | Newton iterations of the whole run so far |
+//! | `newton_total` | Newton iterations of the whole run so far, those of rejected attempts included |
 //!
 //! A `cutback` line ends with `# reason`. Numbers are written so they read back exactly.
 
@@ -48,8 +48,9 @@ pub struct StaSink {
     path: PathBuf,
     file: Option<std::fs::File>,
     error: Option<RecordError>,
-    /// Newton iterations and last residual seen for the attempt in progress.
-    iterations: usize,
+    /// Newton iterations (None: none reported yet) and last residual seen for the attempt in
+    /// progress.
+    iterations: Option<usize>,
     residual: f64,
     /// Cut-backs of the step in progress.
     cutbacks: usize,
@@ -64,7 +65,7 @@ impl StaSink {
             path: dir.join(FILE_NAME),
             file: None,
             error: None,
-            iterations: 0,
+            iterations: None,
             residual: f64::NAN,
             cutbacks: 0,
             rejected: 0,
@@ -89,7 +90,7 @@ impl StaSink {
         status: &str,
         time: f64,
         dt: f64,
-        newton: usize,
+        newton: Option<usize>,
         residual: f64,
     ) -> String {
         format!(
@@ -99,8 +100,13 @@ impl StaSink {
             status,
             fmt_num(time),
             fmt_num(dt),
-            newton,
-            fmt_num(residual),
+            // Unknown figures are `-`, never NaN.
+            newton.map_or_else(|| "-".to_string(), |n| n.to_string()),
+            if residual.is_finite() {
+                fmt_num(residual)
+            } else {
+                "-".to_string()
+            },
             self.cutbacks,
             self.rejected,
             self.newton_total
@@ -146,13 +152,21 @@ impl Recorder for StaSink {
     }
 
     fn newton_iteration(&mut self, it: &NewtonIteration) {
-        self.iterations = self.iterations.max(it.iteration);
+        self.iterations = Some(self.iterations.unwrap_or(0).max(it.iteration));
         self.residual = it.residual_rel.iter().copied().fold(f64::NAN, f64::max);
     }
 
     fn step_rejected(&mut self, s: &RejectedStep) {
+        // The attempt's own figures where the solver reports them, else those of its Newton
+        // iterations seen so far.
+        if s.newton_iterations.is_some() {
+            self.iterations = s.newton_iterations;
+        }
+        if let Some(r) = s.residual {
+            self.residual = r;
+        }
         self.rejected += 1;
-        self.newton_total += self.iterations;
+        self.newton_total += self.iterations.unwrap_or(0);
         let reason = s.reason.replace('\n', " ");
         let text = format!(
             "{}  # {reason}\n",
@@ -167,7 +181,7 @@ impl Recorder for StaSink {
         );
         self.write(&text);
         self.cutbacks += 1;
-        self.iterations = 0;
+        self.iterations = None;
         self.residual = f64::NAN;
     }
 
@@ -175,7 +189,7 @@ impl Recorder for StaSink {
         let newton = if info.newton_iterations > 0 {
             info.newton_iterations
         } else {
-            self.iterations
+            self.iterations.unwrap_or(0)
         };
         let residual = if info.residual > 0.0 || self.residual.is_nan() {
             info.residual
@@ -185,11 +199,18 @@ impl Recorder for StaSink {
         self.newton_total += newton;
         let text = format!(
             "{}\n",
-            self.line(info.index, "accepted", info.time, info.dt, newton, residual)
+            self.line(
+                info.index,
+                "accepted",
+                info.time,
+                info.dt,
+                Some(newton),
+                residual
+            )
         );
         self.write(&text);
         self.cutbacks = 0;
-        self.iterations = 0;
+        self.iterations = None;
         self.residual = f64::NAN;
     }
 
@@ -210,5 +231,85 @@ impl Recorder for StaSink {
         self.write(&text);
         self.file = None;
         self.error.take().into_iter().collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rejected(newton_iterations: Option<usize>, residual: Option<f64>) -> RejectedStep<'static> {
+        RejectedStep {
+            index: 0,
+            time: 0.5,
+            dt: 0.5,
+            reason: "test",
+            newton_iterations,
+            residual,
+        }
+    }
+
+    #[test]
+    fn unknown_figures_are_dashes_and_known_ones_are_counted() {
+        let dir = std::env::temp_dir().join(format!("tread-sta-unit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut sink = StaSink::new(&dir);
+        sink.run_started(&RunMeta {
+            scene_name: "unit",
+            mode: "static",
+            scene_toml: "",
+            version: "0",
+            features: "",
+            mesh: None,
+            time_name: "load_factor",
+            time_end: 1.0,
+            revolution_period: None,
+        });
+        // A solver failure that reports nothing, then one that reports its figures, then the
+        // accepted attempt.
+        sink.step_rejected(&rejected(None, None));
+        sink.step_rejected(&rejected(Some(7), Some(2.5e-3)));
+        sink.step(
+            &StepInfo {
+                index: 0,
+                time: 0.25,
+                dt: 0.25,
+                newton_iterations: 3,
+                residual: 1e-11,
+                is_final: true,
+            },
+            None,
+        );
+        let errors = sink.run_finished(&RunEnd {
+            converged: true,
+            interrupted: false,
+            error: None,
+            steps: 1,
+            wall_time_s: 0.0,
+            summary: None,
+        });
+        assert!(errors.is_empty());
+        let text = std::fs::read_to_string(dir.join(FILE_NAME)).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let rows: Vec<Vec<&str>> = text
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(|l| l.split('#').next().unwrap().split_whitespace().collect())
+            .collect();
+        assert_eq!(rows.len(), 3, "{text}");
+        assert!(!text.contains("NaN") && !text.contains("inf"), "{text}");
+        // step attempt status time dt newton residual cutbacks rejected newton_total
+        assert_eq!(
+            rows[0][1..],
+            ["1", "cutback", "0.5", "0.5", "-", "-", "0", "1", "0"]
+        );
+        assert_eq!(
+            rows[1][1..],
+            ["2", "cutback", "0.5", "0.5", "7", "0.0025", "1", "2", "7"]
+        );
+        assert_eq!(
+            rows[2][1..],
+            ["3", "accepted", "0.25", "0.25", "3", "1e-11", "2", "2", "10"]
+        );
     }
 }
