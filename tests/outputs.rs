@@ -329,6 +329,40 @@ fn terminal_shows_no_internal_values() {
 }
 
 #[test]
+fn a_step_budget_short_of_t_end_is_warned_before_the_run() {
+    // 3 adaptive steps of at most 10 × 1e-4 s reach 3e-3 s < t_end = 3 s: the run warns up
+    // front, stops at max_steps, and the summary keeps the warning.
+    let d = TestDir::new("outputs", "step_budget");
+    let out = d.join("out");
+    let o = run_ok(
+        &scene("free_rolling.toml"),
+        &out,
+        &[SINKS, "time.dt=1e-4", "time.max_steps=3"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    let needle = "time.max_steps = 3 steps of at most time.dt_max";
+    assert!(err.contains(needle), "{err}");
+    assert!(
+        err.contains("reach t = 0.003 s, short of time.t_end = 3 s"),
+        "{err}"
+    );
+    let s = summary(&out);
+    let w = s["warnings"].as_array().expect("warnings");
+    assert!(
+        w.iter().any(|w| w.as_str().unwrap().contains(needle)),
+        "{w:?}"
+    );
+    // A budget that reaches t_end: no such warning.
+    let out2 = d.join("out2");
+    let o = run_ok(
+        &scene("free_rolling.toml"),
+        &out2,
+        &[SINKS, "time.t_end=0.002"],
+    );
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("short of time.t_end"));
+}
+
+#[test]
 fn error_messages_print_numbers_briefly() {
     let d = TestDir::new("outputs", "long_numbers");
     let o = run(

@@ -32,13 +32,13 @@ use super::results::{
 use super::system::SolidSystem;
 use super::tables;
 use super::transient::ode_first_order::OdeTolerances;
-use super::transient::{Kinematics, Ramp, Setup, TimeOptions, Transient, TransientReport};
+use super::transient::{Kinematics, Ramp, Scheme, Setup, TimeOptions, Transient, TransientReport};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::{
     self, Energy, HubLoads, Recorder, RejectedStep, SteadyReached, StepInfo, StepView,
 };
-use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink};
+use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink, TimeSpec};
 use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
 use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
@@ -144,7 +144,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         time_name: "time",
         time_end: time_opts.t_end,
     };
-    let mut env = RunEnvelope::open(scene, opts, clock, Vec::new())?;
+    let mut env = RunEnvelope::open(scene, opts, clock, reach_warning(ts, &scheme))?;
     let recorders = &mut env.recorders;
     let (mut t_prev, mut its_prev, mut rejections_seen) = (0.0, 0usize, 0usize);
     let on_step = |tr: &Transient, rep: &TransientReport| {
@@ -317,6 +317,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     for w in &warnings {
         eprintln!("tread: warning: {w}");
     }
+    // The summary keeps those printed at the start too (the run's and the recorders').
+    let warnings: Vec<String> = env.warnings.iter().cloned().chain(warnings).collect();
     let typed = Summary::new(
         &scene.scene.name,
         scene.analysis.mode.to_string(),
@@ -496,4 +498,34 @@ pub fn kinematics(scene: &Scene) -> Kinematics {
             time: road.map_or(scene.motion.ramp, |r| r.resolved_v0_ramp(&scene.motion)),
         },
     }
+}
+
+/// A warning when `[time] max_steps` steps of the largest size the integrator takes (`dt_max`
+/// with adaptive generalized-α steps, else `dt`) cannot reach `t_end`: the run would stop at
+/// `max_steps` short of its end time unless it turns steady first.
+fn reach_warning(ts: &TimeSpec, scheme: &Scheme) -> Vec<String> {
+    if !ts.integrator.bounded_step() {
+        return Vec::new();
+    }
+    let adaptive = ts.adaptive && matches!(scheme, Scheme::GeneralizedAlpha(_));
+    let (h, key) = match (adaptive, ts.dt_max) {
+        (true, Some(h)) => (h, "time.dt_max"),
+        (true, None) => (
+            ts.resolved_dt_max(),
+            "time.dt_max (10 × time.dt unless given)",
+        ),
+        (false, _) => (ts.dt, "time.dt"),
+    };
+    let reach = h * ts.max_steps as f64;
+    if reach >= ts.t_end {
+        return Vec::new();
+    }
+    vec![format!(
+        "time.max_steps = {} steps of at most {key} = {} s reach t = {} s, short of time.t_end = \
+         {} s: the run stops at max_steps unless it is steady before (raise the step or time.max_steps)",
+        ts.max_steps,
+        crate::io::output::fmt_num(h),
+        crate::io::output::fmt_num(reach),
+        crate::io::output::fmt_num(ts.t_end),
+    )]
 }

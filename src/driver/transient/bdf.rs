@@ -15,6 +15,7 @@ impl IntegratorSpec for Bdf {
         "Variable-order BDF on the first-order form `y = (u, v)` (diffsol), \
         with its own error control.";
     const HISTORY: bool = true;
+    const BOUNDED_STEP: bool = false;
 
     fn integrate(
         tr: &mut Transient,

@@ -32,6 +32,9 @@ pub trait IntegratorSpec {
     /// Smallest admissible `[time] rho_inf` (the spectral radius at infinity, at most 1; read
     /// only by the integrators that have one).
     const RHO_INF_MIN: f64 = 0.0;
+    /// Its steps never exceed `[time] dt_max` (adaptive steps) or `dt` (fixed steps); false
+    /// for an integrator that chooses its own steps without a maximum.
+    const BOUNDED_STEP: bool = true;
 
     /// The one-step scheme the [`Transient`] model is built with (its Newton system). By
     /// default generalized-α with `rho_inf`, which an integrator with its own loop (BDF, SDIRK)
