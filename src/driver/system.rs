@@ -86,8 +86,8 @@ pub struct SteadyViscosity {
     /// Per cell, its own θ-derivative at its nodes (N × N row-major) at `local_off[c]`.
     local: Vec<f64>,
     local_off: Vec<usize>,
-    /// Per cell, ∂r_c/∂v_c (2N × 2N row-major) at `av_off[c]`, from the last evaluation with
-    /// the matrix.
+    /// Per cell, ∂r_c/∂v_c (2N × 2N, symmetric: the upper triangle row by row, see
+    /// [`packed_at`]) at `av_off[c]`, from the last evaluation with the matrix.
     av: Vec<f64>,
     av_off: Vec<usize>,
     /// Nodal velocities of the current evaluation (full length; reused, not reallocated).
@@ -341,7 +341,7 @@ impl SolidSystem {
             local.extend_from_slice(&d);
             local_off.push(local.len());
             let nu = 2 * mesh.cell_nodes(c).len();
-            av_off.push(av_off[c] + nu * nu);
+            av_off.push(av_off[c] + nu * (nu + 1) / 2);
         }
         let n_full = self.x.len();
         self.steady_visc = Some(SteadyViscosity {
@@ -507,7 +507,7 @@ impl SolidSystem {
                     }
                     for r in 0..nu {
                         for comp in 0..2 {
-                            let arm = a[r * nu + 2 * m + comp];
+                            let arm = a[packed_at(nu, r, 2 * m + comp)];
                             if arm == 0.0 {
                                 continue;
                             }
@@ -601,9 +601,16 @@ impl SolidSystem {
                     Some((av, av_off)) if with_matrix => {
                         let mut a = [0.0; 324];
                         cells.eval(c, loc, true, Some(&mut a));
-                        for (i, v) in a[..av_off[c + 1] - av_off[c]].iter().enumerate() {
-                            // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
-                            unsafe { av.set(av_off[c] + i, *v) };
+                        // ∂r/∂v of the damping is symmetric (∂P/∂∇v has the major
+                        // symmetry): its upper triangle is kept.
+                        let nu = 2 * model.mesh.cell_nodes(c).len();
+                        let mut i = av_off[c];
+                        for r in 0..nu {
+                            for v in &a[r * nu + r..(r + 1) * nu] {
+                                // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
+                                unsafe { av.set(i, *v) };
+                                i += 1;
+                            }
                         }
                     }
                     _ => cells.eval(c, loc, with_matrix, None),
@@ -692,12 +699,26 @@ impl SolidSystem {
                     diff[2 * m + i] = sv.dv[cd[2 * m + i] as usize] - alpha * om * loc;
                 }
             }
+            // y = A diff from the upper triangle of the symmetric A.
+            let mut y = [0.0; 18];
+            let mut k = 0;
             for r in 0..nu {
+                let (row, dr) = (&a[k..k + nu - r], diff[r]);
+                let mut yr = row[0] * dr;
+                for ((&ars, ys), &ds) in
+                    row[1..].iter().zip(&mut y[r + 1..nu]).zip(&diff[r + 1..nu])
+                {
+                    yr += ars * ds;
+                    *ys += ars * dr;
+                }
+                y[r] += yr;
+                k += nu - r;
+            }
+            for (r, &y) in y[..nu].iter().enumerate() {
                 let e = self.dofs.eq[cd[r] as usize];
                 if e == FIXED {
                     continue;
                 }
-                let y: f64 = (0..nu).map(|s| a[r * nu + s] * diff[s]).sum();
                 if e < CONSTRAINED {
                     out[e as usize] += y;
                 } else {
@@ -1030,5 +1051,33 @@ impl LoadedSystem for SolidSystem {
         self.lambda_prev = self.lambda;
         self.x_step_start.clone_from(&self.x_prev);
         self.x_prev.copy_from_slice(&self.x);
+    }
+}
+
+/// Index of entry (r, c) of a symmetric n × n matrix kept as its upper triangle, row by row
+/// (row r holds columns r..n, after Σ_{i<r} (n − i) = r n − r (r − 1)/2 entries).
+#[inline]
+fn packed_at(n: usize, r: usize, c: usize) -> usize {
+    let (r, c) = if r <= c { (r, c) } else { (c, r) };
+    r * n - r * r.saturating_sub(1) / 2 + (c - r)
+}
+
+#[cfg(test)]
+mod packed_tests {
+    use super::packed_at;
+
+    #[test]
+    fn packed_upper_triangle_indices_run_row_by_row() {
+        for n in [1, 2, 5, 18] {
+            let mut k = 0;
+            for r in 0..n {
+                for c in r..n {
+                    assert_eq!(packed_at(n, r, c), k, "n {n}, ({r}, {c})");
+                    assert_eq!(packed_at(n, c, r), k, "n {n}, ({c}, {r})");
+                    k += 1;
+                }
+            }
+            assert_eq!(k, n * (n + 1) / 2);
+        }
     }
 }
