@@ -4,6 +4,7 @@ a signal, or a run past the time limit (a hang) is a finding; every finding is p
 its command line and the run exits 1.
 
 Usage: fuzz.py [--tread PATH] [--seconds N] [--cases N] [--timeout S] [--memory MB] [--seed N]
+       fuzz.py --shipped [--tread PATH] [--timeout S]   (every shipped scene once, as it is)
 The smoke run in CI: fuzz.py --cases 25.
 """
 import argparse
@@ -89,6 +90,31 @@ def limit(memory_mb):
     return f
 
 
+def shipped(a):
+    """Run each scene under scenarios/ once with its own settings; a panic, a death by a
+    signal, a hang or a non-finite text output is a finding. Returns the exit status."""
+    scenes = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.toml")))
+    work = tempfile.mkdtemp(prefix="tread-shipped-")
+    findings = 0
+    for sc in scenes:
+        out = os.path.join(work, os.path.basename(sc)[:-5])
+        try:
+            p = subprocess.run([a.tread, "-q", "run", sc, "--out", out], capture_output=True,
+                               timeout=a.timeout, env=dict(os.environ, RAYON_NUM_THREADS="1"))
+            err = p.stderr.decode(errors="replace")
+            kind = ("panic" if "panicked" in err or p.returncode == 101
+                    else f"signal {-p.returncode}" if p.returncode < 0 else f"exit {p.returncode}")
+        except subprocess.TimeoutExpired:
+            kind = "hang"
+        bad = non_finite_outputs(out)
+        finding = kind in ("panic", "hang") or kind.startswith("signal") or bool(bad)
+        findings += finding
+        print(f"shipped: {os.path.basename(sc)}: {kind}{'; non-finite: ' + bad[0] if bad else ''}"
+              f"{'  FINDING' if finding else ''}", flush=True)
+    shutil.rmtree(work, ignore_errors=True)
+    return 1 if findings else 0
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--tread", default="target/release/tread")
@@ -97,7 +123,11 @@ def main():
     ap.add_argument("--timeout", type=float, default=60)
     ap.add_argument("--memory", type=int, default=4096, help="address-space limit, MB")
     ap.add_argument("--seed", type=int, default=None)
+    ap.add_argument("--shipped", action="store_true",
+                    help="run every shipped scene once, unmutated, and check it the same way")
     a = ap.parse_args()
+    if a.shipped:
+        sys.exit(shipped(a))
     seed = a.seed if a.seed is not None else int(time.time())
     rng = random.Random(seed)
     scenes = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.toml")))
