@@ -1,7 +1,8 @@
 """Fuzz the tread command line: mutate the shipped scenes and `--set` values and run them with
 bounded time and memory. A panic ("panicked", exit status 101), an abort or any other death by
-a signal, or a run past the time limit (a hang) is a finding; every finding is printed with
-its command line and the run exits 1.
+a signal, a run past the time limit (a hang), or a non-finite number (NaN, inf) in a text
+output file (CSV, JSON, the XML of a VTU, PVD, run.sta) is a finding; every finding is printed
+with its command line and the run exits 1.
 
 Usage: fuzz.py [--tread PATH] [--seconds N] [--cases N] [--timeout S] [--memory MB] [--seed N]
        fuzz.py --shipped [--tread PATH] [--timeout S]   (every shipped scene once, as it is)

@@ -69,13 +69,14 @@ macro_rules! integrators {
                 }
             }
 
-            /// See [`IntegratorSpec::RHO_INF_MIN`].
+            /// See [`IntegratorSpec::BOUNDED_STEP`].
             pub fn bounded_step(self) -> bool {
                 match self {
                     $(IntegratorName::$spec => <super::$file::$spec as IntegratorSpec>::BOUNDED_STEP,)+
                 }
             }
 
+            /// See [`IntegratorSpec::RHO_INF_MIN`].
             pub fn rho_inf_min(self) -> f64 {
                 match self {
                     $(IntegratorName::$spec => <super::$file::$spec as IntegratorSpec>::RHO_INF_MIN,)+
