@@ -91,24 +91,39 @@ def limit(memory_mb):
     return f
 
 
+SCENES_GLOB = os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.toml")
+
+
+def run_case(cmd, timeout, preexec_fn=None):
+    """Run one tread command with one rayon thread: (kind, stderr), kind being "panic", "hang",
+    "signal N" or "exit N"."""
+    try:
+        p = subprocess.run(cmd, capture_output=True, timeout=timeout, preexec_fn=preexec_fn,
+                           env=dict(os.environ, RAYON_NUM_THREADS="1"))
+    except subprocess.TimeoutExpired:
+        return "hang", ""
+    err = p.stderr.decode(errors="replace")
+    if "panicked" in err or p.returncode == 101:
+        return "panic", err
+    if p.returncode < 0:
+        return f"signal {-p.returncode}", err
+    return f"exit {p.returncode}", err
+
+
+def is_finding(kind):
+    return kind in ("panic", "hang", "non-finite output") or kind.startswith("signal")
+
+
 def shipped(a):
     """Run each scene under scenarios/ once with its own settings; a panic, a death by a
     signal, a hang or a non-finite text output is a finding. Returns the exit status."""
-    scenes = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.toml")))
     work = tempfile.mkdtemp(prefix="tread-shipped-")
     findings = 0
-    for sc in scenes:
+    for sc in sorted(glob.glob(SCENES_GLOB)):
         out = os.path.join(work, os.path.basename(sc)[:-5])
-        try:
-            p = subprocess.run([a.tread, "-q", "run", sc, "--out", out], capture_output=True,
-                               timeout=a.timeout, env=dict(os.environ, RAYON_NUM_THREADS="1"))
-            err = p.stderr.decode(errors="replace")
-            kind = ("panic" if "panicked" in err or p.returncode == 101
-                    else f"signal {-p.returncode}" if p.returncode < 0 else f"exit {p.returncode}")
-        except subprocess.TimeoutExpired:
-            kind = "hang"
+        kind, _ = run_case([a.tread, "-q", "run", sc, "--out", out], a.timeout)
         bad = non_finite_outputs(out)
-        finding = kind in ("panic", "hang") or kind.startswith("signal") or bool(bad)
+        finding = is_finding(kind) or bool(bad)
         findings += finding
         print(f"shipped: {os.path.basename(sc)}: {kind}{'; non-finite: ' + bad[0] if bad else ''}"
               f"{'  FINDING' if finding else ''}", flush=True)
@@ -131,7 +146,7 @@ def main():
         sys.exit(shipped(a))
     seed = a.seed if a.seed is not None else int(time.time())
     rng = random.Random(seed)
-    scenes = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "..", "scenarios", "*.toml")))
+    scenes = sorted(glob.glob(SCENES_GLOB))
     work = tempfile.mkdtemp(prefix="tread-fuzz-")
     findings, counts, n, t0 = [], {}, 0, time.time()
     print(f"fuzz: seed {seed}, {len(scenes)} scenes, timeout {a.timeout} s, memory {a.memory} MB")
@@ -153,24 +168,13 @@ def main():
         cmd = [a.tread, "-q", sub, path] + base + sets
         if sub == "run":
             cmd += ["--out", out, "--max-memory", f"{a.memory // 2}M"]
-        try:
-            p = subprocess.run(cmd, capture_output=True, timeout=a.timeout,
-                               preexec_fn=limit(a.memory), env=dict(os.environ, RAYON_NUM_THREADS="1"))
-            err = p.stderr.decode(errors="replace")
-            if "panicked" in err or p.returncode == 101:
-                kind = "panic"
-            elif p.returncode < 0:
-                kind = f"signal {-p.returncode}"
-            else:
-                kind = f"exit {p.returncode}"
-        except subprocess.TimeoutExpired:
-            kind, err = "hang", ""
-        if sub == "run" and kind not in ("panic", "hang") and not kind.startswith("signal"):
+        kind, err = run_case(cmd, a.timeout, limit(a.memory))
+        if sub == "run" and not is_finding(kind):
             bad = non_finite_outputs(out)
             if bad:
                 kind, err = "non-finite output", "\n".join(bad)
         counts[kind] = counts.get(kind, 0) + 1
-        if kind in ("panic", "hang", "non-finite output") or kind.startswith("signal"):
+        if is_finding(kind):
             keep = os.path.join(work, f"finding_{n}.toml")
             shutil.copy(path, keep)
             findings.append((kind, cmd[:3] + [keep] + cmd[4:], err.strip().splitlines()[-3:]))
