@@ -274,7 +274,9 @@ every = {every}
             residual: 0.0,
             is_final: k + 1 == steps,
         };
-        let frame = rec.wants_view(&info).then(|| SolidFrame::capture(&sys));
+        let frame = rec
+            .wants_view(&info)
+            .then(|| SolidFrame::capture(&sys, rec.wants_fields(&info)));
         let scalars = [("angle", omega * t)];
         rec.step(
             &info,
@@ -299,7 +301,7 @@ every = {every}
             measures: &measures,
         });
     }
-    let frame = SolidFrame::capture(&sys);
+    let frame = SolidFrame::capture(&sys, true);
     rec.steady_reached(
         &SteadyReached {
             time: dt * steps as f64,
@@ -475,7 +477,7 @@ fn unfinished_and_truncated_mcap_read_up_to_the_last_chunk() {
         time_end: 1.0,
         revolution_period: None,
     });
-    let frame = SolidFrame::capture(&sys);
+    let frame = SolidFrame::capture(&sys, true);
     let n = 12u64;
     for k in 0..n {
         let info = StepInfo {

@@ -681,7 +681,7 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
 
 /// The VTU of one solved mesh, with the cells' error indicators.
 pub fn write_vtu(dir: &Path, step: usize, sys: &SolidSystem) -> Result<(), OutputError> {
-    let frame = super::frame::SolidFrame::capture(sys);
+    let frame = super::frame::SolidFrame::capture(sys, true);
     let view = frame.view(sys, &[]);
     let path = dir.join(format!("adapt_{step:03}.vtu"));
     std::fs::write(

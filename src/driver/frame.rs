@@ -42,7 +42,7 @@ impl SolidSystem {
     /// recorder wants one.
     pub fn record_step<R: Recorder + ?Sized>(&self, info: &StepInfo, rec: &mut R) {
         if rec.wants_view(info) {
-            let frame = SolidFrame::capture(self);
+            let frame = SolidFrame::capture(self, rec.wants_fields(info));
             rec.step(info, Some(&frame.view(self, &[])));
         } else {
             rec.step(info, None);
@@ -72,18 +72,25 @@ impl<R: Recorder + ?Sized> StepObserver<SolidSystem> for R {
 }
 
 impl SolidFrame {
-    pub fn capture(sys: &SolidSystem) -> Self {
+    /// The frame of the current state; with `fields`, also the recovered stress and the error
+    /// indicator (two patch recoveries; empty otherwise).
+    pub fn capture(sys: &SolidSystem, fields: bool) -> Self {
         let (f, m) = sys.hub_reaction();
         let ns = nodal_stress_full_at(sys, &sys.x);
+        let (stress_recovered, error_indicator) = if fields {
+            (
+                crate::physics::recovery::recover_cauchy(&sys.model, &sys.dofs, &sys.x),
+                crate::physics::estimate::recovery(&sys.model, &sys.dofs, &sys.x).indicators,
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         Self {
             stress: ns.in_plane,
             sigma_33: ns.sigma_33,
             pressure: ns.pressure,
-            stress_recovered: crate::physics::recovery::recover_cauchy(
-                &sys.model, &sys.dofs, &sys.x,
-            ),
-            error_indicator: crate::physics::estimate::recovery(&sys.model, &sys.dofs, &sys.x)
-                .indicators,
+            stress_recovered,
+            error_indicator,
             contact: sys.contact_samples(),
             hub: HubLoads {
                 force: [f[0], f[1]],

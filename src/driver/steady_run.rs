@@ -1046,7 +1046,7 @@ pub fn run_with_dump(
                 let on_point = &mut |s: &SteadyRolling, p: &BranchPoint| {
                     let row = branch_row(s, p);
                     if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
-                        let frame = SolidFrame::capture(&s.sys);
+                        let frame = SolidFrame::capture(&s.sys, false);
                         sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
                     }
                     arc += p.ds.abs() * f64::from(p.step > 0);

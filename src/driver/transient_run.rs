@@ -186,10 +186,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
         let snap = tr.snapshot();
         let ns = nodal_stress_full_at(&tr.sys, &tr.state.u);
-        let recovered =
-            crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.state.u);
-        let indicator =
-            crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.state.u).indicators;
+        let (recovered, indicator) = if recorders.wants_fields(&info) {
+            (
+                crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.state.u),
+                crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.state.u)
+                    .indicators,
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let contact = tr.contact_samples(&tr.state.u, &tr.state.v);
         let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
         let view = StepView {

@@ -25,7 +25,8 @@
 //! quadratic fit would add an O(h³) truncation error of its own, which dominates at the boundary
 //! nodes where the patch polynomial is extrapolated. Complete polynomials are invariant under
 //! rotations of the mesh. The normal equations are 10 × 10 (fixed-size, no allocation, solved
-//! by a singular value decomposition); a patch whose samples cannot determine the polynomial
+//! by a Cholesky factorization; a singular value decomposition decides the rare patch whose rank
+//! the factorization leaves open); a patch whose samples cannot determine the polynomial
 //! (too few samples, samples on too few lines: smallest singular value below 1e-12 of the
 //! largest diagonal entry) is fitted with the next lower complete degree (P2, P1, P0).
 //!
@@ -251,23 +252,55 @@ fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly
         }
         // The padding adds unit singular values; the samples' scaled monomials are at most 1,
         // so the active block's largest entry is at most n: relative rank test against it.
-        let svd = ak.svd(true, true);
         let amax = (0..MAX_TERMS)
             .filter(|&i| on(i))
             .map(|i| a[(i, i)])
             .fold(0.0, f64::max);
-        if svd.singular_values.min().partial_cmp(&(1e-12 * amax))
-            != Some(std::cmp::Ordering::Greater)
-        {
-            continue;
-        }
-        if let Ok(coef) = svd.solve(&bk, 0.0) {
+        if let Some(coef) = fit_solve(ak, &bk, 1e-12 * amax) {
             if coef.iter().all(|v| v.is_finite()) {
                 return Some(Poly { z, h, coef });
             }
         }
     }
     None
+}
+
+/// Solve the symmetric positive semi-definite normal equations `a c = b`; `None` when they are
+/// singular: smallest eigenvalue (= singular value) of `a` at most `threshold`, the polynomial
+/// not determined by the samples. Most patches
+/// are decided by a Cholesky factorization alone: for symmetric positive definite `a` of order
+/// m the smallest eigenvalue λ lies in [1/tr(a⁻¹), m/tr(a⁻¹)], so `a` is regular when
+/// 1/tr(a⁻¹) exceeds the threshold and singular when m/tr(a⁻¹) does not. A matrix in between,
+/// or one the factorization refuses, is decided and solved by its symmetric eigendecomposition.
+/// (Not by nalgebra's singular value decomposition: on some well-conditioned 10 × 10 normal
+/// matrices its factors do not reproduce the matrix, U Σ Vᵀ off by 5e-3 at a condition number
+/// of 2e3, and the fit with them is wrong by as much.)
+fn fit_solve(a: Normal, b: &Rhs, threshold: f64) -> Option<Rhs> {
+    if let Some(chol) = a.cholesky() {
+        // tr(a⁻¹) = ‖L⁻¹‖_F² (a = L Lᵀ): one triangular solve instead of the inverse.
+        let trace_inv = chol
+            .l_dirty()
+            .solve_lower_triangular(&Normal::identity())
+            .map_or(f64::NAN, |li| li.norm_squared());
+        if trace_inv.is_finite() && trace_inv > 0.0 {
+            if 1.0 / trace_inv > threshold {
+                return Some(chol.solve(b));
+            }
+            if MAX_TERMS as f64 / trace_inv <= threshold {
+                return None;
+            }
+        }
+    }
+    let eig = a.symmetric_eigen();
+    if eig.eigenvalues.min().partial_cmp(&threshold) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let q = &eig.eigenvectors;
+    let mut qtb = q.transpose() * b;
+    for (i, &l) in eig.eigenvalues.iter().enumerate() {
+        qtb.row_mut(i).scale_mut(1.0 / l);
+    }
+    Some(q * qtb)
 }
 
 /// Nodal values of SPR from the stress samples of every cell (`samples[c]`, at reference
@@ -430,4 +463,130 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Normal equations of the complete cubic (padded as in [`fit`]) on `pts` (scaled to the
+    /// unit disc), with the right-hand side of a smooth field, and the rank threshold.
+    fn normal(pts: &[Vec2], mask: u16) -> (Normal, Rhs, f64) {
+        let mut a = Normal::zeros();
+        let mut b = Rhs::zeros();
+        for x in pts {
+            let phi = monomials(x);
+            a += phi * phi.transpose();
+            let s = [x[0].sin(), x[1].exp(), x[0] * x[1], 1.0 + x[0] * x[0]];
+            b += phi * SMatrix::<f64, 1, 4>::from_row_slice(&s);
+        }
+        let on = |i: usize| mask & (1 << i) != 0;
+        let amax = (0..MAX_TERMS)
+            .filter(|&i| on(i))
+            .map(|i| a[(i, i)])
+            .fold(0.0, f64::max);
+        for i in (0..MAX_TERMS).filter(|&i| !on(i)) {
+            for j in 0..MAX_TERMS {
+                a[(i, j)] = 0.0;
+                a[(j, i)] = 0.0;
+            }
+            a[(i, i)] = 1.0;
+            for j in 0..4 {
+                b[(i, j)] = 0.0;
+            }
+        }
+        (a, b, 1e-12 * amax)
+    }
+
+    /// Random patches, some degenerate (points on one or two lines, or within 1e-7 of a line):
+    /// the verdict is the eigenvalues' (smallest one above the threshold or not), and a solved
+    /// fit satisfies its normal equations to round-off (backward stable).
+    #[test]
+    fn fits_are_decided_by_the_smallest_eigenvalue_and_solve_their_equations() {
+        // A small linear congruential generator: reproducible points without a dependency.
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let (mut solved, mut singular) = (0, 0);
+        for case in 0..600 {
+            let n = 1 + case % 17;
+            let mut pts: Vec<Vec2> = (0..n).map(|_| Vec2::new(next(), next())).collect();
+            match case % 5 {
+                1 => pts.iter_mut().for_each(|p| p[1] = 0.3 * p[0] - 0.1),
+                2 => pts
+                    .iter_mut()
+                    .enumerate()
+                    .for_each(|(i, p)| p[1] = if i % 2 == 0 { 0.5 } else { -0.2 }),
+                3 => pts.iter_mut().for_each(|p| p[1] = 0.3 * p[0] + 1e-7 * p[1]),
+                _ => {}
+            }
+            for &mask in masks(2) {
+                let (a, b, thr) = normal(&pts, mask);
+                let regular = a.symmetric_eigenvalues().min() > thr;
+                match fit_solve(a, &b, thr) {
+                    Some(c) => {
+                        assert!(regular, "case {case}, mask {mask:b}: solved a singular fit");
+                        let res = (a * c - b).norm();
+                        let scale = a.norm() * c.norm() + b.norm();
+                        assert!(
+                            res <= 1e-13 * scale,
+                            "case {case}, mask {mask:b}: residual {res:.2e} of {scale:.2e}"
+                        );
+                        solved += 1;
+                    }
+                    None => {
+                        assert!(
+                            !regular,
+                            "case {case}, mask {mask:b}: refused a regular fit"
+                        );
+                        singular += 1;
+                    }
+                }
+            }
+        }
+        // Both verdicts occur often enough for the comparison to mean something.
+        assert!(
+            solved > 500 && singular > 500,
+            "{solved} solved, {singular} singular"
+        );
+    }
+
+    /// The fit on a patch where nalgebra's SVD (0.35) loses accuracy: its factors are off by
+    /// 5e-3, the Cholesky solution satisfies the equations to round-off.
+    #[test]
+    fn a_well_conditioned_patch_is_fitted_to_round_off() {
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        // Draw the points of case 285 of the test above (the generator's state at that case).
+        let mut pts = Vec::new();
+        for case in 0..=285 {
+            let n = 1 + case % 17;
+            pts = (0..n)
+                .map(|_| Vec2::new(next(), next()))
+                .collect::<Vec<_>>();
+        }
+        let (a, b, thr) = normal(&pts, 0b11_1111_1111);
+        let svd = a.svd(true, true);
+        let recomposed = svd.recompose().expect("u and v were asked for");
+        let Some(c) = fit_solve(a, &b, thr) else {
+            panic!("a regular patch was refused");
+        };
+        let res = (a * c - b).amax();
+        assert!(res < 1e-13 * b.amax(), "residual {res:.2e}");
+        // Documents the reason for not using the SVD; if nalgebra fixes it, this line fails and
+        // the doc comment of `fit_solve` can drop the remark.
+        assert!(
+            (recomposed - a).amax() > 1e-6,
+            "nalgebra's SVD is accurate here now"
+        );
+    }
 }

@@ -93,6 +93,10 @@ impl Recorder for CsvSink {
     fn wants_view(&self, _info: &StepInfo) -> bool {
         self.error.is_none()
     }
+    /// The scalars of every step ([`StepView::series`]): no recovered fields.
+    fn wants_fields(&self, _info: &StepInfo) -> bool {
+        false
+    }
     fn step(&mut self, info: &StepInfo, view: Option<&StepView>) {
         let Some(view) = view else { return };
         if self.error.is_some() {

@@ -44,8 +44,11 @@
 //!                 let info = StepInfo { index, time: t, dt, newton_iterations: rep.iterations,
 //!                                       residual: final_residual(&rep.table),
 //!                                       is_final: t >= t_end };
-//!                 // Build the view only when some sink records this step (decimation).
-//!                 let frame = rec.wants_view(&info).then(|| SolidFrame::capture(sys));
+//!                 // Build the view only when some sink records this step (decimation), with
+//!                 // the recovered fields only when some sink reads them.
+//!                 let frame = rec
+//!                     .wants_view(&info)
+//!                     .then(|| SolidFrame::capture(sys, rec.wants_fields(&info)));
 //!                 let extra = [("revolutions", t / period)];       // optional model scalars
 //!                 rec.step(&info, frame.as_ref().map(|f| f.view(sys, &extra)).as_ref());
 //!                 index += 1;
@@ -350,6 +353,13 @@ pub trait Recorder {
     fn wants_view(&self, _info: &StepInfo) -> bool {
         false
     }
+    /// Whether the view of the step `info`, if this sink wants one, must carry the recovered
+    /// fields ([`StepView::stress_recovered`], [`StepView::error_indicator`]): each costs a
+    /// patch recovery over the mesh. A sink that reads only the scalars of the view says no;
+    /// the default is [`Recorder::wants_view`].
+    fn wants_fields(&self, info: &StepInfo) -> bool {
+        self.wants_view(info)
+    }
     /// An accepted step; `view` is `Some` when [`Recorder::wants_view`] said so.
     fn step(&mut self, _info: &StepInfo, _view: Option<&StepView>) {}
     fn step_rejected(&mut self, _step: &RejectedStep) {}
@@ -461,6 +471,12 @@ impl Recorder for Recorders {
         self.entries
             .iter()
             .any(|e| e.admits(info) && e.sink.wants_view(info))
+    }
+    fn wants_fields(&self, info: &StepInfo) -> bool {
+        let info = &self.numbered(info);
+        self.entries
+            .iter()
+            .any(|e| e.admits(info) && e.sink.wants_view(info) && e.sink.wants_fields(info))
     }
     fn step(&mut self, info: &StepInfo, view: Option<&StepView>) {
         let info = &self.numbered(info);
@@ -671,6 +687,39 @@ mod tests {
             residual: 0.0,
             is_final: true
         }));
+    }
+
+    /// The recovered fields are asked for only on the steps where a sink that reads them is
+    /// admitted: a CSV sink on every step and a VTU sink on every third one ask for them on
+    /// steps 0, 3, 6 and the final one; the CSV sink alone, never.
+    #[test]
+    fn recovered_fields_only_where_a_field_sink_is_admitted() {
+        let dir = std::env::temp_dir().join(format!("tread-wants-fields-{}", std::process::id()));
+        let info = |i: u64| StepInfo {
+            index: i,
+            time: i as f64,
+            dt: 1.0,
+            newton_iterations: 1,
+            residual: 0.0,
+            is_final: i == 7,
+        };
+        let mut both = Recorders::new();
+        both.push(Box::new(csv::CsvSink::new(&dir)), 1);
+        both.push(Box::new(vtu::VtuSink::new(&dir)), 3);
+        let mut csv_only = Recorders::new();
+        csv_only.push(Box::new(csv::CsvSink::new(&dir)), 1);
+        let mut asked = Vec::new();
+        for i in 0..8u64 {
+            assert!(both.wants_view(&info(i)) && csv_only.wants_view(&info(i)));
+            assert!(!csv_only.wants_fields(&info(i)), "step {i}");
+            if both.wants_fields(&info(i)) {
+                asked.push(i);
+            }
+            both.step(&info(i), None);
+            csv_only.step(&info(i), None);
+        }
+        assert_eq!(asked, [0, 3, 6, 7]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
