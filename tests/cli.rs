@@ -148,6 +148,27 @@ fn malformed_scenes_exit_nonzero_naming_the_key() {
     assert!(err.contains("mode"), "{err}");
 }
 
+/// A sweep file given to `tread run` (or `check`) gets one error that names the command to
+/// use, not one per unknown section; a scene that only has a stray [sweep] table besides its
+/// [scene] still gets the usual unknown-section error.
+#[test]
+fn a_sweep_file_is_pointed_to_tread_sweep() {
+    let sweep = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/sweep_creep_force.toml"
+    );
+    for cmd in ["run", "check"] {
+        let out = tread().args([cmd, sweep]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{cmd}: {err}");
+        assert!(err.contains("tread sweep run"), "{cmd}: {err}");
+        assert_eq!(err.matches("unknown section").count(), 0, "{cmd}: {err}");
+    }
+    let (code, err) = run_bad("stray_sweep", &format!("{GOOD}\n[sweep]\nname = \"x\"\n"));
+    assert_ne!(code, 0);
+    assert!(err.contains("unknown section"), "{err}");
+}
+
 #[test]
 fn bad_cli_input_is_an_error_not_a_panic() {
     let out = tread()

@@ -47,6 +47,7 @@
 //! ([`IterationRecord`]) keeps ‖R_f‖, ‖R_f‖ / ‖R_f⁰‖, ref_f and ρ_f per iteration.
 
 use super::linear::{LinearError, LinearKind, SparseSolver};
+use std::time::Instant;
 
 /// A discretised nonlinear problem R(x) = 0 with a fixed sparse tangent pattern.
 pub trait NonlinearSystem {
@@ -300,6 +301,22 @@ pub struct NewtonReport {
     /// GMRES products with the exact tangent (systems with a
     /// [`NonlinearSystem::tangent_correction`]; 0 otherwise).
     pub krylov_iterations: usize,
+    /// Where the solve's wall time went.
+    pub timing: NewtonTiming,
+}
+
+/// Wall time of one Newton solve by phase, in seconds (what `-v` prints when it converges).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct NewtonTiming {
+    /// Residual and tangent evaluations (assembly), line-search trials included.
+    pub evaluate_s: f64,
+    /// Numeric factorizations of the assembled tangent.
+    pub factorize_s: f64,
+    /// Linear solves: triangular solves with the factors, and the GMRES iterations of a
+    /// tangent with a matrix-free part.
+    pub linear_solve_s: f64,
+    /// The whole solve.
+    pub total_s: f64,
 }
 
 /// Newton solver owning the sparse factorization (symbolic analysis done once).
@@ -313,6 +330,14 @@ pub struct Newton {
     noise: Vec<f64>,
 }
 
+/// Run `f`, adding its wall time to `acc`.
+fn timed<T>(acc: &mut f64, f: impl FnOnce() -> T) -> T {
+    let t = Instant::now();
+    let out = f();
+    *acc += t.elapsed().as_secs_f64();
+    out
+}
+
 impl Newton {
     pub fn new<S: NonlinearSystem>(
         sys: &S,
@@ -320,7 +345,15 @@ impl Newton {
         opts: NewtonOptions,
     ) -> Result<Self, SolveError> {
         let (cp, ri) = sys.pattern();
+        let started = Instant::now();
         let mut solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        if opts.verbose {
+            eprintln!(
+                "         symbolic analysis of {} equations: {:.3} s",
+                sys.n_eq(),
+                started.elapsed().as_secs_f64()
+            );
+        }
         // The determinant (an extra LBLᵀ pass for LU) is only needed by continuation.
         solver.set_track_determinant(false);
         Ok(Self {
@@ -393,8 +426,10 @@ impl Newton {
     /// (the caller restores a saved state if it wants to retry).
     pub fn solve<S: NonlinearSystem>(&mut self, sys: &mut S) -> Result<NewtonReport, SolveError> {
         let mut rep = NewtonReport::default();
+        let started = Instant::now();
         let floors = sys.reference_norms();
-        if !sys.evaluate(true) {
+        let ok = timed(&mut rep.timing.evaluate_s, || sys.evaluate(true));
+        if !ok {
             return Err(SolveError::InadmissibleStart);
         }
         rep.assemblies += 1;
@@ -452,6 +487,8 @@ impl Newton {
                 self.print_row(&rec);
                 rep.table.push(rec);
                 rep.iterations = it;
+                rep.timing.total_s = started.elapsed().as_secs_f64();
+                self.print_timing(&rep, sys.n_eq());
                 return Ok(rep);
             }
             if it == self.opts.max_iterations {
@@ -491,10 +528,14 @@ impl Newton {
             if !lagged {
                 self.solver
                     .set_single_precision_factors(correction && single_ok);
-                self.solver.factorize(sys.matrix_values())?;
+                let solver = &mut self.solver;
+                timed(&mut rep.timing.factorize_s, || {
+                    solver.factorize(sys.matrix_values())
+                })?;
                 rep.factorizations += 1;
                 lu_ready = true;
             }
+            let solve_started = Instant::now();
             for (d, r) in self.dx.iter_mut().zip(sys.residual()) {
                 *d = -r;
             }
@@ -610,6 +651,8 @@ impl Newton {
                     );
                 }
             }
+            // (A refactorization inside GMRES counts as linear solve time.)
+            rep.timing.linear_solve_s += solve_started.elapsed().as_secs_f64();
             rec.increment_norm = self.dx.iter().map(|v| v * v).sum::<f64>().sqrt();
             let r0 = total_norm(&norms);
             sys.save_state(&mut self.saved);
@@ -623,18 +666,20 @@ impl Newton {
             last_increment = rec.increment_norm / xnorm.max(f64::MIN_POSITIVE);
             if rec.increment_norm <= self.opts.increment_tol * xnorm.max(f64::MIN_POSITIVE) {
                 sys.update(1.0, &self.dx);
-                sys.evaluate(true);
+                timed(&mut rep.timing.evaluate_s, || sys.evaluate(true));
                 rep.assemblies += 1;
                 rec.alpha = 1.0;
                 self.print_row(&rec);
                 rep.table.push(rec);
                 rep.iterations = it + 1;
+                rep.timing.total_s = started.elapsed().as_secs_f64();
+                self.print_timing(&rep, sys.n_eq());
                 return Ok(rep);
             }
             let mut alpha = 1.0;
             loop {
                 sys.update(alpha, &self.dx);
-                let ok = sys.evaluate(alpha == 1.0);
+                let ok = timed(&mut rep.timing.evaluate_s, || sys.evaluate(alpha == 1.0));
                 rep.assemblies += 1;
                 let trial = Self::field_norms(sys);
                 let rt = total_norm(&trial);
@@ -647,7 +692,7 @@ impl Newton {
                 {
                     if alpha != 1.0 {
                         // Tangent at the accepted point for the next iteration.
-                        sys.evaluate(true);
+                        timed(&mut rep.timing.evaluate_s, || sys.evaluate(true));
                         rep.assemblies += 1;
                         damped += 1;
                     }
@@ -724,6 +769,29 @@ impl Newton {
         }
         let c = lmax * inv;
         c.is_finite().then_some(c)
+    }
+
+    /// With `verbose`: where a converged solve's time went.
+    fn print_timing(&self, rep: &NewtonReport, n_eq: usize) {
+        if !self.opts.verbose {
+            return;
+        }
+        let t = &rep.timing;
+        eprintln!(
+            "         {n_eq} equations, {:.3} s: {} evaluations {:.3} s, {} factorizations {:.3} s, \
+             linear solves {:.3} s{}",
+            t.total_s,
+            rep.assemblies,
+            t.evaluate_s,
+            rep.factorizations,
+            t.factorize_s,
+            t.linear_solve_s,
+            if rep.krylov_iterations > 0 {
+                format!(" ({} GMRES products)", rep.krylov_iterations)
+            } else {
+                String::new()
+            }
+        );
     }
 
     fn print_row(&self, rec: &IterationRecord) {
@@ -938,5 +1006,22 @@ mod tests {
             "double-precision factors at the end"
         );
         assert!(rep_s.factorizations > rep_d.factorizations);
+    }
+
+    /// The phases of the timing record are disjoint parts of the solve: they add up to at
+    /// most its total, each one measured when it ran.
+    #[test]
+    fn timing_phases_are_parts_of_the_total() {
+        let mut sys = NearlySingular::new(150);
+        let mut newton = Newton::new(&sys, LinearKind::Lu, NewtonOptions::default()).unwrap();
+        let rep = newton.solve(&mut sys).unwrap();
+        let t = rep.timing;
+        let parts = t.evaluate_s + t.factorize_s + t.linear_solve_s;
+        assert!(rep.assemblies > 0 && rep.factorizations > 0, "{rep:?}");
+        assert!(
+            t.evaluate_s > 0.0 && t.factorize_s > 0.0 && t.linear_solve_s > 0.0,
+            "{t:?}"
+        );
+        assert!(parts <= t.total_s, "{t:?}");
     }
 }

@@ -88,7 +88,14 @@ pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
                 });
                 lambda = target;
                 sys.commit();
+                let recording = std::time::Instant::now();
                 rec.observe_accepted(sys, &info);
+                if opts.verbose {
+                    eprintln!(
+                        "  step recorded in {:.3} s",
+                        recording.elapsed().as_secs_f64()
+                    );
+                }
                 index += 1;
                 if rep.iterations <= 4 {
                     dl *= 1.5;

@@ -193,6 +193,15 @@ impl Ctx<'_> {
     /// offending entries, so that the remaining sections can still be deserialized and validated.
     pub(super) fn check_schema(&mut self, doc: &toml::Table) -> toml::Table {
         let mut clean = toml::Table::new();
+        // A sweep file is not a scene: one error that says what to run, not one per section.
+        if doc.contains_key("sweep") && !doc.contains_key("scene") {
+            self.push(
+                "sweep",
+                "this is a sweep file (a [sweep] table, no [scene]): run it with \
+                 `tread sweep run FILE` (or list its runs with `tread sweep plan FILE`)",
+            );
+            return clean;
+        }
         for (sec_name, sec_value) in doc {
             let Some(sec) = section_schema(sec_name) else {
                 self.push(
