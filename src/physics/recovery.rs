@@ -469,6 +469,17 @@ pub fn recover_nodal(mesh: &Mesh, samples: &[CellSamples]) -> Vec<Stress4> {
 mod tests {
     use super::*;
 
+    const SEED: u64 = 12345;
+
+    /// The next number in [−1, 1) of a small linear congruential generator: reproducible
+    /// points without a dependency.
+    fn uniform(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
     /// Normal equations of the complete cubic (padded as in [`fit`]) on `pts` (scaled to the
     /// unit disc), with the right-hand side of a smooth field, and the rank threshold.
     fn normal(pts: &[Vec2], mask: u16) -> (Normal, Rhs, f64) {
@@ -503,14 +514,8 @@ mod tests {
     /// fit satisfies its normal equations to round-off (backward stable).
     #[test]
     fn fits_are_decided_by_the_smallest_eigenvalue_and_solve_their_equations() {
-        // A small linear congruential generator: reproducible points without a dependency.
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut seed = SEED;
+        let mut next = || uniform(&mut seed);
         let (mut solved, mut singular) = (0, 0);
         for case in 0..600 {
             let n = 1 + case % 17;
@@ -559,13 +564,8 @@ mod tests {
     /// 5e-3, the Cholesky solution satisfies the equations to round-off.
     #[test]
     fn a_well_conditioned_patch_is_fitted_to_round_off() {
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut seed = SEED;
+        let mut next = || uniform(&mut seed);
         // Draw the points of case 285 of the test above (the generator's state at that case).
         let mut pts = Vec::new();
         for case in 0..=285 {

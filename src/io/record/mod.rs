@@ -641,6 +641,18 @@ mod tests {
         }
     }
 
+    /// Step `i` of a run of eight unit steps (the last one final).
+    fn step_of_eight(i: u64) -> StepInfo {
+        StepInfo {
+            index: i,
+            time: i as f64,
+            dt: 1.0,
+            newton_iterations: 1,
+            residual: 0.0,
+            is_final: i == 7,
+        }
+    }
+
     #[test]
     fn decimation_admits_every_nth_and_final_step() {
         let a = std::rc::Rc::new(std::cell::RefCell::new(Count::default()));
@@ -650,14 +662,7 @@ mod tests {
         r.push(Box::new(Shared(b.clone())), 3);
         let x = [0.0; 2];
         for i in 0..8u64 {
-            let info = StepInfo {
-                index: i,
-                time: i as f64,
-                dt: 1.0,
-                newton_iterations: 1,
-                residual: 0.0,
-                is_final: i == 7,
-            };
+            let info = step_of_eight(i);
             let view = StepView {
                 mesh: None,
                 x: &x,
@@ -695,14 +700,7 @@ mod tests {
     #[test]
     fn recovered_fields_only_where_a_field_sink_is_admitted() {
         let dir = std::env::temp_dir().join(format!("tread-wants-fields-{}", std::process::id()));
-        let info = |i: u64| StepInfo {
-            index: i,
-            time: i as f64,
-            dt: 1.0,
-            newton_iterations: 1,
-            residual: 0.0,
-            is_final: i == 7,
-        };
+        let info = step_of_eight;
         let mut both = Recorders::new();
         both.push(Box::new(csv::CsvSink::new(&dir)), 1);
         both.push(Box::new(vtu::VtuSink::new(&dir)), 3);
