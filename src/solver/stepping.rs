@@ -6,7 +6,7 @@
 //! can make K − ω² M indefinite) without counting as a cut-back.
 
 use super::linear::{LinearError, LinearKind};
-use super::newton::{IterationRecord, Newton, NonlinearSystem, SolveError};
+use super::newton::{IterationRecord, Newton, NewtonTiming, NonlinearSystem, SolveError};
 use super::observe::{RejectedStep, StepInfo, StepObserver};
 
 /// A system with a scalar load factor.
@@ -29,6 +29,10 @@ pub struct StepRecord {
     pub iterations: usize,
     pub converged: bool,
     pub table: Vec<IterationRecord>,
+    /// Where the step's Newton solve spent its time (zero for a failed attempt; not written to
+    /// the outputs, which stay reproducible).
+    #[serde(skip)]
+    pub timing: NewtonTiming,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -85,6 +89,7 @@ pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
                     iterations: rep.iterations,
                     converged: true,
                     table: rep.table,
+                    timing: rep.timing,
                 });
                 lambda = target;
                 sys.commit();
@@ -129,6 +134,7 @@ pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
                     iterations: 0,
                     converged: false,
                     table: Vec::new(),
+                    timing: NewtonTiming::default(),
                 });
                 sys.restore_state(&saved);
                 sys.set_load(lambda);
