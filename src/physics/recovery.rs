@@ -25,7 +25,7 @@
 //! quadratic fit would add an O(h³) truncation error of its own, which dominates at the boundary
 //! nodes where the patch polynomial is extrapolated. Complete polynomials are invariant under
 //! rotations of the mesh. The normal equations are 10 × 10 (fixed-size, no allocation, solved
-//! by a Cholesky factorization; a singular value decomposition decides the rare patch whose rank
+//! by a Cholesky factorization; a symmetric eigendecomposition decides the rare patch whose rank
 //! the factorization leaves open); a patch whose samples cannot determine the polynomial
 //! (too few samples, samples on too few lines: smallest singular value below 1e-12 of the
 //! largest diagonal entry) is fitted with the next lower complete degree (P2, P1, P0).
@@ -267,10 +267,10 @@ fn fit(samples: &[CellSamples], cells: &[u32], z: Vec2, p: usize) -> Option<Poly
 
 /// Solve the symmetric positive semi-definite normal equations `a c = b`; `None` when they are
 /// singular: smallest eigenvalue (= singular value) of `a` at most `threshold`, the polynomial
-/// not determined by the samples. Most patches
-/// are decided by a Cholesky factorization alone: for symmetric positive definite `a` of order
-/// m the smallest eigenvalue λ lies in [1/tr(a⁻¹), m/tr(a⁻¹)], so `a` is regular when
-/// 1/tr(a⁻¹) exceeds the threshold and singular when m/tr(a⁻¹) does not. A matrix in between,
+/// not determined by the samples. Most patches are decided by a Cholesky factorization alone:
+/// for symmetric positive definite `a` of order m the smallest eigenvalue λ lies in
+/// [1/tr(a⁻¹), m/tr(a⁻¹)], so `a` is regular when 1/tr(a⁻¹) exceeds the threshold and singular
+/// when m/tr(a⁻¹) does not. A matrix in between,
 /// or one the factorization refuses, is decided and solved by its symmetric eigendecomposition.
 /// (Not by nalgebra's singular value decomposition: on some well-conditioned 10 × 10 normal
 /// matrices its factors do not reproduce the matrix, U Σ Vᵀ off by 5e-3 at a condition number
