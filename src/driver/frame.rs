@@ -71,20 +71,25 @@ impl<R: Recorder + ?Sized> StepObserver<SolidSystem> for R {
     }
 }
 
+/// The recovered fields of the state `x` of `sys` when `wanted` (the recovered Cauchy stress
+/// and the Zienkiewicz–Zhu error indicator per cell: two patch recoveries), else empty.
+pub fn recovered_fields(sys: &SolidSystem, x: &[f64], wanted: bool) -> (Vec<[f64; 4]>, Vec<f64>) {
+    if !wanted {
+        return (Vec::new(), Vec::new());
+    }
+    (
+        crate::physics::recovery::recover_cauchy(&sys.model, &sys.dofs, x),
+        crate::physics::estimate::recovery(&sys.model, &sys.dofs, x).indicators,
+    )
+}
+
 impl SolidFrame {
     /// The frame of the current state; with `fields`, also the recovered stress and the error
     /// indicator (two patch recoveries; empty otherwise).
     pub fn capture(sys: &SolidSystem, fields: bool) -> Self {
         let (f, m) = sys.hub_reaction();
         let ns = nodal_stress_full_at(sys, &sys.x);
-        let (stress_recovered, error_indicator) = if fields {
-            (
-                crate::physics::recovery::recover_cauchy(&sys.model, &sys.dofs, &sys.x),
-                crate::physics::estimate::recovery(&sys.model, &sys.dofs, &sys.x).indicators,
-            )
-        } else {
-            (Vec::new(), Vec::new())
-        };
+        let (stress_recovered, error_indicator) = recovered_fields(sys, &sys.x, fields);
         Self {
             stress: ns.in_plane,
             sigma_33: ns.sigma_33,

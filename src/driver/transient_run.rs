@@ -24,7 +24,7 @@
 //! u = χ − X the displacement of the material point that sits there.
 
 use super::envelope::{conclude, RunClock, RunEnvelope};
-use super::frame::nodal_stress_full_at;
+use super::frame::{nodal_stress_full_at, recovered_fields};
 use super::results::{
     MeshInfo, ModeSummary, RunStats, Summary, Terms, TransientResults, TransientSummary,
     TransientTerms,
@@ -186,15 +186,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
         let snap = tr.snapshot();
         let ns = nodal_stress_full_at(&tr.sys, &tr.state.u);
-        let (recovered, indicator) = if recorders.wants_fields(&info) {
-            (
-                crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &tr.state.u),
-                crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &tr.state.u)
-                    .indicators,
-            )
-        } else {
-            (Vec::new(), Vec::new())
-        };
+        let (recovered, indicator) =
+            recovered_fields(&tr.sys, &tr.state.u, recorders.wants_fields(&info));
         let contact = tr.contact_samples(&tr.state.u, &tr.state.v);
         let scalars = [("phi", snap.phi), ("revolutions", rep.revolutions)];
         let view = StepView {
@@ -432,8 +425,7 @@ fn record_steady_field(
     let n = field.len().min(x.len());
     x[..n].copy_from_slice(&field[..n]);
     let ns = nodal_stress_full_at(&tr.sys, &x);
-    let recovered = crate::physics::recovery::recover_cauchy(&tr.sys.model, &tr.sys.dofs, &x);
-    let indicator = crate::physics::estimate::recovery(&tr.sys.model, &tr.sys.dofs, &x).indicators;
+    let (recovered, indicator) = recovered_fields(&tr.sys, &x, true);
     let contact = tr.contact_samples(&tr.state.u, &tr.state.v);
     let snap = tr.snapshot();
     let mean = rep

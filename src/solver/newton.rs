@@ -526,13 +526,7 @@ impl Newton {
                 && full_step
                 && last_products <= fresh_products + REUSE_EXTRA_PRODUCTS;
             if !lagged {
-                self.solver
-                    .set_single_precision_factors(correction && single_ok);
-                let solver = &mut self.solver;
-                timed(&mut rep.timing.factorize_s, || {
-                    solver.factorize(sys.matrix_values())
-                })?;
-                rep.factorizations += 1;
+                self.factorize(sys, correction && single_ok, &mut rep)?;
                 lu_ready = true;
             }
             let (solve_started, factorized_before) = (Instant::now(), rep.timing.factorize_s);
@@ -601,12 +595,7 @@ impl Newton {
                     if fresh {
                         single_ok = false;
                     }
-                    self.solver.set_single_precision_factors(single_ok);
-                    let solver = &mut self.solver;
-                    timed(&mut rep.timing.factorize_s, || {
-                        solver.factorize(sys.matrix_values())
-                    })?;
-                    rep.factorizations += 1;
+                    self.factorize(sys, single_ok, &mut rep)?;
                     self.dx.copy_from_slice(&b);
                     self.solver.solve_in_place(&mut self.dx)?;
                     fresh = true;
@@ -773,6 +762,23 @@ impl Newton {
         }
         let c = lmax * inv;
         c.is_finite().then_some(c)
+    }
+
+    /// Factorize the assembled tangent (in single precision when `single`), counted and timed
+    /// in `rep`.
+    fn factorize<S: NonlinearSystem>(
+        &mut self,
+        sys: &S,
+        single: bool,
+        rep: &mut NewtonReport,
+    ) -> Result<(), LinearError> {
+        self.solver.set_single_precision_factors(single);
+        let solver = &mut self.solver;
+        timed(&mut rep.timing.factorize_s, || {
+            solver.factorize(sys.matrix_values())
+        })?;
+        rep.factorizations += 1;
+        Ok(())
     }
 
     /// With `verbose`: where a converged solve's time went.
@@ -970,18 +976,25 @@ mod tests {
         }
     }
 
+    /// Newton on the 150-equation [`NearlySingular`] system, with single-precision
+    /// preconditioner factors first or not.
+    fn solve_nearly_singular(single: bool) -> (NearlySingular, Newton, NewtonReport) {
+        let mut sys = NearlySingular::new(150);
+        let opts = NewtonOptions {
+            single_precision_preconditioner: single,
+            ..Default::default()
+        };
+        let mut newton = Newton::new(&sys, LinearKind::Lu, opts).unwrap();
+        let rep = newton.solve(&mut sys).unwrap();
+        (sys, newton, rep)
+    }
+
     /// Single-precision factors that do not precondition (a nearly singular assembled part)
     /// are replaced by double-precision ones, and Newton converges.
     #[test]
     fn poor_single_precision_factors_fall_back_to_double() {
         let solve = |single: bool| {
-            let mut sys = NearlySingular::new(150);
-            let opts = NewtonOptions {
-                single_precision_preconditioner: single,
-                ..Default::default()
-            };
-            let mut newton = Newton::new(&sys, LinearKind::Lu, opts).unwrap();
-            let rep = newton.solve(&mut sys).unwrap();
+            let (sys, newton, rep) = solve_nearly_singular(single);
             let err = sys
                 .x
                 .iter()
@@ -1019,13 +1032,7 @@ mod tests {
         // Single-precision factors first: GMRES then refactorizes within the linear solve
         // (the test above), which the record counts as factorization time.
         for single in [false, true] {
-            let mut sys = NearlySingular::new(150);
-            let opts = NewtonOptions {
-                single_precision_preconditioner: single,
-                ..Default::default()
-            };
-            let mut newton = Newton::new(&sys, LinearKind::Lu, opts).unwrap();
-            let rep = newton.solve(&mut sys).unwrap();
+            let (_, _, rep) = solve_nearly_singular(single);
             let t = rep.timing;
             let parts = t.evaluate_s + t.factorize_s + t.linear_solve_s;
             assert!(rep.assemblies > 0 && rep.factorizations > 0, "{rep:?}");
