@@ -657,25 +657,12 @@ impl SolidModel {
                 let sv = (fd.transpose() * f + f.transpose() * fd) * (0.5 * eta);
                 p_st += f * sv;
                 if with_k {
-                    for k in 0..2 {
-                        for l in 0..2 {
-                            let mut e = Mat2::zeros();
-                            e[(k, l)] = 1.0;
-                            // Through F (at fixed ∇v) and through ∇v.
-                            let ds_h = (fd.transpose() * e + e.transpose() * fd) * (0.5 * eta);
-                            let dp_h = e * sv + f * ds_h;
-                            let dp_l = f * ((e.transpose() * f + f.transpose() * e) * (0.5 * eta));
-                            for i in 0..2 {
-                                for j in 0..2 {
-                                    a_t[(v(i, j), v(k, l))] += dp_h[(i, j)];
-                                    if steady_d.is_some() {
-                                        a_l[(v(i, j), v(k, l))] += dp_l[(i, j)];
-                                    } else {
-                                        a_t[(v(i, j), v(k, l))] += kv * dp_l[(i, j)];
-                                    }
-                                }
-                            }
-                        }
+                    let (dp_h, dp_l) = strain_rate_damping_tangents(&f, &fd, &sv, eta);
+                    a_t += dp_h;
+                    if steady_d.is_some() {
+                        a_l = dp_l;
+                    } else {
+                        a_t += dp_l * kv;
                     }
                 }
             }
@@ -1045,6 +1032,95 @@ fn add_gag<const N: usize>(
                     _ => {
                         for b in 0..N {
                             row[b] += c0 * gx[b] + c1 * gy[b];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The tangents of the first Piola–Kirchhoff stress of the strain-rate damping,
+/// P_v = F S_v with S_v = η/2 (∇vᵀ F + Fᵀ ∇v) (`sv`, the viscous second Piola–Kirchhoff
+/// stress at F = I + H and velocity gradient ∇v = `fd`): ∂P_v/∂H at fixed ∇v and ∂P_v/∂(∇v),
+/// in the layout of [`Tangent`]. In index form,
+///   ∂P_iJ/∂H_kL = δ_ik S_v,LJ + η/2 ((F ∇vᵀ)_ik δ_LJ + F_iL ∇v_kJ),
+///   ∂P_iJ/∂∇v_kL = η/2 (F_iL F_kJ + (F Fᵀ)_ik δ_LJ).
+fn strain_rate_damping_tangents(f: &Mat2, fd: &Mat2, sv: &Mat2, eta: f64) -> (Tangent, Tangent) {
+    let he = 0.5 * eta;
+    let ffd = f * fd.transpose();
+    let fft = f * f.transpose();
+    let (mut dh, mut dl) = (Tangent::zeros(), Tangent::zeros());
+    for k in 0..2 {
+        for l in 0..2 {
+            let col = v(k, l);
+            for i in 0..2 {
+                for j in 0..2 {
+                    let row = v(i, j);
+                    let (mut h, mut g) = (he * f[(i, l)] * fd[(k, j)], he * f[(i, l)] * f[(k, j)]);
+                    if j == l {
+                        h += he * ffd[(i, k)];
+                        g += he * fft[(i, k)];
+                    }
+                    if i == k {
+                        h += sv[(l, j)];
+                    }
+                    dh[(row, col)] = h;
+                    dl[(row, col)] = g;
+                }
+            }
+        }
+    }
+    (dh, dl)
+}
+
+#[cfg(test)]
+mod damping_tangent_tests {
+    use super::*;
+
+    /// P_v = F η/2 (∇vᵀ F + Fᵀ ∇v) at F = I + H.
+    fn p_v(h: &Mat2, fd: &Mat2, eta: f64) -> Mat2 {
+        let f = Mat2::identity() + h;
+        f * ((fd.transpose() * f + f.transpose() * fd) * (0.5 * eta))
+    }
+
+    #[test]
+    fn strain_rate_damping_tangents_match_central_differences() {
+        let eta = 1.7;
+        let cases = [
+            (
+                Mat2::new(0.1, -0.3, 0.25, -0.05),
+                Mat2::new(0.4, 1.2, -0.7, 0.3),
+            ),
+            (
+                Mat2::new(-0.4, 0.6, 0.0, 0.8),
+                Mat2::new(-2.0, 0.1, 0.5, 0.9),
+            ),
+            (Mat2::zeros(), Mat2::new(0.0, 1.0, -1.0, 0.0)),
+        ];
+        let step = 1e-6;
+        for (h, fd) in cases {
+            let f = Mat2::identity() + h;
+            let sv = (fd.transpose() * f + f.transpose() * fd) * (0.5 * eta);
+            let (dh, dl) = strain_rate_damping_tangents(&f, &fd, &sv, eta);
+            for k in 0..2 {
+                for l in 0..2 {
+                    let mut e = Mat2::zeros();
+                    e[(k, l)] = step;
+                    let num_h = (p_v(&(h + e), &fd, eta) - p_v(&(h - e), &fd, eta)) / (2.0 * step);
+                    let num_l = (p_v(&h, &(fd + e), eta) - p_v(&h, &(fd - e), eta)) / (2.0 * step);
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let (a, b) = (dh[(v(i, j), v(k, l))], num_h[(i, j)]);
+                            assert!(
+                                (a - b).abs() <= 1e-8 * (1.0 + b.abs()),
+                                "dP/dH ({i}{j},{k}{l}): {a} vs {b}"
+                            );
+                            let (a, b) = (dl[(v(i, j), v(k, l))], num_l[(i, j)]);
+                            assert!(
+                                (a - b).abs() <= 1e-8 * (1.0 + b.abs()),
+                                "dP/dgrad v ({i}{j},{k}{l}): {a} vs {b}"
+                            );
                         }
                     }
                 }
