@@ -5,7 +5,8 @@ output file (CSV, JSON, the XML of a VTU, PVD, run.sta) is a finding; every find
 with its command line and the run exits 1.
 
 Usage: fuzz.py [--tread PATH] [--seconds N] [--cases N] [--timeout S] [--memory MB] [--seed N]
-       fuzz.py --shipped [--tread PATH] [--timeout S]   (every shipped scene once, as it is)
+       fuzz.py --shipped [--tread PATH] [--timeout S]   (every shipped scene once, as it is;
+                                                          a sweep file through `tread sweep plan`)
 The smoke run in CI: fuzz.py --cases 25.
 """
 import argparse
@@ -121,7 +122,12 @@ def shipped(a):
     findings = 0
     for sc in sorted(glob.glob(SCENES_GLOB)):
         out = os.path.join(work, os.path.basename(sc)[:-5])
-        kind, _ = run_case([a.tread, "-q", "run", sc, "--out", out], a.timeout)
+        with open(sc, encoding="utf-8") as f:
+            sweep = re.search(r"^\[sweep\]", f.read(), re.M) is not None
+        # A sweep file is planned (every run's scene built and checked), not run as a scene.
+        cmd = ([a.tread, "-q", "sweep", "plan", sc] if sweep
+               else [a.tread, "-q", "run", sc, "--out", out])
+        kind, _ = run_case(cmd, a.timeout)
         bad = non_finite_outputs(out)
         finding = is_finding(kind) or bool(bad)
         findings += finding
