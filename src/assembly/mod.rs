@@ -332,6 +332,8 @@ impl<'a, T: Copy> SharedMut<'a, T> {
 pub struct Block {
     pub dofs: Vec<u32>,
     pub offsets: Vec<usize>,
+    /// Per element, the size of its core ([`Assembler::with_blocks_cored`]); `None`: all of it.
+    pub core: Option<Vec<u32>>,
     /// Per element, `nd²` slots (row-major local pairs); `u32::MAX` where a row or column is fixed.
     slots: Vec<u32>,
     slot_offsets: Vec<usize>,
@@ -444,25 +446,33 @@ fn bucket<T: Copy + Default>(
 /// offsets in full-dof numbering), constrained dofs expanded to their free masters. Each
 /// column is gathered once from the elements that hold it, deduplicated with a marker, and
 /// only its distinct rows sorted.
-fn block_pattern(dofs: &DofMap, lists: &[(Vec<u32>, Vec<usize>)]) -> (Vec<usize>, Vec<usize>) {
+fn block_pattern(
+    dofs: &DofMap,
+    lists: &[(Vec<u32>, Vec<usize>)],
+    cores: &[Option<Vec<u32>>],
+) -> (Vec<usize>, Vec<usize>) {
     let n = dofs.n_eq;
-    // Every element's free equations, flat.
-    let (mut el_eq, mut el_off) = (Vec::<u32>::new(), vec![0usize]);
+    // Every element's free equations, flat, each flagged whether it comes from a core dof.
+    let (mut el_eq, mut el_core, mut el_off) =
+        (Vec::<u32>::new(), Vec::<bool>::new(), vec![0usize]);
     let mut tgt = Vec::new();
-    for (d, o) in lists {
+    for (b, (d, o)) in lists.iter().enumerate() {
+        let core = cores.get(b).and_then(Option::as_ref);
         for e in 0..o.len().saturating_sub(1) {
-            for &di in &d[o[e]..o[e + 1]] {
+            let k = core.map_or(usize::MAX, |c| c[e] as usize);
+            for (a, &di) in d[o[e]..o[e + 1]].iter().enumerate() {
                 dofs.targets(di, &mut tgt);
                 el_eq.extend(tgt.iter().map(|t| t.0));
+                el_core.extend(std::iter::repeat_n(a < k, tgt.len()));
             }
             el_off.push(el_eq.len());
         }
     }
-    // Equation → elements.
+    // Equation → (element, whether it is a core equation there).
     let (inc_ptr, inc) = bucket(n, |f| {
         for e in 0..el_off.len() - 1 {
-            for &q in &el_eq[el_off[e]..el_off[e + 1]] {
-                f(q as usize, e as u32);
+            for p in el_off[e]..el_off[e + 1] {
+                f(el_eq[p] as usize, (e as u32, el_core[p]));
             }
         }
     });
@@ -472,10 +482,11 @@ fn block_pattern(dofs: &DofMap, lists: &[(Vec<u32>, Vec<usize>)]) -> (Vec<usize>
     let mut row_idx = Vec::new();
     for j in 0..n {
         let start = row_idx.len();
-        for &e in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
+        for &(e, j_core) in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
             let e = e as usize;
-            for &q in &el_eq[el_off[e]..el_off[e + 1]] {
-                if mark[q as usize] != j as u32 {
+            for p in el_off[e]..el_off[e + 1] {
+                let q = el_eq[p];
+                if (j_core || el_core[p]) && mark[q as usize] != j as u32 {
                     mark[q as usize] = j as u32;
                     row_idx.push(q as usize);
                 }
@@ -495,6 +506,7 @@ fn block_pattern(dofs: &DofMap, lists: &[(Vec<u32>, Vec<usize>)]) -> (Vec<usize>
 fn block_slots(
     dofs: &DofMap,
     lists: &[(Vec<u32>, Vec<usize>)],
+    cores: &[Option<Vec<u32>>],
     col_ptr: &[usize],
     row_idx: &[usize],
 ) -> Vec<(Vec<u32>, Vec<usize>)> {
@@ -535,9 +547,13 @@ fn block_slots(
             let nd = el.len();
             let (slots, off) = &mut out[bi as usize];
             let base = off[e as usize] + b as usize;
+            let k = cores
+                .get(bi as usize)
+                .and_then(Option::as_ref)
+                .map_or(usize::MAX, |c| c[e as usize] as usize);
             for (a, &di) in el.iter().enumerate() {
                 let q = dofs.eq[di as usize];
-                if q < CONSTRAINED {
+                if q < CONSTRAINED && (a < k || (b as usize) < k) {
                     slots[base + a * nd] = pos[q as usize];
                 }
             }
@@ -545,6 +561,9 @@ fn block_slots(
     }
     out
 }
+
+/// One block's elements: their dofs (full numbering), one after the other, and the offsets.
+pub type ElementList = (Vec<u32>, Vec<usize>);
 
 /// Global sparse pattern (union over all blocks), per-block slot tables and colourings; the
 /// value and residual buffers.
@@ -574,12 +593,27 @@ impl Assembler {
     /// Pattern of several element blocks, each given as (dof lists, offsets) in full-dof
     /// numbering. Block indices follow the order given.
     pub fn with_blocks(dofs: &DofMap, lists: Vec<(Vec<u32>, Vec<usize>)>) -> Self {
+        let cores = vec![None; lists.len()];
+        Self::with_blocks_cored(dofs, lists, cores)
+    }
+
+    /// As [`Self::with_blocks`], with per block optionally the size of each element's core:
+    /// `cores[b][e] = k` leaves out of the pattern the pairs of element e of block b whose row
+    /// and column are both past its first k dofs (its matrix has nonzeros only in the rows or
+    /// the columns of its core: a coupling block reaching beyond a cell). The kernel must
+    /// leave those entries zero; they are not assembled.
+    pub fn with_blocks_cored(
+        dofs: &DofMap,
+        lists: Vec<(Vec<u32>, Vec<usize>)>,
+        cores: Vec<Option<Vec<u32>>>,
+    ) -> Self {
         let n = dofs.n_eq;
-        let (col_ptr, row_idx) = block_pattern(dofs, &lists);
-        let mut all_slots = block_slots(dofs, &lists, &col_ptr, &row_idx).into_iter();
+        let (col_ptr, row_idx) = block_pattern(dofs, &lists, &cores);
+        let mut all_slots = block_slots(dofs, &lists, &cores, &col_ptr, &row_idx).into_iter();
         let blocks = lists
             .into_iter()
-            .map(|(d, o)| {
+            .zip(cores)
+            .map(|((d, o), core)| {
                 let slot_of = |ei: u32, ej: u32| -> u32 {
                     let (s, e) = (col_ptr[ej as usize], col_ptr[ej as usize + 1]);
                     row_idx[s..e]
@@ -656,6 +690,7 @@ impl Assembler {
                 Block {
                     dofs: d,
                     offsets: o,
+                    core,
                     slots,
                     slot_offsets,
                     con_k,
@@ -683,6 +718,14 @@ impl Assembler {
 
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
+    }
+    /// The blocks' element lists and cores, as [`Self::with_blocks_cored`] takes them (to
+    /// rebuild the assembler with a block changed).
+    pub fn block_lists(&self) -> (Vec<ElementList>, Vec<Option<Vec<u32>>>) {
+        self.blocks
+            .iter()
+            .map(|b| ((b.dofs.clone(), b.offsets.clone()), b.core.clone()))
+            .unzip()
     }
     /// Number of colours of block 0 (the cells); 0 if it is assembled serially.
     pub fn n_colors(&self) -> usize {
@@ -904,5 +947,83 @@ impl Assembler {
             }
         }
         a
+    }
+}
+
+#[cfg(test)]
+mod cored_block_tests {
+    use super::*;
+    use crate::mesh::annulus::{annulus, AnnulusSpec};
+
+    /// A block whose elements have a core: its pattern holds the pairs with the row or the
+    /// column in the core and no other, its slots are empty (u32::MAX) exactly at the pairs
+    /// left out, and the whole pattern is the union with the cells' pattern.
+    #[test]
+    fn a_cored_block_leaves_out_the_pairs_outside_its_core() {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 1,
+            n_theta: 8,
+            degree: 1,
+            grading_r: 1.0,
+            grading_theta: 1.0,
+        });
+        let dofs = DofMap::new(&mesh, 0, &[]);
+        // One element: the dofs of nodes 0 and 1 (core), then those of nodes 5 and 6.
+        let el: Vec<u32> = [0u32, 1, 5, 6]
+            .iter()
+            .flat_map(|&n| [2 * n, 2 * n + 1])
+            .collect();
+        let core = 4usize;
+        let lists = vec![(el.clone(), vec![0, el.len()])];
+        let cored =
+            Assembler::with_blocks_cored(&dofs, lists.clone(), vec![Some(vec![core as u32])]);
+        let full = Assembler::with_blocks(&dofs, lists);
+        let has = |asm: &Assembler, i: usize, j: usize| {
+            asm.row_idx[asm.col_ptr[j]..asm.col_ptr[j + 1]].contains(&i)
+        };
+        let nd = el.len();
+        let mut left_out = 0;
+        for a in 0..nd {
+            for b in 0..nd {
+                let (i, j) = (
+                    dofs.eq[el[a] as usize] as usize,
+                    dofs.eq[el[b] as usize] as usize,
+                );
+                let kept = a < core || b < core;
+                assert_eq!(has(&cored, i, j), kept, "pair ({a}, {b})");
+                assert!(has(&full, i, j), "pair ({a}, {b}) of the full block");
+                let slot = cored.blocks[0].slots[a * nd + b];
+                assert_eq!(slot != u32::MAX, kept, "slot of pair ({a}, {b})");
+                if kept {
+                    assert_eq!(cored.row_idx[slot as usize], i);
+                }
+                left_out += usize::from(!kept);
+            }
+        }
+        assert_eq!(left_out, 16);
+        assert_eq!(cored.nnz(), full.nnz() - left_out);
+        // Rebuilt from its own lists, the assembler keeps the core.
+        let (lists, cores) = cored.block_lists();
+        let again = Assembler::with_blocks_cored(&dofs, lists, cores);
+        assert_eq!(
+            (again.col_ptr.clone(), again.row_idx.clone()),
+            (cored.col_ptr.clone(), cored.row_idx.clone())
+        );
+        // Union with the cells' block: a left-out pair that two cell-mates share stays.
+        let cells = (dofs.cell_dofs.clone(), dofs.cell_offsets.clone());
+        let both = Assembler::with_blocks_cored(
+            &dofs,
+            vec![cells, (el.clone(), vec![0, el.len()])],
+            vec![None, Some(vec![core as u32])],
+        );
+        let (i, j) = (
+            dofs.eq[el[4] as usize] as usize,
+            dofs.eq[el[6] as usize] as usize,
+        );
+        assert!(has(&both, i, j), "nodes 5 and 6 share a cell");
+        let (i, j) = (dofs.eq[10] as usize, dofs.eq[0] as usize);
+        assert!(has(&both, i, j) && has(&both, j, i));
     }
 }

@@ -301,15 +301,10 @@ impl SolidSystem {
         if !c.enable_steady_slip(&self.model.mesh) {
             return;
         }
-        let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
-            .asm
-            .blocks
-            .iter()
-            .map(|b| (b.dofs.clone(), b.offsets.clone()))
-            .collect();
+        let (mut lists, cores) = self.asm.block_lists();
         lists[1] = c.element_dofs(&self.model.mesh, &self.dofs);
         let parallel = self.asm.parallel;
-        self.asm = Assembler::with_blocks(&self.dofs, lists);
+        self.asm = Assembler::with_blocks_cored(&self.dofs, lists, cores);
         self.asm.parallel = parallel;
     }
 
@@ -417,24 +412,22 @@ impl SolidSystem {
         let Some(sv) = self.steady_visc.as_mut() else {
             return;
         };
-        let mut lists: Vec<(Vec<u32>, Vec<usize>)> = self
-            .asm
-            .blocks
-            .iter()
-            .map(|b| (b.dofs.clone(), b.offsets.clone()))
-            .collect();
+        let (mut lists, mut cores) = self.asm.block_lists();
         if let Some((block, _, _)) = sv.assembled.take() {
             lists.truncate(block);
+            cores.truncate(block);
         }
         sv.banded = banded;
         if mode != SteadyDampingTangent::MatrixFree {
             let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
             let mesh = &self.model.mesh;
             let (mut ext, mut ext_off) = (Vec::new(), vec![0]);
-            let (mut list, mut off) = (Vec::new(), vec![0]);
+            let (mut list, mut off, mut core) = (Vec::new(), vec![0], Vec::new());
             for c in 0..mesh.n_cells() {
                 let start = ext.len();
                 let nodes = mesh.cell_nodes(c);
+                // The cell's own dofs first: the coupling has rows there only.
+                core.push(2 * nodes.len() as u32);
                 ext.extend_from_slice(nodes);
                 for &a in nodes {
                     let a = a as usize;
@@ -453,9 +446,10 @@ impl SolidSystem {
             }
             sv.assembled = Some((lists.len(), ext, ext_off));
             lists.push((list, off));
+            cores.push(Some(core));
         }
         let parallel = self.asm.parallel;
-        self.asm = Assembler::with_blocks(&self.dofs, lists);
+        self.asm = Assembler::with_blocks_cored(&self.dofs, lists, cores);
         self.asm.parallel = parallel;
     }
 
