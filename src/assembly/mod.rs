@@ -452,7 +452,7 @@ fn block_pattern(
     cores: &[Option<Vec<u32>>],
 ) -> (Vec<usize>, Vec<usize>) {
     let n = dofs.n_eq;
-    // Every element's free equations, flat, each flagged whether it comes from a core dof.
+    // Every element's free equations, flat, each flagged whether it is a core (row) dof.
     let (mut el_eq, mut el_core, mut el_off) =
         (Vec::<u32>::new(), Vec::<bool>::new(), vec![0usize]);
     let mut tgt = Vec::new();
@@ -468,11 +468,11 @@ fn block_pattern(
             el_off.push(el_eq.len());
         }
     }
-    // Equation → (element, whether it is a core equation there).
+    // Equation → the elements that hold it.
     let (inc_ptr, inc) = bucket(n, |f| {
         for e in 0..el_off.len() - 1 {
             for p in el_off[e]..el_off[e + 1] {
-                f(el_eq[p] as usize, (e as u32, el_core[p]));
+                f(el_eq[p] as usize, e as u32);
             }
         }
     });
@@ -482,11 +482,11 @@ fn block_pattern(
     let mut row_idx = Vec::new();
     for j in 0..n {
         let start = row_idx.len();
-        for &(e, j_core) in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
+        for &e in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
             let e = e as usize;
             for p in el_off[e]..el_off[e + 1] {
                 let q = el_eq[p];
-                if (j_core || el_core[p]) && mark[q as usize] != j as u32 {
+                if el_core[p] && mark[q as usize] != j as u32 {
                     mark[q as usize] = j as u32;
                     row_idx.push(q as usize);
                 }
@@ -553,7 +553,7 @@ fn block_slots(
                 .map_or(usize::MAX, |c| c[e as usize] as usize);
             for (a, &di) in el.iter().enumerate() {
                 let q = dofs.eq[di as usize];
-                if q < CONSTRAINED && (a < k || (b as usize) < k) {
+                if q < CONSTRAINED && a < k {
                     slots[base + a * nd] = pos[q as usize];
                 }
             }
@@ -599,9 +599,10 @@ impl Assembler {
 
     /// As [`Self::with_blocks`], with per block optionally the size of each element's core:
     /// `cores[b][e] = k` leaves out of the pattern the pairs of element e of block b whose row
-    /// and column are both past its first k dofs (its matrix has nonzeros only in the rows or
-    /// the columns of its core: a coupling block reaching beyond a cell). The kernel must
-    /// leave those entries zero; they are not assembled.
+    /// is past its first k dofs (its matrix has nonzeros only in the rows of its core: a
+    /// coupling block from a cell's residual to nodes beyond the cell). The kernel fills the
+    /// first k rows of its matrix; the others are neither zeroed nor assembled. The pattern
+    /// is then not structurally symmetric: the LU analyses A + Aᵀ.
     pub fn with_blocks_cored(
         dofs: &DofMap,
         lists: Vec<ElementList>,
@@ -872,6 +873,11 @@ impl Assembler {
         while start < n_el {
             let end = (start + BATCH).min(n_el);
             let batch = &mut buf[..(end - start) * stride];
+            // Rows past an element's core are neither zeroed nor assembled (not in the
+            // pattern).
+            let core_rows = |e: usize, nd: usize| -> usize {
+                block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd))
+            };
             let eval = |(i, s): (usize, &mut [f64])| {
                 let e = start + i;
                 let nd = block.element(e).len();
@@ -879,7 +885,8 @@ impl Assembler {
                 let r = &mut r[..nd];
                 let k = &mut k[..if with_matrix { nd * nd } else { 0 }];
                 r.fill(0.0);
-                k.fill(0.0);
+                let kc = core_rows(e, nd);
+                k[..kc * nd].fill(0.0);
                 kernel(e, r, k);
             };
             if self.parallel {
@@ -897,9 +904,10 @@ impl Assembler {
                         self.scale[q as usize] += s[a].abs();
                     }
                 }
+                let kc = core_rows(e, nd);
                 if with_matrix {
                     let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                    for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + nd * nd]) {
+                    for (slot, &kv) in sl[..kc * nd].iter().zip(&s[max_nd..max_nd + kc * nd]) {
                         if *slot != u32::MAX {
                             self.values[*slot as usize] += kv;
                         }
@@ -914,7 +922,7 @@ impl Assembler {
                     if with_matrix {
                         let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
                         for &(ab, slot, w) in ck {
-                            if slot != u32::MAX {
+                            if slot != u32::MAX && (ab as usize) < kc * nd {
                                 self.values[slot as usize] += w * s[max_nd + ab as usize];
                             }
                         }
@@ -955,8 +963,8 @@ mod cored_block_tests {
     use super::*;
     use crate::mesh::annulus::{annulus, AnnulusSpec};
 
-    /// A block whose elements have a core: its pattern holds the pairs with the row or the
-    /// column in the core and no other, its slots are empty (u32::MAX) exactly at the pairs
+    /// A block whose elements have a core: its pattern holds the pairs with the row in the
+    /// core and no other, its slots are empty (u32::MAX) exactly at the pairs
     /// left out, and the whole pattern is the union with the cells' pattern.
     #[test]
     fn a_cored_block_leaves_out_the_pairs_outside_its_core() {
@@ -991,7 +999,7 @@ mod cored_block_tests {
                     dofs.eq[el[a] as usize] as usize,
                     dofs.eq[el[b] as usize] as usize,
                 );
-                let kept = a < core || b < core;
+                let kept = a < core;
                 assert_eq!(has(&cored, i, j), kept, "pair ({a}, {b})");
                 assert!(has(&full, i, j), "pair ({a}, {b}) of the full block");
                 let slot = cored.blocks[0].slots[a * nd + b];
@@ -1002,7 +1010,7 @@ mod cored_block_tests {
                 left_out += usize::from(!kept);
             }
         }
-        assert_eq!(left_out, 16);
+        assert_eq!(left_out, 32);
         assert_eq!(cored.nnz(), full.nnz() - left_out);
         // Rebuilt from its own lists, the assembler keeps the core.
         let (lists, cores) = cored.block_lists();

@@ -473,42 +473,54 @@ impl SolidSystem {
                 let nn = nodes.len();
                 let nu = 2 * nn;
                 let ex = &ext[ext_off[c]..ext_off[c + 1]];
-                let nd = 2 * ex.len();
+                let (ne, nd) = (ex.len(), 2 * ex.len());
                 let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
                 let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
                 let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
-                // Row weights over the extended nodes: on the stack for the usual sizes (a Q2
-                // cell and its ring stencils: at most 21 nodes).
-                let mut stack = [0.0f64; 64];
+                // W (N × extended nodes): row m is ω (D − D_c) (or ω (D₃ − D_c)) of the
+                // cell's node m over the extended nodes; then two rows of the product. On the
+                // stack for the usual sizes (a Q2 cell and its ring stencils: at most 21
+                // extended nodes).
+                const MAX_EXT: usize = 32;
+                let mut stack = [0.0f64; 11 * MAX_EXT];
                 let mut heap = Vec::new();
-                let w: &mut [f64] = if ex.len() <= stack.len() {
-                    &mut stack[..ex.len()]
+                let buf: &mut [f64] = if nn <= 9 && ne <= MAX_EXT {
+                    &mut stack[..(nn + 2) * ne]
                 } else {
-                    heap.resize(ex.len(), 0.0);
+                    heap.resize((nn + 2) * ne, 0.0);
                     &mut heap
                 };
+                let (w, row) = buf.split_at_mut(nn * ne);
                 for m in 0..nn {
-                    // Row m of ω (D − D_c) (or ω (D₃ − D_c)) over the extended nodes.
-                    w.fill(0.0);
+                    let wm = &mut w[m * ne..(m + 1) * ne];
                     let node = nodes[m] as usize;
                     for p in stencil.ptr[node]..stencil.ptr[node + 1] {
                         if let Some(e) = ex.iter().position(|&q| q == stencil.idx[p]) {
-                            w[e] += om * stencil.w[p];
+                            wm[e] += om * stencil.w[p];
                         }
                     }
-                    for b in 0..nn {
-                        w[b] -= om * d[m * nn + b];
+                    for (b, wb) in wm[..nn].iter_mut().enumerate() {
+                        *wb -= om * d[m * nn + b];
                     }
-                    for r in 0..nu {
-                        for comp in 0..2 {
-                            let arm = a[packed_at(nu, r, 2 * m + comp)];
-                            if arm == 0.0 {
-                                continue;
-                            }
-                            for (e, &we) in w.iter().enumerate() {
-                                k[r * nd + 2 * e + comp] += arm * we;
-                            }
+                }
+                // Row r of the coupling, component by component: K[r, (e, i)] =
+                // Σ_m A[r, (m, i)] W[m, e] (the cell's rows only: its core).
+                let (s0, s1) = row.split_at_mut(ne);
+                for r in 0..nu {
+                    s0.fill(0.0);
+                    s1.fill(0.0);
+                    for m in 0..nn {
+                        let (a0, a1) = (a[packed_at(nu, r, 2 * m)], a[packed_at(nu, r, 2 * m + 1)]);
+                        let wm = &w[m * ne..(m + 1) * ne];
+                        for ((x0, x1), &we) in s0.iter_mut().zip(s1.iter_mut()).zip(wm) {
+                            *x0 += a0 * we;
+                            *x1 += a1 * we;
                         }
+                    }
+                    let krow = &mut k[r * nd..(r + 1) * nd];
+                    for (e, kp) in krow.chunks_exact_mut(2).enumerate() {
+                        kp[0] += s0[e];
+                        kp[1] += s1[e];
                     }
                 }
             });
