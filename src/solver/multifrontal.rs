@@ -23,7 +23,11 @@
 //!
 //! The dense kernels (triangular solves, the Schur update) are faer's; the numeric phase
 //! allocates nothing (the factor storage, the front and the update stack are sized by the
-//! symbolic phase).
+//! symbolic phase). The children of each supernode are factorized in Liu's order (by
+//! decreasing peak of their subtree's update stack less their own update matrix), which
+//! minimises the stack's peak for the tree: on the damped steady tangent at 262k DOFs
+//! (banded) 2.7 M entries instead of 19.3 M in the tree's index order, 0.6 M instead of
+//! 3.2 M without damping.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::factor::{lu_in_place, lu_in_place_scratch};
@@ -185,6 +189,57 @@ impl std::fmt::Debug for SymmetricLu {
     }
 }
 
+/// A postorder of the forest `parent` (`usize::MAX` at the roots) with the children of each
+/// node reordered in place in Liu's order: by decreasing peak of the child's subtree less its
+/// own update matrix (`update[c]`, which stays on the stack while its later siblings are
+/// factorized). For update stacks this order minimises the peak over all postorders.
+fn liu_postorder(parent: &[usize], children: &mut [Vec<usize>], update: &[usize]) -> Vec<usize> {
+    let postorder = |children: &[Vec<usize>]| {
+        let mut order = Vec::with_capacity(parent.len());
+        let mut dfs: Vec<(usize, usize)> = Vec::new();
+        for root in (0..parent.len()).filter(|&s| parent[s] == usize::MAX) {
+            dfs.push((root, 0));
+            while let Some((s, k)) = dfs.pop() {
+                if k < children[s].len() {
+                    dfs.push((s, k + 1));
+                    dfs.push((children[s][k], 0));
+                } else {
+                    order.push(s);
+                }
+            }
+        }
+        order
+    };
+    let mut sub_peak = vec![0usize; parent.len()];
+    for s in postorder(children) {
+        let ch = &mut children[s];
+        ch.sort_by_key(|&c| std::cmp::Reverse(sub_peak[c] - update[c]));
+        let (mut below, mut peak) = (0usize, update[s]);
+        for &c in ch.iter() {
+            peak = peak.max(below + sub_peak[c]);
+            below += update[c];
+        }
+        sub_peak[s] = peak;
+    }
+    postorder(children)
+}
+
+/// Peak of the update stack over the postorder `order`: each node pops its children's update
+/// matrices, then pushes its own.
+fn stack_peak(order: &[usize], n_children: &[usize], update: &[usize]) -> usize {
+    let (mut depth, mut peak) = (0usize, 0usize);
+    let mut sizes: Vec<usize> = Vec::new();
+    for &s in order {
+        for _ in 0..n_children[s] {
+            depth -= sizes.pop().unwrap_or(0);
+        }
+        sizes.push(update[s]);
+        depth += update[s];
+        peak = peak.max(depth);
+    }
+    peak
+}
+
 impl SymmetricLu {
     /// Analyse the CSC pattern of an n × n matrix (rows sorted within each column, no
     /// duplicates). The pattern need not be symmetric: A + Aᵀ is analysed.
@@ -329,19 +384,17 @@ impl SymmetricLu {
             }
         }
         let n_children: Vec<usize> = children.iter().map(Vec::len).collect();
-        let mut order = Vec::with_capacity(ns);
-        let mut dfs: Vec<(usize, usize)> = Vec::new();
-        for root in (0..ns).filter(|&s| parent[s] == usize::MAX) {
-            dfs.push((root, 0));
-            while let Some((s, k)) = dfs.pop() {
-                if k < children[s].len() {
-                    dfs.push((s, k + 1));
-                    dfs.push((children[s][k], 0));
+        let update: Vec<usize> = (0..ns)
+            .map(|s| {
+                let r = rows_ptr[s + 1] - rows_ptr[s];
+                if parent[s] == usize::MAX {
+                    0
                 } else {
-                    order.push(s);
+                    r * r
                 }
-            }
-        }
+            })
+            .collect();
+        let order = liu_postorder(&parent, &mut children, &update);
         // Factor storage, the largest front, the update stack's peak.
         let mut fac_off = Vec::with_capacity(ns + 1);
         fac_off.push(0usize);
@@ -356,19 +409,7 @@ impl SymmetricLu {
             max_w = max_w.max(w);
             max_r = max_r.max(r);
         }
-        let (mut depth, mut peak) = (0usize, 0usize);
-        let mut sizes: Vec<usize> = Vec::new();
-        for &s in &order {
-            for _ in 0..n_children[s] {
-                depth -= sizes.pop().unwrap_or(0);
-            }
-            let r = rows_ptr[s + 1] - rows_ptr[s];
-            if parent[s] != usize::MAX {
-                sizes.push(r * r);
-                depth += r * r;
-                peak = peak.max(depth);
-            }
-        }
+        let peak = stack_peak(&order, &n_children, &update);
         // Where the entries of A go: bucket them by the supernode of their leading permuted
         // index, then resolve front positions one supernode at a time.
         let mut bucket_ptr = vec![0usize; ns + 1];
@@ -784,6 +825,99 @@ impl From<Round> for f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Liu's children order gives the lowest update-stack peak over all postorders: checked
+    /// against every ordering of the children on small random forests (and it is never above
+    /// the tree's index order).
+    #[test]
+    fn liu_order_minimises_the_update_stack_peak() {
+        fn peak_of(parent: &[usize], children: &[Vec<usize>], update: &[usize]) -> usize {
+            let mut order = Vec::new();
+            fn visit(s: usize, children: &[Vec<usize>], order: &mut Vec<usize>) {
+                for &c in &children[s] {
+                    visit(c, children, order);
+                }
+                order.push(s);
+            }
+            for r in (0..parent.len()).filter(|&s| parent[s] == usize::MAX) {
+                visit(r, children, &mut order);
+            }
+            let n_children: Vec<usize> = children.iter().map(Vec::len).collect();
+            stack_peak(&order, &n_children, update)
+        }
+        fn best(
+            parent: &[usize],
+            children: &mut Vec<Vec<usize>>,
+            update: &[usize],
+            node: usize,
+        ) -> usize {
+            // Every permutation of every node's children, node by node.
+            if node == children.len() {
+                return peak_of(parent, children, update);
+            }
+            let k = children[node].len();
+            let mut idx: Vec<usize> = (0..k).collect();
+            let orig = children[node].clone();
+            let mut lowest = usize::MAX;
+            loop {
+                children[node] = idx.iter().map(|&i| orig[i]).collect();
+                lowest = lowest.min(best(parent, children, update, node + 1));
+                // Next permutation (lexicographic).
+                let Some(i) = (1..k).rev().find(|&i| idx[i - 1] < idx[i]) else {
+                    break;
+                };
+                let j = (i..k).rev().find(|&j| idx[j] > idx[i - 1]).unwrap();
+                idx.swap(i - 1, j);
+                idx[i..].reverse();
+            }
+            children[node] = orig;
+            lowest
+        }
+        let mut seed = 12345u64;
+        let mut rand = |m: usize| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as usize) % m
+        };
+        for _ in 0..200 {
+            let n = 2 + rand(7);
+            // parent[s] > s (or a root), as in an elimination tree.
+            let parent: Vec<usize> = (0..n)
+                .map(|s| {
+                    if s + 1 == n || rand(5) == 0 {
+                        usize::MAX
+                    } else {
+                        s + 1 + rand(n - s - 1)
+                    }
+                })
+                .collect();
+            let update: Vec<usize> = (0..n)
+                .map(|s| {
+                    if parent[s] == usize::MAX {
+                        0
+                    } else {
+                        1 + rand(50)
+                    }
+                })
+                .collect();
+            let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+            for s in 0..n {
+                if parent[s] != usize::MAX {
+                    children[parent[s]].push(s);
+                }
+            }
+            let index_order = peak_of(&parent, &children, &update);
+            let optimum = best(&parent, &mut children.clone(), &update, 0);
+            let mut liu = children.clone();
+            let order = liu_postorder(&parent, &mut liu, &update);
+            let n_children: Vec<usize> = liu.iter().map(Vec::len).collect();
+            let got = stack_peak(&order, &n_children, &update);
+            assert_eq!(got, optimum, "parent {parent:?} update {update:?}");
+            assert!(got <= index_order);
+            assert_eq!(order.len(), n);
+        }
+    }
 
     /// Dense Gaussian elimination with partial pivoting: x, sign det, log|det|.
     fn dense(a: &[Vec<f64>], b: &[f64]) -> (Vec<f64>, f64, f64) {
