@@ -646,11 +646,16 @@ impl Assembler {
                 for e in 0..n_con {
                     let el = &d[o[e]..o[e + 1]];
                     let nd = el.len();
+                    // Matrix rows past a core are not assembled.
+                    let rows = core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd));
                     for (a, &di) in el.iter().enumerate() {
                         let ei = dofs.eq[di as usize];
                         if ei == CONSTRAINED {
                             dofs.targets(di, &mut ti);
                             con_r.extend(ti.iter().map(|&(q, w)| (a as u32, q, w)));
+                        }
+                        if a >= rows {
+                            continue;
                         }
                         for (b, &dj) in el.iter().enumerate() {
                             let ej = dofs.eq[dj as usize];
@@ -878,11 +883,6 @@ impl Assembler {
         while start < n_el {
             let end = (start + BATCH).min(n_el);
             let batch = &mut buf[..(end - start) * stride];
-            // Rows past an element's core are neither zeroed nor assembled (not in the
-            // pattern).
-            let core_rows = |e: usize, nd: usize| -> usize {
-                block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd))
-            };
             let eval = |(i, s): (usize, &mut [f64])| {
                 let e = start + i;
                 let nd = block.element(e).len();
@@ -890,7 +890,9 @@ impl Assembler {
                 let r = &mut r[..nd];
                 let k = &mut k[..if with_matrix { nd * nd } else { 0 }];
                 r.fill(0.0);
-                let kc = core_rows(e, nd);
+                // Rows past an element's core are neither zeroed nor assembled (not in the
+                // pattern).
+                let kc = block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd));
                 k[..kc * nd].fill(0.0);
                 kernel(e, r, k);
             };
@@ -901,7 +903,6 @@ impl Assembler {
             }
             for (e, s) in (start..end).zip(batch.chunks(stride)) {
                 let el = block.element(e);
-                let nd = el.len();
                 for (a, &d) in el.iter().enumerate() {
                     let q = dofs.eq[d as usize];
                     if q < CONSTRAINED {
@@ -909,10 +910,10 @@ impl Assembler {
                         self.scale[q as usize] += s[a].abs();
                     }
                 }
-                let kc = core_rows(e, nd);
                 if with_matrix {
+                    // A cored element's slots cover its core's rows only.
                     let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                    for (slot, &kv) in sl[..kc * nd].iter().zip(&s[max_nd..max_nd + kc * nd]) {
+                    for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + sl.len()]) {
                         if *slot != u32::MAX {
                             self.values[*slot as usize] += kv;
                         }
@@ -927,7 +928,7 @@ impl Assembler {
                     if with_matrix {
                         let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
                         for &(ab, slot, w) in ck {
-                            if slot != u32::MAX && (ab as usize) < kc * nd {
+                            if slot != u32::MAX {
                                 self.values[slot as usize] += w * s[max_nd + ab as usize];
                             }
                         }
