@@ -928,9 +928,11 @@ impl SparseSolver {
         self.track_det = on;
     }
 
-    /// Symmetric-pattern LU only: keep the factors in single precision from the next
+    /// Symmetric-pattern LU only: factorize and solve in single precision from the next
     /// factorization on ([`super::multifrontal::SymmetricLu::set_single_precision_factors`]),
-    /// for factors that only precondition an iterative solve. No effect on other backends.
+    /// for factors that only precondition an iterative solve. A factorization that loses a
+    /// pivot to single-precision round-off is redone in double precision, which stays on
+    /// ([`Self::single_precision_factors`] then reports it). No effect on other backends.
     pub fn set_single_precision_factors(&mut self, on: bool) {
         if let Backend::Symmetric(st) = &mut self.backend {
             st.lu.set_single_precision_factors(on);
@@ -1049,7 +1051,13 @@ impl SparseSolver {
             Backend::Symmetric(st) => {
                 // A pivot that the pivoting within supernodes could not make nonzero (a zero
                 // diagonal block, a singular matrix): hand over to the partial-pivoting LU.
-                let ok = st.lu.factorize(values, par).is_ok() && st.lu.perturbed() == 0;
+                let mut ok = st.lu.factorize(values, par).is_ok() && st.lu.perturbed() == 0;
+                if !ok && st.lu.single_precision_factors() {
+                    // A pivot lost to single-precision round-off (a nearly singular block):
+                    // the same LU in double precision.
+                    st.lu.set_single_precision_factors(false);
+                    ok = st.lu.factorize(values, par).is_ok() && st.lu.perturbed() == 0;
+                }
                 if !ok {
                     return self.fall_back_to_colamd(values);
                 }
