@@ -259,7 +259,8 @@ fn matrix_free_and_assembled_reach_the_same_state() {
 
 /// `[solver] damping_cell_weight` changes the assembled part of the matrix-free damping
 /// tangent (GMRES's preconditioner) and nothing else: at one state the exact tangent is the
-/// same for every weight, and the steady solves reach the same state. Out-of-range weights
+/// same for every weight (to the single precision in which ∂r/∂v is stored), and the steady
+/// solves reach the same state. Out-of-range weights
 /// are refused by name.
 #[test]
 fn damping_cell_weight_changes_only_the_preconditioner() {
@@ -302,7 +303,9 @@ fn damping_cell_weight_changes_only_the_preconditioner() {
     let (da, dk) = (max_diff(&a1, &a4) / kmax, max_diff(&k1, &k4) / kmax);
     println!("relative to max |K|: assembled parts differ by {da:.2e}, exact tangents by {dk:.2e}");
     assert!(da > 1e-3, "the weight did not reach the matrix: {da:e}");
-    assert!(dk < 1e-12, "{dk:e}");
+    // The matrix-free part applies ∂r/∂v stored in single precision, the assembled part
+    // takes it in double precision: the exact tangents agree to single precision.
+    assert!(dk < 1e-8, "{dk:e}");
     for bad in ["0.0", "1.5", "-0.2"] {
         let e = Scene::from_toml_str(
             ODEN,

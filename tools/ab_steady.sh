@@ -6,6 +6,7 @@
 #   REPS=5 tools/ab_steady.sh OLD_TREAD NEW_TREAD 8x128:matrix_free 16x512:banded ...
 #
 # TANGENT is a `[solver] damping_tangent` keyword (auto, matrix_free, banded, assembled).
+# AB_SET=KEY=VALUE adds one more scene override to every run (e.g. AB_SET=time.strain_rate_damping=0).
 set -euo pipefail
 [ $# -ge 3 ] || { sed -n '2,8p' "$0" >&2; exit 2; }
 OLD=$1; NEW=$2; shift 2
@@ -17,7 +18,7 @@ run() { # binary mesh tangent -> "wall_s rss_kB"
   d=$(mktemp -d)
   RAYON_NUM_THREADS=1 /usr/bin/time -f "%M" -o "$d/t" "$1" run "$SCENE" --mode steady -q --threads 1 \
     --set "mesh.n_r=$nr" --set "mesh.n_theta=$nt" --set 'output.sinks=["summary"]' \
-    --set "solver.damping_tangent=\"$3\"" --out "$d/o" >/dev/null 2>&1 \
+    --set "solver.damping_tangent=\"$3\"" ${AB_SET:+--set "$AB_SET"} --out "$d/o" >/dev/null 2>&1 \
     || { echo "run failed: $1 $2 $3" >&2; rm -rf "$d"; exit 1; }
   python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['wall_time_s'], open(sys.argv[2]).read().strip())" "$d/o/summary.json" "$d/t"
   rm -rf "$d"

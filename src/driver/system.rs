@@ -83,12 +83,17 @@ pub struct SolidSystem {
 #[derive(Clone, Debug)]
 pub struct SteadyViscosity {
     pub nodal: NodalThetaDerivative,
-    /// Per cell, its own θ-derivative at its nodes (N × N row-major) at `local_off[c]`.
+    /// Per cell, its own θ-derivative at its nodes (N × N row-major) at `local_off[c]`,
+    /// stored once for the cells that share it (the derivative along the circles is
+    /// invariant under rotations: the cells of a ring of a uniform annulus share one).
     local: Vec<f64>,
     local_off: Vec<usize>,
     /// Per cell, ∂r_c/∂v_c (2N × 2N, symmetric: the upper triangle row by row, see
-    /// [`packed_at`]) at `av_off[c]`, from the last evaluation with the matrix.
-    av: Vec<f64>,
+    /// [`packed_at`]) at `av_off[c]`, from the last evaluation with the matrix, in single
+    /// precision: it enters the preconditioner's matrix (banded and assembled tangents)
+    /// and the matrix-free part of the Newton step, whose relative error 6e-8 is far below
+    /// the forcing terms of the inexact Newton steps.
+    av: Vec<f32>,
     av_off: Vec<usize>,
     /// Nodal velocities of the current evaluation (full length; reused, not reallocated).
     vel: Vec<f64>,
@@ -105,6 +110,11 @@ pub struct SteadyViscosity {
     /// scratch for their product.
     banded: Option<NodalThetaDerivative>,
     dv3: Vec<f64>,
+    /// The coupling block also holds the cells' own matrices (their rows are its rows, their
+    /// columns the first of its columns), and block 0 only their residuals: one slot table
+    /// and one scatter per cell instead of two. Set with `assembled` when every cell's dofs
+    /// are its nodes' displacements.
+    cells_in_coupling: bool,
     /// Set when a GMRES solve with the matrix-free coupling did not reach its tolerance.
     pub stalled: bool,
     /// Weight of the cells' own derivative in the matrix-free tangent's assembled part
@@ -328,22 +338,36 @@ impl SolidSystem {
             return false;
         };
         let mesh = &self.model.mesh;
-        let (mut local, mut local_off, mut av_off) = (Vec::new(), vec![0], vec![0]);
+        let (mut local, mut local_off, mut av_off) = (Vec::new(), Vec::new(), vec![0]);
+        // Cells whose derivatives agree to 1e-12 of their largest entry share one copy.
+        let mut seen: std::collections::HashMap<Vec<i64>, usize> = Default::default();
         for c in 0..mesh.n_cells() {
             let Some(d) = self.model.cell_theta_derivative(c) else {
                 return false;
             };
-            local.extend_from_slice(&d);
-            local_off.push(local.len());
+            let scale = d
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()))
+                .max(f64::MIN_POSITIVE);
+            let key: Vec<i64> = d
+                .iter()
+                .map(|v| (v / scale * 1e12).round() as i64)
+                .collect();
+            let start = *seen.entry(key).or_insert_with(|| {
+                local.extend_from_slice(&d);
+                local.len() - d.len()
+            });
+            local_off.push(start);
             let nu = 2 * mesh.cell_nodes(c).len();
             av_off.push(av_off[c] + nu * (nu + 1) / 2);
         }
+        local.shrink_to_fit();
         let n_full = self.x.len();
         self.steady_visc = Some(SteadyViscosity {
             nodal,
             local,
             local_off,
-            av: vec![0.0; av_off[mesh.n_cells()]],
+            av: vec![0.0f32; av_off[mesh.n_cells()]],
             av_off,
             vel: vec![0.0; n_full],
             du: vec![0.0; n_full],
@@ -351,6 +375,7 @@ impl SolidSystem {
             assembled: None,
             banded: None,
             dv3: vec![0.0; n_full],
+            cells_in_coupling: false,
             stalled: false,
             cell_weight: DEFAULT_DAMPING_CELL_WEIGHT,
         });
@@ -417,6 +442,9 @@ impl SolidSystem {
             lists.truncate(block);
             cores.truncate(block);
         }
+        // Block 0 holds the cells' matrices unless the coupling block takes them (below).
+        cores[0] = None;
+        sv.cells_in_coupling = false;
         sv.banded = banded;
         if mode != SteadyDampingTangent::MatrixFree {
             let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
@@ -444,6 +472,16 @@ impl SolidSystem {
                 }
                 off.push(list.len());
             }
+            // A cell's coupling element starts with the cell's own dofs: when those are all
+            // of the cell's dofs (no cell-owned unknowns), the coupling block holds the
+            // cells' matrices and block 0 keeps their residuals only (an empty core).
+            let (cl, co) = &lists[0];
+            let same = (0..mesh.n_cells())
+                .all(|c| cl[co[c]..co[c + 1]] == list[off[c]..off[c] + core[c] as usize]);
+            if same {
+                cores[0] = Some(vec![0; mesh.n_cells()]);
+                sv.cells_in_coupling = true;
+            }
             sv.assembled = Some((lists.len(), ext, ext_off));
             lists.push((list, off));
             cores.push(Some(core));
@@ -455,7 +493,8 @@ impl SolidSystem {
 
     /// Add the steady damping's coupling beyond the cells to the matrix (assembled mode):
     /// per cell, A_c ω (D − D_c) on its extended element, from the A_c of the cell assembly
-    /// just made.
+    /// just made (when the coupling block does not hold the cells' matrices: then
+    /// [`Self::assemble`] adds it with them).
     fn add_steady_damping_coupling(&mut self) {
         let (Some(sv), Some(om)) = (self.steady_visc.as_ref(), self.steady_omega) else {
             return;
@@ -463,66 +502,20 @@ impl SolidSystem {
         let Some((block, ext, ext_off)) = &sv.assembled else {
             return;
         };
-        if self.model.strain_rate_damping <= 0.0 {
+        if self.model.strain_rate_damping <= 0.0 || sv.cells_in_coupling {
             return;
         }
         let mesh = &self.model.mesh;
+        let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
         self.asm
             .add_block_large(*block, &self.dofs, true, |c, _r, k| {
                 let nodes = mesh.cell_nodes(c);
                 let nn = nodes.len();
-                let nu = 2 * nn;
                 let ex = &ext[ext_off[c]..ext_off[c + 1]];
-                let (ne, nd) = (ex.len(), 2 * ex.len());
-                let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
+                let d = &sv.local[sv.local_off[c]..sv.local_off[c] + nn * nn];
                 let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
-                let stencil = sv.banded.as_ref().unwrap_or(&sv.nodal);
-                // W (N × extended nodes): row m is ω (D − D_c) (or ω (D₃ − D_c)) of the
-                // cell's node m over the extended nodes; then two rows of the product. On the
-                // stack for the usual sizes (a Q2 cell and its ring stencils: at most 21
-                // extended nodes).
-                const MAX_EXT: usize = 32;
-                let mut stack = [0.0f64; 11 * MAX_EXT];
-                let mut heap = Vec::new();
-                let buf: &mut [f64] = if nn <= 9 && ne <= MAX_EXT {
-                    &mut stack[..(nn + 2) * ne]
-                } else {
-                    heap.resize((nn + 2) * ne, 0.0);
-                    &mut heap
-                };
-                let (w, row) = buf.split_at_mut(nn * ne);
-                for m in 0..nn {
-                    let wm = &mut w[m * ne..(m + 1) * ne];
-                    let node = nodes[m] as usize;
-                    for p in stencil.ptr[node]..stencil.ptr[node + 1] {
-                        if let Some(e) = ex.iter().position(|&q| q == stencil.idx[p]) {
-                            wm[e] += om * stencil.w[p];
-                        }
-                    }
-                    for (b, wb) in wm[..nn].iter_mut().enumerate() {
-                        *wb -= om * d[m * nn + b];
-                    }
-                }
-                // Row r of the coupling, component by component: K[r, (e, i)] =
-                // Σ_m A[r, (m, i)] W[m, e] (the cell's rows only: its core).
-                let (s0, s1) = row.split_at_mut(ne);
-                for r in 0..nu {
-                    s0.fill(0.0);
-                    s1.fill(0.0);
-                    for m in 0..nn {
-                        let (a0, a1) = (a[packed_at(nu, r, 2 * m)], a[packed_at(nu, r, 2 * m + 1)]);
-                        let wm = &w[m * ne..(m + 1) * ne];
-                        for ((x0, x1), &we) in s0.iter_mut().zip(s1.iter_mut()).zip(wm) {
-                            *x0 += a0 * we;
-                            *x1 += a1 * we;
-                        }
-                    }
-                    let krow = &mut k[r * nd..(r + 1) * nd];
-                    for (e, kp) in krow.chunks_exact_mut(2).enumerate() {
-                        kp[0] += s0[e];
-                        kp[1] += s1[e];
-                    }
-                }
+                let at = |r: usize, col: usize| f64::from(a[packed_at(2 * nn, r, col)]);
+                damping_coupling_rows(nodes, ex, Some(d), stencil, om, at, k);
             });
     }
 
@@ -577,21 +570,55 @@ impl SolidSystem {
             };
             let (model, dofs, asm) = (&self.model, &self.dofs, &mut self.asm);
             let mut av_out = None;
-            let rate = match (terms.rates, self.steady_visc.as_mut(), self.steady_omega) {
-                (Rates::Dynamic { v, kv, .. }, _, _) => CellRate::Dynamic { v, kv },
-                (Rates::Steady, Some(sv), Some(omega)) if model.strain_rate_damping > 0.0 => {
-                    sv.nodal.velocities(&model.mesh, xs, omega, &mut sv.vel);
-                    let alpha = sv.cell_weight();
-                    av_out = Some((SharedMut::new(&mut sv.av), &sv.av_off));
-                    CellRate::Steady {
-                        vel: &sv.vel,
-                        omega: alpha * omega,
-                        local: &sv.local,
-                        local_off: &sv.local_off,
-                    }
-                }
+            // The coupling block that holds the cells' matrices too (with the matrix only),
+            // and the steady damping's coupling to add there.
+            let mut cell_block: Option<(usize, &[u32], &[usize])> = None;
+            let mut coupling: Option<(&NodalThetaDerivative, f64)> = None;
+            let mut rate = match terms.rates {
+                Rates::Dynamic { v, kv, .. } => CellRate::Dynamic { v, kv },
                 _ => CellRate::None,
             };
+            if let Some(sv) = self.steady_visc.as_mut() {
+                let alpha = sv.cell_weight();
+                let SteadyViscosity {
+                    nodal,
+                    local,
+                    local_off,
+                    av,
+                    av_off,
+                    vel,
+                    assembled,
+                    banded,
+                    cells_in_coupling,
+                    ..
+                } = sv;
+                if let (true, true, Some((b, ext, ext_off))) =
+                    (with_matrix, *cells_in_coupling, assembled.as_ref())
+                {
+                    cell_block = Some((*b, ext, ext_off));
+                }
+                if let (Rates::Steady, Some(omega)) = (terms.rates, self.steady_omega) {
+                    if model.strain_rate_damping > 0.0 {
+                        nodal.velocities(&model.mesh, xs, omega, vel);
+                        av_out = Some((SharedMut::new(av), &*av_off));
+                        // With the cells in the coupling block, the coupling takes the whole
+                        // linearisation of the velocities (ω D₃ or ω D over the extended
+                        // nodes) and the cells' matrices leave out their own derivative's.
+                        rate = CellRate::Steady {
+                            vel: &*vel,
+                            omega: if cell_block.is_some() {
+                                0.0
+                            } else {
+                                alpha * omega
+                            },
+                            local: &*local,
+                            local_off: &*local_off,
+                        };
+                        let stencil = banded.as_ref().unwrap_or(&*nodal);
+                        coupling = Some((stencil, omega));
+                    }
+                }
+            }
             let cells = CellForces {
                 model,
                 dofs,
@@ -600,21 +627,18 @@ impl SolidSystem {
                 force_scale: terms.force_scale,
                 inertia: terms.inertia,
             };
-            model.reset_admissible();
-            asm.zero(with_matrix);
-            asm.add_block(0, dofs, with_matrix, |c, loc| {
+            // One cell: `loc` (and ∂r/∂v into the damping's store, whose symmetric matrix
+            // keeps its upper triangle, when the steady damping is on).
+            let eval = |c: usize, loc: &mut LocalSystem, a: &mut [f64; 324]| {
                 match &av_out {
                     Some((av, av_off)) if with_matrix => {
-                        let mut a = [0.0; 324];
-                        cells.eval(c, loc, true, Some(&mut a));
-                        // ∂r/∂v of the damping is symmetric (∂P/∂∇v has the major
-                        // symmetry): its upper triangle is kept.
+                        cells.eval(c, loc, true, Some(a));
                         let nu = 2 * model.mesh.cell_nodes(c).len();
                         let mut i = av_off[c];
                         for r in 0..nu {
                             for v in &a[r * nu + r..(r + 1) * nu] {
                                 // SAFETY: cell c alone writes its own range av_off[c]..av_off[c + 1].
-                                unsafe { av.set(i, *v) };
+                                unsafe { av.set(i, *v as f32) };
                                 i += 1;
                             }
                         }
@@ -624,7 +648,37 @@ impl SolidSystem {
                 if let Some(hook) = terms.cell_hook {
                     hook(model, c, loc);
                 }
-            });
+            };
+            model.reset_admissible();
+            asm.zero(with_matrix);
+            match cell_block {
+                Some((cb, ext, ext_off)) => {
+                    // The cells' rows of the coupling block: the cell's matrix in its first
+                    // columns, then the damping's coupling over the extended nodes.
+                    asm.add_block_large(cb, dofs, true, |c, r, k| {
+                        let nodes = model.mesh.cell_nodes(c);
+                        let nu = 2 * nodes.len();
+                        let ex = &ext[ext_off[c]..ext_off[c + 1]];
+                        let nd = 2 * ex.len();
+                        let mut loc = LocalSystem::new(nu);
+                        let mut a = [0.0; 324];
+                        eval(c, &mut loc, &mut a);
+                        r[..nu].copy_from_slice(&loc.r[..nu]);
+                        for row in 0..nu {
+                            k[row * nd..row * nd + nu]
+                                .copy_from_slice(&loc.k[row * nu..(row + 1) * nu]);
+                        }
+                        if let Some((stencil, om)) = coupling {
+                            let at = |r: usize, col: usize| a[r * nu + col];
+                            damping_coupling_rows(nodes, ex, None, stencil, om, at, k);
+                        }
+                    });
+                }
+                None => asm.add_block(0, dofs, with_matrix, |c, loc| {
+                    let mut a = [0.0; 324];
+                    eval(c, loc, &mut a);
+                }),
+            }
             model.admissible()
         };
         if with_matrix && steady {
@@ -690,7 +744,7 @@ impl SolidSystem {
             let nodes = mesh.cell_nodes(c);
             let (nn, cd) = (nodes.len(), self.dofs.cell(c));
             let nu = 2 * nn;
-            let d = &sv.local[sv.local_off[c]..sv.local_off[c + 1]];
+            let d = &sv.local[sv.local_off[c]..sv.local_off[c] + nn * nn];
             let a = &sv.av[sv.av_off[c]..sv.av_off[c + 1]];
             let mut diff = [0.0; 18];
             for m in 0..nn {
@@ -710,10 +764,11 @@ impl SolidSystem {
             let mut k = 0;
             for r in 0..nu {
                 let (row, dr) = (&a[k..k + nu - r], diff[r]);
-                let mut yr = row[0] * dr;
+                let mut yr = f64::from(row[0]) * dr;
                 for ((&ars, ys), &ds) in
                     row[1..].iter().zip(&mut y[r + 1..nu]).zip(&diff[r + 1..nu])
                 {
+                    let ars = f64::from(ars);
                     yr += ars * ds;
                     *ys += ars * dr;
                 }
@@ -1057,6 +1112,71 @@ impl LoadedSystem for SolidSystem {
         self.lambda_prev = self.lambda;
         self.x_step_start.clone_from(&self.x_prev);
         self.x_prev.copy_from_slice(&self.x);
+    }
+}
+
+/// The steady damping's coupling of one cell beyond its own derivative, added to the
+/// cell's rows of its extended element matrix `k` (row-major, its cell's 2N rows, 2 × the
+/// extended nodes `ex` columns): K[r, (e, i)] += Σ_m A[r, (m, i)] W[m, e], with
+/// W = ω (D − D_c) (or ω (D₃ − D_c) with the ring stencil `stencil` = D₃) over the extended
+/// nodes, `d` the cell's own derivative D_c (N × N; `None`: W = ω D, the whole
+/// linearisation of the velocities, when the cell's matrix left it out) and
+/// `a(r, col)` = ∂r_c/∂v_c.
+fn damping_coupling_rows(
+    nodes: &[u32],
+    ex: &[u32],
+    d: Option<&[f64]>,
+    stencil: &NodalThetaDerivative,
+    om: f64,
+    a: impl Fn(usize, usize) -> f64,
+    k: &mut [f64],
+) {
+    let nn = nodes.len();
+    let nu = 2 * nn;
+    let nd = 2 * ex.len();
+    // W by its nonzeros (m, e, W[m, e]): the stencils' few per node, and with `d` the cell's
+    // own derivative subtracted over the cell's nodes (the first of the extended nodes). On
+    // the stack for the usual sizes (a Q2 cell: 9 nodes of 5-point stencils and 9 × 9).
+    const MAX_W: usize = 9 * 5 + 81;
+    let mut stack = [(0usize, 0usize, 0.0f64); MAX_W];
+    let mut heap = Vec::new();
+    let mut len = 0;
+    let mut push = |entry: (usize, usize, f64)| {
+        if len < MAX_W {
+            stack[len] = entry;
+        } else {
+            if heap.is_empty() {
+                heap.extend_from_slice(&stack);
+            }
+            heap.push(entry);
+        }
+        len += 1;
+    };
+    for (m, &node) in nodes.iter().enumerate() {
+        let node = node as usize;
+        for p in stencil.ptr[node]..stencil.ptr[node + 1] {
+            if let Some(e) = ex.iter().position(|&q| q == stencil.idx[p]) {
+                push((m, e, om * stencil.w[p]));
+            }
+        }
+        if let Some(d) = d {
+            for b in 0..nn {
+                push((m, b, -om * d[m * nn + b]));
+            }
+        }
+    }
+    let entries = if len <= MAX_W {
+        &stack[..len]
+    } else {
+        &heap[..]
+    };
+    // K[r, (e, i)] += A[r, (m, i)] W[m, e] over the cell's rows (its core).
+    for &(m, e, w) in entries {
+        for r in 0..nu {
+            let kr = &mut k[r * nd + 2 * e..r * nd + 2 * e + 2];
+            kr[0] += a(r, 2 * m) * w;
+            kr[1] += a(r, 2 * m + 1) * w;
+        }
     }
 }
 

@@ -85,7 +85,7 @@ pub(crate) enum CellRate<'a> {
     /// Independent velocity field, ∂v/∂x = kv.
     Dynamic { v: &'a [f64], kv: f64 },
     /// Nodal velocities ω ∂θχ (full vector) of the steady mode, linearised in the tangent with
-    /// each cell's own θ-derivative (`local[local_off[c]..local_off[c + 1]]`).
+    /// each cell's own θ-derivative (N × N at `local[local_off[c]..]`, N its nodes).
     Steady {
         vel: &'a [f64],
         omega: f64,
@@ -121,7 +121,8 @@ impl CellForces<'_> {
                 local,
                 local_off,
             } => {
-                let d = &local[local_off[c]..local_off[c + 1]];
+                let nn = model.mesh.cell_nodes(c).len();
+                let d = &local[local_off[c]..local_off[c] + nn * nn];
                 model.cell_system_steady_viscous(c, dofs, x, vel, omega, d, loc, with_k, av);
             }
         }

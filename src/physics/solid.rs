@@ -320,7 +320,8 @@ impl SolidModel {
     /// tangent takes the velocities' dependence on the displacements through the cell's own
     /// θ-derivative `d` (N × N row-major, (∂θf)(X_m) ≈ Σ_b d[m N + b] f_b, from
     /// [`Self::cell_theta_derivative`]): an approximation of the exact coupling that keeps
-    /// the cell's sparsity. With `av`, the derivative of the cell residual with respect to
+    /// the cell's sparsity (none with `omega` = 0: the caller then linearises the
+    /// velocities itself). With `av`, the derivative of the cell residual with respect to
     /// the cell's nodal velocities is written there (2N × 2N row-major), from which the
     /// caller applies the rest of the exact tangent matrix-free.
     #[allow(clippy::too_many_arguments)]
@@ -733,7 +734,8 @@ impl SolidModel {
             if let Some(d) = steady_d {
                 // K_ab += Σ_m A_am ω d_mb: the velocities' gradient per δu_b is
                 // G̃_b = ω Σ_m d_mb G_m (the gradient of the velocity interpolant).
-                for r in 0..2 * nu {
+                // (ω = 0: the caller linearises the velocities itself.)
+                for r in (0..2 * nu).filter(|_| omega != 0.0) {
                     let (arow, krow) = (&avl[r * N..(r + 1) * N], &mut kb[r * N..(r + 1) * N]);
                     for m in 0..N {
                         let am = omega * arow[m];

@@ -163,8 +163,8 @@ pub struct SymmetricLu {
     /// Supernode s holds the permuted columns `begin[s]..begin[s + 1]`.
     begin: Vec<usize>,
     /// Rows below the diagonal block of each supernode (permuted, ascending) at
-    /// `rows_ptr[s]..rows_ptr[s + 1]`.
-    rows: Vec<usize>,
+    /// `rows_ptr[s]..rows_ptr[s + 1]` (`u32`: n < 2³² is checked by the analysis).
+    rows: Vec<u32>,
     rows_ptr: Vec<usize>,
     /// Position of each of those rows in the parent's front (`u32::MAX` for a root).
     rel: Vec<u32>,
@@ -310,6 +310,12 @@ impl SymmetricLu {
             return Err(SymmetricLuError::Pattern(format!(
                 "{} column pointers and {} row indices for n = {n}",
                 col_ptr.len(),
+                row_idx.len()
+            )));
+        }
+        if n >= u32::MAX as usize || row_idx.len() >= u32::MAX as usize {
+            return Err(SymmetricLuError::Pattern(format!(
+                "n = {n} or {} entries: more than 32-bit indices hold",
                 row_idx.len()
             )));
         }
@@ -522,6 +528,7 @@ impl SymmetricLu {
         }
         let amap_ptr = bucket_ptr;
         let nf = fac_off[ns];
+        let rows: Vec<u32> = rows.iter().map(|&i| i as u32).collect();
         Ok(Self {
             n,
             fwd,
@@ -877,7 +884,7 @@ impl SymmetricLu {
             );
             let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
             for (&row, &ti) in rows.iter().zip(t.iter()) {
-                x[row] -= ti;
+                x[row as usize] -= ti;
             }
         }
         for s in (0..ns).rev() {
@@ -890,7 +897,7 @@ impl SymmetricLu {
                 let rows = &self.rows[self.rows_ptr[s]..self.rows_ptr[s + 1]];
                 let xr = &mut rtmp[..r];
                 for (v, &row) in xr.iter_mut().zip(rows) {
-                    *v = x[row];
+                    *v = x[row as usize];
                 }
                 let u12 = w * w;
                 matmul(
