@@ -784,11 +784,11 @@ impl SymmetricLu {
             // L21. A multiplier above GROWTH means a pivot that is small against entries of its
             // column outside the supernode: counted like a tiny pivot (the caller then uses a
             // partial-pivoting LU).
-            let growth = T::of(GROWTH);
             let unstable = (0..w).any(|j| {
-                front[j * m + w..(j + 1) * m]
-                    .iter()
-                    .fold(false, |o, &l| o | !(l.mag() <= growth))
+                front[j * m + w..(j + 1) * m].iter().fold(false, |o, &l| {
+                    let l: f64 = l.into();
+                    o | (l.abs() > GROWTH) | l.is_nan()
+                })
             });
             if unstable {
                 perturbed += 1;
