@@ -112,6 +112,14 @@ fn tiny(rings: bool) -> SteadyRolling {
     pressed_by_hand(SteadyRolling::new(sys, 20.0, 2.0))
 }
 
+/// Block 0 (the cells) has an empty core: its matrices are assembled in the coupling block.
+fn cells_in_coupling(st: &SteadyRolling) -> bool {
+    st.sys.asm.blocks[0]
+        .core
+        .as_ref()
+        .is_some_and(|c| c.iter().all(|&k| k == 0))
+}
+
 #[test]
 fn damped_steady_tangent_is_exact_in_both_modes_with_and_without_rings() {
     for rings in [true, false] {
@@ -136,9 +144,12 @@ fn damped_steady_tangent_is_exact_in_both_modes_with_and_without_rings() {
             Some(SteadyDampingTangent::MatrixFree)
         );
         let (err_mf, corr) = fd_errors(&mut st);
+        assert!(st.sys.asm.blocks[0].core.is_none());
         st.sys
             .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
         assert!(!st.has_tangent_correction());
+        // The coupling block holds the cells' matrices: block 0 keeps their residuals only.
+        assert!(cells_in_coupling(&st));
         let (err_as, none) = fd_errors(&mut st);
         println!(
             "rings {rings} ({src:?}): FD error matrix-free {err_mf:.2e} (matrix-free part {corr:.2e} of max |K|), assembled {err_as:.2e}"
@@ -168,11 +179,14 @@ fn damped_steady_tangent_is_exact_in_both_modes_with_and_without_rings() {
                 Some(SteadyDampingTangent::Assembled)
             );
         }
-        // Back to matrix-free: the same sparsity as without damping again.
+        assert!(cells_in_coupling(&st));
+        // Back to matrix-free: the same sparsity as without damping again, the cells' matrices
+        // in block 0.
         let nnz_as = st.sys.asm.nnz();
         st.sys
             .set_steady_damping_tangent(SteadyDampingTangent::MatrixFree);
         assert!(st.sys.asm.nnz() < nnz_as);
+        assert!(st.sys.asm.blocks[0].core.is_none());
     }
 }
 
@@ -208,6 +222,7 @@ fn damped_frictional_steady_tangent_is_exact_with_hanging_nodes() {
     let (err_mf, corr) = fd_errors(&mut st);
     st.sys
         .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+    assert!(cells_in_coupling(&st));
     let (err_as, _) = fd_errors(&mut st);
     println!(
         "hanging nodes: FD error matrix-free {err_mf:.2e} (matrix-free part {corr:.2e}), assembled {err_as:.2e}"
