@@ -735,13 +735,15 @@ impl SolidModel {
                 // K_ab += Σ_m A_am ω d_mb: the velocities' gradient per δu_b is
                 // G̃_b = ω Σ_m d_mb G_m (the gradient of the velocity interpolant).
                 // (ω = 0: the caller linearises the velocities itself.)
-                for r in (0..2 * nu).filter(|_| omega != 0.0) {
-                    let (arow, krow) = (&avl[r * N..(r + 1) * N], &mut kb[r * N..(r + 1) * N]);
-                    for m in 0..N {
-                        let am = omega * arow[m];
-                        let dm = &d[m * N..(m + 1) * N];
-                        for b in 0..N {
-                            krow[b] += am * dm[b];
+                if omega != 0.0 {
+                    for r in 0..2 * nu {
+                        let (arow, krow) = (&avl[r * N..(r + 1) * N], &mut kb[r * N..(r + 1) * N]);
+                        for m in 0..N {
+                            let am = omega * arow[m];
+                            let dm = &d[m * N..(m + 1) * N];
+                            for b in 0..N {
+                                krow[b] += am * dm[b];
+                            }
                         }
                     }
                 }

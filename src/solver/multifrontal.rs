@@ -549,12 +549,12 @@ impl SymmetricLu {
             tmp: vec![0.0; max_w],
             max_w,
             max_r,
-            lu_mem: MemBuffer::new(lu_in_place_scratch::<usize, f64>(
-                max_w,
-                max_w,
-                Par::Seq,
-                Default::default(),
-            )),
+            // Scratch of the dense LU in either arithmetic.
+            lu_mem: MemBuffer::new(
+                lu_in_place_scratch::<usize, f64>(max_w, max_w, Par::Seq, Default::default()).or(
+                    lu_in_place_scratch::<usize, f32>(max_w, max_w, Par::Seq, Default::default()),
+                ),
+            ),
             front: vec![0.0; max_front],
             stack: vec![0.0; peak],
             front32: Vec::new(),
@@ -751,14 +751,16 @@ impl SymmetricLu {
                 }
             }
             // The same row order in F12 (none to make without interchanges).
-            let tmp = &mut self.tmp[..w];
-            for j in (w..m).filter(|_| swaps > 0) {
-                let col = &mut front[j * m..j * m + w];
-                for (t, &p) in tmp.iter_mut().zip(perm.iter()) {
-                    *t = col[p].into();
-                }
-                for (c, &t) in col.iter_mut().zip(tmp.iter()) {
-                    *c = T::of(t); // exact: the values are T's
+            if swaps > 0 {
+                let tmp = &mut self.tmp[..w];
+                for j in w..m {
+                    let col = &mut front[j * m..j * m + w];
+                    for (t, &p) in tmp.iter_mut().zip(perm.iter()) {
+                        *t = col[p].into();
+                    }
+                    for (c, &t) in col.iter_mut().zip(tmp.iter()) {
+                        *c = T::of(t); // exact: the values are T's
+                    }
                 }
             }
             if r > 0 {
