@@ -74,6 +74,7 @@ trait FrontScalar:
     + std::ops::MulAssign
     + std::ops::Neg<Output = Self>
     + Into<f64>
+    + Default
 {
     const ZERO: Self;
     const ONE: Self;
@@ -179,11 +180,15 @@ pub struct SymmetricLu {
     /// Offset of each supernode's factors in `factors`: the ns × ns block (L11 unit lower and
     /// U11), then U12 (ns × r), then L21 (r × ns), all column-major.
     fac_off: Vec<usize>,
-    factors: Vec<f64>,
-    /// The factors rounded to single precision, in place of `factors`, when
-    /// [`SymmetricLu::set_single_precision_factors`] is on (a preconditioner's factors).
-    factors32: Vec<f32>,
+    /// Factors, front, update stack and solve scratch in double precision, or, when
+    /// [`SymmetricLu::set_single_precision_factors`] is on (a preconditioner's factors), in
+    /// single precision (the other store is empty).
+    store: Store<f64>,
+    store32: Store<f32>,
     single: bool,
+    /// The largest front and the update stack's peak (entries).
+    max_front: usize,
+    peak: usize,
     /// Row order within each supernode: position i of its diagonal block holds its local row
     /// `perm[begin + i]`.
     perm: Vec<usize>,
@@ -194,12 +199,6 @@ pub struct SymmetricLu {
     max_w: usize,
     max_r: usize,
     lu_mem: MemBuffer,
-    /// The front and the update stack: double precision, or single with single-precision
-    /// factors (the other pair is empty).
-    front: Vec<f64>,
-    stack: Vec<f64>,
-    front32: Vec<f32>,
-    stack32: Vec<f32>,
     /// The update matrices on the stack: (supernode, offset, rows).
     pending: Vec<(usize, usize, usize)>,
     /// Scratch of the extend-add: runs (first child row, first front row, length).
@@ -208,9 +207,6 @@ pub struct SymmetricLu {
     perturbed: usize,
     /// Sign and log|det A| of the last factorization.
     det: (f64, f64),
-    /// Scratch of the solves, per arithmetic.
-    scratch: SolveScratch<f64>,
-    scratch32: SolveScratch<f32>,
 }
 
 /// Why the analysis or the factorization failed.
@@ -541,8 +537,10 @@ impl SymmetricLu {
             amap,
             amap_ptr,
             fac_off,
-            factors: vec![0.0; nf],
-            factors32: Vec::new(),
+            store: Store::sized(nf, max_front, peak),
+            store32: Store::default(),
+            max_front,
+            peak,
             single: false,
             perm: vec![0; n],
             perm_inv: vec![0; max_w],
@@ -555,16 +553,10 @@ impl SymmetricLu {
                     lu_in_place_scratch::<usize, f32>(max_w, max_w, Par::Seq, Default::default()),
                 ),
             ),
-            front: vec![0.0; max_front],
-            stack: vec![0.0; peak],
-            front32: Vec::new(),
-            stack32: Vec::new(),
             pending: Vec::with_capacity(ns),
             runs: Vec::with_capacity(max_r),
             perturbed: 0,
             det: (f64::NAN, f64::NAN),
-            scratch: SolveScratch::default(),
-            scratch32: SolveScratch::default(),
         })
     }
 
@@ -589,19 +581,13 @@ impl SymmetricLu {
             return;
         }
         self.single = on;
-        let nf = self.factor_entries();
+        let sizes = (self.factor_entries(), self.max_front, self.peak);
         if on {
-            let (nfr, nst) = (self.front.len(), self.stack.len());
-            (self.factors, self.front, self.stack) = (Vec::new(), Vec::new(), Vec::new());
-            self.factors32 = vec![0.0; nf];
-            self.front32 = vec![0.0; nfr];
-            self.stack32 = vec![0.0; nst];
+            self.store = Store::default();
+            self.store32 = Store::sized(sizes.0, sizes.1, sizes.2);
         } else {
-            let (nfr, nst) = (self.front32.len(), self.stack32.len());
-            (self.factors32, self.front32, self.stack32) = (Vec::new(), Vec::new(), Vec::new());
-            self.factors = vec![0.0; nf];
-            self.front = vec![0.0; nfr];
-            self.stack = vec![0.0; nst];
+            self.store32 = Store::default();
+            self.store = Store::sized(sizes.0, sizes.1, sizes.2);
         }
     }
 
@@ -628,36 +614,32 @@ impl SymmetricLu {
             return Err(SymmetricLuError::ZeroMatrix);
         }
         if self.single {
-            let (mut front, mut stack, mut fac) = (
-                std::mem::take(&mut self.front32),
-                std::mem::take(&mut self.stack32),
-                std::mem::take(&mut self.factors32),
-            );
-            self.factorize_with(values, amax, par, &mut front, &mut stack, &mut fac);
-            (self.front32, self.stack32, self.factors32) = (front, stack, fac);
+            let mut st = std::mem::take(&mut self.store32);
+            self.factorize_with(values, amax, par, &mut st);
+            self.store32 = st;
         } else {
-            let (mut front, mut stack, mut fac) = (
-                std::mem::take(&mut self.front),
-                std::mem::take(&mut self.stack),
-                std::mem::take(&mut self.factors),
-            );
-            self.factorize_with(values, amax, par, &mut front, &mut stack, &mut fac);
-            (self.front, self.stack, self.factors) = (front, stack, fac);
+            let mut st = std::mem::take(&mut self.store);
+            self.factorize_with(values, amax, par, &mut st);
+            self.store = st;
         }
         Ok(())
     }
 
     /// The numeric factorization in the arithmetic of `T` (A's largest entry `amax`), into
-    /// `factors`, with the front and the update stack given.
+    /// the factors of `st`, with its front and update stack.
     fn factorize_with<T: FrontScalar>(
         &mut self,
         values: &[f64],
         amax: f64,
         par: Par,
-        front_buf: &mut [T],
-        stack: &mut [T],
-        factors: &mut [T],
+        st: &mut Store<T>,
     ) {
+        let Store {
+            factors,
+            front: front_buf,
+            stack,
+            ..
+        } = st;
         // The same threshold in both arithmetics: a single-precision factorization that loses
         // a nearly singular pivot to round-off gives factors that precondition poorly, which
         // GMRES reports (the caller then factorizes in double precision), while pivots small
@@ -819,13 +801,13 @@ impl SymmetricLu {
     /// with single-precision factors: a preconditioner's solve).
     pub fn solve_in_place(&mut self, rhs: &mut [f64]) {
         if self.single {
-            let mut sc = std::mem::take(&mut self.scratch32);
-            self.solve_with(&self.factors32, rhs, &mut sc);
-            self.scratch32 = sc;
+            let mut st = std::mem::take(&mut self.store32);
+            self.solve_with(&mut st, rhs);
+            self.store32 = st;
         } else {
-            let mut sc = std::mem::take(&mut self.scratch);
-            self.solve_with(&self.factors, rhs, &mut sc);
-            self.scratch = sc;
+            let mut st = std::mem::take(&mut self.store);
+            self.solve_with(&mut st, rhs);
+            self.store = st;
         }
     }
 
@@ -833,8 +815,11 @@ impl SymmetricLu {
     /// blocks (L21, U12) go through faer's dense matrix–vector products, which stream the
     /// factors at close to the memory bandwidth; the triangles of small supernodes by plain
     /// loops.
-    fn solve_with<T: FrontScalar>(&self, factors: &[T], rhs: &mut [f64], sc: &mut SolveScratch<T>) {
+    fn solve_with<T: FrontScalar>(&self, st: &mut Store<T>, rhs: &mut [f64]) {
         let n = self.n;
+        let Store {
+            factors, solve: sc, ..
+        } = st;
         sc.ensure(n, self.max_w, self.max_r);
         let (x, tmp, rtmp) = (&mut sc.x[..n], &mut sc.tmp, &mut sc.rows);
         for k in 0..n {
@@ -934,6 +919,27 @@ impl SymmetricLu {
         }
         for k in 0..n {
             rhs[self.fwd[k]] = x[k].into();
+        }
+    }
+}
+
+/// The numeric storage of one arithmetic: the factors, the front, the update stack (zeroed,
+/// sized by the analysis) and the solves' scratch.
+#[derive(Default)]
+struct Store<T> {
+    factors: Vec<T>,
+    front: Vec<T>,
+    stack: Vec<T>,
+    solve: SolveScratch<T>,
+}
+
+impl<T: FrontScalar> Store<T> {
+    fn sized(factors: usize, front: usize, stack: usize) -> Self {
+        Self {
+            factors: vec![T::ZERO; factors],
+            front: vec![T::ZERO; front],
+            stack: vec![T::ZERO; stack],
+            solve: SolveScratch::default(),
         }
     }
 }
