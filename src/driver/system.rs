@@ -629,10 +629,16 @@ impl SolidSystem {
             };
             // One cell: `loc` (and ∂r/∂v into the damping's store, whose symmetric matrix
             // keeps its upper triangle, when the steady damping is on).
-            let eval = |c: usize, loc: &mut LocalSystem, a: &mut [f64; 324]| {
+            // `a`: where ∂r/∂v goes (`None`: a local one, made only with the damping on).
+            let eval = |c: usize, loc: &mut LocalSystem, a: Option<&mut [f64; 324]>| {
                 match &av_out {
                     Some((av, av_off)) if with_matrix => {
-                        cells.eval(c, loc, true, Some(a));
+                        let mut own = None;
+                        let a = match a {
+                            Some(a) => a,
+                            None => own.insert([0.0; 324]),
+                        };
+                        cells.eval(c, loc, true, Some(&mut *a));
                         let nu = 2 * model.mesh.cell_nodes(c).len();
                         let mut i = av_off[c];
                         for r in 0..nu {
@@ -662,7 +668,7 @@ impl SolidSystem {
                         let nd = 2 * ex.len();
                         let mut loc = LocalSystem::new(nu);
                         let mut a = [0.0; 324];
-                        eval(c, &mut loc, &mut a);
+                        eval(c, &mut loc, Some(&mut a));
                         r[..nu].copy_from_slice(&loc.r[..nu]);
                         for row in 0..nu {
                             k[row * nd..row * nd + nu]
@@ -674,10 +680,7 @@ impl SolidSystem {
                         }
                     });
                 }
-                None => asm.add_block(0, dofs, with_matrix, |c, loc| {
-                    let mut a = [0.0; 324];
-                    eval(c, loc, &mut a);
-                }),
+                None => asm.add_block(0, dofs, with_matrix, |c, loc| eval(c, loc, None)),
             }
             model.admissible()
         };
