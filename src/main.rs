@@ -463,14 +463,10 @@ fn main() -> ExitCode {
         }
     }
     let threads = cli.threads.unwrap_or(0);
-    if threads > 0 {
-        if let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build_global()
-        {
-            eprintln!("tread: warning: cannot set the thread count: {e}");
-        }
-    }
+    app::in_pool(threads, || dispatch(cli, threads))
+}
+
+fn dispatch(cli: Cli, threads: usize) -> ExitCode {
     match cli.command {
         None => match Scene::from_toml_str(
             DEFAULT_SCENE,
@@ -507,14 +503,10 @@ fn main() -> ExitCode {
                     );
                 ExitCode::from(2)
             }
-            Ok(s) => {
-                if threads == 0 && s.solver.threads > 0 {
-                    let _ = rayon::ThreadPoolBuilder::new()
-                        .num_threads(s.solver.threads)
-                        .build_global();
-                }
+            Ok(s) if threads == 0 && s.solver.threads > 0 => app::in_pool(s.solver.threads, || {
                 run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
-            }
+            }),
+            Ok(s) => run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref()),
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                 ExitCode::from(2)

@@ -176,7 +176,12 @@ fn numeric_median(s: &mut SparseSolver, vals: &[f64]) -> f64 {
     )
 }
 
+/// The benchmark runs on a worker of a rayon pool, as `tread` does (see `tread::app::in_pool`).
 fn main() {
+    tread::app::in_pool(0, run)
+}
+
+fn run() {
     let args: Vec<String> = std::env::args().collect();
     let mut meshes: Vec<(usize, usize)> = vec![(8, 256), (16, 512), (32, 1024)];
     let mut scene_text = ODEN.to_string();

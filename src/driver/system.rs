@@ -339,8 +339,10 @@ impl SolidSystem {
         };
         let mesh = &self.model.mesh;
         let (mut local, mut local_off, mut av_off) = (Vec::new(), Vec::new(), vec![0]);
-        // Cells whose derivatives agree to 1e-12 of their largest entry share one copy.
-        let mut seen: std::collections::HashMap<Vec<i64>, usize> = Default::default();
+        // Cells whose derivatives agree to 1e-12 of their largest entry share one copy: the
+        // kept copies' rounded entries in `keys` (at the copy's offset), found by their hash.
+        let mut seen: std::collections::HashMap<u64, Vec<usize>> = Default::default();
+        let (mut key, mut keys) = (Vec::<i64>::new(), Vec::<i64>::new());
         for c in 0..mesh.n_cells() {
             let Some(d) = self.model.cell_theta_derivative(c) else {
                 return false;
@@ -349,14 +351,26 @@ impl SolidSystem {
                 .iter()
                 .fold(0.0f64, |m, v| m.max(v.abs()))
                 .max(f64::MIN_POSITIVE);
-            let key: Vec<i64> = d
-                .iter()
-                .map(|v| (v / scale * 1e12).round() as i64)
-                .collect();
-            let start = *seen.entry(key).or_insert_with(|| {
-                local.extend_from_slice(&d);
-                local.len() - d.len()
+            key.clear();
+            key.extend(d.iter().map(|v| (v / scale * 1e12).round() as i64));
+            // FNV-1a over the rounded entries.
+            let hash = key.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &v| {
+                (h ^ v as u64).wrapping_mul(0x0100_0000_01b3)
             });
+            let starts = seen.entry(hash).or_default();
+            let start = match starts
+                .iter()
+                .find(|&&s| keys.get(s..s + key.len()) == Some(&key[..]))
+            {
+                Some(&s) => s,
+                None => {
+                    let s = local.len();
+                    local.extend_from_slice(&d);
+                    keys.extend_from_slice(&key);
+                    starts.push(s);
+                    s
+                }
+            };
             local_off.push(start);
             let nu = 2 * mesh.cell_nodes(c).len();
             av_off.push(av_off[c] + nu * (nu + 1) / 2);

@@ -31,25 +31,27 @@ pub struct RingDerivative {
     pub stencils: Vec<[(u32, f64); WIDTH]>,
 }
 
-/// Derivative at `t0` of the Lagrange interpolant through (t_k, ·), as weights.
+/// Derivative at `t0` of the Lagrange interpolant through (t_k, ·), as weights:
+/// L_j'(t0) = Σ_{m≠j} Π_{k≠j,m} (t0 − t_k) / Π_{k≠j} (t_j − t_k), one division per point.
 pub fn lagrange_derivative_weights(t: &[f64; WIDTH], t0: f64) -> [f64; WIDTH] {
     let mut w = [0.0; WIDTH];
     for j in 0..WIDTH {
-        // L_j'(t0) = Σ_{m≠j} [1/(t_j − t_m)] Π_{k≠j,m} (t0 − t_k)/(t_j − t_k)
-        let mut s = 0.0;
+        let mut den = 1.0;
+        let mut num = 0.0;
         for m in 0..WIDTH {
             if m == j {
                 continue;
             }
-            let mut p = 1.0 / (t[j] - t[m]);
+            den *= t[j] - t[m];
+            let mut p = 1.0;
             for k in 0..WIDTH {
                 if k != j && k != m {
-                    p *= (t0 - t[k]) / (t[j] - t[k]);
+                    p *= t0 - t[k];
                 }
             }
-            s += p;
+            num += p;
         }
-        w[j] = s;
+        w[j] = num / den;
     }
     w
 }
@@ -63,15 +65,13 @@ impl RingDerivative {
             return None;
         }
         let two_pi = 2.0 * std::f64::consts::PI;
+        let angles: Vec<f64> = mesh.nodes.iter().map(|x| x[1].atan2(x[0])).collect();
+        let angle = |n: u32| angles[n as usize];
         let mut stencils = Vec::with_capacity(mesh.n_nodes());
         for m in 0..rl.rings {
             for l in 0..per {
                 let node =
                     |o: i64| (m * per + (l as i64 + o).rem_euclid(per as i64) as usize) as u32;
-                let angle = |n: u32| {
-                    let x = mesh.nodes[n as usize];
-                    x[1].atan2(x[0])
-                };
                 let t0 = angle(node(0));
                 let mut t = [0.0; WIDTH];
                 let mut nodes = [0u32; WIDTH];

@@ -38,6 +38,7 @@ use crate::math::{cofactor, det_identity_plus_minus_one, v, Mat2, Tangent, Vec2}
 use crate::mesh::{CellGeometry, Mesh};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 
 /// How the incompressibility constraint (if any) is imposed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -350,22 +351,29 @@ impl SolidModel {
     /// fields the element reproduces; one-sided at the cell's edges. `None` if the cell map
     /// is degenerate at a node.
     pub fn cell_theta_derivative(&self, c: usize) -> Option<Vec<f64>> {
+        // The shape functions at the reference nodes, the same for every cell.
+        static NODAL: OnceLock<(ShapeTable<4>, ShapeTable<9>)> = OnceLock::new();
+        let (q1, q2) = NODAL.get_or_init(|| {
+            (
+                ShapeTable::<4>::new::<Q1>((0..4).map(Q1::node_ref).collect(), vec![1.0; 4]),
+                ShapeTable::<9>::new::<Q2>((0..9).map(Q2::node_ref).collect(), vec![1.0; 9]),
+            )
+        });
         match self.mesh.degree[c] {
-            1 => self.cell_theta_derivative_generic::<Q1, 4>(c),
-            _ => self.cell_theta_derivative_generic::<Q2, 9>(c),
+            1 => self.cell_theta_derivative_generic(q1, c),
+            _ => self.cell_theta_derivative_generic(q2, c),
         }
     }
 
-    fn cell_theta_derivative_generic<E: Lagrange2D, const N: usize>(
+    fn cell_theta_derivative_generic<const N: usize>(
         &self,
+        tab: &ShapeTable<N>,
         c: usize,
     ) -> Option<Vec<f64>> {
-        let pts: Vec<(f64, f64)> = (0..N).map(E::node_ref).collect();
-        let tab = ShapeTable::<N>::new::<E>(pts, vec![1.0; N]);
         let mut g = [[0.0; 2]; N];
         let mut d = vec![0.0; N * N];
         for m in 0..N {
-            let pg = self.point(c, &tab, m, &mut g)?;
+            let pg = self.point(c, tab, m, &mut g)?;
             let t = [-pg.x[1], pg.x[0]];
             for b in 0..N {
                 d[m * N + b] = g[b][0] * t[0] + g[b][1] * t[1];

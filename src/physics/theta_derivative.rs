@@ -133,10 +133,8 @@ impl NodalThetaDerivative {
     pub fn three_point(mesh: &Mesh) -> Option<Self> {
         let r = RingDerivative::new(mesh)?;
         let two_pi = 2.0 * std::f64::consts::PI;
-        let angle = |n: u32| {
-            let x = mesh.nodes[n as usize];
-            x[1].atan2(x[0])
-        };
+        let angles: Vec<f64> = mesh.nodes.iter().map(|x| x[1].atan2(x[0])).collect();
+        let angle = |n: u32| angles[n as usize];
         let mut ptr = Vec::with_capacity(r.stencils.len() + 1);
         ptr.push(0);
         let (mut idx, mut w) = (Vec::new(), Vec::new());
