@@ -298,6 +298,89 @@ fn stack_peak(order: &[usize], n_children: &[usize], update: &[usize]) -> usize 
     peak
 }
 
+/// Lower triangle of the pattern of A + Aᵀ, the whole diagonal included, in CSC with sorted
+/// rows. Column j is the merge of A's rows i > j in its column j with the columns k > j whose
+/// entry (j, k) lies above the diagonal, gathered by one counting pass over the columns in
+/// ascending k (so sorted as well): no sort, when A's rows are sorted within each column (the
+/// documented input of [`SymmetricLu::new`]); columns that are not get sorted first.
+fn lower_of_sum(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut sorted_cols: Vec<usize> = Vec::new();
+    let mut sorted_ptr: Vec<usize> = Vec::new();
+    let unsorted = (0..n).any(|j| {
+        row_idx[col_ptr[j]..col_ptr[j + 1]]
+            .windows(2)
+            .any(|w| w[0] >= w[1])
+    });
+    let (col_ptr, row_idx) = if unsorted {
+        sorted_ptr.push(0);
+        for j in 0..n {
+            let start = sorted_cols.len();
+            sorted_cols.extend_from_slice(&row_idx[col_ptr[j]..col_ptr[j + 1]]);
+            sorted_cols[start..].sort_unstable();
+            let mut w = start;
+            for r in start..sorted_cols.len() {
+                if r == start || sorted_cols[r] != sorted_cols[w - 1] {
+                    sorted_cols[w] = sorted_cols[r];
+                    w += 1;
+                }
+            }
+            sorted_cols.truncate(w);
+            sorted_ptr.push(sorted_cols.len());
+        }
+        (&sorted_ptr[..], &sorted_cols[..])
+    } else {
+        (col_ptr, row_idx)
+    };
+    // The strict upper part, transposed: for each row i the columns k > i of its entries.
+    let mut tp = vec![0usize; n + 1];
+    for k in 0..n {
+        for &i in &row_idx[col_ptr[k]..col_ptr[k + 1]] {
+            if i < k {
+                tp[i + 1] += 1;
+            }
+        }
+    }
+    for i in 0..n {
+        tp[i + 1] += tp[i];
+    }
+    let mut ti = vec![0usize; tp[n]];
+    let mut next = tp[..n].to_vec();
+    for k in 0..n {
+        for &i in &row_idx[col_ptr[k]..col_ptr[k + 1]] {
+            if i < k {
+                ti[next[i]] = k;
+                next[i] += 1;
+            }
+        }
+    }
+    drop(next);
+    let mut lp = Vec::with_capacity(n + 1);
+    lp.push(0usize);
+    let mut li = Vec::with_capacity(n + row_idx.len());
+    for j in 0..n {
+        li.push(j);
+        let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+        let (mut a, b) = (
+            &col[col.partition_point(|&i| i <= j)..],
+            &ti[tp[j]..tp[j + 1]],
+        );
+        let mut b = b;
+        while let (Some(&x), Some(&y)) = (a.first(), b.first()) {
+            li.push(x.min(y));
+            if x <= y {
+                a = &a[1..];
+            }
+            if y <= x {
+                b = &b[1..];
+            }
+        }
+        li.extend_from_slice(a);
+        li.extend_from_slice(b);
+        lp.push(li.len());
+    }
+    (lp, li)
+}
+
 impl SymmetricLu {
     /// Analyse the CSC pattern of an n × n matrix (rows sorted within each column, no
     /// duplicates). The pattern need not be symmetric: A + Aᵀ is analysed.
@@ -320,47 +403,7 @@ impl SymmetricLu {
                 "row index {i} ≥ n = {n}"
             )));
         }
-        // Lower triangle of A + Aᵀ (with the whole diagonal), CSC.
-        let mut cnt = vec![1usize; n];
-        for j in 0..n {
-            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
-                if i != j {
-                    cnt[i.min(j)] += 1;
-                }
-            }
-        }
-        let mut sp = vec![0usize; n + 1];
-        for j in 0..n {
-            sp[j + 1] = sp[j] + cnt[j];
-        }
-        let mut si = vec![0usize; sp[n]];
-        let mut fill = sp[..n].to_vec();
-        for j in 0..n {
-            si[fill[j]] = j;
-            fill[j] += 1;
-        }
-        for j in 0..n {
-            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
-                if i != j {
-                    let (lo, hi) = (i.min(j), i.max(j));
-                    si[fill[lo]] = hi;
-                    fill[lo] += 1;
-                }
-            }
-        }
-        let (mut lp, mut li) = (vec![0usize; n + 1], Vec::with_capacity(si.len()));
-        for j in 0..n {
-            let col = &mut si[sp[j]..sp[j + 1]];
-            col.sort_unstable();
-            let start = li.len();
-            for &i in col.iter() {
-                if li.len() == start || li[li.len() - 1] != i {
-                    li.push(i);
-                }
-            }
-            lp[j + 1] = li.len();
-        }
-        drop(si);
+        let (lp, li) = lower_of_sum(n, col_ptr, row_idx);
         let lower = SymbolicSparseColMat::new_checked(n, n, lp, None, li);
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
@@ -1009,6 +1052,58 @@ fn store_factors<T: Copy>(fac: &mut [T], front: &[T], m: usize, w: usize, r: usi
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lower triangle of A + Aᵀ by merging equals the one of a set construction, on random
+    /// unsymmetric patterns with sorted columns and, sorted first, with shuffled ones
+    /// (duplicates included).
+    #[test]
+    fn lower_of_sum_matches_a_set_construction() {
+        let mut seed = 777u64;
+        let mut rand = |m: usize| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as usize) % m
+        };
+        for case in 0..300 {
+            let n = 1 + rand(12);
+            let mut cols: Vec<Vec<usize>> = (0..n)
+                .map(|_| {
+                    let mut c: Vec<usize> = (0..rand(n + 1)).map(|_| rand(n)).collect();
+                    c.sort_unstable();
+                    c.dedup();
+                    c
+                })
+                .collect();
+            if case % 2 == 1 {
+                for c in &mut cols {
+                    if let Some(&first) = c.first() {
+                        c.push(first);
+                    }
+                    c.reverse();
+                }
+            }
+            let mut col_ptr = vec![0];
+            let mut row_idx = Vec::new();
+            for c in &cols {
+                row_idx.extend_from_slice(c);
+                col_ptr.push(row_idx.len());
+            }
+            let mut want: Vec<std::collections::BTreeSet<usize>> =
+                (0..n).map(|j| std::iter::once(j).collect()).collect();
+            for (j, c) in cols.iter().enumerate() {
+                for &i in c {
+                    want[i.min(j)].insert(i.max(j));
+                }
+            }
+            let (lp, li) = lower_of_sum(n, &col_ptr, &row_idx);
+            for j in 0..n {
+                let got: Vec<usize> = li[lp[j]..lp[j + 1]].to_vec();
+                let exp: Vec<usize> = want[j].iter().copied().collect();
+                assert_eq!(got, exp, "case {case}, column {j} of {cols:?}");
+            }
+        }
+    }
 
     /// Liu's children order gives the lowest update-stack peak over all postorders: checked
     /// against every ordering of the children on small random forests (and it is never above
