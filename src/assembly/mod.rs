@@ -859,23 +859,105 @@ impl Assembler {
 
     /// As [`Self::add_block`] for a block whose elements may have more than [`MAX_LOCAL`]
     /// dofs: `kernel(element, r, k)` fills the zeroed residual `r` (nd) and row-major matrix
-    /// `k` (nd², empty without `with_matrix`) of the element. Elements are evaluated in
-    /// parallel batches (when the assembler is parallel) into a scratch buffer kept by the
-    /// assembler (allocated on the first call only) and scattered serially, adding to the
-    /// residual, its force-flux scale and the matrix values.
+    /// `k` (nd², empty without `with_matrix`) of the element, which is added to the residual,
+    /// its force-flux scale and the matrix values. A block split into chunks (or a serial
+    /// assembler) is assembled element by element from one element's scratch per chunk, as
+    /// [`Self::add_block`] does; otherwise the elements are evaluated in parallel batches
+    /// into a scratch buffer kept by the assembler (allocated on the first call only) and
+    /// scattered serially.
     pub fn add_block_large<K>(&mut self, b: usize, dofs: &DofMap, with_matrix: bool, kernel: K)
     where
         K: Fn(usize, &mut [f64], &mut [f64]) + Sync,
     {
         const BATCH: usize = 256;
-        let mut buf = std::mem::take(&mut self.large_scratch);
         let Some(block) = self.blocks.get(b) else {
-            self.large_scratch = buf;
             return;
         };
         let n_el = block.len();
         let max_nd = (0..n_el).map(|e| block.element(e).len()).max().unwrap_or(0);
         let stride = max_nd + if with_matrix { max_nd * max_nd } else { 0 };
+        // One element into `s` (its residual, then its matrix from `max_nd` on).
+        let eval = |e: usize, s: &mut [f64]| {
+            let nd = block.element(e).len();
+            let (r, k) = s.split_at_mut(max_nd);
+            let r = &mut r[..nd];
+            let k = &mut k[..if with_matrix { nd * nd } else { 0 }];
+            r.fill(0.0);
+            // Rows past an element's core are neither zeroed nor assembled (not in the
+            // pattern).
+            let kc = block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd));
+            k[..kc * nd].fill(0.0);
+            kernel(e, r, k);
+        };
+        if block.chunks.is_some() || !self.parallel {
+            let res = SharedMut::new(&mut self.residual);
+            let sc = SharedMut::new(&mut self.scale);
+            let val = SharedMut::new(&mut self.values);
+            // SAFETY (of the adds below): elements of chunks assembled concurrently (every
+            // other chunk) share no dof, so they touch disjoint equations and slots; a
+            // serial assembler runs one element at a time.
+            let work = |e: usize, s: &mut [f64]| {
+                eval(e, s);
+                let el = block.element(e);
+                unsafe {
+                    for (a, &d) in el.iter().enumerate() {
+                        let q = dofs.eq[d as usize];
+                        if q < CONSTRAINED {
+                            res.add(q as usize, s[a]);
+                            sc.add(q as usize, s[a].abs());
+                        }
+                    }
+                    if with_matrix {
+                        let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
+                        for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + sl.len()]) {
+                            if *slot != u32::MAX {
+                                val.add(*slot as usize, kv);
+                            }
+                        }
+                    }
+                    if !block.con_r_offsets.is_empty() {
+                        let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
+                        for &(a, q, w) in cr {
+                            res.add(q as usize, w * s[a as usize]);
+                            sc.add(q as usize, (w * s[a as usize]).abs());
+                        }
+                        if with_matrix {
+                            let ck =
+                                &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
+                            for &(ab, slot, w) in ck {
+                                if slot != u32::MAX {
+                                    val.add(slot as usize, w * s[max_nd + ab as usize]);
+                                }
+                            }
+                        }
+                    }
+                }
+            };
+            match (&block.chunks, self.parallel) {
+                (Some(chunks), true) => {
+                    for phase in 0..2 {
+                        chunks
+                            .par_iter()
+                            .skip(phase)
+                            .step_by(2)
+                            .for_each(|&(a, b)| {
+                                let mut s = vec![0.0; stride];
+                                for e in a..b {
+                                    work(e, &mut s);
+                                }
+                            });
+                    }
+                }
+                _ => {
+                    let mut s = vec![0.0; stride];
+                    for e in 0..n_el {
+                        work(e, &mut s);
+                    }
+                }
+            }
+            return;
+        }
+        let mut buf = std::mem::take(&mut self.large_scratch);
         if buf.len() < BATCH * stride {
             buf.resize(BATCH * stride, 0.0);
         }
@@ -883,24 +965,10 @@ impl Assembler {
         while start < n_el {
             let end = (start + BATCH).min(n_el);
             let batch = &mut buf[..(end - start) * stride];
-            let eval = |(i, s): (usize, &mut [f64])| {
-                let e = start + i;
-                let nd = block.element(e).len();
-                let (r, k) = s.split_at_mut(max_nd);
-                let r = &mut r[..nd];
-                let k = &mut k[..if with_matrix { nd * nd } else { 0 }];
-                r.fill(0.0);
-                // Rows past an element's core are neither zeroed nor assembled (not in the
-                // pattern).
-                let kc = block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd));
-                k[..kc * nd].fill(0.0);
-                kernel(e, r, k);
-            };
-            if self.parallel {
-                batch.par_chunks_mut(stride).enumerate().for_each(eval);
-            } else {
-                batch.chunks_mut(stride).enumerate().for_each(eval);
-            }
+            batch
+                .par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(i, s)| eval(start + i, s));
             for (e, s) in (start..end).zip(batch.chunks(stride)) {
                 let el = block.element(e);
                 for (a, &d) in el.iter().enumerate() {
@@ -1039,5 +1107,84 @@ mod cored_block_tests {
             dofs.eq[el[6] as usize] as usize,
         );
         assert!(has(&both, i, j), "nodes 5 and 6 share a cell");
+    }
+
+    /// `add_block_large` gives the same residual, scale and matrix whichever way it runs: by
+    /// chunks (parallel, a block of ≥ 256 elements on rings), by batches (parallel, the
+    /// block's chunks taken away) and serially, on a cored block of extended elements (each
+    /// cell's dofs, then those of the nodes one passage beyond it along the rings).
+    #[test]
+    fn large_blocks_assemble_alike_by_chunks_batches_and_serially() {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 4,
+            n_theta: 96,
+            degree: 1,
+            grading_r: 1.0,
+            grading_theta: 1.0,
+        });
+        let dofs = DofMap::new(&mesh, 0, &[]);
+        let per = 96u32;
+        let (mut list, mut off, mut core) = (Vec::new(), vec![0], Vec::new());
+        for c in 0..mesh.n_cells() {
+            let nodes = mesh.cell_nodes(c);
+            let mut ex: Vec<u32> = nodes.to_vec();
+            for &a in nodes {
+                let (ring, pos) = (a / per, a % per);
+                for b in [
+                    ring * per + (pos + 1) % per,
+                    ring * per + (pos + per - 1) % per,
+                ] {
+                    if !ex.contains(&b) {
+                        ex.push(b);
+                    }
+                }
+            }
+            core.push(2 * nodes.len() as u32);
+            list.extend(ex.iter().flat_map(|&n| [2 * n, 2 * n + 1]));
+            off.push(list.len());
+        }
+        assert!(mesh.n_cells() >= 256);
+        let make = || {
+            Assembler::with_blocks_cored(
+                &dofs,
+                vec![(list.clone(), off.clone())],
+                vec![Some(core.clone())],
+            )
+        };
+        // A kernel with distinct values per element, row and column.
+        let kernel = |e: usize, r: &mut [f64], k: &mut [f64]| {
+            let nd = r.len();
+            for (a, ra) in r.iter_mut().enumerate() {
+                *ra = ((e * 7 + a) % 13) as f64 - 6.0;
+            }
+            for row in 0..core[e] as usize {
+                for col in 0..nd {
+                    k[row * nd + col] = ((e * 31 + row * 5 + col * 3) % 17) as f64 * 0.25;
+                }
+            }
+        };
+        let run = |asm: &mut Assembler| {
+            asm.zero(true);
+            asm.add_block_large(0, &dofs, true, kernel);
+            (asm.residual.clone(), asm.scale.clone(), asm.values.clone())
+        };
+        let mut chunked = make();
+        assert!(
+            chunked.blocks[0].chunks.is_some(),
+            "the ring block is chunked"
+        );
+        let by_chunks = run(&mut chunked);
+        let mut batched = make();
+        batched.blocks[0].chunks = None;
+        let by_batches = run(&mut batched);
+        let mut serial = make();
+        serial.parallel = false;
+        let serially = run(&mut serial);
+        // Small integers and quarters: every order of the sums is exact.
+        assert_eq!(by_chunks, serially);
+        assert_eq!(by_batches, serially);
+        assert!(serially.2.iter().any(|&v| v != 0.0));
     }
 }
