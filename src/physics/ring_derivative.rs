@@ -43,13 +43,12 @@ pub fn lagrange_derivative_weights(t: &[f64; WIDTH], t0: f64) -> [f64; WIDTH] {
                 continue;
             }
             den *= t[j] - t[m];
-            let mut p = 1.0;
-            for k in 0..WIDTH {
-                if k != j && k != m {
-                    p *= t0 - t[k];
-                }
-            }
-            num += p;
+            num += t
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != j && k != m)
+                .map(|(_, &tk)| t0 - tk)
+                .product::<f64>();
         }
         w[j] = num / den;
     }
