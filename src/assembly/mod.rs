@@ -567,6 +567,98 @@ fn block_slots(
     out
 }
 
+/// The assembler's sums (residual, its force-flux scale, matrix values) as elements add to
+/// them, possibly from several threads at disjoint indices.
+struct Sums<'a> {
+    res: SharedMut<'a, f64>,
+    scale: SharedMut<'a, f64>,
+    values: SharedMut<'a, f64>,
+}
+
+impl<'a> Sums<'a> {
+    fn new(res: &'a mut [f64], scale: &'a mut [f64], values: &'a mut [f64]) -> Self {
+        Self {
+            res: SharedMut::new(res),
+            scale: SharedMut::new(scale),
+            values: SharedMut::new(values),
+        }
+    }
+}
+
+impl Block {
+    /// Add element `e`'s residual `r` (one entry per element dof) and, `with_matrix`, its
+    /// row-major matrix `k` (at least the rows of its slots) to `out`: free equations
+    /// directly, constrained ones over their masters.
+    ///
+    /// # Safety
+    /// No other thread adds to the equations and matrix slots of element `e` meanwhile.
+    #[inline]
+    unsafe fn scatter(
+        &self,
+        e: usize,
+        dofs: &DofMap,
+        r: &[f64],
+        k: &[f64],
+        with_matrix: bool,
+        out: &Sums<'_>,
+    ) {
+        // SAFETY (of every add): the indices are element e's equations and slots, exclusive to
+        // this call by the caller's contract.
+        unsafe {
+            for (&d, &ra) in self.element(e).iter().zip(r) {
+                let q = dofs.eq[d as usize];
+                if q < CONSTRAINED {
+                    out.res.add(q as usize, ra);
+                    out.scale.add(q as usize, ra.abs());
+                }
+            }
+            if with_matrix {
+                let sl = &self.slots[self.slot_offsets[e]..self.slot_offsets[e + 1]];
+                for (slot, &kv) in sl.iter().zip(k) {
+                    if *slot != u32::MAX {
+                        out.values.add(*slot as usize, kv);
+                    }
+                }
+            }
+            if !self.con_r_offsets.is_empty() {
+                for &(a, q, w) in &self.con_r[self.con_r_offsets[e]..self.con_r_offsets[e + 1]] {
+                    out.res.add(q as usize, w * r[a as usize]);
+                    out.scale.add(q as usize, (w * r[a as usize]).abs());
+                }
+                if with_matrix {
+                    let ck = &self.con_k[self.con_k_offsets[e]..self.con_k_offsets[e + 1]];
+                    for &(ab, slot, w) in ck {
+                        if slot != u32::MAX {
+                            out.values.add(slot as usize, w * k[ab as usize]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The elements of `chunks` (ranges that share dofs with their neighbours only), the even
+/// chunks in parallel, then the odd ones, each chunk with its own scratch from `init`.
+fn by_chunks<S>(
+    chunks: &[(usize, usize)],
+    init: impl Fn() -> S + Sync,
+    work: impl Fn(usize, &mut S) + Sync,
+) {
+    for phase in 0..2 {
+        chunks
+            .par_iter()
+            .skip(phase)
+            .step_by(2)
+            .for_each(|&(a, b)| {
+                let mut scratch = init();
+                for e in a..b {
+                    work(e, &mut scratch);
+                }
+            });
+    }
+}
+
 /// One block's elements: their dofs (full numbering), one after the other, and the offsets.
 pub type ElementList = (Vec<u32>, Vec<usize>);
 
@@ -781,64 +873,23 @@ impl Assembler {
         let Some(block) = self.blocks.get(b) else {
             return;
         };
-        let res = SharedMut::new(&mut self.residual);
-        let sc = SharedMut::new(&mut self.scale);
-        let val = SharedMut::new(&mut self.values);
+        let out = Sums::new(&mut self.residual, &mut self.scale, &mut self.values);
         let work = |e: usize, loc: &mut LocalSystem| {
-            let el = block.element(e);
-            let nd = el.len();
+            let nd = block.element(e).len();
             loc.clear(nd);
             kernel(e, loc);
-            // SAFETY: elements processed concurrently belong to one colour and share no dof,
-            // so they touch disjoint equations and disjoint (row, col) slots; serial blocks
-            // are processed by one thread.
-            unsafe {
-                for (a, &d) in el.iter().enumerate() {
-                    let q = dofs.eq[d as usize];
-                    if q < CONSTRAINED {
-                        res.add(q as usize, loc.r[a]);
-                        sc.add(q as usize, loc.r[a].abs());
-                    }
-                }
-                if with_matrix {
-                    let s = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                    for (slot, &kv) in s.iter().zip(&loc.k[..nd * nd]) {
-                        if *slot != u32::MAX {
-                            val.add(*slot as usize, kv);
-                        }
-                    }
-                }
-                if !block.con_r_offsets.is_empty() {
-                    let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
-                    for &(a, q, w) in cr {
-                        res.add(q as usize, w * loc.r[a as usize]);
-                        sc.add(q as usize, (w * loc.r[a as usize]).abs());
-                    }
-                    if with_matrix {
-                        let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
-                        for &(ab, slot, w) in ck {
-                            if slot != u32::MAX {
-                                val.add(slot as usize, w * loc.k[ab as usize]);
-                            }
-                        }
-                    }
-                }
-            }
+            // SAFETY: elements processed concurrently belong to one colour or to chunks two
+            // apart and share no dof, so they touch disjoint equations and disjoint (row, col)
+            // slots; serial blocks are processed by one thread.
+            unsafe { block.scatter(e, dofs, &loc.r[..nd], &loc.k[..nd * nd], with_matrix, &out) };
         };
         match (&block.chunks, &block.colors, self.parallel) {
             (Some(chunks), _, true) => {
-                for phase in 0..2 {
-                    chunks
-                        .par_iter()
-                        .skip(phase)
-                        .step_by(2)
-                        .for_each(|&(a, b)| {
-                            let mut loc = Box::new(LocalSystem::new(0));
-                            for e in a..b {
-                                work(e, &mut loc);
-                            }
-                        });
-                }
+                by_chunks(
+                    chunks,
+                    || Box::new(LocalSystem::new(0)),
+                    |e, loc| work(e, loc),
+                );
             }
             (_, Some(colors), true) => {
                 for color in colors {
@@ -890,64 +941,17 @@ impl Assembler {
             kernel(e, r, k);
         };
         if block.chunks.is_some() || !self.parallel {
-            let res = SharedMut::new(&mut self.residual);
-            let sc = SharedMut::new(&mut self.scale);
-            let val = SharedMut::new(&mut self.values);
-            // SAFETY (of the adds below): elements of chunks assembled concurrently (every
-            // other chunk) share no dof, so they touch disjoint equations and slots; a
-            // serial assembler runs one element at a time.
-            let work = |e: usize, s: &mut [f64]| {
+            let out = Sums::new(&mut self.residual, &mut self.scale, &mut self.values);
+            let work = |e: usize, s: &mut Vec<f64>| {
                 eval(e, s);
-                let el = block.element(e);
-                unsafe {
-                    for (a, &d) in el.iter().enumerate() {
-                        let q = dofs.eq[d as usize];
-                        if q < CONSTRAINED {
-                            res.add(q as usize, s[a]);
-                            sc.add(q as usize, s[a].abs());
-                        }
-                    }
-                    if with_matrix {
-                        let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                        for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + sl.len()]) {
-                            if *slot != u32::MAX {
-                                val.add(*slot as usize, kv);
-                            }
-                        }
-                    }
-                    if !block.con_r_offsets.is_empty() {
-                        let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
-                        for &(a, q, w) in cr {
-                            res.add(q as usize, w * s[a as usize]);
-                            sc.add(q as usize, (w * s[a as usize]).abs());
-                        }
-                        if with_matrix {
-                            let ck =
-                                &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
-                            for &(ab, slot, w) in ck {
-                                if slot != u32::MAX {
-                                    val.add(slot as usize, w * s[max_nd + ab as usize]);
-                                }
-                            }
-                        }
-                    }
-                }
+                let nd = block.element(e).len();
+                // SAFETY: chunks assembled concurrently are two apart and share no dof (they
+                // touch disjoint equations and slots); a serial assembler runs one element at
+                // a time.
+                unsafe { block.scatter(e, dofs, &s[..nd], &s[max_nd..], with_matrix, &out) };
             };
             match (&block.chunks, self.parallel) {
-                (Some(chunks), true) => {
-                    for phase in 0..2 {
-                        chunks
-                            .par_iter()
-                            .skip(phase)
-                            .step_by(2)
-                            .for_each(|&(a, b)| {
-                                let mut s = vec![0.0; stride];
-                                for e in a..b {
-                                    work(e, &mut s);
-                                }
-                            });
-                    }
-                }
+                (Some(chunks), true) => by_chunks(chunks, || vec![0.0; stride], work),
                 _ => {
                     let mut s = vec![0.0; stride];
                     for e in 0..n_el {
@@ -969,39 +973,11 @@ impl Assembler {
                 .par_chunks_mut(stride)
                 .enumerate()
                 .for_each(|(i, s)| eval(start + i, s));
+            let out = Sums::new(&mut self.residual, &mut self.scale, &mut self.values);
             for (e, s) in (start..end).zip(batch.chunks(stride)) {
-                let el = block.element(e);
-                for (a, &d) in el.iter().enumerate() {
-                    let q = dofs.eq[d as usize];
-                    if q < CONSTRAINED {
-                        self.residual[q as usize] += s[a];
-                        self.scale[q as usize] += s[a].abs();
-                    }
-                }
-                if with_matrix {
-                    // A cored element's slots cover its core's rows only.
-                    let sl = &block.slots[block.slot_offsets[e]..block.slot_offsets[e + 1]];
-                    for (slot, &kv) in sl.iter().zip(&s[max_nd..max_nd + sl.len()]) {
-                        if *slot != u32::MAX {
-                            self.values[*slot as usize] += kv;
-                        }
-                    }
-                }
-                if !block.con_r_offsets.is_empty() {
-                    let cr = &block.con_r[block.con_r_offsets[e]..block.con_r_offsets[e + 1]];
-                    for &(a, q, w) in cr {
-                        self.residual[q as usize] += w * s[a as usize];
-                        self.scale[q as usize] += (w * s[a as usize]).abs();
-                    }
-                    if with_matrix {
-                        let ck = &block.con_k[block.con_k_offsets[e]..block.con_k_offsets[e + 1]];
-                        for &(ab, slot, w) in ck {
-                            if slot != u32::MAX {
-                                self.values[slot as usize] += w * s[max_nd + ab as usize];
-                            }
-                        }
-                    }
-                }
+                let nd = block.element(e).len();
+                // SAFETY: one element at a time, on this thread.
+                unsafe { block.scatter(e, dofs, &s[..nd], &s[max_nd..], with_matrix, &out) };
             }
             start = end;
         }
