@@ -1053,18 +1053,22 @@ fn store_factors<T: Copy>(fac: &mut [T], front: &[T], m: usize, w: usize, r: usi
 mod tests {
     use super::*;
 
+    /// Pseudo-random integers in 0..m (a linear congruential generator from `seed`).
+    fn lcg(mut seed: u64) -> impl FnMut(usize) -> usize {
+        move |m| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as usize) % m
+        }
+    }
+
     /// The lower triangle of A + Aᵀ by merging equals the one of a set construction, on random
     /// unsymmetric patterns with sorted columns and, sorted first, with shuffled ones
     /// (duplicates included).
     #[test]
     fn lower_of_sum_matches_a_set_construction() {
-        let mut seed = 777u64;
-        let mut rand = |m: usize| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 33) as usize) % m
-        };
+        let mut rand = lcg(777);
         for case in 0..300 {
             let n = 1 + rand(12);
             let mut cols: Vec<Vec<usize>> = (0..n)
@@ -1152,13 +1156,7 @@ mod tests {
             children[node] = orig;
             lowest
         }
-        let mut seed = 12345u64;
-        let mut rand = |m: usize| {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 33) as usize) % m
-        };
+        let mut rand = lcg(12345);
         for _ in 0..200 {
             let n = 2 + rand(7);
             // parent[s] > s (or a root), as in an elimination tree.
