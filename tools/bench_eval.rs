@@ -16,7 +16,7 @@
 
 #[path = "common.rs"]
 mod common;
-use common::median;
+use common::{median, solved_steady};
 
 use std::time::Instant;
 use tread::io::Scene;
@@ -76,20 +76,7 @@ fn run(repeats: usize, sets: &[String]) {
             std::process::exit(2);
         }
     };
-    let mut st = match tread::driver::steady_run::build_steady(&scene) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(1);
-        }
-    };
-    let mut report = Default::default();
-    if let Err(e) =
-        tread::driver::steady_run::solve_steady(&scene, &mut st, false, &mut report, &mut ())
-    {
-        eprintln!("the steady solve failed: {e}");
-        std::process::exit(1);
-    }
+    let mut st = solved_steady(&scene);
     println!(
         "{} equations, overrides {sets:?}, rayon threads {}",
         st.n_eq(),

@@ -17,7 +17,7 @@
 
 #[path = "common.rs"]
 mod common;
-use common::median;
+use common::{median, solved_steady};
 
 use std::time::Instant;
 use tread::app::RunOptions;
@@ -42,19 +42,7 @@ fn scene(text: &str, set: &[&str]) -> Scene {
 /// Median time of one contact-block assembly (residual and tangent) at the steady state.
 fn contact_block_time(set: &[&str], repeats: usize) -> (f64, f64) {
     let sc = scene(ODEN, set);
-    let mut st = match tread::driver::steady_run::build_steady(&sc) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            std::process::exit(1);
-        }
-    };
-    let mut rep = Default::default();
-    if let Err(e) = tread::driver::steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ())
-    {
-        eprintln!("steady solve failed: {e}");
-        std::process::exit(1);
-    }
+    let mut st = solved_steady(&sc);
     let sys = &mut st.sys;
     let inner = 200;
     let mut times = Vec::new();

@@ -28,6 +28,28 @@ pub fn fnv1a(text: &str) -> String {
     format!("{h:016x}")
 }
 
+/// The steady state of `scene`, built and solved as `tread run --mode steady` does (without
+/// its outputs). A scene that cannot be built or solved ends the tool: the error on stderr,
+/// exit status 1.
+#[allow(dead_code)]
+pub fn solved_steady(scene: &tread::io::Scene) -> tread::driver::steady::SteadyRolling {
+    let mut st = match tread::driver::steady_run::build_steady(scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            std::process::exit(1);
+        }
+    };
+    let mut report = Default::default();
+    if let Err(e) =
+        tread::driver::steady_run::solve_steady(scene, &mut st, false, &mut report, &mut ())
+    {
+        eprintln!("the steady solve failed: {e}");
+        std::process::exit(1);
+    }
+    st
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
