@@ -483,6 +483,13 @@ fn block_pattern(
     let mut row_idx = Vec::new();
     for j in 0..n {
         let start = row_idx.len();
+        // A column held by the same elements as the one before (the other component of a
+        // node) has the same rows.
+        if j > 0 && inc[inc_ptr[j]..inc_ptr[j + 1]] == inc[inc_ptr[j - 1]..inc_ptr[j]] {
+            row_idx.extend_from_within(col_ptr[j - 1]..start);
+            col_ptr.push(row_idx.len());
+            continue;
+        }
         for &e in &inc[inc_ptr[j]..inc_ptr[j + 1]] {
             let e = e as usize;
             for p in el_off[e]..el_off[e + 1] {
@@ -685,6 +692,22 @@ impl Assembler {
             dofs,
             vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())],
         )
+    }
+
+    /// No block and an empty pattern for `n` equations (a placeholder until the blocks are
+    /// known).
+    pub fn unbuilt(n: usize) -> Self {
+        Self {
+            n,
+            col_ptr: vec![0; n + 1],
+            row_idx: Vec::new(),
+            blocks: Vec::new(),
+            values: Vec::new(),
+            residual: vec![0.0; n],
+            scale: vec![0.0; n],
+            parallel: true,
+            large_scratch: Vec::new(),
+        }
     }
 
     /// Pattern of several element blocks, each given as (dof lists, offsets) in full-dof
@@ -1083,6 +1106,81 @@ mod cored_block_tests {
             dofs.eq[el[6] as usize] as usize,
         );
         assert!(has(&both, i, j), "nodes 5 and 6 share a cell");
+    }
+
+    /// The pattern is the set of element pairs (core rows × all columns, free dofs only), the
+    /// columns shared by one node's two components among them: random element blocks on an
+    /// annulus with fixed nodes, elements with one component of a node only (whose columns
+    /// then differ from the other component's), and a cored block.
+    #[test]
+    fn pattern_is_the_set_of_element_pairs() {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 3,
+            n_theta: 12,
+            degree: 2,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+        });
+        let fixed: Vec<u32> = mesh.node_set("hub").to_vec();
+        let dofs = DofMap::new(&mesh, 0, &fixed);
+        let n_nodes = mesh.n_nodes() as u64;
+        let mut seed = 11u64;
+        let mut rnd = move |n: u64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) % n
+        };
+        let mut lists = vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())];
+        let mut cores = vec![None];
+        for cored in [false, true] {
+            let (mut d, mut o, mut core) = (Vec::new(), vec![0], Vec::new());
+            for _ in 0..40 {
+                let start = d.len();
+                for _ in 0..1 + rnd(6) {
+                    let node = rnd(n_nodes) as u32;
+                    match rnd(4) {
+                        0 => d.push(2 * node),
+                        1 => d.push(2 * node + 1),
+                        _ => d.extend([2 * node, 2 * node + 1]),
+                    }
+                }
+                o.push(d.len());
+                core.push(rnd((d.len() - start) as u64 + 1) as u32);
+            }
+            lists.push((d, o));
+            cores.push(cored.then_some(core));
+        }
+        let asm = Assembler::with_blocks_cored(&dofs, lists.clone(), cores.clone());
+        let mut want = std::collections::BTreeSet::new();
+        for ((d, o), core) in lists.iter().zip(&cores) {
+            for e in 0..o.len() - 1 {
+                let el = &d[o[e]..o[e + 1]];
+                let k = core.as_ref().map_or(el.len(), |c| c[e] as usize);
+                for &di in &el[..k] {
+                    for &dj in el {
+                        let (i, j) = (dofs.eq[di as usize], dofs.eq[dj as usize]);
+                        if i < CONSTRAINED && j < CONSTRAINED {
+                            want.insert((j as usize, i as usize));
+                        }
+                    }
+                }
+            }
+        }
+        let got: std::collections::BTreeSet<(usize, usize)> = (0..asm.n)
+            .flat_map(|j| {
+                asm.row_idx[asm.col_ptr[j]..asm.col_ptr[j + 1]]
+                    .iter()
+                    .map(move |&i| (j, i))
+            })
+            .collect();
+        assert_eq!(got.len(), asm.nnz(), "no duplicate rows in a column");
+        assert_eq!(got, want);
+        for j in 0..asm.n {
+            assert!(asm.row_idx[asm.col_ptr[j]..asm.col_ptr[j + 1]].is_sorted());
+        }
     }
 
     /// `add_block_large` gives the same residual, scale and matrix whichever way it runs: by

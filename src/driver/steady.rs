@@ -62,7 +62,7 @@ use super::system::{Loading, SolidSystem};
 use crate::io::record::Recorder;
 use crate::solver::continuation::ParametricSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
-use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
+use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError, SparseSolver};
 
 /// The parameter of a continuation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -101,6 +101,10 @@ pub struct SteadyRolling {
     /// Free-rolling road speed at the current ω (zero hub torque), once solved for
     /// ([`solve_torque`] with target 0); the reference of the creep. NaN until then.
     pub v0_free: f64,
+    /// A linear solver analysed for this system's matrix ahead of its first Newton solve
+    /// (while a coarser mesh was solved), and the wall time of that analysis: [`press`] takes
+    /// it when its kind and pattern still match.
+    pub analysed: Option<(SparseSolver, f64)>,
 }
 
 impl SteadyRolling {
@@ -117,6 +121,7 @@ impl SteadyRolling {
             coarse_start: None,
             v0_free: f64::NAN,
             damping_fallback: None,
+            analysed: None,
         };
         s.set_omega(omega, v0);
         s.sys.enable_steady_slip();
@@ -277,7 +282,23 @@ pub fn press(
         let f = st.sys.contact_force_scale(st.ro);
         st.sys.set_reference_force(f);
     }
-    let mut newton = Newton::new(&st.sys, kind, newton_opts)?;
+    let mut newton = match st.analysed.take() {
+        Some((solver, wall))
+            if solver.kind() == kind && {
+                let (cp, ri) = st.sys.pattern();
+                solver.has_pattern(cp, ri)
+            } =>
+        {
+            if newton_opts.verbose {
+                eprintln!(
+                    "         symbolic analysis of {} equations: {wall:.3} s, made alongside the coarser mesh's solve",
+                    st.sys.n_eq()
+                );
+            }
+            Newton::with_solver(&st.sys, solver, newton_opts)
+        }
+        _ => Newton::new(&st.sys, kind, newton_opts)?,
+    };
     solve_load_steps(&mut st.sys, &mut newton, step_opts, report, rec)
 }
 

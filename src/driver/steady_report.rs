@@ -109,7 +109,9 @@ pub struct CoarseStart {
     pub meshes: Vec<String>,
     /// Newton iterations on the coarser meshes (all of them).
     pub coarse_newton_iterations: usize,
-    /// Wall time of the coarser solves and the interpolation.
+    /// Wall time of the coarser meshes' set-up and solves and of the interpolation (not of
+    /// this mesh's symbolic analysis, which runs alongside the coarse solve when the thread
+    /// pool has a second worker, and after it otherwise).
     pub coarse_wall_time_s: f64,
     /// Newton iterations on this mesh from the interpolated state.
     pub newton_iterations: usize,

@@ -50,7 +50,7 @@ use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
-use crate::solver::linear::{write_matrix_market, write_vector_market};
+use crate::solver::linear::{write_matrix_market, write_vector_market, SparseSolver};
 use crate::solver::stepping::{StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
 use std::path::{Path, PathBuf};
@@ -340,7 +340,8 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
             if c.friction.is_active() {
                 c.enable_steady_slip(&model.mesh);
             }
-            SolidSystem::with_contact(model, c)
+            // The assembler once its blocks are final (below).
+            SolidSystem::with_contact_deferred(model, c)
         }
         _ => SolidSystem::new(model, "hub"),
     };
@@ -366,6 +367,7 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
             .set_steady_damping_tangent(SteadyDampingTangent::Banded),
         DampingTangentChoice::Auto | DampingTangentChoice::MatrixFree => {}
     }
+    st.sys.finish_assembly();
     Ok(st)
 }
 
@@ -618,7 +620,29 @@ fn coarse_start(
         }
     };
     let mut crep = StepReport::default();
-    let solved = solve_steady(&coarse, &mut cst, false, &mut crep, &mut ());
+    let setup_s = t0.elapsed().as_secs_f64();
+    // This mesh's symbolic analysis alongside the coarse solve (on another worker of the
+    // pool, when it has one): it depends on the sparsity only.
+    let kind = linear_kind(scene, &st.sys);
+    let sys = &st.sys;
+    let ((solved, solve_s), analysed) = rayon::join(
+        || {
+            let t = Instant::now();
+            let solved = solve_steady(&coarse, &mut cst, false, &mut crep, &mut ());
+            (solved, t.elapsed().as_secs_f64())
+        },
+        || {
+            let t = Instant::now();
+            let (cp, ri) = sys.pattern();
+            SparseSolver::new(sys.n_eq(), cp, ri, kind)
+                .ok()
+                .map(|s| (s, t.elapsed().as_secs_f64()))
+        },
+    );
+    st.analysed = analysed;
+    // The coarser meshes' time leaves out this mesh's analysis, which one thread makes after
+    // the coarse solve (and more threads alongside it).
+    let mut coarse_s = setup_s + solve_s;
     if let Some(inner) = &cst.coarse_start {
         out.meshes = inner.meshes.clone();
         out.coarse_newton_iterations = inner.coarse_newton_iterations;
@@ -634,18 +658,20 @@ fn coarse_start(
         if let SolveError::Interrupted { .. } = e {
             return Err(e);
         }
-        out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+        out.coarse_wall_time_s = coarse_s;
         out.error = Some(format!(
             "the solve on the {} mesh failed: {e}",
             out.meshes.last().map_or("", |m| m.as_str())
         ));
         return Ok(Some(out));
     }
+    let t1 = Instant::now();
     interpolate_state(&cst.sys, &mut st.sys);
     // The coarse system (its matrix, factors, work vectors) is not needed any more: free it
     // before the fine mesh's factorization.
     drop(cst);
-    out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+    coarse_s += t1.elapsed().as_secs_f64();
+    out.coarse_wall_time_s = coarse_s;
     if verbose {
         eprintln!(
             "  started from the steady state on the {} mesh ({} Newton iterations, {:.3} s)",
@@ -679,22 +705,11 @@ fn coarse_start(
 /// `to` keep their values.
 fn interpolate_state(from: &SolidSystem, to: &mut SolidSystem) {
     use crate::assembly::CONSTRAINED;
-    use crate::mesh::locate::{inverse_map, vector_at, PointLocator};
+    use crate::mesh::locate::{locate_points, vector_at};
     let src = &from.model.mesh;
-    let loc = PointLocator::new(src);
     let mut x = to.x.clone();
-    // Consecutive nodes mostly lie in one cell: try the last node's cell first.
-    let mut hint: Option<usize> = None;
-    let inside = |r: &(f64, f64)| r.0.abs() <= 1.0 + 1e-12 && r.1.abs() <= 1.0 + 1e-12;
-    for (a, &xa) in to.model.mesh.nodes.iter().enumerate() {
-        let (c, xi, eta) = hint
-            .and_then(|c| {
-                inverse_map(src, c, xa)
-                    .filter(inside)
-                    .map(|(xi, eta)| (c, xi, eta))
-            })
-            .unwrap_or_else(|| loc.locate_nearest(src, xa));
-        hint = Some(c);
+    let found = locate_points(src, &to.model.mesh.nodes);
+    for (a, &(c, xi, eta)) in found.iter().enumerate() {
         let u = vector_at(src, &from.x, c, xi, eta);
         for (i, &ui) in u.iter().enumerate() {
             if to.dofs.eq[2 * a + i] < CONSTRAINED {

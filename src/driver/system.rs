@@ -74,7 +74,13 @@ pub struct SolidSystem {
     /// beyond the cell, so this system computes them and assembles with
     /// [`crate::physics::SolidModel::cell_system_steady_viscous`]. `None` in the other modes.
     pub steady_omega: Option<f64>,
+    /// The blocks (element lists, cores) of an assembler not built yet
+    /// ([`Self::with_contact_deferred`]); `asm` holds no block meanwhile.
+    pending_blocks: Option<BlockLists>,
 }
+
+/// An assembler's element lists and their cores ([`Assembler::block_lists`]).
+type BlockLists = (Vec<crate::assembly::ElementList>, Vec<Option<Vec<u32>>>);
 
 /// The steady mode's strain-rate damping (see [`SolidSystem::enable_steady_viscosity`]): the
 /// nodal θ-derivative, each cell's own derivative (the assembled tangent's approximation of
@@ -167,24 +173,69 @@ impl SolidSystem {
 
     /// Fix both displacement components of the given nodes (values taken from `x`, initially 0).
     pub fn with_fixed_nodes(model: SolidModel, fixed: &[u32]) -> Self {
-        Self::build(model, None, fixed)
+        Self::build(model, None, fixed, false)
     }
 
     /// Solid with contact on the outer facets; the hub set is fixed. Under load control the
     /// road height is a global unknown, initialised to `contact.h`.
     pub fn with_contact(model: SolidModel, contact: ContactModel) -> Self {
         let fixed: Vec<u32> = model.mesh.node_set("hub").to_vec();
-        Self::build(model, Some(contact), &fixed)
+        Self::build(model, Some(contact), &fixed, false)
     }
 
-    fn build(model: SolidModel, contact: Option<ContactModel>, fixed: &[u32]) -> Self {
+    /// As [`Self::with_contact`], with the assembler (its sparsity, the costliest part of the
+    /// set-up) built only by [`Self::finish_assembly`]: for a caller that changes the blocks
+    /// first ([`Self::set_steady_damping_tangent`]), so that the pattern is built once.
+    /// Nothing may be assembled before [`Self::finish_assembly`].
+    pub fn with_contact_deferred(model: SolidModel, contact: ContactModel) -> Self {
+        let fixed: Vec<u32> = model.mesh.node_set("hub").to_vec();
+        Self::build(model, Some(contact), &fixed, true)
+    }
+
+    /// Build the assembler of [`Self::with_contact_deferred`] (no effect once built).
+    pub fn finish_assembly(&mut self) {
+        if let Some((lists, cores)) = self.pending_blocks.take() {
+            self.set_blocks(lists, cores);
+        }
+    }
+
+    /// The blocks of the assembler (built or pending).
+    fn block_lists(&self) -> BlockLists {
+        match &self.pending_blocks {
+            Some(p) => p.clone(),
+            None => self.asm.block_lists(),
+        }
+    }
+
+    /// Rebuild the assembler on these blocks (its parallel setting kept), or replace the
+    /// pending ones.
+    fn set_blocks(
+        &mut self,
+        lists: Vec<crate::assembly::ElementList>,
+        cores: Vec<Option<Vec<u32>>>,
+    ) {
+        if let Some(p) = self.pending_blocks.as_mut() {
+            *p = (lists, cores);
+            return;
+        }
+        let parallel = self.asm.parallel;
+        self.asm = Assembler::with_blocks_cored(&self.dofs, lists, cores);
+        self.asm.parallel = parallel;
+    }
+
+    fn build(model: SolidModel, contact: Option<ContactModel>, fixed: &[u32], defer: bool) -> Self {
         let n_global = usize::from(contact.as_ref().is_some_and(|c| c.load.is_some()));
         let dofs = DofMap::with_globals(&model.mesh, model.dofs_per_cell(), fixed, n_global);
         let mut blocks = vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())];
         if let Some(c) = &contact {
             blocks.push(c.element_dofs(&model.mesh, &dofs));
         }
-        let asm = Assembler::with_blocks(&dofs, blocks);
+        let (asm, pending_blocks) = if defer {
+            let cores = vec![None; blocks.len()];
+            (Assembler::unbuilt(dofs.n_eq), Some((blocks, cores)))
+        } else {
+            (Assembler::with_blocks(&dofs, blocks), None)
+        };
         let mut x = model.initial_state(&dofs);
         if let (Some(c), true) = (&contact, n_global > 0) {
             x[dofs.global(0)] = c.h;
@@ -210,6 +261,7 @@ impl SolidSystem {
             steady_visc: None,
             steady_history: None,
             steady_omega: None,
+            pending_blocks,
         }
     }
 
@@ -311,11 +363,10 @@ impl SolidSystem {
         if !c.enable_steady_slip(&self.model.mesh) {
             return;
         }
-        let (mut lists, cores) = self.asm.block_lists();
-        lists[1] = c.element_dofs(&self.model.mesh, &self.dofs);
-        let parallel = self.asm.parallel;
-        self.asm = Assembler::with_blocks_cored(&self.dofs, lists, cores);
-        self.asm.parallel = parallel;
+        let elements = c.element_dofs(&self.model.mesh, &self.dofs);
+        let (mut lists, cores) = self.block_lists();
+        lists[1] = elements;
+        self.set_blocks(lists, cores);
     }
 
     /// Steady (θ-referential) mode with strain-rate damping: the damping acts on the material
@@ -448,10 +499,13 @@ impl SolidSystem {
             }
             _ => None,
         };
+        if self.steady_visc.is_none() {
+            return;
+        }
+        let (mut lists, mut cores) = self.block_lists();
         let Some(sv) = self.steady_visc.as_mut() else {
             return;
         };
-        let (mut lists, mut cores) = self.asm.block_lists();
         if let Some((block, _, _)) = sv.assembled.take() {
             lists.truncate(block);
             cores.truncate(block);
@@ -500,9 +554,7 @@ impl SolidSystem {
             lists.push((list, off));
             cores.push(Some(core));
         }
-        let parallel = self.asm.parallel;
-        self.asm = Assembler::with_blocks_cored(&self.dofs, lists, cores);
-        self.asm.parallel = parallel;
+        self.set_blocks(lists, cores);
     }
 
     /// Add the steady damping's coupling beyond the cells to the matrix (assembled mode):
@@ -567,6 +619,10 @@ impl SolidSystem {
     /// then the contact facets at the same rates. Returns whether the state is admissible
     /// (no J ≤ 0) and the residual finite.
     pub fn assemble(&mut self, terms: &Terms, with_matrix: bool) -> bool {
+        debug_assert!(
+            self.pending_blocks.is_none(),
+            "the assembler is not built yet"
+        );
         // Hanging-node values follow their masters: a state set from outside (an interpolated
         // start) may not, and Newton's first step would then be taken from a state its update
         // does not continue. Idempotent on a consistent state.
@@ -1055,6 +1111,10 @@ impl NonlinearSystem for SolidSystem {
         }
     }
     fn pattern(&self) -> (&[usize], &[usize]) {
+        debug_assert!(
+            self.pending_blocks.is_none(),
+            "the assembler is not built yet"
+        );
         (&self.asm.col_ptr, &self.asm.row_idx)
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {

@@ -125,7 +125,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("solver.coarse_start", N, SD, "null, or how the steady solve started from the steady state of the mesh with half the cells in r and θ (nested iteration, `[solver] coarse_start`)"),
     k("solver.coarse_start.meshes", N, CST, "the coarser meshes solved first, coarsest first, as `n_r x n_theta`"),
     k("solver.coarse_start.coarse_newton_iterations", N, CST, "Newton iterations on the coarser meshes"),
-    k("solver.coarse_start.coarse_wall_time_s", "s", CST, "wall time of the coarser solves and the interpolation"),
+    k("solver.coarse_start.coarse_wall_time_s", "s", CST, "wall time of the coarser meshes' set-up and solves and of the interpolation (not of this mesh's symbolic analysis, made alongside)"),
     k("solver.coarse_start.newton_iterations", N, CST, "Newton iterations on the scene's mesh from the interpolated state"),
     k("solver.coarse_start.succeeded", N, CST, "whether Newton converged from it (if not, the press-in from the undeformed state followed)"),
     k("solver.coarse_start.error", N, CST, "why it did not (null if it did)"),

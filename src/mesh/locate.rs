@@ -126,6 +126,61 @@ impl PointLocator {
     }
 }
 
+/// [`PointLocator::locate_nearest`] of many points at once, for points that mostly lie in
+/// the cell of the point before them (a mesh's nodes, in order). On a ring mesh (cell
+/// j · n_theta + k, see [`super::RingLayout`]) the cell a point's radius and angle name among
+/// the vertex rings and rays is tried first, then the cell of the point before, then the
+/// buckets' search; a point is taken from a tried cell when it lies inside it up to round-off.
+pub fn locate_points(mesh: &Mesh, points: &[Vec2]) -> Vec<(usize, f64, f64)> {
+    use std::f64::consts::TAU;
+    let loc = PointLocator::new(mesh);
+    // The vertex rings' radii (but the innermost) and the vertex rays' angles from the first.
+    let rings = mesh
+        .rings
+        .filter(|rl| rl.n_r > 0 && rl.n_theta > 0 && rl.degree > 0)
+        .map(|rl| {
+            let vertex =
+                |ring: usize, k: usize| mesh.nodes[ring * rl.degree * rl.per_ring + k * rl.degree];
+            let x0 = vertex(0, 0);
+            let t0 = x0[1].atan2(x0[0]);
+            let radii: Vec<f64> = (1..rl.n_r).map(|j| vertex(j, 0).norm()).collect();
+            let angles: Vec<f64> = (1..rl.n_theta)
+                .map(|k| {
+                    let x = vertex(0, k);
+                    (x[1].atan2(x[0]) - t0).rem_euclid(TAU)
+                })
+                .collect();
+            (rl.n_theta, t0, radii, angles)
+        });
+    let ring_cell = |p: Vec2| {
+        rings.as_ref().map(|(nt, t0, radii, angles)| {
+            let j = radii.partition_point(|&r| r <= p.norm());
+            let t = (p[1].atan2(p[0]) - t0).rem_euclid(TAU);
+            j * nt + angles.partition_point(|&a| a <= t)
+        })
+    };
+    let inside = |r: &(f64, f64)| r.0.abs() <= 1.0 + 1e-12 && r.1.abs() <= 1.0 + 1e-12;
+    let try_cell = |c: usize, p: Vec2| {
+        (c < mesh.n_cells())
+            .then(|| inverse_map(mesh, c, p))
+            .flatten()
+            .filter(inside)
+            .map(|(xi, eta)| (c, xi, eta))
+    };
+    let mut hint: Option<usize> = None;
+    points
+        .iter()
+        .map(|&p| {
+            let found = ring_cell(p)
+                .and_then(|c| try_cell(c, p))
+                .or_else(|| hint.and_then(|c| try_cell(c, p)))
+                .unwrap_or_else(|| loc.locate_nearest(mesh, p));
+            hint = Some(found.0);
+            found
+        })
+        .collect()
+}
+
 fn bucket_of(lo: Vec2, h: Vec2, nx: usize, ny: usize, x: Vec2) -> (usize, usize) {
     let f = |v: f64, n: usize| -> usize {
         if v.is_finite() && v > 0.0 {
@@ -256,6 +311,74 @@ mod tests {
             // Points outside the annulus are not.
             assert!(loc.locate(&m, Vec2::new(0.0, 0.0)).is_none());
             assert!(loc.locate(&m, Vec2::new(2.5, 0.0)).is_none());
+        }
+    }
+
+    /// `locate_points` on graded ring meshes (Q1 and Q2, uniform and graded in θ, a rotated
+    /// first ray) finds what `locate_nearest` finds: for the nodes of a finer mesh of the same
+    /// annulus (not nested in the coarser one where graded), points off the nodes, and points
+    /// on the exact outer circle, just outside the Q2 arcs. A point inside a cell maps back to
+    /// itself; the cell may differ only for a point on a shared edge.
+    #[test]
+    fn locate_points_agrees_with_the_bucket_search() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (degree, gr, gt) in [(2, 1.0, 0.0), (2, 1.7, 0.0), (1, 1.3, 0.4), (2, 0.6, 0.3)] {
+            let spec = |n_r: usize, n_theta: usize| AnnulusSpec {
+                ri: 1.0,
+                ro: 2.0,
+                n_r,
+                n_theta,
+                degree,
+                grading_r: gr,
+                grading_theta: gt,
+            };
+            let mut coarse = annulus(&spec(3, 20));
+            coarse.make_isoparametric();
+            let rot =
+                crate::math::Mat2::new(0.6f64.cos(), -0.6f64.sin(), 0.6f64.sin(), 0.6f64.cos());
+            for x in coarse.nodes.iter_mut() {
+                *x = rot * *x;
+            }
+            let fine = annulus(&spec(7, 44));
+            let mut points: Vec<Vec2> = fine.nodes.iter().map(|x| rot * x).collect();
+            for _ in 0..500 {
+                let (r, t) = (1.0 + rnd(), std::f64::consts::TAU * rnd());
+                points.push(Vec2::new(r * t.cos(), r * t.sin()));
+            }
+            for _ in 0..50 {
+                let t = std::f64::consts::TAU * rnd();
+                points.push(Vec2::new(2.0 * t.cos(), 2.0 * t.sin()));
+            }
+            let loc = PointLocator::new(&coarse);
+            let found = locate_points(&coarse, &points);
+            let mut n = [0.0; 9];
+            let at = |c: usize, xi: f64, eta: f64, n: &mut [f64; 9]| -> Vec2 {
+                shape_values(&coarse, c, xi, eta, n);
+                coarse
+                    .cell_nodes(c)
+                    .iter()
+                    .enumerate()
+                    .map(|(a, &k)| coarse.nodes[k as usize] * n[a])
+                    .sum()
+            };
+            for (p, &(c, xi, eta)) in points.iter().zip(&found) {
+                let (c0, xi0, eta0) = loc.locate_nearest(&coarse, *p);
+                let (q, q0) = (at(c, xi, eta, &mut n), at(c0, xi0, eta0, &mut n));
+                assert!(
+                    (q - q0).norm() <= 1e-10,
+                    "degree {degree}, grading {gr}/{gt}: {p:?} -> cell {c} ({xi}, {eta}) at {q:?}, the search: cell {c0} ({xi0}, {eta0}) at {q0:?}"
+                );
+                if xi.abs() < 1.0 - 1e-9 && eta.abs() < 1.0 - 1e-9 {
+                    assert_eq!(c, c0, "{p:?}");
+                    assert!((q - p).norm() <= 1e-10, "{p:?} maps back to {q:?}");
+                }
+            }
         }
     }
 }

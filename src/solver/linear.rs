@@ -894,6 +894,11 @@ impl SparseSolver {
         self.kind
     }
 
+    /// Whether this solver was analysed for the CSC pattern (`col_ptr`, `row_idx`).
+    pub fn has_pattern(&self, col_ptr: &[usize], row_idx: &[usize]) -> bool {
+        self.pattern.col_ptr() == col_ptr && self.pattern.row_idx() == row_idx
+    }
+
     /// System size.
     pub fn n(&self) -> usize {
         self.n

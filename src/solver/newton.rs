@@ -347,7 +347,7 @@ impl Newton {
     ) -> Result<Self, SolveError> {
         let (cp, ri) = sys.pattern();
         let started = Instant::now();
-        let mut solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
+        let solver = SparseSolver::new(sys.n_eq(), cp, ri, kind)?;
         if opts.verbose {
             eprintln!(
                 "         symbolic analysis of {} equations: {:.3} s",
@@ -355,16 +355,26 @@ impl Newton {
                 started.elapsed().as_secs_f64()
             );
         }
+        Ok(Self::with_solver(sys, solver, opts))
+    }
+
+    /// With a solver already analysed for `sys`'s pattern (see [`SparseSolver::has_pattern`]),
+    /// e.g. one made while other work ran.
+    pub fn with_solver<S: NonlinearSystem>(
+        sys: &S,
+        mut solver: SparseSolver,
+        opts: NewtonOptions,
+    ) -> Self {
         // The determinant (an extra LBLᵀ pass for LU) is only needed by continuation.
         solver.set_track_determinant(false);
-        Ok(Self {
+        Self {
             opts,
             solver,
             dx: vec![0.0; sys.n_eq()],
             saved: Vec::new(),
             mag: Vec::new(),
             noise: Vec::new(),
-        })
+        }
     }
 
     pub fn linear_kind(&self) -> LinearKind {
