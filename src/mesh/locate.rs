@@ -133,7 +133,8 @@ impl PointLocator {
 /// buckets' search; a point is taken from a tried cell when it lies inside it up to round-off.
 pub fn locate_points(mesh: &Mesh, points: &[Vec2]) -> Vec<(usize, f64, f64)> {
     use std::f64::consts::TAU;
-    let loc = PointLocator::new(mesh);
+    // The buckets only if some point needs them.
+    let loc = std::cell::OnceCell::new();
     // The vertex rings' radii (but the innermost) and the vertex rays' angles from the first.
     let rings = mesh
         .rings
@@ -174,7 +175,10 @@ pub fn locate_points(mesh: &Mesh, points: &[Vec2]) -> Vec<(usize, f64, f64)> {
             let found = ring_cell(p)
                 .and_then(|c| try_cell(c, p))
                 .or_else(|| hint.and_then(|c| try_cell(c, p)))
-                .unwrap_or_else(|| loc.locate_nearest(mesh, p));
+                .unwrap_or_else(|| {
+                    loc.get_or_init(|| PointLocator::new(mesh))
+                        .locate_nearest(mesh, p)
+                });
             hint = Some(found.0);
             found
         })

@@ -404,6 +404,58 @@ fn analyse(
     Ok((fwd, inv, begin, rows, rows_ptr))
 }
 
+/// [`analyse`] on the quotient graph of the column groups `first` ([`column_pairs`]; a
+/// quarter of the entries for pairs), expanded to the columns: the elimination of a group is
+/// that of its columns, one after the other.
+#[allow(clippy::type_complexity)]
+fn analyse_pairs(
+    n: usize,
+    first: &[usize],
+    lp: Vec<usize>,
+    li: Vec<usize>,
+) -> Result<(Vec<usize>, Vec<usize>, Vec<usize>, Vec<usize>, Vec<usize>), SymmetricLuError> {
+    let groups = first.len() - 1;
+    let mut gid = vec![0usize; n];
+    for g in 0..groups {
+        gid[first[g]..first[g + 1]].fill(g);
+    }
+    // A group's rows are its first column's (L_j = {j} ∪ L_{j+1} for a pair).
+    let (mut gp, mut gi) = (vec![0usize], Vec::with_capacity(li.len() / 3));
+    for g in 0..groups {
+        let start = gi.len();
+        for &r in &li[lp[first[g]]..lp[first[g] + 1]] {
+            if gi.len() == start || gi[gi.len() - 1] != gid[r] {
+                gi.push(gid[r]);
+            }
+        }
+        gp.push(gi.len());
+    }
+    drop((lp, li, gid));
+    let (gfwd, _, gbegin, grows, grows_ptr) = analyse(groups, gp, gi)?;
+    // Each group's first permuted column.
+    let mut at = Vec::with_capacity(groups + 1);
+    at.push(0usize);
+    let mut fwd = Vec::with_capacity(n);
+    for &g in &gfwd {
+        fwd.extend(first[g]..first[g + 1]);
+        at.push(fwd.len());
+    }
+    let mut inv = vec![0usize; n];
+    for (k, &j) in fwd.iter().enumerate() {
+        inv[j] = k;
+    }
+    let begin: Vec<usize> = gbegin.iter().map(|&b| at[b]).collect();
+    let mut rows = Vec::with_capacity(2 * grows.len());
+    let mut rows_ptr = vec![0usize];
+    for s in 0..begin.len() - 1 {
+        for &r in &grows[grows_ptr[s]..grows_ptr[s + 1]] {
+            rows.extend(at[r]..at[r + 1]);
+        }
+        rows_ptr.push(rows.len());
+    }
+    Ok((fwd, inv, begin, rows, rows_ptr))
+}
+
 /// Lower triangle of the pattern of A + Aᵀ, the whole diagonal included, in CSC with sorted
 /// rows. Column j is the merge of A's rows i > j in its column j with the columns k > j whose
 /// entry (j, k) lies above the diagonal, gathered by one counting pass over the columns in
@@ -521,55 +573,13 @@ impl SymmetricLu {
             )));
         }
         let (lp, li) = lower_of_sum(n, col_ptr, row_idx);
-        let first = if pairs {
-            column_pairs(n, &lp, &li)
-        } else {
-            Vec::new()
-        };
-        let groups = first.len().saturating_sub(1);
-        let (fwd, inv, begin, rows, rows_ptr) = if pairs && 4 * (n - groups) >= n && n > 0 {
-            // The quotient graph of the pairs (a quarter of the entries), analysed and
-            // expanded: its elimination of a pair is that of its two columns.
-            let mut gid = vec![0usize; n];
-            for g in 0..groups {
-                gid[first[g]..first[g + 1]].fill(g);
-            }
-            let (mut gp, mut gi) = (vec![0usize], Vec::with_capacity(li.len() / 3));
-            for g in 0..groups {
-                let start = gi.len();
-                for &r in &li[lp[first[g]]..lp[first[g] + 1]] {
-                    if gi.len() == start || gi[gi.len() - 1] != gid[r] {
-                        gi.push(gid[r]);
-                    }
-                }
-                gp.push(gi.len());
-            }
-            drop((lp, li, gid));
-            let (gfwd, _, gbegin, grows, grows_ptr) = analyse(groups, gp, gi)?;
-            // Each group's first permuted column.
-            let mut at = Vec::with_capacity(groups + 1);
-            at.push(0usize);
-            let mut fwd = Vec::with_capacity(n);
-            for &g in &gfwd {
-                fwd.extend(first[g]..first[g + 1]);
-                at.push(fwd.len());
-            }
-            let mut inv = vec![0usize; n];
-            for (k, &j) in fwd.iter().enumerate() {
-                inv[j] = k;
-            }
-            let begin: Vec<usize> = gbegin.iter().map(|&b| at[b]).collect();
-            let mut rows = Vec::with_capacity(2 * grows.len());
-            let mut rows_ptr = vec![0usize];
-            for s in 0..begin.len() - 1 {
-                for &r in &grows[grows_ptr[s]..grows_ptr[s + 1]] {
-                    rows.extend(at[r]..at[r + 1]);
-                }
-                rows_ptr.push(rows.len());
-            }
-            (fwd, inv, begin, rows, rows_ptr)
-        } else {
-            analyse(n, lp, li)?
+        // With at least a quarter of the columns in pairs, the pairs' quotient graph.
+        let first = pairs
+            .then(|| column_pairs(n, &lp, &li))
+            .filter(|first| n > 0 && 4 * (n + 1 - first.len()) >= n);
+        let (fwd, inv, begin, rows, rows_ptr) = match first {
+            Some(first) => analyse_pairs(n, &first, lp, li)?,
+            None => analyse(n, lp, li)?,
         };
         let ns = begin.len() - 1;
         let mut sup_of = vec![0usize; n];
