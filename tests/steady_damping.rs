@@ -355,6 +355,20 @@ fn damped_steady_solve_on_a_gmsh_mesh_without_rings() {
             .source,
         ThetaDerivativeSource::CellAverage
     );
+    assert!(st.damping_fallback.is_none());
+    // `banded` needs node rings: this mesh gets the matrix-free tangent, and says why.
+    let banded = build_steady(&scene(
+        &text,
+        "gmsh_banded",
+        &["solver.damping_tangent=\"banded\""],
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        banded.sys.steady_damping_tangent(),
+        Some(SteadyDampingTangent::MatrixFree)
+    );
+    let why = banded.damping_fallback.as_deref().unwrap_or("");
+    assert!(why.contains("banded") && why.contains("rings"), "{why}");
     let mut rep = Default::default();
     solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
     let g = hub_force(&st);

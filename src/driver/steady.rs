@@ -86,8 +86,10 @@ pub struct SteadyRolling {
     pub v0_per_omega: f64,
     /// Outer radius (H = ro − disp).
     pub ro: f64,
-    /// Why the steady damping's tangent was switched from matrix-free to assembled
-    /// ([`crate::driver::SteadyDampingTangent`]), if it was.
+    /// Why the steady damping's tangent differs from the one asked for
+    /// ([`crate::driver::SteadyDampingTangent`]), if it does: switched from matrix-free or
+    /// banded to assembled after a failed press, or banded asked for on a mesh without
+    /// node rings (matrix-free then).
     pub damping_fallback: Option<String>,
     /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
     pub recovery: Option<Recovery>,

@@ -367,6 +367,16 @@ pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, 
             .set_steady_damping_tangent(SteadyDampingTangent::Banded),
         DampingTangentChoice::Auto | DampingTangentChoice::MatrixFree => {}
     }
+    if scene.solver.damping_tangent == DampingTangentChoice::Banded
+        && st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree)
+    {
+        // The three-point ring differences need node rings (a generated annulus).
+        let why = "solver.damping_tangent = \"banded\" needs a mesh with node rings (a generated \
+                   annulus); this mesh has none, so the matrix-free damping tangent is used"
+            .to_string();
+        eprintln!("tread: warning: {why}");
+        st.damping_fallback = Some(why);
+    }
     st.sys.finish_assembly();
     Ok(st)
 }

@@ -71,7 +71,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("terms.pressure", N, "", "a pressure field was solved for (incompressible material)"),
     k("terms.strain_rate_damping", N, TR, "`time.strain_rate_damping` acted"),
     k("terms.damping_tangent", N, SD, "Newton matrix of the steady strain-rate damping: `matrix_free` (the cells' own sparsity, the rest by GMRES), `banded` (three-point ring differences in the matrix, the rest by GMRES) or `assembled` (the whole coupling, direct LU); null without damping"),
-    k("terms.damping_tangent_fallback", N, SD, "why the press switched from the matrix-free or banded to the assembled damping tangent (null: it did not)"),
+    k("terms.damping_tangent_fallback", N, SD, "why the damping tangent differs from the one asked for: the press switched from the matrix-free or banded to the assembled one, or `banded` was asked for on a mesh without node rings (matrix-free then); null: it does not"),
     k("terms.contact_facets_per_iteration", N, "", "mean contact facets integrated per assembly"),
     // mesh
     k("mesh", N, "", "the mesh"),
