@@ -139,3 +139,40 @@ fn steady_matches_transient_frictionless_at_half_critical_speed() {
 fn steady_matches_transient_with_friction_at_half_critical_speed() {
     check_fast(&compare("friction", ODEN, 20.0, FAST));
 }
+
+/// A steady scene whose `[time]` gives `strain_rate_damping` alone runs in its own mode, and
+/// `tread compare`, which needs the transient keys, says so instead of integrating in time.
+#[test]
+fn compare_refuses_a_steady_scene_without_time_steps() {
+    let text = include_str!("../scenarios/steady_footprint_refined.toml").replace(
+        "file = \"footprint_refined.msh\"",
+        &format!(
+            "file = \"{}/scenarios/footprint_refined.msh\"",
+            env!("CARGO_MANIFEST_DIR")
+        ),
+    );
+    let scene = Scene::from_toml_str(
+        &text,
+        "steady_only",
+        &["time.strain_rate_damping=0.05".into()],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(scene.time.as_ref().is_some_and(|t| t.steady_only()));
+    let dir = TestDir::new("compare", "steady_only");
+    let res = tread::driver::compare::run(
+        &scene,
+        &RunOptions {
+            out_dir: dir.to_path_buf(),
+            verbose: false,
+            quiet: true,
+        },
+    );
+    let Err(e) = res else {
+        panic!("compare ran a steady scene without time.dt and time.t_end")
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("time.dt") && msg.contains("time.t_end"),
+        "{msg}"
+    );
+}

@@ -216,10 +216,20 @@ fn with_csv(scene: &Scene, mode: Mode) -> Scene {
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     ensure_dir(&opts.out_dir)?;
-    if scene.time.is_none() {
-        return Err(AppError::Unsupported(
-            "compare runs the transient mode, which needs the [time] section".into(),
-        ));
+    match &scene.time {
+        None => {
+            return Err(AppError::Unsupported(
+                "compare runs the transient mode, which needs the [time] section".into(),
+            ))
+        }
+        Some(t) if t.steady_only() => {
+            return Err(AppError::Unsupported(
+                "compare runs the transient mode, which needs time.dt and time.t_end (this \
+                 steady scene's [time] leaves them out)"
+                    .into(),
+            ))
+        }
+        Some(_) => {}
     }
     let mut warnings = steady_run::warnings(scene);
     let tr_scene = with_csv(scene, Mode::Transient);

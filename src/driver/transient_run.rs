@@ -52,6 +52,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             "mode \"transient\" needs the [time] section".into(),
         ));
     };
+    if ts.steady_only() {
+        return Err(AppError::Unsupported(
+            "mode \"transient\" needs time.dt and time.t_end (this scene's [time] is a steady \
+             scene's, without them)"
+                .into(),
+        ));
+    }
     let integrator = ts.integrator;
     let scheme = integrator.scheme(ts.rho_inf);
     let mut model = build_model(scene)?;

@@ -10,6 +10,11 @@ use super::spans::Locator;
 use serde::de::DeserializeOwned;
 use std::collections::BTreeSet;
 
+/// Keys of `[time]` required by the transient mode that the steady mode does not read: a
+/// steady scene may give `[time]` for `strain_rate_damping` alone (see
+/// [`super::TimeSpec::steady_only`]).
+const STEADY_UNUSED_TIME: [&str; 2] = ["dt", "t_end"];
+
 pub(super) struct Ctx<'a> {
     pub(super) source_name: &'a str,
     pub(super) locator: &'a Locator,
@@ -193,6 +198,11 @@ impl Ctx<'_> {
     /// offending entries, so that the remaining sections can still be deserialized and validated.
     pub(super) fn check_schema(&mut self, doc: &toml::Table) -> toml::Table {
         let mut clean = toml::Table::new();
+        let steady = doc
+            .get("analysis")
+            .and_then(|a| a.get("mode"))
+            .and_then(|m| m.as_str())
+            == Some("steady");
         // A sweep file is not a scene: one error that says what to run, not one per section.
         if doc.contains_key("sweep") && !doc.contains_key("scene") {
             self.push(
@@ -272,12 +282,20 @@ impl Ctx<'_> {
                 }
             }
             for field in sec.fields.iter().filter(|f| f.required) {
-                if !table.contains_key(field.key) {
-                    self.push(
-                        format!("{sec_name}.{}", field.key),
-                        "required key is missing",
-                    );
+                if table.contains_key(field.key) {
+                    continue;
                 }
+                if steady && sec_name == "time" && STEADY_UNUSED_TIME.contains(&field.key) {
+                    // The steady mode uses [time] for strain_rate_damping only: the transient
+                    // keys it does not read stand in as NaN ([`TimeSpec::steady_only`]; not
+                    // written back by `Scene::to_toml_string`, refused by the transient runs).
+                    clean_table.insert(field.key.to_string(), toml::Value::Float(f64::NAN));
+                    continue;
+                }
+                self.push(
+                    format!("{sec_name}.{}", field.key),
+                    "required key is missing",
+                );
             }
             clean.insert(sec_name.clone(), toml::Value::Table(clean_table));
         }

@@ -376,7 +376,7 @@ impl Scene {
         // An explicitly written `mass` (valid or not) counts as given.
         let time_mass_given = table_has(&doc, "time", "mass");
         if let Some(Some(t)) = &time {
-            validate_time(t, time_mass_given, &mut out);
+            validate_time(t, time_mass_given, mode == Some(Mode::Steady), &mut out);
         }
         if let Some(Some(c)) = &continuation {
             validate_continuation(
@@ -544,7 +544,7 @@ impl Scene {
             validate_stick_slip(s, &mut out);
         }
         if let Some(t) = &self.time {
-            validate_time(t, true, &mut out);
+            validate_time(t, true, mode == Some(Mode::Steady), &mut out);
             validate_steady_extraction(mode, &self.mesh, t, &mut out);
         }
         if let Some(c) = &self.continuation {

@@ -335,15 +335,15 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
     SectionSchema {
         name: "time",
         required: false,
-        doc: "Time integration (required in transient; allowed and unused in steady).",
+        doc: "Time integration (required in transient). The steady mode reads strain_rate_damping only; a steady scene may leave out dt and t_end.",
         fields: &const { [
             opt("integrator", Kind::Keyword(IntegratorName::NAMES), NONE, "time integrator"),
             opt("rho_inf", Kind::Float, NONE,
                 "spectral radius at infinity of generalized_alpha, in [0, 1], or of hht_alpha, in [0.5, 1] (1: no numerical dissipation)"),
-            req("dt", Kind::Float, "T", "initial time step, > 0, <= t_end"),
+            req("dt", Kind::Float, "T", "initial time step, > 0, <= t_end (a steady scene may leave it out)"),
             opt("dt_min", Kind::Float, "T", "smallest step, > 0, <= dt (default dt · 1e-4)"),
             opt("dt_max", Kind::Float, "T", "largest step, >= dt (default dt · 10)"),
-            req("t_end", Kind::Float, "T", "maximum simulated time, > 0"),
+            req("t_end", Kind::Float, "T", "maximum simulated time, > 0 (a steady scene may leave it out)"),
             opt("adaptive", Kind::Bool, NONE, "step-size control from a local error estimate"),
             opt("error_tol", Kind::Float, NONE, "relative local error tolerance of the step-size control, > 0"),
             opt("steady_tol", Kind::Float, NONE,

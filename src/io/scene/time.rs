@@ -22,7 +22,9 @@ keyword_enum! {
     }
 }
 
-/// `[time]`: time integration of the `transient` mode (required there, forbidden otherwise).
+/// `[time]`: time integration of the `transient` mode (required there). The steady mode reads
+/// `strain_rate_damping` only, and a steady scene may leave out `dt` and `t_end`
+/// ([`TimeSpec::steady_only`]).
 /// `dt_min` and `dt_max` stay `None` when not given (their defaults follow `dt`; see
 /// [`TimeSpec::resolved_dt_min`], [`TimeSpec::resolved_dt_max`]). After
 /// [`Scene::from_toml_str`], `mass` is `lumped` for `central_difference` (which always uses the
@@ -38,7 +40,9 @@ pub struct TimeSpec {
     /// `generalized_alpha` and `hht_alpha`.
     #[serde(default = "default_rho_inf")]
     pub rho_inf: f64,
-    /// Initial time step (time, > 0, <= t_end).
+    /// Initial time step (time, > 0, <= t_end). NaN in a steady scene that left it out
+    /// ([`Self::steady_only`]).
+    #[serde(skip_serializing_if = "is_nan")]
     pub dt: f64,
     /// Smallest step (time, > 0, <= dt); `None` = `dt · 1e-4`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -47,7 +51,8 @@ pub struct TimeSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt_max: Option<f64>,
     /// Maximum simulated time (time, > 0); the run stops earlier when steady if
-    /// `stop_at_steady`.
+    /// `stop_at_steady`. NaN in a steady scene that left it out ([`Self::steady_only`]).
+    #[serde(skip_serializing_if = "is_nan")]
     pub t_end: f64,
     /// Step-size control from a local error estimate.
     #[serde(default = "default_true")]
@@ -91,6 +96,10 @@ pub const DEFAULT_STEADY_TOL: f64 = 1e-4;
 
 /// Default of `[time] max_steps`.
 pub const DEFAULT_MAX_STEPS: usize = 200_000;
+
+fn is_nan(v: &f64) -> bool {
+    v.is_nan()
+}
 
 pub(super) fn default_rho_inf() -> f64 {
     DEFAULT_RHO_INF
@@ -156,9 +165,32 @@ impl TimeSpec {
     pub fn is_explicit(&self) -> bool {
         self.integrator.lumped_only()
     }
+
+    /// A steady scene's `[time]` without `dt` or `t_end` (it gives `strain_rate_damping`, the
+    /// one key the steady mode reads): no time integration can run from it.
+    pub fn steady_only(&self) -> bool {
+        self.dt.is_nan() || self.t_end.is_nan()
+    }
 }
 
-pub(super) fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>) {
+fn validate_damping(t: &TimeSpec, out: &mut Vec<Issue>) {
+    if !(t.strain_rate_damping >= 0.0 && t.strain_rate_damping.is_finite()) {
+        out.push(issue(
+            "time.strain_rate_damping",
+            format!(
+                "Green-strain-rate viscosity must be >= 0, got {}",
+                t.strain_rate_damping
+            ),
+        ));
+    }
+}
+
+pub(super) fn validate_time(t: &TimeSpec, mass_given: bool, steady: bool, out: &mut Vec<Issue>) {
+    if steady && t.steady_only() {
+        // Only strain_rate_damping (and keys the steady mode ignores) to check.
+        validate_damping(t, out);
+        return;
+    }
     let dt_ok = positive(t.dt);
     if !dt_ok {
         out.push(issue(
@@ -239,15 +271,7 @@ pub(super) fn validate_time(t: &TimeSpec, mass_given: bool, out: &mut Vec<Issue>
     if t.max_steps < 1 {
         out.push(issue("time.max_steps", "must be >= 1, got 0"));
     }
-    if !(t.strain_rate_damping >= 0.0 && t.strain_rate_damping.is_finite()) {
-        out.push(issue(
-            "time.strain_rate_damping",
-            format!(
-                "Green-strain-rate viscosity must be >= 0, got {}",
-                t.strain_rate_damping
-            ),
-        ));
-    }
+    validate_damping(t, out);
     if mass_given && t.integrator.lumped_only() && t.mass == MassKind::Consistent {
         out.push(issue(
             "time.mass",
@@ -586,6 +610,41 @@ mod tests {
         let e = errors_with(MINIMAL, &["analysis.mode=transient"]);
         assert_only(&e, "time", None);
         assert!(e.0[0].is_override(), "{e}");
+    }
+
+    /// A steady scene may give `[time]` for `strain_rate_damping` alone: no `dt` or `t_end`
+    /// needed there (nor written back), while the transient mode still asks for them.
+    #[test]
+    fn steady_scene_time_without_dt_and_t_end() {
+        let (a, b) = (
+            STEADY_SWEEP.find("dt = 2.0e-4").expect("dt"),
+            STEADY_SWEEP
+                .find("strain_rate_damping = 1.0")
+                .expect("damping"),
+        );
+        let text = format!("{}{}", &STEADY_SWEEP[..a], &STEADY_SWEEP[b..]);
+        let s = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        let t = s.time.as_ref().expect("[time]");
+        assert!(t.steady_only());
+        assert_eq!(t.strain_rate_damping, 1.0);
+        let out = s.to_toml_string();
+        assert!(!out.contains("nan") && !out.contains("t_end"), "{out}");
+        let back = load(&out).unwrap_or_else(|e| panic!("{e}\n{out}"));
+        let tb = back.time.as_ref().expect("[time]");
+        assert!(tb.steady_only() && tb.strain_rate_damping == 1.0);
+        // The damping is still checked.
+        let e = errors_with(&text, &["time.strain_rate_damping=-1"]);
+        assert_only(&e, "time.strain_rate_damping", None);
+        // The transient mode needs both keys.
+        let e = errors_with(&text, &["analysis.mode=transient"]);
+        let keys: Vec<&str> = e.0.iter().map(|i| i.key.as_str()).collect();
+        assert!(
+            keys.contains(&"time.dt") && keys.contains(&"time.t_end"),
+            "{e}"
+        );
+        // With the keys, a steady scene's [time] is an ordinary one.
+        let s = load(STEADY_SWEEP).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!s.time.expect("[time]").steady_only());
     }
 
     #[test]
