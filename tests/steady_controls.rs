@@ -354,5 +354,15 @@ fn no_arguments_compares_the_default_scene_in_both_modes() {
     .unwrap_or_default();
     let c = &s["results"]["compare"];
     assert!(f(&c["speedup"]) > 1.0, "{c}");
-    assert!(f(&c["hub_force_y_rel_diff"]) < 0.05, "{c}");
+    // The transient runs to time.steady_tol = 1e-4, so the two modes agree closely (measured:
+    // field 9.5e-4, hub forces 9.5e-5 and 1.4e-4, torque 4.3e-4; with the scene's 1e-3 the
+    // field is 5.7e-3 apart).
+    assert!(f(&c["field_rel_l2"]) < 3e-3, "{c}");
+    for k in [
+        "hub_force_x_rel_diff",
+        "hub_force_y_rel_diff",
+        "hub_torque_rel_diff",
+    ] {
+        assert!(f(&c[k]) < 2e-3, "{k}: {c}");
+    }
 }
