@@ -33,8 +33,9 @@
 //! of the coupling; the columns "exact tangent LU" then time one LU factor + solve (double
 //! precision, default ordering) of the whole tangent (the assembled damping tangent at the
 //! converged state), the cost of one exact Newton step by a direct solve, and set the Newton
-//! phase against it. Without damping, or with the assembled tangent, the two LUs are one. Times are CPU seconds of the process (`CLOCK_PROCESS_CPUTIME_ID`), so
-//! run with `RAYON_NUM_THREADS=1`; the wall time of the steady solve is shown in parentheses.
+//! phase against it. Without damping, or with the assembled tangent, the two LUs are one.
+//! Times are CPU seconds of the process (`CLOCK_PROCESS_CPUTIME_ID`), so run with
+//! `RAYON_NUM_THREADS=1`; the wall time of the steady solve is shown in parentheses.
 
 #[path = "common.rs"]
 mod common;

@@ -199,10 +199,12 @@ impl SolidSystem {
         }
     }
 
-    /// The blocks of the assembler (built or pending).
-    fn block_lists(&self) -> BlockLists {
-        match &self.pending_blocks {
-            Some(p) => p.clone(),
+    /// The blocks of the assembler, to be changed and handed back to [`Self::set_blocks`]:
+    /// moved out of the pending ones (which stay pending, empty until then), or copied from
+    /// the built assembler.
+    fn take_block_lists(&mut self) -> BlockLists {
+        match self.pending_blocks.as_mut() {
+            Some(p) => std::mem::take(p),
             None => self.asm.block_lists(),
         }
     }
@@ -364,7 +366,7 @@ impl SolidSystem {
             return;
         }
         let elements = c.element_dofs(&self.model.mesh, &self.dofs);
-        let (mut lists, cores) = self.block_lists();
+        let (mut lists, cores) = self.take_block_lists();
         lists[1] = elements;
         self.set_blocks(lists, cores);
     }
@@ -499,11 +501,10 @@ impl SolidSystem {
             }
             _ => None,
         };
-        if self.steady_visc.is_none() {
-            return;
-        }
-        let (mut lists, mut cores) = self.block_lists();
+        let (mut lists, mut cores) = self.take_block_lists();
         let Some(sv) = self.steady_visc.as_mut() else {
+            // (Not reached: `current` is set only with the damping on.)
+            self.set_blocks(lists, cores);
             return;
         };
         if let Some((block, _, _)) = sv.assembled.take() {
