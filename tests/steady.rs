@@ -729,6 +729,52 @@ fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
     assert!(odd.coarse_start.is_none());
 }
 
+/// With a second worker, `tread run` builds the scene's system while the coarser meshes of the
+/// nested iteration are solved (`build_steady_nested`): the same coarse meshes, the same fine
+/// Newton iterations and the same steady state as building first and solving after. With one
+/// worker it builds only.
+#[test]
+fn nested_build_solves_the_coarse_meshes_while_the_scene_mesh_is_built() {
+    let sc = scene(ODEN, &["mesh.n_r=8", "mesh.n_theta=128"]);
+    let solve = |threads: usize, nested: bool| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut st = if nested {
+                steady_run::build_steady_nested(&sc).unwrap()
+            } else {
+                steady_run::build_steady(&sc).unwrap()
+            };
+            let ahead = st.coarse_solved.is_some();
+            let mut rep = tread::solver::stepping::StepReport::default();
+            steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
+            assert!(st.coarse_solved.is_none(), "the coarse state was not used");
+            (st, ahead)
+        })
+    };
+    let (plain, ahead) = solve(2, false);
+    assert!(!ahead);
+    let (nested, ahead) = solve(2, true);
+    assert!(ahead, "two workers: the coarse meshes are solved during the build");
+    let (_, ahead) = solve(1, true);
+    assert!(!ahead, "one worker: build only");
+    let (a, b) = (
+        plain.coarse_start.clone().unwrap(),
+        nested.coarse_start.clone().unwrap(),
+    );
+    assert!(b.succeeded, "{:?}", b.error);
+    assert_eq!(a.meshes, b.meshes);
+    assert_eq!(a.coarse_newton_iterations, b.coarse_newton_iterations);
+    assert_eq!(a.newton_iterations, b.newton_iterations);
+    let (fa, ma) = plain.sys.hub_reaction();
+    let (fb, mb) = nested.sys.hub_reaction();
+    let scale = fa.norm();
+    assert!((fa - fb).norm() <= 1e-9 * scale, "{fa:?} vs {fb:?}");
+    assert!((ma - mb).abs() <= 1e-9 * scale * 2.0, "{ma} vs {mb}");
+}
+
 /// Branch switching on the cylinder: frictionless, undamped rolling (a symmetric tangent,
 /// inertia from LBLᵀ) followed in ω from 40 rad/s through the first bifurcation near the
 /// critical speed (46.6–46.7 rad/s on 3 × 64). The path that stays on its branch keeps the

@@ -107,6 +107,10 @@ pub struct SteadyRolling {
     /// (while a coarser mesh was solved), and the wall time of that analysis: [`press`] takes
     /// it when its kind and pattern still match.
     pub analysed: Option<(SparseSolver, f64)>,
+    /// The coarser mesh's steady state of the nested iteration, solved while this system was
+    /// built ([`super::steady_run::build_steady_nested`]); [`super::steady_run::solve_steady`]
+    /// starts from it.
+    pub coarse_solved: Option<Box<super::steady_run::CoarseSolved>>,
 }
 
 impl SteadyRolling {
@@ -124,6 +128,7 @@ impl SteadyRolling {
             v0_free: f64::NAN,
             damping_fallback: None,
             analysed: None,
+            coarse_solved: None,
         };
         s.set_omega(omega, v0);
         s.sys.enable_steady_slip();

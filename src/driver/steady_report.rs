@@ -111,7 +111,8 @@ pub struct CoarseStart {
     pub coarse_newton_iterations: usize,
     /// Wall time of the coarser meshes' set-up and solves and of the interpolation (not of
     /// this mesh's symbolic analysis, which runs alongside the coarse solve when the thread
-    /// pool has a second worker, and after it otherwise).
+    /// pool has a second worker, and after it otherwise; with a second worker `tread run`
+    /// also builds this mesh's system while the coarser ones are solved).
     pub coarse_wall_time_s: f64,
     /// Newton iterations on this mesh from the interpolated state.
     pub newton_iterations: usize,

@@ -615,10 +615,37 @@ fn coarse_start(
     if st.sys.contact.is_none() || st.sys.dofs.per_cell != 0 {
         return Ok(None);
     }
-    let t0 = Instant::now();
     let name = format!("{}x{}", coarse.mesh.n_r, coarse.mesh.n_theta);
     let mut out = CoarseStart::default();
-    let mut cst = match build_steady(&coarse) {
+    let solved_ahead = st.coarse_solved.take().map(|c| *c);
+    let CoarseSolved {
+        system,
+        report: crep,
+        solved,
+        setup_s,
+        solve_s,
+    } = match solved_ahead {
+        Some(c) => c,
+        None => {
+            // With a second worker in the pool, this mesh's symbolic analysis runs alongside
+            // the coarse solve (it depends on the sparsity only). One thread makes it after
+            // the coarse system is freed, as Newton does: made before, it would add its work
+            // arrays to the coarse system's memory (262k DOFs: 5 % more peak memory).
+            let kind = linear_kind(scene, &st.sys);
+            let sys = &st.sys;
+            let (c, analysed) = if rayon::current_num_threads() > 1 {
+                rayon::join(
+                    || solve_coarse(&coarse, build_steady),
+                    || analyse(sys, kind),
+                )
+            } else {
+                (solve_coarse(&coarse, build_steady), None)
+            };
+            st.analysed = analysed;
+            c
+        }
+    };
+    let cst = match system {
         Ok(c) => c,
         Err(e) => {
             out.meshes.push(name);
@@ -629,31 +656,6 @@ fn coarse_start(
             return Ok(Some(out));
         }
     };
-    let mut crep = StepReport::default();
-    let setup_s = t0.elapsed().as_secs_f64();
-    // With a second worker in the pool, this mesh's symbolic analysis runs alongside the
-    // coarse solve (it depends on the sparsity only). One thread makes it after the coarse
-    // system is freed, as Newton does: made before, it would add its work arrays to the
-    // coarse system's memory (262k DOFs: 5 % more peak memory).
-    let kind = linear_kind(scene, &st.sys);
-    let sys = &st.sys;
-    let mut coarse_solve = || {
-        let t = Instant::now();
-        let solved = solve_steady(&coarse, &mut cst, false, &mut crep, &mut ());
-        (solved, t.elapsed().as_secs_f64())
-    };
-    let ((solved, solve_s), analysed) = if rayon::current_num_threads() > 1 {
-        rayon::join(coarse_solve, || {
-            let t = Instant::now();
-            let (cp, ri) = sys.pattern();
-            SparseSolver::new(sys.n_eq(), cp, ri, kind)
-                .ok()
-                .map(|s| (s, t.elapsed().as_secs_f64()))
-        })
-    } else {
-        (coarse_solve(), None)
-    };
-    st.analysed = analysed;
     // The coarser meshes' time leaves out this mesh's analysis, which one thread makes after
     // the coarse solve (and more threads alongside it).
     let mut coarse_s = setup_s + solve_s;
@@ -712,6 +714,90 @@ fn coarse_start(
         }
     }
     Ok(Some(out))
+}
+
+/// A coarser mesh's steady state for [`coarse_start`]: its system (or why it could not be
+/// built), the report and outcome of its solve, and the wall times of its set-up and solve.
+pub struct CoarseSolved {
+    system: Result<Box<SteadyRolling>, String>,
+    report: StepReport,
+    solved: Result<(), SolveError>,
+    setup_s: f64,
+    solve_s: f64,
+}
+
+/// Build the `coarse` scene's steady system with `build` and solve it (silently, by
+/// [`solve_steady`]: it starts from its own coarser mesh in turn).
+fn solve_coarse(
+    coarse: &Scene,
+    build: fn(&Scene) -> Result<SteadyRolling, AppError>,
+) -> CoarseSolved {
+    let t0 = Instant::now();
+    let mut report = StepReport::default();
+    let mut cst = match build(coarse) {
+        Ok(c) => c,
+        Err(e) => {
+            return CoarseSolved {
+                system: Err(e.to_string()),
+                report,
+                solved: Ok(()),
+                setup_s: t0.elapsed().as_secs_f64(),
+                solve_s: 0.0,
+            }
+        }
+    };
+    let setup_s = t0.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let solved = solve_steady(coarse, &mut cst, false, &mut report, &mut ());
+    CoarseSolved {
+        system: Ok(Box::new(cst)),
+        report,
+        solved,
+        setup_s,
+        solve_s: t.elapsed().as_secs_f64(),
+    }
+}
+
+/// The symbolic analysis of `sys`'s matrix for a `kind` solver and its wall time (`None` if
+/// it fails: Newton then makes and reports it).
+fn analyse(sys: &SolidSystem, kind: LinearKind) -> Option<(SparseSolver, f64)> {
+    let t = Instant::now();
+    let (cp, ri) = sys.pattern();
+    SparseSolver::new(sys.n_eq(), cp, ri, kind)
+        .ok()
+        .map(|s| (s, t.elapsed().as_secs_f64()))
+}
+
+/// [`build_steady`], and with more than one thread and a nested iteration ahead
+/// ([`coarse_start`]) the coarser mesh's steady state solved in the same time (on the other
+/// workers; it is built the same way, so each mesh of the hierarchy is built while the next
+/// coarser one is solved), together with this system's symbolic analysis. With one thread, as
+/// [`build_steady`]: the coarse solve then runs from [`solve_steady`], before the analysis.
+pub fn build_steady_nested(scene: &Scene) -> Result<SteadyRolling, AppError> {
+    let coarse = match coarse_scene(scene) {
+        Some(c)
+            if rayon::current_num_threads() > 1
+                && scene.road.is_some()
+                && scene.contact.is_some() =>
+        {
+            c
+        }
+        _ => return build_steady(scene),
+    };
+    let (built, ahead) = rayon::join(
+        || {
+            build_steady(scene).map(|mut st| {
+                st.analysed = analyse(&st.sys, linear_kind(scene, &st.sys));
+                st
+            })
+        },
+        || solve_coarse(&coarse, build_steady_nested),
+    );
+    let mut st = built?;
+    if st.sys.contact.is_some() && st.sys.dofs.per_cell == 0 {
+        st.coarse_solved = Some(Box::new(ahead));
+    }
+    Ok(st)
 }
 
 /// Interpolate the displacements of `from` (another mesh of the same body) at the nodes of
@@ -940,7 +1026,7 @@ pub fn run_with_dump(
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let warn = warnings(scene);
-    let mut st = build_steady(scene)?;
+    let mut st = build_steady_nested(scene)?;
     // The undeformed state: the start of a direct solve past a limit point.
     let mut x_undeformed = Vec::new();
     st.sys.save_state(&mut x_undeformed);
