@@ -729,6 +729,48 @@ fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
     assert!(odd.coarse_start.is_none());
 }
 
+/// `[solver] single_precision` (on by default): the undamped steady state solved by GMRES on
+/// single-precision LU factors is the one of double-precision direct solves (hub loads and
+/// displacements to the Newton tolerance), with the same Newton iterations on the scene's
+/// mesh.
+#[test]
+fn single_precision_factors_give_the_double_precision_steady_state() {
+    let mesh = [
+        "mesh.n_r=8",
+        "mesh.n_theta=128",
+        "time.strain_rate_damping=0",
+    ];
+    let (_, single) = steady_solution(ODEN, &mesh);
+    let (_, double) = steady_solution(
+        ODEN,
+        &[&mesh[..], &["solver.single_precision=false"]].concat(),
+    );
+    let (a, b) = (
+        single.coarse_start.clone().unwrap(),
+        double.coarse_start.clone().unwrap(),
+    );
+    assert!(a.succeeded && b.succeeded);
+    assert!(
+        a.newton_iterations <= b.newton_iterations + 1,
+        "{} vs {}",
+        a.newton_iterations,
+        b.newton_iterations
+    );
+    let (fa, ma) = single.sys.hub_reaction();
+    let (fb, mb) = double.sys.hub_reaction();
+    let scale = fb.norm();
+    assert!((fa - fb).norm() <= 1e-8 * scale, "{fa:?} vs {fb:?}");
+    assert!((ma - mb).abs() <= 1e-8 * scale * 2.0, "{ma} vs {mb}");
+    let du = single
+        .sys
+        .x
+        .iter()
+        .zip(&double.sys.x)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    let umax = double.sys.x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(du <= 1e-7 * umax, "max |du| = {du:e} of {umax:e}");
+}
+
 /// With a second worker, `tread run` builds the scene's system while the coarser meshes of the
 /// nested iteration are solved (`build_steady_nested`): the same coarse meshes, the same fine
 /// Newton iterations and the same steady state as building first and solving after. With one
@@ -757,7 +799,10 @@ fn nested_build_solves_the_coarse_meshes_while_the_scene_mesh_is_built() {
     let (plain, ahead) = solve(2, false);
     assert!(!ahead);
     let (nested, ahead) = solve(2, true);
-    assert!(ahead, "two workers: the coarse meshes are solved during the build");
+    assert!(
+        ahead,
+        "two workers: the coarse meshes are solved during the build"
+    );
     let (_, ahead) = solve(1, true);
     assert!(!ahead, "one worker: build only");
     let (a, b) = (

@@ -944,6 +944,12 @@ impl SparseSolver {
         }
     }
 
+    /// Whether this solver can factorize in single precision (the symmetric-pattern LU;
+    /// [`Self::set_single_precision_factors`]).
+    pub fn supports_single_precision(&self) -> bool {
+        matches!(&self.backend, Backend::Symmetric(_))
+    }
+
     /// Whether the factors are kept in single precision
     /// ([`Self::set_single_precision_factors`] on a symmetric-pattern LU).
     pub fn single_precision_factors(&self) -> bool {

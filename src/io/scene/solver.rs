@@ -85,6 +85,10 @@ pub struct SolverSpec {
     /// half the cells in r and in θ (itself started the same way), interpolated (false: press
     /// in from the undeformed state).
     pub coarse_start: bool,
+    /// Steady mode: Newton's linear solves by GMRES on single-precision LU factors kept
+    /// across iterations (false: a double-precision direct solve each iteration where the
+    /// tangent is assembled whole).
+    pub single_precision: bool,
     /// Steady mode with a viscoelastic material: how the internal variables are integrated
     /// along the streamlines.
     pub steady_history: SteadyHistoryChoice,
@@ -104,6 +108,7 @@ impl Default for SolverSpec {
             damping_cell_weight: crate::driver::DEFAULT_DAMPING_CELL_WEIGHT,
             eps_continuation: true,
             coarse_start: true,
+            single_precision: true,
             steady_history: SteadyHistoryChoice::Auto,
         }
     }
