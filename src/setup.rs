@@ -370,7 +370,7 @@ pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptio
         max_iterations: scene.solver.max_iterations,
         line_search: scene.solver.line_search,
         verbose,
-        mixed_precision: scene.solver.single_precision && scene.analysis.mode == Mode::Steady,
+        mixed_precision: scene.solver.single_precision,
         ..Default::default()
     };
     let step_opts = StepOptions {

@@ -85,9 +85,9 @@ pub struct SolverSpec {
     /// half the cells in r and in θ (itself started the same way), interpolated (false: press
     /// in from the undeformed state).
     pub coarse_start: bool,
-    /// Steady mode: Newton's linear solves by GMRES on single-precision LU factors kept
-    /// across iterations (false: a double-precision direct solve each iteration where the
-    /// tangent is assembled whole).
+    /// Newton's linear solves by GMRES on single-precision LU factors kept across iterations,
+    /// in every mode with the sparse LU (false: a double-precision direct solve each iteration
+    /// where the tangent is assembled whole).
     pub single_precision: bool,
     /// Steady mode with a viscoelastic material: how the internal variables are integrated
     /// along the streamlines.
