@@ -371,6 +371,7 @@ pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptio
         line_search: scene.solver.line_search,
         verbose,
         mixed_precision: scene.solver.single_precision,
+        single_precision_preconditioner: scene.solver.single_precision,
         ..Default::default()
     };
     let step_opts = StepOptions {

@@ -771,6 +771,25 @@ fn single_precision_factors_give_the_double_precision_steady_state() {
     assert!(du <= 1e-7 * umax, "max |du| = {du:e} of {umax:e}");
 }
 
+/// `single_precision = false` also makes the damping tangent's GMRES precondition with
+/// double-precision factors: the damped steady state is the same (hub loads to the Newton
+/// tolerance).
+#[test]
+fn double_precision_preconditioner_gives_the_same_damped_steady_state() {
+    let mesh = ["mesh.n_r=8", "mesh.n_theta=128"];
+    let (_, single) = steady_solution(ODEN, &mesh);
+    let (_, double) = steady_solution(
+        ODEN,
+        &[&mesh[..], &["solver.single_precision=false"]].concat(),
+    );
+    assert!(single.sys.has_tangent_correction() && double.sys.has_tangent_correction());
+    let (fa, ma) = single.sys.hub_reaction();
+    let (fb, mb) = double.sys.hub_reaction();
+    let scale = fb.norm();
+    assert!((fa - fb).norm() <= 1e-8 * scale, "{fa:?} vs {fb:?}");
+    assert!((ma - mb).abs() <= 1e-8 * scale * 2.0, "{ma} vs {mb}");
+}
+
 /// With a second worker, `tread run` builds the scene's system while the coarser meshes of the
 /// nested iteration are solved (`build_steady_nested`): the same coarse meshes, the same fine
 /// Newton iterations and the same steady state as building first and solving after. With one

@@ -86,8 +86,8 @@ pub struct SolverSpec {
     /// in from the undeformed state).
     pub coarse_start: bool,
     /// Newton's linear solves by GMRES on single-precision LU factors kept across iterations,
-    /// in every mode with the sparse LU (false: a double-precision direct solve each iteration
-    /// where the tangent is assembled whole).
+    /// in every mode with the sparse LU (false: double-precision factors throughout, and a
+    /// direct solve each iteration where the tangent is assembled whole).
     pub single_precision: bool,
     /// Steady mode with a viscoelastic material: how the internal variables are integrated
     /// along the streamlines.
