@@ -85,9 +85,10 @@ pub struct SolverSpec {
     /// half the cells in r and in θ (itself started the same way), interpolated (false: press
     /// in from the undeformed state).
     pub coarse_start: bool,
-    /// Newton's linear solves by GMRES on single-precision LU factors kept across iterations,
-    /// in every mode with the sparse LU (false: double-precision factors throughout, and a
-    /// direct solve each iteration where the tangent is assembled whole).
+    /// Newton's linear solves on single-precision LU factors kept across iterations, refined
+    /// by GMRES to the accuracy of a direct solve, in every mode with the sparse LU (false:
+    /// double-precision factors throughout, and a direct solve each iteration where the
+    /// tangent is assembled whole).
     pub single_precision: bool,
     /// Steady mode with a viscoelastic material: how the internal variables are integrated
     /// along the streamlines.
