@@ -267,9 +267,10 @@ pub struct NewtonOptions {
 
 /// Relative linear residual asked of each Newton step with [`NewtonOptions::mixed_precision`]
 /// on a tangent without a matrix-free part: the accuracy of a direct solve, so that the Newton
-/// iteration is that of double precision. Looser steps (the Eisenstat–Walker forcing terms of the matrix-free path) were
-/// faster on the rolling cylinder but stalled the static indentation at c_n = 1e12 and κ/G =
-/// 1e6, which double precision solves, and took more iterations at κ/G = 1e6 in steady mode.
+/// iteration is that of double precision. Looser steps (the Eisenstat–Walker forcing terms of
+/// the matrix-free path) were faster on the rolling cylinder but stalled the static
+/// indentation at c_n = 1e12 and κ/G = 1e6, which double precision solves, and took more
+/// iterations at κ/G = 1e6 in steady mode.
 pub const MIXED_ETA: f64 = 1e-10;
 
 /// GMRES products after which such a step gives up its factors for fresher ones (lagged →
