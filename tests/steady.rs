@@ -33,6 +33,21 @@ fn steady_solution(text: &str, set: &[&str]) -> (Scene, SteadyRolling) {
     (sc, st)
 }
 
+/// Hub force and torque of `a` and `b` agree to `rel` of |F| of `reference` (the torque to
+/// `rel` |F| × 2, the outer radius).
+fn assert_same_hub_loads(
+    a: &SteadyRolling,
+    b: &SteadyRolling,
+    reference: &SteadyRolling,
+    rel: f64,
+) {
+    let (fa, ma) = a.sys.hub_reaction();
+    let (fb, mb) = b.sys.hub_reaction();
+    let scale = reference.sys.hub_reaction().0.norm();
+    assert!((fa - fb).norm() <= rel * scale, "{fa:?} vs {fb:?}");
+    assert!((ma - mb).abs() <= rel * scale * 2.0, "{ma} vs {mb}");
+}
+
 /// As [`fd_error`], and max |K − K_assembled| / max |K| (the matrix-free part).
 fn fd_errors(sys: &mut SolidSystem) -> (f64, f64) {
     assert!(sys.evaluate(true));
@@ -720,11 +735,7 @@ fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
         cs.newton_iterations
     );
     assert_eq!(rep.total_iterations, cs.newton_iterations);
-    let (fa, ma) = direct.sys.hub_reaction();
-    let (fb, mb) = st.sys.hub_reaction();
-    let scale = fa.norm();
-    assert!((fa - fb).norm() <= 1e-7 * scale, "{fa:?} vs {fb:?}");
-    assert!((ma - mb).abs() <= 1e-7 * scale * 2.0, "{ma} vs {mb}");
+    assert_same_hub_loads(&direct, &st, &direct, 1e-7);
     let (_, odd) = steady_solution(ODEN, &["mesh.n_r=3", "mesh.n_theta=64"]);
     assert!(odd.coarse_start.is_none());
 }
@@ -756,11 +767,7 @@ fn single_precision_factors_give_the_double_precision_steady_state() {
         a.newton_iterations,
         b.newton_iterations
     );
-    let (fa, ma) = single.sys.hub_reaction();
-    let (fb, mb) = double.sys.hub_reaction();
-    let scale = fb.norm();
-    assert!((fa - fb).norm() <= 1e-8 * scale, "{fa:?} vs {fb:?}");
-    assert!((ma - mb).abs() <= 1e-8 * scale * 2.0, "{ma} vs {mb}");
+    assert_same_hub_loads(&single, &double, &double, 1e-8);
     let du = single
         .sys
         .x
@@ -783,11 +790,7 @@ fn double_precision_preconditioner_gives_the_same_damped_steady_state() {
         &[&mesh[..], &["solver.single_precision=false"]].concat(),
     );
     assert!(single.sys.has_tangent_correction() && double.sys.has_tangent_correction());
-    let (fa, ma) = single.sys.hub_reaction();
-    let (fb, mb) = double.sys.hub_reaction();
-    let scale = fb.norm();
-    assert!((fa - fb).norm() <= 1e-8 * scale, "{fa:?} vs {fb:?}");
-    assert!((ma - mb).abs() <= 1e-8 * scale * 2.0, "{ma} vs {mb}");
+    assert_same_hub_loads(&single, &double, &double, 1e-8);
 }
 
 /// With a second worker, `tread run` builds the scene's system while the coarser meshes of the
@@ -832,11 +835,7 @@ fn nested_build_solves_the_coarse_meshes_while_the_scene_mesh_is_built() {
     assert_eq!(a.meshes, b.meshes);
     assert_eq!(a.coarse_newton_iterations, b.coarse_newton_iterations);
     assert_eq!(a.newton_iterations, b.newton_iterations);
-    let (fa, ma) = plain.sys.hub_reaction();
-    let (fb, mb) = nested.sys.hub_reaction();
-    let scale = fa.norm();
-    assert!((fa - fb).norm() <= 1e-9 * scale, "{fa:?} vs {fb:?}");
-    assert!((ma - mb).abs() <= 1e-9 * scale * 2.0, "{ma} vs {mb}");
+    assert_same_hub_loads(&plain, &nested, &plain, 1e-9);
 }
 
 /// Branch switching on the cylinder: frictionless, undamped rolling (a symmetric tangent,
