@@ -307,6 +307,23 @@ pub fn check_memory(scene: &Scene) -> Result<(), AppError> {
     )))
 }
 
+/// Every check a run makes before it solves, without solving or writing anything: the memory
+/// estimate, the mesh (generated, or read from `mesh.file` and checked cell by cell), the material
+/// and its mode, and the road contact of a static scene. `tread check` runs this, so that a scene
+/// it passes is refused by `tread run` only by the solve itself; `tread run` runs it before it
+/// creates the output folder.
+pub fn preflight(scene: &Scene) -> Result<(), AppError> {
+    check_memory(scene)?;
+    if scene.analysis.mode == Mode::StickSlip {
+        return Ok(());
+    }
+    let model = crate::setup::build_model(scene)?;
+    if scene.analysis.mode == Mode::Static {
+        crate::setup::build_contact(scene, &model)?;
+    }
+    Ok(())
+}
+
 /// Parse a memory size: bytes, or a number with K, M, G or T (powers of 1024), e.g. `2G`.
 pub fn parse_memory(text: &str) -> Result<u64, String> {
     let t = text.trim();

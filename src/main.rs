@@ -192,10 +192,39 @@ enum Command {
 const MAX_SCENE_BYTES: u64 = 4 << 20;
 
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
-    load_checked(path, set).map_err(|e| match e {
+    let scene = load_checked(path, set).map_err(|e| match e {
         LoadError::Read(m) => m,
         LoadError::Scene(e) => e.to_string(),
-    })
+    })?;
+    preflight(path, set, &scene)?;
+    Ok(scene)
+}
+
+/// [`app::preflight`] on a loaded scene: what `tread run` would refuse before its solve (the mesh
+/// file, a model too large for memory, …), with the scene line of `mesh.file` (or `(--set)`) and
+/// the file's resolved path for a mesh-file problem.
+fn preflight(path: &Path, set: &[String], scene: &Scene) -> Result<(), String> {
+    let e = match app::preflight(scene) {
+        Ok(()) => return Ok(()),
+        Err(e) => e,
+    };
+    let key = match &e {
+        app::AppError::MeshFile(_) => "mesh.file",
+        app::AppError::TooBig(_) => "mesh",
+        _ => "",
+    };
+    let source = if !key.is_empty() && set.iter().any(|s| s.trim_start().starts_with(key)) {
+        format!("{}:(--set)", path.display())
+    } else {
+        let line = std::fs::read_to_string(path)
+            .ok()
+            .and_then(|t| tread::io::scene::key_line(&t, key));
+        match line {
+            Some(l) if !key.is_empty() => format!("{}:{l}", path.display()),
+            _ => path.display().to_string(),
+        }
+    };
+    Err(format!("{source}: {e}"))
 }
 
 enum LoadError {
@@ -216,7 +245,10 @@ fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Sce
     let mut all = set.to_vec();
     all.push(format!("analysis.mode=\"{m}\""));
     let mut errs = match load_checked(path, &all) {
-        Ok(s) => return Ok(s),
+        Ok(s) => {
+            preflight(path, set, &s)?;
+            return Ok(s);
+        }
         Err(LoadError::Read(e)) => return Err(e),
         Err(LoadError::Scene(e)) => e,
     };
@@ -239,6 +271,7 @@ fn load_with_mode(path: &Path, set: &[String], mode: Option<&str>) -> Result<Sce
                 "--mode {m}: left out what analysis mode \"{m}\" does not use: {}",
                 dropped.join(", ")
             );
+            preflight(path, set, &scene)?;
             return Ok(scene);
         }
     }
@@ -656,7 +689,12 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             }
         },
         Some(Command::Check { scene, set }) => match load(&scene, &set) {
-            Ok(s) => {
+            Ok(mut s) => {
+                // The listing loads back from any folder: the mesh file by its absolute path.
+                if let Some(abs) = s.mesh.file.as_ref().and_then(|f| std::fs::canonicalize(f).ok())
+                {
+                    s.mesh.file = Some(abs.display().to_string());
+                }
                 say(&format!(
                     "# {}: valid; resolved scene with defaults:",
                     scene.display()

@@ -44,6 +44,9 @@ pub enum AppError {
     /// The scene would need more memory than allowed.
     #[error("{0}")]
     TooBig(String),
+    /// The scene's mesh file (`mesh.file`, resolved path) cannot be read or is not a valid mesh.
+    #[error("mesh.file: {0}")]
+    MeshFile(crate::mesh::gmsh::MeshError),
 }
 
 impl AppError {
@@ -55,7 +58,7 @@ impl AppError {
             AppError::Interrupted(_) => 130,
             AppError::Solve(..) | AppError::Failed(..) => 1,
             AppError::Output(_) | AppError::OutDir(..) => 3,
-            AppError::Unsupported(_) | AppError::TooBig(_) => 2,
+            AppError::Unsupported(_) | AppError::TooBig(_) | AppError::MeshFile(_) => 2,
         }
     }
 }
@@ -276,15 +279,13 @@ fn build_model_from_file(
         regions: scene.regions.iter().map(|r| r.region.clone()).collect(),
     };
     let bad = |message: String| {
-        AppError::Unsupported(
-            MeshError {
-                file: file.to_string(),
-                message,
-            }
-            .to_string(),
-        )
+        AppError::MeshFile(MeshError {
+            file: std::path::absolute(file)
+                .map_or_else(|_| file.to_string(), |p| p.display().to_string()),
+            message,
+        })
     };
-    let mesh = read_msh(Path::new(file), &groups).map_err(|e| bad(e.message))?;
+    let mesh = read_msh(Path::new(file), &groups).map_err(AppError::MeshFile)?;
     if !matches!(pressure, PressureMode::None) && mesh.degree.iter().any(|&p| p != 2) {
         return Err(bad(
             "incompressible materials need 9-node quadrilaterals (Q2 displacements with P1 \

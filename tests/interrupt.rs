@@ -269,3 +269,28 @@ fn replay_converts_mcap_to_rrd() {
     assert_eq!(r["/tread/nodes"].times.len(), steps);
     assert!(r["/metadata/scene"].static_rows >= 1);
 }
+
+/// SIGTERM (what `timeout`, `kill` and batch schedulers send) and SIGHUP stop a run as Ctrl-C
+/// does: at a step boundary, with summary.json and a finished run.sta, exit status 130.
+#[test]
+fn sigterm_and_sighup_stop_like_ctrl_c() {
+    for sig in ["-TERM", "-HUP"] {
+        let dir = tmpdir(&format!("sig{}", &sig[1..]));
+        let mut child = start(&dir);
+        let out = dir.join("out");
+        wait_rows(&mut child, &out.join("history.csv"), 2);
+        signal(&child, sig);
+        let o = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(130), "{sig}: {stderr}");
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(s["error"], "interrupted", "{sig}");
+        let sta = std::fs::read_to_string(out.join("run.sta")).unwrap();
+        let last = sta.lines().last().unwrap_or_default();
+        assert!(last.starts_with("# interrupted:"), "{sig}: run.sta ends with {last:?}");
+        let m = read_mcap(&out.join("run.mcap"));
+        assert!(!m.truncated, "{sig}: the MCAP was finished");
+    }
+}

@@ -436,6 +436,7 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
     };
     let mut rep = Default::default();
+    let mut notes = Notes(Vec::new());
     let r = recover(
         &mut st,
         loading,
@@ -445,10 +446,23 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
         &x_init,
         &tread::solver::SolveError::InadmissibleStart,
         &mut rep,
+        &mut notes,
     )
     .unwrap();
     println!("{}", r.message);
     assert_eq!(r.strategy, Some(Strategy::OmegaStepping));
+    // The recorders hear of the strategy and of each of its steps (run.sta follows them).
+    assert!(
+        notes.0.iter().any(|n| n.contains("trying") && n.contains("omega")),
+        "{:?}",
+        notes.0
+    );
+    assert!(
+        notes.0.iter().filter(|n| n.contains("reached")).count() >= r.attempts[0].steps(),
+        "{:?}",
+        notes.0
+    );
+    assert!(notes.0.last().is_some_and(|n| n.contains("succeeded")), "{:?}", notes.0);
     assert!(r.attempts[0].steps() >= 2, "{}", r.message);
     assert_eq!(st.omega(), 46.0);
     let res = scene_residual(&sc, &st);
@@ -564,6 +578,7 @@ fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() 
         &x_init,
         &tread::solver::SolveError::InadmissibleStart,
         &mut Default::default(),
+        &mut (),
     )
     .unwrap();
     println!("{}", r.message);
@@ -905,4 +920,13 @@ fn branch_switching_leaves_the_symmetric_branch_at_the_first_bifurcation() {
     assert!(after.len() >= 5);
     assert!(after.iter().all(|&t| t > 1e-7), "{after:?}");
     assert!(after.last().unwrap() > &(10.0 * after[0]), "{after:?}");
+}
+
+/// Collects the recorders' progress notes.
+struct Notes(Vec<String>);
+
+impl tread::io::record::Recorder for Notes {
+    fn note(&mut self, text: &str) {
+        self.0.push(text.to_string());
+    }
 }

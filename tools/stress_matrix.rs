@@ -496,6 +496,7 @@ fn solve_class(e: &SolveError) -> &'static str {
         SolveError::ContinuationReversed { .. } => "continuation",
         SolveError::ContinuationStalled { .. } => "continuation",
         SolveError::TooManyCutbacks { last, .. } => solve_class(last),
+        SolveError::StepBelowRoundOff { .. } => "step_below_round_off",
     }
 }
 
@@ -506,7 +507,7 @@ fn app_class(e: &AppError) -> &'static str {
         AppError::Output(_) | AppError::OutDir(..) => "output",
         AppError::Interrupted(_) => "interrupted",
         AppError::Failed(..) => "failed",
-        AppError::TooBig(_) => "invalid_input",
+        AppError::TooBig(_) | AppError::MeshFile(_) => "invalid_input",
     }
 }
 

@@ -8,7 +8,9 @@
 //! 2. The mode's solve, which reports its steps to [`RunEnvelope::recorders`].
 //! 3. [`RunEnvelope::finish`]: finish the recorders with the run's end (converged, interrupted,
 //!    error, steps, wall time, the summary) and write `summary.json` from the typed
-//!    [`Summary`]. A failed or interrupted run writes it too, with what it reached.
+//!    [`Summary`]. A failed or interrupted run writes it too, with what it reached. Outputs a
+//!    recorder could not complete (disk full, …) are listed in its `incomplete_outputs` (sink,
+//!    path, error); the key is absent when every output is complete.
 //! 4. The mode writes its tables, then [`conclude`] turns the solve's result into the run's:
 //!    `Ok(RunOutcome)`, [`AppError::Interrupted`] (exit status 130) or [`AppError::Solve`]
 //!    (exit status 1), both naming the output folder that holds the partial results.
@@ -90,16 +92,34 @@ impl RunEnvelope {
         error: Option<&str>,
         interrupted: bool,
     ) -> Result<serde_json::Value, AppError> {
-        let summary = typed.to_json();
-        for e in self.recorders.run_finished(&RunEnd {
+        let mut summary = typed.to_json();
+        let errors = self.recorders.run_finished(&RunEnd {
             converged: typed.converged,
             interrupted,
             error,
             steps,
             wall_time_s,
             summary: Some(&summary),
-        }) {
+        });
+        for e in &errors {
             eprintln!("tread: warning: {e}");
+        }
+        // Outputs a sink could not finish (a full disk, a removed folder): named, so that a
+        // converged run's summary never vouches for a file that is missing or cut short.
+        if !errors.is_empty() {
+            if let Some(m) = summary.as_object_mut() {
+                let list: Vec<serde_json::Value> = errors
+                    .iter()
+                    .map(|e| {
+                        serde_json::json!({
+                            "sink": e.sink,
+                            "path": e.path.display().to_string(),
+                            "error": e.message,
+                        })
+                    })
+                    .collect();
+                m.insert("incomplete_outputs".into(), serde_json::Value::Array(list));
+            }
         }
         write_json(&self.out_dir.join("summary.json"), &summary)?;
         Ok(summary)

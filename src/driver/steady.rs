@@ -441,6 +441,12 @@ pub fn step_parameter(
         } else {
             lambda + step
         };
+        if next != target && crate::solver::newton::below_round_off(lambda, target, next - lambda) {
+            return Err(SolveError::StepBelowRoundOff {
+                at: lambda,
+                step: next - lambda,
+            });
+        }
         st.sys.save_state(&mut saved);
         st.set_parameter(next);
         match newton.solve(st) {

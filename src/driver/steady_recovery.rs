@@ -50,7 +50,7 @@ pub use super::steady_report::{
     Attempt, HomotopyParameter, LegReport, Recovery, Spacing, Strategy,
 };
 use super::system::Loading;
-use crate::io::record;
+use crate::io::record::{self, Recorder};
 use crate::physics::PressureMode;
 use crate::solver::stepping::{StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
@@ -238,6 +238,7 @@ pub fn recover(
     x_init: &[f64],
     direct_error: &SolveError,
     report: &mut StepReport,
+    log: &mut dyn Recorder,
 ) -> Result<Recovery, SolveError> {
     let t0 = Instant::now();
     let targets = Targets::of(st);
@@ -256,6 +257,7 @@ pub fn recover(
         if step_opts.verbose {
             eprintln!("  steady recovery: trying {strategy}");
         }
+        log.note(&format!("steady recovery: trying {strategy}"));
         let res = attempt(
             st,
             &targets,
@@ -266,6 +268,7 @@ pub fn recover(
             newton_opts,
             step_opts,
             x_init,
+            log,
         );
         let a = match res {
             Ok(a) | Err(AttemptError::Failed(a)) => a,
@@ -280,6 +283,11 @@ pub fn recover(
         report.total_iterations += a.newton_iterations;
         report.cutbacks += a.cutbacks();
         let ok = a.succeeded;
+        log.note(&format!(
+            "steady recovery: {strategy} {} ({} Newton iterations)",
+            if ok { "succeeded" } else { "failed" },
+            a.newton_iterations
+        ));
         rec.attempts.push(a);
         if ok {
             rec.strategy = Some(strategy);
@@ -336,8 +344,13 @@ pub fn continue_in_eps(
     step_opts: &StepOptions,
     x_init: &[f64],
     report: &mut StepReport,
+    log: &mut dyn Recorder,
 ) -> Result<Attempt, SolveError> {
     let targets = Targets::of(st);
+    log.note(&format!(
+        "friction eps continuation from {:.6e} to {:.6e}",
+        leg.from, leg.to
+    ));
     let res = attempt(
         st,
         &targets,
@@ -348,6 +361,7 @@ pub fn continue_in_eps(
         newton_opts,
         step_opts,
         x_init,
+        log,
     );
     let a = match res {
         Ok(a) | Err(AttemptError::Failed(a)) => a,
@@ -386,6 +400,7 @@ fn attempt(
     newton_opts: &NewtonOptions,
     step_opts: &StepOptions,
     x_init: &[f64],
+    log: &mut dyn Recorder,
 ) -> Result<Attempt, AttemptError> {
     let t0 = Instant::now();
     let mut a = Attempt {
@@ -435,7 +450,7 @@ fn attempt(
         }
     };
     for leg in legs {
-        let (lr, err) = walk(st, t, leg, &mut newton, step_opts)?;
+        let (lr, err) = walk(st, t, leg, &mut newton, step_opts, log)?;
         a.newton_iterations += lr.newton_iterations;
         a.legs.push(lr);
         if let Some(e) = err {
@@ -457,6 +472,7 @@ fn walk(
     leg: &Leg,
     newton: &mut Newton,
     step_opts: &StepOptions,
+    log: &mut dyn Recorder,
 ) -> Result<(LegReport, Option<String>), AttemptError> {
     let mut lr = LegReport {
         parameter: leg.parameter,
@@ -514,6 +530,12 @@ fn walk(
         }
         match newton.solve(st) {
             Ok(r) => {
+                log.note(&format!(
+                    "steady recovery: {} = {} reached ({} Newton iterations)",
+                    leg.parameter,
+                    crate::io::output::fmt_num(value),
+                    r.iterations
+                ));
                 lr.newton_iterations += r.iterations;
                 lr.steps += 1;
                 lr.reached = value;

@@ -441,6 +441,7 @@ pub fn solve_steady(
             &step_opts,
             &x_init,
             report,
+            rec,
         )?;
         let ok = a.succeeded;
         if verbose {
@@ -522,6 +523,7 @@ pub fn solve_steady(
                 &x_init,
                 &e,
                 report,
+                rec,
             )?;
             let ok = r.succeeded();
             st.recovery = Some(r);

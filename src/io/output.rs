@@ -138,6 +138,21 @@ pub fn write_csv(
     rows: impl Iterator<Item = Vec<f64>>,
 ) -> Result<(), OutputError> {
     let tmp = tmp_path(path);
+    let written = write_csv_to(&tmp, header, rows);
+    if written.is_err() {
+        // A full disk: no partial temporary left behind.
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written?;
+    std::fs::rename(&tmp, path).map_err(wrap(path))
+}
+
+fn write_csv_to(
+    tmp: &Path,
+    header: &[&str],
+    rows: impl Iterator<Item = Vec<f64>>,
+) -> Result<(), OutputError> {
+    let tmp = tmp.to_path_buf();
     let f = std::fs::File::create(&tmp).map_err(wrap(&tmp))?;
     let mut w = std::io::BufWriter::new(f);
     writeln!(w, "{}", header.join(",")).map_err(wrap(&tmp))?;
@@ -158,8 +173,7 @@ pub fn write_csv(
         path: tmp.clone(),
         source: e.into_error(),
     })?;
-    f.sync_all().map_err(wrap(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(wrap(path))
+    f.sync_all().map_err(wrap(&tmp))
 }
 
 /// `dir/.name.tmp`: where a file is written before it is renamed to `path`.
@@ -306,7 +320,7 @@ fn clear_outputs(dir: &Path) -> usize {
             let name = e.file_name().to_string_lossy().to_string();
             let ours = OUTPUT_NAMES.contains(&name.as_str())
                 || name.ends_with(".png")
-                || (name.starts_with('.') && name.ends_with(".tmp"));
+                || (name.starts_with('.') && (name.ends_with(".tmp") || name.ends_with(".tmp.png")));
             if ours && e.path().is_file() && std::fs::remove_file(e.path()).is_ok() {
                 n += 1;
             }

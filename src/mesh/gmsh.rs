@@ -21,9 +21,13 @@
 //! Geometry: every cell is isoparametric ([`CellGeometry::Isoparametric`]): 9-node cells follow
 //! curved boundaries as well as the file's mid-side nodes do.
 //!
-//! Node tags: mshio keeps a tag → index map only when the file's node tags are not contiguous;
-//! for contiguous tags it assumes that the blocks list the tags in increasing order (as Gmsh
-//! writes them).
+//! Node tags: every node is identified by the tag the file gives it, in whatever order the blocks
+//! list them (a file that lists its nodes in another order is the same mesh). The tags are read
+//! here from the `$Nodes` section ([`node_tags`]), not taken from mshio, which keeps them only when
+//! they are not contiguous. A tag given twice is an error.
+//!
+//! Every count, size and tag in the file is checked against what follows it before anything is
+//! allocated for it: a malformed count gives an error naming the section, never an abort.
 
 use super::{CellGeometry, Facet, Mesh};
 use crate::element::{Lagrange2D, ShapeTable, Q1, Q2};
@@ -57,14 +61,48 @@ pub struct GmshGroups {
     pub regions: Vec<String>,
 }
 
-/// Read a `.msh` 4.1 file (ASCII or binary).
+/// The largest mesh file read, in bytes (1 GiB: a 3D hexahedral mesh of several million nodes in
+/// ASCII). Larger files, and endless ones such as `/dev/zero`, are refused before they fill memory.
+pub const MAX_MESH_BYTES: u64 = 1 << 30;
+
+/// Read a `.msh` 4.1 file (ASCII or binary) of at most [`MAX_MESH_BYTES`]. Errors name the file
+/// by its absolute path (what a relative `mesh.file` resolved to).
 pub fn read_msh(path: &Path, groups: &GmshGroups) -> Result<Mesh, MeshError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| MeshError {
-        file: file.clone(),
-        message: format!("cannot read: {e}"),
-    })?;
-    parse_msh(&bytes, &file, groups)
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let bytes = read_bounded(&abs, MAX_MESH_BYTES)?;
+    parse_msh(&bytes, &abs.display().to_string(), groups)
+}
+
+/// The bytes of a file of at most `limit` bytes; a directory, an unreadable or a larger file is
+/// an error naming the path.
+pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, MeshError> {
+    use std::io::Read;
+    let err = |message: String| MeshError {
+        file: path.display().to_string(),
+        message,
+    };
+    let f = std::fs::File::open(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let meta = f.metadata().map_err(|e| err(format!("cannot read: {e}")))?;
+    if meta.is_dir() {
+        return Err(err("is a directory, not a mesh file".into()));
+    }
+    if meta.len() > limit {
+        return Err(err(format!(
+            "is {} bytes, more than the {limit} bytes a mesh file may have",
+            meta.len()
+        )));
+    }
+    let mut bytes = Vec::new();
+    f.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| err(format!("cannot read: {e}")))?;
+    if bytes.len() as u64 > limit {
+        return Err(err(format!(
+            "holds more than the {limit} bytes a mesh file may have (is it a device or a \
+             stream?)"
+        )));
+    }
+    Ok(bytes)
 }
 
 /// Parse the bytes of a `.msh` 4.1 file; `file` names it in errors.
@@ -76,6 +114,7 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
     check_header(bytes).map_err(&err)?;
     let names = physical_names(bytes).map_err(&err)?;
     let msh = mshio::parse_msh_bytes(bytes).map_err(|e| err(describe_parse_error(bytes, &e)))?;
+    let tags = node_tags(bytes).map_err(&err)?;
     let data = &msh.data;
     let (Some(nodes), Some(elements)) = (&data.nodes, &data.elements) else {
         return Err(err(
@@ -113,38 +152,39 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
     };
 
     // Node coordinates by tag.
+    if tags.len() != nodes.node_blocks.len() {
+        return Err(err(format!(
+            "$Nodes: {} node blocks parsed but {} read with their tags",
+            nodes.node_blocks.len(),
+            tags.len()
+        )));
+    }
     let mut node_index: HashMap<u64, usize> = HashMap::new();
     let mut coords: Vec<Vec2> = Vec::new();
-    let mut next_tag = nodes.min_node_tag;
-    for block in &nodes.node_blocks {
-        let base = coords.len();
-        for n in &block.nodes {
+    for (block, block_tags) in nodes.node_blocks.iter().zip(&tags) {
+        if block_tags.len() != block.nodes.len() {
+            return Err(err(format!(
+                "$Nodes: a block of entity {} has {} tags for {} nodes",
+                block.entity_tag,
+                block_tags.len(),
+                block.nodes.len()
+            )));
+        }
+        for (n, &tag) in block.nodes.iter().zip(block_tags) {
             if !(n.x.is_finite() && n.y.is_finite() && n.z.is_finite()) {
-                return Err(err(format!(
-                    "node {} has a non-finite coordinate",
-                    coords.len() + 1
-                )));
+                return Err(err(format!("node {tag} has a non-finite coordinate")));
             }
             if n.z.abs() > 1e-9 * (n.x.abs() + n.y.abs()).max(1.0) {
                 return Err(err(format!(
-                    "node at ({}, {}, {}) is not in the plane z = 0 (a 2D mesh in x, y is needed)",
+                    "node {tag} at ({}, {}, {}) is not in the plane z = 0 (a 2D mesh in x, y is \
+                     needed)",
                     n.x, n.y, n.z
                 )));
             }
+            if node_index.insert(tag, coords.len()).is_some() {
+                return Err(err(format!("node tag {tag} is given to more than one node")));
+            }
             coords.push(Vec2::new(n.x, n.y));
-        }
-        match &block.node_tags {
-            Some(map) => {
-                for (&tag, &i) in map {
-                    node_index.insert(tag, base + i);
-                }
-            }
-            None => {
-                for i in 0..block.nodes.len() {
-                    node_index.insert(next_tag, base + i);
-                    next_tag += 1;
-                }
-            }
         }
     }
 
@@ -159,6 +199,32 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
             format!("element {el} refers to node {tag}, which the file does not define")
         })
     };
+    // The $Elements header's claims, against its blocks.
+    let n_elements: u64 = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.elements.len() as u64)
+        .sum();
+    if n_elements != elements.num_elements {
+        return Err(err(format!(
+            "$Elements announces {} elements, its blocks hold {n_elements}",
+            elements.num_elements
+        )));
+    }
+    let tags = || {
+        elements
+            .element_blocks
+            .iter()
+            .flat_map(|b| b.elements.iter().map(|e| e.element_tag))
+    };
+    if let (Some(lo), Some(hi)) = (tags().min(), tags().max()) {
+        if (lo, hi) != (elements.min_element_tag, elements.max_element_tag) {
+            return Err(err(format!(
+                "$Elements announces element tags {} to {}, its blocks hold tags {lo} to {hi}",
+                elements.min_element_tag, elements.max_element_tag
+            )));
+        }
+    }
     for block in &elements.element_blocks {
         match block.entity_dim {
             2 => {
@@ -481,7 +547,8 @@ fn physical_names(bytes: &[u8]) -> Result<Vec<(i32, i32, String)>, String> {
         .next()
         .and_then(|l| l.parse().ok())
         .ok_or("malformed $PhysicalNames section: no count")?;
-    let mut out = Vec::with_capacity(count);
+    // The count is a claim checked against the lines that follow, not a size to allocate.
+    let mut out = Vec::new();
     for line in lines {
         let mut parts = line.splitn(3, char::is_whitespace);
         let dim = parts.next().and_then(|s| s.parse::<i32>().ok());
@@ -500,6 +567,196 @@ fn physical_names(bytes: &[u8]) -> Result<Vec<(i32, i32, String)>, String> {
         ));
     }
     Ok(out)
+}
+
+/// The node tags of every block of `$Nodes`, in file order (ASCII or binary, 4- or 8-byte
+/// `size_t`, either byte order). Called after mshio has parsed the file, so the layout is known to
+/// be well formed; each count is still bounded by the bytes that remain before it is used.
+fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
+    let (binary, size_t, little) = mesh_format(bytes)?;
+    let Some(start) = find(bytes, b"\n$Nodes") else {
+        return Err("no $Nodes section".into());
+    };
+    let mut rest = &bytes[start + b"\n$Nodes".len()..];
+    // Skip the end of the `$Nodes` line.
+    match rest.iter().position(|&b| b == b'\n') {
+        Some(k) => rest = &rest[k + 1..],
+        None => return Err("truncated file: $Nodes is incomplete".into()),
+    }
+    let mut reader = Reader {
+        rest,
+        binary,
+        size_t,
+        little,
+    };
+    let n_blocks = reader.size("number of node blocks")?;
+    let n_nodes = reader.size("number of nodes")?;
+    let min_tag = reader.size("minimum node tag")?;
+    let max_tag = reader.size("maximum node tag")?;
+    let mut blocks = Vec::new();
+    let mut total = 0u64;
+    for b in 0..n_blocks {
+        let what = |s: &str| format!("{s} of node block {} of {n_blocks}", b + 1);
+        let _dim = reader.int(&what("entity dimension"))?;
+        let _entity = reader.int(&what("entity tag"))?;
+        let parametric = reader.int(&what("parametric flag"))?;
+        if parametric != 0 {
+            return Err(format!("{} is not supported", what("parametric node coordinates")));
+        }
+        let n = reader.size(&what("number of nodes"))?;
+        // Each node takes at least one tag and three coordinates: a count larger than the bytes
+        // left cannot be true.
+        let per_node = if binary { size_t + 24 } else { 8 };
+        if n.saturating_mul(per_node as u64) > reader.rest.len() as u64 {
+            return Err(format!(
+                "{} = {n} is more than the rest of the file can hold",
+                what("number of nodes")
+            ));
+        }
+        let mut block = Vec::with_capacity(n as usize);
+        for _ in 0..n {
+            let tag = reader.size(&what("node tag"))?;
+            if tag == 0 {
+                return Err(format!("{}: node tag 0 is not allowed", what("node tags")));
+            }
+            block.push(tag);
+        }
+        reader.skip_coords(n, &what("node coordinates"))?;
+        total += n;
+        blocks.push(block);
+    }
+    if total != n_nodes {
+        return Err(format!(
+            "$Nodes announces {n_nodes} nodes, its blocks hold {total}"
+        ));
+    }
+    let all = || blocks.iter().flatten().copied();
+    let (lo, hi) = (all().min().unwrap_or(min_tag), all().max().unwrap_or(max_tag));
+    if (lo, hi) != (min_tag, max_tag) && total > 0 {
+        return Err(format!(
+            "$Nodes announces node tags {min_tag} to {max_tag}, its blocks hold tags {lo} to {hi}"
+        ));
+    }
+    Ok(blocks)
+}
+
+/// (binary, size of `size_t`, little-endian) from `$MeshFormat`.
+fn mesh_format(bytes: &[u8]) -> Result<(bool, usize, bool), String> {
+    let start = find(bytes, b"$MeshFormat").ok_or("no $MeshFormat section")?;
+    let after = &bytes[start + b"$MeshFormat".len()..];
+    let line_start = after.iter().position(|&b| b == b'\n').ok_or("truncated $MeshFormat")? + 1;
+    let line_len = after[line_start..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .ok_or("truncated $MeshFormat")?;
+    let line = String::from_utf8_lossy(&after[line_start..line_start + line_len]).to_string();
+    let mut it = line.split_whitespace();
+    let _version = it.next();
+    let file_type = it.next().unwrap_or("");
+    let data_size = it.next().unwrap_or("");
+    let binary = match file_type {
+        "0" => false,
+        "1" => true,
+        other => return Err(format!("$MeshFormat: file type \"{other}\" is neither 0 nor 1")),
+    };
+    let size_t = match data_size {
+        "4" => 4,
+        "8" => 8,
+        other => return Err(format!("$MeshFormat: data size \"{other}\" is neither 4 nor 8")),
+    };
+    let mut little = true;
+    if binary {
+        let one = after
+            .get(line_start + line_len + 1..line_start + line_len + 5)
+            .ok_or("truncated $MeshFormat")?;
+        little = match one {
+            [1, 0, 0, 0] => true,
+            [0, 0, 0, 1] => false,
+            _ => return Err("$MeshFormat: the binary integer 1 that gives the byte order is missing".into()),
+        };
+    }
+    Ok((binary, size_t, little))
+}
+
+/// Reads the numbers of a section, ASCII or binary.
+struct Reader<'a> {
+    rest: &'a [u8],
+    binary: bool,
+    size_t: usize,
+    little: bool,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&[u8], String> {
+        if self.rest.len() < n {
+            return Err(format!("truncated file: {what} is cut off"));
+        }
+        let (head, tail) = self.rest.split_at(n);
+        self.rest = tail;
+        Ok(head)
+    }
+
+    fn token(&mut self, what: &str) -> Result<String, String> {
+        let skip = self
+            .rest
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .ok_or_else(|| format!("truncated file: {what} is missing"))?;
+        self.rest = &self.rest[skip..];
+        let len = self
+            .rest
+            .iter()
+            .position(|b| b.is_ascii_whitespace())
+            .unwrap_or(self.rest.len());
+        let tok = String::from_utf8_lossy(&self.rest[..len]).to_string();
+        self.rest = &self.rest[len..];
+        Ok(tok)
+    }
+
+    fn unsigned(&mut self, n: usize, what: &str) -> Result<u64, String> {
+        let little = self.little;
+        let b = self.take(n, what)?;
+        let mut v = 0u64;
+        for k in 0..n {
+            let byte = if little { b[n - 1 - k] } else { b[k] };
+            v = (v << 8) | u64::from(byte);
+        }
+        Ok(v)
+    }
+
+    fn size(&mut self, what: &str) -> Result<u64, String> {
+        if self.binary {
+            self.unsigned(self.size_t, what)
+        } else {
+            let t = self.token(what)?;
+            t.parse()
+                .map_err(|_| format!("{what} \"{t}\" is not a non-negative integer"))
+        }
+    }
+
+    fn int(&mut self, what: &str) -> Result<i64, String> {
+        if self.binary {
+            Ok(i64::from(self.unsigned(4, what)? as u32 as i32))
+        } else {
+            let t = self.token(what)?;
+            t.parse().map_err(|_| format!("{what} \"{t}\" is not an integer"))
+        }
+    }
+
+    fn skip_coords(&mut self, n: u64, what: &str) -> Result<(), String> {
+        if self.binary {
+            let len = n
+                .checked_mul(24)
+                .filter(|&l| l <= self.rest.len() as u64)
+                .ok_or_else(|| format!("truncated file: {what} are cut off"))?;
+            self.take(len as usize, what)?;
+        } else {
+            for _ in 0..n.saturating_mul(3) {
+                self.token(what)?;
+            }
+        }
+        Ok(())
+    }
 }
 
 fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
@@ -577,6 +834,178 @@ mod tests {
         for (a, &g) in GMSH_Q1.iter().enumerate() {
             assert_eq!(Q1::node_ref(a), gmsh9[g], "Q1 node {a}");
         }
+    }
+
+    /// The text of a shipped mesh.
+    fn shipped(name: &str) -> String {
+        std::fs::read_to_string(format!("{}/scenarios/{name}", env!("CARGO_MANIFEST_DIR")))
+            .expect("shipped mesh")
+    }
+
+    fn groups() -> GmshGroups {
+        GmshGroups {
+            hub: "hub".into(),
+            contact: "contact".into(),
+            regions: Vec::new(),
+        }
+    }
+
+    /// Line range of the `$Nodes` section's content (after the `$Nodes` line, before
+    /// `$EndNodes`) and the node blocks in it: (header line, tag lines, coordinate lines).
+    fn node_blocks(lines: &[String]) -> Vec<(usize, std::ops::Range<usize>, std::ops::Range<usize>)> {
+        let start = lines.iter().position(|l| l == "$Nodes").expect("$Nodes") + 1;
+        let n_blocks: usize = lines[start].split_whitespace().next().unwrap().parse().unwrap();
+        let mut at = start + 1;
+        let mut out = Vec::new();
+        for _ in 0..n_blocks {
+            let n: usize = lines[at].split_whitespace().nth(3).unwrap().parse().unwrap();
+            out.push((at, at + 1..at + 1 + n, at + 1 + n..at + 1 + 2 * n));
+            at += 1 + 2 * n;
+        }
+        out
+    }
+
+    fn lines_of(text: &str) -> Vec<String> {
+        text.lines().map(str::to_string).collect()
+    }
+
+    fn parse(lines: &[String]) -> Result<Mesh, MeshError> {
+        parse_msh((lines.join("\n") + "\n").as_bytes(), "test.msh", &groups())
+    }
+
+    /// Cells as sorted lists of their node coordinates (bit patterns), sorted: equal for two
+    /// meshes with the same cells whatever the node numbering.
+    fn cell_geometry(m: &Mesh) -> Vec<Vec<(u64, u64)>> {
+        let mut cells: Vec<Vec<(u64, u64)>> = (0..m.n_cells())
+            .map(|c| {
+                let mut v: Vec<(u64, u64)> = m
+                    .cell_nodes(c)
+                    .iter()
+                    .map(|&n| {
+                        let p = m.nodes[n as usize];
+                        (p[0].to_bits(), p[1].to_bits())
+                    })
+                    .collect();
+                v.sort_unstable();
+                v
+            })
+            .collect();
+        cells.sort();
+        cells
+    }
+
+    /// A `$Nodes` block listed in another order (each tag with its own coordinates) is the same
+    /// mesh; so is a file whose tags are not contiguous.
+    #[test]
+    fn node_order_and_tag_gaps_do_not_change_the_mesh() {
+        let lines = lines_of(&shipped("footprint_refined.msh"));
+        let reference = parse(&lines).expect("shipped mesh");
+        // Reverse the largest block's nodes, keeping each tag with its coordinates.
+        let blocks = node_blocks(&lines);
+        let (_, tags, coords) = blocks.iter().max_by_key(|b| b.1.len()).unwrap().clone();
+        assert!(tags.len() > 100, "{}", tags.len());
+        let mut permuted = lines.clone();
+        let t: Vec<String> = lines[tags.clone()].iter().rev().cloned().collect();
+        let x: Vec<String> = lines[coords.clone()].iter().rev().cloned().collect();
+        permuted.splice(tags, t);
+        permuted.splice(coords, x);
+        let m = parse(&permuted).expect("the same mesh in another node order");
+        assert_eq!(m.n_cells(), reference.n_cells());
+        assert_eq!(cell_geometry(&m), cell_geometry(&reference));
+        assert_eq!(m.facet_sets, {
+            // Facets keep their cells (the cell order is the file's element order).
+            reference.facet_sets.clone()
+        });
+
+        // Tags with gaps: every tag t becomes 3 t + 5, in $Nodes and in $Elements.
+        let mut gaps = lines.clone();
+        let node_start = gaps.iter().position(|l| l == "$Nodes").unwrap() + 1;
+        let mut head: Vec<u64> = gaps[node_start]
+            .split_whitespace()
+            .map(|v| v.parse().unwrap())
+            .collect();
+        head[2] = 3 * head[2] + 5;
+        head[3] = 3 * head[3] + 5;
+        gaps[node_start] = head.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+        for (_, tags, _) in node_blocks(&lines) {
+            for i in tags {
+                let t: u64 = gaps[i].trim().parse().unwrap();
+                gaps[i] = (3 * t + 5).to_string();
+            }
+        }
+        let el_start = gaps.iter().position(|l| l == "$Elements").unwrap() + 1;
+        let n_el_blocks: usize = gaps[el_start].split_whitespace().next().unwrap().parse().unwrap();
+        let mut at = el_start + 1;
+        for _ in 0..n_el_blocks {
+            let n: usize = gaps[at].split_whitespace().nth(3).unwrap().parse().unwrap();
+            for i in at + 1..at + 1 + n {
+                let mut v: Vec<u64> =
+                    gaps[i].split_whitespace().map(|v| v.parse().unwrap()).collect();
+                for t in &mut v[1..] {
+                    *t = 3 * *t + 5;
+                }
+                gaps[i] = v.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+            }
+            at += 1 + n;
+        }
+        let m = parse(&gaps).expect("non-contiguous tags");
+        assert_eq!(cell_geometry(&m), cell_geometry(&reference));
+    }
+
+    /// Two tags exchanged between nodes at different places: the elements now join the wrong
+    /// nodes (a tangled mesh), which is refused, not read as the original.
+    #[test]
+    fn swapped_node_tags_give_the_tangled_mesh_and_are_refused() {
+        let lines = lines_of(&shipped("footprint_refined.msh"));
+        let blocks = node_blocks(&lines);
+        let (_, tags, _) = blocks.iter().max_by_key(|b| b.1.len()).unwrap().clone();
+        let (a, b) = (tags.start + 3, tags.start + tags.len() / 2);
+        let mut swapped = lines.clone();
+        swapped.swap(a, b);
+        let e = parse(&swapped).expect_err("a tangled mesh");
+        assert!(
+            e.message.contains("inverted") || e.message.contains("degenerate"),
+            "{e}"
+        );
+        // A tag given twice is named.
+        let mut twice = lines.clone();
+        twice[b] = twice[a].clone();
+        let e = parse(&twice).expect_err("a duplicated tag");
+        assert!(e.message.contains("more than one node"), "{e}");
+    }
+
+    /// Counts read from the file are checked against what follows them before anything is
+    /// allocated: a huge count is an error, not an abort.
+    #[test]
+    fn huge_counts_are_errors() {
+        let lines = lines_of(&shipped("two_layer.msh"));
+        let names = lines.iter().position(|l| l == "$PhysicalNames").unwrap() + 1;
+        let nodes = lines.iter().position(|l| l == "$Nodes").unwrap() + 1;
+        let elements = lines.iter().position(|l| l == "$Elements").unwrap() + 1;
+        let block = nodes + 1;
+        let entities = lines.iter().position(|l| l == "$Entities").unwrap() + 1;
+        let huge = ["100000000000", "4611686018427387904", "18446744073709551616", "-1"];
+        for count in huge {
+            for (line, field) in [(names, 0), (entities, 0), (entities, 1), (entities, 2), (nodes, 0), (nodes, 1), (nodes, 3), (block, 3), (elements, 0), (elements, 1), (elements + 1, 3)] {
+                let mut bad = lines.clone();
+                let mut f: Vec<String> =
+                    bad[line].split_whitespace().map(str::to_string).collect();
+                f[field] = count.to_string();
+                bad[line] = f.join(" ");
+                let Err(e) = parse(&bad) else {
+                    panic!("count {count} at line {} field {field} accepted", line + 1);
+                };
+                assert!(!e.message.is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn bounded_reader_refuses_endless_and_large_files() {
+        let e = read_bounded(Path::new("/dev/zero"), 1 << 20).expect_err("/dev/zero");
+        assert!(e.message.contains("more than"), "{e}");
+        let e = read_bounded(Path::new("/"), 1 << 20).expect_err("a directory");
+        assert!(e.message.contains("directory"), "{e}");
     }
 
     #[test]

@@ -145,6 +145,10 @@ pub enum SolveError {
         cutbacks: usize,
         last: Box<SolveError>,
     },
+    /// A cut-back made the step smaller than the round-off of the parameter it steps: a step
+    /// that cannot change the parameter is a failure, not progress.
+    #[error("the step fell to {step:.3e} at parameter {at:.6e}, below its round-off: no further progress is possible (raise the step floor, e.g. time.dt_min, or lower solver.max_cutbacks)")]
+    StepBelowRoundOff { at: f64, step: f64 },
     #[error("load stepping gave up at load factor {lambda:.6} after {cutbacks} cut-backs: {last}")]
     TooManyCutbacks {
         lambda: f64,
@@ -1223,4 +1227,12 @@ mod tests {
             assert!(parts <= t.total_s * (1.0 + 1e-12), "{t:?}");
         }
     }
+}
+
+/// Whether a step `step` from `at` (towards an end at `end`) is below the round-off of the
+/// parameter: fewer than about four units in the last place of the larger of |at| and |end|, so
+/// that `at + step` cannot be told from `at` after a few operations.
+pub fn below_round_off(at: f64, end: f64, step: f64) -> bool {
+    let scale = at.abs().max(end.abs());
+    !(step.abs() > 4.0 * f64::EPSILON * scale) || at + step == at
 }

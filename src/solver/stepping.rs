@@ -67,6 +67,12 @@ pub fn solve_load_steps<S: LoadedSystem, O: StepObserver<S> + ?Sized>(
             return Err(SolveError::Interrupted { at: lambda });
         }
         let target = (lambda + dl).min(1.0);
+        if target < 1.0 && super::newton::below_round_off(lambda, 1.0, target - lambda) {
+            return Err(SolveError::StepBelowRoundOff {
+                at: lambda,
+                step: target - lambda,
+            });
+        }
         sys.save_state(&mut saved);
         sys.set_load(target);
         if opts.verbose {

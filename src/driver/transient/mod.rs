@@ -1202,6 +1202,18 @@ pub fn integrate(
         dt = dt
             .min(opts.t_end - tr.state.t)
             .max(opts.dt_min.min(opts.t_end - tr.state.t));
+        // A step that cannot move the time (a `dt_min` below the round-off of t) would repeat
+        // without end.
+        if crate::solver::newton::below_round_off(tr.state.t, opts.t_end, dt) {
+            rep.final_time = tr.state.t;
+            return Err((
+                SolveError::StepBelowRoundOff {
+                    at: tr.state.t,
+                    step: dt,
+                },
+                rep,
+            ));
+        }
         // Land exactly on the next node passage once the ramps are done, so that the
         // referential field and the hub forces are sampled from a computed state (the hub force
         // varies quickly within a passage as nodes enter the patch: interpolating it is noisy).

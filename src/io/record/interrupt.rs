@@ -1,5 +1,7 @@
-//! Ctrl-C handling: the first SIGINT sets a flag that drivers poll at step boundaries
-//! ([`interrupted`]); a second one exits at once with status 130.
+//! Ctrl-C handling: the first SIGINT, SIGTERM or SIGHUP (Ctrl-C, `timeout`, a batch scheduler's
+//! cancellation, a closed terminal) sets a flag that drivers poll at step boundaries
+//! ([`interrupted`]): the run stops there, writes its summary and finishes its logs, and exits
+//! with status 130. A second signal exits at once with status 130.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -33,7 +35,9 @@ pub fn install_interrupt_handler() {
             eprintln!("\ntread: interrupted again: exiting without finishing the logs");
             std::process::exit(130);
         }
-        eprintln!("\ntread: interrupt: stopping at the next step boundary (Ctrl-C again to abort)");
+        eprintln!(
+            "\ntread: interrupt (SIGINT/SIGTERM): stopping at the next step boundary (again to abort)"
+        );
         request_interrupt();
     });
     if let Err(e) = r {

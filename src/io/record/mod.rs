@@ -365,6 +365,9 @@ pub trait Recorder {
     fn step_rejected(&mut self, _step: &RejectedStep) {}
     fn newton_iteration(&mut self, _it: &NewtonIteration) {}
     fn continuation_point(&mut self, _p: &ContinuationPoint) {}
+    /// A line of progress between steps (e.g. the steady mode's recovery strategies, which take
+    /// steps of their own that are not the run's): shown where a user follows a run (`run.sta`).
+    fn note(&mut self, _text: &str) {}
     fn steady_reached(&mut self, _s: &SteadyReached, _view: &StepView) {}
     /// Finish every file; returns the errors met while writing (empty when all went well).
     fn run_finished(&mut self, _end: &RunEnd) -> Vec<RecordError> {
@@ -508,6 +511,11 @@ impl Recorder for Recorders {
     fn continuation_point(&mut self, p: &ContinuationPoint) {
         for e in &mut self.entries {
             e.sink.continuation_point(p);
+        }
+    }
+    fn note(&mut self, text: &str) {
+        for e in &mut self.entries {
+            e.sink.note(text);
         }
     }
     fn steady_reached(&mut self, s: &SteadyReached, view: &StepView) {

@@ -402,6 +402,47 @@ pub fn chart(
     y: Axis,
     series: &[(&str, &[(f64, f64)])],
 ) -> Result<Vec<String>, String> {
+    draw_atomic(path, |tmp| chart_to(tmp, title, x, y, series))
+}
+
+/// `dir/.stem.tmp.png`: where a PNG is drawn before it is renamed (the encoder picks the format
+/// from the extension, so it stays `.png`).
+pub fn tmp_png_path(path: &Path) -> std::path::PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{stem}.tmp.png"))
+}
+
+/// Draw a PNG with `draw` into [`tmp_png_path`], then rename it to `path`: a full disk or a
+/// failed drawing never leaves a partial or empty PNG under the final name, nor the temporary.
+pub fn draw_atomic<T>(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> Result<T, String>,
+) -> Result<T, String> {
+    let tmp = tmp_png_path(path);
+    let done = draw(&tmp).and_then(|v| {
+        let len = std::fs::metadata(&tmp).map_err(|e| e.to_string())?.len();
+        if len == 0 {
+            return Err("the PNG encoder wrote nothing (disk full?)".into());
+        }
+        std::fs::rename(&tmp, path).map_err(|e| e.to_string())?;
+        Ok(v)
+    });
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    done
+}
+
+fn chart_to(
+    path: &Path,
+    title: &str,
+    x: Axis,
+    y: Axis,
+    series: &[(&str, &[(f64, f64)])],
+) -> Result<Vec<String>, String> {
     let (mapped, notes) = map_series(x, y, series);
     let any = mapped.iter().any(|(_, p)| !p.is_empty());
     if !any && (x.scale == Scale::Log10 || y.scale == Scale::Log10) {
@@ -463,6 +504,10 @@ pub fn panels(path: &Path, title: &str, x_label: &str, panels: &[Panel]) -> Resu
     if panels.is_empty() {
         return Ok(());
     }
+    draw_atomic(path, |tmp| panels_to(tmp, title, x_label, panels))
+}
+
+fn panels_to(path: &Path, title: &str, x_label: &str, panels: &[Panel]) -> Result<(), String> {
     ensure_font()?;
     let h = (220 * panels.len()).clamp(560, 1400) as u32;
     let root = BitMapBackend::new(path, (900, h)).into_drawing_area();

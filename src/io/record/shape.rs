@@ -299,13 +299,17 @@ impl ShapeSnapshots {
                 continue;
             }
             let path = dir.join(&name);
-            self.draw(&path, &[s], 1, SINGLE, range, bbox, units)?;
+            super::png::draw_atomic(&path, |tmp| {
+                self.draw(tmp, &[s], 1, SINGLE, range, bbox, units)
+            })?;
             written.push(name);
             files.push(path);
         }
         let path = dir.join("shape_montage.png");
         let cols = shots.len().min(MONTAGE_COLUMNS);
-        self.draw(&path, &shots, cols, PANEL, range, bbox, units)?;
+        super::png::draw_atomic(&path, |tmp| {
+            self.draw(tmp, &shots, cols, PANEL, range, bbox, units)
+        })?;
         files.push(path);
         Ok(files)
     }

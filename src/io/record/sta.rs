@@ -18,7 +18,9 @@
 //! | `rejected` | rejected attempts of the whole run so far |
 //! | `newton_total` | Newton iterations of the whole run so far, those of rejected attempts included |
 //!
-//! A `cutback` line ends with `# reason`. Numbers are written so they read back exactly.
+//! A `cutback` line ends with `# reason`. Numbers are written so they read back exactly. Between
+//! steps, `#` lines say what the run is doing when it is not taking steps of its own (the steady
+//! mode's recovery strategies: each strategy as it starts, each of its homotopy steps, its end).
 
 use super::{
     NewtonIteration, RecordError, Recorder, RejectedStep, RunEnd, RunMeta, StepInfo, StepView,
@@ -149,6 +151,10 @@ impl Recorder for StaSink {
             COLUMNS[9],
         );
         self.write(&head);
+    }
+
+    fn note(&mut self, text: &str) {
+        self.write(&format!("# {}\n", text.replace('\n', " ")));
     }
 
     fn newton_iteration(&mut self, it: &NewtonIteration) {

@@ -121,10 +121,18 @@ impl VtuSink {
     }
 }
 
+/// Write through a temporary file and a rename; a failed write (a full disk) removes the
+/// temporary, so that neither a partial file nor the temporary is left.
 fn write_atomic(path: &Path, text: &[u8]) -> Result<(), RecordError> {
     let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text).map_err(|e| RecordError::new("vtu", &tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| RecordError::new("vtu", path, e))
+    if let Err(e) = std::fs::write(&tmp, text) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(RecordError::new("vtu", &tmp, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        RecordError::new("vtu", path, e)
+    })
 }
 
 /// The VTK cell type and node order of cell `c`.

@@ -13,13 +13,15 @@ use std::collections::BTreeSet;
 /// Keys of `[time]` required by the transient mode that the steady mode does not read: a
 /// steady scene may give `[time]` for `strain_rate_damping` alone (see
 /// [`super::TimeSpec::steady_only`]).
-const STEADY_UNUSED_TIME: [&str; 2] = ["dt", "t_end"];
+pub(super) const STEADY_UNUSED_TIME: [&str; 2] = ["dt", "t_end"];
 
 pub(super) struct Ctx<'a> {
     pub(super) source_name: &'a str,
     pub(super) locator: &'a Locator,
     pub(super) overridden: BTreeSet<String>,
     pub(super) issues: Vec<Issue>,
+    /// `[[material]]` regions and the index of the array element that names each.
+    pub(super) region_elements: Vec<(String, usize)>,
 }
 
 impl Ctx<'_> {
@@ -363,11 +365,12 @@ impl Ctx<'_> {
             };
             if out.iter().any(|(r, _)| *r == region) {
                 self.push(
-                    format!("material[{region}]"),
-                    "region given twice in [[material]]",
+                    format!("material[{i}]"),
+                    format!("region \"{region}\" given twice in [[material]]"),
                 );
                 continue;
             }
+            self.region_elements.push((region.clone(), i));
             out.push((region, t));
         }
         // Nothing usable: the schema pass reports the section as missing.
@@ -542,6 +545,9 @@ impl Ctx<'_> {
         if self.overridden.contains(key) {
             return (None, true);
         }
+        if let Some((index, rest)) = self.material_element(key) {
+            return (self.locator.locate_element("material", index, rest), false);
+        }
         match self.locator.locate(key) {
             Some(line) => (Some(line), false),
             None => {
@@ -553,6 +559,23 @@ impl Ctx<'_> {
                 (None, touched)
             }
         }
+    }
+
+    /// A key of a `[[material]]` element, `material[<index or region>].<rest>`: the element's
+    /// index and `<rest>` (empty for the element itself).
+    fn material_element<'k>(&self, key: &'k str) -> Option<(usize, &'k str)> {
+        let inner = key.strip_prefix("material[")?;
+        let (name, rest) = inner.split_once(']')?;
+        let rest = rest.strip_prefix('.').unwrap_or(rest);
+        let index = match name.parse::<usize>() {
+            Ok(i) => i,
+            Err(_) => self
+                .region_elements
+                .iter()
+                .find(|(r, _)| r == name)
+                .map(|(_, i)| *i)?,
+        };
+        Some((index, rest))
     }
 
     pub(super) fn into_errors(self) -> SceneErrors {

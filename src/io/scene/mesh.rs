@@ -39,6 +39,12 @@ pub const DEFAULT_HUB_GROUP: &str = "hub";
 /// Default `[mesh] contact` group name.
 pub const DEFAULT_CONTACT_GROUP: &str = "contact";
 
+impl MeshSpec {
+    /// The keys of the generated annulus, not used (and refused) with `file`.
+    pub const GENERATOR_KEYS: &'static [&'static str] =
+        &["n_r", "n_theta", "order", "grading_r", "grading_theta"];
+}
+
 impl Default for MeshSpec {
     fn default() -> Self {
         MeshSpec {
@@ -70,7 +76,7 @@ pub(super) fn validate_mesh_file(
                     "must name a .msh file, got an empty string",
                 ));
             }
-            for key in ["n_r", "n_theta", "order", "grading_r", "grading_theta"] {
+            for key in MeshSpec::GENERATOR_KEYS {
                 if table_has(doc, "mesh", key) {
                     out.push(issue(
                         format!("mesh.{key}"),

@@ -275,6 +275,7 @@ impl Scene {
             locator: &locator,
             overridden: BTreeSet::new(),
             issues: Vec::new(),
+            region_elements: Vec::new(),
         };
 
         let mut doc: toml::Table = match text.parse::<toml::Table>() {
@@ -284,7 +285,7 @@ impl Scene {
                     .span()
                     .map(|s| spans::LineIndex::new(text).line_of(s.start));
                 let key = line
-                    .and_then(|l| locator.key_at_line(l))
+                    .and_then(|l| locator.key_at_line(l).or_else(|| spans::key_written_at(text, l)))
                     .unwrap_or_default();
                 return Err(SceneErrors(vec![SceneError {
                     key,
@@ -588,11 +589,40 @@ impl Scene {
         if !self.regions.is_empty() {
             return self.to_toml_string_regions();
         }
+        if self.mesh.file.is_some() {
+            let mut scene = self.clone();
+            // Not written: the loader refuses them next to `mesh.file` (their defaults stand).
+            scene.mesh = MeshSpec {
+                file: self.mesh.file.clone(),
+                hub: self.mesh.hub.clone(),
+                contact: self.mesh.contact.clone(),
+                ..MeshSpec::default()
+            };
+            return match toml::Table::try_from(&scene)
+                .map(|t| toml::to_string_pretty(&self.drop_unused(t)))
+            {
+                Ok(Ok(s)) => s,
+                Ok(Err(e)) | Err(e) => format!("# cannot write scene as TOML: {e}\n"),
+            };
+        }
         match toml::to_string_pretty(self) {
             Ok(s) => s,
             // Only possible for non-finite floats in a scene built in code.
             Err(e) => format!("# cannot write scene as TOML: {e}\n"),
         }
+    }
+
+    /// The resolved table without the keys the loader refuses in this scene: the generated
+    /// annulus's `[mesh]` keys when the mesh comes from `mesh.file`.
+    fn drop_unused(&self, mut t: toml::Table) -> toml::Table {
+        if self.mesh.file.is_some() {
+            if let Some(toml::Value::Table(m)) = t.get_mut("mesh") {
+                for key in MeshSpec::GENERATOR_KEYS {
+                    m.remove(*key);
+                }
+            }
+        }
+        t
     }
 
     /// [`Self::to_toml_string`] with every key's unit and meaning (from the scene schema) as a
@@ -611,7 +641,7 @@ impl Scene {
                 arr.push(toml::Value::Table(m));
             }
             t.insert("material".into(), toml::Value::Array(arr));
-            Ok(t)
+            Ok(self.drop_unused(t))
         });
         match table.map(|t| toml::to_string_pretty(&t)) {
             Ok(Ok(s)) => s,
@@ -792,3 +822,9 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
 
 #[cfg(test)]
 mod tests;
+
+/// The 1-based line of a dotted key (`mesh.file`) in a scene's text, or of its nearest enclosing
+/// section when the key itself is not written there; `None` when neither is.
+pub fn key_line(text: &str, dotted: &str) -> Option<usize> {
+    spans::Locator::new(text).locate(dotted)
+}

@@ -384,7 +384,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("tolerance", Kind::Float, NONE, "relative residual tolerance, in (0, 1)"),
             opt("max_iterations", Kind::UInt, NONE, "Newton iterations per load step, >= 1"),
             opt("load_steps", Kind::UInt, NONE, "initial number of load steps, >= 1"),
-            opt("max_cutbacks", Kind::UInt, NONE, "how many times a failed step may be halved"),
+            opt("max_cutbacks", Kind::UInt, NONE, "how many times a failed step may be halved (<= 200)"),
             opt("linear", Kind::Keyword(LinearChoice::NAMES), NONE, "sparse linear solver"),
             opt("threads", Kind::UInt, NONE, "worker threads; 0 = all cores"),
             opt("line_search", Kind::Bool, NONE, "backtracking line search on the residual norm"),
@@ -459,11 +459,25 @@ pub(super) fn describe_value(v: &toml::Value) -> String {
     }
 }
 
+/// Smallest non-zero magnitude of a scene number: products of a handful of scene values (areas,
+/// moduli times lengths, ...) stay well inside double precision, and subnormals never reach the
+/// computation.
+pub const MIN_MAGNITUDE: f64 = 1e-60;
+/// Largest magnitude of a scene number (see [`MIN_MAGNITUDE`]).
+pub const MAX_MAGNITUDE: f64 = 1e60;
+
 pub(super) fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
     let ok = match (kind, v) {
         (Kind::Float, toml::Value::Float(f)) => {
-            if f.is_finite() {
+            if f.is_finite() && !(*f != 0.0 && !(MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&f.abs())) {
                 true
+            } else if f.is_finite() {
+                return Err(format!(
+                    "{} is outside the magnitudes a scene value may have, [{MIN_MAGNITUDE:e}, \
+                     {MAX_MAGNITUDE:e}] (or 0): products of such values under- or overflow in \
+                     double precision; choose units in which it is not",
+                    describe_value(v)
+                ));
             } else {
                 return Err(format!(
                     "expected a finite number, found {}",
@@ -640,10 +654,28 @@ pub(super) fn section_defaults(sec: &SectionSchema) -> toml::Table {
 // JSON Schema (draft 2020-12) for editors
 // ---------------------------------------------------------------------------------------------
 
+/// The loader's bounds of the integer keys that have more than `>= 0`: (minimum, maximum).
+fn uint_bounds(key: &str) -> (u64, Option<u64>) {
+    match key {
+        "n_r" | "max_iterations" | "load_steps" => (1, None),
+        "n_theta" => (8, None),
+        "order" => (1, Some(2)),
+        "max_cutbacks" => (0, Some(super::solver::MAX_CUTBACKS as u64)),
+        _ => (0, None),
+    }
+}
+
 fn field_json(f: &FieldSchema, default: Option<&toml::Value>) -> Value {
     let mut o = match f.kind {
         Kind::Float => json!({ "type": "number" }),
-        Kind::UInt => json!({ "type": "integer", "minimum": 0 }),
+        Kind::UInt => {
+            let (min, max) = uint_bounds(f.key);
+            let mut o = json!({ "type": "integer", "minimum": min });
+            if let (Some(max), Value::Object(m)) = (max, &mut o) {
+                m.insert("maximum".into(), json!(max));
+            }
+            o
+        }
         Kind::Bool => json!({ "type": "boolean" }),
         Kind::Str => json!({ "type": "string" }),
         Kind::Keyword(names) => json!({ "type": "string", "enum": names }),
@@ -652,7 +684,7 @@ fn field_json(f: &FieldSchema, default: Option<&toml::Value>) -> Value {
             "items": { "type": "string", "enum": names },
             "uniqueItems": true
         }),
-        Kind::Table(sub) => object_json(sub, &toml::Table::new(), None),
+        Kind::Table(sub) => object_json(sub, &toml::Table::new(), None, false),
         Kind::FloatList => json!({ "type": "array", "items": { "type": "number" } }),
         Kind::FloatPairs => json!({
             "type": "array",
@@ -678,10 +710,13 @@ fn field_json(f: &FieldSchema, default: Option<&toml::Value>) -> Value {
     o
 }
 
+/// `steady_optional`: the `[time]` keys a steady scene may leave out are not listed as required
+/// (the schema's top-level rule requires them for the other modes).
 fn object_json(
     fields: &[FieldSchema],
     defaults: &toml::Table,
     extra: Option<(&str, Value)>,
+    steady_optional: bool,
 ) -> Value {
     let mut props = Map::new();
     let mut required: Vec<&str> = Vec::new();
@@ -691,7 +726,7 @@ fn object_json(
     }
     for f in fields {
         props.insert(f.key.to_string(), field_json(f, defaults.get(f.key)));
-        if f.required {
+        if f.required && !(steady_optional && super::load::STEADY_UNUSED_TIME.contains(&f.key)) {
             required.push(f.key);
         }
     }
@@ -712,13 +747,13 @@ pub fn json_schema() -> Value {
     let mut required = Vec::new();
     for sec in SCHEMA.iter() {
         let defaults = section_defaults(sec);
-        let mut obj = object_json(sec.fields, &defaults, None);
+        let mut obj = object_json(sec.fields, &defaults, None, sec.name == "time");
         if sec.name == "material" {
             let region = json!({
                 "type": "string",
                 "description": "name of a 2D physical group of mesh.file"
             });
-            let per_region = object_json(sec.fields, &defaults, Some(("region", region)));
+            let per_region = object_json(sec.fields, &defaults, Some(("region", region)), false);
             obj = json!({
                 "oneOf": [
                     obj,
@@ -741,7 +776,17 @@ pub fn json_schema() -> Value {
         "type": "object",
         "additionalProperties": false,
         "properties": props,
-        "required": required
+        "required": required,
+        // The transient keys of [time] are required unless the scene is steady (which may
+        // give [time] for strain_rate_damping alone), as the loader has it.
+        "if": {
+            "properties": { "analysis": { "properties": { "mode": { "const": "steady" } },
+                                          "required": ["mode"] } },
+            "required": ["analysis"]
+        },
+        "else": {
+            "properties": { "time": { "required": super::load::STEADY_UNUSED_TIME } }
+        }
     })
 }
 

@@ -115,6 +115,9 @@ impl Default for SolverSpec {
     }
 }
 
+/// Largest `solver.max_cutbacks`.
+pub const MAX_CUTBACKS: usize = 200;
+
 pub(super) fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
     if !(s.tolerance.is_finite() && s.tolerance > 0.0 && s.tolerance < 1.0) {
         out.push(issue(
@@ -127,6 +130,16 @@ pub(super) fn validate_solver(s: &SolverSpec, out: &mut Vec<Issue>) {
     }
     if s.load_steps < 1 {
         out.push(issue("solver.load_steps", "must be >= 1, got 0"));
+    }
+    if s.max_cutbacks > MAX_CUTBACKS {
+        out.push(issue(
+            "solver.max_cutbacks",
+            format!(
+                "must be <= {MAX_CUTBACKS}, got {} (each cut-back halves the step; {MAX_CUTBACKS} \
+                 halvings already take any step below the round-off of its parameter)",
+                s.max_cutbacks
+            ),
+        ));
     }
     let w = s.damping_cell_weight;
     if !(w.is_finite() && w > 0.0 && w <= 1.0) {

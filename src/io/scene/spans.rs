@@ -49,6 +49,31 @@ impl Locator {
         best.map(|(_, line)| line)
     }
 
+    /// Line of `key` (dotted, may be empty for the element itself) in the `index`-th (0-based)
+    /// element of the array of tables `array` (`[[material]]`); the element's header line when
+    /// the key is not written in it.
+    pub(super) fn locate_element(&self, array: &str, index: usize, key: &str) -> Option<usize> {
+        let mut headers: Vec<usize> = self
+            .entries
+            .iter()
+            .filter(|(p, _)| p.len() == 1 && p[0] == array)
+            .map(|(_, l)| *l)
+            .collect();
+        headers.dedup();
+        let start = *headers.get(index)?;
+        let end = headers.get(index + 1).copied().unwrap_or(usize::MAX);
+        if key.is_empty() {
+            return Some(start);
+        }
+        let mut target = vec![array.to_string()];
+        target.extend(key.split('.').map(str::to_string));
+        self.entries
+            .iter()
+            .find(|(p, l)| *l >= start && *l < end && *p == target)
+            .map(|(_, l)| *l)
+            .or(Some(start))
+    }
+
     /// The longest key path defined on a line, dotted.
     pub(super) fn key_at_line(&self, line: usize) -> Option<String> {
         self.entries
@@ -92,6 +117,37 @@ fn walk_value(
         }
         _ => {}
     }
+}
+
+/// The dotted key written on 1-based `line` of `text`, read from the text alone (for lines the
+/// parser could not record, e.g. a key defined twice): the key before `=`, under the nearest
+/// `[section]` or `[[array]]` header above it; a header line gives its own path.
+pub(super) fn key_written_at(text: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let here = lines.get(line.checked_sub(1)?)?.trim();
+    let header = |l: &str| -> Option<String> {
+        let l = l.trim();
+        let inner = l.strip_prefix("[[").and_then(|r| r.split("]]").next());
+        let inner = inner.or_else(|| l.strip_prefix('[').and_then(|r| r.split(']').next()))?;
+        Some(inner.trim().replace(['"', '\'', ' '], ""))
+    };
+    if here.starts_with('[') {
+        return header(here);
+    }
+    let (key, _) = here.split_once('=')?;
+    let key = key.trim().replace(['"', '\'', ' '], "");
+    if key.is_empty() {
+        return None;
+    }
+    let section = lines[..line - 1]
+        .iter()
+        .rev()
+        .find(|l| l.trim_start().starts_with('['))
+        .and_then(|l| header(l));
+    Some(match section {
+        Some(s) if !s.is_empty() => format!("{s}.{key}"),
+        _ => key,
+    })
 }
 
 /// Byte offset to 1-based line.
