@@ -278,7 +278,7 @@ def scene_phase(a, rng, work, ph, budget):
         if f:
             keep = os.path.join(work, f"finding_{n}.toml")
             shutil.copy(path, keep)
-            ph.finding(f, cmd[:3] + [keep] + cmd[4:], err)
+            ph.finding(f, cmd[:3] + [keep] + cmd[4:], f"{os.path.basename(sc)}\n{err}")
         shutil.rmtree(out, ignore_errors=True)
 
 
@@ -771,7 +771,15 @@ def inspect_outputs(out):
                 problems.append(("incomplete-output", rel))
     for line in non_finite_outputs(out):
         problems.append(("non-finite output", line))
-    return problems
+    return grouped(problems)
+
+
+def grouped(problems):
+    """(kind, "a, b, c"): the problems of one case, one per kind."""
+    by = {}
+    for k, d in problems:
+        by.setdefault(k, []).append(d)
+    return [(k, ", ".join(v)) for k, v in by.items()]
 
 
 def mount_tmpfs(d, size):
@@ -797,6 +805,8 @@ FULL_DISK_RUNS = [
 ]
 SIZES = ["64k", "256k", "1M"]
 LONG_RUN = "oden_hollow_cylinder.toml"
+# Rolling on past steady state, for about a minute on one core: still running when signalled.
+LONG_SETS = ["--set", "time.stop_at_steady=false", "--set", "time.t_end=10"]
 
 
 def full_disk(a, work, ph, budget):
@@ -900,7 +910,7 @@ def readable(out):
                 n = rows[0].count(b",")
                 if any(r.count(b",") != n for r in rows[1:-2] if not r.startswith(b"#")):
                     problems.append(("incomplete-output", rel))
-    return problems + [("non-finite output", l) for l in non_finite_outputs(out)]
+    return grouped(problems + [("non-finite output", l) for l in non_finite_outputs(out)])
 
 
 def start(cmd, a, log):
@@ -914,7 +924,7 @@ def signals(a, rng, work, ph, budget):
             return
         out = os.path.join(work, f"sig_{sig.name}")
         log = out + ".log"
-        cmd = [a.tread, "-q", "run", os.path.join(SCENARIOS, LONG_RUN), "--out", out]
+        cmd = [a.tread, "-q", "run", os.path.join(SCENARIOS, LONG_RUN), "--out", out] + LONG_SETS
         delay = round(rng.uniform(2, 5), 1)
         p = start(cmd, a, log)
         time.sleep(delay)
@@ -949,7 +959,8 @@ def signals(a, rng, work, ph, budget):
             ph.finding(f"killed by {signal.Signals(-rc).name}", shown,
                        f"died of the signal, without cleanup\n{err}")
         elif rc not in ok:
-            ph.finding("wrong-exit", shown, f"exit {rc}, expected {' or '.join(map(str, ok))}\n{err}")
+            ph.finding("wrong-exit", shown,
+                       f"exit {rc}, expected {' or '.join(map(str, ok))}\n{err}")
         if not os.path.exists(os.path.join(out, "summary.json")):
             ph.finding("missing-output", shown, "no summary.json")
         if not sta_finished(out):
@@ -962,7 +973,7 @@ def concurrent(a, work, ph, budget):
     if budget.spent("fault phase, concurrent runs"):
         return
     out = os.path.join(work, "shared_out")
-    cmd = [a.tread, "-q", "run", os.path.join(SCENARIOS, LONG_RUN), "--out", out]
+    cmd = [a.tread, "-q", "run", os.path.join(SCENARIOS, LONG_RUN), "--out", out] + LONG_SETS
     first = start(cmd, a, out + ".first.log")
     try:
         t0 = time.time()
@@ -1048,7 +1059,8 @@ def main():
             kinds[k] = kinds.get(k, 0) + 1
         total_f += len(ph.findings)
         print(f"fuzz: {ph.name}: {ph.cases} cases in {ph.seconds:.0f} s: outcomes "
-              f"{dict(sorted(ph.counts.items()))}; findings {dict(sorted(kinds.items())) or 'none'}")
+              f"{dict(sorted(ph.counts.items()))}; "
+              f"findings {dict(sorted(kinds.items())) or 'none'}")
         for t in ph.notes:
             print(f"fuzz: {ph.name}:   {t}")
     for ph in report:
