@@ -30,8 +30,9 @@ wrong-accept, wrong-refuse, wrong-exit, wrong-message, unnamed-file, wrong-resul
 leftover-tmp, zero-byte, missing-output, incomplete-output, unfinished-sta. Each finding is
 printed with its command line; a summary per phase gives the cases, their outcomes (exit
 statuses) and the findings by kind, then one line of totals; the run exits 1 on any finding.
-The cases depend only on --seed (one random generator per phase); --budget stops starting
-cases once that many seconds are spent and says where it stopped.
+The cases depend only on --seed (one random generator per phase); --budget S shares S seconds
+between the phases (each an equal share of what is left when it starts), stops starting cases
+once a phase's share is spent and says where it stopped.
 
 Usage: fuzz.py [--tread PATH] [--phases scene,mesh,fault] [--budget S] [--seconds N]
                [--cases N] [--timeout S] [--memory MB] [--seed N]
@@ -225,15 +226,21 @@ class Phase:
 
 
 class Budget:
-    """The total time of the run: no new case starts once it is spent (0: no limit)."""
+    """The total time of the run (0: no limit), shared by the phases: each gets an equal share
+    of what is left when it starts. No new case starts once the phase's share is spent."""
 
     def __init__(self, seconds):
-        self.t0, self.seconds, self.stopped = time.time(), seconds, None
+        self.t0, self.seconds, self.stops, self.phase_end = time.time(), seconds, [], None
+
+    def begin(self, phases_left):
+        if self.seconds:
+            left = self.seconds - (time.time() - self.t0)
+            self.phase_end = time.time() + max(left, 0) / phases_left
 
     def spent(self, where):
-        if self.seconds and time.time() - self.t0 >= self.seconds:
-            if self.stopped is None:
-                self.stopped = where
+        if self.seconds and time.time() >= self.phase_end:
+            if not self.stops or self.stops[-1][0] != self.phase_end:
+                self.stops.append((self.phase_end, where))
             return True
         return False
 
@@ -1043,7 +1050,8 @@ def main():
     print(f"fuzz: seed {seed}, phases {','.join(phases)}, timeout {a.timeout} s, memory "
           f"{a.memory} MB{f', budget {a.budget:.0f} s' if a.budget else ''}", flush=True)
     report = []
-    for name in phases:
+    for i, name in enumerate(phases):
+        budget.begin(len(phases) - i)
         ph = Phase(name)
         report.append(ph)
         # One generator per phase: a phase's cases do not depend on which others run.
@@ -1069,8 +1077,8 @@ def main():
             first, _, rest = detail.strip().partition("\n")
             for l in ([first] if first else []) + gist(rest):
                 print(f"    {l}")
-    if budget.stopped:
-        print(f"fuzz: budget of {a.budget:.0f} s spent: stopped before {budget.stopped}")
+    for _, where in budget.stops:
+        print(f"fuzz: budget: the share of the {a.budget:.0f} s was spent before {where}")
     print(f"fuzz: total: {sum(p.cases for p in report)} cases, {total_f} findings in "
           f"{time.time() - budget.t0:.0f} s (seed {seed})")
     if total_f:
