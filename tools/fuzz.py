@@ -820,7 +820,7 @@ def full_disk(a, work, ph, budget):
     mnt = os.path.join(work, "tmpfs")
     why = mount_tmpfs(mnt, "64k")
     if why:
-        ph.note(f"SKIPPED the full-disk cases: {why}")
+        ph.note(f"SKIPPED the full-disk runs and replays: {why}")
         return False
     umount(mnt)
     for scene, extra in FULL_DISK_RUNS:
