@@ -3,33 +3,37 @@
 * scene: the shipped scenes mutated (lines deleted, duplicated, cut, values replaced) and random
   `--set` values, run or checked;
 * mesh: mutants of the shipped Gmsh files (scenarios/footprint_refined.msh,
-  scenarios/two_layer.msh) through `tread check SCENE --set mesh.file="PATH"`, a few accepted
-  ones also through a short `tread run`. The node order of a $Nodes block permuted (each tag
-  with its coordinates) and the node tags renumbered with gaps are the same mesh: they must be
-  accepted, and `tread run` on them must give the original file's summary.json hub loads to
-  1e-9 of the largest. Two node tags swapped (a tangled mesh) must be refused with exit 2 and a
-  message saying "inverted" or "degenerate". Every header count ($PhysicalNames, $Entities,
-  $Nodes, $Elements, a block's count) set to 1e11, 2^62, 2^64, -1 or 0, `/dev/zero` and a
-  2 GiB sparse file must be refused (exit 2). The file written as binary .msh 4.1 must be
-  accepted; truncations (also of the binary file), line deletions and duplications and byte
-  flips may be accepted or refused. A refusal (exit 2) must name the file;
+  scenarios/two_layer.msh) through `tread check SCENE --set mesh.file="PATH"`. The node order
+  of a $Nodes block permuted (each tag keeps its coordinates), the node tags renumbered with
+  gaps, and the file written as binary .msh 4.1 are the same mesh: `check` must accept them and
+  `tread run` on them must give the original file's summary.json hub loads to 1e-9 of the
+  largest (else wrong-refuse, wrong-result). Two node tags swapped (a tangled mesh) must be
+  refused with exit 2 and a message saying "inverted" or "degenerate". Every header count
+  ($PhysicalNames, the four of $Entities and of $Nodes and $Elements, a block's count) set to
+  1e11, 2^62, 2^64, -1 or 0, `/dev/zero` and a 2 GiB sparse file must be refused with exit 2,
+  the last two within 5 s. Truncations (also of the binary file), line deletions and
+  duplications and byte flips may be accepted or refused. A refusal must name the file. Every
+  other mutant `check` accepts is also run (one load step, summary and CSV): a crash, hang or
+  NaN there is a finding, and a refusal by `run` of what had to be refused makes the
+  finding "wrong-accept by check" (`check` does not read what `run` reads);
 * fault: runs into a full disk (tmpfs of 64k, 256k, 1M; skipped with the reason when not root
   or when mount fails): exit 0 or 3, no `*.tmp` file left, no empty *.png/*.json/*.csv/*.vtu,
   and with summary.json saying `converged: true` its outputs (those it lists, else every file
   present) whole, except those its `incomplete_outputs` names; `tread replay` of a run's .mcap
   (and .rrd) into a 64k tmpfs must exit non-zero (skipped when the build has no .rrd
-  support); SIGINT, SIGTERM during a long transient run: exit 130 (SIGTERM: 130 or 143) within
-  30 s, summary.json and a finished run.sta left; SIGKILL: the files left readable (JSON
+  support); SIGINT, SIGTERM 2-5 s into a long transient run: exit 130 (SIGTERM: 130 or 143)
+  within 30 s, summary.json and a finished run.sta left; SIGKILL: the files left readable (JSON
   parses, CSV rows whole but the last, no NaN); a second run into the folder of a running one
   refused with exit 3 and a message naming the folder.
 
 A finding is a panic ("panicked", exit status 101), an abort or any other death by a signal, a
 run past the time limit (a hang), a non-finite number (NaN, inf) in a text output file (CSV,
-JSON, the XML of a VTU, PVD, run.sta), and the mesh and fault phases' expectations above:
+JSON, the XML of a VTU, PVD, run.sta), and a broken expectation of the mesh and fault phases:
 wrong-accept, wrong-refuse, wrong-exit, wrong-message, unnamed-file, wrong-result,
-leftover-tmp, zero-byte, missing-output, incomplete-output, unfinished-sta. Each finding is
-printed with its command line; a summary per phase gives the cases, their outcomes (exit
-statuses) and the findings by kind, then one line of totals; the run exits 1 on any finding.
+slow-refusal, leftover-tmp, zero-byte, missing-output, incomplete-output, unfinished-sta,
+killed by SIGTERM. Each finding is printed with its command line; a summary per phase gives
+the cases, their outcomes (exit statuses) and the findings by kind, then one line of totals;
+the run exits 1 on any finding and keeps the inputs of the findings (the folder is named).
 The cases depend only on --seed (one random generator per phase); --budget S shares S seconds
 between the phases (each an equal share of what is left when it starts), stops starting cases
 once a phase's share is spent and says where it stopped.
@@ -40,7 +44,7 @@ Usage: fuzz.py [--tread PATH] [--phases scene,mesh,fault] [--budget S] [--second
                                                           a sweep file through `tread sweep plan`)
 --cases and --seconds bound the random cases of the scene and mesh phases (each); the mesh
 phase's fixed cases and the fault phase always run, within --budget.
-The run in CI: fuzz.py --cases 25 --budget 240 --seed 1.
+The run in CI: fuzz.py --phases scene,mesh,fault --cases 25 --timeout 60 --budget 240 --seed 1.
 """
 import argparse
 import copy
@@ -629,10 +633,13 @@ def mesh_phase(a, rng, work, ph, budget):
             break
         cmd = check_cmd(a, scene, path)
         # The bounded inputs (/dev/zero, a file past the bound) must be refused quickly.
-        t = min(a.timeout, 30) if path in ("/dev/zero", big) else a.timeout
+        bounded = path in ("/dev/zero", big)
+        t = min(a.timeout, 30) if bounded else a.timeout
+        t1 = time.time()
         kind, out = run_case(cmd, t, limit(a.memory))
         ph.outcome(kind)
         f = judge(kind, out, path, expect)
+        slow(ph, bounded, kind, time.time() - t1, cmd, label)
         if f and f != "wrong-accept":
             ph.finding(f, cmd, f"{label}\n{out}")
             continue
@@ -653,8 +660,10 @@ def mesh_phase(a, rng, work, ph, budget):
                 f'mesh.file="{path}"', "--set", "solver.load_steps=1", "--set",
                 'output.sinks=["summary","csv"]', "--out", o, "--max-memory",
                 f"{a.memory // 2}M"]
+        t1 = time.time()
         rkind, rout = run_case(rcmd, t, limit(a.memory))
         ph.outcome(rkind)
+        slow(ph, bounded, rkind, time.time() - t1, rcmd, label)
         rf = finding_kind(rkind)
         bad = non_finite_outputs(o) if not rf else []
         shutil.rmtree(o, ignore_errors=True)
@@ -666,6 +675,17 @@ def mesh_phase(a, rng, work, ph, budget):
         if rf or bad:
             ph.finding(rf or "non-finite output", rcmd, f"{label}\n" + (rout if rf else bad[0]))
     os.remove(big)
+
+
+BOUNDED_SECONDS = 5
+
+
+def slow(ph, bounded, kind, seconds, cmd, label):
+    """A refusal of an input past the reader's bound (/dev/zero, a 2 GiB file) taking longer
+    than BOUNDED_SECONDS: the file was read (into memory) rather than refused by its size."""
+    if bounded and exit_code(kind) == 2 and seconds > BOUNDED_SECONDS:
+        ph.finding("slow-refusal", cmd, f"{label}: refused after {seconds:.1f} s (more than "
+                   f"{BOUNDED_SECONDS} s; the address space is limited to --memory)")
 
 
 def summary_run(a, scene, path, out):
