@@ -650,7 +650,7 @@ def mesh_phase(a, rng, work, ph, budget):
         if expect == "accept":
             res = same_results(a, scene, path, ref, work, ph, label)
             if res:
-                ph.finding("wrong-result", res[0], f"{label}\n{res[1]}")
+                ph.finding(res[0], res[1], f"{label}\n{res[2]}")
             continue
         # Every other accepted mutant is run (coarse: one load step, summary and CSV only): a
         # file `check` lets through must not crash, hang or give NaN in `run`, and `run`'s
@@ -703,8 +703,8 @@ def summary_run(a, scene, path, out):
 
 
 def same_results(a, scene, path, ref, work, ph, label):
-    """Run `scene` on the mesh `path` and on its own mesh: (cmd, what differs), or None when
-    the hub loads agree to 1e-9 of the largest of them."""
+    """Run `scene` on the mesh `path` and on its own mesh: (finding, cmd, what differs), or
+    None when the hub loads agree to 1e-9 of the largest of them."""
     if scene not in ref:
         cmd, kind, err, s = summary_run(a, scene, None, os.path.join(work, "ref_run"))
         ph.outcome(kind)
@@ -715,8 +715,12 @@ def same_results(a, scene, path, ref, work, ph, label):
         return None
     cmd, kind, err, s = summary_run(a, scene, path, os.path.join(work, "cmp_run"))
     ph.outcome(kind)
+    f = finding_kind(kind)
+    if f or exit_code(kind) == 2:
+        # The same mesh refused by `run` (or crashing it) although `check` accepted it.
+        return f or "wrong-refuse", cmd, f"`tread run`: {kind}\n{err}"
     if s is None or exit_code(kind) != 0:
-        return cmd, f"{kind}, no summary.json\n{err}"
+        return "wrong-result", cmd, f"{kind}, no summary.json\n{err}"
     h0, h1 = hub_loads(ref[scene]), hub_loads(s)
     if not h0:
         ph.note(f"{scene}: summary.json has no hub loads to compare")
@@ -724,8 +728,8 @@ def same_results(a, scene, path, ref, work, ph, label):
     scale = max(abs(v) for v in h0.values()) or 1.0
     bad = [f"{k}: {h0[k]} vs {h1.get(k)}" for k in h0
            if k not in h1 or not abs(h1[k] - h0[k]) <= 1e-9 * max(abs(h0[k]), scale)]
-    return (cmd, "hub loads differ from the original file's: " + "; ".join(bad[:3])) if bad \
-        else None
+    return ("wrong-result", cmd, "hub loads differ from the original file's: "
+            + "; ".join(bad[:3])) if bad else None
 
 
 # ---------------------------------------------------------------------------------------------
