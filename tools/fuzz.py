@@ -764,6 +764,17 @@ def complete(path):
     return len(data) > 0
 
 
+def incomplete_outputs(summary, out):
+    """The files summary.json `incomplete_outputs` names (entries as paths or as objects with
+    a `path`), relative to the output folder."""
+    names = set()
+    for e in (summary or {}).get("incomplete_outputs") or []:
+        p = e.get("path") or e.get("file") if isinstance(e, dict) else e
+        if isinstance(p, str):
+            names.add(os.path.relpath(p, out) if os.path.isabs(p) else p)
+    return names
+
+
 def inspect_outputs(out):
     """(kind, detail) of every problem of an output folder after a run into a full disk."""
     problems = []
@@ -774,7 +785,7 @@ def inspect_outputs(out):
     except (OSError, ValueError) as e:
         problems.append(("incomplete-output", f"summary.json: {e}"))
         summary = None
-    allowed = set((summary or {}).get("incomplete_outputs") or [])
+    allowed = incomplete_outputs(summary, out)
     present = []
     for root, _, files in os.walk(out):
         for f in files:
