@@ -6,7 +6,7 @@
 //! * one full Newton iteration (assembly + factorization + solve + residual norm),
 //! * the ratio iteration / (factorization + solve), and the peak resident memory.
 //!
-//! Every time is the median of `--repeats` runs. Usage (see README):
+//! Every time is the median of `--repeats` runs. Usage (see docs/benchmarks.md):
 //!
 //! ```text
 //! cargo run --release --bin tread-bench -- [--max-dofs N] [--repeats R] [--kind cholesky|lu] [--out DIR]

@@ -393,7 +393,7 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "profile.csv",
-        when: "sink `csv`; spinning, static",
+        when: "sink `csv`; spinning (generated annulus)",
         columns: &[
             k("r", "L", "", "radius of the radial Gauss point"),
             k("u_r", "L", "", "ring average of the radial displacement"),
@@ -404,7 +404,7 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "nodes.csv",
-        when: "sink `csv`",
+        when: "sink `csv`; spinning, static, steady",
         columns: &[
             k("node", N, "", "node index"),
             k("X1", "L", "", "reference position, x1"),
@@ -415,7 +415,7 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "convergence.csv",
-        when: "sink `csv`",
+        when: "sink `csv`; spinning, static",
         columns: &[
             k("step", N, "", "load step"),
             k("load_factor", N, "", "load factor λ of the step"),
@@ -444,7 +444,7 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "contact.csv",
-        when: "sink `csv`; static",
+        when: "sink `csv`; static, transient, steady",
         columns: &[
             k(
                 "theta",

@@ -15,7 +15,7 @@ use std::time::Duration;
 pub enum SweepCommand {
     /// Print the runs of a sweep spec as a table and check every run's scene (nothing runs).
     Plan {
-        /// Sweep spec (TOML), see README.md "Parameter sweeps".
+        /// Sweep spec (TOML), see docs/sweeps.md.
         spec: PathBuf,
     },
     /// Run every run of the sweep that is not done yet, on a backend, then collect.

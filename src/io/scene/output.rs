@@ -29,7 +29,7 @@ keyword_enum! {
 }
 
 keyword_enum! {
-    /// An output sink (`[output] sinks`); see `src/io/record/mod.rs` and README.md (Outputs).
+    /// An output sink (`[output] sinks`); see `src/io/record/mod.rs` and docs/outputs.md.
     Sink, "output sink" {
         /// `summary.json` (always written, also when not listed).
         Summary => "summary",
