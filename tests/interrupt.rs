@@ -294,3 +294,62 @@ fn sigterm_and_sighup_stop_like_ctrl_c() {
         assert!(!m.truncated, "{sig}: the MCAP was finished");
     }
 }
+
+/// `tread replay X.rrd --to F` onto a full disk ends with status 1 and the reason, leaving no
+/// partial file and no temporary. Needs a small tmpfs (root, `mount`); elsewhere the test says it
+/// skipped the case.
+#[cfg(feature = "rerun")]
+#[test]
+fn replay_into_a_full_disk_fails_cleanly() {
+    let dir = tmpdir("replay_full");
+    let f = dir.join("scene.toml");
+    std::fs::write(&f, LONG.replace("load_steps = 40", "load_steps = 4")).unwrap();
+    let out = dir.join("out");
+    let o = tread()
+        .args(["run", f.to_str().unwrap(), "-q", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rrd = out.join("run.rrd");
+    let size = std::fs::metadata(&rrd).unwrap().len();
+    let disk = dir.join("disk");
+    std::fs::create_dir_all(&disk).unwrap();
+    let k = (size / 2048).max(4);
+    let mounted = Command::new("mount")
+        .args(["-t", "tmpfs", "-o", &format!("size={k}k"), "tmpfs"])
+        .arg(&disk)
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !mounted {
+        eprintln!("skipped: cannot mount a small tmpfs here (needs root)");
+        return;
+    }
+    let to = disk.join("y.rrd");
+    let mut child = tread()
+        .args(["replay", rrd.to_str().unwrap(), "--to", to.to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if t0.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let leftovers: Vec<String> = std::fs::read_dir(&disk)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
+    let _ = Command::new("umount").arg(&disk).status();
+    let status = status.expect("the replay into a full disk hung");
+    assert_eq!(status.code(), Some(1), "{status}");
+    assert!(leftovers.is_empty(), "left on the full disk: {leftovers:?}");
+}

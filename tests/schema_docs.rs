@@ -84,6 +84,11 @@ fn validate(schema: &Value, v: &Value, path: &str, errs: &mut Vec<String>) {
                 "maxItems",
                 "uniqueItems",
                 "minimum",
+                "maximum",
+                "const",
+                "if",
+                "then",
+                "else",
                 "oneOf",
             ]
             .contains(&key.as_str()),
@@ -104,6 +109,24 @@ fn validate(schema: &Value, v: &Value, path: &str, errs: &mut Vec<String>) {
     if let (Some(m), Some(x)) = (s.get("minimum").and_then(Value::as_f64), v.as_f64()) {
         if x < m {
             errs.push(format!("{path}: {x} < {m}"));
+        }
+    }
+    if let (Some(m), Some(x)) = (s.get("maximum").and_then(Value::as_f64), v.as_f64()) {
+        if x > m {
+            errs.push(format!("{path}: {x} > {m}"));
+        }
+    }
+    if let Some(c) = s.get("const") {
+        if c != v {
+            errs.push(format!("{path}: {v} is not {c}"));
+        }
+    }
+    if let Some(cond) = s.get("if") {
+        let mut e = Vec::new();
+        validate(cond, v, path, &mut e);
+        let branch = if e.is_empty() { s.get("then") } else { s.get("else") };
+        if let Some(b) = branch {
+            validate(b, v, path, errs);
         }
     }
     if let Some(o) = v.as_object() {
@@ -239,6 +262,23 @@ fn json_schema_accepts_every_scenario_and_rejects_mistakes() {
         errs.iter().any(|e| e.contains(".geometry: required")),
         "{errs:?}"
     );
+    // `[time]` keys of the transient mode: required unless the scene is steady, as the loader
+    // has it; integer bounds as the loader's.
+    let transient = std::fs::read_to_string(root().join("scenarios/rolling_frictionless.toml"))
+        .expect("read");
+    let no_dt: String = transient
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("dt ="))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let errs = errors_of(&schema, &no_dt);
+    assert!(errs.iter().any(|e| e.contains(".time.dt: required")), "{errs:?}");
+    let steady = no_dt.replacen("mode = \"transient\"", "mode = \"steady\"", 1);
+    assert_ne!(steady, no_dt);
+    let errs = errors_of(&schema, &steady);
+    assert!(!errs.iter().any(|e| e.contains(".time.dt")), "{errs:?}");
+    let errs = errors_of(&schema, &text.replacen("\nn_r = ", "\nn_r = 0 # ", 1));
+    assert!(errs.iter().any(|e| e.contains(".mesh.n_r: 0 < 1")), "{errs:?}");
     // `[[material]]`: each entry needs its region.
     let two =
         std::fs::read_to_string(root().join("scenarios/two_layer_cylinder.toml")).expect("read");

@@ -249,17 +249,41 @@ pub fn recover_rrd(src: &Path, dst: &Path) -> Result<ConvertStats, ReplayError> 
             "not a Rerun recording (no readable message)".into(),
         ));
     }
-    let sink = rerun::sink::FileSink::new(dst)
-        .map_err(|e| ReplayError::Write(dst.to_path_buf(), e.to_string()))?;
     st.messages = msgs.len() as u64;
-    for m in msgs {
-        sink.send(m);
+    // Encoded here, on this thread, into a temporary renamed when complete: a write error (a
+    // full disk) is returned at once, and leaves neither a partial file nor the temporary.
+    let tmp = crate::io::output::tmp_path(dst);
+    let written = write_rrd(&tmp, &msgs);
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(ReplayError::Write(dst.to_path_buf(), e));
     }
-    sink.flush_blocking(std::time::Duration::from_secs(600))
-        .map_err(|e| ReplayError::Write(dst.to_path_buf(), e.to_string()))?;
-    // Dropping the sink writes the footer and closes the file.
-    drop(sink);
+    std::fs::rename(&tmp, dst).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        ReplayError::Write(dst.to_path_buf(), e.to_string())
+    })?;
     Ok(st)
+}
+
+/// Encode `msgs` as a complete `.rrd` (stream header, messages, footer) into `path`.
+#[cfg(feature = "rerun")]
+fn write_rrd(path: &Path, msgs: &[rerun::external::re_log_types::LogMsg]) -> Result<(), String> {
+    use rerun::external::re_build_info::CrateVersion;
+    use rerun::external::re_log_encoding::{Encoder, EncodingOptions};
+    let f = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let mut enc = Encoder::new_eager(
+        CrateVersion::LOCAL,
+        EncodingOptions::PROTOBUF_COMPRESSED,
+        std::io::BufWriter::new(f),
+    )
+    .map_err(|e| e.to_string())?;
+    for m in msgs {
+        enc.append(m).map_err(|e| e.to_string())?;
+    }
+    enc.finish().map_err(|e| e.to_string())?;
+    let w = enc.into_inner().map_err(|e| e.to_string())?;
+    let f = w.into_inner().map_err(|e| e.error().to_string())?;
+    f.sync_all().map_err(|e| e.to_string())
 }
 
 /// See the `rerun` build's docs: here the file is copied.
