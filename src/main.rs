@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use tread::app::{self, RunOptions};
+use tread::driver::compare::CompareTolerances;
 use tread::io::output::tidy_numbers;
 use tread::io::Scene;
 
@@ -23,7 +24,14 @@ const MAIN_JOB_SETTINGS: [&str; 3] = ["mesh.n_r=8", "mesh.n_theta=128", "time.st
 #[command(
     name = "tread",
     version,
-    about = "Rolling-contact finite elements for a hyperelastic hollow cylinder (plane strain)"
+    about = "Rolling-contact finite elements for a hyperelastic hollow cylinder (plane strain)",
+    long_about = "Rolling-contact finite elements for a hyperelastic hollow cylinder (plane strain).\n\n\
+        Without a command: the default scene (scenarios/oden_hollow_cylinder.toml on an 8 × 128 \
+        mesh) runs in both modes and is compared, as `tread compare` does.",
+    after_help = "Exit status: 0 success; 1 the solve failed; 2 invalid scene or arguments, or an \
+        unsupported request; 3 an output could not be written; 4 (compare, and tread without a \
+        command) both modes ran but the steady solution is not validated against the transient \
+        (a quantity outside its tolerance, or the transient run not steady); 130 interrupted."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -66,7 +74,9 @@ enum Command {
     },
     /// Run a rolling scene in both modes (transient until steady, then steady) and compare
     /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png,
-    /// with each mode's own outputs in OUT/transient/ and OUT/steady/.
+    /// with each mode's own outputs in OUT/transient/ and OUT/steady/. Each quantity is judged
+    /// against its tolerance; the last line says whether the steady solution is validated
+    /// against the transient, and the exit status is 4 when it is not.
     Compare {
         /// Scene file (TOML) with [time] (for the transient run), see scenarios/README.md.
         scene: PathBuf,
@@ -78,6 +88,22 @@ enum Command {
         set: Vec<String>,
         #[arg(short, long)]
         verbose: bool,
+        /// Tolerance of the hub force components, relative to |F_steady| [default: 0.01].
+        #[arg(long, value_name = "REL")]
+        force_tol: Option<f64>,
+        /// Tolerance of the hub torque, relative to |T_steady| (to |F_steady| Ro when the
+        /// torque is below 1e-3 of that) [default: 0.02].
+        #[arg(long, value_name = "REL")]
+        torque_tol: Option<f64>,
+        /// Tolerance of the referential displacement field, relative L2 [default: 0.01].
+        #[arg(long, value_name = "REL")]
+        field_tol: Option<f64>,
+        /// Tolerance of the contact patch ends, in surface node spacings [default: 1].
+        #[arg(long, value_name = "SPACINGS")]
+        contact_tol: Option<f64>,
+        /// Tolerance of the peak pressure, relative to the steady peak [default: 0.05].
+        #[arg(long, value_name = "REL")]
+        pressure_tol: Option<f64>,
     },
     /// Critical speeds of the steady operator (standing waves): OUT/critical.json with
     /// `omega_crit` (rad/s), `n_star` and the crossing speed of every wave number (spinning
@@ -381,13 +407,13 @@ fn run_with(
     out: Option<PathBuf>,
     verbose: bool,
     quiet: bool,
-    compare: bool,
+    compare: Option<CompareTolerances>,
     dump_matrix: Option<&Path>,
 ) -> ExitCode {
     let started = std::time::Instant::now();
     let out_dir = out.unwrap_or_else(|| {
         let d = app::default_out_dir(&scene);
-        if compare {
+        if compare.is_some() {
             d.with_file_name(format!("{}_compare", scene.scene.name))
         } else {
             d
@@ -427,8 +453,8 @@ fn run_with(
         verbose,
         quiet,
     };
-    let result = if compare {
-        tread::driver::compare::run(&scene, &opts)
+    let result = if let Some(tol) = &compare {
+        tread::driver::compare::run_with_tolerances(&scene, &opts, tol)
     } else if let Some(p) = dump_matrix {
         tread::driver::steady_run::run_with_dump(&scene, &opts, Some(p))
     } else {
@@ -437,7 +463,7 @@ fn run_with(
     match result {
         Ok(o) => {
             if !quiet {
-                if compare {
+                if compare.is_some() {
                     say(&format!(
                         "compared the transient and steady modes: dofs = {}",
                         o.typed.dofs
@@ -453,7 +479,15 @@ fn run_with(
                 "results written to {}",
                 o.out_dir.join("summary.json").display()
             ));
-            ExitCode::SUCCESS
+            match o.typed.compare() {
+                Some(c) if !c.validated => {
+                    if quiet {
+                        say(&c.verdict);
+                    }
+                    ExitCode::from(tread::driver::compare::NOT_VALIDATED_EXIT)
+                }
+                _ => ExitCode::SUCCESS,
+            }
         }
         Err(e) => {
             eprintln!("tread: error: {}", tidy_numbers(&e.to_string()));
@@ -520,7 +554,14 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                          (time.steady_tol; the scene's own is 1e-3)"
                     );
                 }
-                run_with(scene, None, false, cli.quiet, true, None)
+                run_with(
+                    scene,
+                    None,
+                    false,
+                    cli.quiet,
+                    Some(CompareTolerances::default()),
+                    None,
+                )
             }
             Err(e) => {
                 eprintln!("tread: error in the embedded default scene:\n{e}");
@@ -543,9 +584,9 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                 ExitCode::from(2)
             }
             Ok(s) if threads == 0 && s.solver.threads > 0 => app::in_pool(s.solver.threads, || {
-                run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref())
+                run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref())
             }),
-            Ok(s) => run_with(s, out, verbose, cli.quiet, false, dump_matrix.as_deref()),
+            Ok(s) => run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref()),
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                 ExitCode::from(2)
@@ -556,8 +597,23 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             out,
             set,
             verbose,
+            force_tol,
+            torque_tol,
+            field_tol,
+            contact_tol,
+            pressure_tol,
         }) => match load(&scene, &set) {
-            Ok(s) => run_with(s, out, verbose, cli.quiet, true, None),
+            Ok(s) => {
+                let d = CompareTolerances::default();
+                let tol = CompareTolerances {
+                    force: force_tol.unwrap_or(d.force),
+                    torque: torque_tol.unwrap_or(d.torque),
+                    field: field_tol.unwrap_or(d.field),
+                    contact_spacings: contact_tol.unwrap_or(d.contact_spacings),
+                    pressure: pressure_tol.unwrap_or(d.pressure),
+                };
+                run_with(s, out, verbose, cli.quiet, Some(tol), None)
+            }
             Err(e) => {
                 eprintln!("tread: invalid scene:\n{e}");
                 ExitCode::from(2)

@@ -188,3 +188,87 @@ fn continuation_passes_the_critical_speed_of_a_small_mesh() {
     });
     assert!(hit, "no crossing reported near {wc}: {special:?}");
 }
+
+/// A rolling search whose steady branch ends before the search end says where and why it
+/// ended and how the smallest singular value went, and never claims the range it did not
+/// cover (the undamped frictionless scene: Newton fails just past the critical speed).
+#[test]
+fn rolling_search_states_where_and_why_the_branch_ended() {
+    let scene = Scene::from_toml_str(
+        include_str!("../scenarios/oden_steady_sweep.toml"),
+        "critical_rolling",
+        &[
+            "contact.b_n=0".into(),
+            "time.strain_rate_damping=0".into(),
+            "mesh.n_theta=32".into(),
+        ],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let r = critical::run(
+        &scene,
+        &CriticalOptions {
+            n_max: None,
+            n_min: None,
+            omega_max: None,
+            samples: 12,
+            no_contact: false,
+            verbose: false,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let h = critical::headline(&r);
+    println!("{h}");
+    assert_eq!(r.kind, "rolling");
+    let last = r.sweep.last().unwrap().omega;
+    if r.end_reason == "newton_failed" {
+        assert!(r.omega_covered < r.omega_max, "{h}");
+        assert_eq!(r.omega_covered, last);
+        assert!(h.contains("the steady branch ended at"), "{h}");
+        assert!(!h.contains(&format!("below {:.4}", r.omega_max)), "{h}");
+    } else {
+        assert_eq!(r.end_reason, "target_reached");
+        assert!(h.contains("followed to the end of the search"), "{h}");
+    }
+    assert!(h.contains("smallest singular value of the tangent"), "{h}");
+    let v = serde_json::to_value(&r).unwrap();
+    assert!(v["end_reason"].is_string() && v["omega_covered"].is_number());
+}
+
+/// The headline of a report whose branch ended early (the README's undamped example on
+/// 3 × 64 cells: σ_min from 2.2 at 10 rad/s to 0.036 at 46.68 rad/s, search end 65.75 rad/s).
+#[test]
+fn headline_of_an_early_branch_end_names_it_and_the_singular_value_trend() {
+    let row = |omega: f64, sigma_min: f64| critical::SweepRow {
+        omega,
+        sigma_min,
+        n_dominant: 30,
+        negative_eigenvalues: None,
+        hub_force_x: 0.0,
+        hub_force_y: -100.0,
+    };
+    let r = critical::CriticalReport {
+        omega_crit: None,
+        n_star: None,
+        crossings: vec![],
+        kind: "rolling",
+        density: RHO,
+        shear_modulus: 200.0,
+        omega_rayleigh_estimate: 41.1,
+        omega_max: 65.7547,
+        n_resolved: 64,
+        not_crossed: vec![],
+        unresolved_crossings: vec![],
+        full_operator: None,
+        sweep: vec![row(10.0, 2.2), row(30.0, 1.1), row(46.68, 0.036)],
+        branch_end: Some("Newton did not converge at 46.69 rad/s".into()),
+        end_reason: "newton_failed",
+        omega_covered: 46.68,
+        hermitian_defect: 0.0,
+        wall_time_s: 1.0,
+    };
+    let h = critical::headline(&r);
+    assert!(!h.contains("below 65.7547"), "{h}");
+    assert!(h.contains("between 10.0000 and 46.6800 rad/s"), "{h}");
+    assert!(h.contains("ended at 46.6800 rad/s, short of the 65.7547 rad/s searched"), "{h}");
+    assert!(h.contains("2.20 at 10.0000 rad/s, 0.0360 at 46.6800 rad/s"), "{h}");
+}

@@ -331,10 +331,11 @@ fn no_arguments_compares_the_default_scene_in_both_modes() {
     // The converged 8 × 128 mesh (17 × 256 nodes, the hub ring fixed).
     assert!(stdout.contains("dofs = 8192"), "{stdout}");
     for q in [
-        "hub_force_x",
-        "hub_force_y",
-        "hub_torque",
-        "wall_time_s",
+        "hub_force_x [lbf/in]",
+        "hub_force_y [lbf/in]",
+        "hub_torque [lbf·in/in]",
+        "steady solution validated against the transient:",
+        "wall time: transient",
         "files:",
     ] {
         assert!(stdout.contains(q), "missing {q}: {stdout}");
@@ -354,6 +355,12 @@ fn no_arguments_compares_the_default_scene_in_both_modes() {
     .unwrap_or_default();
     let c = &s["results"]["compare"];
     assert!(f(&c["speedup"]) > 1.0, "{c}");
+    assert_eq!(c["validated"].as_bool(), Some(true), "{c}");
+    // Wall times are a line of their own, not a row of the comparison table.
+    assert!(
+        stdout.lines().all(|l| !l.starts_with("wall_time")),
+        "{stdout}"
+    );
     // The transient runs to time.steady_tol = 1e-4, so the two modes agree closely (measured:
     // field 9.5e-4, hub forces 9.5e-5 and 1.4e-4, torque 4.3e-4; with the scene's 1e-3 the
     // field is 5.7e-3 apart).

@@ -253,18 +253,26 @@ fn real_main() -> Result<(), String> {
             Err(e) => eprintln!("peer comparison skipped: {e}"),
         }
     }
-    // CSV.
-    let mut csv = String::from("series,step,n,rel_error,cumulative_time_s,step_time_s\n");
-    for s in &series {
-        for (i, r) in s.steps.iter().enumerate() {
-            csv.push_str(&format!(
-                "{},{i},{},{:.6e},{:.6},{:.6}\n",
-                s.name, r.0, r.1, r.2, r.3
-            ));
-        }
-    }
+    // CSV (the series names contain commas: the csv crate quotes them).
+    let rows = series.iter().flat_map(|s| {
+        s.steps.iter().enumerate().map(|(i, r)| {
+            vec![
+                s.name.clone(),
+                i.to_string(),
+                r.0.to_string(),
+                format!("{:.6e}", r.1),
+                format!("{:.6}", r.2),
+                format!("{:.6}", r.3),
+            ]
+        })
+    });
     let csv_path = out.join("adapt.csv");
-    std::fs::write(&csv_path, csv).map_err(|e| format!("{}: {e}", csv_path.display()))?;
+    tread::io::output::write_text_csv(
+        &csv_path,
+        &["series", "step", "n", "rel_error", "cumulative_time_s", "step_time_s"],
+        rows,
+    )
+    .map_err(|e| e.to_string())?;
     plot(&out.join("adapt_dofs.png"), &series, false)?;
     plot(&out.join("adapt_time.png"), &series, true)?;
     println!("| series | steps | final N | final rel. error | total time [s] | time to {t1:.0e} | time to {t2:.0e} | mean time per step [s] |");

@@ -199,7 +199,7 @@ fn real_main() -> Result<(), String> {
     println!();
 
     // 3. Table.
-    let mut csv = String::from("method,dofs,hub_force_y,rel_error,wall_s\n");
+    let mut csv_rows = Vec::new();
     println!("| method | equations | F_y | relative error | wall time (s) |");
     println!("|---|---|---|---|---|");
     for r in &rows {
@@ -208,12 +208,20 @@ fn real_main() -> Result<(), String> {
             "| {} | {} | {:.10e} | {e:.2e} | {:.3} |",
             r.method, r.dofs, r.fy, r.time
         );
-        csv += &format!(
-            "{},{},{:.15e},{e:.6e},{:.6}\n",
-            r.method, r.dofs, r.fy, r.time
-        );
+        csv_rows.push(vec![
+            r.method.to_string(),
+            r.dofs.to_string(),
+            format!("{:.15e}", r.fy),
+            format!("{e:.6e}"),
+            format!("{:.6}", r.time),
+        ]);
     }
-    std::fs::write(out.join("adapt_indentation.csv"), csv).map_err(|e| e.to_string())?;
+    tread::io::output::write_text_csv(
+        &out.join("adapt_indentation.csv"),
+        &["method", "dofs", "hub_force_y", "rel_error", "wall_s"],
+        csv_rows,
+    )
+    .map_err(|e| e.to_string())?;
     println!();
     for target in [1e-3, 1e-4, 1e-5] {
         let mut methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();

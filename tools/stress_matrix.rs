@@ -754,39 +754,44 @@ fn viscous_diagnostic(summary: &serde_json::Value) -> String {
     s
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 fn md_cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
 fn write_reports(rows: &[Row], out: &Path, total_wall: f64) -> std::io::Result<String> {
-    let mut csv = String::from(
-        "factor,value,scene,mode,outcome,class,message,wall_time_s,nan_in_outputs,newton_iterations,viscous_energy\n",
-    );
-    for r in rows {
-        csv += &format!(
-            "{},{},{},{},{},{},{},{:.3},{},{},{}\n",
-            csv_field(&r.factor),
-            csv_field(&r.value),
-            r.scene,
-            r.mode,
-            r.outcome,
-            r.class,
-            csv_field(&r.message),
-            r.wall,
-            r.nan,
-            r.newton,
-            csv_field(&r.viscous)
-        );
-    }
-    std::fs::write(out.join("stress_matrix.csv"), csv)?;
+    let rows_csv = rows.iter().map(|r| {
+        vec![
+            r.factor.to_string(),
+            r.value.to_string(),
+            r.scene.to_string(),
+            r.mode.to_string(),
+            r.outcome.to_string(),
+            r.class.to_string(),
+            r.message.to_string(),
+            format!("{:.3}", r.wall),
+            r.nan.to_string(),
+            r.newton.to_string(),
+            r.viscous.to_string(),
+        ]
+    });
+    tread::io::output::write_text_csv(
+        &out.join("stress_matrix.csv"),
+        &[
+            "factor",
+            "value",
+            "scene",
+            "mode",
+            "outcome",
+            "class",
+            "message",
+            "wall_time_s",
+            "nan_in_outputs",
+            "newton_iterations",
+            "viscous_energy",
+        ],
+        rows_csv,
+    )
+    .map_err(|e| std::io::Error::other(e.to_string()))?;
 
     let mut md = String::from("# Stress matrix\n\n");
     md += "| factor | value | scene | mode | outcome | class | wall (s) | NaN/inf in outputs | Newton its | viscous energy | message |\n";

@@ -50,7 +50,6 @@ use crate::physics::{equilibrated, estimate};
 use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
 use crate::solver::stepping::{LoadedSystem, StepReport};
 use crate::solver::{Newton, NonlinearSystem, SolveError};
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -635,33 +634,45 @@ fn coarsening_candidates(
 /// `error_indicator` per cell).
 pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(), OutputError> {
     ensure_dir(dir)?;
-    let mut csv = String::from(
-        "step,cells,dofs,hanging_nodes,max_level,degree2_cells,coarsened,estimate,relative_estimate,hub_force_x,hub_force_y,hub_torque,penetration,newton_iterations,wall_step_s,wall_total_s\n",
-    );
-    for s in steps {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{:.10e},{:.10e},{:.12e},{:.12e},{:.12e},{:.12e},{},{:.6},{:.6}",
-            s.step,
-            s.cells,
-            s.dofs,
-            s.hanging_nodes,
-            s.max_level,
-            s.degree2_cells,
-            s.coarsened,
-            s.estimate,
-            s.relative_estimate,
-            s.hub_force_x,
-            s.hub_force_y,
-            s.hub_torque,
-            s.penetration,
-            s.newton_iterations,
-            s.wall_step_s,
-            s.wall_total_s
-        );
-    }
-    let path = dir.join("adapt.csv");
-    std::fs::write(&path, csv).map_err(|source| OutputError { path, source })?;
+    let header = [
+        "step",
+        "cells",
+        "dofs",
+        "hanging_nodes",
+        "max_level",
+        "degree2_cells",
+        "coarsened",
+        "estimate",
+        "relative_estimate",
+        "hub_force_x",
+        "hub_force_y",
+        "hub_torque",
+        "penetration",
+        "newton_iterations",
+        "wall_step_s",
+        "wall_total_s",
+    ];
+    let rows = steps.iter().map(|s| {
+        vec![
+            s.step.to_string(),
+            s.cells.to_string(),
+            s.dofs.to_string(),
+            s.hanging_nodes.to_string(),
+            s.max_level.to_string(),
+            s.degree2_cells.to_string(),
+            s.coarsened.to_string(),
+            format!("{:.10e}", s.estimate),
+            format!("{:.10e}", s.relative_estimate),
+            format!("{:.12e}", s.hub_force_x),
+            format!("{:.12e}", s.hub_force_y),
+            format!("{:.12e}", s.hub_torque),
+            format!("{:.12e}", s.penetration),
+            s.newton_iterations.to_string(),
+            format!("{:.6}", s.wall_step_s),
+            format!("{:.6}", s.wall_total_s),
+        ]
+    });
+    crate::io::output::write_text_csv(&dir.join("adapt.csv"), &header, rows)?;
     let json = serde_json::json!({
         "options": {
             "steps": opts.steps,

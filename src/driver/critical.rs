@@ -168,6 +168,13 @@ pub struct CriticalReport {
     pub sweep: Vec<SweepRow>,
     /// Rolling: where the branch could not be continued (Newton failure), if it stopped.
     pub branch_end: Option<String>,
+    /// Why the search ended: `target_reached` (the search end `omega_max` was covered; the
+    /// spinning search always covers it) or `newton_failed` (rolling: Newton failed at the next
+    /// speed even after the speed step was halved nine times, to 1/512 of the sampling step).
+    pub end_reason: &'static str,
+    /// Highest speed the search covered (rad/s): `omega_max`, or the last converged speed
+    /// of the rolling branch.
+    pub omega_covered: f64,
     /// Largest |K_n − K_nᴴ| / max |K_n| met (Hermitian check of the reduction).
     pub hermitian_defect: f64,
     pub wall_time_s: f64,
@@ -607,11 +614,14 @@ pub fn run(scene: &Scene, opts: &CriticalOptions) -> Result<CriticalReport, AppE
         full_operator: None,
         sweep: Vec::new(),
         branch_end: None,
+        end_reason: "target_reached",
+        omega_covered: f64::NAN,
         hermitian_defect: 0.0,
         wall_time_s: 0.0,
     };
     if spinning {
         spinning_critical(&scene, opts, &mut st, rg, &mut report)?;
+        report.omega_covered = report.omega_max;
     } else {
         rolling_critical(&scene, opts, &mut st, &mut report)?;
     }
@@ -809,8 +819,9 @@ fn rolling_critical(
                 continue;
             }
             report.branch_end = Some(format!(
-                "Newton did not converge at {w:.6} rad/s ({e}); the steady branch ends between {wl:.6} and {w:.6} rad/s"
+                "Newton did not converge at {w:.6} rad/s ({e}) with the speed step halved to {step:.3e} rad/s; the steady branch ends between {wl:.6} and {w:.6} rad/s"
             ));
+            report.end_reason = "newton_failed";
             break;
         }
         let (s, neg) = probe
@@ -840,6 +851,11 @@ fn rolling_critical(
         }
         w += step;
     }
+    report.omega_covered = if report.end_reason == "target_reached" {
+        omega_max
+    } else {
+        om.last().copied().unwrap_or(w0)
+    };
     let s_ref = sig.first().copied().unwrap_or(f64::NAN);
     // Symmetric tangent (no friction, no damping): a change of the inertia between two
     // speeds brackets a crossing; located by bisection on the negative-eigenvalue count.
@@ -991,17 +1007,77 @@ pub fn write(report: &CriticalReport, dir: &std::path::Path) -> Result<(), AppEr
 
 /// One-line summary for the terminal.
 pub fn headline(r: &CriticalReport) -> String {
-    match (r.omega_crit, r.n_star) {
-        (Some(w), Some(n)) => format!(
+    let found = match (r.omega_crit, r.n_star) {
+        (Some(w), Some(n)) => Some(format!(
             "critical speed ({}): {w:.6} rad/s ({:.2} rpm), wave number n* = {n}; {} crossings, Rayleigh estimate {:.4} rad/s",
             r.kind,
             w * 30.0 / PI,
             r.crossings.len(),
             r.omega_rayleigh_estimate
+        )),
+        _ => None,
+    };
+    if r.kind != "rolling" {
+        return found.unwrap_or_else(|| {
+            format!(
+                "no singular point below {:.4} rad/s ({})",
+                r.omega_max, r.kind
+            )
+        });
+    }
+    let (Some(first), Some(last)) = (r.sweep.first(), r.sweep.last()) else {
+        return found.unwrap_or_else(|| "no speed of the rolling branch converged".into());
+    };
+    let covered = r.omega_covered;
+    let search = match found {
+        Some(f) => f,
+        None => format!(
+            "no singular point found between {:.4} and {:.4} rad/s (rolling)",
+            first.omega, covered
         ),
-        _ => format!(
-            "no singular point below {:.4} rad/s ({})",
-            r.omega_max, r.kind
-        ),
+    };
+    let end = if r.end_reason == "newton_failed" {
+        format!(
+            "the steady branch ended at {:.4} rad/s, short of the {:.4} rad/s searched: Newton did not converge at the next speed even with the speed step halved to 1/512 of the sampling step",
+            covered, r.omega_max
+        )
+    } else {
+        format!("the branch was followed to the end of the search, {:.4} rad/s", r.omega_max)
+    };
+    let low = r
+        .sweep
+        .iter()
+        .min_by(|a, b| a.sigma_min.total_cmp(&b.sigma_min))
+        .unwrap_or(last);
+    let trend = format!(
+        "smallest singular value of the tangent {} at {:.4} rad/s, {} at {:.4} rad/s{}",
+        sig3(first.sigma_min),
+        first.omega,
+        sig3(last.sigma_min),
+        last.omega,
+        if low.omega != last.omega && low.omega != first.omega {
+            format!(" (lowest {} at {:.4} rad/s)", sig3(low.sigma_min), low.omega)
+        } else {
+            String::new()
+        }
+    );
+    let falling = last.sigma_min < 0.1 * first.sigma_min && r.end_reason == "newton_failed";
+    format!(
+        "{search}; {end}; {trend}{}",
+        if falling {
+            ": it fell by a factor of more than 10 toward the end of the branch, where the tangent is close to singular"
+        } else {
+            ""
+        }
+    )
+}
+
+/// Three significant digits.
+fn sig3(x: f64) -> String {
+    if x.is_finite() && x != 0.0 && (1e-3..1e5).contains(&x.abs()) {
+        let dec = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+        format!("{x:.dec$}")
+    } else {
+        format!("{x:.2e}")
     }
 }

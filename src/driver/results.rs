@@ -634,6 +634,40 @@ pub struct CompareResults {
     pub transient_steady: bool,
     pub transient_time_to_steady: Option<f64>,
     pub transient_steps: usize,
+    /// Every judged quantity: values, units, differences and the tolerance it is held to.
+    pub quantities: Vec<CompareQuantity>,
+    /// Whether every quantity is within its tolerance and the transient run reached its
+    /// steady state.
+    pub validated: bool,
+    /// One sentence: "steady solution validated against the transient: …" or "not
+    /// validated: …".
+    pub verdict: String,
+}
+
+/// One quantity of `results.compare.quantities`: |Δq| = |q_t − q_s| over the scale it is
+/// relative to, against its tolerance.
+#[derive(Clone, Debug, Serialize)]
+pub struct CompareQuantity {
+    /// Key (`hub_force_x`, `hub_force_y`, `hub_torque`, `field_l2`, `contact_x_min`,
+    /// `contact_x_max`, `max_pressure`).
+    pub name: String,
+    /// Unit in the scene's system (`[scene] units`), e.g. `lbf/in`; `1` when dimensionless.
+    pub unit: String,
+    /// Values of both modes (null for the field, compared as a whole).
+    pub transient: Option<f64>,
+    pub steady: Option<f64>,
+    /// |q_t − q_s| (unit of the quantity; the field: ‖u_t − u_s‖_L2 / ‖u_s‖_L2).
+    pub abs_diff: f64,
+    /// abs_diff / scale.
+    pub rel_diff: f64,
+    /// What the difference is relative to, e.g. `|F_steady|`, `|hub_torque_steady|`,
+    /// `|F_steady| Ro`, `steady patch length`.
+    pub relative_to: String,
+    /// Its value (unit of the quantity).
+    pub scale: f64,
+    /// Largest accepted rel_diff.
+    pub tolerance: f64,
+    pub within: bool,
 }
 
 /// `results` of `tread compare` (one key, `compare`).

@@ -1431,23 +1431,19 @@ pub fn run_with_dump(
             }
         }
         if !samples.is_empty() {
-            let tn: Vec<(f64, f64)> = samples
-                .iter()
-                .filter(|s| s.t_n > 0.0)
-                .map(|s| (s.x1, s.t_n))
-                .collect();
-            let tt: Vec<(f64, f64)> = samples
-                .iter()
-                .filter(|s| s.t_n > 0.0)
-                .map(|s| (s.x1, s.t_t))
-                .collect();
+            let (tn, tt) = record::png::contact_curves(samples.iter().filter(|s| s.t_n > 0.0));
             if !tn.is_empty() {
+                let u = record::png::Units::parse(&scene.scene.units);
                 if let Err(e) = record::png::line_chart(
                     &dir.join("contact.png"),
-                    "Steady contact tractions",
-                    "x1",
-                    "traction per unit reference length",
-                    &[("t_n", &tn), ("t_t", &tt)],
+                    &format!(
+                        "Steady contact tractions at omega = {} rad/{}",
+                        st.omega(),
+                        u.time
+                    ),
+                    &record::png::with_unit("x1", &u.length),
+                    &record::png::with_unit("traction", &u.stress()),
+                    &[("t_n", &tn), ("t_T", &tt)],
                 ) {
                     eprintln!("tread: warning: contact.png: {e}");
                 }

@@ -128,17 +128,28 @@ pub fn tidy_numbers(text: &str) -> String {
     out
 }
 
-/// Write a CSV with a header; non-finite values are written as empty fields (never "NaN").
-/// Numbers are written by [`fmt_num`] (round trip). The file is written under a temporary name
-/// and renamed when complete, so a full disk or a crash never leaves a truncated table under
-/// its final name.
-pub fn write_csv(
+/// One CSV line (with its line break) of `fields`, quoted by the csv crate where a field
+/// needs it (RFC 4180: a comma, a quote or a line break).
+pub fn csv_line<S: AsRef<str>>(fields: &[S]) -> String {
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(fields.iter().map(|f| f.as_ref()));
+    let bytes = w.into_inner().unwrap_or_default();
+    String::from_utf8(bytes).unwrap_or_default()
+}
+
+/// Write a CSV of text fields with a header through the csv crate (fields quoted where they
+/// need it), under a temporary name renamed when complete (a full disk or a crash never
+/// leaves a truncated table under the final name).
+pub fn write_text_csv<S: AsRef<str>>(
     path: &Path,
     header: &[&str],
-    rows: impl Iterator<Item = Vec<f64>>,
+    rows: impl IntoIterator<Item = Vec<S>>,
 ) -> Result<(), OutputError> {
     let tmp = tmp_path(path);
-    let written = write_csv_to(&tmp, header, rows);
+    let written = write_text_csv_to(&tmp, header, rows);
     if written.is_err() {
         // A full disk: no partial temporary left behind.
         let _ = std::fs::remove_file(&tmp);
@@ -147,33 +158,83 @@ pub fn write_csv(
     std::fs::rename(&tmp, path).map_err(wrap(path))
 }
 
-fn write_csv_to(
+fn write_text_csv_to<S: AsRef<str>>(
     tmp: &Path,
     header: &[&str],
-    rows: impl Iterator<Item = Vec<f64>>,
+    rows: impl IntoIterator<Item = Vec<S>>,
 ) -> Result<(), OutputError> {
     let tmp = tmp.to_path_buf();
     let f = std::fs::File::create(&tmp).map_err(wrap(&tmp))?;
-    let mut w = std::io::BufWriter::new(f);
-    writeln!(w, "{}", header.join(",")).map_err(wrap(&tmp))?;
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .flexible(true)
+        .from_writer(std::io::BufWriter::new(f));
+    let io = |e: csv::Error| match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        k => std::io::Error::other(format!("{k:?}")),
+    };
+    w.write_record(header).map_err(io).map_err(wrap(&tmp))?;
     for row in rows {
-        let cells: Vec<String> = row
-            .iter()
-            .map(|v| {
-                if v.is_finite() {
-                    fmt_num(*v)
-                } else {
-                    String::new()
-                }
-            })
-            .collect();
-        writeln!(w, "{}", cells.join(",")).map_err(wrap(&tmp))?;
+        w.write_record(row.iter().map(|f| f.as_ref()))
+            .map_err(io)
+            .map_err(wrap(&tmp))?;
     }
-    let f = w.into_inner().map_err(|e| OutputError {
-        path: tmp.clone(),
-        source: e.into_error(),
-    })?;
+    let f = w
+        .into_inner()
+        .map_err(|e| OutputError {
+            path: tmp.clone(),
+            source: std::io::Error::other(e.to_string()),
+        })?
+        .into_inner()
+        .map_err(|e| OutputError {
+            path: tmp.clone(),
+            source: e.into_error(),
+        })?;
     f.sync_all().map_err(wrap(&tmp))
+}
+
+/// Read a CSV (header and rows of text fields) through the csv crate.
+pub fn read_text_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>), String> {
+    let mut r = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_path(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let header = r
+        .headers()
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .iter()
+        .map(|s| s.trim().to_string())
+        .collect();
+    let mut rows = Vec::new();
+    for rec in r.records() {
+        let rec = rec.map_err(|e| format!("{}: {e}", path.display()))?;
+        rows.push(rec.iter().map(str::to_string).collect());
+    }
+    Ok((header, rows))
+}
+
+/// Write a CSV of numbers with a header ([`write_text_csv`]); non-finite values are written as
+/// empty fields (never "NaN"). Numbers are written by [`fmt_num`] (round trip).
+pub fn write_csv(
+    path: &Path,
+    header: &[&str],
+    rows: impl Iterator<Item = Vec<f64>>,
+) -> Result<(), OutputError> {
+    write_text_csv(
+        path,
+        header,
+        rows.map(|row| {
+            row.iter()
+                .map(|v| {
+                    if v.is_finite() {
+                        fmt_num(*v)
+                    } else {
+                        String::new()
+                    }
+                })
+                .collect::<Vec<String>>()
+        }),
+    )
 }
 
 /// `dir/.name.tmp`: where a file is written before it is renamed to `path`.

@@ -317,6 +317,19 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.compare.transient_steady", N, CMP, "whether the transient reached steady rolling"),
     k("results.compare.transient_time_to_steady", "T", CMP, "the transient's time_to_steady"),
     k("results.compare.transient_steps", N, CMP, "the transient's accepted steps"),
+    k("results.compare.quantities", N, CMP, "the judged quantities, one object each (below); also `compare.csv`"),
+    k("results.compare.quantities[].name", N, CMP, "`hub_force_x`, `hub_force_y`, `hub_torque`, `field_l2`, `contact_x_min`, `contact_x_max`, `max_pressure`"),
+    k("results.compare.quantities[].unit", N, CMP, "unit of the quantity in the scene's system (`[scene] units`, e.g. `lbf/in`); `1` dimensionless"),
+    k("results.compare.quantities[].transient", "as the quantity", CMP, "transient value (null for `field_l2`)"),
+    k("results.compare.quantities[].steady", "as the quantity", CMP, "steady value (null for `field_l2`)"),
+    k("results.compare.quantities[].abs_diff", "as the quantity", CMP, "|transient − steady| (`field_l2`: ‖u_t − u_s‖_L2 / ‖u_s‖_L2)"),
+    k("results.compare.quantities[].rel_diff", N, CMP, "abs_diff / scale"),
+    k("results.compare.quantities[].relative_to", N, CMP, "what the difference is relative to: `|F_steady|` for the hub force components (a component near zero is not divided by itself), `|hub_torque_steady|` or, for a torque below 1e-3 |F_steady| Ro, `|F_steady| Ro`; `steady patch length` for the patch ends; `|max_pressure_steady|`; `‖u_steady‖_L2`"),
+    k("results.compare.quantities[].scale", "as the quantity", CMP, "the value of `relative_to`"),
+    k("results.compare.quantities[].tolerance", N, CMP, "largest accepted rel_diff: hub forces 0.01, torque 0.02, field 0.01, peak pressure 0.05 (`tread compare --force-tol`, `--torque-tol`, `--field-tol`, `--pressure-tol`); patch ends one surface node spacing over the patch length (`--contact-tol` spacings)"),
+    k("results.compare.quantities[].within", N, CMP, "rel_diff <= tolerance (false for a non-finite difference)"),
+    k("results.compare.validated", N, CMP, "every quantity within its tolerance and the transient run steady; `tread compare` (and `tread` without a command) exits with status 4 when false"),
+    k("results.compare.verdict", N, CMP, "the sentence printed last: `steady solution validated against the transient: …` or `not validated: …` (what failed)"),
 ];
 
 /// One CSV file and its columns.
@@ -530,7 +543,7 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "compare.csv",
-        when: "tread compare; one row per quantity",
+        when: "tread compare; one row per judged quantity (the wall times are in summary.json)",
         columns: &[
             k(
                 "quantity",
@@ -538,9 +551,14 @@ pub static CSV_FILES: &[CsvFile] = &[
                 "",
                 "name of the compared quantity (a key of `results.compare`)",
             ),
-            k("transient", "as the quantity", "", "transient value"),
-            k("steady", "as the quantity", "", "steady value"),
+            k("unit", N, "", "unit of the quantity (`results.compare.quantities[].unit`)"),
+            k("transient", "as the quantity", "", "transient value (empty for `field_l2`)"),
+            k("steady", "as the quantity", "", "steady value (empty for `field_l2`)"),
             k("abs_diff", "as the quantity", "", "|transient − steady|"),
+            k("rel_diff", N, "", "abs_diff / the scale named in `relative_to`"),
+            k("relative_to", N, "", "what rel_diff is relative to (`results.compare.quantities[].relative_to`)"),
+            k("tolerance", N, "", "largest accepted rel_diff"),
+            k("within", N, "", "`true` or `false`: rel_diff <= tolerance"),
         ],
     },
 ];
@@ -593,5 +611,29 @@ pub fn markdown() -> String {
             rows(f.columns, &mut out);
         }
     }
+    out.push_str(PNG_FILES);
+    out.push_str(EXIT_STATUS);
     out
 }
+
+/// Which PNG plots a run writes (`[output] sinks` with `png`).
+const PNG_FILES: &str = "\n## PNG plots\n\n\
+Every axis carries its unit from `[scene] units`. `contact.png`: t_n and t_T along x1 (sorted \
+by x1) at the last recorded state. `hub_forces.png`, `hub_torque.png`, `energy.png`: against \
+time (transient) or load factor, written only for two or more distinct recorded times on one \
+clock: a steady solve pressed in one load step (the default, `solver.load_steps = 1`) has a \
+single state and writes none of them, and a steady run with `[continuation]` writes \
+`branch.png` instead (its loads against the continuation parameter). A steady press in \
+several load steps plots them against the load factor.\n";
+
+/// The exit statuses of `tread`.
+const EXIT_STATUS: &str = "\n## Exit status\n\n\
+| status | meaning |\n|---|---|\n\
+| 0 | success |\n\
+| 1 | the solve failed (the outputs hold the last converged state) |\n\
+| 2 | invalid scene or arguments, or an unsupported request |\n\
+| 3 | an output file or folder could not be written |\n\
+| 4 | `tread compare` and `tread` without a command: both modes ran and every output is written, \
+but the steady solution is not validated against the transient (`results.compare.validated` \
+false: a quantity outside its tolerance, or the transient run did not reach its steady state) |\n\
+| 130 | interrupted (Ctrl-C) |\n";

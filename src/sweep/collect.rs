@@ -213,66 +213,26 @@ pub fn gather(spec: &Spec, root: &Path) -> Table {
     }
 }
 
-/// One CSV field (RFC 4180 quoting when needed).
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// Write the table as CSV, atomically.
+/// Write the table as CSV, atomically (through [`crate::io::output::write_text_csv`]: fields
+/// with commas, quotes or line breaks are quoted).
 pub fn write_csv(table: &Table, path: &Path) -> Result<(), String> {
-    let mut s = String::new();
-    let line = |cells: Vec<String>| {
-        cells
-            .iter()
-            .map(|c| csv_field(c))
-            .collect::<Vec<_>>()
-            .join(",")
-    };
-    s.push_str(&line(table.csv_header()));
-    s.push('\n');
-    for r in &table.rows {
-        s.push_str(&line(table.csv_row(r)));
-        s.push('\n');
-    }
-    let tmp = path.with_extension("csv.tmp");
-    std::fs::write(&tmp, s).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, path).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    let header = table.csv_header();
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    crate::io::output::write_text_csv(path, &header, table.rows.iter().map(|r| table.csv_row(r)))
+        .map_err(|e| e.to_string())
 }
 
-/// Read a CSV written by [`write_csv`] back into rows of fields.
+/// Read a CSV written by [`write_csv`] back into rows of fields (the csv crate's reader, no
+/// header row taken out).
 pub fn read_csv(text: &str) -> Vec<Vec<String>> {
-    let mut rows = Vec::new();
-    let mut row = Vec::new();
-    let mut field = String::new();
-    let mut quoted = false;
-    let mut chars = text.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (quoted, c) {
-            (true, '"') if chars.peek() == Some(&'"') => {
-                chars.next();
-                field.push('"');
-            }
-            (true, '"') => quoted = false,
-            (true, c) => field.push(c),
-            (false, '"') => quoted = true,
-            (false, ',') => row.push(std::mem::take(&mut field)),
-            (false, '\n') => {
-                row.push(std::mem::take(&mut field));
-                rows.push(std::mem::take(&mut row));
-            }
-            (false, '\r') => {}
-            (false, c) => field.push(c),
-        }
-    }
-    if !field.is_empty() || !row.is_empty() {
-        row.push(field);
-        rows.push(row);
-    }
-    rows
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes())
+        .records()
+        .filter_map(Result::ok)
+        .map(|r| r.iter().map(str::to_string).collect())
+        .collect()
 }
 
 /// Draw the spec's plots into `dir`. Returns the files written and the problems met.
@@ -457,8 +417,8 @@ mod tests {
             rows,
             vec![vec!["a", "b,1", "say \"hi\"\nthere"], vec!["1", "", "x"]]
         );
-        let back: Vec<String> = rows[0].iter().map(|f| csv_field(f)).collect();
-        assert_eq!(back.join(","), "a,\"b,1\",\"say \"\"hi\"\"\nthere\"");
+        let back = crate::io::output::csv_line(&rows[0]);
+        assert_eq!(back, "a,\"b,1\",\"say \"\"hi\"\"\nthere\"\n");
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //! [`crate::io::output::fmt_num`] (shortest text that reads back to the same value; integers as
 //! integers). Every row is flushed, so a killed run leaves a complete file up to its last
 //! step; a failed write (full disk) truncates the file back to its last complete row.
-//! Non-finite values are empty fields.
+//! Non-finite values are empty fields. Lines are written by the csv crate
+//! ([`crate::io::output::csv_line`]).
 
 use super::{RecordError, Recorder, RunEnd, StepInfo, StepView};
 use std::fs::File;
@@ -42,26 +43,24 @@ impl CsvSink {
         info: &StepInfo,
         series: &[(&'static str, f64)],
     ) -> std::io::Result<()> {
-        use std::fmt::Write as _;
+        use crate::io::output::csv_line;
         self.line.clear();
         if self.out.is_none() {
             self.out = Some(BufWriter::new(File::create(&self.path)?));
             self.columns = series.iter().map(|(n, _)| *n).collect();
-            self.line.push_str("step,time");
-            for c in &self.columns {
-                let _ = write!(self.line, ",{c}");
-            }
-            self.line.push('\n');
+            let mut head = vec!["step", "time"];
+            head.extend(self.columns.iter().copied());
+            self.line.push_str(&csv_line(&head));
         }
-        let _ = write!(self.line, "{},{}", info.index, fmt(info.time));
+        let mut row = vec![info.index.to_string(), fmt(info.time)];
         for c in &self.columns {
             let v = series
                 .iter()
                 .find(|(n, _)| n == c)
                 .map_or(f64::NAN, |(_, v)| *v);
-            let _ = write!(self.line, ",{}", fmt(v));
+            row.push(fmt(v));
         }
-        self.line.push('\n');
+        self.line.push_str(&csv_line(&row));
         let Some(w) = self.out.as_mut() else {
             return Ok(());
         };

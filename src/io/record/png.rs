@@ -9,7 +9,12 @@
 //! * `branch.png` — continuation branch: each measure against the parameter;
 //! * `series.png` — the model's own scalars (e.g. stick-slip x, v) against time.
 //!
-//! A plot without data is not written. Non-finite points are skipped.
+//! A plot without data is not written. Non-finite points are skipped. The histories
+//! (`hub_forces.png`, `hub_torque.png`, `energy.png`) need two or more distinct times: a steady
+//! solve pressed in one load step has a single state, and writes none of them. A run with
+//! continuation points records its load steps (load factor) and its branch points (the
+//! continuation parameter) on one clock, so its histories are not written either; `branch.png`
+//! draws its loads against the parameter.
 //!
 //! Every axis carries its unit, derived from `[scene] units` (`"L-F-T"`, e.g. `in-lbf-s`:
 //! length L, force F, time T; stresses and tractions F/L², forces per unit thickness F/L,
@@ -634,6 +639,22 @@ impl Units {
     }
 }
 
+/// Points (x, y) of one plotted curve.
+pub type Curve = Vec<(f64, f64)>;
+
+/// The curves t_n(x1) and t_T(x1) of contact samples, sorted by x1 (the samples come in facet
+/// order around the body, which would draw each curve as a closed loop back to its start).
+pub fn contact_curves<'a>(
+    samples: impl Iterator<Item = &'a ContactSample>,
+) -> (Curve, Curve) {
+    let mut pts: Vec<&ContactSample> = samples.collect();
+    pts.sort_by(|p, q| p.x1.total_cmp(&q.x1));
+    (
+        pts.iter().map(|s| (s.x1, s.t_n)).collect(),
+        pts.iter().map(|s| (s.x1, s.t_t)).collect(),
+    )
+}
+
 /// `name [unit]`.
 pub fn with_unit(name: &str, unit: &str) -> String {
     format!("{name} [{unit}]")
@@ -720,7 +741,13 @@ impl Recorder for PngSink {
         };
         let tn = self.time_name.clone();
         let u = self.units.clone();
-        if !self.hub[0].is_empty() {
+        // Histories: two distinct times or more, on one clock (no continuation points).
+        let history = |s: &[(f64, f64)]| {
+            self.branch.is_empty() && s.iter().any(|p| s.first().is_some_and(|q| p.0 != q.0))
+        };
+        let draw_hub = history(&self.hub[0]);
+        let draw_energy = history(&self.energy[0]);
+        if draw_hub {
             let fscale = self.stress_scale * self.radius;
             let (nx, fx) = clamp_round_off("F_x", &self.hub[0], fscale);
             let (ny, fy) = clamp_round_off("F_y", &self.hub[1], fscale);
@@ -748,7 +775,7 @@ impl Recorder for PngSink {
                 ),
             );
         }
-        if !self.energy[0].is_empty() {
+        if draw_energy {
             let p = self.dir.join("energy.png");
             draw(
                 "energy.png",
@@ -770,14 +797,12 @@ impl Recorder for PngSink {
             // The patch and a margin of half its width on each side.
             let (a, b) = range(active.iter().map(|s| s.x1));
             let m = 0.5 * (b - a);
-            let mut pts: Vec<&ContactSample> = self
+            let pts: Vec<&ContactSample> = self
                 .contact
                 .iter()
                 .filter(|s| s.x1 >= a - m && s.x1 <= b + m && s.x2 < 0.0)
                 .collect();
-            pts.sort_by(|p, q| p.x1.total_cmp(&q.x1));
-            let n: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_n)).collect();
-            let t: Vec<(f64, f64)> = pts.iter().map(|s| (s.x1, s.t_t)).collect();
+            let (n, t) = contact_curves(pts.into_iter());
             let p = self.dir.join("contact.png");
             // Six significant digits, and the unit.
             let tc = self.contact_time;

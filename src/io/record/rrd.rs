@@ -527,8 +527,11 @@ impl RrdSink {
 
 impl Recorder for RrdSink {
     fn run_started(&mut self, meta: &RunMeta) {
+        // Named by scene and mode: the transient and steady recordings of one `tread compare`
+        // are told apart in the viewer's recording list.
+        let name = format!("{} ({} mode)", meta.scene_name, meta.mode);
         let r = rerun::RecordingStreamBuilder::new("tread")
-            .recording_name(meta.scene_name)
+            .recording_name(name.as_str())
             .send_properties(false)
             .save(&self.path);
         let rec = match r {
@@ -542,7 +545,7 @@ impl Recorder for RrdSink {
         rec.set_log_tick_enabled(false);
         // `send_properties(false)` (no wall-clock start time: reproducible files) drops the
         // builder's name too, so the name is sent on its own.
-        let _ = rec.send_recording_name(meta.scene_name);
+        let _ = rec.send_recording_name(name.as_str());
         self.rec = Some(rec.clone());
         self.units = scene_units(meta.scene_toml);
         self.magnification = displacement_scale(meta.scene_toml);
