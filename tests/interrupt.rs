@@ -82,6 +82,21 @@ fn wait_rows(child: &mut Child, csv: &Path, rows: usize) -> usize {
     }
 }
 
+/// Run the scene `text` in `dir` to its end (it must succeed); returns its output folder.
+#[cfg(feature = "rerun")]
+fn run_to_end(dir: &Path, text: &str) -> std::path::PathBuf {
+    let f = dir.join("scene.toml");
+    std::fs::write(&f, text).unwrap();
+    let out = dir.join("out");
+    let o = tread()
+        .args(["run", f.to_str().unwrap(), "-q", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
 fn signal(child: &Child, sig: &str) {
     let st = Command::new("kill")
         .args([sig, &child.id().to_string()])
@@ -220,21 +235,13 @@ fn replay_without_viewer_tells_how_to_install() {
 #[test]
 fn replay_converts_mcap_to_rrd() {
     let dir = tmpdir("convert");
-    let f = dir.join("scene.toml");
-    std::fs::write(
-        &f,
-        LONG.replace("load_steps = 40", "load_steps = 2")
+    let out = run_to_end(
+        &dir,
+        &LONG
+            .replace("load_steps = 40", "load_steps = 2")
             .replace("n_theta = 192", "n_theta = 32")
             .replace("n_r = 6", "n_r = 2"),
-    )
-    .unwrap();
-    let out = dir.join("out");
-    let o = tread()
-        .args(["run", f.to_str().unwrap(), "-q", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    );
     let m = read_mcap(&out.join("run.mcap"));
     let steps = m.count("/tread/step");
     let rrd = dir.join("converted.rrd");
@@ -302,15 +309,7 @@ fn sigterm_and_sighup_stop_like_ctrl_c() {
 #[test]
 fn replay_into_a_full_disk_fails_cleanly() {
     let dir = tmpdir("replay_full");
-    let f = dir.join("scene.toml");
-    std::fs::write(&f, LONG.replace("load_steps = 40", "load_steps = 4")).unwrap();
-    let out = dir.join("out");
-    let o = tread()
-        .args(["run", f.to_str().unwrap(), "-q", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = run_to_end(&dir, &LONG.replace("load_steps = 40", "load_steps = 4"));
     let rrd = out.join("run.rrd");
     let size = std::fs::metadata(&rrd).unwrap().len();
     let disk = dir.join("disk");
