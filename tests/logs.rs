@@ -452,8 +452,13 @@ fn synthetic_time_stepping_with_decimation_reads_back() {
         let sim: Vec<i64> = k.times.iter().map(|x| x.1).collect();
         assert_eq!(sim.iter().map(|x| *x as u64).collect::<Vec<_>>(), want);
     }
-    for p in ["energy.png", "series.png", "hub_forces.png"] {
-        assert_eq!(png_size(&dir.join(p)), (900, 560), "{p}");
+    for p in ["series.png", "branch.png"] {
+        assert!(png_size(&dir.join(p)).0 > 0, "{p}");
+    }
+    // Time steps and continuation points in one run: the histories would mix two clocks, so
+    // they are not drawn (branch.png has the loads against the parameter).
+    for p in ["energy.png", "hub_forces.png", "hub_torque.png"] {
+        assert!(!dir.join(p).exists(), "{p} drawn over two clocks");
     }
 }
 

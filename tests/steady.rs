@@ -458,7 +458,8 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
         notes.0
     );
     assert!(
-        notes.0.iter().filter(|n| n.contains("reached")).count() >= r.attempts[0].steps(),
+        notes.0.iter().filter(|n| n.contains("reached")).count()
+            == r.attempts[0].legs.iter().map(|l| l.steps).sum::<usize>(),
         "{:?}",
         notes.0
     );
