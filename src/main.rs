@@ -747,7 +747,11 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
         Some(Command::Check { scene, set }) => match load(&scene, &set) {
             Ok(mut s) => {
                 // The listing loads back from any folder: the mesh file by its absolute path.
-                if let Some(abs) = s.mesh.file.as_ref().and_then(|f| std::fs::canonicalize(f).ok())
+                if let Some(abs) = s
+                    .mesh
+                    .file
+                    .as_ref()
+                    .and_then(|f| std::fs::canonicalize(f).ok())
                 {
                     s.mesh.file = Some(abs.display().to_string());
                 }

@@ -65,7 +65,10 @@ fn a_torque_five_percent_off_is_not_validated() {
     inp.steady_tol = Some(1e-3);
     let (qs, ok, verdict) = judge(&inp, &CompareTolerances::default(), &units);
     assert!(!ok);
-    assert!(verdict.starts_with("not validated: hub_torque differs by 5.09 %"), "{verdict}");
+    assert!(
+        verdict.starts_with("not validated: hub_torque differs by 5.09 %"),
+        "{verdict}"
+    );
     assert!(verdict.contains("tolerance 2 %"), "{verdict}");
     assert!(verdict.contains("time.steady_tol"), "{verdict}");
     assert_eq!(qs.iter().filter(|q| !q.within).count(), 1);
@@ -90,7 +93,10 @@ fn a_transient_run_not_steady_is_not_validated() {
     inp.transient_steady = false;
     let (_, ok, verdict) = judge(&inp, &CompareTolerances::default(), &Units::default());
     assert!(!ok);
-    assert!(verdict.contains("did not reach its steady state"), "{verdict}");
+    assert!(
+        verdict.contains("did not reach its steady state"),
+        "{verdict}"
+    );
 }
 
 /// The command: a tolerance no run meets gives the verdict line, exit status 4, and the same
@@ -100,7 +106,10 @@ fn compare_exits_with_status_4_when_not_validated() {
     let dir = TestDir::new("compare-verdict", "strict");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_tread"))
         .args(["--threads", "1", "compare"])
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/rolling_frictionless.toml"))
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/scenarios/rolling_frictionless.toml"
+        ))
         .args([
             "--set",
             "mesh.n_theta=32",
@@ -127,8 +136,7 @@ fn compare_exits_with_status_4_when_not_validated() {
     assert!(stdout.contains("hub_force_y [lbf/in]"), "{stdout}");
     assert!(stdout.contains("wall time: transient"), "{stdout}");
     let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let c = &s["results"]["compare"];
     assert_eq!(c["validated"].as_bool(), Some(false), "{c}");
     assert!(c["verdict"].as_str().unwrap().starts_with("not validated"));

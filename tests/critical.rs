@@ -269,6 +269,12 @@ fn headline_of_an_early_branch_end_names_it_and_the_singular_value_trend() {
     let h = critical::headline(&r);
     assert!(!h.contains("below 65.7547"), "{h}");
     assert!(h.contains("between 10.0000 and 46.6800 rad/s"), "{h}");
-    assert!(h.contains("ended at 46.6800 rad/s, short of the 65.7547 rad/s searched"), "{h}");
-    assert!(h.contains("2.20 at 10.0000 rad/s, 0.0360 at 46.6800 rad/s"), "{h}");
+    assert!(
+        h.contains("ended at 46.6800 rad/s, short of the 65.7547 rad/s searched"),
+        "{h}"
+    );
+    assert!(
+        h.contains("2.20 at 10.0000 rad/s, 0.0360 at 46.6800 rad/s"),
+        "{h}"
+    );
 }

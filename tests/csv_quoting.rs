@@ -11,14 +11,28 @@ use tread::io::output::{read_text_csv, write_csv, write_text_csv};
 fn a_field_with_a_comma_round_trips_through_a_csv_reader() {
     let dir = TestDir::new("csv-quoting", "comma");
     let path = dir.join("adapt.csv");
-    let header = ["series", "step", "n", "rel_error", "cumulative_time_s", "step_time_s"];
+    let header = [
+        "series",
+        "step",
+        "n",
+        "rel_error",
+        "cumulative_time_s",
+        "step_time_s",
+    ];
     let names = ["h Q1, Jacobi-CG", "hp \"graded\", direct"];
     write_text_csv(
         &path,
         &header,
-        names
-            .iter()
-            .map(|n| vec![n.to_string(), "0".into(), "16".into(), "1e-2".into(), "0.5".into(), "0.5".into()]),
+        names.iter().map(|n| {
+            vec![
+                n.to_string(),
+                "0".into(),
+                "16".into(),
+                "1e-2".into(),
+                "0.5".into(),
+                "0.5".into(),
+            ]
+        }),
     )
     .unwrap();
     let mut r = csv::Reader::from_path(&path).unwrap();
@@ -39,7 +53,12 @@ fn a_field_with_a_comma_round_trips_through_a_csv_reader() {
 fn numeric_tables_read_back_with_empty_fields_for_non_finite_values() {
     let dir = TestDir::new("csv-quoting", "numbers");
     let path = dir.join("t.csv");
-    write_csv(&path, &["a", "b"], [vec![1.5, f64::NAN], vec![-2.0, 3.0]].into_iter()).unwrap();
+    write_csv(
+        &path,
+        &["a", "b"],
+        [vec![1.5, f64::NAN], vec![-2.0, 3.0]].into_iter(),
+    )
+    .unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     assert_eq!(text, "a,b\n1.5,\n-2,3\n");
     let (h, rows) = tread::driver::compare::read_csv(&path).unwrap();

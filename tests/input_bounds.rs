@@ -75,17 +75,30 @@ fn check_refuses_what_run_refuses_with_line_and_path() {
         let o = tread_in(d.path(), &args, MINUTE);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{cmd}: {err}");
-        assert!(err.contains(&format!("scene.toml:{line}")), "{cmd}: no line: {err}");
+        assert!(
+            err.contains(&format!("scene.toml:{line}")),
+            "{cmd}: no line: {err}"
+        );
         assert!(err.contains("mesh.file"), "{cmd}: {err}");
-        assert!(err.contains(&resolved.display().to_string()), "{cmd}: no path: {err}");
+        assert!(
+            err.contains(&resolved.display().to_string()),
+            "{cmd}: no path: {err}"
+        );
     }
-    assert!(!d.path().join("out").exists(), "a refused run created its output folder");
+    assert!(
+        !d.path().join("out").exists(),
+        "a refused run created its output folder"
+    );
 
     // Not a mesh: named as such by check.
     std::fs::write(d.path().join("missing.msh"), "hello\n").unwrap();
     let o = tread_in(d.path(), &["check", "scene.toml"], MINUTE);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("not a Gmsh .msh file"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not a Gmsh .msh file"),
+        "{}",
+        stderr(&o)
+    );
 
     // An endless file is refused at the bound, quickly.
     let o = tread_in(
@@ -147,13 +160,23 @@ fn magnitudes_outside_double_precision_products_are_refused() {
     ] {
         let o = tread_in(
             d.path(),
-            &["run", &scene("spinning_neo_hookean.toml"), "--set", set, "--out", "out"],
+            &[
+                "run",
+                &scene("spinning_neo_hookean.toml"),
+                "--set",
+                set,
+                "--out",
+                "out",
+            ],
             MINUTE,
         );
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{set}: {err}");
         assert!(err.contains(key) && err.contains("1e-60"), "{set}: {err}");
-        assert!(!d.path().join("out").exists(), "{set}: output folder created");
+        assert!(
+            !d.path().join("out").exists(),
+            "{set}: output folder created"
+        );
     }
 }
 
@@ -186,7 +209,11 @@ fn step_controls_that_could_never_end_are_refused_or_end() {
     args.extend(["--set", "solver.max_cutbacks=200"]);
     let o = tread_in(d.path(), &args, Duration::from_secs(600));
     let code = o.status.code();
-    assert!(matches!(code, Some(0) | Some(1)), "{code:?}: {}", stderr(&o));
+    assert!(
+        matches!(code, Some(0) | Some(1)),
+        "{code:?}: {}",
+        stderr(&o)
+    );
 }
 
 /// Error messages name the key: a key written twice (a TOML error) and the keys of the second
@@ -275,7 +302,10 @@ fn schema_matches_the_loader() {
         .iter()
         .filter_map(|v| v.as_str())
         .collect();
-    assert!(!req.contains(&"dt"), "time.dt required of every scene: {req:?}");
+    assert!(
+        !req.contains(&"dt"),
+        "time.dt required of every scene: {req:?}"
+    );
     assert_eq!(
         s["if"]["properties"]["analysis"]["properties"]["mode"]["const"],
         "steady"
@@ -288,5 +318,8 @@ fn schema_matches_the_loader() {
     let mesh = &s["properties"]["mesh"]["properties"];
     assert_eq!(mesh["n_r"]["minimum"], 1);
     assert_eq!(mesh["n_theta"]["minimum"], 8);
-    assert_eq!(s["properties"]["solver"]["properties"]["max_cutbacks"]["maximum"], 200);
+    assert_eq!(
+        s["properties"]["solver"]["properties"]["max_cutbacks"]["maximum"],
+        200
+    );
 }

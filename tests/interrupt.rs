@@ -296,7 +296,10 @@ fn sigterm_and_sighup_stop_like_ctrl_c() {
         assert_eq!(s["error"], "interrupted", "{sig}");
         let sta = std::fs::read_to_string(out.join("run.sta")).unwrap();
         let last = sta.lines().last().unwrap_or_default();
-        assert!(last.starts_with("# interrupted:"), "{sig}: run.sta ends with {last:?}");
+        assert!(
+            last.starts_with("# interrupted:"),
+            "{sig}: run.sta ends with {last:?}"
+        );
         let m = read_mcap(&out.join("run.mcap"));
         assert!(!m.truncated, "{sig}: the MCAP was finished");
     }
@@ -327,7 +330,12 @@ fn replay_into_a_full_disk_fails_cleanly() {
     }
     let to = disk.join("y.rrd");
     let mut child = tread()
-        .args(["replay", rrd.to_str().unwrap(), "--to", to.to_str().unwrap()])
+        .args([
+            "replay",
+            rrd.to_str().unwrap(),
+            "--to",
+            to.to_str().unwrap(),
+        ])
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();

@@ -124,7 +124,11 @@ fn validate(schema: &Value, v: &Value, path: &str, errs: &mut Vec<String>) {
     if let Some(cond) = s.get("if") {
         let mut e = Vec::new();
         validate(cond, v, path, &mut e);
-        let branch = if e.is_empty() { s.get("then") } else { s.get("else") };
+        let branch = if e.is_empty() {
+            s.get("then")
+        } else {
+            s.get("else")
+        };
         if let Some(b) = branch {
             validate(b, v, path, errs);
         }
@@ -264,21 +268,27 @@ fn json_schema_accepts_every_scenario_and_rejects_mistakes() {
     );
     // `[time]` keys of the transient mode: required unless the scene is steady, as the loader
     // has it; integer bounds as the loader's.
-    let transient = std::fs::read_to_string(root().join("scenarios/rolling_frictionless.toml"))
-        .expect("read");
+    let transient =
+        std::fs::read_to_string(root().join("scenarios/rolling_frictionless.toml")).expect("read");
     let no_dt: String = transient
         .lines()
         .filter(|l| !l.trim_start().starts_with("dt ="))
         .collect::<Vec<_>>()
         .join("\n");
     let errs = errors_of(&schema, &no_dt);
-    assert!(errs.iter().any(|e| e.contains(".time.dt: required")), "{errs:?}");
+    assert!(
+        errs.iter().any(|e| e.contains(".time.dt: required")),
+        "{errs:?}"
+    );
     let steady = no_dt.replacen("mode = \"transient\"", "mode = \"steady\"", 1);
     assert_ne!(steady, no_dt);
     let errs = errors_of(&schema, &steady);
     assert!(!errs.iter().any(|e| e.contains(".time.dt")), "{errs:?}");
     let errs = errors_of(&schema, &text.replacen("\nn_r = ", "\nn_r = 0 # ", 1));
-    assert!(errs.iter().any(|e| e.contains(".mesh.n_r: 0 < 1")), "{errs:?}");
+    assert!(
+        errs.iter().any(|e| e.contains(".mesh.n_r: 0 < 1")),
+        "{errs:?}"
+    );
     // `[[material]]`: each entry needs its region.
     let two =
         std::fs::read_to_string(root().join("scenarios/two_layer_cylinder.toml")).expect("read");

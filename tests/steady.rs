@@ -453,7 +453,10 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
     assert_eq!(r.strategy, Some(Strategy::OmegaStepping));
     // The recorders hear of the strategy and of each of its steps (run.sta follows them).
     assert!(
-        notes.0.iter().any(|n| n.contains("trying") && n.contains("omega")),
+        notes
+            .0
+            .iter()
+            .any(|n| n.contains("trying") && n.contains("omega")),
         "{:?}",
         notes.0
     );
@@ -463,7 +466,11 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
         "{:?}",
         notes.0
     );
-    assert!(notes.0.last().is_some_and(|n| n.contains("succeeded")), "{:?}", notes.0);
+    assert!(
+        notes.0.last().is_some_and(|n| n.contains("succeeded")),
+        "{:?}",
+        notes.0
+    );
     assert!(r.attempts[0].steps() >= 2, "{}", r.message);
     assert_eq!(st.omega(), 46.0);
     let res = scene_residual(&sc, &st);

@@ -269,7 +269,14 @@ fn real_main() -> Result<(), String> {
     let csv_path = out.join("adapt.csv");
     tread::io::output::write_text_csv(
         &csv_path,
-        &["series", "step", "n", "rel_error", "cumulative_time_s", "step_time_s"],
+        &[
+            "series",
+            "step",
+            "n",
+            "rel_error",
+            "cumulative_time_s",
+            "step_time_s",
+        ],
         rows,
     )
     .map_err(|e| e.to_string())?;

@@ -150,8 +150,22 @@ pub fn judge(
     let patch = inp.contact_x_max.1 - inp.contact_x_min.1;
     let contact_tol = tol.contact_spacings * inp.surface_spacing / patch;
     let out = vec![
-        q("hub_force_x", f_unit.clone(), inp.hub_force_x, "|F_steady|".into(), fmag, tol.force),
-        q("hub_force_y", f_unit, inp.hub_force_y, "|F_steady|".into(), fmag, tol.force),
+        q(
+            "hub_force_x",
+            f_unit.clone(),
+            inp.hub_force_x,
+            "|F_steady|".into(),
+            fmag,
+            tol.force,
+        ),
+        q(
+            "hub_force_y",
+            f_unit,
+            inp.hub_force_y,
+            "|F_steady|".into(),
+            fmag,
+            tol.force,
+        ),
         q(
             "hub_torque",
             units.moment_per_thickness(),
@@ -676,7 +690,11 @@ pub fn run_with_tolerances(
             ]
         })
         .collect();
-    write_text_csv(&opts.out_dir.join("compare.csv"), &COMPARE_CSV_COLUMNS, rows)?;
+    write_text_csv(
+        &opts.out_dir.join("compare.csv"),
+        &COMPARE_CSV_COLUMNS,
+        rows,
+    )?;
     if let Some(h) = &history {
         let ring_rows: Vec<Vec<String>> = h
             .rings

@@ -1042,7 +1042,10 @@ pub fn headline(r: &CriticalReport) -> String {
             covered, r.omega_max
         )
     } else {
-        format!("the branch was followed to the end of the search, {:.4} rad/s", r.omega_max)
+        format!(
+            "the branch was followed to the end of the search, {:.4} rad/s",
+            r.omega_max
+        )
     };
     let low = r
         .sweep
@@ -1056,7 +1059,11 @@ pub fn headline(r: &CriticalReport) -> String {
         sig3(last.sigma_min),
         last.omega,
         if low.omega != last.omega && low.omega != first.omega {
-            format!(" (lowest {} at {:.4} rad/s)", sig3(low.sigma_min), low.omega)
+            format!(
+                " (lowest {} at {:.4} rad/s)",
+                sig3(low.sigma_min),
+                low.omega
+            )
         } else {
             String::new()
         }

@@ -381,7 +381,8 @@ fn clear_outputs(dir: &Path) -> usize {
             let name = e.file_name().to_string_lossy().to_string();
             let ours = OUTPUT_NAMES.contains(&name.as_str())
                 || name.ends_with(".png")
-                || (name.starts_with('.') && (name.ends_with(".tmp") || name.ends_with(".tmp.png")));
+                || (name.starts_with('.')
+                    && (name.ends_with(".tmp") || name.ends_with(".tmp.png")));
             if ours && e.path().is_file() && std::fs::remove_file(e.path()).is_ok() {
                 n += 1;
             }

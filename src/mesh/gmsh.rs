@@ -182,7 +182,9 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
                 )));
             }
             if node_index.insert(tag, coords.len()).is_some() {
-                return Err(err(format!("node tag {tag} is given to more than one node")));
+                return Err(err(format!(
+                    "node tag {tag} is given to more than one node"
+                )));
             }
             coords.push(Vec2::new(n.x, n.y));
         }
@@ -601,7 +603,10 @@ fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
         let _entity = reader.int(&what("entity tag"))?;
         let parametric = reader.int(&what("parametric flag"))?;
         if parametric != 0 {
-            return Err(format!("{} is not supported", what("parametric node coordinates")));
+            return Err(format!(
+                "{} is not supported",
+                what("parametric node coordinates")
+            ));
         }
         let n = reader.size(&what("number of nodes"))?;
         // Each node takes at least one tag and three coordinates: a count larger than the bytes
@@ -631,7 +636,10 @@ fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
         ));
     }
     let all = || blocks.iter().flatten().copied();
-    let (lo, hi) = (all().min().unwrap_or(min_tag), all().max().unwrap_or(max_tag));
+    let (lo, hi) = (
+        all().min().unwrap_or(min_tag),
+        all().max().unwrap_or(max_tag),
+    );
     if (lo, hi) != (min_tag, max_tag) && total > 0 {
         return Err(format!(
             "$Nodes announces node tags {min_tag} to {max_tag}, its blocks hold tags {lo} to {hi}"
@@ -644,7 +652,11 @@ fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
 fn mesh_format(bytes: &[u8]) -> Result<(bool, usize, bool), String> {
     let start = find(bytes, b"$MeshFormat").ok_or("no $MeshFormat section")?;
     let after = &bytes[start + b"$MeshFormat".len()..];
-    let line_start = after.iter().position(|&b| b == b'\n').ok_or("truncated $MeshFormat")? + 1;
+    let line_start = after
+        .iter()
+        .position(|&b| b == b'\n')
+        .ok_or("truncated $MeshFormat")?
+        + 1;
     let line_len = after[line_start..]
         .iter()
         .position(|&b| b == b'\n')
@@ -657,12 +669,20 @@ fn mesh_format(bytes: &[u8]) -> Result<(bool, usize, bool), String> {
     let binary = match file_type {
         "0" => false,
         "1" => true,
-        other => return Err(format!("$MeshFormat: file type \"{other}\" is neither 0 nor 1")),
+        other => {
+            return Err(format!(
+                "$MeshFormat: file type \"{other}\" is neither 0 nor 1"
+            ))
+        }
     };
     let size_t = match data_size {
         "4" => 4,
         "8" => 8,
-        other => return Err(format!("$MeshFormat: data size \"{other}\" is neither 4 nor 8")),
+        other => {
+            return Err(format!(
+                "$MeshFormat: data size \"{other}\" is neither 4 nor 8"
+            ))
+        }
     };
     let mut little = true;
     if binary {
@@ -672,7 +692,11 @@ fn mesh_format(bytes: &[u8]) -> Result<(bool, usize, bool), String> {
         little = match one {
             [1, 0, 0, 0] => true,
             [0, 0, 0, 1] => false,
-            _ => return Err("$MeshFormat: the binary integer 1 that gives the byte order is missing".into()),
+            _ => {
+                return Err(
+                    "$MeshFormat: the binary integer 1 that gives the byte order is missing".into(),
+                )
+            }
         };
     }
     Ok((binary, size_t, little))
@@ -739,7 +763,8 @@ impl Reader<'_> {
             Ok(i64::from(self.unsigned(4, what)? as u32 as i32))
         } else {
             let t = self.token(what)?;
-            t.parse().map_err(|_| format!("{what} \"{t}\" is not an integer"))
+            t.parse()
+                .map_err(|_| format!("{what} \"{t}\" is not an integer"))
         }
     }
 
@@ -852,13 +877,25 @@ mod tests {
 
     /// Line range of the `$Nodes` section's content (after the `$Nodes` line, before
     /// `$EndNodes`) and the node blocks in it: (header line, tag lines, coordinate lines).
-    fn node_blocks(lines: &[String]) -> Vec<(usize, std::ops::Range<usize>, std::ops::Range<usize>)> {
+    fn node_blocks(
+        lines: &[String],
+    ) -> Vec<(usize, std::ops::Range<usize>, std::ops::Range<usize>)> {
         let start = lines.iter().position(|l| l == "$Nodes").expect("$Nodes") + 1;
-        let n_blocks: usize = lines[start].split_whitespace().next().unwrap().parse().unwrap();
+        let n_blocks: usize = lines[start]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
         let mut at = start + 1;
         let mut out = Vec::new();
         for _ in 0..n_blocks {
-            let n: usize = lines[at].split_whitespace().nth(3).unwrap().parse().unwrap();
+            let n: usize = lines[at]
+                .split_whitespace()
+                .nth(3)
+                .unwrap()
+                .parse()
+                .unwrap();
             out.push((at, at + 1..at + 1 + n, at + 1 + n..at + 1 + 2 * n));
             at += 1 + 2 * n;
         }
@@ -926,7 +963,11 @@ mod tests {
             .collect();
         head[2] = 3 * head[2] + 5;
         head[3] = 3 * head[3] + 5;
-        gaps[node_start] = head.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+        gaps[node_start] = head
+            .iter()
+            .map(u64::to_string)
+            .collect::<Vec<_>>()
+            .join(" ");
         for (_, tags, _) in node_blocks(&lines) {
             for i in tags {
                 let t: u64 = gaps[i].trim().parse().unwrap();
@@ -934,17 +975,24 @@ mod tests {
             }
         }
         let el_start = gaps.iter().position(|l| l == "$Elements").unwrap() + 1;
-        let n_el_blocks: usize = gaps[el_start].split_whitespace().next().unwrap().parse().unwrap();
+        let n_el_blocks: usize = gaps[el_start]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
         let mut at = el_start + 1;
         for _ in 0..n_el_blocks {
             let n: usize = gaps[at].split_whitespace().nth(3).unwrap().parse().unwrap();
-            for i in at + 1..at + 1 + n {
-                let mut v: Vec<u64> =
-                    gaps[i].split_whitespace().map(|v| v.parse().unwrap()).collect();
+            for line in &mut gaps[at + 1..at + 1 + n] {
+                let mut v: Vec<u64> = line
+                    .split_whitespace()
+                    .map(|v| v.parse().unwrap())
+                    .collect();
                 for t in &mut v[1..] {
                     *t = 3 * *t + 5;
                 }
-                gaps[i] = v.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+                *line = v.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
             }
             at += 1 + n;
         }
@@ -984,12 +1032,28 @@ mod tests {
         let elements = lines.iter().position(|l| l == "$Elements").unwrap() + 1;
         let block = nodes + 1;
         let entities = lines.iter().position(|l| l == "$Entities").unwrap() + 1;
-        let huge = ["100000000000", "4611686018427387904", "18446744073709551616", "-1"];
+        let huge = [
+            "100000000000",
+            "4611686018427387904",
+            "18446744073709551616",
+            "-1",
+        ];
         for count in huge {
-            for (line, field) in [(names, 0), (entities, 0), (entities, 1), (entities, 2), (nodes, 0), (nodes, 1), (nodes, 3), (block, 3), (elements, 0), (elements, 1), (elements + 1, 3)] {
+            for (line, field) in [
+                (names, 0),
+                (entities, 0),
+                (entities, 1),
+                (entities, 2),
+                (nodes, 0),
+                (nodes, 1),
+                (nodes, 3),
+                (block, 3),
+                (elements, 0),
+                (elements, 1),
+                (elements + 1, 3),
+            ] {
                 let mut bad = lines.clone();
-                let mut f: Vec<String> =
-                    bad[line].split_whitespace().map(str::to_string).collect();
+                let mut f: Vec<String> = bad[line].split_whitespace().map(str::to_string).collect();
                 f[field] = count.to_string();
                 bad[line] = f.join(" ");
                 let Err(e) = parse(&bad) else {

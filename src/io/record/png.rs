@@ -644,9 +644,7 @@ pub type Curve = Vec<(f64, f64)>;
 
 /// The curves t_n(x1) and t_T(x1) of contact samples, sorted by x1 (the samples come in facet
 /// order around the body, which would draw each curve as a closed loop back to its start).
-pub fn contact_curves<'a>(
-    samples: impl Iterator<Item = &'a ContactSample>,
-) -> (Curve, Curve) {
+pub fn contact_curves<'a>(samples: impl Iterator<Item = &'a ContactSample>) -> (Curve, Curve) {
     let mut pts: Vec<&ContactSample> = samples.collect();
     pts.sort_by(|p, q| p.x1.total_cmp(&q.x1));
     (

@@ -285,7 +285,11 @@ impl Scene {
                     .span()
                     .map(|s| spans::LineIndex::new(text).line_of(s.start));
                 let key = line
-                    .and_then(|l| locator.key_at_line(l).or_else(|| spans::key_written_at(text, l)))
+                    .and_then(|l| {
+                        locator
+                            .key_at_line(l)
+                            .or_else(|| spans::key_written_at(text, l))
+                    })
                     .unwrap_or_default();
                 return Err(SceneErrors(vec![SceneError {
                     key,
