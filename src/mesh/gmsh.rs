@@ -23,7 +23,7 @@
 //!
 //! Node tags: every node is identified by the tag the file gives it, in whatever order the blocks
 //! list them (a file that lists its nodes in another order is the same mesh). The tags are read
-//! here from the `$Nodes` section ([`node_tags`]), not taken from mshio, which keeps them only when
+//! here from the `$Nodes` section (`node_tags`), not taken from mshio, which keeps them only when
 //! they are not contiguous. A tag given twice is an error.
 //!
 //! Every count, size and tag in the file is checked against what follows it before anything is
