@@ -106,6 +106,8 @@ pub mod progress;
 pub mod rrd;
 #[cfg(feature = "rerun")]
 pub mod rrd_layout;
+#[cfg(feature = "rerun")]
+pub mod rrd_draw;
 pub mod shape;
 pub mod sta;
 pub mod vtu;
