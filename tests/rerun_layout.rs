@@ -120,7 +120,12 @@ fn timelines(s: &Stores) -> std::collections::BTreeSet<String> {
         .values()
         .flatten()
         .filter(|c| !c.is_static())
-        .flat_map(|c| c.timelines().keys().map(|t| t.to_string()).collect::<Vec<_>>())
+        .flat_map(|c| {
+            c.timelines()
+                .keys()
+                .map(|t| t.to_string())
+                .collect::<Vec<_>>()
+        })
         .collect()
 }
 
@@ -150,7 +155,10 @@ fn assert_named(s: &Stores, name: &str) {
         .filter(|(e, _)| e.contains("__properties"))
         .map(|(_, t)| t.as_str())
         .collect();
-    assert!(props.contains(name), "recording not named {name:?}: {props}");
+    assert!(
+        props.contains(name),
+        "recording not named {name:?}: {props}"
+    );
 }
 
 #[test]
@@ -197,7 +205,10 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_charts() {
     // Load stepping: the step sequence only, no duration timeline (λ is a series).
     let tl = timelines(&s);
     assert!(tl.contains("step"), "{tl:?}");
-    assert!(!tl.contains("sim_time"), "a load-stepping run on sim_time: {tl:?}");
+    assert!(
+        !tl.contains("sim_time"),
+        "a load-stepping run on sim_time: {tl:?}"
+    );
     let r = read_rrd(&rrd);
     let (h, rows) = read_csv(&out.join("history.csv"));
     let steps = rows.len();
@@ -205,7 +216,11 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_charts() {
     assert_eq!(lambda.scalars.len(), steps);
     assert!((lambda.scalars[steps - 1] - 1.0).abs() < 1e-12);
     assert_eq!(
-        r["/hub/force_y"].times.iter().map(|t| t.0).collect::<Vec<_>>(),
+        r["/hub/force_y"]
+            .times
+            .iter()
+            .map(|t| t.0)
+            .collect::<Vec<_>>(),
         (0..steps as i64).collect::<Vec<_>>()
     );
     // Few load steps: the series carry markers, so one step is seen too.
@@ -258,17 +273,26 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_charts() {
 
     // The contact charts: one marker per contact point, spread over most of the frame's width
     // (the x range is the patch, padded to round ticks), inside the frame.
-    let (w, hgt) = (tread::io::record::rrd_draw::CHART_W, tread::io::record::rrd_draw::CHART_H);
+    let (w, hgt) = (
+        tread::io::record::rrd_draw::CHART_W,
+        tread::io::record::rrd_draw::CHART_H,
+    );
     let cx = column(&h, &rows, "patch_x_min");
     let cy = column(&h, &rows, "patch_x_max");
-    for e in ["/contact/chart/pressure/points", "/contact/chart/shear/points"] {
+    for e in [
+        "/contact/chart/pressure/points",
+        "/contact/chart/shear/points",
+    ] {
         let p = last_points2d(&s, e);
         assert!(p.len() >= 3, "{e}: {p:?}");
         let xs: Vec<f32> = p.iter().map(|q| q[0]).collect();
         let (a, b) = (xs[0], xs[xs.len() - 1]);
         assert!(xs.windows(2).all(|q| q[0] <= q[1]), "{e}: not along x1");
         assert!(a >= 0.0 && b <= w && b - a >= 0.4 * w, "{e}: {a} … {b}");
-        assert!(p.iter().all(|q| q[1] <= 1e-6 && q[1] >= -hgt - 1e-6), "{e}: {p:?}");
+        assert!(
+            p.iter().all(|q| q[1] <= 1e-6 && q[1] >= -hgt - 1e-6),
+            "{e}: {p:?}"
+        );
     }
     // The ticks: round values covering the patch, at least three along x1.
     let (x0, step, n) = tread::io::record::rrd_draw::nice_ticks(cx[steps - 1], cy[steps - 1]);
@@ -294,7 +318,11 @@ fn newton_iterations_and_residuals_are_separate_views() {
                 .collect()
         };
         let it = shows("newton_iterations");
-        let it = if it.is_empty() { shows("newton/iterations") } else { it };
+        let it = if it.is_empty() {
+            shows("newton/iterations")
+        } else {
+            it
+        };
         let res = shows("log10_residual");
         assert_eq!(it.len(), 1, "{v:?}");
         assert_eq!(res.len(), 1, "{v:?}");

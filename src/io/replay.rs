@@ -460,7 +460,12 @@ mod convert {
                 _ => {
                     if topic == "tread/step" && load_stepping {
                         let lambda = f64_of(&msg, "time");
-                        draw.scalar(&rec, "tread/series/load_factor", "load factor λ [1]", lambda);
+                        draw.scalar(
+                            &rec,
+                            "tread/series/load_factor",
+                            "load factor λ [1]",
+                            lambda,
+                        );
                     }
                     for (f, v) in msg.fields() {
                         let name = f.name();

@@ -938,13 +938,13 @@ mod tests {
         let mut at = el_start + 1;
         for _ in 0..n_el_blocks {
             let n: usize = gaps[at].split_whitespace().nth(3).unwrap().parse().unwrap();
-            for i in at + 1..at + 1 + n {
+            for line in gaps.iter_mut().skip(at + 1).take(n) {
                 let mut v: Vec<u64> =
-                    gaps[i].split_whitespace().map(|v| v.parse().unwrap()).collect();
+                    line.split_whitespace().map(|v| v.parse().unwrap()).collect();
                 for t in &mut v[1..] {
                     *t = 3 * *t + 5;
                 }
-                gaps[i] = v.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
+                *line = v.iter().map(u64::to_string).collect::<Vec<_>>().join(" ");
             }
             at += 1 + n;
         }

@@ -906,6 +906,16 @@ fn unreachable_guard() -> Result<NewtonReport, SolveError> {
     })
 }
 
+/// Whether a step `step` from `at` (towards an end at `end`) is below the round-off of the
+/// parameter: fewer than about four units in the last place of the larger of |at| and |end|, so
+/// that `at + step` cannot be told from `at` after a few operations.
+pub fn below_round_off(at: f64, end: f64, step: f64) -> bool {
+    let scale = at.abs().max(end.abs());
+    // Not greater (also when `step` is NaN): below the round-off.
+    step.abs().partial_cmp(&(4.0 * f64::EPSILON * scale)) != Some(std::cmp::Ordering::Greater)
+        || at + step == at
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1227,12 +1237,4 @@ mod tests {
             assert!(parts <= t.total_s * (1.0 + 1e-12), "{t:?}");
         }
     }
-}
-
-/// Whether a step `step` from `at` (towards an end at `end`) is below the round-off of the
-/// parameter: fewer than about four units in the last place of the larger of |at| and |end|, so
-/// that `at + step` cannot be told from `at` after a few operations.
-pub fn below_round_off(at: f64, end: f64, step: f64) -> bool {
-    let scale = at.abs().max(end.abs());
-    !(step.abs() > 4.0 * f64::EPSILON * scale) || at + step == at
 }

@@ -105,9 +105,9 @@ pub mod progress;
 #[cfg(feature = "rerun")]
 pub mod rrd;
 #[cfg(feature = "rerun")]
-pub mod rrd_layout;
-#[cfg(feature = "rerun")]
 pub mod rrd_draw;
+#[cfg(feature = "rerun")]
+pub mod rrd_layout;
 pub mod shape;
 pub mod sta;
 pub mod vtu;

@@ -419,7 +419,11 @@ impl Recorder for RrdSink {
             meta.scene_name,
             meta.mode,
             meta.version,
-            if meta.features.is_empty() { "none" } else { meta.features },
+            if meta.features.is_empty() {
+                "none"
+            } else {
+                meta.features
+            },
             if self.load_stepping {
                 "timeline `step`: the load step (the reference configuration at step −1); the \
                  load factor λ is the series `series/load_factor`"

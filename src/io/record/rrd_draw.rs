@@ -25,7 +25,7 @@ pub const CHART_H: f32 = 1.0;
 /// The 2D view bounds of a contact chart: `(min, max)` corners, with room for the tick labels
 /// left of and below the frame and for the title above it.
 pub fn chart_bounds() -> ([f32; 2], [f32; 2]) {
-    ([-0.42, -CHART_H - 0.2], [CHART_W + 0.08, 0.2])
+    ([-0.42, -CHART_H - 0.28], [CHART_W + 0.08, 0.28])
 }
 
 /// Light text on the viewer's dark background.
@@ -193,8 +193,8 @@ pub fn contact_curves(
     let pmax = pts[kmax].1;
     let tabs = pts.iter().map(|p| p.2.abs()).fold(0.0, f64::max);
     let unit = units.stress();
-    // Labels apart from each other (drawn centred on their point): t_n under its peak, t_T right
-    // of the patch, the axis left of it.
+    // Labels apart from each other (drawn centred on their point): t_n under its peak, the x1
+    // range under that, t_T right of the patch.
     rec.log(
         format!("{prefix}/labels"),
         &rerun::Points3D::new([
@@ -204,7 +204,11 @@ pub fn contact_curves(
                 0.0,
             ],
             [(b + 0.45 * ro) as f32, base as f32, 0.0],
-            [(a - 0.45 * ro) as f32, base as f32, 0.0],
+            [
+                pts[kmax].0 as f32,
+                (base - scale * pmax - 0.2 * ro) as f32,
+                0.0,
+            ],
         ])
         .with_radii([rerun::Radius::new_ui_points(0.5)])
         .with_colors([pressure_colour(), shear_colour(), label_colour()])
@@ -230,7 +234,13 @@ pub fn traction_arrows(
     let scale = if tmax > 0.0 { 0.2 * ro / tmax } else { 0.0 };
     let vectors: Vec<[f32; 3]> = t
         .iter()
-        .map(|(n, s)| [(or_zero(*s) * scale) as f32, (or_zero(*n) * scale) as f32, 0.0])
+        .map(|(n, s)| {
+            [
+                (or_zero(*s) * scale) as f32,
+                (or_zero(*n) * scale) as f32,
+                0.0,
+            ]
+        })
         .collect();
     rec.log(
         entity,
@@ -290,9 +300,9 @@ pub fn contact_chart(
             .with_radii([rerun::Radius::new_ui_points(0.5)]),
     )?;
     // Axis names: x1 below the middle of the x ticks, the title above the frame.
-    tick_pos.push([0.5 * w, 0.15]);
+    tick_pos.push([0.5 * w, 0.2]);
     tick_txt.push(format!("x1 [{}]", units.length));
-    tick_pos.push([0.5 * w, h - 0.09]);
+    tick_pos.push([0.5 * w, h - 0.14]);
     tick_txt.push(format!("{title} [{}]", units.stress()));
     rec.log(
         format!("{entity}/ticks"),

@@ -308,15 +308,16 @@ pub fn blueprint_messages(
         )?;
         match v.class {
             "3D" => {
-                // Head-on: the camera on the +x3 axis, x2 up, looking at the body centre a
-                // little below the hub (the road and the contact curves are below the body).
+                // Head-on: the camera on the +x3 axis, x2 up, looking a little below and right
+                // of the hub (the road and the contact curves are below the body, the colour
+                // scale and its labels right of it).
                 let r = spec.radius.max(f64::MIN_POSITIVE) as f32;
-                let target = [0.2 * r, -0.25 * r, 0.0];
+                let target = [0.35 * r, -0.3 * r, 0.0];
                 bs.log(
                     format!("{path}/EyeControls3D"),
                     &bp::EyeControls3D::new()
                         .with_kind(bpc::Eye3DKind::Orbital)
-                        .with_position([0.2 * r, -0.25 * r, 2.7 * r])
+                        .with_position([0.35 * r, -0.3 * r, 3.0 * r])
                         .with_look_target(target)
                         .with_eye_up([0.0, 1.0, 0.0]),
                 )?;

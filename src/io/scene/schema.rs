@@ -469,7 +469,7 @@ pub const MAX_MAGNITUDE: f64 = 1e60;
 pub(super) fn check_kind(kind: Kind, v: &toml::Value) -> Result<(), String> {
     let ok = match (kind, v) {
         (Kind::Float, toml::Value::Float(f)) => {
-            if f.is_finite() && !(*f != 0.0 && !(MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&f.abs())) {
+            if f.is_finite() && (*f == 0.0 || (MIN_MAGNITUDE..=MAX_MAGNITUDE).contains(&f.abs())) {
                 true
             } else if f.is_finite() {
                 return Err(format!(
