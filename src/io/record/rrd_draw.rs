@@ -25,7 +25,7 @@ pub const CHART_H: f32 = 1.0;
 /// The 2D view bounds of a contact chart: `(min, max)` corners, with room for the tick labels
 /// left of and below the frame and for the title above it.
 pub fn chart_bounds() -> ([f32; 2], [f32; 2]) {
-    ([-0.42, -CHART_H - 0.28], [CHART_W + 0.08, 0.28])
+    ([-0.42, -CHART_H - 0.28], [CHART_W + 0.08, 0.38])
 }
 
 /// Light text on the viewer's dark background.
