@@ -187,12 +187,16 @@ fn static_run_every_output_reads_back() {
         assert!((fyr.scalars[steps - 1] - fy).abs() <= 1e-9 * fy.abs());
         let st: Vec<i64> = fyr.times.iter().map(|x| x.0).collect();
         assert_eq!(st, (0..steps as i64).collect::<Vec<_>>());
-        let tt: Vec<i64> = fyr.times.iter().map(|x| x.1).collect();
-        assert_eq!(tt[steps - 1], 1_000_000_000);
+        // Load stepping: no `sim_time` (read back as −1); λ is a series.
+        assert!(fyr.times.iter().all(|x| x.1 == -1), "{:?}", fyr.times);
+        let lambda = &r["/series/load_factor"].scalars;
+        assert_eq!(lambda.len(), steps);
+        assert!((lambda[steps - 1] - 1.0).abs() < 1e-12);
         let mesh_r = &r["/body/mesh"];
-        // Every step, and the reference configuration at sim_time 0 (no step index) first.
+        // Every step, and the reference configuration at step −1 first.
         assert_eq!(mesh_r.mesh_vertices, vec![n_nodes; steps + 1]);
-        assert_eq!(mesh_r.times[0], (-1, 0));
+        assert_eq!(mesh_r.times[0], (-1, -1));
+        assert_eq!(mesh_r.times[1], (0, -1));
         for n in 0..n_nodes {
             let p = mesh_r.last_vertices[n];
             assert!((f64::from(p[0]) - (x1[n] + u1[n])).abs() < 1e-5);
@@ -200,7 +204,7 @@ fn static_run_every_output_reads_back() {
         assert_eq!(r["/newton/iterations"].scalars.len(), steps);
         assert_eq!(r["/newton/residual"].scalars.len(), conv.len());
         assert!(r["/scene"].static_rows >= 1);
-        assert!(r.contains_key("/contact/pressure") && r.contains_key("/road"));
+        assert!(r.contains_key("/contact/chart/pressure/curve") && r.contains_key("/road"));
     }
 
     // PNG plots exist and are PNG images of the drawn size.

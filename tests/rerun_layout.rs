@@ -2,9 +2,13 @@
 //! `run.mcap`) carries a default layout (a blueprint store, activated) with a head-on body view,
 //! one time-series view for the hub forces and torque together, one for Newton, one for the
 //! energies and bar charts of the contact tractions against x1, named with the scene's units;
-//! the body is visible at sim_time 0 (the reference configuration); the contact bar charts have
-//! widths that tile the patch (not 1-length-unit bars); the body view is magnified by
-//! `[output] displacement_scale`; a killed run's `.rrd` is repaired by `tread replay --to`.
+//! Newton iterations and residuals in separate views; the body is visible before the first step
+//! (the reference configuration); a load-stepping run (static, steady) is on the `step`
+//! sequence, with no duration timeline; the colour scale's labels are light and beside the bar;
+//! the contact charts are drawn against x1 over the patch with round ticks; recordings are named
+//! by scene and mode; an `.rrd` converted from MCAP has the colour scale, contact curves, arrows
+//! and charts and the units; the body view is magnified by `[output] displacement_scale`; a
+//! killed run's `.rrd` is repaired by `tread replay --to`.
 
 #![cfg(feature = "rerun")]
 
@@ -110,8 +114,55 @@ fn run(dir: &Path, extra: &[&str]) -> std::path::PathBuf {
     out
 }
 
+/// Timelines of every temporal recording chunk.
+fn timelines(s: &Stores) -> std::collections::BTreeSet<String> {
+    s.chunks
+        .values()
+        .flatten()
+        .filter(|c| !c.is_static())
+        .flat_map(|c| {
+            c.timelines()
+                .keys()
+                .map(|t| t.to_string())
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Positions of the Points2D rows of `entity` (the last row).
+fn last_points2d(s: &Stores, entity: &str) -> Vec<[f32; 2]> {
+    let id = rerun::archetypes::Points2D::descriptor_positions().component;
+    let c = s.chunks[entity].last().unwrap();
+    c.iter_slices::<[f32; 2]>(id).last().unwrap().to_vec()
+}
+
+/// Positions and colours of the Points3D rows of `entity` (the last row).
+fn last_points3d(s: &Stores, entity: &str) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let pid = rerun::archetypes::Points3D::descriptor_positions().component;
+    let cid = rerun::archetypes::Points3D::descriptor_colors().component;
+    let c = s.chunks[entity].last().unwrap();
+    (
+        c.iter_slices::<[f32; 3]>(pid).last().unwrap().to_vec(),
+        c.iter_slices::<u32>(cid).last().unwrap().to_vec(),
+    )
+}
+
+/// The recording's name (its `/__properties` chunk) contains `name`.
+fn assert_named(s: &Stores, name: &str) {
+    let props: String = s
+        .text
+        .iter()
+        .filter(|(e, _)| e.contains("__properties"))
+        .map(|(_, t)| t.as_str())
+        .collect();
+    assert!(
+        props.contains(name),
+        "recording not named {name:?}: {props}"
+    );
+}
+
 #[test]
-fn run_rrd_has_the_default_layout_units_initial_state_and_tiled_bars() {
+fn run_rrd_has_the_default_layout_units_initial_state_and_charts() {
     let dir = TestDir::new("rerun_layout", "run");
     let out = run(&dir, &[]);
     let rrd = out.join("run.rrd");
@@ -120,14 +171,15 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_tiled_bars() {
     // The layout: a blueprint store, activated and the default.
     assert_eq!(s.activation, vec![(true, true)]);
     assert!(s.blueprint_entities.iter().any(|e| e == "/viewport"));
-    for (class, n) in [("3D", 1), ("TimeSeries", 4), ("BarChart", 2)] {
+    for (class, n) in [("3D", 1), ("TimeSeries", 5), ("2D", 2), ("BarChart", 0)] {
         let got = s.blueprint_text.matches(&format!("\"{class}\"")).count();
         assert_eq!(got, n, "{class} views");
     }
     for name in [
         "Body head-on [mm], colour τ = max in-plane shear [N/mm²], u ×10",
-        "Hub force F_x, F_y [N/mm] and torque M [N·mm/mm] against load factor λ on sim_time",
-        "Newton iterations and relative residual",
+        "Hub force F_x, F_y [N/mm] and torque M [N·mm/mm] against load step",
+        "Newton iterations per step against load step",
+        "Newton residual: log10 of the relative residual of every iteration",
         "Energies (strain, kinetic, total) [N·mm/mm]",
         "Contact pressure t_n [N/mm²] against x1 [mm]",
         "Contact shear t_T [N/mm²] against x1 [mm]",
@@ -136,33 +188,66 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_tiled_bars() {
     }
     for q in [
         "/hub/**",
-        "/newton/**",
+        "/newton/iterations",
+        "/newton/log10_residual",
         "/energy/**",
-        "/contact/pressure",
+        "/contact/chart/pressure/**",
         "/body/**",
     ] {
         assert!(s.blueprint_text.contains(q), "no view shows {q}");
     }
     assert!(s.blueprint_text.contains("EyeControls3D"));
+    assert!(s.blueprint_text.contains("VisualBounds2D"));
+
+    // Named by scene and mode.
+    assert_named(&s, "layout_static (static mode)");
+
+    // Load stepping: the step sequence only, no duration timeline (λ is a series).
+    let tl = timelines(&s);
+    assert!(tl.contains("step"), "{tl:?}");
+    assert!(
+        !tl.contains("sim_time"),
+        "a load-stepping run on sim_time: {tl:?}"
+    );
+    let r = read_rrd(&rrd);
+    let (h, rows) = read_csv(&out.join("history.csv"));
+    let steps = rows.len();
+    let lambda = &r["/series/load_factor"];
+    assert_eq!(lambda.scalars.len(), steps);
+    assert!((lambda.scalars[steps - 1] - 1.0).abs() < 1e-12);
+    assert_eq!(
+        r["/hub/force_y"]
+            .times
+            .iter()
+            .map(|t| t.0)
+            .collect::<Vec<_>>(),
+        (0..steps as i64).collect::<Vec<_>>()
+    );
+    // Few load steps: the series carry markers, so one step is seen too.
+    assert!(s.text["/hub/force_y"].contains("SeriesPoints"));
 
     // Series named with units.
     let names = |e: &str| s.text[e].clone();
     assert!(names("/hub/force_x").contains("F_x [N/mm]"));
     assert!(names("/hub/torque").contains("M [N·mm/mm]"));
 
-    // The body at sim_time 0: the reference configuration, before step 0.
-    let r = read_rrd(&rrd);
+    // The body before the first step (step −1): the reference configuration.
     let mesh = &r["/body/mesh"];
-    assert_eq!(
-        mesh.times[0],
-        (-1, 0),
-        "first body/mesh row: no step, sim_time 0"
-    );
-    let (h, rows) = read_csv(&out.join("history.csv"));
-    let steps = rows.len();
+    assert_eq!(mesh.times[0].0, -1, "first body/mesh row at step -1");
     assert_eq!(mesh.times.len(), steps + 1);
-    assert!(r.contains_key("/body/colour_scale"));
     assert!(r.contains_key("/contact/curves/pressure"));
+
+    // The colour scale's labels: light text, right of the bar (x1 > 1.25 Ro), not on it.
+    let ro = 2.0f32;
+    let (lp, lc) = last_points3d(&s, "/body/colour_scale/labels");
+    assert_eq!(lp.len(), 2);
+    for p in &lp {
+        assert!(p[0] > 1.25 * ro + 0.3 * ro, "label at {p:?}");
+    }
+    for c in &lc {
+        let [r, g, b] = [c >> 24, (c >> 16) & 255, (c >> 8) & 255];
+        assert!(r.min(g).min(b) >= 200, "label colour {c:08x}");
+    }
 
     // Magnification: the body view shows X + 10 u (the final step).
     let (nh, nrows) = read_csv(&out.join("nodes.csv"));
@@ -185,33 +270,111 @@ fn run_rrd_has_the_default_layout_units_initial_state_and_tiled_bars() {
             "node {n}"
         );
     }
-    let _ = h;
 
-    // Bar charts: widths tile the patch (sum = extent + half of each end spacing), far below
-    // the default 1 length unit each.
-    let widths_id = rerun::archetypes::BarChart::descriptor_widths().component;
-    let absc_id = rerun::archetypes::BarChart::descriptor_abscissa().component;
-    let last = s.chunks["/contact/pressure"].last().unwrap();
-    assert!(
-        last.components().get_array(widths_id).is_some(),
-        "no widths"
+    // The contact charts: one marker per contact point, spread over most of the frame's width
+    // (the x range is the patch, padded to round ticks), inside the frame.
+    let (w, hgt) = (
+        tread::io::record::rrd_draw::CHART_W,
+        tread::io::record::rrd_draw::CHART_H,
     );
-    let w: Vec<f32> = last.iter_slices::<f32>(widths_id).last().unwrap().to_vec();
-    assert!(w.len() >= 3, "{w:?}");
-    assert!(w.iter().all(|&x| x > 0.0 && x < 0.2), "{w:?}");
-    let _ = absc_id;
     let cx = column(&h, &rows, "patch_x_min");
     let cy = column(&h, &rows, "patch_x_max");
-    let extent = cy[steps - 1] - cx[steps - 1];
-    let total: f64 = w.iter().map(|x| f64::from(*x)).sum();
-    assert!(
-        total >= extent && total <= extent * 1.5 + 0.1,
-        "bars span {total}, patch {extent}"
-    );
+    for e in [
+        "/contact/chart/pressure/points",
+        "/contact/chart/shear/points",
+    ] {
+        let p = last_points2d(&s, e);
+        assert!(p.len() >= 3, "{e}: {p:?}");
+        let xs: Vec<f32> = p.iter().map(|q| q[0]).collect();
+        let (a, b) = (xs[0], xs[xs.len() - 1]);
+        assert!(xs.windows(2).all(|q| q[0] <= q[1]), "{e}: not along x1");
+        assert!(a >= 0.0 && b <= w && b - a >= 0.4 * w, "{e}: {a} … {b}");
+        assert!(
+            p.iter().all(|q| q[1] <= 1e-6 && q[1] >= -hgt - 1e-6),
+            "{e}: {p:?}"
+        );
+    }
+    // The ticks: round values covering the patch, at least three along x1.
+    let (x0, step, n) = tread::io::record::rrd_draw::nice_ticks(cx[steps - 1], cy[steps - 1]);
+    assert!(n >= 3 && x0 <= cx[steps - 1] && x0 + step * (n - 1) as f64 >= cy[steps - 1]);
+    assert!(s.text["/contact/chart/pressure/ticks"].contains("x1 [mm]"));
 }
 
 #[test]
-fn replayed_mcap_has_the_layout_and_contact_bars() {
+fn newton_iterations_and_residuals_are_separate_views() {
+    use tread::io::record::rrd_layout::{views, LayoutPaths, LayoutSpec};
+    for paths in [LayoutPaths::run(), LayoutPaths::replay()] {
+        let spec = LayoutSpec {
+            units: Default::default(),
+            radius: 1.0,
+            magnification: 1.0,
+            time_name: "time".into(),
+            paths,
+        };
+        let v = views(&spec);
+        let shows = |q: &str| -> Vec<usize> {
+            (0..v.len())
+                .filter(|&k| v[k].contents.iter().any(|c| c.contains(q)))
+                .collect()
+        };
+        let it = shows("newton_iterations");
+        let it = if it.is_empty() {
+            shows("newton/iterations")
+        } else {
+            it
+        };
+        let res = shows("log10_residual");
+        assert_eq!(it.len(), 1, "{v:?}");
+        assert_eq!(res.len(), 1, "{v:?}");
+        assert_ne!(it, res, "iterations and residuals in one view");
+        assert_eq!(v[it[0]].contents.len(), 1, "{:?}", v[it[0]]);
+        assert_eq!(v[res[0]].contents.len(), 1, "{:?}", v[res[0]]);
+    }
+}
+
+#[test]
+fn a_steady_recording_is_named_by_mode_and_on_the_step_sequence() {
+    let dir = TestDir::new("rerun_layout", "steady");
+    let out = dir.join("out");
+    let o = tread()
+        .args(["-q", "run", "scenarios/rolling_frictionless.toml", "--out"])
+        .arg(&out)
+        .args([
+            "--set",
+            "analysis.mode=\"steady\"",
+            "--set",
+            "mesh.n_theta=32",
+            "--set",
+            "output.sinks=[\"summary\",\"mcap\",\"rerun\"]",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = read_stores(&out.join("run.rrd"));
+    assert_named(&s, "rolling_frictionless (steady mode)");
+    let tl = timelines(&s);
+    assert!(!tl.contains("sim_time"), "{tl:?}");
+    assert!(s.blueprint_text.contains("against load step"));
+    let r = read_rrd(&out.join("run.rrd"));
+    assert!(!r["/hub/force_y"].scalars.is_empty());
+    assert!(r["/hub/force_y"].times.iter().all(|t| t.0 >= 0));
+    // The MCAP converted: the same name and timelines.
+    let to = dir.join("converted.rrd");
+    let o = tread()
+        .args(["replay", out.join("run.mcap").to_str().unwrap(), "--to"])
+        .arg(&to)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let c = read_stores(&to);
+    assert_named(&c, "rolling_frictionless (steady mode)");
+    let tl = timelines(&c);
+    assert!(!tl.contains("sim_time"), "{tl:?}");
+}
+
+#[test]
+fn replayed_mcap_has_the_layout_colour_scale_curves_arrows_charts_and_units() {
     let dir = TestDir::new("rerun_layout", "replay");
     let out = run(&dir, &[]);
     let to = dir.join("converted.rrd");
@@ -226,15 +389,38 @@ fn replayed_mcap_has_the_layout_and_contact_bars() {
     for q in [
         "/tread/hub/**",
         "/tread/energy/**",
-        "/tread/contact_curves/pressure",
+        "/tread/colour_scale/**",
+        "/tread/contact_curves/**",
+        "/tread/traction",
+        "/tread/contact_chart/pressure/**",
     ] {
         assert!(s.blueprint_text.contains(q), "no view shows {q}");
     }
     assert!(s
         .blueprint_text
         .contains("Contact pressure t_n [N/mm²] against x1 [mm]"));
-    assert!(s.chunks.contains_key("/tread/contact_curves/pressure"));
-    assert!(s.chunks.contains_key("/tread/newton/log10_residual"));
+    for e in [
+        "/tread/colour_scale",
+        "/tread/colour_scale/labels",
+        "/tread/contact_curves/pressure",
+        "/tread/contact_curves/shear",
+        "/tread/traction",
+        "/tread/contact_chart/pressure/points",
+        "/tread/contact_chart/shear/curve",
+        "/tread/newton/log10_residual",
+    ] {
+        assert!(s.chunks.contains_key(e), "no {e}");
+    }
+    assert!(s.text["/tread/hub/force_x"].contains("F_x [N/mm]"));
+    assert!(s.text["/tread/energy/strain"].contains("strain energy [N·mm/mm]"));
+    assert_named(&s, "layout_static (static mode)");
+    assert!(!timelines(&s).contains("sim_time"));
+    // The charts of the last step match the run's own.
+    let run = read_stores(&out.join("run.rrd"));
+    assert_eq!(
+        last_points2d(&s, "/tread/contact_chart/pressure/points"),
+        last_points2d(&run, "/contact/chart/pressure/points")
+    );
 }
 
 /// Statuses of `rerun rrd verify` on each file, or None without the Rerun CLI.

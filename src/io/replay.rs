@@ -13,13 +13,16 @@
 //! loopback address only (`rerun --bind 127.0.0.1`); `tread replay --bind ADDR` chooses
 //! another address (e.g. `0.0.0.0` to accept connections from other machines).
 //!
-//! A converted recording is named after the scene (the `name` of the MCAP's `scene` metadata
-//! record), as the `.rrd` written during a run is, and carries the same default layout
-//! ([`crate::io::record::rrd_layout`], with the MCAP's entity paths and the units of its scene):
-//! `/tread/contact_patch` messages become the bar charts `tread/contact_curves/pressure` and
-//! `tread/contact_curves/shear` (t_n, t_T at the points in contact against x1, bars as wide as
-//! each point's share of the patch), and the Newton residual also gets its log10
-//! (`tread/newton/log10_residual`).
+//! A converted recording is named by scene and mode (the `name` and `mode` of the MCAP's `scene`
+//! metadata record), as the `.rrd` written during a run is, and carries the same default layout
+//! ([`crate::io::record::rrd_layout`], with the MCAP's entity paths and the units of its scene),
+//! drawn from what the MCAP carries ([`crate::io::record::rrd_draw`]): the colour scale of the
+//! body (`tread/colour_scale`, from the `max_shear_stress` of `/tread/nodes`), the traction
+//! arrows (`tread/traction`, from `/tread/contact`), the contact curves below the road
+//! (`tread/contact_curves/*`) and the pressure and shear charts (`tread/contact_chart/*`, from
+//! `/tread/contact_patch`), series named with their units, and the Newton residual's log10
+//! (`tread/newton/log10_residual`). Not there: the displacement magnification and the reference
+//! configuration before the first step (the MCAP holds neither).
 //!
 //! The conversion reads the MCAP with a streaming reader (a truncated file converts up to its
 //! last complete chunk), decodes every protobuf message with the schema embedded in the file
@@ -27,9 +30,11 @@
 //! `LineStrips3D` (so the deformed mesh appears, which the Rerun viewer's own MCAP importer does
 //! not map), `foxglove.PointCloud` as `Points3D` (with its red/green/blue fields as colours),
 //! `foxglove.Log` as `TextLog`, and every numeric field of any other message as a `Scalars`
-//! series at `<topic>/<field>`. Timelines: `sim_time` = log_time (ns from 0) and `step` (the
-//! `index` of the latest `/tread/step` message at the same log time, or a message's own `step`
-//! field). Metadata records become static text documents under `metadata/<name>`.
+//! series at `<topic>/<field>`. Timelines: `step` (the `index` of the latest `/tread/step`
+//! message at the same log time, or a message's own `step` field) and, for a time-stepping run,
+//! `sim_time` = log_time (ns from 0); a load-stepping run (`time` = `load_factor` in the `scene`
+//! record) has `step` only, with λ as the series `tread/series/load_factor`. Metadata records
+//! become static text documents under `metadata/<name>`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -321,9 +326,11 @@ pub fn mcap_to_rrd(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayE
 #[cfg(feature = "rerun")]
 mod convert {
     use super::{ConvertStats, ReplayError};
-    use crate::io::record::rrd_layout;
+    use crate::io::record::png::Units;
+    use crate::io::record::rrd_draw;
+    use crate::io::record::rrd_layout::{self, series_label};
     use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, Value};
-    use std::collections::{BTreeMap, HashMap};
+    use std::collections::{BTreeMap, BTreeSet, HashMap};
     use std::path::Path;
 
     pub fn run(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayError> {
@@ -337,9 +344,13 @@ mod convert {
         rec.set_log_tick_enabled(false);
         // Named after the scene (`send_properties(false)` drops a builder's name).
         if let Some(name) = super::mcap_scene_name(&bytes) {
+            let name = match mcap_scene_field(&bytes, "mode") {
+                Some(m) => format!("{name} ({m} mode)"),
+                None => name,
+            };
             let _ = rec.send_recording_name(name);
         }
-        let scene_toml = mcap_scene_toml(&bytes).unwrap_or_default();
+        let scene_toml = mcap_scene_field(&bytes, "toml").unwrap_or_default();
         let radius = scene_toml
             .parse::<toml::Table>()
             .ok()
@@ -347,16 +358,23 @@ mod convert {
             .filter(|r| r.is_finite() && *r > 0.0)
             .unwrap_or(1.0);
         let units = crate::io::record::rrd::scene_units(&scene_toml);
+        let load_stepping = mcap_scene_field(&bytes, "time").as_deref() == Some("load_factor");
         let spec = rrd_layout::LayoutSpec {
-            units,
+            units: units.clone(),
             radius,
             magnification: 1.0,
-            // The MCAP's log time is the step's time or load factor: named as such.
-            time_name: "sim_time".into(),
+            time_name: if load_stepping { "load_factor" } else { "time" }.into(),
             paths: rrd_layout::LayoutPaths::replay(),
         };
         rrd_layout::send_layout(&rec, "tread", &spec)
             .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+        let mut draw = Drawing {
+            units,
+            ro: radius,
+            bottom: f64::INFINITY,
+            road: None,
+            styled: BTreeSet::new(),
+        };
         let mut st = ConvertStats::default();
         // Metadata records (not part of the message stream).
         if let Ok(reader) = mcap::read::LinearReader::new(&bytes) {
@@ -413,18 +431,25 @@ mod convert {
                     step_at.insert(m.log_time, i as i64);
                 }
             }
-            rec.set_duration_secs("sim_time", m.log_time as f64 * 1e-9);
+            if !load_stepping {
+                rec.set_duration_secs("sim_time", m.log_time as f64 * 1e-9);
+            }
             let step = uint_field(&msg, "step")
                 .map(|s| s as i64)
                 .or_else(|| step_at.get(&m.log_time).copied());
-            match step {
-                Some(s) => rec.set_time_sequence("step", s),
-                None => rec.disable_timeline("step"),
+            match (step, load_stepping) {
+                (Some(s), _) => rec.set_time_sequence("step", s),
+                // Before the first step (on no timeline at all it would be static).
+                (None, true) => rec.set_time_sequence("step", -1),
+                (None, false) => rec.disable_timeline("step"),
             }
             match desc.full_name() {
                 "foxglove.SceneUpdate" => scene_update(&rec, &topic, &msg),
-                "foxglove.PointCloud" => point_cloud(&rec, &topic, &msg),
-                "treadcontact.TreadContact" => contact_bars(&rec, &msg),
+                "foxglove.PointCloud" => {
+                    let cloud = point_cloud(&rec, &topic, &msg);
+                    draw.cloud(&rec, &topic, &cloud);
+                }
+                "treadcontact.TreadContact" => draw.contact(&rec, &topic, &msg),
                 "foxglove.Log" => {
                     if let Some(Value::String(t)) =
                         msg.get_field_by_name("message").map(|v| v.into_owned())
@@ -433,21 +458,31 @@ mod convert {
                     }
                 }
                 _ => {
+                    if topic == "tread/step" && load_stepping {
+                        let lambda = f64_of(&msg, "time");
+                        draw.scalar(
+                            &rec,
+                            "tread/series/load_factor",
+                            "load factor λ [1]",
+                            lambda,
+                        );
+                    }
                     for (f, v) in msg.fields() {
                         let name = f.name();
                         if matches!(name, "step" | "time" | "index") {
                             continue;
                         }
                         if let Some(x) = number(v) {
-                            if x.is_finite() {
-                                let _ =
-                                    rec.log(format!("{topic}/{name}"), &rerun::Scalars::single(x));
-                                if topic == "tread/newton" && name == "residual" && x > 0.0 {
-                                    let _ = rec.log(
-                                        "tread/newton/log10_residual",
-                                        &rerun::Scalars::single(x.log10()),
-                                    );
-                                }
+                            let entity = format!("{topic}/{name}");
+                            let label = draw.label(&topic, name);
+                            draw.scalar(&rec, &entity, &label, x);
+                            if topic == "tread/newton" && name == "residual" && x > 0.0 {
+                                draw.scalar(
+                                    &rec,
+                                    "tread/newton/log10_residual",
+                                    "log10 relative residual [1]",
+                                    x.log10(),
+                                );
                             }
                         }
                     }
@@ -460,13 +495,14 @@ mod convert {
         Ok(st)
     }
 
-    /// The resolved scene TOML of an MCAP log (its `scene` metadata record).
-    fn mcap_scene_toml(bytes: &[u8]) -> Option<String> {
+    /// A field of the `scene` metadata record of an MCAP log (`toml`: the resolved scene, `mode`,
+    /// `time`: `time` or `load_factor`).
+    fn mcap_scene_field(bytes: &[u8], field: &str) -> Option<String> {
         let reader = mcap::read::LinearReader::new(bytes).ok()?;
         for r in reader {
             match r {
                 Ok(mcap::records::Record::Metadata(m)) if m.name == "scene" => {
-                    return m.metadata.get("toml").cloned();
+                    return m.metadata.get(field).cloned();
                 }
                 Ok(_) => {}
                 Err(_) => return None,
@@ -482,44 +518,118 @@ mod convert {
         }
     }
 
-    /// t_n and t_T at the points in contact (t_n > 0) as bar charts against x1.
-    fn contact_bars(rec: &rerun::RecordingStream, msg: &DynamicMessage) {
-        let (x1, tn, tt) = (
-            f64_list(msg, "x1"),
-            f64_list(msg, "t_n"),
-            f64_list(msg, "t_t"),
-        );
-        let mut pts: Vec<(f64, f64, f64)> = (0..x1.len().min(tn.len()).min(tt.len()))
-            .filter(|&k| tn[k] > 0.0 && x1[k].is_finite() && tt[k].is_finite())
-            .map(|k| (x1[k], tn[k], tt[k]))
-            .collect();
-        if pts.is_empty() {
-            return;
+    /// What the drawings of the run's own `.rrd` need, gathered from the messages.
+    struct Drawing {
+        units: Units,
+        ro: f64,
+        /// Lowest x2 of the body in the last `/tread/nodes` cloud.
+        bottom: f64,
+        /// The last road height (`/tread/series/road_height`).
+        road: Option<f64>,
+        /// Series whose name and style are logged.
+        styled: BTreeSet<String>,
+    }
+
+    impl Drawing {
+        /// `name [unit]` of field `field` of `topic`, as the run's own `.rrd` names it.
+        fn label(&self, topic: &str, field: &str) -> String {
+            let name = match topic {
+                "tread/hub" => format!("hub_{field}"),
+                "tread/energy" => format!("energy_{field}"),
+                "tread/step" if field == "newton_iterations" => {
+                    return "Newton iterations per step [iterations]".into()
+                }
+                "tread/newton" if field == "residual" => return "relative residual [1]".into(),
+                t => match t.strip_prefix("tread/series/") {
+                    Some(n) if field == "value" => n.to_string(),
+                    _ => field.to_string(),
+                },
+            };
+            series_label(&self.units, &name)
         }
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let x: Vec<f64> = pts.iter().map(|p| p.0).collect();
-        let w: Vec<f32> = crate::io::record::rrd::bar_widths(&x)
-            .into_iter()
-            .map(|w| w as f32)
-            .collect();
-        for (entity, vals, colour) in [
-            (
-                "tread/contact_curves/pressure",
-                pts.iter().map(|p| p.1).collect::<Vec<_>>(),
-                rerun::Color::from_rgb(200, 60, 40),
-            ),
-            (
-                "tread/contact_curves/shear",
-                pts.iter().map(|p| p.2).collect(),
-                rerun::Color::from_rgb(40, 90, 200),
-            ),
-        ] {
-            let _ = rec.log(
-                entity,
-                &rerun::BarChart::new(vals)
-                    .with_abscissa(x.clone())
-                    .with_widths(w.clone())
-                    .with_color(colour),
+
+        /// A finite value of a series, named (and for the residuals drawn as dots) the first
+        /// time.
+        fn scalar(&mut self, rec: &rerun::RecordingStream, entity: &str, name: &str, x: f64) {
+            if !x.is_finite() {
+                return;
+            }
+            if self.styled.insert(entity.to_string()) {
+                let _ = if entity.starts_with("tread/newton/") && entity.ends_with("residual") {
+                    rec.log_static(
+                        entity,
+                        &rerun::SeriesPoints::new()
+                            .with_names([name])
+                            .with_marker_sizes([1.5]),
+                    )
+                } else {
+                    rec.log_static(entity, &rerun::SeriesLines::new().with_names([name]))
+                };
+            }
+            let _ = rec.log(entity, &rerun::Scalars::single(x));
+            if entity == "tread/series/road_height/value" {
+                self.road = Some(x);
+            }
+        }
+
+        /// The colour scale of `/tread/nodes` and the traction arrows of `/tread/contact`.
+        fn cloud(&mut self, rec: &rerun::RecordingStream, topic: &str, c: &Cloud) {
+            let col = |n: &str| c.get(n).map(Vec::as_slice).unwrap_or(&[]);
+            match topic {
+                "tread/nodes" => {
+                    self.bottom = col("y").iter().copied().fold(f64::INFINITY, f64::min);
+                    let max = col("max_shear_stress")
+                        .iter()
+                        .copied()
+                        .filter(|x| x.is_finite())
+                        .fold(0.0, f64::max);
+                    let _ = rrd_draw::colour_scale(rec, "tread", self.ro, max, &self.units);
+                }
+                "tread/contact" => {
+                    let (x, y, tn, tt) = (col("x"), col("y"), col("t_n"), col("t_t"));
+                    let k: Vec<usize> = (0..x.len().min(y.len()).min(tn.len()).min(tt.len()))
+                        .filter(|&k| tn[k] > 0.0)
+                        .collect();
+                    let origins: Vec<[f32; 3]> =
+                        k.iter().map(|&k| [x[k] as f32, y[k] as f32, 0.0]).collect();
+                    let t: Vec<(f64, f64)> = k.iter().map(|&k| (tn[k], tt[k])).collect();
+                    let _ = rrd_draw::traction_arrows(rec, "tread/traction", &origins, &t, self.ro);
+                }
+                _ => {}
+            }
+        }
+
+        /// The contact curves below the road and the pressure and shear charts of a
+        /// `/tread/contact_patch` message.
+        fn contact(&mut self, rec: &rerun::RecordingStream, topic: &str, msg: &DynamicMessage) {
+            if topic != "tread/contact_patch" {
+                return;
+            }
+            let (x1, tn, tt) = (
+                f64_list(msg, "x1"),
+                f64_list(msg, "t_n"),
+                f64_list(msg, "t_t"),
+            );
+            let n = x1.len().min(tn.len()).min(tt.len());
+            let pts = rrd_draw::sorted_patch((0..n).map(|k| (x1[k], tn[k], tt[k])));
+            if pts.is_empty() {
+                return;
+            }
+            let _ = rrd_draw::contact_charts(
+                rec,
+                "tread/contact_chart/pressure",
+                "tread/contact_chart/shear",
+                &pts,
+                &self.units,
+            );
+            let base = (-self.road.unwrap_or(self.ro)).min(self.bottom) - 0.1 * self.ro;
+            let _ = rrd_draw::contact_curves(
+                rec,
+                "tread/contact_curves",
+                &pts,
+                base,
+                self.ro,
+                &self.units,
             );
         }
     }
@@ -631,11 +741,15 @@ mod convert {
         }
     }
 
-    fn point_cloud(rec: &rerun::RecordingStream, topic: &str, msg: &DynamicMessage) {
+    /// The fields of a point cloud by name, one value per point.
+    type Cloud = HashMap<String, Vec<f64>>;
+
+    /// Log a `foxglove.PointCloud` as `Points3D`; returns its fields.
+    fn point_cloud(rec: &rerun::RecordingStream, topic: &str, msg: &DynamicMessage) -> Cloud {
         let stride = f64_of(msg, "point_stride") as usize;
         let data = match msg.get_field_by_name("data").map(|v| v.into_owned()) {
             Some(Value::Bytes(b)) => b,
-            _ => return,
+            _ => return Cloud::new(),
         };
         let mut fields: HashMap<String, (usize, i32)> = HashMap::new();
         for f in messages(msg, "fields") {
@@ -650,7 +764,7 @@ mod convert {
             fields.insert(name, (f64_of(&f, "offset") as usize, ty));
         }
         if stride == 0 {
-            return;
+            return Cloud::new();
         }
         let read = |p: usize, name: &str| -> Option<f64> {
             let (off, ty) = *fields.get(name)?;
@@ -683,5 +797,12 @@ mod convert {
             pts = pts.with_colors(c);
         }
         let _ = rec.log(topic, &pts);
+        fields
+            .keys()
+            .map(|k| {
+                let col = (0..n).map(|p| read(p, k).unwrap_or(f64::NAN)).collect();
+                (k.clone(), col)
+            })
+            .collect()
     }
 }

@@ -339,14 +339,17 @@ pub struct RrdEntity {
     pub static_rows: usize,
 }
 
+/// One temporal row of an entity: step, sim_time, its scalar and its mesh vertices.
+#[cfg(feature = "rerun")]
+type RrdRow = (i64, i64, Option<f64>, Option<Vec<[f32; 3]>>);
+
 /// Decode an `.rrd` with the rerun crate's decoder; entities by path (e.g. `/hub/force_y`).
 #[cfg(feature = "rerun")]
 pub fn read_rrd(path: &Path) -> BTreeMap<String, RrdEntity> {
     use rerun::external::re_log_encoding::DecoderApp;
     use rerun::log::{Chunk, LogMsg};
     let f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut rows: BTreeMap<String, Vec<(i64, i64, Option<f64>, Option<Vec<[f32; 3]>>)>> =
-        BTreeMap::new();
+    let mut rows: BTreeMap<String, Vec<RrdRow>> = BTreeMap::new();
     let mut statics: BTreeMap<String, usize> = BTreeMap::new();
     let scalars_id = rerun::archetypes::Scalars::descriptor_scalars().component;
     let verts_id = rerun::archetypes::Mesh3D::descriptor_vertex_positions().component;

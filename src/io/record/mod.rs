@@ -105,6 +105,8 @@ pub mod progress;
 #[cfg(feature = "rerun")]
 pub mod rrd;
 #[cfg(feature = "rerun")]
+pub mod rrd_draw;
+#[cfg(feature = "rerun")]
 pub mod rrd_layout;
 pub mod shape;
 pub mod sta;

@@ -1,36 +1,40 @@
 //! Rerun sink: `run.rrd` for the Rerun viewer (`rerun run.rrd`). Behind the default cargo
 //! feature `rerun`.
 //!
-//! Timelines: `step` (sequence: the accepted-step index) and `sim_time` (duration: simulated
-//! seconds, or the load factor λ counted as seconds in load stepping; on a continuation branch
-//! the continuation parameter); on an ω-continuation branch also `omega` (duration: the hub
-//! speed in rad/s counted as seconds), so the deformed body and its stresses can be scrubbed by
-//! speed; the wall-clock
-//! `log_time`/`log_tick` timelines are off, so a file depends only on the run. Entities:
+//! Timelines: `step` (sequence: the accepted-step index) and, for a time-stepping run, `sim_time`
+//! (duration: simulated seconds). A load-stepping run (`RunMeta::time_name` = `load_factor`:
+//! static, spinning, steady) has `step` only, and λ is the series `series/load_factor` (Rerun has
+//! no float timeline; λ as a duration would read "+990 ms"). On an ω-continuation branch also
+//! `omega` (duration: the hub speed in rad/s counted as seconds), so the deformed body and its
+//! stresses can be scrubbed by speed; the wall-clock `log_time`/`log_tick` timelines are off, so
+//! a file depends only on the run. The recording is named `<scene> (<mode> mode)`. Entities:
 //!
 //! | entity | archetype | content |
 //! |---|---|---|
 //! | `scene` | TextDocument (static) | the resolved scene TOML and the build |
-//! | `body/mesh` | Mesh3D | the deformed mesh (z = 0), vertex colours = in-plane max shear stress (viridis, 0 … frame max); the reference configuration (u = 0, the initial state of every mode) at `sim_time` 0 |
-//! | `body/colour_scale` | Mesh3D + Points3D labels (`body/colour_scale/labels`) | the colour scale of the mesh beside the body: viridis from 0 (bottom) to the frame's maximum τ (top), labelled with values and unit |
+//! | `body/mesh` | Mesh3D | the deformed mesh (z = 0), vertex colours = in-plane max shear stress (viridis, 0 … frame max); the reference configuration (u = 0, the initial state of every mode) at `sim_time` 0, or at `step` −1 in load stepping |
+//! | `body/colour_scale` | Mesh3D + Points3D labels (`body/colour_scale/labels`) | the colour scale of the mesh beside the body: viridis from 0 (bottom) to the frame's maximum τ (top), labelled with values and unit in light text right of the bar ([`rrd_draw::colour_scale`]) |
 //! | `body/boundary` | LineStrips3D | inner and outer boundary loops |
 //! | `road` | LineStrips3D | the road line x2 = −H (magnified with the body, see below) |
 //! | `contact/points` | Points3D | facet points of the outer boundary in contact, coloured by t_n |
 //! | `contact/traction` | Arrows3D | traction vectors (t_T, t_n) at those points (scaled to 0.2 Ro at the peak) |
-//! | `contact/pressure`, `contact/shear` | BarChart | t_n and t_T at the contact points (abscissa x1; each bar as wide as its point's share of the patch: half the distance to each neighbour) |
+//! | `contact/chart/pressure/*`, `contact/chart/shear/*` | LineStrips2D, Points2D | charts of t_n and t_T against x1 for 2D views: frame, grid at round ticks over the patch, tick labels, the curve and a marker per contact point ([`rrd_draw::contact_chart`]) |
 //! | `contact/curves/pressure`, `contact/curves/shear`, `contact/curves/axis`, `contact/curves/labels` | LineStrips3D, Points3D labels | t_n and t_T drawn as curves against x1 below the road and the body (one scale for both, peak = 0.3 Ro; the labels give the peak values and the x1 range) |
 //! | `hub/force_x`, `hub/force_y`, `hub/torque` | Scalars | hub loads |
 //! | `energy/strain`, `energy/kinetic`, `energy/total` | Scalars | energies |
 //! | `series/<name>` | Scalars | the other series of the view (contact resultants, patch, stress max, model scalars) |
 //! | `newton/iterations` | Scalars | Newton iterations of every step |
-//! | `newton/residual`, `newton/log10_residual` | Scalars | every Newton iteration (max over fields of ‖R_f‖/‖R_f⁰‖, and its log10), also on the `newton_iteration` timeline |
+//! | `newton/residual`, `newton/log10_residual` | Scalars (drawn as dots) | every Newton iteration (max over fields of ‖R_f‖/‖R_f⁰‖, and its log10), also on the `newton_iteration` timeline |
+//! | `series/load_factor` | Scalars | λ of every step (load stepping) |
 //! | `branch/<name>` | Scalars | continuation points on the `branch_point` timeline; `branch/table` TextDocument at the end |
 //! | `steady/mesh`, `steady/results` | Mesh3D, TextDocument | the steady state |
 //! | `log` | TextLog | run start and end, rejected steps, interrupts |
 //!
 //! Every series is named with its unit (`F_x [lbf/in]`) from `[scene] units`. The recording
 //! carries a default layout ([`super::rrd_layout`]): a head-on view of the body and separate
-//! views for the hub loads, the Newton iterations, the energies and the contact tractions.
+//! views for the hub loads, the Newton iterations, the Newton residuals, the energies and the
+//! contact tractions. In load stepping every series has a marker at each step (a plain steady
+//! solve has a single step).
 //!
 //! # Displacement magnification
 //!
@@ -46,6 +50,7 @@
 //! body still meets it.
 
 use super::png::Units;
+use super::rrd_draw;
 use super::rrd_layout::{self, series_label, LayoutPaths, LayoutSpec};
 use super::{
     boundary_loops, colormap, display_triangles, ContinuationPoint, NewtonIteration, RecordError,
@@ -72,6 +77,9 @@ pub struct RrdSink {
     bottom: f64,
     /// Displacement magnification of the body view (`[output] displacement_scale`).
     magnification: f64,
+    /// Load stepping (`RunMeta::time_name` = `load_factor`): the steps are on the `step`
+    /// sequence only, λ is the series `series/load_factor`.
+    load_stepping: bool,
 }
 
 /// `[output] displacement_scale` of a resolved scene TOML (1 when absent or not a finite
@@ -95,41 +103,6 @@ pub fn scene_units(scene_toml: &str) -> Units {
         .ok()
         .and_then(|t| t.get("scene")?.get("units")?.as_str().map(Units::parse))
         .unwrap_or_default()
-}
-
-/// Widths of bars centred at the sorted abscissae `x`: half the distance to each neighbour
-/// (the outer bars extend as far outwards as inwards), so the bars tile the patch. A point that
-/// shares its abscissa with its only neighbour takes the width of the next bar, so no bar is
-/// invisible.
-pub fn bar_widths(x: &[f64]) -> Vec<f64> {
-    let mut w = raw_bar_widths(x);
-    for i in 0..w.len() {
-        if w[i] <= 0.0 {
-            let near = (1..w.len())
-                .flat_map(|d| [i.checked_sub(d), Some(i + d)])
-                .flatten()
-                .filter_map(|j| w.get(j).copied())
-                .find(|v| *v > 0.0);
-            w[i] = near.unwrap_or(0.0);
-        }
-    }
-    w
-}
-
-fn raw_bar_widths(x: &[f64]) -> Vec<f64> {
-    let n = x.len();
-    (0..n)
-        .map(|i| {
-            let left = if i > 0 { x[i] - x[i - 1] } else { f64::NAN };
-            let right = if i + 1 < n { x[i + 1] - x[i] } else { f64::NAN };
-            match (left.is_finite(), right.is_finite()) {
-                (true, true) => 0.5 * (left + right),
-                (true, false) => left,
-                (false, true) => right,
-                (false, false) => 0.0,
-            }
-        })
-        .collect()
 }
 
 /// x_rigid + k (x − x_rigid): the displayed position (module docs, displacement magnification).
@@ -179,6 +152,7 @@ impl RrdSink {
             units: Units::default(),
             bottom: f64::INFINITY,
             magnification: 1.0,
+            load_stepping: false,
         }
     }
 
@@ -196,7 +170,30 @@ impl RrdSink {
             return;
         }
         if self.styled.insert(entity.to_string()) {
-            let r = rec.log_static(entity, &rerun::SeriesLines::new().with_names([name]));
+            let r = if entity.starts_with("newton/") && entity.ends_with("residual") {
+                // One value per Newton iteration, several per step: dots, not a line through
+                // every iteration of every step.
+                rec.log_static(
+                    entity,
+                    &rerun::SeriesPoints::new()
+                        .with_names([name])
+                        .with_marker_sizes([1.5]),
+                )
+            } else if self.load_stepping {
+                // Few load steps (a plain steady solve has one): a marker at each, so a single
+                // step is seen.
+                rec.log_static(entity, &rerun::SeriesLines::new().with_names([name]))
+                    .and_then(|()| {
+                        rec.log_static(
+                            entity,
+                            &rerun::SeriesPoints::new()
+                                .with_names([name])
+                                .with_marker_sizes([3.0]),
+                        )
+                    })
+            } else {
+                rec.log_static(entity, &rerun::SeriesLines::new().with_names([name]))
+            };
             self.check(r);
         }
         let r = rec.log(entity, &rerun::Scalars::single(value));
@@ -256,55 +253,10 @@ impl RrdSink {
         self.colour_scale(entity, mmax);
     }
 
-    /// The colour scale of the mesh colours: a vertical bar right of the body (x1 from 1.15 Ro to
-    /// 1.25 Ro, x2 from −0.6 Ro to Ro) in the same piecewise-linear viridis as the mesh (its five
-    /// stops are the bar's vertices, so the GPU's linear interpolation reproduces the map
-    /// exactly), labelled 0 below and the maximum τ of the frame above.
+    /// The colour scale of the mesh colours ([`rrd_draw::colour_scale`]).
     fn colour_scale(&mut self, entity: &str, max: f64) {
         let Some(rec) = self.rec.clone() else { return };
-        let ro = self.ro as f32;
-        let (x0, x1) = (1.15 * ro, 1.25 * ro);
-        let y = |t: f32| -0.6 * ro + 1.6 * ro * t;
-        let mut pos = Vec::with_capacity(10);
-        let mut colors = Vec::with_capacity(10);
-        for k in 0..5 {
-            let t = k as f32 / 4.0;
-            let c = colormap(f64::from(t));
-            for x in [x0, x1] {
-                pos.push([x, y(t), 0.0]);
-                colors.push(rerun::Color::from_rgb(c[0], c[1], c[2]));
-            }
-        }
-        let tris: Vec<[u32; 3]> = (0..4u32)
-            .flat_map(|k| {
-                let a = 2 * k;
-                [[a, a + 1, a + 3], [a, a + 3, a + 2]]
-            })
-            .collect();
-        let r = rec.log(
-            format!("{entity}/colour_scale"),
-            &rerun::Mesh3D::new(pos)
-                .with_triangle_indices(tris)
-                .with_vertex_colors(colors),
-        );
-        self.check(r);
-        let unit = self.units.stress();
-        let fmt =
-            |v: f64| crate::io::output::fmt_num(if v.abs() > 0.0 { round_sig(v, 4) } else { 0.0 });
-        let labels = [
-            format!("τ = 0 {unit}"),
-            format!("τ max = {} {unit}", fmt(max)),
-        ];
-        let xc = 0.5 * (x0 + x1);
-        let r = rec.log(
-            format!("{entity}/colour_scale/labels"),
-            // Labels are drawn centred on their point: below and above the bar.
-            &rerun::Points3D::new([[xc, y(0.0) - 0.08 * ro, 0.0], [xc, y(1.0) + 0.08 * ro, 0.0]])
-                .with_radii([0.005 * ro])
-                .with_colors([rerun::Color::from_rgb(30, 30, 30)])
-                .with_labels(labels)
-                .with_show_labels(true),
-        );
+        let r = rrd_draw::colour_scale(&rec, entity, self.ro, max, &self.units);
         self.check(r);
     }
 
@@ -339,110 +291,21 @@ impl RrdSink {
     }
 
     /// Contact pressure and shear as curves against x1 below the road (in the body view) and as
-    /// bar charts with their true widths.
+    /// charts against x1 ([`rrd_draw::contact_charts`]).
     fn contact_curves(&mut self, patch: &[&crate::contact::ContactSample], road: Option<f64>) {
         let Some(rec) = self.rec.clone() else { return };
-        let mut pts: Vec<(f64, f64, f64)> = patch
-            .iter()
-            .map(|s| (s.x1, s.t_n, super::or_zero(s.t_t)))
-            .collect();
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let x1: Vec<f64> = pts.iter().map(|p| p.0).collect();
-        let tn: Vec<f64> = pts.iter().map(|p| p.1).collect();
-        let tt: Vec<f64> = pts.iter().map(|p| p.2).collect();
-        let w: Vec<f32> = bar_widths(&x1).into_iter().map(|w| w as f32).collect();
-        let pressure_colour = rerun::Color::from_rgb(200, 60, 40);
-        let shear_colour = rerun::Color::from_rgb(40, 90, 200);
-        let r = rec.log(
-            "contact/pressure",
-            &rerun::BarChart::new(tn.clone())
-                .with_abscissa(x1.clone())
-                .with_widths(w.clone())
-                .with_color(pressure_colour),
+        let pts = rrd_draw::sorted_patch(patch.iter().map(|s| (s.x1, s.t_n, s.t_t)));
+        let r = rrd_draw::contact_charts(
+            &rec,
+            "contact/chart/pressure",
+            "contact/chart/shear",
+            &pts,
+            &self.units,
         );
         self.check(r);
-        let r = rec.log(
-            "contact/shear",
-            &rerun::BarChart::new(tt.clone())
-                .with_abscissa(x1.clone())
-                .with_widths(w)
-                .with_color(shear_colour),
-        );
-        self.check(r);
-        // Curves: baseline 0.1 Ro below the road and the body, one scale for both (peak |t| =
-        // 0.3 Ro).
-        let ro = self.ro;
-        let base = (-road.unwrap_or(ro)).min(self.bottom) - 0.1 * ro;
-        let peak = tn
-            .iter()
-            .chain(&tt)
-            .map(|t| t.abs())
-            .filter(|t| t.is_finite())
-            .fold(0.0, f64::max);
-        let scale = if peak > 0.0 { 0.3 * ro / peak } else { 0.0 };
-        let curve = |t: &[f64]| -> Vec<[f32; 3]> {
-            x1.iter()
-                .zip(t)
-                .map(|(x, t)| [*x as f32, (base - scale * t) as f32, 0.0])
-                .collect()
-        };
-        let unit = self.units.stress();
-        let (pmax, tabs) = (
-            tn.iter().copied().fold(0.0, f64::max),
-            tt.iter().map(|t| t.abs()).fold(0.0, f64::max),
-        );
-        let r = rec.log(
-            "contact/curves/pressure",
-            &rerun::LineStrips3D::new([curve(&tn)]).with_colors([pressure_colour]),
-        );
-        self.check(r);
-        let r = rec.log(
-            "contact/curves/shear",
-            &rerun::LineStrips3D::new([curve(&tt)]).with_colors([shear_colour]),
-        );
-        self.check(r);
-        let (Some(&a), Some(&b)) = (x1.first(), x1.last()) else {
-            return;
-        };
-        let r = rec.log(
-            "contact/curves/axis",
-            &rerun::LineStrips3D::new([[
-                [a as f32, base as f32, 0.0],
-                [b as f32, base as f32, 0.0],
-            ]])
-            .with_colors([rerun::Color::from_rgb(90, 90, 90)]),
-        );
-        self.check(r);
-        // Labels apart from each other: t_n under its peak, t_T right of the patch, the axis
-        // left of it (labels are drawn centred on their point).
-        let fmt = |v: f64| crate::io::output::fmt_num(round_sig(v, 4));
-        let kmax = (0..tn.len())
-            .max_by(|&i, &j| tn[i].total_cmp(&tn[j]))
-            .unwrap_or(0);
-        let r = rec.log(
-            "contact/curves/labels",
-            &rerun::Points3D::new([
-                [
-                    x1[kmax] as f32,
-                    (base - scale * tn[kmax] - 0.08 * ro) as f32,
-                    0.0,
-                ],
-                [(b + 0.45 * ro) as f32, base as f32, 0.0],
-                [(a - 0.45 * ro) as f32, base as f32, 0.0],
-            ])
-            .with_radii([0.004 * ro as f32])
-            .with_colors([
-                pressure_colour,
-                shear_colour,
-                rerun::Color::from_rgb(90, 90, 90),
-            ])
-            .with_labels([
-                format!("t_n against x1, max {} {unit}", fmt(pmax)),
-                format!("t_T, max |t_T| {} {unit}", fmt(tabs)),
-                format!("x1 {} … {} {}", fmt(a), fmt(b), self.units.length),
-            ])
-            .with_show_labels(true),
-        );
+        // Curves: baseline 0.1 Ro below the road and the body.
+        let base = (-road.unwrap_or(self.ro)).min(self.bottom) - 0.1 * self.ro;
+        let r = rrd_draw::contact_curves(&rec, "contact/curves", &pts, base, self.ro, &self.units);
         self.check(r);
     }
 
@@ -471,12 +334,6 @@ impl RrdSink {
             .collect();
         if !v.contact.is_empty() {
             let pmax = patch.iter().map(|s| s.t_n).fold(0.0, f64::max);
-            let tmax = patch.iter().map(|s| s.t_n.hypot(s.t_t)).fold(0.0, f64::max);
-            let scale = if tmax > 0.0 {
-                0.2 * self.ro / tmax
-            } else {
-                0.0
-            };
             let (k, phi, ro) = (self.magnification, Self::hub_angle(v), self.ro);
             let points: Vec<[f32; 3]> = patch
                 .iter()
@@ -497,14 +354,8 @@ impl RrdSink {
                 &rerun::Points3D::new(points.clone()).with_colors(colors),
             );
             self.check(r);
-            let vectors: Vec<[f32; 3]> = patch
-                .iter()
-                .map(|s| [(s.t_t * scale) as f32, (s.t_n * scale) as f32, 0.0])
-                .collect();
-            let r = rec.log(
-                "contact/traction",
-                &rerun::Arrows3D::from_vectors(vectors).with_origins(points),
-            );
+            let t: Vec<(f64, f64)> = patch.iter().map(|s| (s.t_n, s.t_t)).collect();
+            let r = rrd_draw::traction_arrows(&rec, "contact/traction", &points, &t, self.ro);
             self.check(r);
             self.contact_curves(&patch, road);
         }
@@ -517,10 +368,13 @@ impl RrdSink {
         }
     }
 
+    /// The step's times: `step`, and `sim_time` (simulated seconds) unless load stepping.
     fn set_step_time(&self, index: u64, time: f64) {
         if let Some(rec) = &self.rec {
             rec.set_time_sequence("step", index as i64);
-            rec.set_duration_secs("sim_time", super::or_zero(time));
+            if !self.load_stepping {
+                rec.set_duration_secs("sim_time", super::or_zero(time));
+            }
         }
     }
 }
@@ -549,6 +403,7 @@ impl Recorder for RrdSink {
         self.rec = Some(rec.clone());
         self.units = scene_units(meta.scene_toml);
         self.magnification = displacement_scale(meta.scene_toml);
+        self.load_stepping = meta.time_name == "load_factor";
         if let Some(mesh) = meta.mesh {
             self.triangles = display_triangles(mesh);
             self.loops = boundary_loops(mesh);
@@ -560,15 +415,20 @@ impl Recorder for RrdSink {
                 .max(f64::MIN_POSITIVE);
         }
         let doc = format!(
-            "# {} ({} mode)\n\ntread {} (features: {}); `sim_time` is the {}.\n\n```toml\n{}\n```\n",
+            "# {} ({} mode)\n\ntread {} (features: {}); {}.\n\n```toml\n{}\n```\n",
             meta.scene_name,
             meta.mode,
             meta.version,
-            if meta.features.is_empty() { "none" } else { meta.features },
-            if meta.time_name == "load_factor" {
-                "load factor λ (counted as seconds)"
+            if meta.features.is_empty() {
+                "none"
             } else {
-                "simulated time"
+                meta.features
+            },
+            if self.load_stepping {
+                "timeline `step`: the load step (the reference configuration at step −1); the \
+                 load factor λ is the series `series/load_factor`"
+            } else {
+                "timelines `step` and `sim_time` (the simulated time)"
             },
             meta.scene_toml
         );
@@ -586,10 +446,14 @@ impl Recorder for RrdSink {
         };
         let r = rrd_layout::send_layout(&rec, "tread", &spec);
         self.check(r);
-        // The initial state at sim_time 0 (before the first step, so no `step` index): the
-        // reference configuration, u = 0, without stress.
-        rec.disable_timeline("step");
-        rec.set_duration_secs("sim_time", 0.0);
+        // The initial state, the reference configuration (u = 0, without stress): at sim_time 0
+        // before the first step (so no `step` index), or at step −1 in load stepping.
+        if self.load_stepping {
+            rec.set_time_sequence("step", -1);
+        } else {
+            rec.disable_timeline("step");
+            rec.set_duration_secs("sim_time", 0.0);
+        }
         if let Some(mesh) = meta.mesh {
             let pos: Vec<[f32; 3]> = mesh
                 .nodes
@@ -617,6 +481,9 @@ impl Recorder for RrdSink {
             "Newton iterations per step [iterations]",
             info.newton_iterations as f64,
         );
+        if self.load_stepping {
+            self.scalar("series/load_factor", "load factor λ [1]", info.time);
+        }
         if let Some(v) = view {
             self.write_view(info, v);
         }
@@ -690,7 +557,9 @@ impl Recorder for RrdSink {
     }
     fn steady_reached(&mut self, s: &SteadyReached, view: &StepView) {
         let Some(rec) = self.rec.clone() else { return };
-        rec.set_duration_secs("sim_time", super::or_zero(s.time));
+        if !self.load_stepping {
+            rec.set_duration_secs("sim_time", super::or_zero(s.time));
+        }
         self.mesh("steady", view);
         let mut doc = format!(
             "# Steady state\n\ntime {:.6e}, change {:.3e}\n\n| result | value |\n|---|---|\n",
@@ -735,14 +604,4 @@ impl Recorder for RrdSink {
         self.rec = None;
         self.error.take().into_iter().collect()
     }
-}
-
-/// `v` rounded to `digits` significant digits (for labels).
-fn round_sig(v: f64, digits: i32) -> f64 {
-    if v == 0.0 || !v.is_finite() {
-        return 0.0;
-    }
-    let e = v.abs().log10().floor() as i32;
-    let f = 10f64.powi(digits - 1 - e);
-    (v * f).round() / f
 }

@@ -5,13 +5,16 @@
 //! |---|---|---|
 //! | Body head-on (x1 right, x2 up) | 3D, camera on the +x3 axis looking at the body | deformed mesh coloured by the in-plane max shear stress τ, its colour scale with labelled ends (`body/colour_scale`), boundary, road, contact points and traction arrows, and the contact pressure and shear drawn as curves against x1 below the road |
 //! | Hub force and torque | time series | F_x, F_y [F/L] and M [F·L/L] together |
-//! | Newton iterations and residual | time series | iterations per step, relative residual and its log10 |
+//! | Newton iterations per step | time series | iterations of every step |
+//! | Newton residual | time series | log10 of the relative residual of every Newton iteration (dots) |
 //! | Energies | time series | strain, kinetic, total [F·L/L] |
-//! | Contact pressure / shear against x1 | bar charts | t_n and t_T [F/L²] at the contact points, abscissa x1 [L], each bar as wide as its point's share of the patch |
-//! | Other series, Log, Scene | time series, text log, text | everything else |
+//! | Contact pressure / shear against x1 | 2D charts ([`super::rrd_draw`]) | t_n and t_T [F/L²] through the contact points against x1 [L], round ticks on both axes, the x range over the patch |
+//! | Other series, Log, Scene | time series, text log, text | everything else (the linear relative residual, the load factor λ of load stepping) |
 //!
 //! Units in the view names come from `[scene] units` (`"L-F-T"`, see [`super::png::Units`]).
-//! The time panel opens on `sim_time`, following the data (a finished run shows its last state).
+//! The time panel opens on `sim_time` (simulated time), or on `step` for load stepping (a steady
+//! or static run, which has no `sim_time`), following the data (a finished run shows its last
+//! state).
 //!
 //! # How the layout is built
 //!
@@ -31,6 +34,7 @@ use super::png::{with_unit, Units};
 use rerun::external::re_log_types::{BlueprintActivationCommand, LogMsg};
 use rerun::external::re_sdk_types::blueprint::archetypes as bp;
 use rerun::external::re_sdk_types::blueprint::components as bpc;
+use rerun::external::re_sdk_types::datatypes::{Range1D, Range2D};
 use rerun::{RecordingStream, RecordingStreamResult};
 
 /// Entity paths (queries) of the things a layout shows; the run's own `.rrd` and a converted MCAP
@@ -40,8 +44,10 @@ pub struct LayoutPaths {
     /// Everything drawn in the body view (entity queries, e.g. `/body/**`).
     pub body: Vec<String>,
     pub hub: Vec<String>,
-    pub newton: Vec<String>,
+    pub newton_iterations: Vec<String>,
+    pub newton_residual: Vec<String>,
     pub energy: Vec<String>,
+    /// The entities of the pressure and shear charts (queries ending in `/**`).
     pub pressure: String,
     pub shear: String,
     pub series: Vec<String>,
@@ -61,11 +67,16 @@ impl LayoutPaths {
                 "/contact/curves/**".into(),
             ],
             hub: vec!["/hub/**".into()],
-            newton: vec!["/newton/**".into()],
+            newton_iterations: vec!["/newton/iterations".into()],
+            newton_residual: vec!["/newton/log10_residual".into()],
             energy: vec!["/energy/**".into()],
-            pressure: "/contact/pressure".into(),
-            shear: "/contact/shear".into(),
-            series: vec!["/series/**".into(), "/branch/**".into()],
+            pressure: "/contact/chart/pressure/**".into(),
+            shear: "/contact/chart/shear/**".into(),
+            series: vec![
+                "/series/**".into(),
+                "/branch/**".into(),
+                "/newton/residual".into(),
+            ],
             log: "/log".into(),
             scene: "/scene".into(),
         }
@@ -74,17 +85,24 @@ impl LayoutPaths {
     /// The entities of an MCAP log converted by `tread replay --to` ([`crate::io::replay`]).
     pub fn replay() -> Self {
         Self {
-            body: vec!["/tread/mesh/**".into(), "/tread/contact".into()],
-            hub: vec!["/tread/hub/**".into()],
-            newton: vec![
-                "/tread/newton/residual".into(),
-                "/tread/newton/log10_residual".into(),
-                "/tread/step/newton_iterations".into(),
+            body: vec![
+                "/tread/mesh/**".into(),
+                "/tread/contact".into(),
+                "/tread/traction".into(),
+                "/tread/colour_scale/**".into(),
+                "/tread/contact_curves/**".into(),
             ],
+            hub: vec!["/tread/hub/**".into()],
+            newton_iterations: vec!["/tread/step/newton_iterations".into()],
+            newton_residual: vec!["/tread/newton/log10_residual".into()],
             energy: vec!["/tread/energy/**".into()],
-            pressure: "/tread/contact_curves/pressure".into(),
-            shear: "/tread/contact_curves/shear".into(),
-            series: vec!["/tread/series/**".into(), "/tread/continuation/**".into()],
+            pressure: "/tread/contact_chart/pressure/**".into(),
+            shear: "/tread/contact_chart/shear/**".into(),
+            series: vec![
+                "/tread/series/**".into(),
+                "/tread/continuation/**".into(),
+                "/tread/newton/residual".into(),
+            ],
             log: "/tread/log".into(),
             scene: "/metadata/**".into(),
         }
@@ -99,7 +117,8 @@ pub struct LayoutSpec {
     pub radius: f64,
     /// Displacement magnification of the body view (shown in its name when not 1).
     pub magnification: f64,
-    /// `"load_factor"` or `"time"`: the meaning of `sim_time` (anything else: either).
+    /// `"load_factor"` (load stepping: timeline `step` only) or `"time"` (timelines `sim_time` and
+    /// `step`).
     pub time_name: String,
     pub paths: LayoutPaths,
 }
@@ -109,7 +128,7 @@ pub struct LayoutSpec {
 pub struct ViewSpec {
     /// Fixed id (a UUID text) of the view: `view/<id>` in the blueprint store.
     pub id: String,
-    /// Rerun view class: `3D`, `TimeSeries`, `BarChart`, `TextLog`, `TextDocument`.
+    /// Rerun view class: `3D`, `2D`, `TimeSeries`, `TextLog`, `TextDocument`.
     pub class: &'static str,
     pub name: String,
     pub contents: Vec<String>,
@@ -145,12 +164,8 @@ pub fn views(spec: &LayoutSpec) -> Vec<ViewSpec> {
         String::new()
     };
     let x_name = match spec.time_name.as_str() {
-        "load_factor" => "load factor λ on sim_time".to_string(),
-        "time" => format!("time [{}]", u.time),
-        _ => format!(
-            "sim_time (time [{}], or the load factor λ in load stepping)",
-            u.time
-        ),
+        "load_factor" => "load step".to_string(),
+        _ => format!("time [{}]", u.time),
     };
     let v = |k: u32, class: &'static str, name: String, contents: &[String]| ViewSpec {
         id: fixed_id(k),
@@ -182,8 +197,14 @@ pub fn views(spec: &LayoutSpec) -> Vec<ViewSpec> {
         v(
             3,
             "TimeSeries",
-            format!("Newton iterations and relative residual against {x_name}"),
-            &p.newton,
+            format!("Newton iterations per step against {x_name}"),
+            &p.newton_iterations,
+        ),
+        v(
+            10,
+            "TimeSeries",
+            format!("Newton residual: log10 of the relative residual of every iteration, against {x_name}"),
+            &p.newton_residual,
         ),
         v(
             4,
@@ -196,7 +217,7 @@ pub fn views(spec: &LayoutSpec) -> Vec<ViewSpec> {
         ),
         v(
             5,
-            "BarChart",
+            "2D",
             format!(
                 "Contact pressure t_n [{}] against x1 [{}]",
                 u.stress(),
@@ -206,7 +227,7 @@ pub fn views(spec: &LayoutSpec) -> Vec<ViewSpec> {
         ),
         v(
             6,
-            "BarChart",
+            "2D",
             format!(
                 "Contact shear t_T [{}] against x1 [{}]",
                 u.stress(),
@@ -228,6 +249,16 @@ pub fn views(spec: &LayoutSpec) -> Vec<ViewSpec> {
             std::slice::from_ref(&p.scene),
         ),
     ]
+}
+
+/// A solid dark background for the view at `path`: the light labels read on it, and the
+/// viridis colours of the body stand out.
+fn dark_background(bs: &RecordingStream, path: &str) -> RecordingStreamResult<()> {
+    bs.log(
+        format!("{path}/Background"),
+        &bp::Background::new(bpc::BackgroundKind::SolidColor)
+            .with_color(rerun::Color::from_rgb(22, 22, 26)),
+    )
 }
 
 /// `name [unit]` of a named series for the Rerun legends.
@@ -277,15 +308,16 @@ pub fn blueprint_messages(
         )?;
         match v.class {
             "3D" => {
-                // Head-on: the camera on the +x3 axis, x2 up, looking at the body centre a
-                // little below the hub (the road and the contact curves are below the body).
+                // Head-on: the camera on the +x3 axis, x2 up, looking a little below and right
+                // of the hub (the road and the contact curves are below the body, the colour
+                // scale and its labels right of it).
                 let r = spec.radius.max(f64::MIN_POSITIVE) as f32;
-                let target = [0.2 * r, -0.25 * r, 0.0];
+                let target = [0.35 * r, -0.3 * r, 0.0];
                 bs.log(
                     format!("{path}/EyeControls3D"),
                     &bp::EyeControls3D::new()
                         .with_kind(bpc::Eye3DKind::Orbital)
-                        .with_position([0.2 * r, -0.25 * r, 2.7 * r])
+                        .with_position([0.35 * r, -0.3 * r, 3.0 * r])
                         .with_look_target(target)
                         .with_eye_up([0.0, 1.0, 0.0]),
                 )?;
@@ -293,11 +325,25 @@ pub fn blueprint_messages(
                     format!("{path}/LineGrid3D"),
                     &bp::LineGrid3D::new().with_visible(false),
                 )?;
+                dark_background(&bs, &path)?;
             }
-            "TimeSeries" | "BarChart" => {
+            "2D" => {
+                let (lo, hi) = super::rrd_draw::chart_bounds();
+                bs.log(
+                    format!("{path}/VisualBounds2D"),
+                    &bp::VisualBounds2D::new(Range2D {
+                        x_range: Range1D([f64::from(lo[0]), f64::from(hi[0])]),
+                        y_range: Range1D([f64::from(lo[1]), f64::from(hi[1])]),
+                    }),
+                )?;
+                dark_background(&bs, &path)?;
+            }
+            "TimeSeries" => {
+                // A single series is named by its view: no legend over the data.
+                let single = v.contents.len() == 1 && !v.contents[0].ends_with("**");
                 bs.log(
                     format!("{path}/PlotLegend"),
-                    &bp::PlotLegend::new().with_visible(true),
+                    &bp::PlotLegend::new().with_visible(!single),
                 )?;
             }
             _ => {}
@@ -310,14 +356,14 @@ pub fn blueprint_messages(
             .with_display_name(name)
             .with_contents(children.into_iter().map(bpc::IncludedContent::from))
     };
-    // Left: the body above the two contact charts; right: the three time-series views above the
-    // tabs of the rest.
+    // Left: the body above the two contact charts; right: the hub loads, the Newton iterations
+    // beside the residual, the energies, above the tabs of the rest.
     bs.log(
         id(2),
         &container(
             bpc::ContainerKind::Horizontal,
             "Contact tractions",
-            vec![view_path(4), view_path(5)],
+            vec![view_path(5), view_path(6)],
         ),
     )?;
     bs.log(
@@ -327,14 +373,22 @@ pub fn blueprint_messages(
             "Body and contact",
             vec![view_path(0), id(2)],
         )
-        .with_row_shares([2.0f32, 1.0]),
+        .with_row_shares([1.8f32, 1.0]),
+    )?;
+    bs.log(
+        id(5),
+        &container(
+            bpc::ContainerKind::Horizontal,
+            "Newton",
+            vec![view_path(2), view_path(3)],
+        ),
     )?;
     bs.log(
         id(4),
         &container(
             bpc::ContainerKind::Tabs,
             "More",
-            vec![view_path(6), view_path(7), view_path(8)],
+            vec![view_path(7), view_path(8), view_path(9)],
         ),
     )?;
     bs.log(
@@ -342,7 +396,7 @@ pub fn blueprint_messages(
         &container(
             bpc::ContainerKind::Vertical,
             "Time series",
-            vec![view_path(1), view_path(2), view_path(3), id(4)],
+            vec![view_path(1), id(5), view_path(4), id(4)],
         ),
     )?;
     bs.log(
@@ -350,11 +404,17 @@ pub fn blueprint_messages(
         &container(bpc::ContainerKind::Horizontal, "tread", vec![id(1), id(3)])
             .with_col_shares([1.2f32, 1.0]),
     )?;
-    // Open on the simulated time, following the data: the final state once the run is over.
+    // Open on the simulated time (the load step in load stepping), following the data: the
+    // final state once the run is over.
+    let timeline = if spec.time_name == "load_factor" {
+        "step"
+    } else {
+        "sim_time"
+    };
     bs.log(
         "time_panel",
         &bp::TimePanelBlueprint::new()
-            .with_timeline(bpc::TimelineName("sim_time".into()))
+            .with_timeline(bpc::TimelineName(timeline.into()))
             .with_play_state(bpc::PlayState::Following),
     )?;
     bs.log(
