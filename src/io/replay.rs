@@ -336,10 +336,16 @@ mod convert {
     pub fn run(mcap_path: &Path, rrd: &Path) -> Result<ConvertStats, ReplayError> {
         let bytes = std::fs::read(mcap_path)
             .map_err(|e| ReplayError::Read(mcap_path.to_path_buf(), e.to_string()))?;
-        let rec = rerun::RecordingStreamBuilder::new("tread")
-            .send_properties(false)
-            .save(rrd)
-            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+        // Written into a temporary renamed when complete: a full disk is an error, with neither
+        // a partial file nor the temporary left.
+        let tmp = crate::io::output::tmp_path(rrd);
+        let builder = rerun::RecordingStreamBuilder::new("tread").send_properties(false);
+        let (rec, file) = crate::io::record::rrd::file_recording(builder, &tmp)
+            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e))?;
+        let failed = |e: String| {
+            let _ = std::fs::remove_file(&tmp);
+            ReplayError::Write(rrd.to_path_buf(), e)
+        };
         rec.set_log_time_enabled(false);
         rec.set_log_tick_enabled(false);
         // Named after the scene (`send_properties(false)` drops a builder's name).
@@ -367,7 +373,7 @@ mod convert {
             paths: rrd_layout::LayoutPaths::replay(),
         };
         rrd_layout::send_layout(&rec, "tread", &spec)
-            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+            .map_err(|e| failed(e.to_string()))?;
         let mut draw = Drawing {
             units,
             ro: radius,
@@ -489,9 +495,11 @@ mod convert {
                 }
             }
         }
-        rec.flush_blocking()
-            .map_err(|e| ReplayError::Write(rrd.to_path_buf(), e.to_string()))?;
+        let flushed = rec.flush_blocking().map_err(|e| e.to_string());
         drop(rec);
+        flushed.map_err(failed)?;
+        file.finish().map_err(failed)?;
+        std::fs::rename(&tmp, rrd).map_err(|e| failed(e.to_string()))?;
         Ok(st)
     }
 

@@ -113,6 +113,11 @@ impl Recorder for CsvSink {
                     .get_or_insert(RecordError::new("csv", &self.path, e));
             }
         }
+        // A table that could not get even its header (a full disk) is removed rather than left
+        // empty under its name; summary.json lists it as incomplete.
+        if self.error.is_some() && std::fs::metadata(&self.path).is_ok_and(|m| m.len() == 0) {
+            let _ = std::fs::remove_file(&self.path);
+        }
         self.error.take().into_iter().collect()
     }
 }

@@ -64,6 +64,7 @@ use std::path::{Path, PathBuf};
 pub struct RrdSink {
     path: PathBuf,
     rec: Option<RecordingStream>,
+    file: Option<RrdFile>,
     error: Option<RecordError>,
     triangles: Vec<[u32; 3]>,
     loops: Vec<Vec<u32>>,
@@ -80,6 +81,114 @@ pub struct RrdSink {
     /// Load stepping (`RunMeta::time_name` = `load_factor`): the steps are on the `step`
     /// sequence only, λ is the series `series/load_factor`.
     load_stepping: bool,
+}
+
+/// An `.rrd` file encoded on the thread that logs (the recording stream's), not by the SDK's
+/// file writer: a write error (a full disk) is kept and every later message dropped, so that a
+/// run or a conversion never waits on a writer that stopped. [`RrdFile::finish`] writes the
+/// footer and says whether the file is complete.
+#[derive(Clone)]
+pub struct RrdFile(std::sync::Arc<std::sync::Mutex<RrdFileState>>);
+
+type RrdEncoder =
+    rerun::external::re_log_encoding::Encoder<std::io::BufWriter<std::fs::File>>;
+
+pub struct RrdFileState {
+    enc: Option<RrdEncoder>,
+    error: Option<String>,
+}
+
+impl RrdFileState {
+    /// Stop writing after `e`: the encoder is taken apart without its drop (which would try to
+    /// write the footer again).
+    fn fail(&mut self, e: String) {
+        if let Some(enc) = self.enc.take() {
+            let _ = enc.into_inner();
+        }
+        self.error.get_or_insert(e);
+    }
+}
+
+impl RrdFile {
+    /// Create (truncate) `path` and write the stream header.
+    pub fn create(path: &Path) -> Result<Self, String> {
+        use rerun::external::re_build_info::CrateVersion;
+        use rerun::external::re_log_encoding::EncodingOptions;
+        let f = std::fs::File::create(path).map_err(|e| e.to_string())?;
+        let enc = RrdEncoder::new_eager(
+            CrateVersion::LOCAL,
+            EncodingOptions::PROTOBUF_COMPRESSED,
+            std::io::BufWriter::new(f),
+        )
+        .map_err(|e| e.to_string())?;
+        Ok(Self(std::sync::Arc::new(std::sync::Mutex::new(
+            RrdFileState {
+                enc: Some(enc),
+                error: None,
+            },
+        ))))
+    }
+
+    fn state(&self) -> std::sync::MutexGuard<'_, RrdFileState> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Write the footer, flush and sync: `Err` with the first write error when the file is not
+    /// complete. Messages sent afterwards are dropped.
+    pub fn finish(&self) -> Result<(), String> {
+        let mut st = self.state();
+        if let Some(mut enc) = st.enc.take() {
+            let done = enc
+                .finish()
+                .map_err(|e| e.to_string())
+                .and_then(|()| enc.into_inner().map_err(|e| e.to_string()))
+                .and_then(|w| w.into_inner().map_err(|e| e.error().to_string()))
+                .and_then(|f| f.sync_all().map_err(|e| e.to_string()));
+            if let Err(e) = done {
+                st.error.get_or_insert(e);
+            }
+        }
+        match &st.error {
+            Some(e) => Err(e.clone()),
+            None => Ok(()),
+        }
+    }
+}
+
+impl rerun::sink::LogSink for RrdFile {
+    fn send(&self, msg: rerun::log::LogMsg) {
+        let mut st = self.state();
+        let r = st.enc.as_mut().map(|enc| enc.append(&msg));
+        if let Some(Err(e)) = r {
+            st.fail(e.to_string());
+        }
+    }
+
+    fn flush_blocking(
+        &self,
+        _timeout: std::time::Duration,
+    ) -> Result<(), rerun::sink::SinkFlushError> {
+        let mut st = self.state();
+        let r = st.enc.as_mut().map(|enc| enc.flush_blocking());
+        if let Some(Err(e)) = r {
+            st.fail(e.to_string());
+        }
+        match &st.error {
+            Some(e) => Err(rerun::sink::SinkFlushError::failed(e.clone())),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A recording stream from `builder` writing into `path` through an [`RrdFile`].
+pub fn file_recording(
+    builder: rerun::RecordingStreamBuilder,
+    path: &Path,
+) -> Result<(RecordingStream, RrdFile), String> {
+    let file = RrdFile::create(path)?;
+    let rec = builder.buffered().map_err(|e| e.to_string())?;
+    rec.set_sink(Box::new(file.clone()));
+    Ok((rec, file))
 }
 
 /// `[output] displacement_scale` of a resolved scene TOML (1 when absent or not a finite
@@ -141,6 +250,7 @@ impl RrdSink {
         Self {
             path,
             rec: None,
+            file: None,
             error: None,
             triangles: Vec::new(),
             loops: Vec::new(),
@@ -384,12 +494,14 @@ impl Recorder for RrdSink {
         // Named by scene and mode: the transient and steady recordings of one `tread compare`
         // are told apart in the viewer's recording list.
         let name = format!("{} ({} mode)", meta.scene_name, meta.mode);
-        let r = rerun::RecordingStreamBuilder::new("tread")
+        let builder = rerun::RecordingStreamBuilder::new("tread")
             .recording_name(name.as_str())
-            .send_properties(false)
-            .save(&self.path);
-        let rec = match r {
-            Ok(rec) => rec,
+            .send_properties(false);
+        let rec = match file_recording(builder, &self.path) {
+            Ok((rec, file)) => {
+                self.file = Some(file);
+                rec
+            }
             Err(e) => {
                 self.error = Some(RecordError::new("rerun", &self.path, e));
                 return;
@@ -600,8 +712,13 @@ impl Recorder for RrdSink {
                     .get_or_insert(RecordError::new("rerun", &self.path, e));
             }
         }
-        // Dropping the last handle closes the file sink.
         self.rec = None;
+        if let Some(file) = self.file.take() {
+            if let Err(e) = file.finish() {
+                self.error
+                    .get_or_insert(RecordError::new("rerun", &self.path, e));
+            }
+        }
         self.error.take().into_iter().collect()
     }
 }
