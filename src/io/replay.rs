@@ -372,8 +372,7 @@ mod convert {
             time_name: if load_stepping { "load_factor" } else { "time" }.into(),
             paths: rrd_layout::LayoutPaths::replay(),
         };
-        rrd_layout::send_layout(&rec, "tread", &spec)
-            .map_err(|e| failed(e.to_string()))?;
+        rrd_layout::send_layout(&rec, "tread", &spec).map_err(|e| failed(e.to_string()))?;
         let mut draw = Drawing {
             units,
             ro: radius,

@@ -90,8 +90,7 @@ pub struct RrdSink {
 #[derive(Clone)]
 pub struct RrdFile(std::sync::Arc<std::sync::Mutex<RrdFileState>>);
 
-type RrdEncoder =
-    rerun::external::re_log_encoding::Encoder<std::io::BufWriter<std::fs::File>>;
+type RrdEncoder = rerun::external::re_log_encoding::Encoder<std::io::BufWriter<std::fs::File>>;
 
 pub struct RrdFileState {
     enc: Option<RrdEncoder>,
