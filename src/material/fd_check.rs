@@ -31,7 +31,7 @@
 //! deterministic generator the property tests draw random strains, states and steps from.
 
 use super::{Constitutive, Hyperelastic};
-use crate::math::{det_identity_plus_minus_one, flatten, v, Mat2, Tangent};
+use crate::math::{det_identity_plus_minus_one, flatten, v, Mat2, Tangent, Tensor};
 
 /// Relative errors of a material's stress and tangent against finite differences.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,21 +47,21 @@ const BASE_STEP: f64 = 1e-3;
 
 /// Fourth-order central difference of `g` in the direction `e` at `x`.
 #[inline]
-fn central4<T>(g: impl Fn(&Mat2) -> T, x: &Mat2, e: &Mat2, h: f64) -> T
+fn central4<X: Tensor, T>(g: impl Fn(&X) -> T, x: &X, e: &X, h: f64) -> T
 where
     T: std::ops::Add<Output = T> + std::ops::Sub<Output = T> + std::ops::Mul<f64, Output = T>,
 {
-    let gp1 = g(&(x + e * h));
-    let gm1 = g(&(x - e * h));
-    let gp2 = g(&(x + e * (2.0 * h)));
-    let gm2 = g(&(x - e * (2.0 * h)));
+    let gp1 = g(&(*x + *e * h));
+    let gm1 = g(&(*x - *e * h));
+    let gp2 = g(&(*x + *e * (2.0 * h)));
+    let gm2 = g(&(*x - *e * (2.0 * h)));
     ((gp1 - gm1) * 8.0 - (gp2 - gm2)) * (1.0 / (12.0 * h))
 }
 
 /// Unit tensor `e_kL` with a one in component `(k, l)`.
 #[inline]
-fn unit(k: usize, l: usize) -> Mat2 {
-    let mut e = Mat2::zeros();
+fn unit<X: Tensor>(k: usize, l: usize) -> X {
+    let mut e = X::zero();
     e[(k, l)] = 1.0;
     e
 }
@@ -78,14 +78,15 @@ fn finite_ratio(num: f64, den: f64) -> f64 {
 }
 
 /// Checks `stress` against the energy and `stress_tangent` against the stress, by central
-/// differences at `grad_u`. See the module docs for the step and the error measures.
-pub fn check_material<M: Hyperelastic + ?Sized>(m: &M, grad_u: &Mat2) -> FdReport {
+/// differences at `grad_u` (a `Mat2` in plane strain or a `Mat3`). See the module docs for the
+/// step and the error measures.
+pub fn check_material<X: Tensor, M: Hyperelastic<X> + ?Sized>(m: &M, grad_u: &X) -> FdReport {
     let inadmissible = FdReport {
         stress_rel_err: f64::INFINITY,
         tangent_rel_err: f64::INFINITY,
     };
-    let j = 1.0 + det_identity_plus_minus_one(grad_u);
-    let f_norm = (Mat2::identity() + grad_u).norm();
+    let j = 1.0 + grad_u.det_ipm1();
+    let f_norm = (X::eye() + *grad_u).frob();
     if !(j > 0.0 && f_norm.is_finite()) {
         return inadmissible;
     }
@@ -94,23 +95,27 @@ pub fn check_material<M: Hyperelastic + ?Sized>(m: &M, grad_u: &Mat2) -> FdRepor
     let p = m.stress(grad_u);
     let (p_st, a) = m.stress_tangent(grad_u);
 
-    let mut p_fd = Mat2::zeros();
-    let mut a_fd = Tangent::zeros();
-    for k in 0..2 {
-        for l in 0..2 {
-            let e = unit(k, l);
+    let mut p_fd = X::zero();
+    let mut a_fd = X::tangent_zero();
+    for k in 0..X::D {
+        for l in 0..X::D {
+            let e = unit::<X>(k, l);
             p_fd[(k, l)] = central4(|g| m.energy(g), grad_u, &e, h);
-            let dp = flatten(&central4(|g| m.stress(g), grad_u, &e, h));
-            a_fd.set_column(v(k, l), &dp);
+            let dp = central4(|g| m.stress(g), grad_u, &e, h);
+            for i in 0..X::D {
+                for jj in 0..X::D {
+                    a_fd[(X::flat(i, jj), X::flat(k, l))] = dp[(i, jj)];
+                }
+            }
         }
     }
 
-    let a_norm = a.norm();
-    let stress_scale = p.norm().max(a_norm * h);
-    let stress_err = (p - p_fd).norm().max((p_st - p).norm());
+    let a_norm = X::tangent_frob(&a);
+    let stress_scale = p.frob().max(a_norm * h);
+    let stress_err = (p - p_fd).frob().max((p_st - p).frob());
     FdReport {
         stress_rel_err: finite_ratio(stress_err, stress_scale),
-        tangent_rel_err: finite_ratio((a - a_fd).norm(), a_norm),
+        tangent_rel_err: finite_ratio(X::tangent_frob(&(a - a_fd)), a_norm),
     }
 }
 

@@ -25,11 +25,11 @@
 //! helpers below are plain polynomials, defined for every `F`.
 
 use super::invariants::{
-    dcof_df, inadmissible_stress, inadmissible_tangent, stress_from_invariants,
-    stress_tangent_from_invariants, InvariantDerivs, Kinematics,
+    inadmissible_stress, inadmissible_tangent, stress_from_invariants,
+    stress_tangent_from_invariants, InvariantDerivs, InvariantTensor, Kinematics,
 };
 use super::{Hyperelastic, MaterialLawSpec, ParamSpec};
-use crate::math::{cofactor, det_identity_plus_minus_one, Mat2, Tangent};
+use crate::math::{Mat2, Tensor};
 
 /// Unconstrained part `c1 (I1 − 3) + c2 (I2 − 3)` of the incompressible Mooney–Rivlin law.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,7 +52,7 @@ impl MooneyRivlinIncompressible {
     }
 
     #[inline]
-    fn derivs(&self, k: &Kinematics) -> InvariantDerivs {
+    fn derivs<T: Tensor>(&self, k: &Kinematics<T>) -> InvariantDerivs {
         InvariantDerivs {
             d1: [self.c1, self.c2, 0.0],
             d2: [[0.0; 3]; 3],
@@ -101,8 +101,8 @@ impl MaterialLawSpec for MooneyRivlinIncompressible {
     }
 }
 
-impl Hyperelastic for MooneyRivlinIncompressible {
-    fn energy(&self, grad_u: &Mat2) -> f64 {
+impl<T: InvariantTensor> Hyperelastic<T> for MooneyRivlinIncompressible {
+    fn energy(&self, grad_u: &T) -> f64 {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return f64::INFINITY;
@@ -110,7 +110,7 @@ impl Hyperelastic for MooneyRivlinIncompressible {
         self.c1 * k.i1m3 + self.c2 * k.i2m3
     }
 
-    fn stress(&self, grad_u: &Mat2) -> Mat2 {
+    fn stress(&self, grad_u: &T) -> T {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return inadmissible_stress();
@@ -118,26 +118,27 @@ impl Hyperelastic for MooneyRivlinIncompressible {
         stress_from_invariants(&k, &self.derivs(&k))
     }
 
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+    fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent) {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
-            return (inadmissible_stress(), inadmissible_tangent());
+            return (inadmissible_stress(), inadmissible_tangent::<T>());
         }
         stress_tangent_from_invariants(&k, &self.derivs(&k))
     }
 }
 
-/// Contribution of the constraint term `−p (J − 1)` to `P` and `∂P/∂F`: `(−p cof F, −p ∂cof/∂F)`.
+/// Contribution of the constraint term `−p (J − 1)` to `P` and `∂P/∂F`: `(−p cof F, −p ∂cof/∂F)`
+/// (in either dimension).
 #[inline]
-pub fn pressure_stress_tangent(grad_u: &Mat2, p: f64) -> (Mat2, Tangent) {
-    let cof = cofactor(&(Mat2::identity() + grad_u));
-    (cof * -p, dcof_df() * -p)
+pub fn pressure_stress_tangent<T: InvariantTensor>(grad_u: &T, p: f64) -> (T, T::Tangent) {
+    let f = T::eye() + *grad_u;
+    (f.cof() * -p, T::dcof(&f) * -p)
 }
 
 /// The constraint value `J − 1`, computed from `∇u` without cancellation.
 #[inline]
-pub fn jm1(grad_u: &Mat2) -> f64 {
-    det_identity_plus_minus_one(grad_u)
+pub fn jm1<T: Tensor>(grad_u: &T) -> f64 {
+    grad_u.det_ipm1()
 }
 
 #[cfg(test)]
@@ -145,6 +146,8 @@ mod tests {
     use super::super::check_material;
     use super::super::test_util::*;
     use super::*;
+    use crate::material::dcof_df;
+    use crate::math::{cofactor, Tangent};
 
     const M: MooneyRivlinIncompressible = MooneyRivlinIncompressible { c1: 80.0, c2: 20.0 };
 

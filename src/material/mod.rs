@@ -57,29 +57,33 @@ pub mod incompressible;
 pub mod invariants;
 pub mod mooney_rivlin;
 pub mod neo_hookean;
+#[cfg(test)]
+mod tests_3d;
 pub mod viscoelastic;
 pub mod viscoelastic_ring;
 pub mod yeoh;
 
 pub use fd_check::{check_material, check_stateful, tangent_asymmetry, FdReport, SplitMix};
 pub use incompressible::{pressure_stress_tangent, MooneyRivlinIncompressible};
-pub use invariants::{dcof_df, InvariantDerivs, Kinematics};
+pub use invariants::{dcof_df, InvariantDerivs, InvariantTensor, Kinematics};
 pub use mooney_rivlin::MooneyRivlin;
 pub use neo_hookean::NeoHookean;
 pub use viscoelastic::{ViscoModel, Viscoelastic, ViscoelasticMaterial};
 pub use yeoh::Yeoh;
 
-use crate::math::{Mat2, Tangent};
+use crate::math::{Mat2, Tangent, Tensor};
 pub use crate::params::{Bound, LawKind, ParamSpec};
 
-/// A hyperelastic law in plane strain, evaluated from the displacement gradient.
-pub trait Hyperelastic: Send + Sync {
-    /// Strain energy per unit reference volume W(F), F = I + grad_u (2x2, plane strain, F33 = 1). +inf if J <= 0.
-    fn energy(&self, grad_u: &Mat2) -> f64;
+/// A hyperelastic law evaluated from the displacement gradient, in the dimension of `T`
+/// (`Mat2`: plane strain, the default; `Mat3`: three dimensions; see [`crate::math::Tensor`]).
+pub trait Hyperelastic<T: Tensor = Mat2>: Send + Sync {
+    /// Strain energy per unit reference volume W(F), F = I + grad_u (in plane strain
+    /// 2×2 with F33 = 1). +inf if J <= 0.
+    fn energy(&self, grad_u: &T) -> f64;
     /// First Piola–Kirchhoff stress P = dW/dF.
-    fn stress(&self, grad_u: &Mat2) -> Mat2;
+    fn stress(&self, grad_u: &T) -> T;
     /// P and the tangent A = dP/dF (flattening of math.rs).
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent);
+    fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent);
 }
 
 /// A material with state in and state out (see the module docs).
@@ -285,23 +289,23 @@ macro_rules! materials {
             }
         }
 
-        impl Hyperelastic for Material {
+        impl<T: InvariantTensor> Hyperelastic<T> for Material {
             #[inline]
-            fn energy(&self, grad_u: &Mat2) -> f64 {
+            fn energy(&self, grad_u: &T) -> f64 {
                 match self {
                     $(Material::$law(m) => m.energy(grad_u),)+
                 }
             }
 
             #[inline]
-            fn stress(&self, grad_u: &Mat2) -> Mat2 {
+            fn stress(&self, grad_u: &T) -> T {
                 match self {
                     $(Material::$law(m) => m.stress(grad_u),)+
                 }
             }
 
             #[inline]
-            fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+            fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent) {
                 match self {
                     $(Material::$law(m) => m.stress_tangent(grad_u),)+
                 }

@@ -23,10 +23,10 @@
 
 use super::invariants::{
     inadmissible_stress, inadmissible_tangent, stress_from_invariants,
-    stress_tangent_from_invariants, InvariantDerivs, Kinematics,
+    stress_tangent_from_invariants, InvariantDerivs, InvariantTensor, Kinematics,
 };
 use super::{Bound, Hyperelastic, MaterialLawSpec, ParamSpec};
-use crate::math::{Mat2, Tangent};
+use crate::math::{Mat2, Tensor};
 
 /// Compressible Mooney–Rivlin law `c1 (Ī1 − 3) + c2 (Ī2 − 3) + κ/2 (J − 1)²`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,7 +47,7 @@ impl MooneyRivlin {
 
     /// Invariant derivatives at an admissible point (`J > 0`).
     #[inline]
-    fn derivs(&self, k: &Kinematics) -> InvariantDerivs {
+    fn derivs<T: Tensor>(&self, k: &Kinematics<T>) -> InvariantDerivs {
         let (c1, c2, kappa) = (self.c1, self.c2, self.kappa);
         let ln_j = k.ln_j();
         let j_pow = |e: f64| (e * ln_j).exp();
@@ -138,8 +138,8 @@ impl MaterialLawSpec for MooneyRivlin {
     }
 }
 
-impl Hyperelastic for MooneyRivlin {
-    fn energy(&self, grad_u: &Mat2) -> f64 {
+impl<T: InvariantTensor> Hyperelastic<T> for MooneyRivlin {
+    fn energy(&self, grad_u: &T) -> f64 {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return f64::INFINITY;
@@ -152,7 +152,7 @@ impl Hyperelastic for MooneyRivlin {
             + 0.5 * self.kappa * k.jm1 * k.jm1
     }
 
-    fn stress(&self, grad_u: &Mat2) -> Mat2 {
+    fn stress(&self, grad_u: &T) -> T {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return inadmissible_stress();
@@ -160,10 +160,10 @@ impl Hyperelastic for MooneyRivlin {
         stress_from_invariants(&k, &self.derivs(&k))
     }
 
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+    fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent) {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
-            return (inadmissible_stress(), inadmissible_tangent());
+            return (inadmissible_stress(), inadmissible_tangent::<T>());
         }
         stress_tangent_from_invariants(&k, &self.derivs(&k))
     }

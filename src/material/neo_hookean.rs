@@ -12,10 +12,10 @@
 
 use super::invariants::{
     inadmissible_stress, inadmissible_tangent, stress_from_invariants,
-    stress_tangent_from_invariants, InvariantDerivs, Kinematics,
+    stress_tangent_from_invariants, InvariantDerivs, InvariantTensor, Kinematics,
 };
 use super::{Bound, Hyperelastic, MaterialLawSpec, ParamSpec};
-use crate::math::{Mat2, Tangent};
+use crate::math::{Mat2, Tensor};
 
 /// Compressible neo-Hookean law with Lamé-like constants `mu`, `lambda`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,7 +34,7 @@ impl NeoHookean {
 
     /// Invariant derivatives at an admissible point (`J > 0`).
     #[inline]
-    fn derivs(&self, k: &Kinematics) -> InvariantDerivs {
+    fn derivs<T: Tensor>(&self, k: &Kinematics<T>) -> InvariantDerivs {
         let (mu, lambda) = (self.mu, self.lambda);
         let ln_j = k.ln_j();
         let inv_j = 1.0 / k.j;
@@ -100,8 +100,8 @@ impl MaterialLawSpec for NeoHookean {
     }
 }
 
-impl Hyperelastic for NeoHookean {
-    fn energy(&self, grad_u: &Mat2) -> f64 {
+impl<T: InvariantTensor> Hyperelastic<T> for NeoHookean {
+    fn energy(&self, grad_u: &T) -> f64 {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return f64::INFINITY;
@@ -110,7 +110,7 @@ impl Hyperelastic for NeoHookean {
         0.5 * self.mu * k.i1m3 - self.mu * ln_j + 0.5 * self.lambda * ln_j * ln_j
     }
 
-    fn stress(&self, grad_u: &Mat2) -> Mat2 {
+    fn stress(&self, grad_u: &T) -> T {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return inadmissible_stress();
@@ -118,10 +118,10 @@ impl Hyperelastic for NeoHookean {
         stress_from_invariants(&k, &self.derivs(&k))
     }
 
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+    fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent) {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
-            return (inadmissible_stress(), inadmissible_tangent());
+            return (inadmissible_stress(), inadmissible_tangent::<T>());
         }
         stress_tangent_from_invariants(&k, &self.derivs(&k))
     }

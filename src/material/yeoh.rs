@@ -26,10 +26,10 @@
 
 use super::invariants::{
     inadmissible_stress, inadmissible_tangent, stress_from_invariants,
-    stress_tangent_from_invariants, InvariantDerivs, Kinematics,
+    stress_tangent_from_invariants, InvariantDerivs, InvariantTensor, Kinematics,
 };
 use super::{Bound, Hyperelastic, MaterialLawSpec, ParamSpec};
-use crate::math::{Mat2, Tangent};
+use crate::math::{Mat2, Tensor};
 
 /// Compressible Yeoh law `c10 x + c20 x² + c30 x³ + κ/2 (J − 1)²`, `x = Ī1 − 3`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,7 +54,7 @@ impl Yeoh {
 
     /// `(x, J^(−2/3))` with `x = Ī1 − 3`.
     #[inline]
-    fn x(k: &Kinematics) -> (f64, f64) {
+    fn x<T: Tensor>(k: &Kinematics<T>) -> (f64, f64) {
         let e = -2.0 / 3.0 * k.ln_j();
         let jm23 = e.exp();
         (3.0 * e.exp_m1() + jm23 * k.i1m3, jm23)
@@ -62,7 +62,7 @@ impl Yeoh {
 
     /// Invariant derivatives at an admissible point (`J > 0`).
     #[inline]
-    fn derivs(&self, k: &Kinematics) -> InvariantDerivs {
+    fn derivs<T: Tensor>(&self, k: &Kinematics<T>) -> InvariantDerivs {
         let (x, jm23) = Self::x(k);
         let w1 = self.c10 + x * (2.0 * self.c20 + 3.0 * self.c30 * x);
         let w2 = 2.0 * self.c20 + 6.0 * self.c30 * x;
@@ -93,8 +93,8 @@ impl Yeoh {
     }
 }
 
-impl Hyperelastic for Yeoh {
-    fn energy(&self, grad_u: &Mat2) -> f64 {
+impl<T: InvariantTensor> Hyperelastic<T> for Yeoh {
+    fn energy(&self, grad_u: &T) -> f64 {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return f64::INFINITY;
@@ -103,7 +103,7 @@ impl Hyperelastic for Yeoh {
         x * (self.c10 + x * (self.c20 + x * self.c30)) + 0.5 * self.kappa * k.jm1 * k.jm1
     }
 
-    fn stress(&self, grad_u: &Mat2) -> Mat2 {
+    fn stress(&self, grad_u: &T) -> T {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
             return inadmissible_stress();
@@ -111,10 +111,10 @@ impl Hyperelastic for Yeoh {
         stress_from_invariants(&k, &self.derivs(&k))
     }
 
-    fn stress_tangent(&self, grad_u: &Mat2) -> (Mat2, Tangent) {
+    fn stress_tangent(&self, grad_u: &T) -> (T, T::Tangent) {
         let k = Kinematics::new(grad_u);
         if !k.is_admissible() {
-            return (inadmissible_stress(), inadmissible_tangent());
+            return (inadmissible_stress(), inadmissible_tangent::<T>());
         }
         stress_tangent_from_invariants(&k, &self.derivs(&k))
     }
