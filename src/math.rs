@@ -102,6 +102,8 @@ pub trait Tensor:
 {
     /// Spatial dimension.
     const D: usize;
+    /// Independent components of a symmetric tensor, `D (D + 1) / 2`.
+    const NSYM: usize;
     /// The tangent `∂P/∂F`, a `D² × D²` matrix in the flattening `D·i + J`.
     type Tangent: Copy
         + Debug
@@ -143,6 +145,17 @@ pub trait Tensor:
     fn tangent_filled(x: f64) -> Self::Tangent;
     /// Frobenius norm of a tangent.
     fn tangent_frob(t: &Self::Tangent) -> f64;
+    /// Determinant.
+    fn det(&self) -> f64;
+    /// Inverse, if the matrix is invertible.
+    fn inverse(&self) -> Option<Self>;
+    /// Double contraction `A:B`.
+    fn ddot(&self, b: &Self) -> f64;
+    /// The symmetric tensor stored as `[a11, a22, a12]` (2D) or Voigt
+    /// `[a11, a22, a33, a23, a13, a12]` (3D), from the first [`Self::NSYM`] values of `s`.
+    fn sym_from(s: &[f64]) -> Self;
+    /// Stores the symmetric part of `self` in the layout of [`Self::sym_from`].
+    fn sym_store(&self, out: &mut [f64]);
     /// Flat index of component `(i, j)`.
     #[inline(always)]
     fn flat(i: usize, j: usize) -> usize {
@@ -150,10 +163,47 @@ pub trait Tensor:
     }
 }
 
+/// Voigt pairs of the 3D symmetric layout of [`Tensor::sym_from`].
+const VOIGT3: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)];
+/// The 2D symmetric layout of [`Tensor::sym_from`].
+const SYM2: [(usize, usize); 3] = [(0, 0), (1, 1), (0, 1)];
+
 macro_rules! tensor_impl {
-    ($mat:ty, $tangent:ty, $d:expr, $cof:path, $det:path) => {
+    ($mat:ty, $tangent:ty, $d:expr, $cof:path, $det:path, $pairs:expr) => {
         impl Tensor for $mat {
             const D: usize = $d;
+            const NSYM: usize = $d * ($d + 1) / 2;
+            #[inline(always)]
+            fn det(&self) -> f64 {
+                self.determinant()
+            }
+            #[inline(always)]
+            fn inverse(&self) -> Option<Self> {
+                self.try_inverse()
+            }
+            #[inline(always)]
+            fn ddot(&self, b: &Self) -> f64 {
+                self.component_mul(b).sum()
+            }
+            #[inline(always)]
+            fn sym_from(s: &[f64]) -> Self {
+                let mut m = <$mat>::zeros();
+                for (v, &(i, j)) in s.iter().zip($pairs.iter()) {
+                    m[(i, j)] = *v;
+                    m[(j, i)] = *v;
+                }
+                m
+            }
+            #[inline(always)]
+            fn sym_store(&self, out: &mut [f64]) {
+                for (o, &(i, j)) in out.iter_mut().zip($pairs.iter()) {
+                    *o = if i == j {
+                        self[(i, i)]
+                    } else {
+                        0.5 * (self[(i, j)] + self[(j, i)])
+                    };
+                }
+            }
             type Tangent = $tangent;
             #[inline(always)]
             fn zero() -> Self {
@@ -215,8 +265,22 @@ macro_rules! tensor_impl {
     };
 }
 
-tensor_impl!(Mat2, Tangent, 2, cofactor, det_identity_plus_minus_one);
-tensor_impl!(Mat3, Tangent3, 3, cofactor3, det3_identity_plus_minus_one);
+tensor_impl!(
+    Mat2,
+    Tangent,
+    2,
+    cofactor,
+    det_identity_plus_minus_one,
+    SYM2
+);
+tensor_impl!(
+    Mat3,
+    Tangent3,
+    3,
+    cofactor3,
+    det3_identity_plus_minus_one,
+    VOIGT3
+);
 
 #[cfg(test)]
 mod tests {

@@ -67,9 +67,13 @@
 //!
 //! # State layout
 //!
-//! `3 (1 + n)` values per quadrature point for `n` Prony terms: the Green strain `E^n` of the
-//! committed state (`[E11, E22, E12]`), then per term `[Q11, Q22, Q12]` (convolution) or
-//! `[Ev11, Ev22, Ev12]` (multiplicative). The initial state (all zeros) is the undisturbed,
+//! `3 (1 + n)` values per quadrature point for `n` Prony terms in plane strain: the Green strain
+//! `E^n` of the committed state (`[E11, E22, E12]`), then per term `[Q11, Q22, Q12]`
+//! (convolution) or `[Ev11, Ev22, Ev12]` (multiplicative). In three dimensions the same with six
+//! values per symmetric tensor in Voigt order `[11, 22, 33, 23, 13, 12]`, `6 (1 + n)` in all
+//! ([`Viscoelastic::n_state_of`]). Every function is generic in the dimension
+//! ([`crate::math::Tensor`]): the 3D model is the same code on `Mat3`, and a plane-strain path
+//! run in 3D keeps an in-plane state and gives the 2D overstress. The initial state (all zeros) is the undisturbed,
 //! stress-free reference. Elastic materials have no state at all.
 //!
 //! The update is a pure function: the start-of-step state, the step `Δt` and the end-of-step
@@ -78,13 +82,16 @@
 
 use super::Constitutive;
 use super::Material;
-use crate::math::{det_identity_plus_minus_one, v, Mat2, Tangent};
+use crate::math::{Mat2, Tangent, Tensor};
 
 /// Largest number of Prony terms (the state is kept in fixed-size stack buffers).
 pub const MAX_PRONY: usize = 8;
 
-/// Largest number of state values per quadrature point.
+/// Largest number of state values per quadrature point in plane strain.
 pub const MAX_STATE: usize = 3 * (1 + MAX_PRONY);
+
+/// Largest number of state values per quadrature point in three dimensions.
+pub const MAX_STATE_3D: usize = 6 * (1 + MAX_PRONY);
 
 /// Which viscoelastic model (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -152,23 +159,10 @@ pub struct Viscoelastic {
     n: usize,
 }
 
-/// Symmetric 2×2 tensor from `[a11, a22, a12]`.
-#[inline(always)]
-fn sym(s: &[f64]) -> Mat2 {
-    Mat2::new(s[0], s[2], s[2], s[1])
-}
-
-#[inline(always)]
-fn store(m: &Mat2, out: &mut [f64]) {
-    out[0] = m[(0, 0)];
-    out[1] = m[(1, 1)];
-    out[2] = 0.5 * (m[(0, 1)] + m[(1, 0)]);
-}
-
 /// Green strain `E = (H + Hᵀ + HᵀH)/2` from `H = ∇u` (no cancellation at small strain).
 #[inline(always)]
-pub fn green_strain(h: &Mat2) -> Mat2 {
-    (h + h.transpose() + h.transpose() * h) * 0.5
+pub fn green_strain<T: Tensor>(h: &T) -> T {
+    (*h + h.transposed() + h.transposed().dot(h)) * 0.5
 }
 
 /// `(a, φ)` of the exponential integrator for `h = Δt/τ ≥ 0`: `a = e^{−h}`,
@@ -186,10 +180,16 @@ pub fn exp_weights(h: f64) -> (f64, f64) {
 
 /// `∂E/∂F_kL = ½(e_kLᵀ F + Fᵀ e_kL)` for the unit tensor `e_kL`.
 #[inline(always)]
-fn de_df(f: &Mat2, k: usize, l: usize) -> Mat2 {
-    let mut e = Mat2::zeros();
+fn de_df<T: Tensor>(f: &T, k: usize, l: usize) -> T {
+    let mut e = T::zero();
     e[(k, l)] = 1.0;
-    (e.transpose() * f + f.transpose() * e) * 0.5
+    (e.transposed().dot(f) + f.transposed().dot(&e)) * 0.5
+}
+
+/// Values `[ns·(1 + i), ns·(2 + i))` of a state: the internal variable of Prony term `i`.
+#[inline(always)]
+fn term(state: &[f64], ns: usize, i: usize) -> &[f64] {
+    &state[ns * (1 + i)..ns * (2 + i)]
 }
 
 impl Viscoelastic {
@@ -231,38 +231,41 @@ impl Viscoelastic {
         0.5 * self.gamma * self.kernel(0.0)
     }
 
-    /// State values per quadrature point.
+    /// State values per quadrature point in plane strain.
     pub fn n_state(&self) -> usize {
-        3 * (1 + self.n)
+        self.n_state_of::<Mat2>()
     }
 
-    /// End-of-step overstress `P_v = F S_v` at `∇u = h`, from the committed state `old` over a
-    /// step `dt ≥ 0`; the new state goes to `new` (same length as `old`). With `with_tangent`,
-    /// also `∂P_v/∂F` (the algorithmic tangent; zeros otherwise).
-    pub fn overstress(
+    /// State values per quadrature point in the dimension of `T`: `NSYM (1 + n)`.
+    pub fn n_state_of<T: Tensor>(&self) -> usize {
+        T::NSYM * (1 + self.n)
+    }
+
+    /// End-of-step overstress `P_v = F S_v` at `∇u = h` (`Mat2` in plane strain or `Mat3`),
+    /// from the committed state `old` over a step `dt ≥ 0`; the new state goes to `new` (same
+    /// length as `old`). With `with_tangent`, also `∂P_v/∂F` (the algorithmic tangent; zeros
+    /// otherwise).
+    pub fn overstress<T: Tensor>(
         &self,
-        h: &Mat2,
+        h: &T,
         old: &[f64],
         dt: f64,
         new: &mut [f64],
         with_tangent: bool,
-    ) -> (Mat2, Tangent) {
-        let f = Mat2::identity() + h;
+    ) -> (T, T::Tangent) {
+        let (d, ns) = (T::D, T::NSYM);
+        let f = T::eye() + *h;
         let e1 = green_strain(h);
-        let e0 = sym(&old[0..3]);
-        store(&e1, &mut new[0..3]);
-        let mut a_t = Tangent::zeros();
-        let de: [Mat2; 4] = if with_tangent {
-            [
-                de_df(&f, 0, 0),
-                de_df(&f, 0, 1),
-                de_df(&f, 1, 0),
-                de_df(&f, 1, 1),
-            ]
-        } else {
-            [Mat2::zeros(); 4]
-        };
-        let mut s_v = Mat2::zeros();
+        let e0 = T::sym_from(&old[0..ns]);
+        e1.sym_store(&mut new[0..ns]);
+        let mut a_t = T::tangent_zero();
+        let mut de = [T::zero(); 9];
+        if with_tangent {
+            for (kl, dek) in de.iter_mut().enumerate().take(d * d) {
+                *dek = de_df(&f, kl / d, kl % d);
+            }
+        }
+        let mut s_v = T::zero();
         match self.model {
             ViscoModel::Convolution => {
                 // S_v = γ Σ Q_i; ∂S_v/∂E = γ Σ g_i φ_i (identity on symmetric tensors).
@@ -270,101 +273,115 @@ impl Viscoelastic {
                 let de_step = e1 - e0;
                 for (i, &(g, tau)) in self.prony().iter().enumerate() {
                     let (a, phi) = exp_weights(dt / tau);
-                    let q = sym(&old[3 + 3 * i..6 + 3 * i]) * a + de_step * (g * phi);
-                    store(&q, &mut new[3 + 3 * i..6 + 3 * i]);
-                    s_v += q;
+                    let q = T::sym_from(term(old, ns, i)) * a + de_step * (g * phi);
+                    q.sym_store(&mut new[ns * (1 + i)..ns * (2 + i)]);
+                    s_v = s_v + q;
                     c_tan += g * phi;
                 }
-                s_v *= self.gamma;
+                s_v = s_v * self.gamma;
                 if with_tangent {
                     c_tan *= self.gamma;
-                    for kl in 0..4 {
-                        let (k, l) = (kl / 2, kl % 2);
-                        let mut e = Mat2::zeros();
+                    for (kl, dek) in de.iter().enumerate().take(d * d) {
+                        let (k, l) = (kl / d, kl % d);
+                        let mut e = T::zero();
                         e[(k, l)] = 1.0;
-                        let dp = e * s_v + f * de[kl] * c_tan;
-                        for i in 0..2 {
-                            for j in 0..2 {
-                                a_t[(v(i, j), kl)] = dp[(i, j)];
+                        let dp = e.dot(&s_v) + f.dot(dek) * c_tan;
+                        for i in 0..d {
+                            for j in 0..d {
+                                a_t[(T::flat(i, j), kl)] = dp[(i, j)];
                             }
                         }
                     }
                 }
             }
             ViscoModel::Multiplicative => {
-                let jm1 = det_identity_plus_minus_one(h);
+                let jm1 = h.det_ipm1();
                 if jm1 <= -1.0 || !jm1.is_finite() {
-                    return (Mat2::repeat(f64::INFINITY), Tangent::repeat(f64::INFINITY));
+                    return (T::filled(f64::INFINITY), T::tangent_filled(f64::INFINITY));
                 }
-                let c = f.transpose() * f;
-                let c_inv = c.try_inverse().unwrap_or(Mat2::repeat(f64::INFINITY));
-                let mut dsv = [Mat2::zeros(); 4];
+                let c = f.transposed().dot(&f);
+                let c_inv = c.inverse().unwrap_or(T::filled(f64::INFINITY));
+                let mut dsv = [T::zero(); 9];
                 for (i, &(g, tau)) in self.prony().iter().enumerate() {
                     let mu = 0.5 * self.gamma * g;
                     let (a, phi) = exp_weights(dt / tau);
-                    let ev0 = sym(&old[3 + 3 * i..6 + 3 * i]);
+                    let ev0 = T::sym_from(term(old, ns, i));
                     let ev = ev0 * a + e0 * (phi - a) + e1 * (1.0 - phi);
-                    store(&ev, &mut new[3 + 3 * i..6 + 3 * i]);
-                    let cv = Mat2::identity() + ev * 2.0;
-                    let Some(gi) = cv.try_inverse() else {
-                        return (Mat2::repeat(f64::INFINITY), Tangent::repeat(f64::INFINITY));
+                    ev.sym_store(&mut new[ns * (1 + i)..ns * (2 + i)]);
+                    let cv = T::eye() + ev * 2.0;
+                    let Some(gi) = cv.inverse() else {
+                        return (T::filled(f64::INFINITY), T::tangent_filled(f64::INFINITY));
                     };
                     // S_i = μ (C_v⁻¹ − C⁻¹) = 2μ C_v⁻¹ (E − E_v) C⁻¹, symmetrised.
-                    let si = gi * (e1 - ev) * c_inv * (2.0 * mu);
-                    s_v += (si + si.transpose()) * 0.5;
+                    let si = gi.dot(&(e1 - ev)).dot(&c_inv) * (2.0 * mu);
+                    s_v = s_v + (si + si.transposed()) * 0.5;
                     if with_tangent {
                         // dS_i = μ [−(1 − φ) G dC G + C⁻¹ dC C⁻¹], dC = 2 dE.
-                        for kl in 0..4 {
-                            let dc = de[kl] * 2.0;
-                            dsv[kl] += (c_inv * dc * c_inv - gi * dc * gi * (1.0 - phi)) * mu;
+                        for (dsk, dek) in dsv.iter_mut().zip(de.iter()).take(d * d) {
+                            let dc = *dek * 2.0;
+                            *dsk = *dsk
+                                + (c_inv.dot(&dc).dot(&c_inv) - gi.dot(&dc).dot(&gi) * (1.0 - phi))
+                                    * mu;
                         }
                     }
                 }
                 if with_tangent {
-                    for kl in 0..4 {
-                        let (k, l) = (kl / 2, kl % 2);
-                        let mut e = Mat2::zeros();
+                    for (kl, dsk) in dsv.iter().enumerate().take(d * d) {
+                        let (k, l) = (kl / d, kl % d);
+                        let mut e = T::zero();
                         e[(k, l)] = 1.0;
-                        let dp = e * s_v + f * dsv[kl];
-                        for i in 0..2 {
-                            for j in 0..2 {
-                                a_t[(v(i, j), kl)] = dp[(i, j)];
+                        let dp = e.dot(&s_v) + f.dot(dsk);
+                        for i in 0..d {
+                            for j in 0..d {
+                                a_t[(T::flat(i, j), kl)] = dp[(i, j)];
                             }
                         }
                     }
                 }
             }
         }
-        (f * s_v, a_t)
+        (f.dot(&s_v), a_t)
+    }
+
+    /// The overstress `S_v` (second Piola–Kirchhoff) that a committed plane-strain state holds
+    /// (see [`Self::state_overstress_of`]).
+    pub fn state_overstress(&self, state: &[f64]) -> Mat2 {
+        self.state_overstress_of::<Mat2>(state)
     }
 
     /// The overstress `S_v` (second Piola–Kirchhoff) that a committed state holds: its Green
-    /// strain `E` (`state[0..3]`) and internal variables give `γ Σ Q_i` (convolution) or
-    /// `Σ μ_i (C_v⁻¹ − C⁻¹)` (multiplicative).
-    pub fn state_overstress(&self, state: &[f64]) -> Mat2 {
-        let mut s_v = Mat2::zeros();
+    /// strain `E` (the first `NSYM` values) and internal variables give `γ Σ Q_i`
+    /// (convolution) or `Σ μ_i (C_v⁻¹ − C⁻¹)` (multiplicative).
+    pub fn state_overstress_of<T: Tensor>(&self, state: &[f64]) -> T {
+        let ns = T::NSYM;
+        let mut s_v = T::zero();
         match self.model {
             ViscoModel::Convolution => {
                 for i in 0..self.n {
-                    s_v += sym(&state[3 + 3 * i..6 + 3 * i]);
+                    s_v = s_v + T::sym_from(term(state, ns, i));
                 }
                 s_v * self.gamma
             }
             ViscoModel::Multiplicative => {
-                let c = Mat2::identity() + sym(&state[0..3]) * 2.0;
-                let Some(c_inv) = c.try_inverse() else {
-                    return Mat2::repeat(f64::INFINITY);
+                let c = T::eye() + T::sym_from(&state[0..ns]) * 2.0;
+                let Some(c_inv) = c.inverse() else {
+                    return T::filled(f64::INFINITY);
                 };
                 for (i, &(g, _)) in self.prony().iter().enumerate() {
-                    let cv = Mat2::identity() + sym(&state[3 + 3 * i..6 + 3 * i]) * 2.0;
-                    let Some(gi) = cv.try_inverse() else {
-                        return Mat2::repeat(f64::INFINITY);
+                    let cv = T::eye() + T::sym_from(term(state, ns, i)) * 2.0;
+                    let Some(gi) = cv.inverse() else {
+                        return T::filled(f64::INFINITY);
                     };
-                    s_v += (gi - c_inv) * (0.5 * self.gamma * g);
+                    s_v = s_v + (gi - c_inv) * (0.5 * self.gamma * g);
                 }
                 s_v
             }
         }
+    }
+
+    /// Stored energy of a committed plane-strain state (see [`Self::stored_energy_of`]).
+    pub fn stored_energy(&self, state: &[f64]) -> f64 {
+        self.stored_energy_of::<Mat2>(state)
     }
 
     /// Energy per unit reference volume stored in the internal variables of a committed state:
@@ -372,85 +389,97 @@ impl Viscoelastic {
     /// g_i Ė` is a spring `γ g_i` in series with a dashpot, `Q_i = g_i (E − E_v,i)`), or the
     /// non-equilibrium energy `Σ ψ_i` of the multiplicative model. Either way the overstress
     /// power is `S_v : Ė = d/dt (stored) + D` with a dissipation `D ≥ 0` for every path.
-    pub fn stored_energy(&self, state: &[f64]) -> f64 {
+    pub fn stored_energy_of<T: Tensor>(&self, state: &[f64]) -> f64 {
+        let (d, ns) = (T::D, T::NSYM);
         match self.model {
             ViscoModel::Convolution => {
                 let mut w = 0.0;
                 for (i, &(g, _)) in self.prony().iter().enumerate() {
                     if g > 0.0 {
-                        let q = &state[3 + 3 * i..6 + 3 * i];
-                        w += 0.5 * self.gamma / g * (q[0] * q[0] + q[1] * q[1] + 2.0 * q[2] * q[2]);
+                        let q = term(state, ns, i);
+                        // |Q|² in the symmetric layout: diagonal once, off-diagonal twice.
+                        let diag: f64 = q[..d].iter().map(|x| x * x).sum();
+                        let off: f64 = q[d..ns].iter().map(|x| x * x).sum();
+                        w += 0.5 * self.gamma / g * (diag + 2.0 * off);
                     }
                 }
                 w
             }
             ViscoModel::Multiplicative => {
-                let c = Mat2::identity() + sym(&state[0..3]) * 2.0;
+                let c = T::eye() + T::sym_from(&state[0..ns]) * 2.0;
                 let mut psi = 0.0;
                 for (i, &(g, _)) in self.prony().iter().enumerate() {
-                    let cv = Mat2::identity() + sym(&state[3 + 3 * i..6 + 3 * i]) * 2.0;
-                    let Some(gi) = cv.try_inverse() else {
+                    let cv = T::eye() + T::sym_from(term(state, ns, i)) * 2.0;
+                    let Some(gi) = cv.inverse() else {
                         return f64::INFINITY;
                     };
-                    let ce = c * gi;
-                    let det = ce.determinant();
+                    let ce = c.dot(&gi);
+                    let det = ce.det();
                     if det.is_nan() || det <= 0.0 {
                         return f64::INFINITY;
                     }
-                    psi += 0.25 * self.gamma * g * (ce.trace() - 2.0 - det.ln());
+                    psi += 0.25 * self.gamma * g * (ce.tr() - d as f64 - det.ln());
                 }
                 psi
             }
         }
     }
 
+    /// Overstress work over a committed plane-strain step (see [`Self::step_work_of`]).
+    pub fn step_work(&self, old: &[f64], new: &[f64]) -> f64 {
+        self.step_work_of::<Mat2>(old, new)
+    }
+
     /// Work per unit reference volume of the overstress over one committed step from state
     /// `old` to state `new`, `∫ S_v : Ė dt` by the trapezoidal rule
     /// `½ (S_v^n + S_v^{n+1}) : (E^{n+1} − E^n)`.
-    pub fn step_work(&self, old: &[f64], new: &[f64]) -> f64 {
-        let de = sym(&new[0..3]) - sym(&old[0..3]);
-        let s = (self.state_overstress(old) + self.state_overstress(new)) * 0.5;
-        s.component_mul(&de).sum()
+    pub fn step_work_of<T: Tensor>(&self, old: &[f64], new: &[f64]) -> f64 {
+        let ns = T::NSYM;
+        let de = T::sym_from(&new[0..ns]) - T::sym_from(&old[0..ns]);
+        let s = (self.state_overstress_of::<T>(old) + self.state_overstress_of::<T>(new)) * 0.5;
+        s.ddot(&de)
     }
 
     /// Non-equilibrium free energy `Σ ψ_i` at `∇u = h` with the internal state `state`
     /// (multiplicative model; `None` for the convolution model, which has none).
-    pub fn free_energy(&self, h: &Mat2, state: &[f64]) -> Option<f64> {
+    pub fn free_energy<T: Tensor>(&self, h: &T, state: &[f64]) -> Option<f64> {
         if self.model != ViscoModel::Multiplicative {
             return None;
         }
-        let f = Mat2::identity() + h;
-        let c = f.transpose() * f;
+        let ns = T::NSYM;
+        let f = T::eye() + *h;
+        let c = f.transposed().dot(&f);
         let mut psi = 0.0;
         for (i, &(g, _)) in self.prony().iter().enumerate() {
             let mu = 0.5 * self.gamma * g;
-            let cv = Mat2::identity() + sym(&state[3 + 3 * i..6 + 3 * i]) * 2.0;
-            let gi = cv.try_inverse()?;
-            let ce = c * gi;
-            let det = ce.determinant();
+            let cv = T::eye() + T::sym_from(term(state, ns, i)) * 2.0;
+            let gi = cv.inverse()?;
+            let ce = c.dot(&gi);
+            let det = ce.det();
             if det.is_nan() || det <= 0.0 {
                 return Some(f64::INFINITY);
             }
-            psi += 0.5 * mu * (ce.trace() - 2.0 - det.ln());
+            psi += 0.5 * mu * (ce.tr() - T::D as f64 - det.ln());
         }
         Some(psi)
     }
 
     /// Dissipation rate `D = Σ μ_i/(2τ_i) tr(A G A G)` of the multiplicative model at `∇u = h`
     /// with internal state `state` (`None` for the convolution model).
-    pub fn dissipation_rate(&self, h: &Mat2, state: &[f64]) -> Option<f64> {
+    pub fn dissipation_rate<T: Tensor>(&self, h: &T, state: &[f64]) -> Option<f64> {
         if self.model != ViscoModel::Multiplicative {
             return None;
         }
+        let ns = T::NSYM;
         let e = green_strain(h);
         let mut d = 0.0;
         for (i, &(g, tau)) in self.prony().iter().enumerate() {
             let mu = 0.5 * self.gamma * g;
-            let ev = sym(&state[3 + 3 * i..6 + 3 * i]);
-            let gi = (Mat2::identity() + ev * 2.0).try_inverse()?;
+            let ev = T::sym_from(term(state, ns, i));
+            let gi = (T::eye() + ev * 2.0).inverse()?;
             let a = (e - ev) * 2.0;
-            let agag = a * gi * a * gi;
-            d += mu / (2.0 * tau) * agag.trace();
+            let agag = a.dot(&gi).dot(&a).dot(&gi);
+            d += mu / (2.0 * tau) * agag.tr();
         }
         Some(d)
     }
@@ -500,6 +529,7 @@ mod tests {
     use super::*;
     use crate::material::fd_check::{check_stateful, SplitMix};
     use crate::material::{MooneyRivlin, MooneyRivlinIncompressible, NeoHookean};
+    use crate::math::{det_identity_plus_minus_one, Mat3, Tangent3};
 
     fn laws() -> Vec<ViscoelasticMaterial> {
         let prony = [(0.6, 0.05), (0.3, 1.3), (0.1, 20.0)];
@@ -765,5 +795,154 @@ mod tests {
             (ve.stored_energy(&new) - psi).abs() <= 1e-12 * psi.abs(),
             "{psi}"
         );
+    }
+
+    /// Random admissible 3D `∇u` with |∇u| up to `scale` and `J ∈ (0.5, 2)`.
+    fn random_grad3(rng: &mut SplitMix, scale: f64) -> Mat3 {
+        loop {
+            let h = Mat3::from_fn(|_, _| scale * (2.0 * rng.next() - 1.0));
+            let j = (Mat3::identity() + h).determinant();
+            if j > 0.5 && j < 2.0 {
+                return h;
+            }
+        }
+    }
+
+    /// A 3D history: a few random steps from the reference.
+    fn random_state3(ve: &Viscoelastic, rng: &mut SplitMix) -> Vec<f64> {
+        let n = ve.n_state_of::<Mat3>();
+        let mut s = vec![0.0; n];
+        let mut s1 = vec![0.0; n];
+        for _ in 0..3 {
+            let h = random_grad3(rng, 0.3);
+            ve.overstress(&h, &s, 0.2 * rng.next(), &mut s1, false);
+            s.copy_from_slice(&s1);
+        }
+        s
+    }
+
+    #[test]
+    fn overstress_3d_tangent_against_finite_differences() {
+        let prony = [(0.6, 0.05), (0.3, 1.3), (0.1, 20.0)];
+        let mut rng = SplitMix(17);
+        for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+            let ve = Viscoelastic::new(model, 3.0, &prony).unwrap();
+            assert_eq!(ve.n_state_of::<Mat3>(), 6 * 4);
+            let mut worst = 0.0_f64;
+            for _ in 0..20 {
+                let old = random_state3(&ve, &mut rng);
+                let h = random_grad3(&mut rng, 0.3);
+                let dt = 0.3 * rng.next();
+                let n = old.len();
+                let (mut new, mut scratch) = (vec![0.0; n], vec![0.0; n]);
+                let (p, a) = ve.overstress(&h, &old, dt, &mut new, true);
+                let (p2, _) = ve.overstress(&h, &old, dt, &mut scratch, false);
+                assert_eq!(p, p2);
+                assert_eq!(new, scratch);
+                let step = 1e-5;
+                let mut a_fd = Tangent3::zeros();
+                for kl in 0..9 {
+                    let mut e = Mat3::zeros();
+                    e[(kl / 3, kl % 3)] = step;
+                    let pp = ve.overstress(&(h + e), &old, dt, &mut scratch, false).0;
+                    let pm = ve.overstress(&(h - e), &old, dt, &mut scratch, false).0;
+                    let dp = (pp - pm) / (2.0 * step);
+                    for r in 0..9 {
+                        a_fd[(r, kl)] = dp[(r / 3, r % 3)];
+                    }
+                }
+                let err = (a - a_fd).norm() / a.norm();
+                assert!(err < 1e-7, "{model:?}: tangent FD {err}");
+                worst = worst.max(err);
+                if model == ViscoModel::Multiplicative {
+                    // P_v = ∂ψ/∂F at the end-of-step internal state, frozen.
+                    let mut p_fd = Mat3::zeros();
+                    for kl in 0..9 {
+                        let mut e = Mat3::zeros();
+                        e[(kl / 3, kl % 3)] = step;
+                        let wp = ve.free_energy(&(h + e), &new).unwrap();
+                        let wm = ve.free_energy(&(h - e), &new).unwrap();
+                        p_fd[(kl / 3, kl % 3)] = (wp - wm) / (2.0 * step);
+                    }
+                    let ep = (p - p_fd).norm() / p.norm().max(1e-3);
+                    assert!(ep < 1e-7, "free-energy stress {ep}");
+                    assert!(ve.dissipation_rate(&h, &new).unwrap() >= 0.0);
+                }
+            }
+            println!("{model:?}: 3D overstress tangent FD worst {worst:.2e}");
+        }
+    }
+
+    #[test]
+    fn overstress_3d_in_plane_strain_is_the_2d_overstress() {
+        // A plane-strain path in 3D: the state stays in-plane (E33 = E13 = E23 = 0, C_v33 = 1)
+        // and the in-plane overstress equals the 2D one step after step.
+        let prony = [(0.6, 0.05), (0.4, 1.3)];
+        let mut rng = SplitMix(5);
+        for model in [ViscoModel::Convolution, ViscoModel::Multiplicative] {
+            let ve = Viscoelastic::new(model, 3.0, &prony).unwrap();
+            let (mut s2, mut s3) = (vec![0.0; ve.n_state()], vec![0.0; ve.n_state_of::<Mat3>()]);
+            let (mut n2, mut n3) = (s2.clone(), s3.clone());
+            for _ in 0..6 {
+                let h = random_grad(&mut rng, 0.3);
+                let h3 = Mat3::new(
+                    h[(0, 0)],
+                    h[(0, 1)],
+                    0.0,
+                    h[(1, 0)],
+                    h[(1, 1)],
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                );
+                let dt = 0.2 * rng.next();
+                let (p2, a2) = ve.overstress(&h, &s2, dt, &mut n2, true);
+                let (p3, a3) = ve.overstress(&h3, &s3, dt, &mut n3, true);
+                for i in 0..2 {
+                    for j in 0..2 {
+                        assert!((p2[(i, j)] - p3[(i, j)]).abs() < 1e-13 * p2.norm().max(1.0));
+                        for k in 0..2 {
+                            for l in 0..2 {
+                                let d = a2[(2 * i + j, 2 * k + l)] - a3[(3 * i + j, 3 * k + l)];
+                                assert!(d.abs() < 1e-12 * a2.norm().max(1.0));
+                            }
+                        }
+                    }
+                }
+                let s_2: Mat2 = ve.state_overstress_of(&n2);
+                let s_3: Mat3 = ve.state_overstress_of(&n3);
+                assert!((s_2[(0, 1)] - s_3[(0, 1)]).abs() < 1e-13 && s_3[(2, 2)].abs() < 1e-13);
+                assert!((ve.stored_energy(&n2) - ve.stored_energy_of::<Mat3>(&n3)).abs() < 1e-13);
+                assert!((ve.step_work(&s2, &n2) - ve.step_work_of::<Mat3>(&s3, &n3)).abs() < 1e-13);
+                s2.copy_from_slice(&n2);
+                s3.copy_from_slice(&n3);
+            }
+        }
+    }
+
+    #[test]
+    fn models_agree_in_3d_at_small_strain_and_dissipate() {
+        let prony = [(0.7, 0.1), (0.3, 2.0)];
+        let conv = Viscoelastic::new(ViscoModel::Convolution, 2.0, &prony).unwrap();
+        let mult = Viscoelastic::new(ViscoModel::Multiplicative, 2.0, &prony).unwrap();
+        let n = conv.n_state_of::<Mat3>();
+        let (mut sc, mut sm) = (vec![0.0; n], vec![0.0; n]);
+        let (mut nc, mut nm) = (vec![0.0; n], vec![0.0; n]);
+        let shape = Mat3::new(0.3, -0.7, 0.4, 0.9, -0.2, 0.1, 0.5, 0.6, -1.0);
+        let mut work = 0.0;
+        for step in 0..40 {
+            let t = 0.05 * step as f64;
+            let h = shape * (1e-7 * (3.0 * t).sin());
+            let pc = conv.overstress(&h, &sc, 0.05, &mut nc, false).0;
+            let pm = mult.overstress(&h, &sm, 0.05, &mut nm, false).0;
+            let scale = pc.norm().max(1e-12);
+            assert!((pc - pm).norm() < 1e-5 * scale, "step {step}");
+            work += conv.step_work_of::<Mat3>(&sc, &nc);
+            sc.copy_from_slice(&nc);
+            sm.copy_from_slice(&nm);
+        }
+        // Work = stored + dissipated, dissipated ≥ 0 (trapezoidal work, so up to O(Δt²)).
+        assert!(work - conv.stored_energy_of::<Mat3>(&sc) > -1e-3 * work.abs());
     }
 }
