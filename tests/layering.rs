@@ -1,14 +1,15 @@
 //! One-way layering of the library's source files, read from the `use` lines under `src/`.
 //!
 //! Every file of the library (not the `tread` binary's `main.rs`) is a node; a `use crate::…`,
-//! `use super::…`, `use self::…` or child-module `use name::…` line, and a `crate::…` path
-//! written inline in code, is an edge to the file that defines the item. A name a `mod.rs`
+//! `use super::…`, `use self::…` or child-module `use name::…` line, and a `crate::…`,
+//! `super::…` or `self::…` path written inline in code, is an edge to the file that defines the item. A name a `mod.rs`
 //! re-exports (`pub use child::Item`) is followed to the child that defines it, and a module's
 //! own re-exports of its descendants are its façade, not a dependency. Comments and
 //! `#[cfg(test)] mod … { … }` blocks are ignored (test code may reach anywhere).
 //!
-//! The rules: no cycle between files, and nothing in `solver/` imports from `io/` (the solvers
-//! report to their own observer trait, which the recorder implements).
+//! The rules: no cycle between files; nothing in `solver/` imports from `io/` (the solvers
+//! report to their own observer trait, which the recorder implements); nothing below the
+//! application face `app.rs` imports it (the drivers are called by the face, never the reverse).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -219,27 +220,31 @@ fn parse(file: &str, src: &str, modules: &BTreeSet<Vec<String>>) -> Parsed {
             rest = after;
         }
     }
-    // Inline `crate::a::b` paths.
+    // Inline `crate::a::b`, `super::a::b` and `self::a::b` paths.
     let bytes = code.as_bytes();
-    let mut from = 0;
-    while let Some(k) = code[from..].find("crate::") {
-        let at = from + k;
-        let prev = at.checked_sub(1).map(|j| bytes[j] as char);
-        from = at + 7;
-        if prev.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
-            continue;
-        }
-        let tail: String = code[from..]
-            .chars()
-            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
-            .collect();
-        let path: Vec<String> = tail
-            .split("::")
-            .filter(|s| !s.is_empty())
-            .map(str::to_string)
-            .collect();
-        if !path.is_empty() {
-            uses.push((false, path));
+    for head in ["crate::", "super::", "self::"] {
+        let mut from = 0;
+        while let Some(k) = code[from..].find(head) {
+            let at = from + k;
+            let prev = at.checked_sub(1).map(|j| bytes[j] as char);
+            from = at + head.len();
+            if prev.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                continue;
+            }
+            let tail: String = code[at..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':')
+                .collect();
+            let path: Vec<String> = tail
+                .split("::")
+                .filter(|s| !s.is_empty())
+                .map(str::to_string)
+                .collect();
+            if let Some(a) = absolute(&path) {
+                if !a.is_empty() {
+                    uses.push((false, a));
+                }
+            }
         }
     }
     Parsed { uses, reexports }
@@ -369,6 +374,19 @@ fn solver_to_io(g: &Graph) -> Vec<String> {
         .collect()
 }
 
+/// Imports of the application face (`app.rs`) from below it: only the binary and the face
+/// itself may use it.
+fn below_the_face_to_app(g: &Graph) -> Vec<String> {
+    g.iter()
+        .filter(|(f, _)| f.as_str() != "app.rs" && f.as_str() != "lib.rs")
+        .flat_map(|(f, ts)| {
+            ts.iter()
+                .filter(|t| t.as_str() == "app.rs")
+                .map(move |t| format!("{f} -> {t}"))
+        })
+        .collect()
+}
+
 fn describe(g: &Graph, comps: &[Vec<String>]) -> String {
     let mut s = String::new();
     for c in comps {
@@ -407,6 +425,12 @@ fn solver_imports_nothing_from_io() {
     assert!(bad.is_empty(), "solver/ imports from io/: {bad:#?}");
 }
 
+#[test]
+fn nothing_below_the_face_imports_app() {
+    let bad = below_the_face_to_app(&crate_graph());
+    assert!(bad.is_empty(), "imports of app.rs below it: {bad:#?}");
+}
+
 /// The parser sees the crate's real imports (an empty graph would pass both checks).
 #[test]
 fn the_graph_holds_known_imports() {
@@ -420,6 +444,8 @@ fn the_graph_holds_known_imports() {
         ("io/record/mod.rs", "solver/observe.rs"),
         // `use super::newton::…` inside solver/.
         ("solver/stepping.rs", "solver/newton.rs"),
+        // An inline `super::run_one::run_dir(…)` call.
+        ("sweep/slurm.rs", "sweep/run_one.rs"),
         // An inline `crate::setup::solver_options(…)` call.
         ("driver/steady_run.rs", "setup.rs"),
     ] {
@@ -438,11 +464,11 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     let mut s = Sources::new();
     s.insert(
         "lib.rs".into(),
-        "pub mod a;\npub mod io;\npub mod solver;\n".into(),
+        "pub mod a;\npub mod app;\npub mod io;\npub mod solver;\n".into(),
     );
     s.insert(
         "a/mod.rs".into(),
-        "pub mod b;\npub mod c;\npub use b::Thing;\n".into(),
+        "pub mod b;\npub mod c;\npub mod d;\npub mod e;\npub use b::Thing;\n".into(),
     );
     // b → c through an inline path, c → b through the façade's re-export.
     s.insert(
@@ -454,6 +480,12 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
         "use super::{Thing as T};\npub fn g() {}\n#[cfg(test)]\nmod tests {\n    use crate::io::X;\n}\n"
             .into(),
     );
+    s.insert(
+        "a/d.rs".into(),
+        "fn h() { super::b::Thing; self::inner(); }\nfn inner() {}\n".into(),
+    );
+    s.insert("app.rs".into(), "pub fn run() {}\n".into());
+    s.insert("a/e.rs".into(), "fn k() { crate::app::run() }\n".into());
     s.insert("io/mod.rs".into(), "pub mod record;\n".into());
     s.insert("io/record.rs".into(), "pub trait Recorder {}\n".into());
     s.insert("solver/mod.rs".into(), "pub mod stepping;\n".into());
@@ -468,6 +500,9 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
         "{g:#?}"
     );
     assert_eq!(solver_to_io(&g), vec!["solver/stepping.rs -> io/record.rs"]);
+    // An inline `super::` path is an edge; an inline `self::` path stays in the file.
+    assert!(g["a/d.rs"].contains("a/b.rs"), "{g:#?}");
+    assert_eq!(below_the_face_to_app(&g), vec!["a/e.rs -> app.rs"]);
     // Neither the façade's `pub use` nor the test module's import is an edge.
     assert!(!g["a/mod.rs"].contains("a/b.rs"), "{g:#?}");
     assert!(!g["a/c.rs"].iter().any(|t| t.starts_with("io/")), "{g:#?}");

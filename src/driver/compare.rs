@@ -34,12 +34,12 @@ use super::results::{
     CompareQuantity, CompareResults, CompareSection, CompareSummary, ModeSummary, Summary,
 };
 use super::steady_run;
-use crate::app::{self, AppError, RunOptions, RunOutcome};
 use crate::assembly::QpHistory;
 use crate::element::QuadRule;
 use crate::io::output::{ensure_dir, write_json, write_text_csv};
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::math::Vec2;
+use crate::setup::{build_model, AppError, RunOptions, RunOutcome};
 use std::path::Path;
 
 /// Exit status of `tread compare` (and of `tread` without arguments) when both runs finished
@@ -324,7 +324,7 @@ pub fn field_difference(
     u_t: &[f64],
     u_s: &[f64],
 ) -> Result<(f64, f64, f64), AppError> {
-    let sys = crate::driver::SolidSystem::new(app::build_model(scene)?, "hub");
+    let sys = crate::driver::SolidSystem::new(build_model(scene)?, "hub");
     let n = sys.model.mesh.n_nodes();
     if u_t.len() < 2 * n || u_s.len() < 2 * n {
         return Err(AppError::Unsupported(format!(
@@ -394,7 +394,7 @@ pub fn history_difference(
     if h_t.n_state != h_s.n_state || h_t.data.len() != h_s.data.len() || h_s.n_state < 6 {
         return Ok(None);
     }
-    let model = app::build_model(&with_csv(scene, Mode::Steady))?;
+    let model = build_model(&with_csv(scene, Mode::Steady))?;
     let Some(layout) = model.mesh.rings else {
         return Ok(None);
     };
@@ -478,7 +478,7 @@ fn with_csv(scene: &Scene, mode: Mode) -> Scene {
 /// Mean spacing of the outer-surface nodes of `scene`'s mesh (the nodes within 1e-9 Ro of the
 /// outer radius; 2π Ro over their count).
 fn surface_spacing(scene: &Scene) -> Result<f64, AppError> {
-    let model = app::build_model(&with_csv(scene, Mode::Steady))?;
+    let model = build_model(&with_csv(scene, Mode::Steady))?;
     let ro = scene.geometry.ro;
     let n = model
         .mesh
@@ -526,7 +526,7 @@ pub fn run_with_tolerances(
         out_dir: opts.out_dir.join("transient"),
         ..opts.clone()
     };
-    let tr = match app::run(&tr_scene, &tr_opts) {
+    let tr = match super::transient_run::run(&tr_scene, &tr_opts) {
         Ok(o) => o,
         Err(AppError::Solve(e, dir)) => {
             return Err(AppError::Solve(e, dir));
@@ -538,7 +538,7 @@ pub fn run_with_tolerances(
         out_dir: opts.out_dir.join("steady"),
         ..opts.clone()
     };
-    let st = app::run(&st_scene, &st_opts)?;
+    let st = super::steady_run::run(&st_scene, &st_opts)?;
     let (Some(ts), Some(ss)) = (tr.typed.transient(), st.typed.steady()) else {
         return Err(AppError::Unsupported(
             "compare: the transient and steady runs gave no results to compare".into(),

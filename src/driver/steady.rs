@@ -110,7 +110,7 @@ pub struct SteadyRolling {
     /// The coarser mesh's steady state of the nested iteration, solved while this system was
     /// built ([`super::steady_run::build_steady_nested`]); [`super::steady_run::solve_steady`]
     /// starts from it.
-    pub coarse_solved: Option<Box<super::steady_run::CoarseSolved>>,
+    pub coarse_solved: Option<Box<CoarseSolved>>,
 }
 
 impl SteadyRolling {
@@ -469,4 +469,14 @@ pub fn step_parameter(
         }
     }
     Ok(iterations)
+}
+
+/// A coarser mesh's steady state for the nested iteration's coarse start: its system (or why it could not be
+/// built), the report and outcome of its solve, and the wall times of its set-up and solve.
+pub struct CoarseSolved {
+    pub(super) system: Result<Box<SteadyRolling>, String>,
+    pub(super) report: StepReport,
+    pub(super) solved: Result<(), SolveError>,
+    pub(super) setup_s: f64,
+    pub(super) solve_s: f64,
 }

@@ -31,7 +31,9 @@ use super::results::{
     SteadySummary, SteadyTerms, Summary, Terms,
 };
 use super::spinning;
-use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
+use super::steady::{
+    press, solve_torque, step_parameter, CoarseSolved, SteadyParameter, SteadyRolling,
+};
 use super::steady_recovery;
 use super::steady_report::CoarseStart;
 use super::system::{Loading, SolidSystem, SteadyDampingTangent};
@@ -716,16 +718,6 @@ fn coarse_start(
         }
     }
     Ok(Some(out))
-}
-
-/// A coarser mesh's steady state for [`coarse_start`]: its system (or why it could not be
-/// built), the report and outcome of its solve, and the wall times of its set-up and solve.
-pub struct CoarseSolved {
-    system: Result<Box<SteadyRolling>, String>,
-    report: StepReport,
-    solved: Result<(), SolveError>,
-    setup_s: f64,
-    solve_s: f64,
 }
 
 /// Build the `coarse` scene's steady system with `build` and solve it (silently, by

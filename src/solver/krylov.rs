@@ -11,7 +11,7 @@
 //! quadratic convergence while the factorization keeps the sparsity of K.
 
 use super::linear::{LinearError, SparseSolver};
-use super::newton::NonlinearSystem;
+use super::system::NonlinearSystem;
 
 /// What a GMRES solve did.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

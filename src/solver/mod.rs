@@ -11,6 +11,7 @@ pub mod multifrontal;
 pub mod newton;
 pub mod observe;
 pub mod stepping;
+pub mod system;
 
 pub use linear::{LinearError, LinearKind, SparseSolver};
 pub use newton::{

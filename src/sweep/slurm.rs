@@ -37,64 +37,9 @@ use std::time::{Duration, Instant};
 /// The default `MaxArraySize` of Slurm.
 pub const DEFAULT_MAX_ARRAY_SIZE: usize = 1001;
 
-fn valid_time(t: &str) -> bool {
-    let num = |s: &str| !s.is_empty() && s.len() <= 4 && s.chars().all(|c| c.is_ascii_digit());
-    let (days, rest) = match t.split_once('-') {
-        Some((d, r)) => (Some(d), r),
-        None => (None, t),
-    };
-    if days.is_some_and(|d| !num(d)) {
-        return false;
-    }
-    let parts: Vec<&str> = rest.split(':').collect();
-    if !parts.iter().all(|p| num(p)) {
-        return false;
-    }
-    (1..=3).contains(&parts.len())
-}
-
-fn valid_mem(m: &str) -> bool {
-    let digits = m.trim_end_matches(['K', 'M', 'G', 'T', 'k', 'm', 'g', 't']);
-    !digits.is_empty() && digits.chars().all(|c| c.is_ascii_digit()) && m.len() - digits.len() <= 1
-}
-
-/// Problems with the Slurm resources (as `key `slurm.x`: …` lines).
-pub fn check_resources(s: &SlurmSpec) -> Vec<String> {
-    let mut e = Vec::new();
-    if let Some(p) = &s.partition {
-        if p.is_empty()
-            || !p
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || "_-.,".contains(c))
-        {
-            e.push(format!(
-                "key `slurm.partition`: `{p}` is not a partition name"
-            ));
-        }
-    }
-    if let Some(t) = &s.time {
-        if !valid_time(t) {
-            e.push(format!(
-                "key `slurm.time`: `{t}` is not a Slurm time (MM, MM:SS, HH:MM:SS, D-HH, D-HH:MM or D-HH:MM:SS)"
-            ));
-        }
-    }
-    if let Some(m) = &s.mem {
-        if !valid_mem(m) {
-            e.push(format!(
-                "key `slurm.mem`: `{m}` is not a memory size (megabytes, or a number with K, M, G or T)"
-            ));
-        }
-    }
-    for (i, x) in s.extra.iter().enumerate() {
-        if !x.starts_with("--") || x.contains('\n') {
-            e.push(format!(
-                "key `slurm.extra[{i}]`: `{x}` must be one sbatch option like `--account=proj`"
-            ));
-        }
-    }
-    e
-}
+pub use super::spec::check_resources;
+#[cfg(test)]
+use super::spec::{valid_mem, valid_time};
 
 /// Resolved resources and layout of the array.
 #[derive(Clone, Debug, PartialEq)]

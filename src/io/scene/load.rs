@@ -5,15 +5,12 @@
 use super::errors::{SceneError, SceneErrors, OVERRIDE_TAG};
 use super::issue::{issue, Issue, Origin};
 use super::material::{validate_material, MaterialModel, MaterialSpec, RegionMaterial};
-use super::schema::{check_kind, describe_value, section_list, section_schema, Kind, SCHEMA};
+use super::schema::{
+    check_kind, describe_value, section_list, section_schema, Kind, SCHEMA, STEADY_UNUSED_TIME,
+};
 use super::spans::Locator;
 use serde::de::DeserializeOwned;
 use std::collections::BTreeSet;
-
-/// Keys of `[time]` required by the transient mode that the steady mode does not read: a
-/// steady scene may give `[time]` for `strain_rate_damping` alone (see
-/// [`super::TimeSpec::steady_only`]).
-pub(super) const STEADY_UNUSED_TIME: [&str; 2] = ["dt", "t_end"];
 
 pub(super) struct Ctx<'a> {
     pub(super) source_name: &'a str,

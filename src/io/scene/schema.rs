@@ -33,6 +33,11 @@ use std::sync::LazyLock;
 
 use serde_json::{json, Map, Value};
 
+/// Keys of `[time]` required by the transient mode that the steady mode does not read: a
+/// steady scene may give `[time]` for `strain_rate_damping` alone (see
+/// [`super::TimeSpec::steady_only`]).
+pub(super) const STEADY_UNUSED_TIME: [&str; 2] = ["dt", "t_end"];
+
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Kind {
     Float,
@@ -727,7 +732,7 @@ fn object_json(
     }
     for f in fields {
         props.insert(f.key.to_string(), field_json(f, defaults.get(f.key)));
-        if f.required && !(steady_optional && super::load::STEADY_UNUSED_TIME.contains(&f.key)) {
+        if f.required && !(steady_optional && STEADY_UNUSED_TIME.contains(&f.key)) {
             required.push(f.key);
         }
     }
@@ -786,7 +791,7 @@ pub fn json_schema() -> Value {
             "required": ["analysis"]
         },
         "else": {
-            "properties": { "time": { "required": super::load::STEADY_UNUSED_TIME } }
+            "properties": { "time": { "required": STEADY_UNUSED_TIME } }
         }
     })
 }
