@@ -110,9 +110,7 @@ impl TaylorHood {
         let mut exp_terms = cv.exp_terms.clone();
         let mut offset = cv.offset.clone();
         for i in 0..pres.n_dofs() {
-            eq.push(if i == pin_dof {
-                u32::MAX
-            } else if cp.eq[i] == u32::MAX {
+            eq.push(if i == pin_dof || cp.eq[i] == u32::MAX {
                 u32::MAX
             } else {
                 map_p(cp.eq[i]).unwrap_or(u32::MAX)
