@@ -181,8 +181,10 @@ const GHIA_V400: [f64; 17] = [
 ];
 
 // Botella & Peyret, Comput. Fluids 27 (1998) 421–433, Re = 1000 (Chebyshev collocation, N = 160),
-// in the +x-lid convention used here (their tables are for a lid moving in −x; x ↦ 1 − x,
-// v ↦ −v... mirrored copies as published in public validation data). u on x = 0.5:
+// centreline tables and primary vortex, in the orientation used here (lid moving in +x, as in
+// Ghia et al.): their vortex centre x = 0.4692 is measured in the mirrored orientation, here
+// x = 1 − 0.4692 = 0.5308 (public validation data quote the tables in this orientation with the
+// vortex at (0.53079, 0.56524), ψ = −0.118936603; the computed centre agrees). u on x = 0.5:
 const BP_Y: [f64; 15] = [
     0.0547, 0.0625, 0.0703, 0.1016, 0.1719, 0.2813, 0.4531, 0.5, 0.6172, 0.7344, 0.8516, 0.9531,
     0.9609, 0.9688, 0.9766,
@@ -200,7 +202,7 @@ const BP_V: [f64; 15] = [
     0.2807056, 0.2962703, 0.3099097, 0.3330442, 0.3769189, 0.3339924, 0.3253592, 0.0257995,
     -0.3202137, -0.4264545, -0.5264392, -0.4103754, -0.3553213, -0.2936869, -0.2279225,
 ];
-/// ψ_min and its location (their Table 1, mirrored to the +x lid: x = 1 − 0.4692).
+/// ψ_min and its location (mirrored to the +x lid: x = 1 − 0.4692).
 const BP_PSI_MIN: f64 = -0.1189366;
 const BP_PSI_AT: [f64; 2] = [0.5308, 0.5652];
 
@@ -321,4 +323,25 @@ fn driven_cavity_regularised_lid() {
     let (u, _) = s.velocity([0.3, 1.0]).unwrap();
     let ul = 16.0 * 0.09 * 0.49;
     assert!((u[0] - ul).abs() < 1e-4, "lid u {} vs {ul}", u[0]);
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let t = unit_square(1);
+    let th = TaylorHood::new(&t, &|x, c| CavityLid::Discontinuous.g(x, c)).unwrap();
+    let mut y = vec![0.0; th.n_eq()];
+    let zero = |_: [f64; 2]| [0.0, 0.0];
+    for nu in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let e = solve_newton(&th, &mut y, nu, &zero, 1e-10, 5).unwrap_err();
+        assert!(e.to_string().contains("viscosity"), "{e}");
+    }
+    let sol = NsSolution {
+        th: &th,
+        x: th.distribute(&y),
+    };
+    let e = sol.velocity([1.5, 0.5]).unwrap_err();
+    assert!(e.to_string().contains("outside"), "{e}");
+    // Newton that cannot converge in the allowed iterations says so.
+    let e = solve_newton(&th, &mut y, 1e-3, &zero, 1e-300, 1).unwrap_err();
+    assert!(e.to_string().contains("did not converge"), "{e}");
 }
