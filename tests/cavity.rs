@@ -345,3 +345,45 @@ fn bad_input_is_an_error() {
     let e = solve_newton(&th, &mut y, 1e-3, &zero, 1e-300, 1).unwrap_err();
     assert!(e.to_string().contains("did not converge"), "{e}");
 }
+
+/// Re = 1000 on a locally refined mesh: 32 × 32 uniform, then three more levels in the cells
+/// at the two top corners (hanging nodes in both fields), 9 140 equations. The corner
+/// singularity dominates the error of ψ_min: the graded mesh reaches Botella & Peyret's value
+/// to 1.2e-4 (measured) against 6.3e-3 on the uniform 32 × 32 mesh; the centreline profiles
+/// stay limited by the bulk resolution (measured 4.0e-3 in u, 5.1e-3 in v, so the bound on
+/// them is the measured level, not the 5e-3 target, which the 64 × 64 test meets).
+#[test]
+fn driven_cavity_graded_towards_lid_corners() {
+    let mut t = unit_square(5);
+    for _ in 0..3 {
+        let marked: Vec<u32> = t
+            .leaves()
+            .into_iter()
+            .filter(|&c| {
+                let [x, y] = t.corner(c);
+                let h = t.h(c);
+                y + h > 1.0 - 1e-12 && (x < 1e-12 || x + h > 1.0 - 1e-12)
+            })
+            .collect();
+        t.refine(&marked);
+    }
+    let run = cavity(&t, CavityLid::Discontinuous, &[100.0, 400.0, 1000.0], 1e-10).unwrap();
+    let th = &run.th;
+    assert!(th.vel.n_hanging > 0 && th.pres.n_hanging > 0);
+    let s = NsSolution {
+        th,
+        x: th.distribute(&run.states[2].1),
+    };
+    let (space, psi) = stream_function(&s).unwrap();
+    let (at, pm) = psi_min(&th.tree, &space, &psi);
+    let rel = (pm - BP_PSI_MIN).abs() / BP_PSI_MIN.abs();
+    let (eu, ev, _, _) = centreline_errors(&s, &BP_Y, &BP_U, &BP_X, &BP_V, &[]);
+    println!(
+        "graded, n_eq {}: psi_min {pm:.7} at ({:.4}, {:.4}), rel {rel:.3e}; u {eu:.3e} v {ev:.3e}",
+        th.n_eq(),
+        at[0],
+        at[1]
+    );
+    assert!(rel < 1e-3);
+    assert!(eu < 6e-3 && ev < 6e-3);
+}
