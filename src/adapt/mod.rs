@@ -7,6 +7,7 @@
 
 pub mod driver;
 pub mod estimate;
+pub mod navier_stokes;
 pub mod poisson;
 pub mod quadtree;
 pub mod space;
