@@ -245,7 +245,9 @@ fn elastic_slip_has_no_odd_even_traction() {
 /// reached by a k_T continuation).
 #[test]
 fn elastic_slip_matches_carter_pointwise() {
-    let cases: Vec<(&str, Vec<(&str, &str)>, f64, Option<f64>)> = vec![
+    // (what, scene edits, k_t, k_t continued to)
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, f64, Option<f64>);
+    let cases: Vec<Case> = vec![
         ("Q2 Gauss, k_t a/G = 500", vec![], 2.0e4, None),
         (
             "Q2 Lobatto, k_t a/G = 500",

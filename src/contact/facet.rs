@@ -474,8 +474,8 @@ impl ContactModel {
                     let bound = mu * pt.tn;
                     if trial.abs() <= bound {
                         let mut rows = [(0u32, 0.0); 3];
-                        for j in 0..pt.nn {
-                            rows[j] = (2 * pt.nodes[j], -pt.nv[j] * pt.ds);
+                        for (j, row) in rows.iter_mut().enumerate().take(pt.nn) {
+                            *row = (2 * pt.nodes[j], -pt.nv[j] * pt.ds);
                         }
                         m.stick.push(StickRows {
                             anchor: a,

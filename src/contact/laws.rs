@@ -1258,6 +1258,7 @@ mod tests {
                     Friction::CoulombLinear(l) => l.mu * t_n,
                     Friction::RateDependent(l) => l.mu_s.max(l.mu_k) * t_n,
                     Friction::OdenMartins(l) => l.c_t * delta.powf(l.m_t),
+                    Friction::CoulombElastic(l) => l.mu * t_n,
                     Friction::None => 0.0,
                 };
                 for s in slip_samples() {
@@ -1367,9 +1368,17 @@ mod tests {
         assert!(bad.validate().unwrap_err().to_string().contains("m_t"));
         assert!(Friction::None.validate().is_ok());
         for mut law in laws(0.1) {
+            let before = law;
             law.set_eps(3e-4);
-            assert_eq!(law.eps(), Some(3e-4), "{law:?}");
+            if matches!(law, Friction::CoulombElastic(_)) {
+                // No velocity regularisation: nothing to set.
+                assert_eq!((law.eps(), law), (None, before));
+            } else {
+                assert_eq!(law.eps(), Some(3e-4), "{law:?}");
+            }
         }
+        let bad = Friction::CoulombElastic(CoulombElastic::new(0.3, 0.0));
+        assert!(bad.validate().unwrap_err().to_string().contains("k_t"));
         let mut none = Friction::None;
         none.set_eps(1.0);
         assert_eq!(none.eps(), None);
