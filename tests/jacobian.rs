@@ -345,3 +345,114 @@ mod contact {
         );
     }
 }
+
+/// The steady mode's elastic-slip friction ([`tread::contact::steady_elastic`]): the assembled
+/// tangent plus its matrix-free anchor coupling equals central finite differences of the
+/// residual, at a state with points in entry, stick and slip, with and without load control,
+/// Gauss and Lobatto points, Q1 and Q2.
+#[test]
+fn steady_elastic_slip_tangent_matches_finite_differences() {
+    use tread::contact::laws::CoulombElastic;
+    use tread::contact::steady_elastic::PointState;
+    use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+    use tread::driver::steady::SteadyRolling;
+
+    for (order, rule, load, k_t) in [
+        (2, FacetRule::Gauss(4), None, 2.0e3),
+        (2, FacetRule::Lobatto(4), Some(3.0), 2.0e3),
+        (1, FacetRule::Gauss(3), Some(3.0), 5.0e2),
+    ] {
+        let mesh = annulus(&AnnulusSpec {
+            ri: 1.0,
+            ro: 2.0,
+            n_r: 2,
+            n_theta: 24,
+            degree: order,
+            grading_r: 1.0,
+            grading_theta: 0.6,
+        });
+        let model = SolidModel::new(
+            mesh,
+            NeoHookean::new(2.0, 5.0).into(),
+            0.01,
+            PressureMode::None,
+        );
+        let contact = ContactModel::new(
+            &model.mesh,
+            1.9,
+            1.99,
+            NormalCompliance::new(300.0, 1.0, 0.0, 0.0),
+            Friction::CoulombElastic(CoulombElastic::new(0.3, k_t)),
+            rule,
+            load,
+        );
+        let mut st = SteadyRolling::new(SolidSystem::with_contact(model, contact), 1.0, 2.0);
+        // A smooth state pressed into the road, with a tangential shear that makes the
+        // material stick at entry and slip behind.
+        for nd in 0..st.sys.model.mesh.n_nodes() {
+            let x = st.sys.model.mesh.nodes[nd];
+            if st.sys.dofs.eq[2 * nd] != FIXED {
+                let r = x.norm();
+                st.sys.x[2 * nd] = 0.004 * (r - 1.0) * (3.0 * x[0]).sin() + 0.001 * x[1];
+                st.sys.x[2 * nd + 1] = 0.02 * (r - 1.0) * (1.0 + 0.3 * x[0]);
+            }
+        }
+        if load.is_some() {
+            let dofs = &st.sys.dofs;
+            let g = dofs.global(0);
+            st.sys.x[g] = 1.93;
+        }
+        assert!(st.evaluate(true));
+        let m = st
+            .sys
+            .contact
+            .as_ref()
+            .unwrap()
+            .elastic
+            .clone()
+            .expect("march");
+        let count =
+            |f: &dyn Fn(&PointState) -> bool| m.points.iter().filter(|p| f(&p.state)).count();
+        let (stick, slip) = (
+            count(&|s| matches!(s, PointState::Stick { .. })),
+            count(&|s| matches!(s, PointState::Slip { .. })),
+        );
+        let k = st.sys.asm.to_dense();
+        let n = st.n_eq();
+        let kmax = k.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut col = vec![0.0; n];
+        let mut e = vec![0.0; n];
+        let mut err = 0.0f64;
+        let h = 1e-7;
+        for j in 0..n {
+            e.fill(0.0);
+            e[j] = 1.0;
+            col.fill(0.0);
+            st.tangent_correction(&e, &mut col);
+            e[j] = h;
+            st.update(1.0, &e);
+            assert!(st.evaluate(false));
+            let rp = st.residual().to_vec();
+            st.update(-2.0, &e);
+            assert!(st.evaluate(false));
+            let rm = st.residual().to_vec();
+            st.update(1.0, &e);
+            for i in 0..n {
+                let fd = (rp[i] - rm[i]) / (2.0 * h);
+                err = err.max((fd - k[i][j] - col[i]).abs());
+            }
+        }
+        assert!(st.evaluate(true));
+        let err = err / kmax;
+        eprintln!(
+            "Q{order} {rule:?} load {load:?}: {stick} stick, {slip} slip points, {} anchors; \
+             max|K − K_fd|/max|K| = {err:.2e}",
+            m.anchors.len()
+        );
+        assert!(stick >= 4 && slip >= 2, "{stick} stick, {slip} slip points");
+        assert!(
+            err < 1e-5,
+            "elastic-slip tangent differs from FD by {err:.3e}"
+        );
+    }
+}

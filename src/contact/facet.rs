@@ -26,6 +26,7 @@
 //! difference.
 
 use super::laws::{Friction, FrictionLaw, NormalCompliance};
+use super::steady_elastic::{AnchorGradient, ElasticMarch, MarchPoint, PointState, StickRows};
 use super::steady_slip::{SteadySlip, MAX_EXT};
 use crate::assembly::{DofMap, LocalSystem};
 use crate::element::gauss_1d;
@@ -139,6 +140,10 @@ pub struct ContactModel {
     /// boundary ([`super::steady_slip`]); set by [`Self::enable_steady_slip`]. Changes the
     /// element dof lists: build the assembler after setting it.
     pub steady_slip: Option<SteadySlip>,
+    /// Steady mode with [`super::laws::CoulombElastic`]: the tractions marched along the
+    /// contact boundary at the state of the last [`Self::prepare_steady`] (the kernel reads
+    /// them; [`super::steady_elastic`]).
+    pub elastic: Option<ElasticMarch>,
     visited: AtomicUsize,
     pts: Vec<f64>,
     wts: Vec<f64>,
@@ -204,6 +209,7 @@ impl ContactModel {
             load,
             facets: mesh.facet_set("outer").to_vec(),
             steady_slip: None,
+            elastic: None,
             visited: AtomicUsize::new(0),
             pts,
             wts,
@@ -307,6 +313,188 @@ impl ContactModel {
             dx_dtheta: t * inv,
             dn_dtheta: dn.map(|d| d * inv),
         }
+    }
+
+    /// Whether the friction law is the steady mode's elastic-slip law, which the contact
+    /// element takes from [`Self::elastic`] rather than pointwise.
+    pub fn is_elastic_slip(&self) -> bool {
+        matches!(self.friction, Friction::CoulombElastic(l) if l.mu != 0.0)
+    }
+
+    /// Before a steady assembly at state `x`: march the elastic-slip law
+    /// ([`super::steady_elastic`]) and keep the result for the kernel (no effect for other
+    /// laws). `scale` is the factor the assembly applies to the contact residual.
+    pub fn prepare_steady(
+        &mut self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        omega: f64,
+        scale: f64,
+    ) {
+        self.elastic = self.elastic_march(mesh, dofs, x, omega).map(|mut m| {
+            m.scale = scale;
+            m
+        });
+    }
+
+    /// The elastic-slip march at state `x` and angular speed `omega` (`None` unless the law is
+    /// [`super::laws::CoulombElastic`] with μ > 0): every facet point in flow order from a point
+    /// out of contact, the return mapping of [`super::steady_elastic`].
+    pub fn elastic_march(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        omega: f64,
+    ) -> Option<ElasticMarch> {
+        let Friction::CoulombElastic(law) = self.friction else {
+            return None;
+        };
+        if law.mu == 0.0 {
+            return None;
+        }
+        struct Pt {
+            theta: f64,
+            chi1: f64,
+            tn: f64,
+            dtn_du2: [f64; 3],
+            dtn_dh: f64,
+            nv: [f64; 3],
+            ds: f64,
+            nodes: [u32; 3],
+            nn: usize,
+        }
+        let kin = SlipKinematics::Steady { omega };
+        let h = self.road_height(dofs, x);
+        let h_dof = (self.load.is_some() && dofs.n_global > 0).then(|| dofs.global(0) as u32);
+        let damping = self.normal.has_damping();
+        let nq = self.pts.len();
+        let mut pts = Vec::with_capacity(self.facets.len() * nq);
+        for f in &self.facets {
+            let c = f.cell as usize;
+            let p = mesh.degree[c] as usize;
+            let nn = p + 1;
+            let cn = mesh.cell_nodes(c);
+            let side = f.local_nodes(p);
+            let touch = self.can_touch(mesh, f, x, h);
+            let mut nodes = [0u32; 3];
+            for j in 0..nn {
+                nodes[j] = cn[side[j]];
+            }
+            for q in 0..nq {
+                let (nv, dv) = lagrange_1d(p, self.pts[q]);
+                let fp = self.facet_point(mesh, f, q, &nv, &dv, p);
+                let (u, vel) = self.point_motion(cn, &side, nn, &nv, &fp, x, &kin);
+                let xc = fp.x + u;
+                let delta = -h - xc[1];
+                let mut pt = Pt {
+                    theta: fp.theta,
+                    chi1: xc[0],
+                    tn: 0.0,
+                    dtn_du2: [0.0; 3],
+                    dtn_dh: 0.0,
+                    nv,
+                    ds: fp.ds0,
+                    nodes,
+                    nn,
+                };
+                if touch && delta > 0.0 {
+                    let nval = self.normal.eval(delta, if damping { -vel[1] } else { 0.0 });
+                    let cv = Self::velocity_coefficients(&nv, &fp, &kin, 0.0);
+                    let d_rate = if damping { nval.d_rate } else { 0.0 };
+                    pt.tn = nval.t;
+                    for b in 0..nn {
+                        pt.dtn_du2[b] = -nval.d_delta * nv[b] - d_rate * cv[b];
+                    }
+                    pt.dtn_dh = -nval.d_delta;
+                }
+                pts.push(pt);
+            }
+        }
+        let n = pts.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| pts[a].theta.total_cmp(&pts[b].theta));
+        if omega < 0.0 {
+            order.reverse();
+        }
+        let start = order.iter().position(|&i| pts[i].tn <= 0.0).unwrap_or(0);
+        let mut m = ElasticMarch {
+            points: vec![
+                MarchPoint {
+                    t: 0.0,
+                    state: PointState::Out,
+                };
+                n
+            ],
+            n_q: nq,
+            anchors: Vec::new(),
+            stick: Vec::new(),
+            scale: 1.0,
+        };
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let v_per_omega = if omega != 0.0 { self.v0 / omega } else { 0.0 };
+        let (k, mu) = (law.k_t, law.mu);
+        // Running unwrapped angle, the current anchor (index, A_s).
+        let (mut theta_u, mut prev_theta) = (0.0, pts[order[start]].theta);
+        let mut anchor: Option<(u32, f64)> = None;
+        let anchor_gradient = |pt: &Pt, slip: Option<f64>| {
+            let mut g = AnchorGradient::default();
+            for j in 0..pt.nn {
+                g.push(2 * pt.nodes[j], k * pt.nv[j]);
+                if let Some(sign) = slip {
+                    g.push(2 * pt.nodes[j] + 1, sign * mu * pt.dtn_du2[j]);
+                }
+            }
+            if let (Some(sign), Some(hd)) = (slip, h_dof) {
+                g.push(hd, sign * mu * pt.dtn_dh);
+            }
+            g
+        };
+        for step in 0..n {
+            let i = order[(start + step) % n];
+            let pt = &pts[i];
+            let mut d = pt.theta - prev_theta;
+            d -= two_pi * (d / two_pi).round();
+            theta_u += d;
+            prev_theta = pt.theta;
+            if pt.tn <= 0.0 {
+                anchor = None;
+                continue;
+            }
+            let g_i = pt.chi1 - v_per_omega * theta_u;
+            let (t, state) = match anchor {
+                None => {
+                    m.anchors.push(anchor_gradient(pt, None));
+                    anchor = Some(((m.anchors.len() - 1) as u32, k * g_i));
+                    (0.0, PointState::Entry)
+                }
+                Some((a, big_a)) => {
+                    let trial = big_a - k * g_i;
+                    let bound = mu * pt.tn;
+                    if trial.abs() <= bound {
+                        let mut rows = [(0u32, 0.0); 3];
+                        for (j, row) in rows.iter_mut().enumerate().take(pt.nn) {
+                            *row = (2 * pt.nodes[j], -pt.nv[j] * pt.ds);
+                        }
+                        m.stick.push(StickRows {
+                            anchor: a,
+                            n: pt.nn,
+                            rows,
+                        });
+                        (trial, PointState::Stick { anchor: a })
+                    } else {
+                        let sign = trial.signum();
+                        let t = sign * bound;
+                        m.anchors.push(anchor_gradient(pt, Some(sign)));
+                        anchor = Some(((m.anchors.len() - 1) as u32, t + k * g_i));
+                        (t, PointState::Slip { sign })
+                    }
+                }
+            };
+            m.points[i] = MarchPoint { t, state };
+        }
+        Some(m)
     }
 
     /// Whether a facet can touch the road (see module docs).
@@ -465,6 +653,17 @@ impl ContactModel {
         let side = f.local_nodes(p);
         let nd = loc.nd;
         let friction = self.friction.is_active();
+        // The elastic-slip law acts through the steady march only (the scene accepts it in
+        // the steady mode alone); elsewhere it contributes nothing.
+        let elastic_law = self.is_elastic_slip();
+        let elastic = match kin {
+            SlipKinematics::Steady { .. } if elastic_law => self.elastic.as_ref(),
+            _ => None,
+        };
+        let (elastic_mu, elastic_k) = match self.friction {
+            Friction::CoulombElastic(l) => (l.mu, l.k_t),
+            _ => (0.0, 0.0),
+        };
         let (kx, kv, dynamic) = kin.factors();
         let damping = dynamic && self.normal.has_damping();
         for q in 0..self.pts.len() {
@@ -494,7 +693,27 @@ impl ContactModel {
             let dtn_dh = -nval.d_delta * kx;
             let (mut tt, mut dtt_du1, mut dtt_du2, mut dtt_dh) =
                 (0.0, [0.0; MAX_EXT], [0.0; 3], 0.0);
-            if friction {
+            if let (Some(m), true) = (elastic, friction) {
+                // Elastic slip: the marched traction; its own facet's part of the tangent
+                // (the anchor's is applied matrix-free, [`ElasticMarch::apply_correction`]).
+                let mp = m.point(e, q);
+                tt = mp.t;
+                match mp.state {
+                    PointState::Stick { .. } => {
+                        for b in 0..nn {
+                            dtt_du1[b] = -elastic_k * nv[b];
+                        }
+                    }
+                    PointState::Slip { sign } => {
+                        let mu = elastic_mu;
+                        for b in 0..nn {
+                            dtt_du2[b] = sign * mu * dtn_du2[b];
+                        }
+                        dtt_dh = sign * mu * dtn_dh;
+                    }
+                    PointState::Out | PointState::Entry => {}
+                }
+            } else if friction && !elastic_law {
                 // ∂w/∂u_{b,1}: the facet-wise cv_b, or ω Σ_j N_j W_jb (nodal derivatives).
                 let mut cw = [0.0; MAX_EXT];
                 let w = match slip {
@@ -584,6 +803,10 @@ impl ContactModel {
         let h = self.road_height(dofs, x);
         let (_, _, dynamic) = kin.factors();
         let damping = dynamic && self.normal.has_damping();
+        let march = match *kin {
+            SlipKinematics::Steady { omega } => self.elastic_march(mesh, dofs, x, omega),
+            _ => None,
+        };
         let mut out = Vec::new();
         for (e, f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
@@ -606,7 +829,9 @@ impl ContactModel {
                 };
                 let (t_n, t_t) = if delta > 0.0 {
                     let nv = self.normal.eval(delta, if damping { -vel[1] } else { 0.0 });
-                    let tt = if self.friction.is_active() {
+                    let tt = if let Some(m) = &march {
+                        m.point(e, q).t
+                    } else if self.friction.is_active() && !self.is_elastic_slip() {
                         self.friction.eval(w, nv.t, delta).t
                     } else {
                         0.0

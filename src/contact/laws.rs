@@ -40,6 +40,10 @@
 //! | [`RateDependent`] | μ_k + (μ_s − μ_k) exp(−|w|/v_s)          | tanh(w/ε)                |
 //! | [`OdenMartins`]   | (compliance type) t_T = −c_T δ^{m_T} φ_ε | tanh(w/ε)                |
 //!
+//! [`CoulombElastic`] (steady mode only) is not a law of the slip velocity: t_T = −k_T g bounded
+//! by μ t_n, with g the elastic part of the tangential relative displacement, marched along the
+//! streamlines by [`super::steady_elastic`].
+//!
 //! The Oden–Martins law does not use t_n: the tangential traction is a power of the penetration,
 //! as the normal one is. With m_T = m_n and c_T = μ c_n (and no normal damping) it reduces to the
 //! regularised Coulomb law.
@@ -314,6 +318,9 @@ pub trait FrictionLawSpec: FrictionLaw + Copy {
     /// Whether the traction is a function of the penetration δ rather than of t_n, so that the
     /// law cannot act on the stick–slip oscillator (which has no δ).
     const NEEDS_PENETRATION: bool = false;
+    /// Whether only the steady mode can supply the law's argument (the elastic slip of
+    /// [`CoulombElastic`]), so that the scene rejects the law in the other modes.
+    const STEADY_ONLY: bool = false;
 
     /// The law from its parameter values in the order of [`Self::PARAMS`] (not range-checked).
     fn from_values(v: &[f64]) -> Self;
@@ -446,6 +453,95 @@ impl FrictionLaw for CoulombLinear {
             d_w: -self.mu * t_n * dphi,
             d_tn: -self.mu * phi,
             d_delta: 0.0,
+        }
+    }
+}
+
+/// Elastic-slip Coulomb friction of the steady mode: a tangential penalty k_T on the elastic
+/// part of the tangential relative displacement g (a length, not a velocity), bounded by the
+/// Coulomb cone,
+///
+/// ```text
+/// t_T = −k_T g   where k_T |g| ≤ μ t_n (stick),    t_T = −μ t_n sign(g) otherwise (slip).
+/// ```
+///
+/// The steady mode gives g at every contact point by a return mapping marched along the
+/// streamline from where the material enters the patch ([`super::steady_elastic`]); the
+/// pointwise [`FrictionLaw::eval`] here is that return mapping for a given trial g (its first
+/// argument), the building block of the march. No velocity regularisation: as k_T → ∞ the law
+/// is exact Coulomb. Only the steady mode supplies g (the scene accepts the law only there).
+///
+/// Not differentiable at k_T |g| = μ t_n; there the derivative of the slip branch is returned.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombElastic {
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+    /// Tangential stiffness k_T > 0 (traction per length).
+    pub k_t: f64,
+}
+
+impl CoulombElastic {
+    /// A law with coefficient `mu` and tangential stiffness `k_t`.
+    pub fn new(mu: f64, k_t: f64) -> Self {
+        Self { mu, k_t }
+    }
+}
+
+/// The tangential stiffness k_T of the elastic-slip law.
+const K_T: ParamSpec = ParamSpec {
+    key: "k_t",
+    what: "tangential stiffness k_T of the elastic slip",
+    unit: "F/L²",
+    bound: Bound::Above(0.0),
+    note: "steady mode only",
+};
+
+impl FrictionLawSpec for CoulombElastic {
+    const NAME: &'static str = "coulomb_elastic";
+    const PARAMS: &'static [ParamSpec] = &[MU, K_T];
+    const STEADY_ONLY: bool = true;
+
+    fn from_values(v: &[f64]) -> Self {
+        Self::new(v[0], v[1])
+    }
+
+    fn values(&self) -> Vec<f64> {
+        vec![self.mu, self.k_t]
+    }
+
+    fn is_active(&self) -> bool {
+        self.mu != 0.0
+    }
+
+    fn kinetic_coefficient(&self) -> Option<f64> {
+        Some(self.mu)
+    }
+}
+
+impl FrictionLaw for CoulombElastic {
+    /// `g`: the trial elastic slip (length); see the type's docs.
+    #[inline]
+    fn eval(&self, g: f64, t_n: f64, _delta: f64) -> FrictionValue {
+        if t_n <= 0.0 {
+            return FrictionValue::default();
+        }
+        let trial = -self.k_t * g;
+        let bound = self.mu * t_n;
+        if trial.abs() <= bound {
+            FrictionValue {
+                t: trial,
+                d_w: -self.k_t,
+                d_tn: 0.0,
+                d_delta: 0.0,
+            }
+        } else {
+            let s = trial.signum();
+            FrictionValue {
+                t: s * bound,
+                d_w: 0.0,
+                d_tn: s * self.mu,
+                d_delta: 0.0,
+            }
         }
     }
 }
@@ -700,6 +796,14 @@ macro_rules! friction_laws {
                 }
             }
 
+            /// Whether only the steady mode can use the law (see [`FrictionLawSpec::STEADY_ONLY`]).
+            pub fn steady_only(self) -> bool {
+                match self {
+                    FrictionKind::None => false,
+                    $(FrictionKind::$law => <$law as FrictionLawSpec>::STEADY_ONLY,)+
+                }
+            }
+
             /// The law's checks between parameters (see [`FrictionLawSpec::cross_check`]).
             pub fn cross_check(
                 self,
@@ -771,7 +875,13 @@ macro_rules! friction_laws {
     };
 }
 
-friction_laws!(CoulombTanh, CoulombLinear, RateDependent, OdenMartins);
+friction_laws!(
+    CoulombTanh,
+    CoulombLinear,
+    RateDependent,
+    OdenMartins,
+    CoulombElastic
+);
 
 impl LawKind for FrictionKind {
     type Law = Friction;
@@ -917,6 +1027,8 @@ mod tests {
             Friction::OdenMartins(OdenMartins::new(250.0, 1.5, eps)),
             Friction::OdenMartins(OdenMartins::new(250.0, 1.0, eps)),
             Friction::OdenMartins(OdenMartins::new(250.0, 2.0, eps)),
+            // k_T = 0.3 / ε: stick for |g| < ε t_n (the kink at |g| = ε t_n is avoided below).
+            Friction::CoulombElastic(CoulombElastic::new(0.3, 0.3 / eps)),
         ]
     }
 
@@ -941,6 +1053,12 @@ mod tests {
                         continue;
                     }
                     for t_n in [1e-3, 0.7, 150.0] {
+                        // and the elastic-slip law's kink at k_T |g| = μ t_n, |g| = ε t_n
+                        if matches!(law, Friction::CoulombElastic(_))
+                            && (s.abs() / t_n - 1.0).abs() < 1e-3
+                        {
+                            continue;
+                        }
                         for delta in [1e-7, 1e-3, 0.1, 2.0] {
                             check_friction_fd(&law, s * eps, t_n, delta, eps);
                             n += 1;
@@ -1140,6 +1258,7 @@ mod tests {
                     Friction::CoulombLinear(l) => l.mu * t_n,
                     Friction::RateDependent(l) => l.mu_s.max(l.mu_k) * t_n,
                     Friction::OdenMartins(l) => l.c_t * delta.powf(l.m_t),
+                    Friction::CoulombElastic(l) => l.mu * t_n,
                     Friction::None => 0.0,
                 };
                 for s in slip_samples() {
@@ -1249,9 +1368,17 @@ mod tests {
         assert!(bad.validate().unwrap_err().to_string().contains("m_t"));
         assert!(Friction::None.validate().is_ok());
         for mut law in laws(0.1) {
+            let before = law;
             law.set_eps(3e-4);
-            assert_eq!(law.eps(), Some(3e-4), "{law:?}");
+            if matches!(law, Friction::CoulombElastic(_)) {
+                // No velocity regularisation: nothing to set.
+                assert_eq!((law.eps(), law), (None, before));
+            } else {
+                assert_eq!(law.eps(), Some(3e-4), "{law:?}");
+            }
         }
+        let bad = Friction::CoulombElastic(CoulombElastic::new(0.3, 0.0));
+        assert!(bad.validate().unwrap_err().to_string().contains("k_t"));
         let mut none = Friction::None;
         none.set_eps(1.0);
         assert_eq!(none.eps(), None);

@@ -9,10 +9,12 @@
 //! * [`laws`]: normal compliance and friction laws with consistent derivatives;
 //! * [`facet`]: the contact element on the outer facets (residual, tangent, load control);
 //! * [`steady_slip`]: the steady mode's continuous slip velocity (nodal θ-derivatives);
+//! * [`steady_elastic`]: the steady mode's elastic-slip Coulomb friction (marched return mapping);
 //! * [`stick_slip`]: the spring–mass block on a moving belt (paper §4), integrated with diffsol.
 
 pub mod facet;
 pub mod laws;
+pub mod steady_elastic;
 pub mod steady_slip;
 pub mod stick_slip;
 

@@ -322,7 +322,7 @@ pub fn closed_form_cycle(
 /// Whether the oscillator can use friction law `kind`: any law but `None` that does not need a
 /// penetration (the block has none).
 pub fn supports(kind: FrictionKind) -> bool {
-    kind != FrictionKind::None && !kind.needs_penetration()
+    kind != FrictionKind::None && !kind.needs_penetration() && !kind.steady_only()
 }
 
 /// The keywords of the friction laws the oscillator can use, in registration order.

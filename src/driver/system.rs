@@ -359,7 +359,8 @@ impl SolidSystem {
         let Some(c) = &mut self.contact else {
             return;
         };
-        if !c.friction.is_active() || c.steady_slip.is_some() {
+        // The elastic-slip law uses no slip velocity.
+        if !c.friction.is_active() || c.steady_slip.is_some() || c.is_elastic_slip() {
             return;
         }
         if !c.enable_steady_slip(&self.model.mesh) {
@@ -758,6 +759,16 @@ impl SolidSystem {
         if with_matrix && steady {
             self.add_steady_damping_coupling();
         }
+        if let (Some(c), Rates::Steady) = (self.contact.as_mut(), terms.rates) {
+            let omega = self.steady_omega.unwrap_or(0.0);
+            c.prepare_steady(
+                &self.model.mesh,
+                &self.dofs,
+                &self.x,
+                omega,
+                terms.force_scale,
+            );
+        }
         if let Some(c) = &self.contact {
             let xs: &[f64] = match terms.rates {
                 Rates::Dynamic { x, .. } => x,
@@ -1142,6 +1153,7 @@ impl NonlinearSystem for SolidSystem {
     fn has_tangent_correction(&self) -> bool {
         self.steady_omega.is_some()
             && (self.steady_history.is_some()
+                || self.contact.as_ref().is_some_and(|c| c.is_elastic_slip())
                 || matches!(
                     self.steady_damping_tangent(),
                     Some(SteadyDampingTangent::MatrixFree | SteadyDampingTangent::Banded)
@@ -1156,6 +1168,12 @@ impl NonlinearSystem for SolidSystem {
         self.steady_viscosity_correction(v, out);
         if let (Some(sh), Some(om)) = (self.steady_history.as_mut(), self.steady_omega) {
             sh.apply_correction(&self.model, &self.dofs, om, v, out);
+        }
+        if let (Some(m), Some(_)) = (
+            self.contact.as_ref().and_then(|c| c.elastic.as_ref()),
+            self.steady_omega,
+        ) {
+            m.apply_correction(&self.dofs, v, out);
         }
     }
 }

@@ -275,6 +275,30 @@ mod tests {
         assert!(e.0[0].message.contains("takes no other key"), "{e}");
     }
 
+    /// The elastic-slip law is accepted in the steady mode and rejected, naming the law and the
+    /// mode, elsewhere (static indentation, the stick–slip oscillator).
+    #[test]
+    fn elastic_slip_law_only_in_steady() {
+        let elastic = "law = \"coulomb_elastic\"\nk_t = 1.0e5";
+        let carter = include_str!("../../../scenarios/carter_tractive_rolling.toml");
+        let steady = replace_line(&replace_line(carter, "law", elastic), "eps", "");
+        let s = load(&steady).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            s.friction.params(),
+            Some(Friction::CoulombElastic(
+                crate::contact::laws::CoulombElastic::new(0.5, 1.0e5)
+            ))
+        );
+        let text = replace_line(&replace_line(FRICTION, "law", elastic), "eps", "");
+        let e = errors(&text);
+        let err = e.find("friction.law").unwrap_or_else(|| panic!("{e}"));
+        assert!(err.message.contains("coulomb_elastic"), "{err}");
+        assert!(err.message.contains("\"steady\" only"), "{err}");
+        let text = replace_line(STICK_SLIP, "law", "law = \"coulomb_elastic\"");
+        let e = errors(&text);
+        assert!(e.find("friction.law").is_some(), "{e}");
+    }
+
     #[test]
     fn invalid_friction_law_reported_once() {
         // The keys of an unknown law are not checked against the default law.

@@ -704,6 +704,20 @@ fn validate_mode_sections(mode: Mode, given: &SectionsGiven, out: &mut Vec<Issue
             "analysis.mode",
         ));
     };
+    // A law whose argument only the steady mode supplies (the elastic slip).
+    if let Some(law) = given.friction_law.filter(|l| l.steady_only()) {
+        if !matches!(mode, Mode::Steady | Mode::Spinning | Mode::StickSlip) {
+            out.push(issue_near(
+                "friction.law",
+                format!(
+                    "friction law \"{law}\" marches the elastic slip along the streamlines of \
+                     steady rolling and is available in analysis mode \"steady\" only, not \
+                     \"{mode}\"; use coulomb_tanh or coulomb_linear (a slip-velocity law)"
+                ),
+                "analysis.mode",
+            ));
+        }
+    }
     let no_contact_friction = |law: FrictionLawName, what: &str, out: &mut Vec<Issue>| {
         out.push(issue(
             "friction.law",

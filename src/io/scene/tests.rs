@@ -508,6 +508,7 @@ pub(super) fn full_friction() -> FrictionSpec {
             ("v_s", 1.0),
             ("c_t", 1.0),
             ("m_t", 1.0),
+            ("k_t", 1.0),
         ],
     )
 }
