@@ -13,6 +13,7 @@
 
 pub mod facet;
 pub mod laws;
+pub mod laws_vec;
 pub mod steady_slip;
 pub mod stick_slip;
 
