@@ -438,7 +438,10 @@ mod tests {
                     assert!(nn.dot(&(fc - centre)) > 0.0, "face {f} normal not outward");
                     assert!((nn.norm() - 1.0).abs() < 1e-15);
                 }
-                assert!((sum - area).abs() < 1e-13 * area, "face {f}: {sum} vs {area}");
+                assert!(
+                    (sum - area).abs() < 1e-13 * area,
+                    "face {f}: {sum} vs {area}"
+                );
             }
         }
         // Hex27 face nodes: 9 per face, the centre of face f is the node at the face centre.
