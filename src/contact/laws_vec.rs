@@ -46,13 +46,21 @@ pub fn eval_vec<L: FrictionLaw + ?Sized>(
     delta: f64,
 ) -> FrictionValueVec {
     let s = w.norm();
-    if !(s > 0.0) {
-        // w = 0 (or NaN, which propagates through the scalar law).
-        let v: FrictionValue = law.eval(s, t_n, delta);
-        let d = if s.is_nan() { f64::NAN } else { v.d_w };
+    if s.is_nan() {
+        // A non-finite slip is not hidden: every output is NaN.
+        let nan = Vector2::repeat(f64::NAN);
+        return FrictionValueVec {
+            t: nan,
+            d_w: Matrix2::repeat(f64::NAN),
+            d_tn: nan,
+            d_delta: nan,
+        };
+    }
+    if s == 0.0 {
+        let v: FrictionValue = law.eval(0.0, t_n, delta);
         return FrictionValueVec {
             t: Vector2::zeros(),
-            d_w: Matrix2::identity() * d,
+            d_w: Matrix2::identity() * v.d_w,
             d_tn: Vector2::zeros(),
             d_delta: Vector2::zeros(),
         };
@@ -250,6 +258,14 @@ mod tests {
                 // The traction is parallel to −w.
                 assert!((v.t.x * w.y - v.t.y * w.x).abs() <= 1e-14 * scale * w.norm());
             }
+        }
+    }
+
+    #[test]
+    fn non_finite_slip_is_not_hidden() {
+        for (name, law) in laws() {
+            let v = eval_vec(&law, Vector2::new(f64::NAN, 0.0), 1.0, 0.1);
+            assert!(v.t.iter().chain(v.d_w.iter()).all(|x| x.is_nan()), "{name}");
         }
     }
 

@@ -138,7 +138,7 @@ pub enum FacetPoints {
 /// The fixed reference coordinate of face `f` and its side (−1 or +1).
 #[inline]
 pub fn face_axis(f: usize) -> (usize, f64) {
-    (f / 2, if f % 2 == 0 { -1.0 } else { 1.0 })
+    (f / 2, if f.is_multiple_of(2) { -1.0 } else { 1.0 })
 }
 
 /// The free reference coordinates (u, v) of face `f`, in increasing order.
@@ -252,6 +252,7 @@ pub fn iso_map<E: Lagrange3D>(
 mod tests {
     use super::*;
 
+    #[allow(clippy::needless_range_loop)] // dn[a][e]: derivative index as in the formulas
     fn basis_properties<E: Lagrange3D, const N: usize>() {
         let mut n = [0.0; N];
         let mut dn = [[0.0; 3]; N];

@@ -14,6 +14,7 @@
 
 pub mod annulus;
 pub mod gmsh;
+pub mod gmsh3d;
 pub mod hex_mesh;
 pub mod locate;
 pub mod refine;

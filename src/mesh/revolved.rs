@@ -135,7 +135,7 @@ pub fn axial_breaks(width: f64, n_z: usize) -> Vec<f64> {
         .collect();
     z[0] = -0.5 * width;
     z[n_z] = 0.5 * width;
-    if n_z % 2 == 0 {
+    if n_z.is_multiple_of(2) {
         z[n_z / 2] = 0.0;
     }
     z
