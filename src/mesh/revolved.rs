@@ -412,7 +412,7 @@ mod tests {
                 * ((a * a + rc * rc - s.ri * s.ri) * 2.0 * h - 2.0 * h * h * h / 3.0
                     + 2.0 * a * is);
             let (v, min_det) = volume(&m, 6);
-            assert!((v - exact).abs() < 1e-11 * exact, "p={p}: {v} vs {exact}");
+            assert!((v - exact).abs() < 1e-13 * exact, "p={p}: {v} vs {exact}");
             assert!(min_det > 0.0);
             check_rings(&m);
             check_nodes_on_map(&m, p);
