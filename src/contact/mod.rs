@@ -14,6 +14,7 @@
 
 pub mod facet;
 pub mod laws;
+pub mod laws_vec;
 pub mod steady_elastic;
 pub mod steady_slip;
 pub mod stick_slip;

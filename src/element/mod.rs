@@ -6,6 +6,7 @@
 //! (circumferential direction, counter-clockwise). Q1 has p = 1 (4 nodes), Q2 has p = 2 (9 nodes,
 //! the centre node is `a = 4`). Nodes sit at ξ ∈ {-1, 1} (Q1) and {-1, 0, 1} (Q2).
 
+pub mod hex;
 pub mod hierarchical;
 pub mod quadrature;
 

@@ -511,7 +511,7 @@ pub fn first_inverted_cell(mesh: &Mesh) -> Option<usize> {
 }
 
 /// The header must say version 4.1 (mshio's own message for other versions is less precise).
-fn check_header(bytes: &[u8]) -> Result<(), String> {
+pub(super) fn check_header(bytes: &[u8]) -> Result<(), String> {
     let head = &bytes[..bytes.len().min(256)];
     let text = String::from_utf8_lossy(head);
     let mut lines = text.lines();
@@ -534,7 +534,7 @@ fn check_header(bytes: &[u8]) -> Result<(), String> {
 
 /// `$PhysicalNames`: (dimension, tag, name) of every physical group (ASCII in both the ASCII and
 /// the binary format). No section: no groups.
-fn physical_names(bytes: &[u8]) -> Result<Vec<(i32, i32, String)>, String> {
+pub(super) fn physical_names(bytes: &[u8]) -> Result<Vec<(i32, i32, String)>, String> {
     let start_tag = b"$PhysicalNames";
     let Some(start) = find(bytes, start_tag) else {
         return Ok(Vec::new());
@@ -574,7 +574,7 @@ fn physical_names(bytes: &[u8]) -> Result<Vec<(i32, i32, String)>, String> {
 /// The node tags of every block of `$Nodes`, in file order (ASCII or binary, 4- or 8-byte
 /// `size_t`, either byte order). Called after mshio has parsed the file, so the layout is known to
 /// be well formed; each count is still bounded by the bytes that remain before it is used.
-fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
+pub(super) fn node_tags(bytes: &[u8]) -> Result<Vec<Vec<u64>>, String> {
     let (binary, size_t, little) = mesh_format(bytes)?;
     let Some(start) = find(bytes, b"\n$Nodes") else {
         return Err("no $Nodes section".into());
@@ -790,7 +790,7 @@ fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
 
 /// A one-line description of a parse error: the sections being parsed, what went wrong and
 /// where (byte offset, and the line for ASCII content).
-fn describe_parse_error(bytes: &[u8], e: &mshio::MshParserError<&[u8]>) -> String {
+pub(super) fn describe_parse_error(bytes: &[u8], e: &mshio::MshParserError<&[u8]>) -> String {
     let bt = e.filtered_backtrace();
     let mut ctx: Vec<String> = bt
         .iter()

@@ -14,8 +14,11 @@
 
 pub mod annulus;
 pub mod gmsh;
+pub mod gmsh3d;
+pub mod hex_mesh;
 pub mod locate;
 pub mod refine;
+pub mod revolved;
 
 use crate::math::{Mat2, Vec2};
 use std::collections::BTreeMap;
