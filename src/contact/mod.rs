@@ -9,6 +9,7 @@
 //! * [`laws`]: normal compliance and friction laws with consistent derivatives;
 //! * [`facet`]: the contact element on the outer facets (residual, tangent, load control);
 //! * [`steady_slip`]: the steady mode's continuous slip velocity (nodal θ-derivatives);
+//! * [`laws_vec`]: the friction laws with a 2D tangential slip vector (3D contact);
 //! * [`steady_elastic`]: the steady mode's elastic-slip Coulomb friction (marched return mapping);
 //! * [`stick_slip`]: the spring–mass block on a moving belt (paper §4), integrated with diffsol.
 
