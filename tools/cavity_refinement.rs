@@ -13,28 +13,27 @@ use tread::adapt::navier_stokes::{
 };
 use tread::adapt::quadtree::Quadtree;
 
-const BP_PSI_MIN: f64 = -0.1189366;
-const BP_Y: [f64; 15] = [
-    0.0547, 0.0625, 0.0703, 0.1016, 0.1719, 0.2813, 0.4531, 0.5, 0.6172, 0.7344, 0.8516, 0.9531,
-    0.9609, 0.9688, 0.9766,
-];
-const BP_U: [f64; 15] = [
-    -0.1812881, -0.2023300, -0.2228955, -0.3004561, -0.3885690, -0.2803696, -0.1081999, -0.0620561,
-    0.0570178, 0.1886747, 0.3372212, 0.4723329, 0.5169277, 0.5808359, 0.6644227,
-];
-const BP_X: [f64; 15] = [
-    0.0625, 0.0703, 0.0781, 0.0938, 0.1563, 0.2266, 0.2344, 0.5, 0.8047, 0.8594, 0.9063, 0.9453,
-    0.9531, 0.9609, 0.9688,
-];
-const BP_V: [f64; 15] = [
-    0.2807056, 0.2962703, 0.3099097, 0.3330442, 0.3769189, 0.3339924, 0.3253592, 0.0257995,
-    -0.3202137, -0.4264545, -0.5264392, -0.4103754, -0.3553213, -0.2936869, -0.2279225,
-];
+include!("../tests/common/botella_peyret.rs");
 
-fn mesh(spec: &str) -> Quadtree {
+/// The mesh of a level argument `L` or `L+G` (see the module docs).
+fn mesh(spec: &str) -> Result<Quadtree, String> {
+    let level = |s: Option<&str>, default: u32| -> Result<u32, String> {
+        match s {
+            None => Ok(default),
+            Some(s) => match s.parse::<u32>() {
+                Ok(v) if v <= 10 => Ok(v),
+                _ => Err(format!(
+                    "mesh level `{spec}`: expected L or L+G with integers 0..=10"
+                )),
+            },
+        }
+    };
     let mut it = spec.split('+');
-    let l: u32 = it.next().and_then(|s| s.parse().ok()).unwrap_or(5);
-    let g: u32 = it.next().and_then(|s| s.parse().ok()).unwrap_or(0);
+    let l = level(it.next(), 5)?;
+    let g = level(it.next(), 0)?;
+    if it.next().is_some() {
+        return Err(format!("mesh level `{spec}`: expected L or L+G"));
+    }
     let mut t = unit_square(l);
     for _ in 0..g {
         let marked: Vec<u32> = t
@@ -48,10 +47,28 @@ fn mesh(spec: &str) -> Quadtree {
             .collect();
         t.refine(&marked);
     }
-    t
+    Ok(t)
 }
 
-fn main() {
+/// Largest deviation from the tabulated stations of component `k` of the velocity along
+/// `point(station)`.
+fn deviation(
+    sol: &NsSolution,
+    stations: &[f64],
+    values: &[f64],
+    k: usize,
+    point: impl Fn(f64) -> [f64; 2],
+) -> Result<f64, String> {
+    let mut worst = 0.0_f64;
+    for (&s, &v) in stations.iter().zip(values) {
+        let u = sol.velocity(point(s)).map_err(|e| e.to_string())?.0[k];
+        worst = worst.max((u - v).abs());
+    }
+    Ok(worst)
+}
+
+fn main() -> std::process::ExitCode {
+    let mut failed = false;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let lid = if args.first().map(String::as_str) == Some("reg") {
         CavityLid::Regularised
@@ -71,12 +88,20 @@ fn main() {
     } else {
         specs
     } {
-        let t = mesh(spec);
+        let t = match mesh(spec) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("{e}");
+                failed = true;
+                continue;
+            }
+        };
         let t0 = Instant::now();
         let run = match cavity(&t, lid, &[100.0, 400.0, 1000.0], 1e-10) {
             Ok(r) => r,
             Err(e) => {
                 eprintln!("{spec}: {e}");
+                failed = true;
                 continue;
             }
         };
@@ -85,20 +110,28 @@ fn main() {
             th,
             x: th.distribute(&run.states[2].1),
         };
-        let (space, psi) = stream_function(&sol).expect("stream function");
+        let (space, psi) = match stream_function(&sol) {
+            Ok(sp) => sp,
+            Err(e) => {
+                eprintln!("{spec}: stream function: {e}");
+                failed = true;
+                continue;
+            }
+        };
         let (at, pm) = psi_min(&th.tree, &space, &psi);
         let dt = t0.elapsed().as_secs_f64();
         let its: usize = run.stats.iter().map(|s| s.iterations).sum();
-        let du = BP_Y
-            .iter()
-            .zip(&BP_U)
-            .map(|(&y, &u)| (sol.velocity([0.5, y]).unwrap().0[0] - u).abs())
-            .fold(0.0, f64::max);
-        let dv = BP_X
-            .iter()
-            .zip(&BP_V)
-            .map(|(&x, &v)| (sol.velocity([x, 0.5]).unwrap().0[1] - v).abs())
-            .fold(0.0, f64::max);
+        let (du, dv) = match (
+            deviation(&sol, &BP_Y, &BP_U, 0, |y| [0.5, y]),
+            deviation(&sol, &BP_X, &BP_V, 1, |x| [x, 0.5]),
+        ) {
+            (Ok(du), Ok(dv)) => (du, dv),
+            (Err(e), _) | (_, Err(e)) => {
+                eprintln!("{spec}: centreline: {e}");
+                failed = true;
+                continue;
+            }
+        };
         if lid == CavityLid::Regularised {
             println!(
                 "{spec:6} {:6} {dt:7.2} {its:6}  {pm:.7} {:.4}  {:.4}",
@@ -115,5 +148,10 @@ fn main() {
             at[1],
             (pm - BP_PSI_MIN).abs() / BP_PSI_MIN.abs()
         );
+    }
+    if failed {
+        std::process::ExitCode::FAILURE
+    } else {
+        std::process::ExitCode::SUCCESS
     }
 }
