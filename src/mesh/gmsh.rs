@@ -121,35 +121,8 @@ pub fn parse_msh(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<Mesh, 
             "no $Nodes or no $Elements section (is the file complete?)".into(),
         ));
     };
-    // Physical tags of every (dim, entity).
-    let mut entity_groups: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    if let Some(ent) = &data.entities {
-        for c in &ent.curves {
-            entity_groups.insert((1, c.tag), c.physical_tags.clone());
-        }
-        for s in &ent.surfaces {
-            entity_groups.insert((2, s.tag), s.physical_tags.clone());
-        }
-    }
-    let group_tag = |dim: i32, name: &str| -> Result<i32, String> {
-        names
-            .iter()
-            .find(|(d, _, n)| *d == dim && n == name)
-            .map(|(_, t, _)| *t)
-            .ok_or_else(|| {
-                let have: Vec<String> = names
-                    .iter()
-                    .filter(|(d, _, _)| *d == dim)
-                    .map(|(_, _, n)| format!("\"{n}\""))
-                    .collect();
-                format!(
-                    "no {}D physical group named \"{name}\"; the file's {}D physical groups are [{}]",
-                    dim,
-                    dim,
-                    have.join(", ")
-                )
-            })
-    };
+    let entity_groups = entity_physical_tags(data);
+    let group_tag = |dim: i32, name: &str| physical_group_tag(&names, dim, name);
 
     // Node coordinates by tag.
     if tags.len() != nodes.node_blocks.len() {
@@ -508,6 +481,49 @@ pub fn first_inverted_cell(mesh: &Mesh) -> Option<usize> {
             d <= 0.0 || d.is_nan()
         })
     })
+}
+
+/// Physical tags of every (dim, entity) of a parsed file, for curves, surfaces and volumes.
+pub(super) fn entity_physical_tags(
+    data: &mshio::MshData<u64, i32, f64>,
+) -> HashMap<(i32, i32), Vec<i32>> {
+    let mut groups = HashMap::new();
+    if let Some(ent) = &data.entities {
+        for c in &ent.curves {
+            groups.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            groups.insert((2, s.tag), s.physical_tags.clone());
+        }
+        for v in &ent.volumes {
+            groups.insert((3, v.tag), v.physical_tags.clone());
+        }
+    }
+    groups
+}
+
+/// The tag of the `dim`-dimensional physical group `name` among the file's `names`
+/// (`(dim, tag, name)`), or a message listing the groups the file has in that dimension.
+pub(super) fn physical_group_tag(
+    names: &[(i32, i32, String)],
+    dim: i32,
+    name: &str,
+) -> Result<i32, String> {
+    names
+        .iter()
+        .find(|(d, _, n)| *d == dim && n == name)
+        .map(|(_, t, _)| *t)
+        .ok_or_else(|| {
+            let have: Vec<String> = names
+                .iter()
+                .filter(|(d, _, _)| *d == dim)
+                .map(|(_, _, n)| format!("\"{n}\""))
+                .collect();
+            format!(
+                "no {dim}D physical group named \"{name}\"; the file's {dim}D physical groups are [{}]",
+                have.join(", ")
+            )
+        })
 }
 
 /// The header must say version 4.1 (mshio's own message for other versions is less precise).

@@ -21,7 +21,8 @@
 //! Geometry: every cell is isoparametric ([`HexGeometry::Isoparametric`]).
 
 use super::gmsh::{
-    check_header, describe_parse_error, node_tags, physical_names, GmshGroups, MeshError,
+    check_header, describe_parse_error, entity_physical_tags, node_tags, physical_group_tag,
+    physical_names, GmshGroups, MeshError,
 };
 use super::hex_mesh::{HexFacet, HexGeometry, HexMesh};
 use crate::element::hex::{face_nodes, Hex27, Hex8, QuadRule3D};
@@ -62,33 +63,8 @@ pub fn parse_msh_hex(bytes: &[u8], file: &str, groups: &GmshGroups) -> Result<He
             "no $Nodes or no $Elements section (is the file complete?)".into(),
         ));
     };
-    let mut entity_groups: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
-    if let Some(ent) = &data.entities {
-        for s in &ent.surfaces {
-            entity_groups.insert((2, s.tag), s.physical_tags.clone());
-        }
-        for v in &ent.volumes {
-            entity_groups.insert((3, v.tag), v.physical_tags.clone());
-        }
-    }
-    let group_tag = |dim: i32, name: &str| -> Result<i32, String> {
-        names
-            .iter()
-            .find(|(d, _, n)| *d == dim && n == name)
-            .map(|(_, t, _)| *t)
-            .ok_or_else(|| {
-                let have: Vec<String> = names
-                    .iter()
-                    .filter(|(d, _, _)| *d == dim)
-                    .map(|(_, _, n)| format!("\"{n}\""))
-                    .collect();
-                format!(
-                    "no {dim}D physical group named \"{name}\"; the file's {dim}D physical groups \
-                     are [{}]",
-                    have.join(", ")
-                )
-            })
-    };
+    let entity_groups = entity_physical_tags(data);
+    let group_tag = |dim: i32, name: &str| physical_group_tag(&names, dim, name);
     if tags.len() != nodes.node_blocks.len() {
         return Err(err(format!(
             "$Nodes: {} node blocks parsed but {} read with their tags",
