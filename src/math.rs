@@ -61,6 +61,23 @@ pub const fn v3(i: usize, j: usize) -> usize {
     3 * i + j
 }
 
+/// A plane-strain tensor as the 3D tensor of the slice `x3 = 0`: zero third row and column
+/// (for a displacement gradient, `F33 = 1`).
+#[inline(always)]
+pub fn embed_plane(h: &Mat2) -> Mat3 {
+    Mat3::new(
+        h[(0, 0)],
+        h[(0, 1)],
+        0.0,
+        h[(1, 0)],
+        h[(1, 1)],
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    )
+}
+
 /// Cofactor of a 3×3 matrix, `cof A = det(A) A⁻ᵀ`, defined for every A (each entry is the
 /// signed 2×2 minor, written cyclically).
 #[inline(always)]

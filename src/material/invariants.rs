@@ -354,6 +354,7 @@ pub(crate) fn inadmissible_tangent<T: Tensor>() -> T::Tangent {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::embed_plane;
 
     const H: Mat2 = Mat2::new(0.1, 0.2, -0.05, 0.15);
 
@@ -374,21 +375,6 @@ mod tests {
         assert!((k.cof - inv_t * k.j).norm() < 1e-14);
     }
 
-    /// The plane-strain `H` embedded in 3D (zero third row and column).
-    fn embed(h: &Mat2) -> Mat3 {
-        Mat3::new(
-            h[(0, 0)],
-            h[(0, 1)],
-            0.0,
-            h[(1, 0)],
-            h[(1, 1)],
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-        )
-    }
-
     #[test]
     fn invariants_3d_match_direct_formulas_and_plane_strain() {
         let h3 = Mat3::new(0.1, 0.2, -0.05, 0.15, -0.1, 0.3, 0.02, 0.07, 0.2);
@@ -402,7 +388,7 @@ mod tests {
         assert!((k.j - f.determinant()).abs() < 1e-14);
         assert!((k.cof - f.try_inverse().unwrap().transpose() * k.j).norm() < 1e-14);
         let k2 = Kinematics::new(&H);
-        let k3 = Kinematics::new(&embed(&H));
+        let k3 = Kinematics::new(&embed_plane(&H));
         assert!((k2.i1m3 - k3.i1m3).abs() < 1e-15);
         assert!((k2.i2m3 - k3.i2m3).abs() < 1e-15);
         assert!((k2.jm1 - k3.jm1).abs() < 1e-15);
@@ -465,7 +451,7 @@ mod tests {
 
         // Plane strain: the in-plane blocks of the 3D P and A are the 2D ones.
         let k2 = Kinematics::new(&H);
-        let k3 = Kinematics::new(&embed(&H));
+        let k3 = Kinematics::new(&embed_plane(&H));
         let d2 = InvariantDerivs::new(
             &k2,
             [0.7, -0.3, 1.9],

@@ -4,7 +4,7 @@
 //! and column gives the 2D in-plane stress and tangent, and `P33 = J σ33`).
 
 use super::*;
-use crate::math::{v, Mat3, Tangent3};
+use crate::math::{embed_plane, v, Mat3, Tangent3};
 
 /// Every registered law with the parameters `1, 1.5, 2, …`, and the same laws with moduli
 /// typical of the scenes (a stiff bulk response).
@@ -48,21 +48,6 @@ fn sample_grads_3d() -> Vec<Mat3> {
         rotation3([0.0, 0.0, 1.0], 1.0) - i,
         rotation3([1.0, 1.0, 1.0], 2.0) - i,
     ]
-}
-
-/// Embeds a plane-strain `∇u` in 3D.
-fn embed(h: &Mat2) -> Mat3 {
-    Mat3::new(
-        h[(0, 0)],
-        h[(0, 1)],
-        0.0,
-        h[(1, 0)],
-        h[(1, 1)],
-        0.0,
-        0.0,
-        0.0,
-        0.0,
-    )
 }
 
 #[test]
@@ -200,7 +185,7 @@ fn every_law_is_safe_at_inadmissible_3d_states() {
 fn plane_strain_is_the_3d_law_with_zero_third_row_and_column() {
     for m in laws() {
         for g in test_util::sample_grads() {
-            let g3 = embed(&g);
+            let g3 = embed_plane(&g);
             let (w2, w3) = (m.energy(&g), m.energy(&g3));
             assert!(
                 (w2 - w3).abs() <= 1e-14 * w2.abs().max(1.0),

@@ -529,7 +529,7 @@ mod tests {
     use super::*;
     use crate::material::fd_check::{check_stateful, SplitMix};
     use crate::material::{MooneyRivlin, MooneyRivlinIncompressible, NeoHookean};
-    use crate::math::{det_identity_plus_minus_one, Mat3, Tangent3};
+    use crate::math::{det_identity_plus_minus_one, embed_plane, Mat3, Tangent3};
 
     fn laws() -> Vec<ViscoelasticMaterial> {
         let prony = [(0.6, 0.05), (0.3, 1.3), (0.1, 20.0)];
@@ -885,17 +885,7 @@ mod tests {
             let (mut n2, mut n3) = (s2.clone(), s3.clone());
             for _ in 0..6 {
                 let h = random_grad(&mut rng, 0.3);
-                let h3 = Mat3::new(
-                    h[(0, 0)],
-                    h[(0, 1)],
-                    0.0,
-                    h[(1, 0)],
-                    h[(1, 1)],
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                );
+                let h3 = embed_plane(&h);
                 let dt = 0.2 * rng.next();
                 let (p2, a2) = ve.overstress(&h, &s2, dt, &mut n2, true);
                 let (p3, a3) = ve.overstress(&h3, &s3, dt, &mut n3, true);
