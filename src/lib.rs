@@ -94,6 +94,7 @@ pub mod io;
 pub mod material;
 pub mod math;
 pub mod mesh;
+pub mod model;
 pub mod params;
 pub mod physics;
 pub mod setup;

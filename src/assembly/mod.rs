@@ -38,6 +38,17 @@ pub const CONSTRAINED: u32 = u32::MAX - 1;
 /// Largest local system: Q2 displacements (18) + P1 pressures (3).
 pub const MAX_LOCAL: usize = 21;
 
+/// The cells of a mesh as [`DofMap::for_cells`] numbers them: node count, cell count, each
+/// cell's nodes in its local order, and the hanging-node constraints (empty for a conforming
+/// mesh).
+#[derive(Clone, Copy)]
+pub struct CellTopology<'a> {
+    pub n_nodes: usize,
+    pub n_cells: usize,
+    pub cell_nodes: &'a (dyn Fn(usize) -> &'a [u32] + Sync),
+    pub constraints: &'a [crate::mesh::NodeConstraint],
+}
+
 #[derive(Clone, Debug)]
 pub struct DofMap {
     /// Field components per node (2 for the solid's displacements, 1 for a scalar field).
@@ -95,20 +106,50 @@ impl DofMap {
         fixed_nodes: &[u32],
         n_global: usize,
     ) -> Self {
-        let nc = n_comp as u32;
         let n_u = n_comp * mesh.n_nodes();
-        let n_full = n_u + per_cell * mesh.n_cells() + n_global;
-        let mut fixed = vec![false; n_full];
+        let mut fixed = vec![false; n_u];
         for &n in fixed_nodes {
             let first = n_comp * n as usize;
             fixed[first..first + n_comp].fill(true);
         }
+        Self::for_cells(
+            CellTopology {
+                n_nodes: mesh.n_nodes(),
+                n_cells: mesh.n_cells(),
+                cell_nodes: &|c| mesh.cell_nodes(c),
+                constraints: &mesh.constraints,
+            },
+            n_comp,
+            per_cell,
+            &fixed,
+            n_global,
+        )
+    }
+
+    /// The map of any cell topology (2D or 3D): `n_comp ≥ 1` components per node, `per_cell`
+    /// cell-owned dofs per cell and `n_global` global unknowns at the end; `fixed_u[n_comp·n + i]`
+    /// fixes component i of node n (shorter than the nodal dofs: the rest is free). Hanging
+    /// nodes of `topology.constraints` follow their masters component by component.
+    pub fn for_cells(
+        topology: CellTopology<'_>,
+        n_comp: usize,
+        per_cell: usize,
+        fixed_u: &[bool],
+        n_global: usize,
+    ) -> Self {
+        let nc = n_comp as u32;
+        let n_cells = topology.n_cells;
+        let n_u = n_comp * topology.n_nodes;
+        let n_full = n_u + per_cell * n_cells + n_global;
+        let mut fixed = vec![false; n_full];
+        let k = fixed_u.len().min(n_u);
+        fixed[..k].copy_from_slice(&fixed_u[..k]);
         // Hanging nodes (a fixed node stays fixed): each component follows its masters'.
         let mut cons_dofs = Vec::new();
         let mut cons_offsets = vec![0];
         let mut cons_terms = Vec::new();
         let mut constrained = vec![false; n_full];
-        for c in &mesh.constraints {
+        for c in topology.constraints {
             for i in 0..nc {
                 let d = nc * c.node + i;
                 if fixed[d as usize] {
@@ -130,7 +171,7 @@ impl DofMap {
                 *e = n_eq;
                 field.push(if d < n_u {
                     0
-                } else if d < n_u + per_cell * mesh.n_cells() {
+                } else if d < n_u + per_cell * n_cells {
                     1
                 } else {
                     2
@@ -140,8 +181,8 @@ impl DofMap {
         }
         let mut cell_dofs = Vec::new();
         let mut cell_offsets = vec![0];
-        for c in 0..mesh.n_cells() {
-            for &n in mesh.cell_nodes(c) {
+        for c in 0..n_cells {
+            for &n in (topology.cell_nodes)(c) {
                 cell_dofs.extend((0..nc).map(|i| nc * n + i));
             }
             for m in 0..per_cell {
@@ -960,7 +1001,9 @@ impl Assembler {
             // Rows past an element's core are neither zeroed nor assembled (not in the
             // pattern).
             let kc = block.core.as_ref().map_or(nd, |c| (c[e] as usize).min(nd));
-            k[..kc * nd].fill(0.0);
+            if with_matrix {
+                k[..kc * nd].fill(0.0);
+            }
             kernel(e, r, k);
         };
         if block.chunks.is_some() || !self.parallel {

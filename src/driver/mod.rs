@@ -25,6 +25,7 @@ pub mod indentation;
 pub mod resistance;
 pub mod results;
 pub mod spinning;
+pub mod spinning3d;
 pub mod steady;
 pub mod steady_recovery;
 pub mod steady_report;

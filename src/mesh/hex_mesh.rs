@@ -209,6 +209,13 @@ impl HexMesh {
     pub fn facet_set(&self, name: &str) -> &[HexFacet] {
         self.facet_sets.get(name).map(Vec::as_slice).unwrap_or(&[])
     }
+    /// Make every cell isoparametric (X = Σ N_a X_a from its nodes, which the generators place
+    /// on the exact surfaces): the discrete displacement space then contains the rigid motions
+    /// exactly (objectivity), as in the plane-strain program.
+    pub fn make_isoparametric(&mut self) {
+        self.geometry.fill(HexGeometry::Isoparametric);
+    }
+
     /// Position and Jacobian dX/dξ of cell `c` at reference point `x`: the exact map where the
     /// cell has one, else the isoparametric interpolation of its nodes.
     pub fn map(&self, c: usize, x: [f64; 3]) -> (Vector3<f64>, Matrix3<f64>) {

@@ -66,3 +66,9 @@ pub trait StepObserver<S: ?Sized> {
     /// A failed attempt (the system is restored to the last converged state after this).
     fn observe_rejected(&mut self, _step: &RejectedStep) {}
 }
+
+/// An observer that ignores every event and never asks to stop (for any system).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoObserver;
+
+impl<S: ?Sized> StepObserver<S> for NoObserver {}

@@ -1,0 +1,344 @@
+//! The three-dimensional solid on hexahedral meshes: the cell integrand of [`super::kernel`]
+//! with `D = 3`, the cells mapped by [`HexMesh::map`] (exact cylindrical and crowned maps of
+//! the revolved mesh, isoparametric otherwise), Gauss rules with 2 points per direction for
+//! Hex8 and 3 for Hex27.
+//!
+//! Frame ([`crate::mesh::hex_mesh`]): the axle is x3, x1 along the road, x2 up, the body spins
+//! about +x3. Displacements are three per node (node-major, component i of node n at dof
+//! 3n + i); incompressible laws add the cell's four P1 pressures after them.
+
+use super::kernel::{
+    cell_energy, n_pressure, solid_cell, BodyForceD, CellLaw, CellPressure, Coefficients,
+    Inadmissible, Point,
+};
+use crate::assembly::{CellTopology, DofMap};
+use crate::element::hex::{Hex27, Hex8, Lagrange3D, QuadRule3D};
+use crate::material::{Hyperelastic, Material};
+use crate::math::Mat3;
+use crate::mesh::hex_mesh::HexMesh;
+use crate::physics::PressureMode;
+use nalgebra::Vector3;
+
+/// Shape values and reference gradients of an element at the points of a rule.
+#[derive(Clone, Debug)]
+struct Table3<const N: usize> {
+    points: Vec<[f64; 3]>,
+    weights: Vec<f64>,
+    n: Vec<[f64; N]>,
+    dn: Vec<[[f64; 3]; N]>,
+}
+
+impl<const N: usize> Table3<N> {
+    fn new<E: Lagrange3D>(q: usize) -> Self {
+        let rule = QuadRule3D::gauss_3d(q);
+        let (mut n, mut dn) = (Vec::new(), Vec::new());
+        for &x in &rule.points {
+            let (mut nv, mut dv) = ([0.0; N], [[0.0; 3]; N]);
+            E::eval(x, &mut nv, &mut dv);
+            n.push(nv);
+            dn.push(dv);
+        }
+        Self {
+            points: rule.points,
+            weights: rule.weights,
+            n,
+            dn,
+        }
+    }
+}
+
+/// Most quadrature points of a cell (Hex27, 3 × 3 × 3).
+pub const MAX_POINTS_3D: usize = 27;
+
+/// The hyperelastic solid on a hexahedral mesh.
+pub struct Solid3D {
+    pub mesh: HexMesh,
+    pub material: Material,
+    /// Reference density ρ0.
+    pub rho: f64,
+    pub pressure: PressureMode,
+    /// Body force per unit reference volume (scaled by [`Coefficients::body_load`]).
+    pub body_force: Option<Box<BodyForceD<3>>>,
+    q1: Table3<8>,
+    q2: Table3<27>,
+}
+
+impl Solid3D {
+    pub fn new(mesh: HexMesh, material: Material, rho: f64, pressure: PressureMode) -> Self {
+        Self {
+            mesh,
+            material,
+            rho,
+            pressure,
+            body_force: None,
+            q1: Table3::new::<Hex8>(2),
+            q2: Table3::new::<Hex27>(3),
+        }
+    }
+
+    /// Cell-owned dofs per cell (the P1 pressures of the exact constraint).
+    pub fn dofs_per_cell(&self) -> usize {
+        match self.pressure {
+            PressureMode::Exact { .. } => n_pressure(3),
+            _ => 0,
+        }
+    }
+
+    /// The dof map: three displacements per node, `fixed_u[3n + i]` fixing component i of node
+    /// n, then the cell pressures, then `n_global` global unknowns.
+    pub fn dof_map(&self, fixed_u: &[bool], n_global: usize) -> DofMap {
+        let mesh = &self.mesh;
+        DofMap::for_cells(
+            CellTopology {
+                n_nodes: mesh.n_nodes(),
+                n_cells: mesh.n_cells(),
+                cell_nodes: &|c| mesh.cell_nodes(c),
+                constraints: &[],
+            },
+            3,
+            self.dofs_per_cell(),
+            fixed_u,
+            n_global,
+        )
+    }
+
+    /// The quadrature points of cell `c` in `out`; returns how many.
+    fn points<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        out: &mut [Point<3, N>; MAX_POINTS_3D],
+    ) -> Result<usize, Inadmissible> {
+        for (q, slot) in out.iter_mut().enumerate().take(tab.points.len()) {
+            let (x, jac) = self.mesh.map(c, tab.points[q]);
+            let det = jac.determinant();
+            let inv = jac.try_inverse().ok_or(Inadmissible::Singular)?;
+            if det <= 0.0 || !det.is_finite() {
+                return Err(Inadmissible::Singular);
+            }
+            slot.x = [x[0], x[1], x[2]];
+            slot.w = tab.weights[q] * det;
+            slot.n = tab.n[q];
+            for a in 0..N {
+                let d = tab.dn[q][a];
+                for (j, gj) in slot.g[a].iter_mut().enumerate() {
+                    *gj = d[0] * inv[(0, j)] + d[1] * inv[(1, j)] + d[2] * inv[(2, j)];
+                }
+            }
+        }
+        Ok(tab.points.len())
+    }
+
+    /// Residual and tangent of cell `c` at the full state `x` (see [`solid_cell`]); `r` has the
+    /// cell's dof count, `k` its square or is empty.
+    pub fn cell(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        co: &Coefficients,
+        r: &mut [f64],
+        k: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        if self.mesh.degree[c] == 1 {
+            self.cell_n::<8>(&self.q1, c, dofs, x, co, r, k)
+        } else {
+            self.cell_n::<27>(&self.q2, c, dofs, x, co, r, k)
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn cell_n<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        co: &Coefficients,
+        r: &mut [f64],
+        k: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts)?;
+        let cd = dofs.cell(c);
+        let mut u = [0.0; 81];
+        for (slot, &d) in u.iter_mut().zip(&cd[..3 * N]) {
+            *slot = x[d as usize];
+        }
+        let mut pe = [0.0; 4];
+        let pressure = match self.pressure {
+            PressureMode::None => CellPressure::None,
+            PressureMode::Exact { .. } => {
+                for (m, slot) in pe.iter_mut().enumerate() {
+                    *slot = x[cd[3 * N + m] as usize];
+                }
+                CellPressure::Exact { p: &pe }
+            }
+            PressureMode::Perturbed { kappa, p0 } => CellPressure::Perturbed { kappa, p0 },
+        };
+        let law = CellLaw {
+            material: &self.material,
+            rho: self.rho,
+            pressure,
+            body_force: self.body_force.as_deref(),
+        };
+        solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)
+    }
+
+    /// Strain energy ∫ W dV (compressible laws).
+    pub fn strain_energy(&self, dofs: &DofMap, x: &[f64]) -> f64 {
+        (0..self.mesh.n_cells())
+            .map(|c| {
+                let cd = dofs.cell(c);
+                let mut u = [0.0; 81];
+                for (slot, &d) in u.iter_mut().zip(cd) {
+                    *slot = x[d as usize];
+                }
+                if self.mesh.degree[c] == 1 {
+                    let mut pts = [Point::<3, 8>::default(); MAX_POINTS_3D];
+                    let n = self.points(&self.q1, c, &mut pts).unwrap_or(0);
+                    cell_energy::<Mat3, Material, 3, 8>(&pts[..n], &u[..24], &self.material)
+                } else {
+                    let mut pts = [Point::<3, 27>::default(); MAX_POINTS_3D];
+                    let n = self.points(&self.q2, c, &mut pts).unwrap_or(0);
+                    cell_energy::<Mat3, Material, 3, 27>(&pts[..n], &u[..81], &self.material)
+                }
+            })
+            .sum()
+    }
+
+    /// Displacement and its gradient at reference point `xi` of cell `c`, with the Cauchy stress
+    /// of the material (σ = P Fᵀ / J, the cell pressure included).
+    pub fn point_values(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        xi: [f64; 3],
+    ) -> Option<PointValues3D> {
+        let cn = self.mesh.cell_nodes(c);
+        let nn = cn.len();
+        let (mut n, mut dn) = ([0.0; 27], [[0.0; 3]; 27]);
+        if self.mesh.degree[c] == 1 {
+            Hex8::eval(xi, &mut n, &mut dn);
+        } else {
+            Hex27::eval(xi, &mut n, &mut dn);
+        }
+        let (xr, jac) = self.mesh.map(c, xi);
+        let inv = jac.try_inverse()?;
+        let cd = dofs.cell(c);
+        let mut u = Vector3::zeros();
+        let mut h = Mat3::zeros();
+        for a in 0..nn {
+            let g = Vector3::new(dn[a][0], dn[a][1], dn[a][2]).transpose() * inv;
+            for i in 0..3 {
+                let ua = x[cd[3 * a + i] as usize];
+                u[i] += ua * n[a];
+                for j in 0..3 {
+                    h[(i, j)] += ua * g[j];
+                }
+            }
+        }
+        let f = Mat3::identity() + h;
+        let jdet = f.determinant();
+        if jdet <= 0.0 {
+            return None;
+        }
+        let mut p = <Material as Hyperelastic<Mat3>>::stress(&self.material, &h);
+        if let PressureMode::Exact { .. } | PressureMode::Perturbed { .. } = self.pressure {
+            // The cell's pressure at the point (for outputs).
+            let pr = self.cell_pressure(c, dofs, x, &xr)?;
+            p -= crate::math::Tensor::cof(&f) * pr;
+        }
+        Some(PointValues3D {
+            x: xr,
+            u,
+            grad_u: h,
+            sigma: p * f.transpose() / jdet,
+        })
+    }
+
+    /// The P1 pressure of cell `c` at reference position `xr`.
+    fn cell_pressure(&self, c: usize, dofs: &DofMap, x: &[f64], xr: &Vector3<f64>) -> Option<f64> {
+        // Rebuild the cell's pressure frame and coefficients through the kernel's residual
+        // rows: the exact mode stores them; the perturbed mode condenses them from J.
+        let cd = dofs.cell(c);
+        let deg = self.mesh.degree[c];
+        let (xc, h, coeffs) = if deg == 1 {
+            self.pressure_coefficients::<8>(&self.q1, c, cd, x)?
+        } else {
+            self.pressure_coefficients::<27>(&self.q2, c, cd, x)?
+        };
+        let mut p = coeffs[0];
+        for i in 0..3 {
+            p += coeffs[i + 1] * (xr[i] - xc[i]) / h;
+        }
+        Some(p)
+    }
+
+    #[allow(clippy::needless_range_loop)] // Index loops spell out the components.
+    fn pressure_coefficients<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        cd: &[u32],
+        x: &[f64],
+    ) -> Option<([f64; 3], f64, [f64; 4])> {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts).ok()?;
+        let pts = &pts[..np];
+        let vol: f64 = pts.iter().map(|p| p.w).sum();
+        let mut xc = [0.0; 3];
+        for p in pts {
+            for i in 0..3 {
+                xc[i] += p.x[i] * p.w / vol;
+            }
+        }
+        let h = vol.abs().cbrt();
+        match self.pressure {
+            PressureMode::Exact { .. } => {
+                let mut pc = [0.0; 4];
+                for (m, slot) in pc.iter_mut().enumerate() {
+                    *slot = x[cd[3 * N + m] as usize];
+                }
+                Some((xc, h, pc))
+            }
+            PressureMode::Perturbed { kappa, p0 } => {
+                let mut u = [0.0; 81];
+                for (slot, &d) in u.iter_mut().zip(&cd[..3 * N]) {
+                    *slot = x[d as usize];
+                }
+                let mut m = nalgebra::Matrix4::zeros();
+                let mut g = nalgebra::Vector4::zeros();
+                for p in pts {
+                    let q = nalgebra::Vector4::new(
+                        1.0,
+                        (p.x[0] - xc[0]) / h,
+                        (p.x[1] - xc[1]) / h,
+                        (p.x[2] - xc[2]) / h,
+                    );
+                    let jm1 = crate::math::Tensor::det_ipm1(&super::kernel::grad_u::<Mat3, 3, N>(
+                        &u[..3 * N],
+                        &p.g,
+                    ));
+                    m += q * q.transpose() * p.w;
+                    g += q * (jm1 * p.w);
+                }
+                let pc = -kappa * (m.try_inverse()? * g);
+                Some((xc, h, [pc[0] + p0, pc[1], pc[2], pc[3]]))
+            }
+            PressureMode::None => Some((xc, h, [0.0; 4])),
+        }
+    }
+}
+
+/// Output values at a point of a hexahedral cell.
+#[derive(Clone, Copy, Debug)]
+pub struct PointValues3D {
+    /// Reference position X.
+    pub x: Vector3<f64>,
+    pub u: Vector3<f64>,
+    pub grad_u: Mat3,
+    /// Cauchy stress σ = P Fᵀ / J.
+    pub sigma: Mat3,
+}

@@ -1,0 +1,185 @@
+//! The three-dimensional solid as a nonlinear system for the solvers: the state, the dof map,
+//! the assembler and the coefficients of the analysis, with load stepping in ω² (spinning) or
+//! in the body-force factor.
+//!
+//! The residual is that of [`super::kernel`] summed over the cells (assembled in parallel by
+//! [`Assembler::add_block_large`]); the coefficients at load factor λ are λ times the target's
+//! ([`Solid3DSystem::set_target`]), so a spinning solve steps ω² from 0 as the plane-strain one
+//! does.
+
+use super::kernel::{Coefficients, Inadmissible};
+use super::solid3d::Solid3D;
+use crate::assembly::{Assembler, DofMap, CONSTRAINED};
+use crate::solver::stepping::LoadedSystem;
+use crate::solver::NonlinearSystem;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The 3D solid, its state and what the analysis supplies.
+pub struct Solid3DSystem {
+    pub solid: Solid3D,
+    pub dofs: DofMap,
+    pub asm: Assembler,
+    /// Full state: displacements, cell pressures, global unknowns.
+    pub x: Vec<f64>,
+    /// Coefficients of the current evaluation.
+    pub coefficients: Coefficients,
+    /// Coefficients at load factor 1.
+    target: Coefficients,
+    ref_norms: Vec<f64>,
+    /// Why the last evaluation failed, if it did.
+    inadmissible: Option<Inadmissible>,
+}
+
+impl Solid3DSystem {
+    /// The system with displacement component i of node n fixed where `fixed_u[3n + i]`.
+    pub fn new(solid: Solid3D, fixed_u: &[bool]) -> Self {
+        let dofs = solid.dof_map(fixed_u, 0);
+        let asm = Assembler::with_blocks(
+            &dofs,
+            vec![(dofs.cell_dofs.clone(), dofs.cell_offsets.clone())],
+        );
+        let mut x = vec![0.0; dofs.n_full()];
+        if let crate::physics::PressureMode::Exact { p0 } = solid.pressure {
+            let per = solid.dofs_per_cell();
+            for c in 0..solid.mesh.n_cells() {
+                x[dofs.n_u + per * c] = p0;
+            }
+        }
+        // Pressure residuals are volumes: their floor is a fraction of the body's volume.
+        let volume = Self::volume(&solid);
+        Self {
+            solid,
+            dofs,
+            asm,
+            x,
+            coefficients: Coefficients::default(),
+            target: Coefficients::default(),
+            ref_norms: vec![0.0, 1e-3 * volume],
+            inadmissible: None,
+        }
+    }
+
+    fn volume(solid: &Solid3D) -> f64 {
+        let mut v = 0.0;
+        let (pts, ws) = crate::element::gauss_1d(2);
+        for c in 0..solid.mesh.n_cells() {
+            for (k, wk) in pts.iter().zip(&ws) {
+                for (j, wj) in pts.iter().zip(&ws) {
+                    for (i, wi) in pts.iter().zip(&ws) {
+                        let (_, jac) = solid.mesh.map(c, [*i, *j, *k]);
+                        v += jac.determinant() * wi * wj * wk;
+                    }
+                }
+            }
+        }
+        v
+    }
+
+    /// The coefficients reached at load factor 1 ([`LoadedSystem::set_load`] scales them).
+    pub fn set_target(&mut self, target: Coefficients) {
+        self.target = target;
+    }
+
+    /// The floor of the displacement residual's convergence reference: a physical force scale
+    /// of the problem (e.g. the centrifugal force ρ ω² Ro V).
+    pub fn set_reference_force(&mut self, f: f64) {
+        self.ref_norms[0] = f;
+    }
+
+    /// Why the last evaluation failed, if it did.
+    pub fn inadmissible(&self) -> Option<Inadmissible> {
+        self.inadmissible
+    }
+
+    /// Residual and tangent at the current state into the assembler; `false` if a cell was
+    /// inadmissible.
+    pub fn assemble(&mut self, with_matrix: bool) -> bool {
+        let bad = AtomicBool::new(false);
+        let why = std::sync::Mutex::new(None);
+        let (solid, dofs, x, co) = (&self.solid, &self.dofs, &self.x, self.coefficients);
+        self.asm.zero(with_matrix);
+        self.asm.add_block_large(0, dofs, with_matrix, |c, r, k| {
+            if let Err(e) = solid.cell(c, dofs, x, &co, r, k) {
+                bad.store(true, Ordering::Relaxed);
+                if let Ok(mut w) = why.lock() {
+                    *w = Some(e);
+                }
+                r.fill(0.0);
+                k.fill(0.0);
+            }
+        });
+        self.inadmissible = why.into_inner().ok().flatten();
+        !bad.load(Ordering::Relaxed)
+    }
+
+    /// The displacement of node `n`.
+    pub fn node_displacement(&self, n: usize) -> [f64; 3] {
+        [self.x[3 * n], self.x[3 * n + 1], self.x[3 * n + 2]]
+    }
+}
+
+impl NonlinearSystem for Solid3DSystem {
+    fn n_eq(&self) -> usize {
+        self.dofs.n_eq
+    }
+    fn fields(&self) -> &[u8] {
+        &self.dofs.field
+    }
+    fn field_names(&self) -> &'static [&'static str] {
+        &["u", "p"]
+    }
+    fn reference_norms(&self) -> Vec<f64> {
+        self.ref_norms.clone()
+    }
+    fn force_scale(&self) -> &[f64] {
+        &self.asm.scale
+    }
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(self.dofs.n_eq, 0.0);
+        let n_u = self.dofs.n_u;
+        for (d, &e) in self.dofs.eq.iter().enumerate() {
+            if e >= CONSTRAINED {
+                continue;
+            }
+            out[e as usize] = if d < n_u {
+                let n = d / 3;
+                (self.solid.mesh.nodes[n] + nalgebra::Vector3::from(self.node_displacement(n)))
+                    .norm()
+            } else {
+                self.x[d].abs()
+            };
+        }
+    }
+    fn pattern(&self) -> (&[usize], &[usize]) {
+        (&self.asm.col_ptr, &self.asm.row_idx)
+    }
+    fn evaluate(&mut self, with_matrix: bool) -> bool {
+        self.assemble(with_matrix)
+    }
+    fn residual(&self) -> &[f64] {
+        &self.asm.residual
+    }
+    fn matrix_values(&self) -> &[f64] {
+        &self.asm.values
+    }
+    fn update(&mut self, alpha: f64, dx: &[f64]) {
+        self.dofs.add_free(alpha, dx, &mut self.x);
+    }
+    fn save_state(&self, buf: &mut Vec<f64>) {
+        buf.clear();
+        buf.extend_from_slice(&self.x);
+    }
+    fn restore_state(&mut self, buf: &[f64]) {
+        self.x.copy_from_slice(buf);
+    }
+}
+
+impl LoadedSystem for Solid3DSystem {
+    fn set_load(&mut self, lambda: f64) {
+        self.coefficients = Coefficients {
+            omega2: lambda * self.target.omega2,
+            body_load: lambda * self.target.body_load,
+        };
+    }
+}
