@@ -82,7 +82,9 @@ pub const MAX_CELL_DOFS: usize = 81;
 pub enum Contact3DError {
     #[error(transparent)]
     Law(#[from] LawError),
-    #[error("facet rule {0:?} is not available on hexahedral facets (Gauss: 1-6 points, Lobatto: 2-4)")]
+    #[error(
+        "facet rule {0:?} is not available on hexahedral facets (Gauss: 1-6 points, Lobatto: 2-4)"
+    )]
     Rule(FacetRule),
     #[error("friction law `{0}` is the steady mode's elastic-slip law; the 3D contact surface has no steady kinematics")]
     SteadyOnlyFriction(&'static str),
@@ -260,7 +262,11 @@ impl ContactSurface3D {
 
     /// Check that every facet's cell exists in `mesh` with degree 1 or 2, and the lengths of
     /// the full vectors.
-    pub fn check(&self, mesh: &HexMesh, vectors: &[(&'static str, &[f64])]) -> Result<(), Contact3DError> {
+    pub fn check(
+        &self,
+        mesh: &HexMesh,
+        vectors: &[(&'static str, &[f64])],
+    ) -> Result<(), Contact3DError> {
         for (index, f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
             if c >= mesh.n_cells() {
@@ -303,7 +309,9 @@ impl ContactSurface3D {
         let m = E::P + 1;
         // Corners in the face's tensor order: (0, 0), (p, 0), (0, p), (p, p).
         let c = [fn_[0], fn_[m - 1], fn_[m * (m - 1)], fn_[m * m - 1]];
-        let chord = (pos(c[3]) - pos(c[0])).norm().max((pos(c[2]) - pos(c[1])).norm());
+        let chord = (pos(c[3]) - pos(c[0]))
+            .norm()
+            .max((pos(c[2]) - pos(c[1])).norm());
         let margin = 0.1 * chord;
         fn_[..nf].iter().any(|&a| pos(a)[1] < -self.h + margin)
     }
@@ -473,7 +481,14 @@ impl ContactSurface3D {
     }
 
     /// Gather the cell-local displacement and velocity of cell `c` (3N entries each).
-    fn gather(mesh: &HexMesh, c: usize, u: &[f64], kin: &Kinematics3D, ul: &mut [f64], vl: &mut [f64]) {
+    fn gather(
+        mesh: &HexMesh,
+        c: usize,
+        u: &[f64],
+        kin: &Kinematics3D,
+        ul: &mut [f64],
+        vl: &mut [f64],
+    ) {
         for (a, &n) in mesh.cell_nodes(c).iter().enumerate() {
             let n = n as usize;
             for i in 0..3 {
@@ -556,7 +571,9 @@ impl ContactSurface3D {
             let mut visit = |pt: &Point| {
                 let delta = -self.h - pt.x[1];
                 let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
-                let nv = self.normal.eval(delta, if damping { -pt.vel[1] } else { 0.0 });
+                let nv = self
+                    .normal
+                    .eval(delta, if damping { -pt.vel[1] } else { 0.0 });
                 let t = if friction && nv.t > 0.0 {
                     eval_vec(&self.friction, w, nv.t, delta).t
                 } else {
