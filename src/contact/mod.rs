@@ -8,12 +8,15 @@
 //!
 //! * [`laws`]: normal compliance and friction laws with consistent derivatives;
 //! * [`facet`]: the contact element on the outer facets (residual, tangent, load control);
+//! * [`facet3d`]: the 3D contact element on the quad facets of hexahedral meshes against the
+//!   road plane x2 = −H (vector slip, residual and tangent in the cell's dofs, patch samples);
 //! * [`steady_slip`]: the steady mode's continuous slip velocity (nodal θ-derivatives);
 //! * [`laws_vec`]: the friction laws with a 2D tangential slip vector (3D contact);
 //! * [`steady_elastic`]: the steady mode's elastic-slip Coulomb friction (marched return mapping);
 //! * [`stick_slip`]: the spring–mass block on a moving belt (paper §4), integrated with diffsol.
 
 pub mod facet;
+pub mod facet3d;
 pub mod laws;
 pub mod laws_vec;
 pub mod steady_elastic;

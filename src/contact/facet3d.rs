@@ -1,0 +1,642 @@
+//! Three-dimensional contact of the quadrilateral facets of a hexahedral mesh with the rigid
+//! road plane x2 = −H.
+//!
+//! # Frame, sign conventions and units
+//!
+//! The frame is the 3D frame of the revolved meshes: x1 along the road, x2 up, x3 along the
+//! axle; the road is the plane x2 = −H (H > 0 the road height below the axle) and moves in its
+//! own plane with the velocity V = (V1, V3) (hub frame; components along e1 and e3). A point of
+//! the facet at the reference position X has the current position x = X + u and the material
+//! velocity v. At every facet quadrature point
+//!
+//! ```text
+//! δ = −H − x2                       penetration (> 0 in contact)
+//! δ̇ = −v2                           its rate
+//! w = (v1 − V1, v3 − V3)            slip velocity of the body relative to the road (in (e1, e3))
+//! t_n = t_n(δ, δ̇) ≥ 0               normal compliance (super::laws::NormalCompliance)
+//! t_T = (t1, t3) = t_T(w, t_n, δ)   isotropic friction (super::laws_vec::eval_vec)
+//! ```
+//!
+//! The traction on the body is T = t1 e1 + t_n e2 + t3 e3 per unit **reference** area dA0 of
+//! the facet (as the 2D element integrates per unit reference length ds0): t_n pushes the body
+//! up, t_T opposes the slip (t_T·w ≤ 0). The residual follows the convention R = internal −
+//! external, the contact traction being external:
+//!
+//! ```text
+//! R_{3a+i} −= ∫_facet N_a T_i dA0,
+//! ```
+//!
+//! with the cell-local dof order 3·a + i (a a local node of the hexahedron in the
+//! [`crate::element::hex`] order, i the component). Units: lengths L (of the mesh), tractions
+//! F/L², c_n in F/L^{2+m_n}, b_n in F·T/L^{3+l_n}, velocities L/T (in a static analysis: L per
+//! unit pseudo-time, see below), the resultant force F and the moment F·L.
+//!
+//! # Velocities and the tangent
+//!
+//! As in 2D ([`super::facet::SlipKinematics`]) the kinematics ([`Kinematics3D`]) say where the
+//! velocity comes from and how it moves with the unknown U:
+//!
+//! * `Static { u_prev, dtau }`: v = (u − u_prev)/Δτ in the pseudo-time of the load stepping
+//!   (so ε of the friction law is a slip length over the whole loading); δu = δU, δv = δU/Δτ;
+//!   no normal damping (δ̇ is not a physical rate).
+//! * `Dynamic { v, kx, kv }`: the velocity field of the time integrator; δu = kx δU and
+//!   δv = kv δU (generalized-α: kx = 1 − α_f, kv = (1 − α_f) γ/(β Δt)); damping active.
+//!
+//! The 2D steady (θ-referential) kinematics v = ω ∂θχ are not provided here. With the
+//! derivatives of the laws, ∂T/∂U_b = N_b D with the 3 × 3 matrix (rows and columns in the
+//! component order 1, 2, 3; d_w the 2 × 2 ∂t_T/∂w in the (1, 3) components)
+//!
+//! ```text
+//! g = −(∂t_n/∂δ kx + ∂t_n/∂δ̇ kv)
+//! D = | kv d_w11   ∂t1/∂t_n g − ∂t1/∂δ kx   kv d_w13 |
+//!     | 0          g                         0        |
+//!     | kv d_w31   ∂t3/∂t_n g − ∂t3/∂δ kx   kv d_w33 |
+//! ```
+//!
+//! and the local tangent K_{3a+i, 3b+j} = −∫ N_a N_b D_ij dA0. Frictionless and undamped it is
+//! symmetric: the residual is then the gradient of Φ = ∫ c_n δ^{m+1}/(m+1) dA0.
+//!
+//! # Facets, rule and margin
+//!
+//! A facet is a [`HexFacet`] (cell, face) of a [`HexMesh`]; the reference surface, its area
+//! element dA0 (from [`surface_map`]) and position come from the cell's exact map where it
+//! has one (cylindrical, crowned), else from the isoparametric interpolation of its nodes. The
+//! facet rule is the tensor Gauss (1–6 points per direction) or Gauss–Lobatto (2–4) rule
+//! ([`FacetRule3D`]). A facet is skipped when all its nodes are higher than the road by more
+//! than 10 % of the longer diagonal of its corners (the rule of the 2D element).
+
+use super::facet::FacetRule;
+use super::laws::{Friction, LawError, NormalCompliance};
+use super::laws_vec::eval_vec;
+use crate::element::hex::{
+    face_axis, face_free_axes, surface_map, FacetPoints, FacetRule3D, Hex27, Hex8, Lagrange3D,
+};
+use crate::mesh::hex_mesh::{HexFacet, HexMesh};
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+/// Largest number of dofs of a cell (Hex27).
+pub const MAX_CELL_DOFS: usize = 81;
+
+/// Error in the set-up or the input of a 3D contact surface.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Contact3DError {
+    #[error(transparent)]
+    Law(#[from] LawError),
+    #[error(
+        "facet rule {0:?} is not available on hexahedral facets (Gauss: 1-6 points, Lobatto: 2-4)"
+    )]
+    Rule(FacetRule),
+    #[error("friction law `{0}` is the steady mode's elastic-slip law; the 3D contact surface has no steady kinematics")]
+    SteadyOnlyFriction(&'static str),
+    #[error("facet {index}: face {face} is not a face of a hexahedron (0..6)")]
+    BadFace { index: usize, face: u8 },
+    #[error("facet {index}: cell {cell} is not in the mesh ({n_cells} cells)")]
+    BadCell {
+        index: usize,
+        cell: u32,
+        n_cells: usize,
+    },
+    #[error("facet {index}: cell {cell} has degree {degree}; hexahedra of degree 1 or 2 only")]
+    BadDegree { index: usize, cell: u32, degree: u8 },
+    #[error("vector `{name}` has {got} entries, the mesh needs {want} (3 per node)")]
+    Length {
+        name: &'static str,
+        got: usize,
+        want: usize,
+    },
+    #[error("road height H = {0} and road velocity must be finite")]
+    NonFinite(f64),
+}
+
+/// Where the velocity at the contact points comes from (full vectors, 3 per node).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kinematics3D<'a> {
+    /// Static analysis: v = (u − u_prev)/Δτ (load-stepping pseudo-time), no normal damping.
+    Static { u_prev: &'a [f64], dtau: f64 },
+    /// Dynamic analysis: `v` is the velocity field; a unit change of the unknown moves the
+    /// positions by `kx` and the velocities by `kv`. Normal damping active.
+    Dynamic { v: &'a [f64], kx: f64, kv: f64 },
+}
+
+impl Kinematics3D<'_> {
+    /// (kx, kv, damping active).
+    pub fn factors(&self) -> (f64, f64, bool) {
+        match *self {
+            Kinematics3D::Static { dtau, .. } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
+            Kinematics3D::Dynamic { kx, kv, .. } => (kx, kv, true),
+        }
+    }
+}
+
+/// Cell-local motion of one facet's cell: displacements and velocities (3·a + i order, 3N
+/// entries) and the factors of [`Kinematics3D::factors`].
+#[derive(Clone, Copy, Debug)]
+pub struct CellMotion<'a> {
+    pub u: &'a [f64],
+    pub v: &'a [f64],
+    pub kx: f64,
+    pub kv: f64,
+    pub damping: bool,
+}
+
+/// Resultants and statistics of the contact on the body (accumulated over facets).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ContactTotals3D {
+    /// ∫ T dA0: force of the road on the body (F1 longitudinal, F2 vertical, F3 lateral).
+    pub force: [f64; 3],
+    /// ∫ x × T dA0: moment about the hub centre (the origin).
+    pub moment: [f64; 3],
+    /// Reference area of the quadrature points with t_n > 0 (Σ dA0).
+    pub contact_area: f64,
+    /// Largest penetration δ and pressure t_n at a quadrature point.
+    pub max_penetration: f64,
+    pub max_pressure: f64,
+    /// Quadrature points with t_n > 0, and facets integrated (not skipped by the margin).
+    pub points_in_contact: usize,
+    pub facets_integrated: usize,
+}
+
+impl ContactTotals3D {
+    /// Add the totals of another set of facets.
+    pub fn add(&mut self, o: &ContactTotals3D) {
+        for i in 0..3 {
+            self.force[i] += o.force[i];
+            self.moment[i] += o.moment[i];
+        }
+        self.contact_area += o.contact_area;
+        self.max_penetration = self.max_penetration.max(o.max_penetration);
+        self.max_pressure = self.max_pressure.max(o.max_pressure);
+        self.points_in_contact += o.points_in_contact;
+        self.facets_integrated += o.facets_integrated;
+    }
+}
+
+/// Contact state at one facet quadrature point (for outputs).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ContactSample3D {
+    pub cell: u32,
+    pub face: u8,
+    /// Current position.
+    pub x1: f64,
+    pub x2: f64,
+    pub x3: f64,
+    /// Penetration (δ)_+.
+    pub delta: f64,
+    /// Contact pressure t_n.
+    pub p: f64,
+    /// Tangential traction on the body (e1, e3 components).
+    pub t1: f64,
+    pub t3: f64,
+    /// Slip velocity w = (v1 − V1, v3 − V3).
+    pub w1: f64,
+    pub w3: f64,
+    /// In contact with friction and |w| below the regularisation ε (the regularised stick
+    /// zone); false without friction.
+    pub stick: bool,
+    /// Reference area weight of the point (dA0).
+    pub da0: f64,
+}
+
+/// The contact surface: facets, road, laws and facet rule.
+#[derive(Clone, Debug)]
+pub struct ContactSurface3D {
+    /// Road height H: the road is the plane x2 = −H.
+    pub h: f64,
+    /// Road velocity (V1, V3) in its plane.
+    pub v_road: Vector2<f64>,
+    pub normal: NormalCompliance,
+    pub friction: Friction,
+    pub rule: FacetRule,
+    pub facets: Vec<HexFacet>,
+    /// The facet rule on each of the six faces.
+    rules: Vec<FacetRule3D>,
+}
+
+/// One facet quadrature point: shape values, reference and current position, velocity.
+struct Point<'a> {
+    n: &'a [f64],
+    x: Vector3<f64>,
+    vel: Vector3<f64>,
+    da0: f64,
+}
+
+impl ContactSurface3D {
+    /// A contact surface on `facets`. Checks the laws, the rule and the face numbers.
+    pub fn new(
+        facets: Vec<HexFacet>,
+        h: f64,
+        v_road: Vector2<f64>,
+        normal: NormalCompliance,
+        friction: Friction,
+        rule: FacetRule,
+    ) -> Result<Self, Contact3DError> {
+        normal.validate()?;
+        friction.validate()?;
+        if friction.kind().steady_only() && friction.is_active() {
+            return Err(Contact3DError::SteadyOnlyFriction(friction.name()));
+        }
+        if !h.is_finite() || !v_road.iter().all(|v| v.is_finite()) {
+            return Err(Contact3DError::NonFinite(h));
+        }
+        let (q, kind) = match rule {
+            FacetRule::Gauss(q) if (1..=6).contains(&q) => (q, FacetPoints::Gauss),
+            FacetRule::Lobatto(q) if (2..=4).contains(&q) => (q, FacetPoints::GaussLobatto),
+            _ => return Err(Contact3DError::Rule(rule)),
+        };
+        if let Some((index, f)) = facets.iter().enumerate().find(|(_, f)| f.face >= 6) {
+            return Err(Contact3DError::BadFace {
+                index,
+                face: f.face,
+            });
+        }
+        Ok(Self {
+            h,
+            v_road,
+            normal,
+            friction,
+            rule,
+            facets,
+            rules: (0..6).map(|f| FacetRule3D::new(f, q, kind)).collect(),
+        })
+    }
+
+    /// Check that every facet's cell exists in `mesh` with degree 1 or 2, and the lengths of
+    /// the full vectors.
+    pub fn check(
+        &self,
+        mesh: &HexMesh,
+        vectors: &[(&'static str, &[f64])],
+    ) -> Result<(), Contact3DError> {
+        for (index, f) in self.facets.iter().enumerate() {
+            let c = f.cell as usize;
+            if c >= mesh.n_cells() {
+                return Err(Contact3DError::BadCell {
+                    index,
+                    cell: f.cell,
+                    n_cells: mesh.n_cells(),
+                });
+            }
+            if !matches!(mesh.degree[c], 1 | 2) {
+                return Err(Contact3DError::BadDegree {
+                    index,
+                    cell: f.cell,
+                    degree: mesh.degree[c],
+                });
+            }
+        }
+        let want = 3 * mesh.n_nodes();
+        for &(name, v) in vectors {
+            if v.len() != want {
+                return Err(Contact3DError::Length {
+                    name,
+                    got: v.len(),
+                    want,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether a facet of the cell with local motion `u` can reach the road (margin rule of
+    /// the module docs).
+    fn can_touch<E: Lagrange3D>(&self, mesh: &HexMesh, facet: HexFacet, u: &[f64]) -> bool {
+        let nodes = mesh.cell_nodes(facet.cell as usize);
+        let (fn_, nf) = face_nodes_fixed::<E>(facet.face as usize);
+        let pos = |a: usize| {
+            let n = nodes[a] as usize;
+            mesh.nodes[n] + Vector3::new(u[3 * a], u[3 * a + 1], u[3 * a + 2])
+        };
+        let m = E::P + 1;
+        // Corners in the face's tensor order: (0, 0), (p, 0), (0, p), (p, p).
+        let c = [fn_[0], fn_[m - 1], fn_[m * (m - 1)], fn_[m * m - 1]];
+        let chord = (pos(c[3]) - pos(c[0]))
+            .norm()
+            .max((pos(c[2]) - pos(c[1])).norm());
+        let margin = 0.1 * chord;
+        fn_[..nf].iter().any(|&a| pos(a)[1] < -self.h + margin)
+    }
+
+    /// Visit the quadrature points of a facet with the cell-local motion.
+    fn for_points<E: Lagrange3D>(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        u: &[f64],
+        v: &[f64],
+        mut f: impl FnMut(&Point),
+    ) {
+        let c = facet.cell as usize;
+        let face = facet.face as usize;
+        let rule = &self.rules[face];
+        let nodes = mesh.cell_nodes(c);
+        let (fn_, nf) = face_nodes_fixed::<E>(face);
+        let mut n = [0.0; 27];
+        let mut dn = [[0.0; 3]; 27];
+        for (xi, &wq) in rule.points.iter().zip(&rule.weights) {
+            E::eval(*xi, &mut n[..E::N], &mut dn[..E::N]);
+            let (xref, jac) = match mesh.geometry[c].exact_map(*xi) {
+                Some(m) => m,
+                None => {
+                    let mut p = Vector3::zeros();
+                    let mut j = Matrix3::zeros();
+                    for a in 0..E::N {
+                        let xa = mesh.nodes[nodes[a] as usize];
+                        p += xa * n[a];
+                        for k in 0..3 {
+                            for i in 0..3 {
+                                j[(i, k)] += xa[i] * dn[a][k];
+                            }
+                        }
+                    }
+                    (p, j)
+                }
+            };
+            let (da, _) = surface_map(&jac, face);
+            let mut x = xref;
+            let mut vel = Vector3::zeros();
+            for &a in &fn_[..nf] {
+                for i in 0..3 {
+                    x[i] += n[a] * u[3 * a + i];
+                    vel[i] += n[a] * v[3 * a + i];
+                }
+            }
+            f(&Point {
+                n: &n[..E::N],
+                x,
+                vel,
+                da0: da * wq,
+            });
+        }
+    }
+
+    /// The facet kernel: local residual `r` (3N entries) and, with `k`, the local tangent
+    /// (row-major (3N)², `k[row·3N + col]`) of facet `facet` in the dofs of its cell, N the
+    /// cell's node count; both buffers are overwritten (zeroed first). `m` is the cell-local
+    /// motion. Adds the facet's resultants to `totals`. Returns false (with zero `r` and `k`)
+    /// when the facet is skipped by the margin rule.
+    ///
+    /// The cell must have degree 1 or 2 ([`Self::check`]); `r`, `k`, `m.u`, `m.v` must hold at
+    /// least 3N, (3N)², 3N, 3N entries.
+    pub fn facet_kernel(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        m: &CellMotion,
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+        totals: &mut ContactTotals3D,
+    ) -> bool {
+        if mesh.degree[facet.cell as usize] == 1 {
+            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, totals)
+        } else {
+            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, totals)
+        }
+    }
+
+    #[allow(clippy::needless_range_loop)] // D[i][j], N_a N_b: indices as in the formulas
+    fn kernel_impl<E: Lagrange3D>(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        m: &CellMotion,
+        r: &mut [f64],
+        mut k: Option<&mut [f64]>,
+        totals: &mut ContactTotals3D,
+    ) -> bool {
+        let nd = 3 * E::N;
+        r[..nd].fill(0.0);
+        if let Some(k) = k.as_deref_mut() {
+            k[..nd * nd].fill(0.0);
+        }
+        if !self.can_touch::<E>(mesh, facet, m.u) {
+            return false;
+        }
+        totals.facets_integrated += 1;
+        let (fn_, nf) = face_nodes_fixed::<E>(facet.face as usize);
+        let friction = self.friction.is_active();
+        let damping = m.damping && self.normal.has_damping();
+        let (kx, kv) = (m.kx, m.kv);
+        self.for_points::<E>(mesh, facet, m.u, m.v, |pt| {
+            let delta = -self.h - pt.x[1];
+            if delta <= 0.0 {
+                return;
+            }
+            let rate = if damping { -pt.vel[1] } else { 0.0 };
+            let nv = self.normal.eval(delta, rate);
+            if nv.t <= 0.0 && nv.d_delta == 0.0 {
+                return;
+            }
+            let d_rate = if damping { nv.d_rate } else { 0.0 };
+            let g = -(nv.d_delta * kx + d_rate * kv);
+            let mut tr = Vector3::new(0.0, nv.t, 0.0);
+            let mut d = Matrix3::zeros();
+            d[(1, 1)] = g;
+            if friction {
+                let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
+                let fv = eval_vec(&self.friction, w, nv.t, delta);
+                tr[0] = fv.t[0];
+                tr[2] = fv.t[1];
+                const C: [usize; 2] = [0, 2];
+                for (i, &ci) in C.iter().enumerate() {
+                    for (j, &cj) in C.iter().enumerate() {
+                        d[(ci, cj)] = kv * fv.d_w[(i, j)];
+                    }
+                    d[(ci, 1)] = fv.d_tn[i] * g - fv.d_delta[i] * kx;
+                }
+            }
+            let da = pt.da0;
+            for &a in &fn_[..nf] {
+                for i in 0..3 {
+                    r[3 * a + i] -= pt.n[a] * tr[i] * da;
+                }
+            }
+            if nv.t > 0.0 {
+                let f = tr * da;
+                let mo = pt.x.cross(&f);
+                for i in 0..3 {
+                    totals.force[i] += f[i];
+                    totals.moment[i] += mo[i];
+                }
+                totals.contact_area += da;
+                totals.points_in_contact += 1;
+                totals.max_penetration = totals.max_penetration.max(delta);
+                totals.max_pressure = totals.max_pressure.max(nv.t);
+            }
+            if let Some(k) = k.as_deref_mut() {
+                for &a in &fn_[..nf] {
+                    let na = pt.n[a] * da;
+                    for &b in &fn_[..nf] {
+                        let nab = na * pt.n[b];
+                        for i in 0..3 {
+                            let row = (3 * a + i) * nd + 3 * b;
+                            for j in 0..3 {
+                                k[row + j] -= nab * d[(i, j)];
+                            }
+                        }
+                    }
+                }
+            }
+        });
+        true
+    }
+
+    /// Gather the cell-local displacement and velocity of cell `c` (3N entries each).
+    fn gather(
+        mesh: &HexMesh,
+        c: usize,
+        u: &[f64],
+        kin: &Kinematics3D,
+        ul: &mut [f64],
+        vl: &mut [f64],
+    ) {
+        for (a, &n) in mesh.cell_nodes(c).iter().enumerate() {
+            let n = n as usize;
+            for i in 0..3 {
+                ul[3 * a + i] = u[3 * n + i];
+                vl[3 * a + i] = match *kin {
+                    Kinematics3D::Static { u_prev, dtau } => {
+                        (u[3 * n + i] - u_prev[3 * n + i]) / dtau.max(f64::MIN_POSITIVE)
+                    }
+                    Kinematics3D::Dynamic { v, .. } => v[3 * n + i],
+                };
+            }
+        }
+    }
+
+    fn kin_vectors<'a>(u: &'a [f64], kin: &Kinematics3D<'a>) -> [(&'static str, &'a [f64]); 2] {
+        match *kin {
+            Kinematics3D::Static { u_prev, .. } => [("u", u), ("u_prev", u_prev)],
+            Kinematics3D::Dynamic { v, .. } => [("u", u), ("v", v)],
+        }
+    }
+
+    /// Loop the facets at the full displacement `u` (3 per node): call `sink(cell, r, k)` with
+    /// each integrated facet's local residual and (with `with_k`) tangent in the cell's dofs
+    /// (3·a + i, row-major), for a global assembler to scatter; return the totals.
+    pub fn for_each_facet(
+        &self,
+        mesh: &HexMesh,
+        u: &[f64],
+        kin: &Kinematics3D,
+        with_k: bool,
+        mut sink: impl FnMut(usize, &[f64], Option<&[f64]>),
+    ) -> Result<ContactTotals3D, Contact3DError> {
+        self.check(mesh, &Self::kin_vectors(u, kin))?;
+        let (kx, kv, damping) = kin.factors();
+        let mut totals = ContactTotals3D::default();
+        let (mut ul, mut vl) = ([0.0; MAX_CELL_DOFS], [0.0; MAX_CELL_DOFS]);
+        let mut r = [0.0; MAX_CELL_DOFS];
+        let mut k = if with_k {
+            vec![0.0; MAX_CELL_DOFS * MAX_CELL_DOFS]
+        } else {
+            Vec::new()
+        };
+        for &f in &self.facets {
+            let c = f.cell as usize;
+            let nd = 3 * mesh.cell_nodes(c).len();
+            Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
+            let m = CellMotion {
+                u: &ul[..nd],
+                v: &vl[..nd],
+                kx,
+                kv,
+                damping,
+            };
+            let kb = with_k.then_some(&mut k[..nd * nd]);
+            if self.facet_kernel(mesh, f, &m, &mut r, kb, &mut totals) {
+                sink(c, &r[..nd], with_k.then_some(&k[..nd * nd]));
+            }
+        }
+        Ok(totals)
+    }
+
+    /// The contact state at every quadrature point of every facet (contact or not) at the full
+    /// displacement `u`, for outputs of the pressure and traction over the patch.
+    pub fn samples(
+        &self,
+        mesh: &HexMesh,
+        u: &[f64],
+        kin: &Kinematics3D,
+    ) -> Result<Vec<ContactSample3D>, Contact3DError> {
+        self.check(mesh, &Self::kin_vectors(u, kin))?;
+        let (_, _, damping) = kin.factors();
+        let damping = damping && self.normal.has_damping();
+        let friction = self.friction.is_active();
+        let eps = self.friction.eps().unwrap_or(0.0);
+        let mut out = Vec::new();
+        let (mut ul, mut vl) = ([0.0; MAX_CELL_DOFS], [0.0; MAX_CELL_DOFS]);
+        for &f in &self.facets {
+            let c = f.cell as usize;
+            Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
+            let mut visit = |pt: &Point| {
+                let delta = -self.h - pt.x[1];
+                let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
+                let nv = self
+                    .normal
+                    .eval(delta, if damping { -pt.vel[1] } else { 0.0 });
+                let t = if friction && nv.t > 0.0 {
+                    eval_vec(&self.friction, w, nv.t, delta).t
+                } else {
+                    Vector2::zeros()
+                };
+                out.push(ContactSample3D {
+                    cell: f.cell,
+                    face: f.face,
+                    x1: pt.x[0],
+                    x2: pt.x[1],
+                    x3: pt.x[2],
+                    delta: delta.max(0.0),
+                    p: nv.t,
+                    t1: t[0],
+                    t3: t[1],
+                    w1: w[0],
+                    w3: w[1],
+                    stick: friction && nv.t > 0.0 && w.norm() < eps,
+                    da0: pt.da0,
+                });
+            };
+            if mesh.degree[c] == 1 {
+                self.for_points::<Hex8>(mesh, f, &ul, &vl, &mut visit);
+            } else {
+                self.for_points::<Hex27>(mesh, f, &ul, &vl, &mut visit);
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Local nodes of face `f` of `E` in the face's tensor order (as
+/// [`crate::element::hex::face_nodes`], without allocating) and their count.
+fn face_nodes_fixed<E: Lagrange3D>(f: usize) -> ([usize; 9], usize) {
+    let m = E::P + 1;
+    let (k, s) = face_axis(f);
+    let fixed = if s < 0.0 { 0 } else { E::P };
+    let [u, v] = face_free_axes(f);
+    let mut out = [0usize; 9];
+    for iv in 0..m {
+        for iu in 0..m {
+            let mut idx = [0usize; 3];
+            idx[k] = fixed;
+            idx[u] = iu;
+            idx[v] = iv;
+            out[iu + m * iv] = idx[0] + m * (idx[1] + m * idx[2]);
+        }
+    }
+    (out, m * m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::hex::face_nodes;
+
+    #[test]
+    fn fixed_face_nodes_match_the_element_module() {
+        for f in 0..6 {
+            let (a, n) = face_nodes_fixed::<Hex8>(f);
+            assert_eq!(&a[..n], face_nodes::<Hex8>(f).as_slice());
+            let (a, n) = face_nodes_fixed::<Hex27>(f);
+            assert_eq!(&a[..n], face_nodes::<Hex27>(f).as_slice());
+        }
+    }
+}
