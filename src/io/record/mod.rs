@@ -98,6 +98,7 @@
 //! MCAP readable up to its last completed chunk (one chunk is closed per recorded step).
 
 pub mod csv;
+pub mod hex_out;
 pub mod interrupt;
 pub mod mcap;
 pub mod png;
@@ -111,6 +112,7 @@ pub mod rrd_layout;
 pub mod shape;
 pub mod sta;
 pub mod vtu;
+pub mod vtu3d;
 
 pub use interrupt::{install_interrupt_handler, interrupted, request_interrupt};
 
@@ -329,7 +331,7 @@ pub struct RunEnd<'a> {
 }
 
 /// A sink failed to write: which file, and why.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 #[error("{sink}: cannot write {path}: {message}")]
 pub struct RecordError {
     pub sink: &'static str,
