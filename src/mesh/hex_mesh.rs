@@ -290,7 +290,8 @@ impl HexMesh {
             // n dA = s (t_{k+1} × t_{k+2}); for k = 1 the free axes (0, 2) are in reversed
             // cyclic order.
             let (k, s) = face_axis(f);
-            let outward = if k == 1 { -s } else { s } > 0.0;
+            let side = if k == 1 { -s } else { s };
+            let outward = side > 0.0;
             for iv in 0..w - 1 {
                 for iu in 0..w - 1 {
                     let p00 = n[iu + w * iv];
