@@ -33,7 +33,7 @@ fn main() {
             n_theta: 12,
             degree,
             grading_r: 1.0,
-            grading_theta: 1.0,
+            grading_theta: 0.0,
             crown_radius: Some(1.0),
         };
         let mesh = match revolved(&spec) {

@@ -353,7 +353,7 @@ mod tests {
             n_theta: 12,
             degree: p,
             grading_r: 1.0,
-            grading_theta: 1.0,
+            grading_theta: 0.0,
             crown_radius: None,
         }
     }

@@ -475,7 +475,7 @@ mod tests {
             n_theta: 8,
             degree: 2,
             grading_r: 1.0,
-            grading_theta: 1.0,
+            grading_theta: 0.0,
             crown_radius: None,
         })
         .unwrap();

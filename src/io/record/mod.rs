@@ -88,6 +88,13 @@
 //! view of step `i` when `i % every == 0` or the step is final; it still gets the cheap
 //! [`StepInfo`] of every step (with `view = None`).
 //!
+//! # Three-dimensional results
+//!
+//! A 3D driver on a [`crate::mesh::hex_mesh::HexMesh`] writes its states with
+//! [`hex_out::HexOutputs`] (`hex.pvd` + `hex/*.vtu` by [`vtu3d`], `hex.mcap`, `hex.rrd`): the
+//! displacement (3 per node) and named point and cell fields ([`vtu3d::Field3D`]: scalars,
+//! vectors, symmetric or full tensors).
+//!
 //! # Interrupts
 //!
 //! [`install_interrupt_handler`] makes Ctrl-C (SIGINT) set a flag; drivers poll [`interrupted`]

@@ -320,7 +320,7 @@ mod tests {
                 n_theta: 6,
                 degree: p,
                 grading_r: 1.0,
-                grading_theta: 1.0,
+                grading_theta: 0.0,
                 crown_radius: None,
             })
             .unwrap();
@@ -391,7 +391,7 @@ mod tests {
             n_theta: 4,
             degree: 1,
             grading_r: 1.0,
-            grading_theta: 1.0,
+            grading_theta: 0.0,
             crown_radius: None,
         })
         .unwrap();
