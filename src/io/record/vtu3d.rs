@@ -46,7 +46,7 @@ pub enum FieldKind {
 
 impl FieldKind {
     /// Values per entity.
-    pub fn len(self) -> usize {
+    pub fn components(self) -> usize {
         match self {
             FieldKind::Scalar => 1,
             FieldKind::Vector => 3,
@@ -119,7 +119,7 @@ pub fn check_field(f: &Field3D, n: usize) -> Result<(), HexOutputError> {
     if !ok {
         return Err(HexOutputError::FieldName(f.name.to_string()));
     }
-    let expected = n * f.kind.len();
+    let expected = n * f.kind.components();
     if f.values.len() != expected {
         return Err(HexOutputError::FieldLength {
             name: f.name.to_string(),
@@ -156,7 +156,7 @@ fn vtk_values(f: &Field3D) -> (usize, Vec<f64>) {
                 .flat_map(|v| [v[0], v[5], v[4], v[5], v[1], v[3], v[4], v[3], v[2]])
                 .collect(),
         ),
-        k => (k.len(), f.values.to_vec()),
+        k => (k.components(), f.values.to_vec()),
     }
 }
 
