@@ -62,7 +62,7 @@ pub struct Field3D<'a> {
     /// Array name (letters, digits, `_`, `-`, `.`).
     pub name: &'a str,
     pub kind: FieldKind,
-    /// `kind.len()` values per entity, entity-major.
+    /// `kind.components()` values per entity, entity-major.
     pub values: &'a [f64],
     /// Unit of the values (shown in viewers), e.g. `"psi"`; may be empty.
     pub unit: &'a str,
