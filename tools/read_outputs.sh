@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Read every output of two scenes back with independent readers (Python mcap + protobuf,
+# Read every output of two scenes (and the 3D outputs of tools/hex_outputs.rs,
+# tools/check_hex_outputs.py) back with independent readers (Python mcap + protobuf,
 # meshio, and `rerun rrd verify` when a run.rrd is written, plus the `omega` timeline of a steady
 # continuation, tools/check_rrd_timeline.py; zlib-compressed VTU against the
 # uncompressed files, tools/check_vtu_zlib.py) and check steps, times and the
@@ -33,8 +34,16 @@ RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$
 # A steady continuation in omega (its branch points on the recording's `omega` timeline).
 RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/oden_figs_9_13.toml --out "$OUT/oden_figs_9_13" \
     --set continuation.max_steps=6 --set 'output.sinks=["summary","csv","rerun"]'
+# 3D outputs of hexahedral meshes (Hex8, Hex27): VTU by meshio, MCAP by the Python reader,
+# against the closed-form fields of tools/hex_outputs.rs (its .rrd is verified below).
+HEX_OUTPUTS=${TREAD_HEX_OUTPUTS:-target/release/examples/hex_outputs}
+if [ ! -x "$HEX_OUTPUTS" ]; then
+    cargo build -q --release --example hex_outputs
+fi
+"$HEX_OUTPUTS" "$OUT/hex"
+"$VENV/bin/python" tools/check_hex_outputs.py "$OUT/hex"
 # The .rrd files (only in builds with the `rerun` feature).
-rrds=$(find "$OUT" -name run.rrd)
+rrds=$(find "$OUT" -name run.rrd -o -name hex.rrd)
 if [ -z "$rrds" ]; then
     echo "read_outputs: no run.rrd (build without the rerun feature): rrd verify SKIPPED"
     exit 0

@@ -11,7 +11,7 @@
 //! `a = i + m·j + m²·k`, ξ radial, η circumferential, ζ axial). Faces are numbered as there
 //! (0: ξ = −1, 1: ξ = +1, 2: η = −1, 3: η = +1, 4: ζ = −1, 5: ζ = +1).
 
-use crate::element::hex::{iso_map, Hex27, Hex8};
+use crate::element::hex::{face_axis, face_nodes, iso_map, Hex27, Hex8};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::BTreeMap;
 
@@ -233,6 +233,183 @@ impl HexMesh {
             iso_map::<Hex8>(&xs[..8], x, &mut n, &mut dn)
         } else {
             iso_map::<Hex27>(&xs, x, &mut n, &mut dn)
+        }
+    }
+
+    /// Global nodes of face `f` of cell `c` in the face's 2D tensor order
+    /// ([`crate::element::hex::face_nodes`]): 4 nodes (Hex8) or 9 (Hex27).
+    pub fn face_node_ids(&self, c: usize, f: usize) -> Vec<u32> {
+        let cn = self.cell_nodes(c);
+        let local = if self.degree[c] == 1 {
+            face_nodes::<Hex8>(f)
+        } else {
+            face_nodes::<Hex27>(f)
+        };
+        local.iter().filter_map(|&a| cn.get(a).copied()).collect()
+    }
+
+    /// The faces that belong to exactly one cell (the boundary of the body), in the order of
+    /// their cells and local faces. Two faces are the same when their four corner nodes are.
+    pub fn boundary_faces(&self) -> Vec<HexFacet> {
+        let mut count: std::collections::HashMap<[u32; 4], u32> =
+            std::collections::HashMap::with_capacity(3 * self.n_cells());
+        let corners = |c: usize, f: usize| -> [u32; 4] {
+            let n = self.face_node_ids(c, f);
+            let m = if n.len() == 9 { 2 } else { 1 };
+            let w = m + 1;
+            let mut k = [n[0], n[m], n[w * m], n[w * m + m]];
+            k.sort_unstable();
+            k
+        };
+        for c in 0..self.n_cells() {
+            for f in 0..6 {
+                *count.entry(corners(c, f)).or_insert(0) += 1;
+            }
+        }
+        let mut out = Vec::new();
+        for c in 0..self.n_cells() {
+            for f in 0..6 {
+                if count.get(&corners(c, f)) == Some(&1) {
+                    out.push(HexFacet {
+                        cell: c as u32,
+                        face: f as u8,
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    /// Triangulation of the faces `faces` for viewers: every quadrilateral of the face's node grid
+    /// split along one diagonal (2 triangles per Hex8 face, 8 per Hex27 face, through its 9
+    /// nodes), each triangle counter-clockwise seen from outside the cell (for cells with
+    /// det J > 0). The vertices are the distinct nodes of the faces in increasing order.
+    pub fn surface_triangulation(&self, faces: &[HexFacet]) -> SurfaceTriangulation {
+        let mut tris_global: Vec<[u32; 3]> = Vec::with_capacity(8 * faces.len());
+        for fc in faces {
+            let (c, f) = (fc.cell as usize, usize::from(fc.face));
+            let n = self.face_node_ids(c, f);
+            let w = if n.len() == 9 { 3 } else { 2 };
+            if n.len() != w * w {
+                continue;
+            }
+            // The face's (u, v) tangents give u × v = +outward for faces 0 and 5 (etc.):
+            // n dA = s (t_{k+1} × t_{k+2}); for k = 1 the free axes (0, 2) are in reversed
+            // cyclic order.
+            let (k, s) = face_axis(f);
+            let side = if k == 1 { -s } else { s };
+            let outward = side > 0.0;
+            for iv in 0..w - 1 {
+                for iu in 0..w - 1 {
+                    let p00 = n[iu + w * iv];
+                    let p10 = n[iu + 1 + w * iv];
+                    let p01 = n[iu + w * (iv + 1)];
+                    let p11 = n[iu + 1 + w * (iv + 1)];
+                    if outward {
+                        tris_global.push([p00, p10, p11]);
+                        tris_global.push([p00, p11, p01]);
+                    } else {
+                        tris_global.push([p00, p11, p10]);
+                        tris_global.push([p00, p01, p11]);
+                    }
+                }
+            }
+        }
+        let mut vertices: Vec<u32> = tris_global.iter().flatten().copied().collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        let mut local = vec![u32::MAX; self.n_nodes()];
+        for (i, &v) in vertices.iter().enumerate() {
+            if let Some(slot) = local.get_mut(v as usize) {
+                *slot = i as u32;
+            }
+        }
+        let triangles = tris_global
+            .iter()
+            .map(|t| t.map(|v| local[v as usize]))
+            .collect();
+        SurfaceTriangulation {
+            vertices,
+            triangles,
+        }
+    }
+}
+
+/// A triangulated surface of a [`HexMesh`] (see [`HexMesh::surface_triangulation`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SurfaceTriangulation {
+    /// Global node of every vertex.
+    pub vertices: Vec<u32>,
+    /// Vertex indices (into `vertices`) of every triangle, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::revolved::{revolved, RevolvedSpec};
+    use std::collections::HashMap;
+
+    fn spec(p: usize) -> RevolvedSpec {
+        RevolvedSpec {
+            ri: 1.0,
+            ro: 2.0,
+            width: 0.6,
+            n_r: 2,
+            n_z: 3,
+            n_theta: 12,
+            degree: p,
+            grading_r: 1.0,
+            grading_theta: 0.0,
+            crown_radius: None,
+        }
+    }
+
+    #[test]
+    fn boundary_faces_are_the_named_facet_sets() {
+        for p in [1, 2] {
+            let m = revolved(&spec(p)).unwrap();
+            let b = m.boundary_faces();
+            // hub + outer: 2 n_z n_theta; two sides: 2 n_r n_theta.
+            assert_eq!(b.len(), 2 * 3 * 12 + 2 * 2 * 12);
+            let mut named: Vec<(u32, u8)> = ["hub", "outer", "side_neg", "side_pos"]
+                .iter()
+                .flat_map(|s| m.facet_set(s).iter().map(|f| (f.cell, f.face)))
+                .collect();
+            named.sort_unstable();
+            let got: Vec<(u32, u8)> = b.iter().map(|f| (f.cell, f.face)).collect();
+            assert_eq!(got, named);
+        }
+    }
+
+    /// The triangulated boundary is a closed surface oriented outward: every edge is used once
+    /// in each direction, and the enclosed volume (divergence theorem, Σ p0·(p1 × p2)/6) is
+    /// positive and close to π (ro² − ri²) W (the inscribed polyhedron of 12 p sectors is smaller
+    /// by the polygon factor sin(2π/N) N/(2π), N = 12 p).
+    #[test]
+    fn surface_triangulation_is_closed_and_outward() {
+        for p in [1usize, 2] {
+            let m = revolved(&spec(p)).unwrap();
+            let s = m.surface_triangulation(&m.boundary_faces());
+            assert_eq!(s.triangles.len(), (2 * 3 * 12 + 2 * 2 * 12) * 2 * p * p);
+            let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+            let mut vol = 0.0;
+            for t in &s.triangles {
+                for e in 0..3 {
+                    let (a, b) = (t[e], t[(e + 1) % 3]);
+                    *edges.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 };
+                }
+                let x = |i: u32| m.nodes[s.vertices[i as usize] as usize];
+                vol += x(t[0]).dot(&x(t[1]).cross(&x(t[2]))) / 6.0;
+            }
+            assert!(edges.values().all(|&c| c == 0));
+            let n = (12 * p) as f64;
+            let tau = std::f64::consts::TAU;
+            let exact = std::f64::consts::PI * (4.0 - 1.0) * 0.6 * (tau / n).sin() * n / tau;
+            assert!((vol - exact).abs() < 1e-12 * exact, "p = {p}: {vol} vs {exact}");
+            // Only boundary nodes are vertices: all nodes minus the interior ones.
+            let (nr, nz, nt) = (2 * p + 1, 3 * p + 1, 12 * p);
+            assert_eq!(s.vertices.len(), nr * nz * nt - (nr - 2) * (nz - 2) * nt);
         }
     }
 }

@@ -207,7 +207,7 @@ impl McapSink {
         self.writer = None;
     }
 
-    fn open(&mut self) -> Result<(), String> {
+    pub(super) fn open(&mut self) -> Result<(), String> {
         let f = File::create(&self.path).map_err(|e| e.to_string())?;
         let opts = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
@@ -243,7 +243,7 @@ impl McapSink {
         }
     }
 
-    fn write<T: Encode>(&mut self, topic: &str, time: f64, msg: &T) {
+    pub(super) fn write<T: Encode>(&mut self, topic: &str, time: f64, msg: &T) {
         if self.error.is_some() || self.writer.is_none() {
             return;
         }
@@ -272,7 +272,7 @@ impl McapSink {
         }
     }
 
-    fn close_chunk(&mut self) {
+    pub(super) fn close_chunk(&mut self) {
         let r = match self.writer.as_mut() {
             Some(w) => w.flush(),
             None => return,
@@ -282,7 +282,7 @@ impl McapSink {
         }
     }
 
-    fn metadata(&mut self, name: &str, pairs: &[(&str, &str)]) {
+    pub(super) fn metadata(&mut self, name: &str, pairs: &[(&str, &str)]) {
         let r = match self.writer.as_mut() {
             Some(w) => w.write_metadata(&mcap::records::Metadata {
                 name: name.to_string(),
@@ -494,10 +494,10 @@ impl McapSink {
     }
 }
 
-const F32: i32 = fm::packed_element_field::NumericType::Float32 as i32;
-const U8: i32 = fm::packed_element_field::NumericType::Uint8 as i32;
+pub(super) const F32: i32 = fm::packed_element_field::NumericType::Float32 as i32;
+pub(super) const U8: i32 = fm::packed_element_field::NumericType::Uint8 as i32;
 
-fn timestamp(t: f64) -> fm::Timestamp {
+pub(super) fn timestamp(t: f64) -> fm::Timestamp {
     let ns = time_ns(t);
     fm::Timestamp::new(
         u32::try_from(ns / 1_000_000_000).unwrap_or(u32::MAX),
@@ -505,7 +505,7 @@ fn timestamp(t: f64) -> fm::Timestamp {
     )
 }
 
-fn identity_pose() -> fm::Pose {
+pub(super) fn identity_pose() -> fm::Pose {
     fm::Pose {
         position: Some(fm::Vector3 {
             x: 0.0,
@@ -521,7 +521,7 @@ fn identity_pose() -> fm::Pose {
     }
 }
 
-fn point_cloud(
+pub(super) fn point_cloud(
     time: f64,
     fields: &[(&str, u32, i32)],
     stride: u32,
@@ -559,6 +559,24 @@ fn line(points: Vec<fm::Point3>, rgb: [f64; 3]) -> fm::LinePrimitive {
         }),
         colors: Vec::new(),
         indices: Vec::new(),
+    }
+}
+
+impl McapSink {
+    /// Finish the file (summary and footer): the first error of the whole file, if any.
+    pub(super) fn finish_file(&mut self) -> Result<(), RecordError> {
+        if let Some(mut w) = self.writer.take() {
+            if let Err(e) = w.finish() {
+                self.error
+                    .get_or_insert(RecordError::new("mcap", &self.path, e));
+            }
+        }
+        self.error.take().map_or(Ok(()), Err)
+    }
+
+    /// The first error so far, if any.
+    pub(super) fn error(&self) -> Option<&RecordError> {
+        self.error.as_ref()
     }
 }
 

@@ -88,6 +88,13 @@
 //! view of step `i` when `i % every == 0` or the step is final; it still gets the cheap
 //! [`StepInfo`] of every step (with `view = None`).
 //!
+//! # Three-dimensional results
+//!
+//! A 3D driver on a [`crate::mesh::hex_mesh::HexMesh`] writes its states with
+//! [`hex_out::HexOutputs`] (`hex.pvd` + `hex/*.vtu` by [`vtu3d`], `hex.mcap`, `hex.rrd`): the
+//! displacement (3 per node) and named point and cell fields ([`vtu3d::Field3D`]: scalars,
+//! vectors, symmetric or full tensors).
+//!
 //! # Interrupts
 //!
 //! [`install_interrupt_handler`] makes Ctrl-C (SIGINT) set a flag; drivers poll [`interrupted`]
@@ -98,6 +105,7 @@
 //! MCAP readable up to its last completed chunk (one chunk is closed per recorded step).
 
 pub mod csv;
+pub mod hex_out;
 pub mod interrupt;
 pub mod mcap;
 pub mod png;
@@ -111,6 +119,7 @@ pub mod rrd_layout;
 pub mod shape;
 pub mod sta;
 pub mod vtu;
+pub mod vtu3d;
 
 pub use interrupt::{install_interrupt_handler, interrupted, request_interrupt};
 
@@ -329,7 +338,7 @@ pub struct RunEnd<'a> {
 }
 
 /// A sink failed to write: which file, and why.
-#[derive(Debug, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 #[error("{sink}: cannot write {path}: {message}")]
 pub struct RecordError {
     pub sink: &'static str,

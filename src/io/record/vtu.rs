@@ -123,7 +123,7 @@ impl VtuSink {
 
 /// Write through a temporary file and a rename; a failed write (a full disk) removes the
 /// temporary, so that neither a partial file nor the temporary is left.
-fn write_atomic(path: &Path, text: &[u8]) -> Result<(), RecordError> {
+pub(super) fn write_atomic(path: &Path, text: &[u8]) -> Result<(), RecordError> {
     let tmp = path.with_extension("tmp");
     if let Err(e) = std::fs::write(&tmp, text) {
         let _ = std::fs::remove_file(&tmp);
@@ -166,7 +166,7 @@ fn num(v: f64) -> String {
 }
 
 /// The values of one data array.
-enum Values {
+pub(super) enum Values {
     F64(Vec<f64>),
     I64(Vec<i64>),
     I32(Vec<i32>),
@@ -233,16 +233,20 @@ impl Values {
 }
 
 /// A named data array with its number of components.
-struct Array {
-    name: &'static str,
+pub(super) struct Array {
+    name: std::borrow::Cow<'static, str>,
     components: usize,
     values: Values,
 }
 
 impl Array {
-    fn new(name: &'static str, components: usize, values: Values) -> Self {
+    pub(super) fn new(
+        name: impl Into<std::borrow::Cow<'static, str>>,
+        components: usize,
+        values: Values,
+    ) -> Self {
         Array {
-            name,
+            name: name.into(),
             components,
             values,
         }
@@ -250,15 +254,15 @@ impl Array {
 }
 
 /// The arrays of one `.vtu`: points, point data, cell data, cells.
-struct Grid {
+pub(super) struct Grid {
     /// Attributes of `<PointData>` naming the active arrays.
-    active: &'static str,
-    n_points: usize,
-    n_cells: usize,
-    points: Array,
-    point_data: Vec<Array>,
-    cell_data: Vec<Array>,
-    cells: Vec<Array>,
+    pub(super) active: String,
+    pub(super) n_points: usize,
+    pub(super) n_cells: usize,
+    pub(super) points: Array,
+    pub(super) point_data: Vec<Array>,
+    pub(super) cell_data: Vec<Array>,
+    pub(super) cells: Vec<Array>,
 }
 
 fn grid(mesh: &Mesh, view: &StepView) -> Grid {
@@ -341,7 +345,8 @@ fn grid(mesh: &Mesh, view: &StepView) -> Grid {
         types.push(t);
     }
     Grid {
-        active: " Scalars=\"max_shear_stress\" Vectors=\"displacement\" Tensors=\"cauchy_stress\"",
+        active: " Scalars=\"max_shear_stress\" Vectors=\"displacement\" Tensors=\"cauchy_stress\""
+            .to_string(),
         n_points: nn,
         n_cells: nc,
         points: Array::new("Points", 3, Values::F64(points)),
@@ -408,7 +413,7 @@ fn contact_grid(samples: &[crate::contact::ContactSample]) -> Option<Grid> {
     // Closed: segment k joins points k and k + 1, the last one back to point 0.
     let conn: Vec<i64> = (0..n).flat_map(|k| [k, (k + 1) % n]).collect();
     let g = Grid {
-        active: " Scalars=\"t_n\"",
+        active: " Scalars=\"t_n\"".to_string(),
         n_points: samples.len(),
         n_cells: samples.len(),
         points: Array::new("Points", 3, Values::F64(pts)),
@@ -461,7 +466,7 @@ fn zlib_blocks(raw: &[u8]) -> Vec<u8> {
     out
 }
 
-fn grid_bytes(g: &Grid, time: f64, enc: Encoding) -> Vec<u8> {
+pub(super) fn grid_bytes(g: &Grid, time: f64, enc: Encoding) -> Vec<u8> {
     let binary = enc.format == VtuFormat::Binary;
     let zlib = binary && enc.compression == VtuCompression::Zlib;
     let mut s = String::with_capacity(if binary { 4096 } else { 200 * g.n_points });
