@@ -263,7 +263,7 @@ fn driven_cavity_against_ghia_and_botella_peyret() {
     // Re = 1000 against Botella & Peyret.
     let s1000 = sol(2);
     let (space, psi) = stream_function(&s1000).unwrap();
-    let (at, pm) = psi_min(&th.tree, &space, &psi);
+    let (at, pm) = psi_min(th, &space, &psi);
     let rel = (pm - BP_PSI_MIN).abs() / BP_PSI_MIN.abs();
     let (eu, ev, _, _) = centreline_errors(&s1000, &BP_Y, &BP_U, &BP_X, &BP_V, &[]);
     println!(
@@ -288,7 +288,7 @@ fn driven_cavity_regularised_lid() {
         x: th.distribute(&run.states[0].1),
     };
     let (space, psi) = stream_function(&s).unwrap();
-    let (at, pm) = psi_min(&th.tree, &space, &psi);
+    let (at, pm) = psi_min(th, &space, &psi);
     println!(
         "regularised lid, Re 0.01: psi_min {pm:.7} at ({:.5}, {:.5})",
         at[0], at[1]
@@ -352,7 +352,7 @@ fn driven_cavity_graded_towards_lid_corners() {
         x: th.distribute(&run.states[2].1),
     };
     let (space, psi) = stream_function(&s).unwrap();
-    let (at, pm) = psi_min(&th.tree, &space, &psi);
+    let (at, pm) = psi_min(th, &space, &psi);
     let rel = (pm - BP_PSI_MIN).abs() / BP_PSI_MIN.abs();
     let (eu, ev, _, _) = centreline_errors(&s, &BP_Y, &BP_U, &BP_X, &BP_V, &[]);
     println!(
