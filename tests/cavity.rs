@@ -438,17 +438,20 @@ fn relocation_with_constant_monitor_is_a_no_op() {
     assert!(VertexGrid::new(&th).is_err());
 }
 
-/// Re = 100 on 16 × 16 cells: the fixed uniform mesh against the same cells moved 8 times
-/// (α = 4, β = 4, γ = 0), both against Ghia et al.'s centreline tables and ψ_min (Ghia:
-/// −0.103423). Same cells, same dofs.
+/// Re = 1000 (continuation 100 → 400 → 1000) on 16 × 16 cells: the fixed uniform mesh against
+/// the same cells moved 8 times (α = 4, β = 4, γ = 0), both against Botella & Peyret's
+/// centreline tables and ψ_min. Same cells, same dofs (2 210 equations). Measured: centreline
+/// error 7.7e-2 → 3.1e-2, ψ_min error 7.9e-3 → 4.3e-3. (At Re = 100 against Ghia et al. the
+/// uniform 16 × 16 mesh already agrees to 8.6e-3, the level of the table's own accuracy, and
+/// the moved mesh does not measurably differ, so that comparison is not asserted.)
 #[test]
-fn moving_mesh_cavity_re100_beats_the_uniform_mesh() {
+fn moving_mesh_cavity_re1000_beats_the_uniform_mesh() {
     let params = MonitorParams::default();
     let mut rows = Vec::new();
     moving_mesh_cavity(
         4,
         CavityLid::Discontinuous,
-        &[100.0],
+        &[100.0, 400.0, 1000.0],
         &params,
         8,
         1e-10,
@@ -456,14 +459,14 @@ fn moving_mesh_cavity_re100_beats_the_uniform_mesh() {
             assert!(r.min_det_j > 0.0, "recalculation {}: det J {}", r.index, r.min_det_j);
             let sol = NsSolution { th, x: x.to_vec() };
             let (eu, ev, _, _) =
-                centreline_errors(&sol, &GHIA_Y, &GHIA_U100, &GHIA_X, &GHIA_V100, &[]);
+                centreline_errors(&sol, &BP_Y, &BP_U, &BP_X, &BP_V, &[]);
             let (space, psi) = stream_function(&sol).unwrap();
             let (_, pm) = psi_min(th, &space, &psi);
             println!(
                 "recalc {} n_eq {} min det J {:.3e} step {} newton {} psi_min {pm:.6} u {eu:.3e} v {ev:.3e}",
                 r.index, th.n_eq(), r.min_det_j, r.step, r.newton_iterations
             );
-            rows.push((eu.max(ev), (pm + 0.103423).abs()));
+            rows.push((eu.max(ev), (pm - BP_PSI_MIN).abs()));
         },
     )
     .unwrap();
