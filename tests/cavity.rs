@@ -441,7 +441,7 @@ fn relocation_with_constant_monitor_is_a_no_op() {
 /// Re = 1000 (continuation 100 → 400 → 1000) on 16 × 16 cells: the fixed uniform mesh against
 /// the same cells moved 8 times (α = 4, β = 4, γ = 0), both against Botella & Peyret's
 /// centreline tables and ψ_min. Same cells, same dofs (2 210 equations). Measured: centreline
-/// error 7.7e-2 → 3.1e-2, ψ_min error 7.9e-3 → 4.3e-3. (At Re = 100 against Ghia et al. the
+/// error 7.7e-2 → 3.1e-2, absolute ψ_min error 7.9e-3 → 4.3e-3. (At Re = 100 against Ghia et al. the
 /// uniform 16 × 16 mesh already agrees to 8.6e-3, the level of the table's own accuracy, and
 /// the moved mesh does not measurably differ, so that comparison is not asserted.)
 #[test]
