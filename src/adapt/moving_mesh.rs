@@ -203,7 +203,7 @@ impl VertexGrid {
                         sx[0] += we * x[q][0];
                         sx[1] += we * x[q][1];
                     }
-                    if !(sw > 0.0) {
+                    if sw.is_nan() || sw <= 0.0 {
                         continue;
                     }
                     // Interior: both coordinates; left/right edges: y only; bottom/top: x only.

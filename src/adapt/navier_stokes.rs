@@ -280,7 +280,7 @@ impl TaylorHood {
         }
         for (k, c) in corners.iter().enumerate() {
             let det = min_det_corners(c);
-            if !(det > 0.0) {
+            if det.is_nan() || det <= 0.0 {
                 return Err(NsError::Inverted { cell: k, det });
             }
         }
