@@ -118,7 +118,7 @@ fn main() -> std::process::ExitCode {
                 continue;
             }
         };
-        let (at, pm) = psi_min(&th.tree, &space, &psi);
+        let (at, pm) = psi_min(th, &space, &psi);
         let dt = t0.elapsed().as_secs_f64();
         let its: usize = run.stats.iter().map(|s| s.iterations).sum();
         let (du, dv) = match (

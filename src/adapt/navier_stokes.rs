@@ -20,6 +20,17 @@
 //! (vertex values, then the H¹-seminorm projection of the rest) gives the linear ramp from 0 at
 //! the corner to 1. The regularised lid is U = 16 x² (1 − x)².
 //!
+//! Cell geometry. Every leaf is the bilinear image of the reference square of its four corner
+//! points ([`TaylorHood::corners`], tensor order: lower-left, lower-right, upper-left,
+//! upper-right): x(ξ, η) = Σ_a N_a(ξ, η) X_a with the Q1 functions N_a. The corners default to
+//! the quadtree's squares (then the map is the affine one of the tree); [`TaylorHood::set_corners`]
+//! moves them (same cells, same connectivity, same dofs), which turns the Q2/Q1 pair into a
+//! subparametric one: physical gradients are J⁻ᵀ ∇_ξ N and the quadrature weights carry det J.
+//! Boundary nodes may only slide along straight boundary edges, so the domain is unchanged; the
+//! Dirichlet values of the space stay those computed on the tree, which is exact for data that do
+//! not change along an edge away from its end points (the cavity lids' walls and the open
+//! discontinuous lid), not for general data (keep boundary nodes fixed then).
+//!
 //! Stream function: ψ with u = ∂ψ/∂y, v = −∂ψ/∂x, ψ = 0 on the walls, computed from
 //! −Δψ = ω = ∂v/∂x − ∂u/∂y in the scalar Q2 space with ψ = 0 on ∂Ω (Cholesky).
 
@@ -36,6 +47,70 @@ const NP: usize = 4;
 const NL: usize = 2 * NV + NP;
 /// Gauss points per direction (exact for the convection term on squares).
 const NQ: usize = 4;
+
+/// Corner points of a cell in tensor order: lower-left, lower-right, upper-left, upper-right.
+pub type CellCorners = [[f64; 2]; 4];
+
+/// The bilinear map of `c` at (ξ, η): the point, the inverse Jacobian `inv[r][d] = ∂ξ_r/∂x_d`
+/// and det J (the inverse is meaningless if det J is not positive).
+#[inline]
+pub fn bilinear(c: &CellCorners, xi: f64, eta: f64) -> ([f64; 2], [[f64; 2]; 2], f64) {
+    let nx = [0.5 * (1.0 - xi), 0.5 * (1.0 + xi)];
+    let ny = [0.5 * (1.0 - eta), 0.5 * (1.0 + eta)];
+    let d = [-0.5, 0.5];
+    let mut x = [0.0; 2];
+    let mut jm = [[0.0; 2]; 2]; // jm[d][r] = ∂x_d/∂ξ_r
+    for j in 0..2 {
+        for i in 0..2 {
+            let xa = c[i + 2 * j];
+            for dim in 0..2 {
+                x[dim] += nx[i] * ny[j] * xa[dim];
+                jm[dim][0] += d[i] * ny[j] * xa[dim];
+                jm[dim][1] += nx[i] * d[j] * xa[dim];
+            }
+        }
+    }
+    let det = jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0];
+    let inv = [
+        [jm[1][1] / det, -jm[0][1] / det],
+        [-jm[1][0] / det, jm[0][0] / det],
+    ];
+    (x, inv, det)
+}
+
+/// Values and physical gradients of the Lagrange basis of degree `p` on the bilinear cell `c`
+/// at (ξ, η); returns the physical point and det J.
+#[inline]
+pub fn mapped_shape(
+    p: usize,
+    c: &CellCorners,
+    xi: f64,
+    eta: f64,
+    n: &mut [f64],
+    dn: &mut [[f64; 2]],
+) -> ([f64; 2], f64) {
+    // h = 2: reference gradients.
+    let m = shape_values(Basis1d::Lagrange, p, 2.0, xi, eta, n, dn);
+    let (x, inv, det) = bilinear(c, xi, eta);
+    for g in dn.iter_mut().take(m) {
+        let r = *g;
+        *g = [
+            r[0] * inv[0][0] + r[1] * inv[1][0],
+            r[0] * inv[0][1] + r[1] * inv[1][1],
+        ];
+    }
+    (x, det)
+}
+
+/// Smallest det J of the bilinear cell `c` over its four corners. det J of a bilinear map is
+/// affine in ξ and in η separately, so this is its minimum over the whole cell.
+pub fn min_det_corners(c: &CellCorners) -> f64 {
+    let mut m = f64::INFINITY;
+    for (xi, eta) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+        m = m.min(bilinear(c, xi, eta).2);
+    }
+    m
+}
 
 /// Error of the Navier–Stokes solver.
 #[derive(Debug, thiserror::Error)]
@@ -58,6 +133,10 @@ pub enum NsError {
     Outside(f64, f64),
     #[error("the pressure space has no free dof to pin")]
     NoPressureDof,
+    #[error("expected {expected} cell geometries (one per leaf), got {got}")]
+    GeometryCount { expected: usize, got: usize },
+    #[error("cell {cell} is inverted or degenerate: min det J = {det:e}")]
+    Inverted { cell: usize, det: f64 },
 }
 
 /// The Taylor–Hood space: velocity (Q2, 2 components, Dirichlet data) and pressure (Q1).
@@ -74,6 +153,11 @@ pub struct TaylorHood {
     pub pinned: usize,
     pub constraints: ClosedConstraints,
     pub pattern: CondensedPattern,
+    /// Corner points of each leaf (leaf order of the spaces), see the module docs.
+    pub corners: Vec<CellCorners>,
+    /// Whether the corners were moved off the tree's squares (point location then searches
+    /// the bilinear cells instead of the tree).
+    pub mapped: bool,
 }
 
 impl TaylorHood {
@@ -139,7 +223,18 @@ impl TaylorHood {
             dof_off.push(cell_dofs.len());
         }
         let pattern = CondensedPattern::new(&constraints, &cell_dofs, &dof_off);
+        let corners = vel
+            .leaves
+            .iter()
+            .map(|&c| {
+                let [x0, y0] = tree.corner(c);
+                let h = tree.h(c);
+                [[x0, y0], [x0 + h, y0], [x0, y0 + h], [x0 + h, y0 + h]]
+            })
+            .collect();
         Ok(Self {
+            corners,
+            mapped: false,
             tree: tv,
             vel,
             pres,
@@ -171,6 +266,117 @@ impl TaylorHood {
         let mut y = vec![0.0; self.n_eq()];
         self.constraints.gather(x, &mut y);
         y
+    }
+
+    /// Move the cell corners (one entry per leaf, tensor order). Every cell must keep a
+    /// positive det J at its four corners (hence everywhere in it); otherwise nothing changes
+    /// and the first bad cell is reported.
+    pub fn set_corners(&mut self, corners: Vec<CellCorners>) -> Result<(), NsError> {
+        if corners.len() != self.corners.len() {
+            return Err(NsError::GeometryCount {
+                expected: self.corners.len(),
+                got: corners.len(),
+            });
+        }
+        for (k, c) in corners.iter().enumerate() {
+            let det = min_det_corners(c);
+            if det.is_nan() || det <= 0.0 {
+                return Err(NsError::Inverted { cell: k, det });
+            }
+        }
+        self.corners = corners;
+        self.mapped = true;
+        Ok(())
+    }
+
+    /// Smallest det J over every cell, at the corners and at the Gauss points of the assembly.
+    pub fn min_det_j(&self) -> f64 {
+        let (gx, _) = gauss_legendre(NQ);
+        let mut m = f64::INFINITY;
+        for c in &self.corners {
+            m = m.min(min_det_corners(c));
+            for &a in &gx {
+                for &b in &gx {
+                    m = m.min(bilinear(c, a, b).2);
+                }
+            }
+        }
+        m
+    }
+
+    /// The leaf (index in the spaces' leaf order) containing the physical point `p`, and its
+    /// reference coordinates there.
+    pub fn locate(&self, p: [f64; 2]) -> Option<(usize, f64, f64)> {
+        if !self.mapped {
+            let (c, xi, eta) = self.tree.locate(p)?;
+            return Some((self.vel.leaf_index[&c], xi, eta));
+        }
+        let tol = 1e-9;
+        for (k, c) in self.corners.iter().enumerate() {
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for x in c {
+                for d in 0..2 {
+                    lo[d] = lo[d].min(x[d]);
+                    hi[d] = hi[d].max(x[d]);
+                }
+            }
+            let pad = tol * (hi[0] - lo[0] + hi[1] - lo[1]);
+            if (0..2).any(|d| p[d] < lo[d] - pad || p[d] > hi[d] + pad) {
+                continue;
+            }
+            // Newton on x(ξ, η) = p from the centre.
+            let (mut xi, mut eta) = (0.0, 0.0);
+            for _ in 0..30 {
+                let (x, inv, _) = bilinear(c, xi, eta);
+                let r = [p[0] - x[0], p[1] - x[1]];
+                let dxi = inv[0][0] * r[0] + inv[0][1] * r[1];
+                let deta = inv[1][0] * r[0] + inv[1][1] * r[1];
+                xi += dxi;
+                eta += deta;
+                if dxi.abs() + deta.abs() < 1e-14 {
+                    break;
+                }
+            }
+            let inside = |s: f64| (-1.0 - 1e-9..=1.0 + 1e-9).contains(&s);
+            if inside(xi) && inside(eta) {
+                return Some((k, xi.clamp(-1.0, 1.0), eta.clamp(-1.0, 1.0)));
+            }
+        }
+        None
+    }
+
+    /// Velocity component `comp` of the dof vector `x` and its physical gradient in leaf `k`.
+    pub fn eval_velocity(
+        &self,
+        x: &[f64],
+        k: usize,
+        comp: usize,
+        xi: f64,
+        eta: f64,
+    ) -> (f64, [f64; 2]) {
+        let mut n = [0.0; MAX_LOCAL_SCALAR];
+        let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
+        mapped_shape(2, &self.corners[k], xi, eta, &mut n, &mut dn);
+        let dofs = self.vel.dofs(k);
+        let (mut v, mut g) = (0.0, [0.0; 2]);
+        for a in 0..NV {
+            let xa = x[dofs[2 * a + comp] as usize];
+            v += n[a] * xa;
+            g[0] += dn[a][0] * xa;
+            g[1] += dn[a][1] * xa;
+        }
+        (v, g)
+    }
+
+    /// Pressure of the dof vector `x` (full, velocity first) in leaf `k`.
+    pub fn eval_pressure(&self, x: &[f64], k: usize, xi: f64, eta: f64) -> f64 {
+        let mut n = [0.0; MAX_LOCAL_SCALAR];
+        let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
+        shape_values(Basis1d::Lagrange, 1, 2.0, xi, eta, &mut n, &mut dn);
+        let dofs = self.pres.dofs(k);
+        (0..NP)
+            .map(|b| n[b] * x[self.n_u + dofs[b] as usize])
+            .sum()
     }
 
     /// Local dofs of leaf `k`: 18 velocity (node-major), then 4 pressure.
@@ -207,8 +413,7 @@ impl TaylorHood {
         let mut dnp = [[0.0; 2]; MAX_LOCAL_SCALAR];
         let mut kc = Vec::new();
         for k in 0..self.vel.leaves.len() {
-            let c = self.vel.leaves[k];
-            let h = self.tree.h(c);
+            let geo = &self.corners[k];
             let dofs = self.local_dofs(k);
             let mut xl = [0.0; NL];
             for (a, &d) in dofs.iter().enumerate() {
@@ -218,9 +423,9 @@ impl TaylorHood {
             let mut kl = [[0.0; NL]; NL];
             for (i, &xi) in gx.iter().enumerate() {
                 for (jq, &eta) in gx.iter().enumerate() {
-                    let w = gw[i] * gw[jq] * 0.25 * h * h;
-                    shape_values(Basis1d::Lagrange, 2, h, xi, eta, &mut n, &mut dn);
-                    shape_values(Basis1d::Lagrange, 1, h, xi, eta, &mut np, &mut dnp);
+                    let (xq, det) = mapped_shape(2, geo, xi, eta, &mut n, &mut dn);
+                    shape_values(Basis1d::Lagrange, 1, 2.0, xi, eta, &mut np, &mut dnp);
+                    let w = gw[i] * gw[jq] * det;
                     let mut u = [0.0; 2];
                     let mut gu = [[0.0; 2]; 2]; // gu[c][d] = ∂u_c/∂x_d
                     for a in 0..NV {
@@ -236,7 +441,7 @@ impl TaylorHood {
                         p += np[b] * xl[2 * NV + b];
                     }
                     let div = gu[0][0] + gu[1][1];
-                    let fx = f(self.tree.map_point(c, xi, eta));
+                    let fx = f(xq);
                     for a in 0..NV {
                         for cc in 0..2 {
                             let conv = u[0] * gu[cc][0] + u[1] * gu[cc][1];
@@ -404,30 +609,25 @@ pub struct NsSolution<'a> {
 impl NsSolution<'_> {
     /// Velocity (u, v) and its gradient [[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]] at a point.
     pub fn velocity(&self, p: [f64; 2]) -> Result<([f64; 2], [[f64; 2]; 2]), NsError> {
-        let (c, xi, eta) = self.th.tree.locate(p).ok_or(NsError::Outside(p[0], p[1]))?;
-        let k = self.th.vel.leaf_index[&c];
-        let (u, gu) = self.th.vel.eval(&self.th.tree, &self.x, k, 0, xi, eta);
-        let (v, gv) = self.th.vel.eval(&self.th.tree, &self.x, k, 1, xi, eta);
+        let (k, xi, eta) = self.th.locate(p).ok_or(NsError::Outside(p[0], p[1]))?;
+        let (u, gu) = self.th.eval_velocity(&self.x, k, 0, xi, eta);
+        let (v, gv) = self.th.eval_velocity(&self.x, k, 1, xi, eta);
         Ok(([u, v], [gu, gv]))
     }
     /// Pressure at a point (with the pinned normalisation).
     pub fn pressure(&self, p: [f64; 2]) -> Result<f64, NsError> {
-        let (c, xi, eta) = self.th.tree.locate(p).ok_or(NsError::Outside(p[0], p[1]))?;
-        let k = self.th.pres.leaf_index[&c];
-        let xp = &self.x[self.th.n_u..];
-        Ok(self.th.pres.eval(&self.th.tree, xp, k, 0, xi, eta).0)
+        let (k, xi, eta) = self.th.locate(p).ok_or(NsError::Outside(p[0], p[1]))?;
+        Ok(self.th.eval_pressure(&self.x, k, xi, eta))
     }
     /// Mean of the pressure over Ω divided by |Ω|.
     pub fn pressure_mean(&self) -> f64 {
         let (gx, gw) = gauss_legendre(3);
-        let xp = &self.x[self.th.n_u..];
         let (mut s, mut area) = (0.0, 0.0);
         for k in 0..self.th.pres.leaves.len() {
-            let h = self.th.tree.h(self.th.pres.leaves[k]);
             for (i, &a) in gx.iter().enumerate() {
                 for (j, &b) in gx.iter().enumerate() {
-                    let w = gw[i] * gw[j] * 0.25 * h * h;
-                    s += w * self.th.pres.eval(&self.th.tree, xp, k, 0, a, b).0;
+                    let w = gw[i] * gw[j] * bilinear(&self.th.corners[k], a, b).2;
+                    s += w * self.th.eval_pressure(&self.x, k, a, b);
                     area += w;
                 }
             }
@@ -453,17 +653,15 @@ pub fn errors(
 ) -> NsErrors {
     let th = sol.th;
     let (gx, gw) = gauss_legendre(6);
-    let xp = &sol.x[th.n_u..];
     // Means of p and p_h.
     let (mut pm, mut phm, mut area) = (0.0, 0.0, 0.0);
     for k in 0..th.vel.leaves.len() {
-        let c = th.vel.leaves[k];
-        let h = th.tree.h(c);
         for (i, &a) in gx.iter().enumerate() {
             for (j, &b) in gx.iter().enumerate() {
-                let w = gw[i] * gw[j] * 0.25 * h * h;
-                pm += w * p(th.tree.map_point(c, a, b));
-                phm += w * th.pres.eval(&th.tree, xp, k, 0, a, b).0;
+                let (xq, _, det) = bilinear(&th.corners[k], a, b);
+                let w = gw[i] * gw[j] * det;
+                pm += w * p(xq);
+                phm += w * th.eval_pressure(&sol.x, k, a, b);
                 area += w;
             }
         }
@@ -472,20 +670,18 @@ pub fn errors(
     phm /= area;
     let (mut eu, mut eg, mut ep) = (0.0, 0.0, 0.0);
     for k in 0..th.vel.leaves.len() {
-        let c = th.vel.leaves[k];
-        let h = th.tree.h(c);
         for (i, &a) in gx.iter().enumerate() {
             for (j, &b) in gx.iter().enumerate() {
-                let w = gw[i] * gw[j] * 0.25 * h * h;
-                let xq = th.tree.map_point(c, a, b);
+                let (xq, _, det) = bilinear(&th.corners[k], a, b);
+                let w = gw[i] * gw[j] * det;
                 let ue = u(xq);
                 let ge = grad_u(xq);
                 for comp in 0..2 {
-                    let (v, g) = th.vel.eval(&th.tree, &sol.x, k, comp, a, b);
+                    let (v, g) = th.eval_velocity(&sol.x, k, comp, a, b);
                     eu += w * (ue[comp] - v).powi(2);
                     eg += w * ((ge[comp][0] - g[0]).powi(2) + (ge[comp][1] - g[1]).powi(2));
                 }
-                let ph = th.pres.eval(&th.tree, xp, k, 0, a, b).0 - phm;
+                let ph = th.eval_pressure(&sol.x, k, a, b) - phm;
                 ep += w * (p(xq) - pm - ph).powi(2);
             }
         }
@@ -560,8 +756,8 @@ pub fn cavity(
 pub fn stream_function(sol: &NsSolution) -> Result<(Space, Vec<f64>), NsError> {
     let th = sol.th;
     let space = Space::new(&th.tree, Basis1d::Lagrange, 1, Some(&|_, _| 0.0))?;
-    let kref = super::poisson::reference_stiffness(Basis1d::Lagrange, 2);
     let pat = &space.pattern;
+    let mut kl = [0.0; NV * NV];
     let mut values = vec![0.0; pat.nnz()];
     let mut rhs = vec![0.0; pat.n];
     let mut scratch = CondenseScratch::default();
@@ -570,21 +766,24 @@ pub fn stream_function(sol: &NsSolution) -> Result<(Space, Vec<f64>), NsError> {
     let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
     let mut fl = [0.0; NV];
     for k in 0..space.leaves.len() {
-        let h = th.tree.h(space.leaves[k]);
         fl.fill(0.0);
+        kl.fill(0.0);
         for (i, &a) in gx.iter().enumerate() {
             for (j, &b) in gx.iter().enumerate() {
-                let w = gw[i] * gw[j] * 0.25 * h * h;
-                let (_, gu) = th.vel.eval(&th.tree, &sol.x, k, 0, a, b);
-                let (_, gv) = th.vel.eval(&th.tree, &sol.x, k, 1, a, b);
+                let (_, gu) = th.eval_velocity(&sol.x, k, 0, a, b);
+                let (_, gv) = th.eval_velocity(&sol.x, k, 1, a, b);
                 let om = gv[0] - gu[1];
-                space.shape(k, h, a, b, &mut n, &mut dn);
+                let (_, det) = mapped_shape(2, &th.corners[k], a, b, &mut n, &mut dn);
+                let w = gw[i] * gw[j] * det;
                 for (q, fq) in fl.iter_mut().enumerate() {
                     *fq += w * om * n[q];
+                    for r in 0..NV {
+                        kl[q * NV + r] += w * (dn[q][0] * dn[r][0] + dn[q][1] * dn[r][1]);
+                    }
                 }
             }
         }
-        pat.add_cell(k, &kref, &fl, &mut values, &mut rhs, &mut scratch);
+        pat.add_cell(k, &kl, &fl, &mut values, &mut rhs, &mut scratch);
     }
     let mut solver = SparseSolver::new(pat.n, &pat.col_ptr, &pat.row_idx, LinearKind::Cholesky)?;
     solver.set_track_determinant(false);
@@ -596,23 +795,25 @@ pub fn stream_function(sol: &NsSolution) -> Result<(Space, Vec<f64>), NsError> {
 }
 
 /// Minimum of ψ over Ω and its location: sampled on a 9 × 9 grid in every cell, then
-/// polished by a compass search (step down to 1e-10).
-pub fn psi_min(tree: &Quadtree, space: &Space, psi: &[f64]) -> ([f64; 2], f64) {
+/// polished by a compass search (step down to 1e-10). `space` and `psi` are those of
+/// [`stream_function`] on `th` (the values of the Q2 basis do not depend on the cell
+/// geometry, only the location does).
+pub fn psi_min(th: &TaylorHood, space: &Space, psi: &[f64]) -> ([f64; 2], f64) {
+    let tree = &th.tree;
     let eval = |p: [f64; 2]| -> f64 {
-        match tree.locate(p) {
-            Some((c, xi, eta)) => space.eval(tree, psi, space.leaf_index[&c], 0, xi, eta).0,
+        match th.locate(p) {
+            Some((k, xi, eta)) => space.eval(tree, psi, k, 0, xi, eta).0,
             None => f64::INFINITY,
         }
     };
     let mut best = ([0.5, 0.5], f64::INFINITY);
     for k in 0..space.leaves.len() {
-        let c = space.leaves[k];
         for i in 0..9 {
             for j in 0..9 {
                 let (xi, eta) = (-1.0 + 0.25 * i as f64, -1.0 + 0.25 * j as f64);
                 let v = space.eval(tree, psi, k, 0, xi, eta).0;
                 if v < best.1 {
-                    best = (tree.map_point(c, xi, eta), v);
+                    best = (bilinear(&th.corners[k], xi, eta).0, v);
                 }
             }
         }
