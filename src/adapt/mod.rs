@@ -4,10 +4,19 @@
 //!
 //! The adapt loop is five named steps (see [`driver`]): **solve → estimate → mark → refine →
 //! transfer**.
+//!
+//! Transient problems ([`two_grid`]): Crank–Nicolson steps solved by Newton, with an adaptive
+//! h-method that estimates the error as the difference between the solutions on the current
+//! mesh and on its uniform refinement, refining and coarsening between steps; applied to
+//! convection-dominated heat conduction with SUPG ([`convection`]) and to the vector Burgers
+//! equations ([`burgers`]).
 
+pub mod burgers;
+pub mod convection;
 pub mod driver;
 pub mod estimate;
 pub mod navier_stokes;
 pub mod poisson;
 pub mod quadtree;
 pub mod space;
+pub mod two_grid;
