@@ -29,14 +29,14 @@ fn uniform_rates_q1_q2() {
             let r = run(&k, &tree, 0.0, &TransientOptions::new(p, 0.0025, 8)).unwrap();
             let s = r.last().unwrap();
             let h = 2.0 / (1u32 << l) as f64;
-            println!("Q{p} level {l}: n_eq {} L2 {:.3e} H1 {:.3e}", s.n_eq, s.l2_error, s.h1_error);
+            println!(
+                "Q{p} level {l}: n_eq {} L2 {:.3e} H1 {:.3e}",
+                s.n_eq, s.l2_error, s.h1_error
+            );
             pts_l2.push((h, s.l2_error));
             pts_h1.push((h, s.h1_error));
         }
-        let (r2, r1) = (
-            loglog_slope(&pts_l2[1..]),
-            loglog_slope(&pts_h1[1..]),
-        );
+        let (r2, r1) = (loglog_slope(&pts_l2[1..]), loglog_slope(&pts_h1[1..]));
         println!("Q{p}: L2 rate {r2:.2}, H1 rate {r1:.2}");
         assert!(r2 > l2_min, "Q{p} L2 rate {r2}");
         assert!(r1 > h1_min, "Q{p} H1 rate {r1}");
@@ -49,8 +49,13 @@ fn uniform_rates_q1_q2() {
 fn adaptive_beats_uniform_hill() {
     let k = hill_kernel(0.01);
     let (dt, n) = (0.02, 10);
-    let uni = run(&k, &square([-1.0, -1.0], 2.0, 5, 1), 0.0, &TransientOptions::new(1, dt, n))
-        .unwrap();
+    let uni = run(
+        &k,
+        &square([-1.0, -1.0], 2.0, 5, 1),
+        0.0,
+        &TransientOptions::new(1, dt, n),
+    )
+    .unwrap();
     let mut o = TransientOptions::new(1, dt, n);
     o.adaptive = true;
     o.min_level = 3;
@@ -131,10 +136,18 @@ fn burgers_uniform_and_adaptive() {
     let mut pts = Vec::new();
     let mut last_uni = None;
     for l in [3u32, 4, 5] {
-        let r = run(&k, &square([0.0, 0.0], 1.0, l, 2), 0.0, &TransientOptions::new(2, dt, n))
-            .unwrap();
+        let r = run(
+            &k,
+            &square([0.0, 0.0], 1.0, l, 2),
+            0.0,
+            &TransientOptions::new(2, dt, n),
+        )
+        .unwrap();
         let s = r.last().unwrap().clone();
-        println!("Burgers Q2 level {l}: n_eq {} L2 {:.3e} H1 {:.3e} newton {}", s.n_eq, s.l2_error, s.h1_error, s.newton_iterations);
+        println!(
+            "Burgers Q2 level {l}: n_eq {} L2 {:.3e} H1 {:.3e} newton {}",
+            s.n_eq, s.l2_error, s.h1_error, s.newton_iterations
+        );
         assert!(s.newton_iterations >= 1 && s.newton_iterations <= 6);
         pts.push((1.0 / (1u32 << l) as f64, s.l2_error));
         last_uni = Some(s);

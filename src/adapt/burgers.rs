@@ -48,7 +48,9 @@ impl ColeHopf {
         let ex: Vec<f64> = self
             .terms
             .iter()
-            .map(|(a, k)| a.ln() + k[0] * x[0] + k[1] * x[1] + self.nu * (k[0] * k[0] + k[1] * k[1]) * t)
+            .map(|(a, k)| {
+                a.ln() + k[0] * x[0] + k[1] * x[1] + self.nu * (k[0] * k[0] + k[1] * k[1]) * t
+            })
             .collect();
         let m = ex.iter().copied().fold(0.0f64, f64::max);
         let mut phi = (-m).exp();
@@ -120,8 +122,8 @@ impl Kernel for Burgers {
                     for c in 0..2 {
                         let conv = u[0] * gu[c][0] + u[1] * gu[c][1];
                         let convn = un[0] * gun[c][0] + un[1] * gun[c][1];
-                        let diff = (gu[c][0] + gun[c][0]) * dn[a][0]
-                            + (gu[c][1] + gun[c][1]) * dn[a][1];
+                        let diff =
+                            (gu[c][0] + gun[c][0]) * dn[a][0] + (gu[c][1] + gun[c][1]) * dn[a][1];
                         r[2 * a + c] += w
                             * (((u[c] - un[c]) * idt + 0.5 * (conv + convn)) * n[a]
                                 + 0.5 * nu * diff);

@@ -122,7 +122,10 @@ impl Kernel for ConvectionDiffusion {
             for (j, &eta) in gx.iter().enumerate() {
                 let nl = basis_at(d.p, h, xi, eta, &mut n, &mut dn, &mut d2);
                 let w = gw[i] * gw[j] * 0.25 * h * h;
-                let x = [d.x0[0] + 0.5 * h * (xi + 1.0), d.x0[1] + 0.5 * h * (eta + 1.0)];
+                let x = [
+                    d.x0[0] + 0.5 * h * (xi + 1.0),
+                    d.x0[1] + 0.5 * h * (eta + 1.0),
+                ];
                 let b = Self::velocity(x);
                 let (mut u, mut un, mut gu, mut gun, mut lu, mut lun) =
                     (0.0, 0.0, [0.0; 2], [0.0; 2], 0.0, 0.0);
@@ -142,16 +145,14 @@ impl Kernel for ConvectionDiffusion {
                 let strong = galerkin - 0.5 * kappa * (lu + lun);
                 for a in 0..nl {
                     let bga = b[0] * dn[a][0] + b[1] * dn[a][1];
-                    let diff = 0.5
-                        * kappa
-                        * ((gu[0] + gun[0]) * dn[a][0] + (gu[1] + gun[1]) * dn[a][1]);
+                    let diff =
+                        0.5 * kappa * ((gu[0] + gun[0]) * dn[a][0] + (gu[1] + gun[1]) * dn[a][1]);
                     r[a] += w * (galerkin * n[a] + diff + tau * strong * bga);
                     for bb in 0..nl {
                         let bgb = b[0] * dn[bb][0] + b[1] * dn[bb][1];
                         let gal_b = n[bb] * idt + 0.5 * bgb;
                         let str_b = gal_b - 0.5 * kappa * (d2[bb][0] + d2[bb][2]);
-                        let diff_b =
-                            0.5 * kappa * (dn[bb][0] * dn[a][0] + dn[bb][1] * dn[a][1]);
+                        let diff_b = 0.5 * kappa * (dn[bb][0] * dn[a][0] + dn[bb][1] * dn[a][1]);
                         k[a * nl + bb] += w * (gal_b * n[a] + diff_b + tau * str_b * bga);
                     }
                 }

@@ -43,7 +43,9 @@ pub enum TransientError {
     Linear(#[from] LinearError),
     #[error("invalid parameter: {0}")]
     Parameter(String),
-    #[error("Newton did not converge at t = {t}: residual {residual:.3e} after {iterations} iterations")]
+    #[error(
+        "Newton did not converge at t = {t}: residual {residual:.3e} after {iterations} iterations"
+    )]
     NoConvergence {
         t: f64,
         residual: f64,
@@ -275,7 +277,14 @@ fn assemble(
             let kb: f64 = (0..nl).map(|bb| kl[a * nl + bb] * b[bb]).sum();
             f[a] = -r[a] + kb;
         }
-        pat.add_cell(k, &kl[..nl * nl], &f[..nl], &mut values, &mut rhs, &mut scratch);
+        pat.add_cell(
+            k,
+            &kl[..nl * nl],
+            &f[..nl],
+            &mut values,
+            &mut rhs,
+            &mut scratch,
+        );
     }
     (values, rhs)
 }
@@ -496,9 +505,8 @@ pub fn run(
             if two_grid {
                 let fs = space_at(&ftree, kernel, t + opts.dt)?;
                 let (xff, _) = step(&ftree, kernel, &fs, &xfn, t, opts.dt, opts.newton)?;
-                let e = Estimate::from_squares(difference_sq(
-                    &tree, &space_new, &x, &ftree, &fs, &xff,
-                ));
+                let e =
+                    Estimate::from_squares(difference_sq(&tree, &space_new, &x, &ftree, &fs, &xff));
                 rec.estimate = e.global;
                 xf = xff;
                 fspace_new = Some(fs);
@@ -530,9 +538,7 @@ pub fn run(
                 xn = interpolate(&tree, &s_new, &|p, c| {
                     value_at(&old_tree, &space_new, &x, p, c)
                 })?;
-                xfn = interpolate(&ftree, &fs_new, &|p, c| {
-                    value_at(&old_ftree, fs, &xf, p, c)
-                })?;
+                xfn = interpolate(&ftree, &fs_new, &|p, c| value_at(&old_ftree, fs, &xf, p, c))?;
                 space_old = s_new;
                 fspace_old = fs_new;
             } else {
