@@ -7,7 +7,14 @@
 //!
 //! [`moving_mesh`] adapts by relocating the nodes of a fixed topology instead (r-adaptivity:
 //! solve → indicator → relocate → transfer), on the Navier–Stokes cavity with bilinear cells.
+//! Transient problems ([`two_grid`]): Crank–Nicolson steps solved by Newton, with an adaptive
+//! h-method that estimates the error as the difference between the solutions on the current
+//! mesh and on its uniform refinement, refining and coarsening between steps; applied to
+//! convection-dominated heat conduction with SUPG ([`convection`]) and to the vector Burgers
+//! equations ([`burgers`]).
 
+pub mod burgers;
+pub mod convection;
 pub mod driver;
 pub mod estimate;
 pub mod moving_mesh;
@@ -15,3 +22,4 @@ pub mod navier_stokes;
 pub mod poisson;
 pub mod quadtree;
 pub mod space;
+pub mod two_grid;
