@@ -346,7 +346,6 @@ pub struct SurfaceTriangulation {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::mesh::revolved::{revolved, RevolvedSpec};
     use std::collections::HashMap;
 
