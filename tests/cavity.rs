@@ -3,11 +3,11 @@
 //! uniform and locally refined meshes, and the lid-driven cavity against published tables.
 
 use std::f64::consts::PI;
+use tread::adapt::moving_mesh::{moving_mesh_cavity, MonitorParams, VertexGrid};
 use tread::adapt::navier_stokes::{
     cavity, errors, psi_min, solve_newton, stream_function, unit_square, CavityLid, NsSolution,
     TaylorHood,
 };
-use tread::adapt::moving_mesh::{moving_mesh_cavity, MonitorParams, VertexGrid};
 use tread::adapt::quadtree::Quadtree;
 
 /// A mesh with hanging nodes: uniform `levels`, then the leaves in the lower-left quadrant
@@ -408,7 +408,10 @@ fn manufactured_solution_rates_distorted_cells() {
         let e = [e.u_l2, e.u_h1, e.p_l2];
         if let Some(e0) = prev {
             let r: Vec<f64> = (0..3).map(|k| (e0[k] / e[k]).log2()).collect();
-            println!("distorted level {levels}: errors {:.3e} {:.3e} {:.3e} rates {r:.2?}", e[0], e[1], e[2]);
+            println!(
+                "distorted level {levels}: errors {:.3e} {:.3e} {:.3e} rates {r:.2?}",
+                e[0], e[1], e[2]
+            );
             assert!(r[0] > 2.8 && r[1] > 1.9 && r[2] > 1.9, "rates {r:?}");
         }
         prev = Some(e);
@@ -425,16 +428,17 @@ fn relocation_with_constant_monitor_is_a_no_op() {
         .relocate(&|_| 3.0, 3.0, &MonitorParams::default())
         .unwrap();
     assert_eq!(step, 1.0);
-    let d = g
-        .x
-        .iter()
-        .zip(&x0)
-        .map(|(a, b)| (a[0] - b[0]).abs().max((a[1] - b[1]).abs()))
-        .fold(0.0, f64::max);
+    let d =
+        g.x.iter()
+            .zip(&x0)
+            .map(|(a, b)| (a[0] - b[0]).abs().max((a[1] - b[1]).abs()))
+            .fold(0.0, f64::max);
     assert!(d < 1e-14, "uniform mesh moved by {d:e}");
     // A mesh with hanging nodes is refused.
-    let th = TaylorHood::new(&locally_refined(1), &|x, c| CavityLid::Discontinuous.g(x, c))
-        .unwrap();
+    let th = TaylorHood::new(&locally_refined(1), &|x, c| {
+        CavityLid::Discontinuous.g(x, c)
+    })
+    .unwrap();
     assert!(VertexGrid::new(&th).is_err());
 }
 

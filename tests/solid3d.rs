@@ -383,3 +383,117 @@ fn errors(sys: &Solid3DSystem) -> (f64, f64) {
     }
     (l2.sqrt(), h1.sqrt())
 }
+
+#[test]
+fn plane_strain_slab_reproduces_the_2d_indentation() {
+    use tread::contact::facet3d::ContactSurface3D;
+    use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+    use tread::driver::indentation::{results, solve_indentation};
+    use tread::driver::system::Loading;
+    use tread::driver::SolidSystem;
+    use tread::mesh::{annulus, AnnulusSpec};
+    use tread::physics::SolidModel;
+    let (n_r, n_theta, grading_theta, disp, c_n, width) = (3, 32, 0.6, 0.05, 2.0e4, 0.25);
+    let normal = NormalCompliance::new(c_n, 1.0, 0.0, 0.0);
+    // 2D: the exact polar cells of the annulus, frictionless, displacement control.
+    let mesh2 = annulus(&AnnulusSpec {
+        ri: RI,
+        ro: RO,
+        n_r,
+        n_theta,
+        degree: 2,
+        grading_r: 1.0,
+        grading_theta,
+    });
+    let model = SolidModel::new(mesh2, neo_hookean(), 1.0, PressureMode::None);
+    let cm = ContactModel::new(
+        &model.mesh,
+        RO,
+        0.0,
+        normal,
+        Friction::None,
+        FacetRule::Gauss(4),
+        None,
+    );
+    let mut s2 = SolidSystem::with_contact(model, cm);
+    s2.loading = Loading::Indent { h_touch: RO, disp };
+    let mut rep = StepReport::default();
+    solve_indentation(
+        &mut s2,
+        LinearKind::Cholesky,
+        newton_opts(),
+        &steps(4),
+        &mut rep,
+        &mut (),
+    )
+    .expect("2D indentation converges");
+    let r2 = results(&s2, RO);
+    // 3D: the slab with u3 = 0 on its faces, on the same (r, θ) mesh with the exact cylindrical
+    // cells.
+    let mut s = spec(n_r, 2, n_theta, 2, width);
+    s.grading_theta = grading_theta;
+    let mesh = revolved(&s).expect("mesh");
+    let fx = fixed(&mesh, true);
+    let surface = ContactSurface3D::new(
+        mesh.facet_set("outer").to_vec(),
+        RO,
+        nalgebra::Vector2::zeros(),
+        normal,
+        Friction::None,
+        FacetRule::Gauss(4),
+    )
+    .expect("contact surface");
+    let mut s3 = Solid3DSystem::new(
+        Solid3D::new(mesh, neo_hookean(), 1.0, PressureMode::None),
+        &fx,
+    )
+    .with_contact(surface, RO, disp)
+    .expect("contact on the mesh");
+    s3.set_reference_force(200.0 * disp * width);
+    let mut newton = Newton::new(&s3, LinearKind::Cholesky, newton_opts()).expect("analysis");
+    let mut rep3 = StepReport::default();
+    solve_load_steps(&mut s3, &mut newton, &steps(4), &mut rep3, &mut NoObserver)
+        .expect("3D indentation converges");
+    s3.evaluate(false);
+    let f3 = s3.contact.as_ref().expect("contact").totals.force;
+    let (fy2, fy3) = (r2.contact_force_y, f3[1] / width);
+    eprintln!(
+        "contact force per width: 2D {fy2:.12e}, 3D {fy3:.12e}; 3D lateral {:.2e}",
+        f3[2]
+    );
+    assert!(
+        (fy3 - fy2).abs() <= 1e-8 * fy2.abs(),
+        "contact force per width {fy3} vs 2D {fy2}"
+    );
+    assert!(f3[2].abs() <= 1e-10 * fy2.abs() * width);
+    let key = |x: f64, y: f64| ((x * 1e9).round() as i64, (y * 1e9).round() as i64);
+    let index: std::collections::HashMap<_, _> = s2
+        .model
+        .mesh
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (key(x[0], x[1]), i))
+        .collect();
+    let umax = (0..s2.model.mesh.n_nodes())
+        .map(|n| s2.x[2 * n].hypot(s2.x[2 * n + 1]))
+        .fold(0.0f64, f64::max);
+    let mut worst: f64 = 0.0;
+    for (n, x) in s3.solid.mesh.nodes.iter().enumerate() {
+        let i = index[&key(x[0], x[1])];
+        let u = s3.node_displacement(n);
+        worst = worst
+            .max((u[0] - s2.x[2 * i]).abs())
+            .max((u[1] - s2.x[2 * i + 1]).abs())
+            .max(u[2].abs());
+    }
+    eprintln!(
+        "indentation slab: max |u_3D − u_2D| / max|u| = {:.2e}",
+        worst / umax
+    );
+    assert!(
+        worst / umax < 1e-8,
+        "slab field differs from 2D: {:.3e}",
+        worst / umax
+    );
+}

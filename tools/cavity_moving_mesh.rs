@@ -16,7 +16,9 @@ include!("../tests/common/botella_peyret.rs");
 fn arg<T: std::str::FromStr>(args: &[String], i: usize, default: T) -> Result<T, String> {
     match args.get(i) {
         None => Ok(default),
-        Some(s) => s.parse().map_err(|_| format!("argument {}: cannot parse `{s}`", i + 1)),
+        Some(s) => s
+            .parse()
+            .map_err(|_| format!("argument {}: cannot parse `{s}`", i + 1)),
     }
 }
 

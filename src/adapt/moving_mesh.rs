@@ -109,7 +109,10 @@ impl VertexGrid {
         let leaves = &th.vel.leaves;
         let level = tree.cells[leaves[0] as usize].level;
         let n = 1usize << level;
-        if leaves.len() != n * n || leaves.iter().any(|&c| tree.cells[c as usize].level != level)
+        if leaves.len() != n * n
+            || leaves
+                .iter()
+                .any(|&c| tree.cells[c as usize].level != level)
         {
             return Err(MovingMeshError::NotUniform);
         }
@@ -321,7 +324,11 @@ pub fn moving_mesh_cavity(
     let mut grid = VertexGrid::new(&th)?;
     for index in 1..=recalculations {
         let mk = cell_monitor(&th, &x, params);
-        let area: f64 = th.corners.iter().map(|c| bilinear(c, 0.0, 0.0).2 * 4.0).sum();
+        let area: f64 = th
+            .corners
+            .iter()
+            .map(|c| bilinear(c, 0.0, 0.0).2 * 4.0)
+            .sum();
         let mean = th
             .corners
             .iter()

@@ -374,9 +374,7 @@ impl TaylorHood {
         let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
         shape_values(Basis1d::Lagrange, 1, 2.0, xi, eta, &mut n, &mut dn);
         let dofs = self.pres.dofs(k);
-        (0..NP)
-            .map(|b| n[b] * x[self.n_u + dofs[b] as usize])
-            .sum()
+        (0..NP).map(|b| n[b] * x[self.n_u + dofs[b] as usize]).sum()
     }
 
     /// Local dofs of leaf `k`: 18 velocity (node-major), then 4 pressure.

@@ -405,7 +405,10 @@ mod tests {
             let n = (12 * p) as f64;
             let tau = std::f64::consts::TAU;
             let exact = std::f64::consts::PI * (4.0 - 1.0) * 0.6 * (tau / n).sin() * n / tau;
-            assert!((vol - exact).abs() < 1e-12 * exact, "p = {p}: {vol} vs {exact}");
+            assert!(
+                (vol - exact).abs() < 1e-12 * exact,
+                "p = {p}: {vol} vs {exact}"
+            );
             // Only boundary nodes are vertices: all nodes minus the interior ones.
             let (nr, nz, nt) = (2 * p + 1, 3 * p + 1, 12 * p);
             assert_eq!(s.vertices.len(), nr * nz * nt - (nr - 2) * (nz - 2) * nt);

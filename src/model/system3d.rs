@@ -10,6 +10,7 @@
 use super::kernel::{Coefficients, Inadmissible};
 use super::solid3d::Solid3D;
 use crate::assembly::{Assembler, DofMap, CONSTRAINED};
+use crate::contact::facet3d::{CellMotion, Contact3DError, ContactSurface3D, ContactTotals3D};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -28,6 +29,22 @@ pub struct Solid3DSystem {
     ref_norms: Vec<f64>,
     /// Why the last evaluation failed, if it did.
     inadmissible: Option<Inadmissible>,
+    /// Contact with the road (block 1 of the assembler: the cells of the contact facets).
+    pub contact: Option<RoadContact3D>,
+}
+
+/// The road under displacement control: H = `h_touch` − λ · `disp`, and the state of the
+/// load-stepping pseudo-time the friction slip is measured in.
+pub struct RoadContact3D {
+    pub surface: ContactSurface3D,
+    pub h_touch: f64,
+    pub disp: f64,
+    /// Full state at the start of the step and the step's pseudo-time length.
+    x_prev: Vec<f64>,
+    lambda_prev: f64,
+    dtau: f64,
+    /// Resultants of the last evaluation.
+    pub totals: ContactTotals3D,
 }
 
 impl Solid3DSystem {
@@ -56,7 +73,46 @@ impl Solid3DSystem {
             target: Coefficients::default(),
             ref_norms: vec![0.0, 1e-3 * volume],
             inadmissible: None,
+            contact: None,
         }
+    }
+
+    /// Add contact with the road on `surface` under displacement control (road height
+    /// H = h_touch − λ · disp), after checking the surface against the mesh.
+    pub fn with_contact(
+        mut self,
+        mut surface: ContactSurface3D,
+        h_touch: f64,
+        disp: f64,
+    ) -> Result<Self, Contact3DError> {
+        let n_u = self.dofs.n_u;
+        surface.check(&self.solid.mesh, &[("u", &self.x[..n_u])])?;
+        surface.h = h_touch;
+        let mesh = &self.solid.mesh;
+        let (mut d, mut o) = (Vec::new(), vec![0]);
+        for f in &surface.facets {
+            let c = f.cell as usize;
+            let nd = 3 * mesh.cell_nodes(c).len();
+            d.extend_from_slice(&self.dofs.cell(c)[..nd]);
+            o.push(d.len());
+        }
+        self.asm = Assembler::with_blocks(
+            &self.dofs,
+            vec![
+                (self.dofs.cell_dofs.clone(), self.dofs.cell_offsets.clone()),
+                (d, o),
+            ],
+        );
+        self.contact = Some(RoadContact3D {
+            surface,
+            h_touch,
+            disp,
+            x_prev: self.x.clone(),
+            lambda_prev: 0.0,
+            dtau: 1.0,
+            totals: ContactTotals3D::default(),
+        });
+        Ok(self)
     }
 
     fn volume(solid: &Solid3D) -> f64 {
@@ -109,6 +165,36 @@ impl Solid3DSystem {
             }
         });
         self.inadmissible = why.into_inner().ok().flatten();
+        if let Some(rc) = self.contact.as_mut() {
+            let mesh = &solid.mesh;
+            let totals = std::sync::Mutex::new(ContactTotals3D::default());
+            let (surface, x_prev, dtau) = (&rc.surface, &rc.x_prev, rc.dtau);
+            self.asm.add_block_large(1, dofs, with_matrix, |e, r, k| {
+                let f = surface.facets[e];
+                let cd = dofs.cell(f.cell as usize);
+                let nd = r.len();
+                let (mut ul, mut vl) = ([0.0; 81], [0.0; 81]);
+                for i in 0..nd {
+                    let g = cd[i] as usize;
+                    ul[i] = x[g];
+                    vl[i] = (x[g] - x_prev[g]) / dtau;
+                }
+                let m = CellMotion {
+                    u: &ul[..nd],
+                    v: &vl[..nd],
+                    kx: 1.0,
+                    kv: 1.0 / dtau,
+                    damping: false,
+                };
+                let mut t = ContactTotals3D::default();
+                let kb = if k.is_empty() { None } else { Some(k) };
+                surface.facet_kernel(mesh, f, &m, r, kb, &mut t);
+                if let Ok(mut all) = totals.lock() {
+                    all.add(&t);
+                }
+            });
+            rc.totals = totals.into_inner().unwrap_or_default();
+        }
         !bad.load(Ordering::Relaxed)
     }
 
@@ -181,5 +267,15 @@ impl LoadedSystem for Solid3DSystem {
             omega2: lambda * self.target.omega2,
             body_load: lambda * self.target.body_load,
         };
+        if let Some(rc) = self.contact.as_mut() {
+            rc.surface.h = rc.h_touch - lambda * rc.disp;
+            rc.dtau = (lambda - rc.lambda_prev).max(f64::MIN_POSITIVE);
+        }
+    }
+    fn commit(&mut self) {
+        if let Some(rc) = self.contact.as_mut() {
+            rc.x_prev.copy_from_slice(&self.x);
+            rc.lambda_prev += rc.dtau;
+        }
     }
 }

@@ -481,7 +481,11 @@ mod tests {
         .unwrap();
         let dir = std::env::temp_dir().join(format!("tread-hex-out-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        let u: Vec<f64> = m.nodes.iter().flat_map(|x| [0.0, -0.01 * x.x, 0.0]).collect();
+        let u: Vec<f64> = m
+            .nodes
+            .iter()
+            .flat_map(|x| [0.0, -0.01 * x.x, 0.0])
+            .collect();
         let vm: Vec<f64> = m.nodes.iter().map(|x| x.z.abs()).collect();
         let fields = [Field3D::scalar("von_mises", &vm, "psi")];
         let mut out = HexOutputs::create(&dir, &m, HexOutputOptions::default()).unwrap();

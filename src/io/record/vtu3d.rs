@@ -104,7 +104,9 @@ pub enum HexOutputError {
         expected: usize,
         got: usize,
     },
-    #[error("field name `{0}` is empty or holds characters other than letters, digits, `_`, `-`, `.`")]
+    #[error(
+        "field name `{0}` is empty or holds characters other than letters, digits, `_`, `-`, `.`"
+    )]
     FieldName(String),
     #[error("cell {cell} has degree {degree}; only 1 (Hex8) and 2 (Hex27) are written")]
     Degree { cell: usize, degree: u8 },
@@ -136,12 +138,7 @@ fn vtk_cell(mesh: &HexMesh, c: usize) -> Result<(u8, Vec<i64>), HexOutputError> 
     let (t, perm): (u8, &[usize]) = match (mesh.degree[c], nodes.len()) {
         (1, 8) => (12, &VTK_HEX8),
         (2, 27) => (29, &VTK_HEX27),
-        (d, _) => {
-            return Err(HexOutputError::Degree {
-                cell: c,
-                degree: d,
-            })
-        }
+        (d, _) => return Err(HexOutputError::Degree { cell: c, degree: d }),
     };
     Ok((t, perm.iter().map(|&a| i64::from(nodes[a])).collect()))
 }
@@ -283,10 +280,18 @@ mod tests {
     fn permutations_match_vtk_parametric_coordinates() {
         let to_ref = |p: [f64; 3]| p.map(|x| 2.0 * x - 1.0);
         for (k, &a) in VTK_HEX27.iter().enumerate() {
-            assert_eq!(Hex27::node_ref(a), to_ref(VTK_PCOORDS_29[k]), "Hex27 node {k}");
+            assert_eq!(
+                Hex27::node_ref(a),
+                to_ref(VTK_PCOORDS_29[k]),
+                "Hex27 node {k}"
+            );
         }
         for (k, &a) in VTK_HEX8.iter().enumerate() {
-            assert_eq!(Hex8::node_ref(a), to_ref(VTK_PCOORDS_29[k]), "Hex8 node {k}");
+            assert_eq!(
+                Hex8::node_ref(a),
+                to_ref(VTK_PCOORDS_29[k]),
+                "Hex8 node {k}"
+            );
         }
         let mut s = VTK_HEX27.to_vec();
         s.sort_unstable();
@@ -325,7 +330,11 @@ mod tests {
             })
             .unwrap();
             let nn = m.n_nodes();
-            let u: Vec<f64> = m.nodes.iter().flat_map(|x| [0.01 * x.y, 0.0, 0.0]).collect();
+            let u: Vec<f64> = m
+                .nodes
+                .iter()
+                .flat_map(|x| [0.01 * x.y, 0.0, 0.0])
+                .collect();
             let vm: Vec<f64> = m.nodes.iter().map(|x| x.norm()).collect();
             let sig: Vec<f64> = (0..nn)
                 .flat_map(|n| [1.0, 2.0, 3.0, 4.0, 5.0, 6.0].map(|v| v * n as f64))
@@ -356,7 +365,9 @@ mod tests {
             // Node 1: Voigt [1, 2, 3, 4, 5, 6] → [[1, 6, 5], [6, 2, 4], [5, 4, 3]].
             assert_eq!(&s[9..18], &[1.0, 6.0, 5.0, 6.0, 2.0, 4.0, 5.0, 4.0, 3.0]);
             let (_, v) = ascii_array(&t, "von_mises");
-            let (lo, hi) = v.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
             assert!((lo - 1.0).abs() < 1e-12 && hi <= (4.0f64 + 0.0625).sqrt() + 1e-12);
             let (_, c) = ascii_array(&t, "cell_value");
             assert_eq!(c, cf);
