@@ -36,7 +36,7 @@ RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/oden_figs_9_13.toml --out "$OUT/od
     --set continuation.max_steps=6 --set 'output.sinks=["summary","csv","rerun"]'
 # 3D outputs of hexahedral meshes (Hex8, Hex27): VTU by meshio, MCAP by the Python reader,
 # against the closed-form fields of tools/hex_outputs.rs (its .rrd is verified below).
-HEX_OUTPUTS=${TREAD_HEX_OUTPUTS:-target/release/examples/hex_outputs}
+HEX_OUTPUTS=${TREAD_HEX_OUTPUTS:-${CARGO_TARGET_DIR:-target}/release/examples/hex_outputs}
 if [ ! -x "$HEX_OUTPUTS" ]; then
     cargo build -q --release --example hex_outputs
 fi
