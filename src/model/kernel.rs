@@ -103,7 +103,7 @@ pub const fn n_pressure(d: usize) -> usize {
 
 /// The P1 pressure basis at X: [1, (X − X̄)/h] (padded with zeros to 4 entries).
 #[inline]
-fn p1_basis<const D: usize>(x: &[f64; D], xc: &[f64; D], h: f64) -> Vector4<f64> {
+pub(crate) fn p1_basis<const D: usize>(x: &[f64; D], xc: &[f64; D], h: f64) -> Vector4<f64> {
     let mut q = Vector4::zeros();
     q[0] = 1.0;
     for i in 0..D {
@@ -114,7 +114,9 @@ fn p1_basis<const D: usize>(x: &[f64; D], xc: &[f64; D], h: f64) -> Vector4<f64>
 
 /// Centroid and size h = |Ω_c|^{1/D} of a cell from its quadrature points.
 #[allow(clippy::needless_range_loop)] // Index loops spell out the components.
-fn pressure_frame<const D: usize, const N: usize>(pts: &[Point<D, N>]) -> ([f64; D], f64) {
+pub(crate) fn pressure_frame<const D: usize, const N: usize>(
+    pts: &[Point<D, N>],
+) -> ([f64; D], f64) {
     let vol: f64 = pts.iter().map(|p| p.w).sum();
     let mut xc = [0.0; D];
     for p in pts {
@@ -148,7 +150,7 @@ pub fn grad_u<T: InvariantTensor, const D: usize, const N: usize>(
 
 /// The perturbed cell pressure p = p0 e0 − κ M⁻¹ g and M⁻¹ (padded to 4 × 4 with the
 /// identity).
-fn perturbed_pressure<T: InvariantTensor, const D: usize, const N: usize>(
+pub(crate) fn perturbed_pressure<T: InvariantTensor, const D: usize, const N: usize>(
     pts: &[Point<D, N>],
     u: &[f64],
     kappa: f64,

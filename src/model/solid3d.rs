@@ -8,8 +8,8 @@
 //! 3n + i); incompressible laws add the cell's four P1 pressures after them.
 
 use super::kernel::{
-    cell_energy, n_pressure, solid_cell, BodyForceD, CellLaw, CellPressure, Coefficients,
-    Inadmissible, Point,
+    cell_energy, n_pressure, p1_basis, perturbed_pressure, pressure_frame, solid_cell, BodyForceD,
+    CellLaw, CellPressure, Coefficients, Inadmissible, Point,
 };
 use crate::assembly::{CellTopology, DofMap};
 use crate::element::hex::{Hex27, Hex8, Lagrange3D, QuadRule3D};
@@ -17,7 +17,7 @@ use crate::material::{Hyperelastic, Material};
 use crate::math::Mat3;
 use crate::mesh::hex_mesh::HexMesh;
 use crate::physics::PressureMode;
-use nalgebra::Vector3;
+use nalgebra::{Vector3, Vector4};
 
 /// Shape values and reference gradients of an element at the points of a rule.
 #[derive(Clone, Debug)]
@@ -258,77 +258,49 @@ impl Solid3D {
         })
     }
 
-    /// The P1 pressure of cell `c` at reference position `xr`.
+    /// The P1 pressure of cell `c` at reference position `xr` (the kernel's basis and, for the
+    /// perturbed constraint, its condensed coefficients).
     fn cell_pressure(&self, c: usize, dofs: &DofMap, x: &[f64], xr: &Vector3<f64>) -> Option<f64> {
-        // Rebuild the cell's pressure frame and coefficients through the kernel's residual
-        // rows: the exact mode stores them; the perturbed mode condenses them from J.
-        let cd = dofs.cell(c);
-        let deg = self.mesh.degree[c];
-        let (xc, h, coeffs) = if deg == 1 {
-            self.pressure_coefficients::<8>(&self.q1, c, cd, x)?
+        if self.mesh.degree[c] == 1 {
+            self.cell_pressure_n::<8>(&self.q1, c, dofs, x, xr)
         } else {
-            self.pressure_coefficients::<27>(&self.q2, c, cd, x)?
-        };
-        let mut p = coeffs[0];
-        for i in 0..3 {
-            p += coeffs[i + 1] * (xr[i] - xc[i]) / h;
+            self.cell_pressure_n::<27>(&self.q2, c, dofs, x, xr)
         }
-        Some(p)
     }
 
-    #[allow(clippy::needless_range_loop)] // Index loops spell out the components.
-    fn pressure_coefficients<const N: usize>(
+    fn cell_pressure_n<const N: usize>(
         &self,
         tab: &Table3<N>,
         c: usize,
-        cd: &[u32],
+        dofs: &DofMap,
         x: &[f64],
-    ) -> Option<([f64; 3], f64, [f64; 4])> {
+        xr: &Vector3<f64>,
+    ) -> Option<f64> {
         let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
         let np = self.points(tab, c, &mut pts).ok()?;
         let pts = &pts[..np];
-        let vol: f64 = pts.iter().map(|p| p.w).sum();
-        let mut xc = [0.0; 3];
-        for p in pts {
-            for i in 0..3 {
-                xc[i] += p.x[i] * p.w / vol;
-            }
-        }
-        let h = vol.abs().cbrt();
-        match self.pressure {
+        let frame = pressure_frame(pts);
+        let cd = dofs.cell(c);
+        let pc = match self.pressure {
+            PressureMode::None => return Some(0.0),
             PressureMode::Exact { .. } => {
-                let mut pc = [0.0; 4];
+                let mut pc = Vector4::zeros();
                 for (m, slot) in pc.iter_mut().enumerate() {
                     *slot = x[cd[3 * N + m] as usize];
                 }
-                Some((xc, h, pc))
+                pc
             }
             PressureMode::Perturbed { kappa, p0 } => {
                 let mut u = [0.0; 81];
                 for (slot, &d) in u.iter_mut().zip(&cd[..3 * N]) {
                     *slot = x[d as usize];
                 }
-                let mut m = nalgebra::Matrix4::zeros();
-                let mut g = nalgebra::Vector4::zeros();
-                for p in pts {
-                    let q = nalgebra::Vector4::new(
-                        1.0,
-                        (p.x[0] - xc[0]) / h,
-                        (p.x[1] - xc[1]) / h,
-                        (p.x[2] - xc[2]) / h,
-                    );
-                    let jm1 = crate::math::Tensor::det_ipm1(&super::kernel::grad_u::<Mat3, 3, N>(
-                        &u[..3 * N],
-                        &p.g,
-                    ));
-                    m += q * q.transpose() * p.w;
-                    g += q * (jm1 * p.w);
-                }
-                let pc = -kappa * (m.try_inverse()? * g);
-                Some((xc, h, [pc[0] + p0, pc[1], pc[2], pc[3]]))
+                perturbed_pressure::<Mat3, 3, N>(pts, &u[..3 * N], kappa, p0, &frame)
+                    .ok()?
+                    .0
             }
-            PressureMode::None => Some((xc, h, [0.0; 4])),
-        }
+        };
+        Some(pc.dot(&p1_basis(&[xr[0], xr[1], xr[2]], &frame.0, frame.1)))
     }
 }
 
