@@ -25,7 +25,7 @@ use crate::driver::results::{
 };
 use crate::driver::spinning;
 use crate::driver::tables;
-use crate::driver::SolidSystem;
+use crate::model::SolidSystem;
 use crate::io::output::{ensure_dir, write_csv, OutputError};
 use crate::io::record::Recorder;
 use crate::io::scene::{Mode, Scene, Sink};
@@ -37,8 +37,9 @@ use std::time::Instant;
 
 pub use crate::setup::{
     build_contact, build_material, build_material_spec, build_model, build_recorders, build_system,
-    linear_kind, solver_options, AppError, RunOptions, RunOutcome,
+    linear_kind, solver_options, AppError, RunOptions,
 };
+pub use crate::driver::results::RunOutcome;
 
 /// Default output directory of a scene: `out/<scene name>/`.
 pub fn default_out_dir(scene: &Scene) -> PathBuf {

@@ -9,8 +9,7 @@
 //! counter-clockwise).
 
 use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
-use crate::driver::results::Summary;
-use crate::driver::SolidSystem;
+use crate::model::SolidSystem;
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
@@ -340,28 +339,6 @@ pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
             }
         }
     }
-}
-
-/// Everything a run produced.
-#[derive(Debug)]
-pub struct RunOutcome {
-    /// The JSON of the run's `summary.json`.
-    pub summary: serde_json::Value,
-    /// The same summary, typed (`summary` is its [`Summary::to_json`]).
-    pub typed: Summary,
-    /// The referential displacement field of the rolling modes (2 per node, node order, the
-    /// numbers of `steady_field.csv`): the steady solution's nodal displacements, or the
-    /// transient run's field extracted at its last node passage. None for the other modes and
-    /// for a transient run that saw no node passage.
-    pub field: Option<Vec<f64>>,
-    /// The quadrature-point history of a stateful material on the referential cells: the
-    /// steady solution's, or the transient run's at its last node passage
-    /// ([`crate::driver::transient::SteadyMonitor::history`]). None otherwise.
-    pub history: Option<crate::assembly::QpHistory>,
-    pub out_dir: PathBuf,
-    pub converged: bool,
-    /// Human-readable result lines for the terminal.
-    pub headline: Vec<String>,
 }
 
 /// Newton and load-stepping options from the scene's `[solver]`.

@@ -3,7 +3,7 @@
 //! serial and parallel assembly agree; Newton converges quadratically.
 
 use tread::assembly::FIXED;
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::material::{Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean};
 use tread::math::Vec2;
 use tread::mesh::{annulus, AnnulusSpec};
@@ -321,7 +321,7 @@ mod contact {
         // reaction balances it.
         let mut sys = contact_system(Friction::None, Some(3.0), 1.0, FacetRule::Gauss(4));
         sys.x.iter_mut().take(sys.dofs.n_u).for_each(|v| *v = 0.0);
-        sys.loading = tread::driver::system::Loading::Load { load: 3.0 };
+        sys.loading = tread::model::system::Loading::Load { load: 3.0 };
         sys.set_reference_force(3.0);
         let mut newton =
             tread::solver::Newton::new(&sys, tread::solver::LinearKind::Lu, Default::default())

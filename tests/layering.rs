@@ -387,6 +387,19 @@ fn below_the_face_to_app(g: &Graph) -> Vec<String> {
         .collect()
 }
 
+/// Imports of `driver/` from the scene translation (`setup.rs`) and the model layer
+/// (`model/`): both sit below the drivers, which take a model and return outcomes.
+fn below_the_drivers_to_driver(g: &Graph) -> Vec<String> {
+    g.iter()
+        .filter(|(f, _)| f.as_str() == "setup.rs" || f.starts_with("model/"))
+        .flat_map(|(f, ts)| {
+            ts.iter()
+                .filter(|t| t.starts_with("driver/"))
+                .map(move |t| format!("{f} -> {t}"))
+        })
+        .collect()
+}
+
 fn describe(g: &Graph, comps: &[Vec<String>]) -> String {
     let mut s = String::new();
     for c in comps {
@@ -431,6 +444,12 @@ fn nothing_below_the_face_imports_app() {
     assert!(bad.is_empty(), "imports of app.rs below it: {bad:#?}");
 }
 
+#[test]
+fn setup_and_the_model_import_no_driver() {
+    let bad = below_the_drivers_to_driver(&crate_graph());
+    assert!(bad.is_empty(), "imports of driver/ below it: {bad:#?}");
+}
+
 /// The parser sees the crate's real imports (an empty graph would pass both checks).
 #[test]
 fn the_graph_holds_known_imports() {
@@ -438,8 +457,8 @@ fn the_graph_holds_known_imports() {
     for (a, b) in [
         // `use super::steady::{press, SteadyRolling}`.
         ("driver/steady_recovery.rs", "driver/steady.rs"),
-        // `use crate::driver::SolidSystem` through driver/mod.rs's re-export.
-        ("app.rs", "driver/system.rs"),
+        // `use crate::model::SolidSystem` through model/mod.rs's re-export.
+        ("app.rs", "model/system.rs"),
         // The recorder re-exports the solvers' step events.
         ("io/record/mod.rs", "solver/observe.rs"),
         // `use super::newton::…` inside solver/.
@@ -464,7 +483,7 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     let mut s = Sources::new();
     s.insert(
         "lib.rs".into(),
-        "pub mod a;\npub mod app;\npub mod io;\npub mod solver;\n".into(),
+        "pub mod a;\npub mod app;\npub mod driver;\npub mod io;\npub mod setup;\npub mod solver;\n".into(),
     );
     s.insert(
         "a/mod.rs".into(),
@@ -486,6 +505,8 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     );
     s.insert("app.rs".into(), "pub fn run() {}\n".into());
     s.insert("a/e.rs".into(), "fn k() { crate::app::run() }\n".into());
+    s.insert("setup.rs".into(), "use crate::driver::Summary;\n".into());
+    s.insert("driver/mod.rs".into(), "pub struct Summary;\n".into());
     s.insert("io/mod.rs".into(), "pub mod record;\n".into());
     s.insert("io/record.rs".into(), "pub trait Recorder {}\n".into());
     s.insert("solver/mod.rs".into(), "pub mod stepping;\n".into());
@@ -503,6 +524,7 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     // An inline `super::` path is an edge; an inline `self::` path stays in the file.
     assert!(g["a/d.rs"].contains("a/b.rs"), "{g:#?}");
     assert_eq!(below_the_face_to_app(&g), vec!["a/e.rs -> app.rs"]);
+    assert_eq!(below_the_drivers_to_driver(&g), vec!["setup.rs -> driver/mod.rs"]);
     // Neither the façade's `pub use` nor the test module's import is an edge.
     assert!(!g["a/mod.rs"].contains("a/b.rs"), "{g:#?}");
     assert!(!g["a/c.rs"].iter().any(|t| t.starts_with("io/")), "{g:#?}");

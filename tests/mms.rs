@@ -7,7 +7,7 @@
 //! the hub and the outer surface by nodal interpolation.
 
 use nalgebra::{Matrix2, Vector2};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::material::{Hyperelastic, Material, NeoHookean};
 use tread::math::v;
 use tread::mesh::{annulus, AnnulusSpec, Forest};

@@ -8,7 +8,7 @@ use common::reference::{neo_hookean_omega_for_growth, neo_hookean_radial};
 use tread::app::build_system;
 use tread::driver::frame::nodal_stress_full_at;
 use tread::driver::spinning::{results, solve_spinning};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::material::Hyperelastic;
 use tread::math::Mat2;

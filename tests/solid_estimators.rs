@@ -9,7 +9,7 @@ mod common;
 use common::reference::{neo_hookean_omega_for_growth, neo_hookean_radial, RadialSolution};
 use tread::app::build_system;
 use tread::driver::spinning::solve_spinning;
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::math::{Mat2, Vec2};
 use tread::physics::estimate::{
     energy_error, energy_norm, explicit_residual, interpolation, recovery,

@@ -6,7 +6,7 @@
 #[path = "common/fixtures.rs"]
 mod fixtures;
 
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::material::{Material, MooneyRivlin, NeoHookean};
 use tread::math::{Mat2, Vec2};
 use tread::mesh::{annulus, AnnulusSpec, Forest, Mesh};

@@ -5,7 +5,7 @@ mod common;
 use common::reference::{incompressible_sigma_r, linear_annulus, neo_hookean_radial};
 use tread::app::build_system;
 use tread::driver::spinning::{profile, results, solve_spinning};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NewtonOptions};

@@ -10,7 +10,7 @@ use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::steady::{solve_torque, SteadyRolling};
 use tread::driver::steady_run;
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::material::{Material, MooneyRivlin};
 use tread::mesh::{annulus, AnnulusSpec};
@@ -378,7 +378,7 @@ fn steady_at(omega: f64) -> Vec<String> {
 /// The direct press (the steady solve before recoveries existed) of a scene: Ok or not.
 fn direct_press_converges(sc: &Scene) -> bool {
     use tread::driver::steady::press;
-    use tread::driver::system::Loading;
+    use tread::model::system::Loading;
     let mut st = steady_run::build_steady(sc).unwrap();
     let (nopt, sopt) = tread::app::solver_options(sc, false);
     let kind = tread::app::linear_kind(sc, &st.sys);
@@ -402,7 +402,7 @@ fn direct_press_converges(sc: &Scene) -> bool {
 /// scene, so the parameters are exactly the scene's, with the state copied in).
 fn scene_residual(sc: &Scene, st: &SteadyRolling) -> f64 {
     use tread::solver::stepping::LoadedSystem;
-    let loading = tread::driver::system::Loading::Indent {
+    let loading = tread::model::system::Loading::Indent {
         h_touch: sc.geometry.ro,
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
     };
@@ -418,7 +418,7 @@ fn scene_residual(sc: &Scene, st: &SteadyRolling) -> f64 {
 #[test]
 fn omega_stepping_recovery_reaches_the_direct_solution() {
     use tread::driver::steady_recovery::{recover, Strategy};
-    use tread::driver::system::Loading;
+    use tread::model::system::Loading;
     // At 46 rad/s (m_n = 2) the direct press converges since the steady strain-rate damping
     // uses nodal velocities (before, it failed there and this test ran the whole recovery).
     // The recovery is run directly from the undeformed state, as after a failed press: its
@@ -559,7 +559,7 @@ fn stiff_bulk_modulus_is_recovered_by_the_kappa_homotopy() {
 #[test]
 fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() {
     use tread::driver::steady_recovery::{recover, Strategy};
-    use tread::driver::system::Loading;
+    use tread::model::system::Loading;
     // ε = 1e-5 v0 near free rolling.
     let set = [
         "analysis.mode=\"steady\"",
@@ -624,7 +624,7 @@ fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() 
 #[test]
 fn eps_continuation_lands_on_the_direct_solution() {
     use tread::driver::steady::press;
-    use tread::driver::system::Loading;
+    use tread::model::system::Loading;
     // ε = 5e-3 v0 (below the continuation threshold 1e-2 v_ref, but large enough for the
     // direct press to converge): the continuation from ε_c = 1e-2 v_ref and the direct press
     // must give the same steady state.

@@ -17,7 +17,7 @@ mod fixtures;
 use tread::assembly::CONSTRAINED;
 use tread::driver::steady::SteadyRolling;
 use tread::driver::steady_run::{build_steady, solve_steady};
-use tread::driver::SteadyDampingTangent;
+use tread::model::SteadyDampingTangent;
 use tread::io::Scene;
 use tread::physics::ThetaDerivativeSource;
 use tread::solver::NonlinearSystem;
@@ -108,7 +108,7 @@ fn tiny(rings: bool) -> SteadyRolling {
         model.mesh.rings = None;
     }
     let contact = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
-    let sys = tread::driver::SolidSystem::with_contact(model, contact);
+    let sys = tread::model::SolidSystem::with_contact(model, contact);
     pressed_by_hand(SteadyRolling::new(sys, 20.0, 2.0))
 }
 
@@ -211,7 +211,7 @@ fn tiny_refined() -> SteadyRolling {
     let mut model = tread::physics::SolidModel::new(mesh, material, sc.material.rho, pressure);
     model.strain_rate_damping = 3.0;
     let contact = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
-    let sys = tread::driver::SolidSystem::with_contact(model, contact);
+    let sys = tread::model::SolidSystem::with_contact(model, contact);
     pressed_by_hand(SteadyRolling::new(sys, 20.0, 2.0))
 }
 
@@ -444,7 +444,7 @@ fn ring_and_cell_average_velocities_converge_together() {
                 model.mesh.rings = None;
             }
             let c = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
-            let sys = tread::driver::SolidSystem::with_contact(model, c);
+            let sys = tread::model::SolidSystem::with_contact(model, c);
             let mut st = SteadyRolling::new(sys, sc.motion.omega, sc.geometry.ro);
             solve_steady(&sc, &mut st, false, &mut Default::default(), &mut ())
                 .unwrap_or_else(|e| panic!("{e}"));
@@ -522,7 +522,7 @@ fn damping_residual_converges_to_the_closed_form_power() {
                 model.mesh.rings = None;
             }
             model.strain_rate_damping = 1.0;
-            let mut sys = tread::driver::SolidSystem::new(model, "hub");
+            let mut sys = tread::model::SolidSystem::new(model, "hub");
             sys.steady_omega = Some(omega);
             assert!(sys.enable_steady_viscosity());
             let source = sys.steady_visc.as_ref().map(|sv| sv.nodal.source);

@@ -8,7 +8,7 @@ use fixtures::*;
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::{GenAlpha, Kinematics, Ramp, Scheme, Transient};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::solver::NonlinearSystem;
 
 /// Max |K − K_fd| / max |K| of a generalized-α step under torque control (optionally also

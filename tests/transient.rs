@@ -9,7 +9,7 @@ use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::spinning::solve_spinning;
 use tread::driver::transient::{integrate, GenAlpha, Ramp, Scheme, Transient};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NonlinearSystem};
 

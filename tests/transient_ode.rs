@@ -13,7 +13,7 @@ use tread::driver::transient::ode_first_order::{
     integrate_first_order, FirstOrder, OdeMethod, OdeTolerances,
 };
 use tread::driver::transient::{GenAlpha, Ramp, Scheme, TimeOptions, Transient, TransientReport};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::physics::PressureMode;
 use tread::solver::{LinearKind, SolveError};
 

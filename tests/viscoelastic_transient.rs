@@ -9,7 +9,7 @@ use fixtures::*;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use tread::driver::transient::{GenAlpha, Ramp, Scheme, TimeOptions, Transient};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::material::{ViscoModel, Viscoelastic};
 use tread::physics::SolidModel;
 use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};

@@ -9,7 +9,7 @@ use fixtures::*;
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use tread::driver::steady_run::{wave_amplitude, wave_number};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 
 /// A system on the 3 × `n_theta` annulus whose radial displacement is `f(θ) · (r − 1)` (zero
 /// at the hub, `f` at the outer surface).

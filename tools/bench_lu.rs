@@ -46,7 +46,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use tread::driver::steady_run::{build_steady, solve_steady};
-use tread::driver::SteadyDampingTangent;
+use tread::model::SteadyDampingTangent;
 use tread::io::Scene;
 use tread::solver::linear::{write_matrix_market, write_vector_market, LuOrdering};
 use tread::solver::{LinearKind, NonlinearSystem, SparseSolver, StepReport};

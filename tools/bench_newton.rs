@@ -19,7 +19,7 @@ mod common;
 use common::median;
 
 use std::time::Instant;
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::material::{Material, NeoHookean};
 use tread::mesh::{annulus, AnnulusSpec};
 use tread::physics::{PressureMode, SolidModel};

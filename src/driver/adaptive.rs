@@ -38,7 +38,7 @@
 use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
 use super::steady_run;
-use super::system::SolidSystem;
+use crate::model::system::SolidSystem;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;

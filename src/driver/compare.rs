@@ -39,7 +39,8 @@ use crate::element::QuadRule;
 use crate::io::output::{ensure_dir, write_json, write_text_csv};
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::math::Vec2;
-use crate::setup::{build_model, AppError, RunOptions, RunOutcome};
+use crate::setup::{build_model, AppError, RunOptions};
+use crate::driver::results::RunOutcome;
 use std::path::Path;
 
 /// Exit status of `tread compare` (and of `tread` without arguments) when both runs finished
@@ -324,7 +325,7 @@ pub fn field_difference(
     u_t: &[f64],
     u_s: &[f64],
 ) -> Result<(f64, f64, f64), AppError> {
-    let sys = crate::driver::SolidSystem::new(build_model(scene)?, "hub");
+    let sys = crate::model::SolidSystem::new(build_model(scene)?, "hub");
     let n = sys.model.mesh.n_nodes();
     if u_t.len() < 2 * n || u_s.len() < 2 * n {
         return Err(AppError::Unsupported(format!(

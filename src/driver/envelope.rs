@@ -19,7 +19,8 @@ use crate::io::output::{ensure_dir, write_json};
 use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
 use crate::io::scene::Scene;
 use crate::mesh::Mesh;
-use crate::setup::{build_recorders, AppError, RunOptions, RunOutcome};
+use crate::setup::{build_recorders, AppError, RunOptions};
+use crate::driver::results::RunOutcome;
 use crate::solver::SolveError;
 use std::path::PathBuf;
 

@@ -14,7 +14,7 @@
 //! goes to [`SolidSystem::record_step`], the Newton table to the recorder's iteration events,
 //! and the interrupt flag answers whether to stop.
 
-use super::SolidSystem;
+use crate::model::SolidSystem;
 use crate::contact::ContactSample;
 use crate::element::QuadRule;
 use crate::io::record::{self, Energy, HubLoads, Recorder, StepView};

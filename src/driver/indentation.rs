@@ -8,7 +8,7 @@
 //! with t_n > 0), the peak normal traction (`max_pressure`, per unit reference length), the
 //! final road height and penetration DISP = Ro − H.
 
-use super::system::{Loading, SolidSystem};
+use crate::model::system::{Loading, SolidSystem};
 use crate::contact::ContactModel;
 use crate::io::record::Recorder;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};

@@ -1,7 +1,7 @@
 //! Drivers: build a model from a scene, run an analysis, collect results.
 //!
-//! * [`system`]: the solid (+ contact) as one nonlinear system R(x) = 0 under a load factor;
-//!   [`frame`] what the recorder sees of it at a step.
+//! * [`frame`]: what the recorder sees of the model's system
+//!   ([`crate::model::SolidSystem`]) at a step.
 //! * Static, spinning and indentation load stepping ([`spinning`], [`indentation`]), steady
 //!   rolling in the spatial frame ([`steady`], with [`steady_recovery`] when the direct press
 //!   fails, reported as [`steady_report::Recovery`]), time integration ([`transient`]), the
@@ -9,9 +9,9 @@
 //!   ([`compare`]).
 //! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
 //!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
-//!   Imports go one way: `app` → `*_run` → the analyses → `system` → physics and solvers.
+//!   Imports go one way: `app` → `*_run` → the analyses → the model ([`crate::model`]) → physics and solvers.
 //! * [`results`]: the typed contents of every mode's `summary.json`, which the `*_run` files
-//!   fill and [`crate::setup::RunOutcome`] carries in memory.
+//!   fill and [`crate::driver::results::RunOutcome`] carries in memory.
 //!
 //! Conventions throughout: forces per unit thickness, ω in rad/s (counter-clockwise > 0), the
 //! road at x2 = −H below the hub centre, units as the scene declares them.
@@ -31,11 +31,7 @@ pub mod steady_recovery;
 pub mod steady_report;
 pub mod steady_run;
 pub mod stick_slip_run;
-pub mod system;
 pub mod tables;
-pub mod terms;
 pub mod transient;
 pub mod transient_run;
 
-pub use system::{SolidSystem, SteadyDampingTangent, DEFAULT_DAMPING_CELL_WEIGHT};
-pub use terms::{Inertia, Rates, Terms};

@@ -6,7 +6,7 @@
 //! [`SteadyResults`], [`StickSlipResults`], [`CompareResults`]), the physical terms the model
 //! carried ([`Terms`] and its per-mode extensions), the mesh ([`MeshInfo`]) and the solver's
 //! report. The drivers fill these structures; `summary.json` is their serialization
-//! ([`Summary::to_json`], where non-finite numbers become null), and [`crate::setup::RunOutcome`]
+//! ([`Summary::to_json`], where non-finite numbers become null), and [`crate::driver::results::RunOutcome`]
 //! carries them in memory, so that `tread compare` and the tools read typed fields instead of
 //! keys.
 //!
@@ -22,7 +22,7 @@ use super::indentation::IndentationResults;
 use super::resistance::RollingResistance;
 use super::spinning::SpinningResults;
 use super::steady_report::{Attempt, CoarseStart, Recovery};
-use super::system::SteadyDampingTangent;
+use crate::model::system::SteadyDampingTangent;
 pub use super::transient::energy::{ViscousEnergy, ENERGY_CREATED_TOL};
 use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
 use crate::io::output::sanitize;
@@ -684,4 +684,26 @@ pub struct CompareSummary {
     /// Output folders of the two runs.
     pub transient_dir: String,
     pub steady_dir: String,
+}
+
+/// Everything a run produced.
+#[derive(Debug)]
+pub struct RunOutcome {
+    /// The JSON of the run's `summary.json`.
+    pub summary: serde_json::Value,
+    /// The same summary, typed (`summary` is its [`Summary::to_json`]).
+    pub typed: Summary,
+    /// The referential displacement field of the rolling modes (2 per node, node order, the
+    /// numbers of `steady_field.csv`): the steady solution's nodal displacements, or the
+    /// transient run's field extracted at its last node passage. None for the other modes and
+    /// for a transient run that saw no node passage.
+    pub field: Option<Vec<f64>>,
+    /// The quadrature-point history of a stateful material on the referential cells: the
+    /// steady solution's, or the transient run's at its last node passage
+    /// ([`crate::driver::transient::SteadyMonitor::history`]). None otherwise.
+    pub history: Option<crate::assembly::QpHistory>,
+    pub out_dir: std::path::PathBuf,
+    pub converged: bool,
+    /// Human-readable result lines for the terminal.
+    pub headline: Vec<String>,
 }

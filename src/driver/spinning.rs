@@ -18,7 +18,7 @@
 //!   constant taken as 1: an upper indicator, ≈ 14–19 times the error on the annulus), the
 //!   energy norm of the solution and the relative recovery estimate.
 
-use super::system::SolidSystem;
+use crate::model::system::SolidSystem;
 use crate::element::gauss_1d;
 use crate::io::record::Recorder;
 use crate::math::{Mat2, Vec2};
@@ -266,7 +266,7 @@ pub fn solve_spinning(
     rec: &mut dyn Recorder,
 ) -> Result<(), SolveError> {
     sys.omega2_target = omega * omega;
-    sys.loading = super::system::Loading::Spin {
+    sys.loading = crate::model::system::Loading::Spin {
         omega2: omega * omega,
     };
     // Reference force: the centrifugal load at the target speed on the undeformed body.

@@ -58,7 +58,7 @@
 //!    ratio: the creep stays put while the speed changes).
 
 use super::steady_report::Recovery;
-use super::system::{Loading, SolidSystem};
+use crate::model::system::{Loading, SolidSystem};
 use crate::io::record::Recorder;
 use crate::solver::continuation::ParametricSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
@@ -87,7 +87,7 @@ pub struct SteadyRolling {
     /// Outer radius (H = ro − disp).
     pub ro: f64,
     /// Why the steady damping's tangent differs from the one asked for
-    /// ([`crate::driver::SteadyDampingTangent`]), if it does: switched from matrix-free or
+    /// ([`crate::model::SteadyDampingTangent`]), if it does: switched from matrix-free or
     /// banded to assembled after a failed press, or banded asked for on a mesh without
     /// node rings (matrix-free then).
     pub damping_fallback: Option<String>,

@@ -49,7 +49,7 @@ use super::steady::{press, SteadyRolling};
 pub use super::steady_report::{
     Attempt, HomotopyParameter, LegReport, Recovery, Spacing, Strategy,
 };
-use super::system::Loading;
+use crate::model::system::Loading;
 use crate::io::record::{self, Recorder};
 use crate::physics::PressureMode;
 use crate::solver::stepping::{StepOptions, StepReport};

@@ -36,7 +36,7 @@ use super::steady::{
 };
 use super::steady_recovery;
 use super::steady_report::CoarseStart;
-use super::system::{Loading, SolidSystem, SteadyDampingTangent};
+use crate::model::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv};
@@ -48,7 +48,8 @@ use crate::io::scene::{
 };
 use crate::physics::viscoelastic_steady::StreamlineScheme;
 use crate::physics::SolidModel;
-use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
+use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions};
+use crate::driver::results::RunOutcome;
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };

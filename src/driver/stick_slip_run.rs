@@ -19,7 +19,8 @@ use crate::driver::results::{
 use crate::io::output::ensure_dir;
 use crate::io::record::{self, Recorder, StepInfo, StepView};
 use crate::io::scene::{stick_slip_law, Scene};
-use crate::setup::{AppError, RunOptions, RunOutcome};
+use crate::setup::{AppError, RunOptions};
+use crate::driver::results::RunOutcome;
 use std::time::Instant;
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {

@@ -29,7 +29,7 @@ use super::results::{
     MeshInfo, ModeSummary, RunStats, Summary, Terms, TransientResults, TransientSummary,
     TransientTerms,
 };
-use super::system::SolidSystem;
+use crate::model::system::SolidSystem;
 use super::tables;
 use super::transient::ode_first_order::OdeTolerances;
 use super::transient::{Kinematics, Ramp, Scheme, Setup, TimeOptions, Transient, TransientReport};
@@ -39,7 +39,8 @@ use crate::io::record::{
     self, Energy, HubLoads, Recorder, RejectedStep, SteadyReached, StepInfo, StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink, TimeSpec};
-use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions, RunOutcome};
+use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions};
+use crate::driver::results::RunOutcome;
 use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
 use std::time::Instant;

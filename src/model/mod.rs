@@ -1,8 +1,11 @@
 //! The model layer, one code for every dimension: the solid's cell integrand
 //! ([`kernel`], generic in the dimension `D` and the node count `N`: plane strain is `D = 2`,
 //! the three-dimensional solid `D = 3`), the three-dimensional solid on hexahedral meshes
-//! ([`solid3d`]) and its nonlinear system ([`system3d`]), which the solvers of
-//! [`crate::solver`] drive like the plane-strain one.
+//! ([`solid3d`]) and its nonlinear system ([`system3d`]); the plane-strain solid with its
+//! contact as one nonlinear system R(x) = 0 under a load factor ([`system`]) and the terms an
+//! analysis asks its assembly for ([`terms`]). The solvers of [`crate::solver`] drive both
+//! systems alike; the drivers of [`crate::driver`] take them and return typed outcomes, and
+//! [`crate::setup`] builds them from a scene without importing any driver.
 //!
 //! The coefficients an analysis supplies (ω², load factors) are values passed to the
 //! integrand ([`kernel::Coefficients`]), not flags written on the model.
@@ -16,8 +19,12 @@
 
 pub mod kernel;
 pub mod solid3d;
+pub mod system;
 pub mod system3d;
+pub mod terms;
 
 pub use kernel::{Coefficients, Inadmissible};
 pub use solid3d::{PointValues3D, Solid3D};
+pub use system::{SolidSystem, SteadyDampingTangent, DEFAULT_DAMPING_CELL_WEIGHT};
 pub use system3d::Solid3DSystem;
+pub use terms::{Inertia, Rates, Terms};

@@ -15,7 +15,7 @@
 //! tangent of the damping couples a cell with its neighbours' neighbours. The steady system
 //! keeps the cells' own sparsity in its assembled matrix (each cell linearises with its own
 //! derivative) and applies the difference to the exact tangent matrix-free
-//! ([`crate::driver::SolidSystem`]).
+//! ([`crate::model::SolidSystem`]).
 //!
 //! Why not each cell's own derivative for the velocities themselves (v_h on cell c from
 //! ∂θu_h of c alone), which would make that tangent exact with the undamped sparsity: on a

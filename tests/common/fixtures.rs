@@ -4,7 +4,7 @@
 
 use tread::app::{run, RunOptions};
 use tread::driver::transient::{integrate, Kinematics, Ramp, Scheme, TimeOptions, Transient};
-use tread::driver::SolidSystem;
+use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};

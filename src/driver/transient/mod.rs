@@ -37,8 +37,8 @@
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
-use super::system::SolidSystem;
-use super::terms::{CellHook, Inertia, Rates, Terms};
+use crate::model::system::SolidSystem;
+use crate::model::terms::{CellHook, Inertia, Rates, Terms};
 use crate::assembly::{LocalSystem, SharedMut, CONSTRAINED, MAX_LOCAL};
 use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
@@ -1149,7 +1149,7 @@ pub fn integrate(
         Err(e) => return Err((e, rep)),
     };
     // Reference force: weight-like scale ρ |Ω| ω² Ro + hub load.
-    let area = super::system::domain_area(&tr.sys.model);
+    let area = crate::model::system::domain_area(&tr.sys.model);
     let ro = tr.sys.model.mesh.outer_radius();
     let fref = tr.sys.model.rho * area * (tr.kin.omega.target.powi(2) * ro).max(1.0)
         + tr.kin.load.map_or(0.0, |l| l.target.abs());
@@ -1506,7 +1506,7 @@ impl Transient {
         };
         let steps = 4;
         let mut newton = Newton::new(&self.sys, kind, opts)?;
-        let area = super::system::domain_area(&self.sys.model);
+        let area = crate::model::system::domain_area(&self.sys.model);
         self.sys
             .set_reference_force(self.sys.model.rho * area * omega * omega);
         if let Some(h) = &mut self.hub_angle {

@@ -69,7 +69,7 @@
 //! [`crate::driver::frame::SolidFrame`] builds a [`StepView`] of a `SolidSystem` (nodal
 //! stresses, contact samples, hub loads, energies); load stepping does all of this through
 //! the solvers' observer ([`crate::solver::StepObserver`]), which every recorder implements
-//! for a `SolidSystem` ([`crate::driver::SolidSystem::record_step`]). A progress bar for a
+//! for a `SolidSystem` ([`crate::model::SolidSystem::record_step`]). A progress bar for a
 //! time-stepping driver is [`progress::Progress`] (in the fan-out built by
 //! `app::build_recorders` unless `--quiet`): give
 //! `RunMeta { time_name: "time", time_end, revolution_period, .. }` and it shows simulated time,

@@ -106,7 +106,7 @@ impl Default for SolverSpec {
             threads: 0,
             line_search: true,
             damping_tangent: DampingTangentChoice::Auto,
-            damping_cell_weight: crate::driver::DEFAULT_DAMPING_CELL_WEIGHT,
+            damping_cell_weight: crate::model::DEFAULT_DAMPING_CELL_WEIGHT,
             eps_continuation: true,
             coarse_start: true,
             single_precision: true,

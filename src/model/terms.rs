@@ -1,5 +1,5 @@
 //! What a driver supplies to the one assembly of the solid's residual and tangent
-//! ([`crate::driver::SolidSystem::assemble`]), and the per-cell evaluation that every assembly
+//! ([`crate::model::SolidSystem::assemble`]), and the per-cell evaluation that every assembly
 //! and every hub-reaction sum shares.
 //!
 //! Every analysis solves R(x) = 0 with
