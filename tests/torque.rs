@@ -48,7 +48,7 @@ fn torque_step_tangent_error(load_control: bool) -> f64 {
     };
     let mut tr = Transient::new(
         sys,
-        Scheme::GeneralizedAlpha(GenAlpha::new(0.7)),
+        Scheme::generalized_alpha(GenAlpha::new(0.7)),
         kin,
         false,
     );

@@ -36,7 +36,7 @@ fn time_step_tangent_matches_finite_differences() {
     });
     let mut tr = Transient::new(
         sys,
-        Scheme::GeneralizedAlpha(GenAlpha::new(0.7)),
+        Scheme::generalized_alpha(GenAlpha::new(0.7)),
         kin,
         false,
     );
@@ -97,7 +97,7 @@ fn rigid_spin_run(
     m.strain_rate_damping = damping;
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        Scheme::generalized_alpha(GenAlpha::new(1.0)),
         spin_kinematics(omega, 0.0),
         lumped,
     );
@@ -192,17 +192,17 @@ fn integrators_converge_at_their_order() {
     for (name, scheme, dt0) in [
         (
             "generalized-α ρ∞=1",
-            Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+            Scheme::generalized_alpha(GenAlpha::new(1.0)),
             1e-3,
         ),
         (
             "generalized-α ρ∞=0.8",
-            Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+            Scheme::generalized_alpha(GenAlpha::new(0.8)),
             1e-3,
         ),
-        ("central difference", Scheme::CentralDifference, 1e-4),
+        ("central difference", Scheme::central_difference(), 1e-4),
     ] {
-        let errs = step_errors(|dt| spin_up(scheme, dt, t_end), dt0);
+        let errs = step_errors(|dt| spin_up(scheme.clone(), dt, t_end), dt0);
         let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
         eprintln!("{name}: dt = {dt0:.1e}/(1, 2, 4): relative errors {errs:?}, observed orders {orders:.2?}");
         table.push((name, orders));
@@ -221,7 +221,7 @@ fn spin_up_reproduces_steady_spinning() {
     let omega = 20.0;
     let mut tr = Transient::new(
         SolidSystem::new(neo_hookean_annulus(2, 32), "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(0.0)),
+        Scheme::generalized_alpha(GenAlpha::new(0.0)),
         spin_kinematics(omega, 0.3),
         false,
     );
@@ -248,7 +248,7 @@ fn spin_up_reproduces_steady_spinning() {
     // (a) the discrete Lagrangian rigid-spin equilibrium, (b) the θ-referential steady spinning.
     let mut eq = Transient::new(
         SolidSystem::new(neo_hookean_annulus(2, 32), "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        Scheme::generalized_alpha(GenAlpha::new(1.0)),
         spin_kinematics(omega, 0.0),
         false,
     );
@@ -323,7 +323,7 @@ fn central_difference_stable_step_includes_damping_and_contact() {
         });
         Transient::new(
             SolidSystem::with_contact(m, cm),
-            Scheme::CentralDifference,
+            Scheme::central_difference(),
             kin,
             true,
         )
@@ -371,7 +371,7 @@ fn passages_landed_on_are_counted_at_that_step() {
     let omega = 20.0;
     let mut tr = Transient::new(
         SolidSystem::new(neo_hookean_annulus(2, 16), "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        Scheme::generalized_alpha(GenAlpha::new(1.0)),
         spin_kinematics(omega, 0.0),
         true,
     );
@@ -435,7 +435,7 @@ fn rejected_steps_leave_no_trace() {
             }
             Transient::new(
                 SolidSystem::new(m, "hub"),
-                Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+                Scheme::generalized_alpha(GenAlpha::new(0.8)),
                 spin_kinematics(omega, 0.05),
                 false,
             )

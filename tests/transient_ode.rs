@@ -34,7 +34,7 @@ fn opts(dt: f64, t_end: f64) -> TimeOptions {
 }
 
 fn placeholder() -> Scheme {
-    Scheme::GeneralizedAlpha(GenAlpha::new(1.0))
+    Scheme::generalized_alpha(GenAlpha::new(1.0))
 }
 
 fn tol(rtol: f64) -> OdeTolerances {

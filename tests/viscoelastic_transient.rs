@@ -44,7 +44,7 @@ fn time_step_tangent_with_history_matches_finite_differences() {
         });
         let mut tr = Transient::new(
             sys,
-            Scheme::GeneralizedAlpha(GenAlpha::new(0.7)),
+            Scheme::generalized_alpha(GenAlpha::new(0.7)),
             kin,
             false,
         );
@@ -92,7 +92,7 @@ fn history_is_committed_only_on_convergence() {
     let m = visco_annulus(2, 12, ViscoModel::Convolution);
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+        Scheme::generalized_alpha(GenAlpha::new(0.8)),
         spin_kinematics(20.0, 0.02),
         false,
     );
@@ -152,17 +152,17 @@ fn integrators_keep_their_order_with_history() {
         for (name, scheme, dt0) in [
             (
                 "generalized-α ρ∞=1",
-                Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+                Scheme::generalized_alpha(GenAlpha::new(1.0)),
                 1e-3,
             ),
             (
                 "generalized-α ρ∞=0.8",
-                Scheme::GeneralizedAlpha(GenAlpha::new(0.8)),
+                Scheme::generalized_alpha(GenAlpha::new(0.8)),
                 1e-3,
             ),
-            ("central difference", Scheme::CentralDifference, 1e-4),
+            ("central difference", Scheme::central_difference(), 1e-4),
         ] {
-            let errs = step_errors(|dt| spin_up(scheme, model, dt, t_end), dt0);
+            let errs = step_errors(|dt| spin_up(scheme.clone(), model, dt, t_end), dt0);
             let orders: Vec<f64> = errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
             eprintln!(
                 "{model:?}, {name}: relative errors {:?}, observed orders {orders:.2?}",
@@ -248,7 +248,7 @@ fn spin_up_first_order(
     m.strain_rate_damping = 1.0;
     let mut tr = Transient::new(
         SolidSystem::new(m, "hub"),
-        Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+        Scheme::generalized_alpha(GenAlpha::new(1.0)),
         spin_kinematics(20.0, 0.03),
         false,
     );
@@ -274,7 +274,7 @@ fn spin_up_first_order(
 fn spin_up_reference(model: ViscoModel, dt: f64, t_end: f64) -> Vec<f64> {
     let mut m = visco_annulus(2, 16, model);
     m.strain_rate_damping = 1.0;
-    spin_up_fixed(m, Scheme::GeneralizedAlpha(GenAlpha::new(1.0)), dt, t_end)
+    spin_up_fixed(m, Scheme::generalized_alpha(GenAlpha::new(1.0)), dt, t_end)
 }
 
 /// BDF and SDIRK carry the history: as their tolerance tightens they converge to the

@@ -215,10 +215,10 @@ impl Case {
     }
     fn scheme(&self) -> Scheme {
         match self.method {
-            Method::GenAlpha(r) => Scheme::GeneralizedAlpha(GenAlpha::new(r)),
-            Method::Central => Scheme::CentralDifference,
+            Method::GenAlpha(r) => Scheme::generalized_alpha(GenAlpha::new(r)),
+            Method::Central => Scheme::central_difference(),
             // Unused by the diffsol integrators.
-            Method::Ode(_) => Scheme::GeneralizedAlpha(GenAlpha::new(1.0)),
+            Method::Ode(_) => Scheme::generalized_alpha(GenAlpha::new(1.0)),
         }
     }
     /// CSV columns scheme (0 generalized-α, 1 central difference, 2 diffsol BDF, 3 diffsol
@@ -1130,7 +1130,7 @@ fn run(args: &Args) -> Result<(), String> {
     );
     // Stable-step estimate of central difference (as `integrate` computes it, at t = 0).
     let dt_stable = {
-        let (mut tr, _) = build(&scene, Scheme::CentralDifference, true)?;
+        let (mut tr, _) = build(&scene, Scheme::central_difference(), true)?;
         let delta_ref = tr.kin.disp.map_or(0.0, |d| d.target);
         tr.stable_step(delta_ref)
     };
@@ -1145,7 +1145,7 @@ fn run(args: &Args) -> Result<(), String> {
     println!(
         "Scene {SCENE_NAME} with {} ({} dofs); Newton tolerance {:.0e}; adaptive runs start at Δt = {:.1e} with Δt ∈ [{:.1e}, {:.1e}] (the scene's defaults); central-difference stable-step estimate Δt_stable = {dt_stable:.4e} s; wall time = median of {} run(s) of `integrate()` on {} thread(s){}.\n",
         OVERRIDES.join(", "),
-        build(&scene, Scheme::CentralDifference, true)?.0.sys.n_dofs(),
+        build(&scene, Scheme::central_difference(), true)?.0.sys.n_dofs(),
         scene.solver.tolerance,
         ts.dt,
         ts.resolved_dt_min(),

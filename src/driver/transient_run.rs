@@ -73,7 +73,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     };
     let kin = kinematics(scene);
     let lumped = ts.effective_mass() == MassKind::Lumped;
-    let mut tr = Transient::new(sys, scheme, kin, lumped);
+    let mut tr = Transient::new(sys, scheme.clone(), kin, lumped);
     let torque_control = scene.motion.control == Control::Torque;
     let kind = if torque_control {
         // The φ row and column make the tangent indefinite-looking to Cholesky in general.
@@ -512,7 +512,7 @@ fn reach_warning(ts: &TimeSpec, scheme: &Scheme) -> Vec<String> {
     if !ts.integrator.bounded_step() {
         return Vec::new();
     }
-    let adaptive = ts.adaptive && matches!(scheme, Scheme::GeneralizedAlpha(_));
+    let adaptive = ts.adaptive && scheme.estimates_error();
     let (h, key) = match (adaptive, ts.dt_max) {
         (true, Some(h)) => (h, "time.dt_max"),
         (true, None) => (

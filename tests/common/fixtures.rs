@@ -85,11 +85,12 @@ pub fn tight_newton_options() -> NewtonOptions {
 /// u at `t_end` of a spin-up of `model` from rest (ω ramped to 20 rad/s over 0.03 s, no contact)
 /// with the one-step `scheme` at fixed steps `dt` (the lumped mass for central difference).
 pub fn spin_up_fixed(model: SolidModel, scheme: Scheme, dt: f64, t_end: f64) -> Vec<f64> {
+    let lumped = scheme.explicit();
     let mut tr = Transient::new(
         SolidSystem::new(model, "hub"),
         scheme,
         spin_kinematics(20.0, 0.03),
-        matches!(scheme, Scheme::CentralDifference),
+        lumped,
     );
     integrate(
         &mut tr,

@@ -3,9 +3,9 @@
 //! stable-step estimate ([`Transient::stable_step`]).
 
 use super::integrator::IntegratorSpec;
-use super::{Scheme, Transient};
+use super::{Scheme, StepMethod, Transient};
 use crate::assembly::CONSTRAINED;
-use crate::solver::SolveError;
+use crate::solver::{Newton, SolveError};
 
 /// The scene's `"central_difference"`: the one-step loop of [`super::integrate`], lumped mass.
 pub struct CentralDifference;
@@ -18,7 +18,38 @@ impl IntegratorSpec for CentralDifference {
     const HISTORY: bool = true;
 
     fn scheme(_rho_inf: f64) -> Scheme {
-        Scheme::CentralDifference
+        Scheme::central_difference()
+    }
+}
+
+/// The explicit central-difference step: no Newton system, no error estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct CentralDifferenceStep;
+
+impl StepMethod for CentralDifferenceStep {
+    fn name(&self) -> &'static str {
+        "central_difference"
+    }
+
+    fn attempt(
+        &self,
+        tr: &mut Transient,
+        _newton: &mut Newton,
+        dt: f64,
+    ) -> Result<(f64, usize), SolveError> {
+        tr.attempt_central_difference(dt)
+    }
+
+    fn evaluate(&self, _tr: &mut Transient, _with_matrix: bool) -> bool {
+        false
+    }
+
+    fn estimates_error(&self) -> bool {
+        false
+    }
+
+    fn explicit(&self) -> bool {
+        true
     }
 }
 

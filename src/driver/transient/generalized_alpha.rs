@@ -14,7 +14,7 @@
 //! adaptive step.
 
 use super::integrator::IntegratorSpec;
-use super::{GenAlpha, Transient};
+use super::{GenAlpha, StepMethod, Transient};
 use crate::solver::{Newton, SolveError};
 
 /// The scene's `"generalized_alpha"`: the one-step loop of [`super::integrate`] with [`GenAlpha`].
@@ -27,6 +27,37 @@ impl IntegratorSpec for GeneralizedAlpha {
         Implicit.";
     const TORQUE_CONTROL: bool = true;
     const HISTORY: bool = true;
+}
+
+/// The generalized-α step with the parameters it holds (also HHT-α's, [`super::hht_alpha`]).
+#[derive(Clone, Copy, Debug)]
+pub struct GeneralizedAlphaStep(pub GenAlpha);
+
+impl StepMethod for GeneralizedAlphaStep {
+    fn name(&self) -> &'static str {
+        "generalized_alpha"
+    }
+
+    fn attempt(
+        &self,
+        tr: &mut Transient,
+        newton: &mut Newton,
+        dt: f64,
+    ) -> Result<(f64, usize), SolveError> {
+        tr.attempt_generalized_alpha(self.0, newton, dt)
+    }
+
+    fn evaluate(&self, tr: &mut Transient, with_matrix: bool) -> bool {
+        tr.assemble_generalized_alpha(&self.0, with_matrix)
+    }
+
+    fn committed(&self, tr: &mut Transient) {
+        tr.update_fprev();
+    }
+
+    fn estimates_error(&self) -> bool {
+        true
+    }
 }
 
 impl Transient {

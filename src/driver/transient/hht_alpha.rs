@@ -41,6 +41,6 @@ impl IntegratorSpec for HhtAlpha {
     const RHO_INF_MIN: f64 = 0.5;
 
     fn scheme(rho_inf: f64) -> Scheme {
-        Scheme::GeneralizedAlpha(hht_parameters(rho_inf))
+        Scheme::generalized_alpha(hht_parameters(rho_inf))
     }
 }

@@ -40,7 +40,7 @@ pub trait IntegratorSpec {
     /// default generalized-α with `rho_inf`, which an integrator with its own loop (BDF, SDIRK)
     /// leaves unused.
     fn scheme(rho_inf: f64) -> Scheme {
-        Scheme::GeneralizedAlpha(GenAlpha::new(rho_inf))
+        Scheme::generalized_alpha(GenAlpha::new(rho_inf))
     }
 
     /// Integrate from the committed state to the end of the run, calling `on_step` after every

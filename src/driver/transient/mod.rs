@@ -148,19 +148,73 @@ impl GenAlpha {
     }
 }
 
-/// Time integration scheme.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Scheme {
-    GeneralizedAlpha(GenAlpha),
-    CentralDifference,
+/// The step of the one-step loop [`integrate`]: how an integrator of the registry
+/// ([`registry`]) attempts a step, assembles its Newton system and commits. Each integrator
+/// that uses the loop supplies one from [`integrator::IntegratorSpec::scheme`]; a new one-step
+/// integrator is a type implementing this trait, in its own file, with no change to the loop.
+pub trait StepMethod: Send + Sync + std::fmt::Debug {
+    /// The integrator's scene keyword.
+    fn name(&self) -> &'static str;
+    /// Attempt one step of size `dt` from the committed state of `tr`, leaving it pending (see
+    /// [`Transient::attempt`]); returns the local error estimate (0 without one) and the
+    /// Newton iterations.
+    fn attempt(
+        &self,
+        tr: &mut Transient,
+        newton: &mut Newton,
+        dt: f64,
+    ) -> Result<(f64, usize), SolveError>;
+    /// Assemble the step's Newton system at the iterate ([`NonlinearSystem::evaluate`]);
+    /// false when there is none (an explicit step) or the iterate is inadmissible.
+    fn evaluate(&self, tr: &mut Transient, with_matrix: bool) -> bool;
+    /// After a step is committed (e.g. the forces the next step averages with).
+    fn committed(&self, _tr: &mut Transient) {}
+    /// Estimates its local error, so that the adaptive step control applies.
+    fn estimates_error(&self) -> bool;
+    /// Explicit: the first step is bounded by a stable-step estimate, and a failed step ends
+    /// the run instead of being retried shorter.
+    fn explicit(&self) -> bool {
+        false
+    }
 }
 
+/// Time integration scheme of a [`Transient`]: a shared handle on its [`StepMethod`].
+#[derive(Clone, Debug)]
+pub struct Scheme(std::sync::Arc<dyn StepMethod>);
+
 impl Scheme {
+    /// The scheme of a step method.
+    pub fn new(method: impl StepMethod + 'static) -> Self {
+        Scheme(std::sync::Arc::new(method))
+    }
+
+    /// Generalized-α with the parameters `ga` ([`generalized_alpha`]).
+    pub fn generalized_alpha(ga: GenAlpha) -> Self {
+        Self::new(generalized_alpha::GeneralizedAlphaStep(ga))
+    }
+
+    /// Explicit central difference ([`central_difference`]).
+    pub fn central_difference() -> Self {
+        Self::new(central_difference::CentralDifferenceStep)
+    }
+
     pub fn name(&self) -> &'static str {
-        match self {
-            Scheme::GeneralizedAlpha(_) => "generalized_alpha",
-            Scheme::CentralDifference => "central_difference",
-        }
+        self.0.name()
+    }
+
+    /// See [`StepMethod::estimates_error`].
+    pub fn estimates_error(&self) -> bool {
+        self.0.estimates_error()
+    }
+
+    /// See [`StepMethod::explicit`].
+    pub fn explicit(&self) -> bool {
+        self.0.explicit()
+    }
+
+    /// The step method.
+    pub fn method(&self) -> &dyn StepMethod {
+        self.0.as_ref()
     }
 }
 
@@ -732,10 +786,8 @@ impl Transient {
     pub fn attempt(&mut self, newton: &mut Newton, dt: f64) -> Result<(f64, usize), SolveError> {
         self.pending = None;
         self.dt = dt;
-        match self.scheme {
-            Scheme::GeneralizedAlpha(ga) => self.attempt_generalized_alpha(ga, newton, dt),
-            Scheme::CentralDifference => self.attempt_central_difference(dt),
-        }
+        let scheme = self.scheme.clone();
+        scheme.method().attempt(self, newton, dt)
     }
 
     /// Commit the step of the last successful [`Self::attempt`]: the quadrature-point history,
@@ -747,9 +799,8 @@ impl Transient {
             return;
         };
         self.commit_state(t1, Some(dt));
-        if matches!(self.scheme, Scheme::GeneralizedAlpha(_)) {
-            self.update_fprev();
-        }
+        let scheme = self.scheme.clone();
+        scheme.method().committed(self);
     }
 
     /// The one commit of the transient state: `next` ← (t1, sys.x, next.v, next.a) becomes the
@@ -794,11 +845,8 @@ impl NonlinearSystem for Transient {
         self.sys.pattern()
     }
     fn evaluate(&mut self, with_matrix: bool) -> bool {
-        match self.scheme {
-            Scheme::GeneralizedAlpha(ga) => self.assemble_generalized_alpha(&ga, with_matrix),
-            // Explicit: no Newton system.
-            Scheme::CentralDifference => false,
-        }
+        let scheme = self.scheme.clone();
+        scheme.method().evaluate(self, with_matrix)
     }
     fn residual(&self) -> &[f64] {
         self.sys.residual()
@@ -1177,18 +1225,17 @@ pub fn integrate(
     if !tr.update_fprev() {
         return Err((SolveError::InadmissibleStart, rep));
     }
-    let mut dt = match tr.scheme {
-        Scheme::CentralDifference => {
-            // Penetration at which the contact stiffness is taken (only matters for m_n ≠ 1).
-            let delta_ref = tr.kin.disp.map_or(0.05 * tr.wall, |d| d.target);
-            let s = tr.stable_step(delta_ref);
-            if s.is_finite() {
-                (0.9 * s).min(opts.dt)
-            } else {
-                opts.dt
-            }
+    let mut dt = if tr.scheme.explicit() {
+        // Penetration at which the contact stiffness is taken (only matters for m_n ≠ 1).
+        let delta_ref = tr.kin.disp.map_or(0.05 * tr.wall, |d| d.target);
+        let s = tr.stable_step(delta_ref);
+        if s.is_finite() {
+            (0.9 * s).min(opts.dt)
+        } else {
+            opts.dt
         }
-        _ => opts.dt,
+    } else {
+        opts.dt
     };
     let mut snap0 = tr.snapshot();
     rep.history.push(snap0);
@@ -1279,7 +1326,7 @@ pub fn integrate(
         match tr.attempt(&mut newton, h) {
             Ok((err, its)) => {
                 let reject = opts.adaptive
-                    && matches!(tr.scheme, Scheme::GeneralizedAlpha(_))
+                    && tr.scheme.estimates_error()
                     && err > 4.0 * opts.error_tol
                     && h > opts.dt_min;
                 if reject {
@@ -1350,7 +1397,7 @@ pub fn integrate(
                 if rep.steady && opts.stop_at_steady {
                     break;
                 }
-                if opts.adaptive && matches!(tr.scheme, Scheme::GeneralizedAlpha(_)) && err > 0.0 {
+                if opts.adaptive && tr.scheme.estimates_error() && err > 0.0 {
                     let proposed = (h * (0.9 * (opts.error_tol / err).cbrt()).clamp(0.5, 1.5))
                         .clamp(opts.dt_min, opts.dt_max);
                     // A step shortened to land on a passage says nothing against the
@@ -1373,9 +1420,7 @@ pub fn integrate(
                     residual: None,
                 });
                 dt = h;
-                if dt <= opts.dt_min * (1.0 + 1e-12)
-                    || matches!(tr.scheme, Scheme::CentralDifference)
-                {
+                if dt <= opts.dt_min * (1.0 + 1e-12) || tr.scheme.explicit() {
                     rep.final_time = tr.state.t;
                     return Err((e, rep));
                 }
