@@ -9,6 +9,7 @@
 //! counter-clockwise).
 
 use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
+use crate::model::system::Loading;
 use crate::model::SolidSystem;
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
@@ -21,7 +22,7 @@ use crate::math::Mat2;
 use crate::mesh::{annulus, AnnulusSpec};
 use crate::physics::{PressureMode, SolidModel};
 use crate::solver::stepping::StepOptions;
-use crate::solver::{LinearKind, NewtonOptions, SolveError};
+use crate::solver::{LinearKind, NewtonOptions, SolveError, SolvePlan};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -338,6 +339,29 @@ pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
                 LinearKind::Cholesky
             }
         }
+    }
+}
+
+/// The road of a scene: its load (load control) or its penetration (displacement control), as
+/// the load factor's target in static indentation and in the steady press.
+pub fn scene_loading(scene: &Scene) -> Loading {
+    match scene.road.as_ref().and_then(|r| r.load) {
+        Some(load) => Loading::Load { load },
+        None => Loading::Indent {
+            h_touch: scene.geometry.ro,
+            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+        },
+    }
+}
+
+/// The run's solve plan for `sys`: [`linear_kind`] and [`solver_options`] (progress lines
+/// off; [`SolvePlan::verbose`] turns them on).
+pub fn solve_plan(scene: &Scene, sys: &SolidSystem) -> SolvePlan {
+    let (newton, steps) = solver_options(scene, false);
+    SolvePlan {
+        kind: linear_kind(scene, sys),
+        newton,
+        steps,
     }
 }
 
