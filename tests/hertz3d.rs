@@ -11,11 +11,11 @@
 //!
 //! What bounds the error against Hertz besides the discretisation:
 //! * the wheel is not a half-space: a hub-bonded ring of radius Ro = 1, hub ri = 0.25 and
-//!   half-width 0.3 (10 contact radii and more to the free sides, 30 and more to the hub);
+//!   half-width 0.3 (12 contact radii to the free sides, 30 to the hub);
 //!   the far boundaries change the pressure by a relative amount of order (a/L)², L the
 //!   distance to them, and a rigid motion of the contact region changes nothing;
 //! * the body is a paraboloid only to O((a/R)²) (torus against its osculating paraboloid);
-//! * the response is not linear: strains are of order p0/E ≈ 1.5 %; the load is per
+//! * the response is not linear: strains are of order p0/E ≈ 1.7 %; the load is per
 //!   reference area and the surface stretches by a comparable relative amount, so p0 (per
 //!   reference area) carries an O(p0/E) bias while a, b (moments of the force density) do
 //!   not;
