@@ -177,9 +177,12 @@ fn solve(level: Level, crown: f64, disp: f64) -> Measured {
     )
     .expect("contact surface");
     let material = MaterialKind::NeoHookean.build(&[MU, LAMBDA]);
-    let mut sys = Solid3DSystem::new(Solid3D::new(mesh, material, 1.0, PressureMode::None), &fixed)
-        .with_contact(surface, RO, disp)
-        .expect("contact on the mesh");
+    let mut sys = Solid3DSystem::new(
+        Solid3D::new(mesh, material, 1.0, PressureMode::None),
+        &fixed,
+    )
+    .with_contact(surface, RO, disp)
+    .expect("contact on the mesh");
     let (e, nu) = young_poisson();
     // Force scale: the Hertz load of a circular contact of radius 0.02 Ro.
     sys.set_reference_force(4.0 / 3.0 * e / (1.0 - nu * nu) * 0.02f64.powi(3) * RO * RO);
@@ -268,8 +271,20 @@ fn crowned_wheel_contact_is_the_hertz_ellipse() {
         println!("crown R_c = {crown}, E* = {e_star:.4}, c_n = {C_N:e}, disp = {disp:e}");
         println!(
             "{:>7} {:>5} {:>6} {:>7} {:>10} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>6} {:>4}",
-            "h0", "q", "cells", "dofs", "P", "a/R", "err a", "err b", "p0 gp", "p0 node",
-            "p0 fit", "pen/δH", "s", "it"
+            "h0",
+            "q",
+            "cells",
+            "dofs",
+            "P",
+            "a/R",
+            "err a",
+            "err b",
+            "p0 gp",
+            "p0 node",
+            "p0 fit",
+            "pen/δH",
+            "s",
+            "it"
         );
         let mut worst = Vec::new();
         for &level in &levels {

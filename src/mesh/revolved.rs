@@ -15,7 +15,7 @@
 //!
 //! Axial breaks ([`graded_axial_breaks`]): geometric cell sizes symmetric about the mid-plane
 //! x3 = 0, the cells at the sides `grading_z` times the ones at the mid-plane (1: uniform;
-//! > 1 clusters the cells toward the mid-plane). With `half_width` only the half
+//! above 1 clusters the cells toward the mid-plane). With `half_width` only the half
 //! 0 ≤ x3 ≤ W/2 is meshed (for problems symmetric about the mid-plane): `n_z` cells from the
 //! mid-plane to the side, the last `grading_z` times the first.
 //!
@@ -131,7 +131,11 @@ impl RevolvedSpec {
             ));
         }
         if !(self.theta_ratio.is_finite() && self.theta_ratio > 0.0) {
-            return Err(err("theta_ratio", self.theta_ratio, "must be finite and > 0"));
+            return Err(err(
+                "theta_ratio",
+                self.theta_ratio,
+                "must be finite and > 0",
+            ));
         }
         if !(self.grading_z.is_finite() && self.grading_z > 0.0) {
             return Err(err("grading_z", self.grading_z, "must be finite and > 0"));
@@ -211,9 +215,7 @@ pub fn graded_axial_breaks(spec: &RevolvedSpec) -> Vec<f64> {
         return axial_breaks(spec.width, n);
     }
     // Distance of cell l to the middle cell(s): ⌊|2l − (n − 1)| / 2⌋.
-    let d: Vec<usize> = (0..n)
-        .map(|l| (2 * l).abs_diff(n - 1) / 2)
-        .collect();
+    let d: Vec<usize> = (0..n).map(|l| (2 * l).abs_diff(n - 1) / 2).collect();
     let mut z = cumulate(&geometric_sizes(&d, spec.grading_z), -h, h);
     if n.is_multiple_of(2) {
         z[n / 2] = 0.0;
@@ -563,11 +565,17 @@ mod tests {
         let s = spec(2, None);
         assert_eq!(theta_breaks(&s), angular_breaks(&s.annulus_spec()));
         for n_z in [1, 2, 3, 4, 7] {
-            let s = RevolvedSpec { n_z, ..spec(2, None) };
+            let s = RevolvedSpec {
+                n_z,
+                ..spec(2, None)
+            };
             let z = graded_axial_breaks(&s);
             assert_eq!(z, axial_breaks(s.width, n_z));
             for (l, w) in z.windows(2).enumerate() {
-                assert!((w[1] - w[0] - s.width / n_z as f64).abs() < 1e-15, "cell {l}");
+                assert!(
+                    (w[1] - w[0] - s.width / n_z as f64).abs() < 1e-15,
+                    "cell {l}"
+                );
             }
         }
         // A graded spec with ratio 1 in s is the uniform one: the sine map alone.
@@ -609,7 +617,11 @@ mod tests {
                 h.iter().cloned().fold(0.0, f64::max),
             );
             assert!((h[0] - if rho > 1.0 { lo } else { hi }).abs() < 1e-14);
-            assert!((hi / lo - rho.max(1.0 / rho)).abs() < 1e-12 * rho, "n={n}: {}", hi / lo);
+            assert!(
+                (hi / lo - rho.max(1.0 / rho)).abs() < 1e-12 * rho,
+                "n={n}: {}",
+                hi / lo
+            );
             // Constant ratio of neighbours on the way to the top.
             let q = h[1] / h[0];
             for k in 1..(n - 1) / 2 {
@@ -708,7 +720,7 @@ mod tests {
                         }
                     }
                 }
-                assert!(mh.node_sets.get("side_neg").is_none());
+                assert!(!mh.node_sets.contains_key("side_neg"));
                 for &n in mh.node_set("mid") {
                     assert_eq!(mh.nodes[n as usize][2], 0.0);
                 }
