@@ -19,6 +19,7 @@ pub mod driver;
 pub mod estimate;
 pub mod moving_mesh;
 pub mod navier_stokes;
+pub mod p_navier_stokes;
 pub mod poisson;
 pub mod quadtree;
 pub mod space;
