@@ -1062,17 +1062,7 @@ pub struct TimeParams {
     pub theta: f64,
 }
 
-/// The transient p-adaptive run from t = 0 with initial degrees `degrees`. Every attempt of
-/// every step is reported (the accepted one last, `accepted` set); with an infinite tolerance
-/// every step is accepted at once (uniform run with its estimate).
-pub fn run_transient(
-    tree: &Quadtree,
-    degrees: &[usize],
-    problem: &TransientProblem,
-    time: &TimeParams,
-    params: &PAdaptParams,
-) -> Result<Vec<SweepReport>, PnsError> {
-    params.check()?;
+fn check_time(time: &TimeParams) -> Result<(), PnsError> {
     if !(time.dt > 0.0 && time.dt.is_finite()) {
         return Err(PnsError::Parameter {
             what: "the time step",
@@ -1085,19 +1075,81 @@ pub fn run_transient(
             value: time.theta,
         });
     }
+    Ok(())
+}
+
+/// The pair on `degrees` with the Dirichlet data of time `t`.
+pub fn pair_at(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &TransientProblem,
+    t: f64,
+) -> Result<Rc<PTaylorHood>, PnsError> {
+    Ok(Rc::new(PTaylorHood::new(tree, degrees, &|x, c| {
+        (problem.g)(x, t, c)
+    })?))
+}
+
+/// The initial field: the L² projection of u₀ onto the velocity space of `degrees` (boundary
+/// dofs from g(·, 0)).
+pub fn initial_field(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &TransientProblem,
+) -> Result<Field, PnsError> {
+    let th = pair_at(tree, degrees, problem, 0.0)?;
+    let x = th.project_velocity(&|_, _, _, x| (problem.u0)(x))?;
+    Ok(Field { th, x })
+}
+
+/// One θ-step from `hist` (at t_new − dt, on the same leaves, any degrees) to `t_new` on the
+/// pair of `degrees`, by Newton from the old velocity projected onto the new space.
+pub fn theta_step(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &TransientProblem,
+    time: &TimeParams,
+    hist: &Field,
+    t_new: f64,
+) -> Result<(Field, NewtonStats), PnsError> {
+    check_time(time)?;
     let physics = Physics {
         nu: problem.nu,
         f: problem.f,
-        t: 0.0,
+        t: t_new,
     };
-    let pair = |d: &[usize], t: f64| -> Result<Rc<PTaylorHood>, PnsError> {
-        Ok(Rc::new(PTaylorHood::new(tree, d, &|x, c| (problem.g)(x, t, c))?))
+    let th = pair_at(tree, degrees, problem, t_new)?;
+    if hist.th.n_cells() != th.n_cells() {
+        return Err(PnsError::Mesh {
+            expected: th.n_cells(),
+            got: hist.th.n_cells(),
+        });
+    }
+    let mut y = th.gather(&th.project_velocity(&|k, xi, eta, _| hist.velocity(k, xi, eta).0)?);
+    let step = ThetaStep {
+        old: hist,
+        dt: time.dt,
+        theta: time.theta,
+        t_new,
     };
-    let initial = |d: &[usize]| -> Result<Field, PnsError> {
-        let th = pair(d, 0.0)?;
-        let x = th.project_velocity(&|_, _, _, x| (problem.u0)(x))?;
-        Ok(Field { th, x })
-    };
+    let s = solve_newton(&th, &mut y, &physics, Some(&step), NEWTON_TOL, NEWTON_MAX)?;
+    let x = th.distribute(&y);
+    Ok((Field { th, x }, s))
+}
+
+/// The transient p-adaptive run from t = 0 with initial degrees `degrees`. Every attempt of
+/// every step is reported (the accepted one last, `accepted` set); with an infinite tolerance
+/// every step is accepted at once (uniform run with its estimate).
+pub fn run_transient(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &TransientProblem,
+    time: &TimeParams,
+    params: &PAdaptParams,
+) -> Result<Vec<SweepReport>, PnsError> {
+    params.check()?;
+    check_time(time)?;
+    let initial = |d: &[usize]| initial_field(tree, d, problem);
     let mut d = degrees.to_vec();
     let mut old = initial(&d)?;
     let mut old_fine = initial(&enriched(&d, params.enrich))?;
@@ -1107,20 +1159,8 @@ pub fn run_transient(
         let t_old = n as f64 * time.dt;
         for sweep in 0.. {
             let advance = |hist: &Field, deg: &[usize]| -> Result<(Field, usize), PnsError> {
-                let th = pair(deg, t_new)?;
-                // Initial guess: the old velocity in the new space.
-                let mut y = th.gather(&th.project_velocity(&|k, xi, eta, _| {
-                    hist.velocity(k, xi, eta).0
-                })?);
-                let step = ThetaStep {
-                    old: hist,
-                    dt: time.dt,
-                    theta: time.theta,
-                    t_new,
-                };
-                let s = solve_newton(&th, &mut y, &physics, Some(&step), NEWTON_TOL, NEWTON_MAX)?;
-                let x = th.distribute(&y);
-                Ok((Field { th, x }, s.iterations))
+                let (f, s) = theta_step(tree, deg, problem, time, hist, t_new)?;
+                Ok((f, s.iterations))
             };
             let (new, i0) = advance(&old, &d)?;
             let (new_fine, i1) = advance(&old_fine, &enriched(&d, params.enrich))?;
@@ -1148,7 +1188,7 @@ pub fn run_transient(
                 old = initial(&d)?;
                 old_fine = initial(&enriched(&d, params.enrich))?;
             } else {
-                let th = pair(&d, t_old)?;
+                let th = pair_at(tree, &d, problem, t_old)?;
                 let x = th.project_velocity(&|k, xi, eta, _| old_fine.velocity(k, xi, eta).0)?;
                 old = Field { th, x };
             }
