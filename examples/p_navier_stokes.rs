@@ -3,14 +3,15 @@
 //!
 //! ```text
 //! cargo run --release --no-default-features --example p_navier_stokes -- kovasznay
-//! cargo run --release --no-default-features --example p_navier_stokes -- taylor-green [TOL]
+//! cargo run --release --no-default-features --example p_navier_stokes -- taylor-green [TOL] [STEPS]
 //! ```
 //!
 //! `kovasznay`: steady Kovasznay flow at Re = 40 on 12 cells, uniform degrees 2..=7 (error,
 //! estimates by enrichment +1 and +2, effectivities) and the p-adaptive loop.
-//! `taylor-green`: the Taylor–Green vortex on a locally refined 4 × 4 mesh, Crank–Nicolson, the
-//! per-step table of the p-adaptive run (time, degree histogram, unknowns, estimate, true
-//! error, global and local effectivity) and the uniform runs for comparison.
+//! `taylor-green`: the Taylor–Green vortex on a graded 25-cell mesh, Crank–Nicolson (dt = 0.02,
+//! STEPS steps, default 5), the per-step table of the p-adaptive run with tolerance TOL
+//! (default 1e-4; every attempt of every step: time, degree histogram, unknowns, estimate,
+//! true error, global and local effectivity) and the uniform runs p = 5..=8 for comparison.
 
 use std::f64::consts::PI;
 use std::process::ExitCode;
@@ -49,8 +50,8 @@ const TG_NU: f64 = 0.01;
 fn tg_exact(x: [f64; 2], t: f64) -> ([f64; 2], [[f64; 2]; 2]) {
     let k = TG_K;
     let a = (-2.0 * TG_NU * k * k * t).exp();
-    let (sx, cx) = (k * x[0]).sin_cos();
-    let (sy, cy) = (k * x[1]).sin_cos();
+    let (sx, cx) = (k * (x[0] + 0.1)).sin_cos();
+    let (sy, cy) = (k * (x[1] + 0.2)).sin_cos();
     (
         [a * cx * sy, -a * sx * cy],
         [
@@ -60,22 +61,23 @@ fn tg_exact(x: [f64; 2], t: f64) -> ([f64; 2], [[f64; 2]; 2]) {
     )
 }
 
-/// The unit square as 4 × 4 cells with the lower-left quadrant split once more.
+/// The unit square as 2 × 2 cells with the lower-left quadrant split twice (25 cells of sides
+/// 1/2, 1/4 and 1/8).
 fn tg_mesh() -> Quadtree {
     let mut t = Quadtree::new([0.0, 0.0], 1.0, &[(0, 0)], 2);
+    let l = t.leaves();
+    t.refine(&l);
     for _ in 0..2 {
-        let l = t.leaves();
-        t.refine(&l);
+        let marked: Vec<u32> = t
+            .leaves()
+            .into_iter()
+            .filter(|&c| {
+                let [x, y] = t.corner(c);
+                x < 0.49 && y < 0.49
+            })
+            .collect();
+        t.refine(&marked);
     }
-    let marked: Vec<u32> = t
-        .leaves()
-        .into_iter()
-        .filter(|&c| {
-            let [x, y] = t.corner(c);
-            x < 0.49 && y < 0.49
-        })
-        .collect();
-    t.refine(&marked);
     t
 }
 
@@ -165,7 +167,7 @@ fn kovasznay() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-fn taylor_green(tol: f64) -> Result<(), Box<dyn std::error::Error>> {
+fn taylor_green(tol: f64, n_steps: usize) -> Result<(), Box<dyn std::error::Error>> {
     let tree = tg_mesh();
     let n = tree.leaves().len();
     let g = |x: [f64; 2], t: f64, c: usize| tg_exact(x, t).0[c];
@@ -181,11 +183,12 @@ fn taylor_green(tol: f64) -> Result<(), Box<dyn std::error::Error>> {
     };
     let time = TimeParams {
         dt: 0.02,
-        n_steps: 5,
+        n_steps,
         theta: 0.5,
     };
     println!(
-        "Taylor–Green vortex, nu = {TG_NU}, k = 2π, {n} cells, Crank–Nicolson dt = {}",
+        "Taylor–Green vortex (shifted by (0.1, 0.2)), nu = {TG_NU}, k = 2π, {n} cells, \
+         Crank–Nicolson dt = {}, enrichment +2",
         time.dt
     );
     let params = PAdaptParams {
@@ -198,7 +201,7 @@ fn taylor_green(tol: f64) -> Result<(), Box<dyn std::error::Error>> {
     println!("\np-adaptive, tolerance {tol:.1e} (every attempt; acc = step accepted):");
     let reps = run_transient(&tree, &vec![2; n], &problem, &time, &params)?;
     print_table(&reps);
-    for p in 3..=6 {
+    for p in 5..=8 {
         let uniform = PAdaptParams {
             tol: f64::INFINITY,
             ..params
@@ -218,17 +221,19 @@ fn main() -> ExitCode {
             let tol = match args.get(1).map(|s| s.parse::<f64>()) {
                 None => Ok(1e-4),
                 Some(Ok(v)) if v > 0.0 && v.is_finite() => Ok(v),
-                Some(_) => Err(format!(
-                    "TOL must be a positive number, got {:?}",
-                    args[1]
-                )),
+                Some(_) => Err(format!("TOL must be a positive number, got {:?}", args[1])),
             };
-            match tol {
-                Ok(t) => taylor_green(t),
-                Err(e) => Err(e.into()),
+            let steps = match args.get(2).map(|s| s.parse::<usize>()) {
+                None => Ok(5),
+                Some(Ok(v)) if v > 0 => Ok(v),
+                Some(_) => Err(format!("STEPS must be a positive integer, got {:?}", args[2])),
+            };
+            match (tol, steps) {
+                (Ok(t), Ok(n)) => taylor_green(t, n),
+                (Err(e), _) | (_, Err(e)) => Err(e.into()),
             }
         }
-        _ => Err("usage: p_navier_stokes kovasznay | taylor-green [TOL]".into()),
+        _ => Err("usage: p_navier_stokes kovasznay | taylor-green [TOL] [STEPS]".into()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -422,10 +422,10 @@ impl PTaylorHood {
                             kl[(ra + 1) * nl + cb] += react * gu[1][0];
                             kl[(ra + 1) * nl + cb + 1] += diag + react * gu[1][1];
                         }
-                        for b in 0..npr {
+                        for (b, &npb) in np.iter().enumerate().take(npr) {
                             let pb = 2 * nv + b;
                             for cc in 0..2 {
-                                let v = w * np[b] * dn[a][cc];
+                                let v = w * npb * dn[a][cc];
                                 kl[(ra + cc) * nl + pb] -= v;
                                 kl[pb * nl + ra + cc] -= v;
                             }
@@ -669,13 +669,16 @@ impl CellNorms {
     }
 }
 
+/// Velocity and gradient at reference (ξ, η) of leaf k and physical point x.
+type CellEval<'a> = &'a dyn Fn(usize, f64, f64, [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]);
+
 /// Per-cell norms of v_a − v_b, where `a(k, ξ, η, x)` and `b` give velocity and gradient;
 /// `nq(k)` Gauss points per direction.
 fn cell_norms(
     th: &PTaylorHood,
     nq: &dyn Fn(usize) -> usize,
-    a: &dyn Fn(usize, f64, f64, [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]),
-    b: &dyn Fn(usize, f64, f64, [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]),
+    a: CellEval,
+    b: CellEval,
 ) -> CellNorms {
     let mut rules = Rules::new();
     let mut out = CellNorms {
@@ -978,8 +981,7 @@ pub struct SweepReport {
 }
 
 fn report(
-    t: f64,
-    sweep: usize,
+    (t, sweep): (f64, usize),
     est_coarse: &Field,
     fine: &Field,
     eta: &[f64],
@@ -1020,8 +1022,7 @@ pub fn adapt_steady(
     for sweep in 0.. {
         let est = estimate(tree, &d, problem, params.enrich)?;
         let mut rep = report(
-            0.0,
-            sweep,
+            (0.0, sweep),
             &est.coarse,
             &est.fine,
             &est.indicators,
@@ -1043,6 +1044,9 @@ pub fn adapt_steady(
     unreachable!("the loop returns")
 }
 
+/// An exact velocity and its gradient at (x, t).
+pub type ExactTransient<'a> = &'a dyn Fn([f64; 2], f64) -> ([f64; 2], [[f64; 2]; 2]);
+
 /// A transient problem: viscosity, Dirichlet data g(x, t, comp), body force f(x, t), initial
 /// velocity and (optionally) the exact velocity at (x, t).
 pub struct TransientProblem<'a> {
@@ -1050,8 +1054,7 @@ pub struct TransientProblem<'a> {
     pub g: &'a dyn Fn([f64; 2], f64, usize) -> f64,
     pub f: &'a dyn Fn([f64; 2], f64) -> [f64; 2],
     pub u0: &'a dyn Fn([f64; 2]) -> [f64; 2],
-    #[allow(clippy::type_complexity)]
-    pub exact: Option<&'a dyn Fn([f64; 2], f64) -> ([f64; 2], [[f64; 2]; 2])>,
+    pub exact: Option<ExactTransient<'a>>,
 }
 
 /// Time stepping: step size, number of steps, θ (1/2: Crank–Nicolson).
@@ -1167,7 +1170,7 @@ pub fn run_transient(
             let eta = difference(&new_fine, &new).l2;
             let exact = problem.exact.map(|e| move |x: [f64; 2]| e(x, t_new));
             let exact_ref = exact.as_ref().map(|e| e as &dyn Fn([f64; 2]) -> _);
-            let mut rep = report(t_new, sweep, &new, &new_fine, &eta, params, exact_ref, i0 + i1);
+            let mut rep = report((t_new, sweep), &new, &new_fine, &eta, params, exact_ref, i0 + i1);
             let marked = mark_cells(&new.th, &eta, params);
             if marked.is_empty() || sweep + 1 >= params.max_sweeps {
                 rep.accepted = true;
