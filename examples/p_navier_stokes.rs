@@ -226,7 +226,10 @@ fn main() -> ExitCode {
             let steps = match args.get(2).map(|s| s.parse::<usize>()) {
                 None => Ok(5),
                 Some(Ok(v)) if v > 0 => Ok(v),
-                Some(_) => Err(format!("STEPS must be a positive integer, got {:?}", args[2])),
+                Some(_) => Err(format!(
+                    "STEPS must be a positive integer, got {:?}",
+                    args[2]
+                )),
             };
             match (tol, steps) {
                 (Ok(t), Ok(n)) => taylor_green(t, n),

@@ -7,9 +7,9 @@
 use std::f64::consts::PI;
 use std::rc::Rc;
 use tread::adapt::p_navier_stokes::{
-    adapt_steady, effectivity, estimate, exact_error, initial_field, pressure_error,
-    run_transient, theta_step, Field, PAdaptParams, PMarking, PTaylorHood, Physics,
-    SteadyProblem, SweepReport, ThetaStep, TimeParams, TransientProblem,
+    adapt_steady, effectivity, estimate, exact_error, initial_field, pressure_error, run_transient,
+    theta_step, Field, PAdaptParams, PMarking, PTaylorHood, Physics, SteadyProblem, SweepReport,
+    ThetaStep, TimeParams, TransientProblem,
 };
 use tread::adapt::quadtree::Quadtree;
 
@@ -100,7 +100,10 @@ fn jacobian_matches_central_differences_with_hanging_nodes_and_mixed_degrees() {
             .zip(&r_plain)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        assert!(rdiff < 1e-13, "residual depends on the Jacobian flag: {rdiff:e}");
+        assert!(
+            rdiff < 1e-13,
+            "residual depends on the Jacobian flag: {rdiff:e}"
+        );
         let j = dense_columns(&th, &jv);
         let scale = jv.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let hfd = 1e-6;
@@ -136,8 +139,14 @@ fn patch_u(x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
             -(3.0 * a * a * b + b * b * b + 2.0 * a * b * b),
         ],
         [
-            [3.0 * a * a + 3.0 * b * b + 4.0 * a * b, 6.0 * a * b + 2.0 * a * a],
-            [-(6.0 * a * b + 2.0 * b * b), -(3.0 * a * a + 3.0 * b * b + 4.0 * a * b)],
+            [
+                3.0 * a * a + 3.0 * b * b + 4.0 * a * b,
+                6.0 * a * b + 2.0 * a * a,
+            ],
+            [
+                -(6.0 * a * b + 2.0 * b * b),
+                -(3.0 * a * a + 3.0 * b * b + 4.0 * a * b),
+            ],
         ],
     )
 }
@@ -379,7 +388,10 @@ fn uniform_errors(tree: &Quadtree, p: usize, time: &TimeParams) -> (usize, Vec<f
 }
 
 fn sci(v: &[f64]) -> String {
-    v.iter().map(|e| format!("{e:.3e}")).collect::<Vec<_>>().join(" ")
+    v.iter()
+        .map(|e| format!("{e:.3e}"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn print_reports(name: &str, reps: &[SweepReport]) {
@@ -491,15 +503,19 @@ fn taylor_green_adaptive_reaches_the_tolerance_with_fewer_unknowns_than_uniform(
     let mut uniform = None;
     for p in 2..=8 {
         let (n_eq, errs) = uniform_errors(&tree, p, &TG_TIME);
-        eprintln!("taylor-green uniform p = {p}: {n_eq} unknowns, errors {}", sci(&errs));
+        eprintln!(
+            "taylor-green uniform p = {p}: {n_eq} unknowns, errors {}",
+            sci(&errs)
+        );
         if errs.iter().all(|&e| e <= params.tol) {
             uniform = Some((p, n_eq));
             break;
         }
     }
     let (p, uniform_n) = uniform.expect("a uniform degree reaches the tolerance");
-    eprintln!(
-        "taylor-green: adaptive {adaptive_n} unknowns, uniform p = {p} {uniform_n} unknowns"
+    eprintln!("taylor-green: adaptive {adaptive_n} unknowns, uniform p = {p} {uniform_n} unknowns");
+    assert!(
+        adaptive_n < uniform_n,
+        "adaptive {adaptive_n}, uniform {uniform_n}"
     );
-    assert!(adaptive_n < uniform_n, "adaptive {adaptive_n}, uniform {uniform_n}");
 }

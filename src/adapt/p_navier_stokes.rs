@@ -302,9 +302,7 @@ impl PTaylorHood {
         let mut dn = [[0.0; 2]; MAX_LOCAL_SCALAR];
         let np = self.pres.shape(k, self.h[k], xi, eta, &mut n, &mut dn);
         let dofs = self.pres.dofs(k);
-        (0..np)
-            .map(|b| n[b] * x[self.n_u + dofs[b] as usize])
-            .sum()
+        (0..np).map(|b| n[b] * x[self.n_u + dofs[b] as usize]).sum()
     }
 
     /// Condensed residual R(y) = Cᵀ r(C y + b) of the steady equations (`step` = `None`) or of
@@ -939,7 +937,9 @@ pub fn estimate(
     let solve = |d: &[usize], guess: Option<&Field>| -> Result<(Field, NewtonStats), PnsError> {
         let th = Rc::new(PTaylorHood::new(tree, d, problem.g)?);
         let mut y = match guess {
-            Some(gf) => th.gather(&th.project_velocity(&|k, xi, eta, _| gf.velocity(k, xi, eta).0)?),
+            Some(gf) => {
+                th.gather(&th.project_velocity(&|k, xi, eta, _| gf.velocity(k, xi, eta).0)?)
+            }
             None => vec![0.0; th.n_eq()],
         };
         let stats = solve_newton(&th, &mut y, &physics, None, NEWTON_TOL, NEWTON_MAX)?;
@@ -1170,7 +1170,15 @@ pub fn run_transient(
             let eta = difference(&new_fine, &new).l2;
             let exact = problem.exact.map(|e| move |x: [f64; 2]| e(x, t_new));
             let exact_ref = exact.as_ref().map(|e| e as &dyn Fn([f64; 2]) -> _);
-            let mut rep = report((t_new, sweep), &new, &new_fine, &eta, params, exact_ref, i0 + i1);
+            let mut rep = report(
+                (t_new, sweep),
+                &new,
+                &new_fine,
+                &eta,
+                params,
+                exact_ref,
+                i0 + i1,
+            );
             let marked = mark_cells(&new.th, &eta, params);
             if marked.is_empty() || sweep + 1 >= params.max_sweeps {
                 rep.accepted = true;
