@@ -1009,7 +1009,9 @@ fn report(
 }
 
 /// The steady p-adaptive loop from `degrees`: solve, estimate, mark, raise, until no cell is
-/// marked or `max_sweeps` solves. Returns one report per sweep and the last solution.
+/// marked (or every cell above its share is at `max_degree`: then
+/// [`SweepReport::worst_ratio`] > 1) or `max_sweeps` solves (the last report is then not
+/// `accepted`). Returns one report per sweep and the last solution.
 pub fn adapt_steady(
     tree: &Quadtree,
     degrees: &[usize],
@@ -1142,7 +1144,9 @@ pub fn theta_step(
 
 /// The transient p-adaptive run from t = 0 with initial degrees `degrees`. Every attempt of
 /// every step is reported (the accepted one last, `accepted` set); with an infinite tolerance
-/// every step is accepted at once (uniform run with its estimate).
+/// every step is accepted at once (uniform run with its estimate). A step is also accepted
+/// after `max_sweeps` attempts, or when every cell above its share is at `max_degree`; its
+/// [`SweepReport::worst_ratio`] is then above 1.
 pub fn run_transient(
     tree: &Quadtree,
     degrees: &[usize],
