@@ -177,6 +177,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             typed,
             field: None,
             history: None,
+            contact: sys.contact_samples(),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

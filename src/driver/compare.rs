@@ -35,6 +35,7 @@ use super::results::{
 };
 use super::steady_run;
 use crate::assembly::QpHistory;
+use crate::contact::ContactSample;
 use crate::element::QuadRule;
 use crate::io::output::{ensure_dir, write_json, write_text_csv};
 use crate::io::scene::{Mode, Scene, Sink};
@@ -395,7 +396,7 @@ pub fn history_difference(
     if h_t.n_state != h_s.n_state || h_t.data.len() != h_s.data.len() || h_s.n_state < 6 {
         return Ok(None);
     }
-    let model = build_model(&with_csv(scene, Mode::Steady))?;
+    let model = build_model(&for_mode(scene, Mode::Steady))?;
     let Some(layout) = model.mesh.rings else {
         return Ok(None);
     };
@@ -464,12 +465,12 @@ pub fn history_difference(
     Ok(Some(out))
 }
 
-fn with_csv(scene: &Scene, mode: Mode) -> Scene {
+/// The scene as one of the two compared runs: its mode set, and in the steady mode no
+/// continuation (the comparison is at the scene's speed). Its outputs are the scene's: the
+/// comparison takes both runs' results in memory.
+fn for_mode(scene: &Scene, mode: Mode) -> Scene {
     let mut s = scene.clone();
     s.analysis.mode = mode;
-    if !s.output.has(Sink::Csv) {
-        s.output.sinks.push(Sink::Csv);
-    }
     if mode == Mode::Steady {
         s.continuation = None;
     }
@@ -479,7 +480,7 @@ fn with_csv(scene: &Scene, mode: Mode) -> Scene {
 /// Mean spacing of the outer-surface nodes of `scene`'s mesh (the nodes within 1e-9 Ro of the
 /// outer radius; 2π Ro over their count).
 fn surface_spacing(scene: &Scene) -> Result<f64, AppError> {
-    let model = build_model(&with_csv(scene, Mode::Steady))?;
+    let model = build_model(&for_mode(scene, Mode::Steady))?;
     let ro = scene.geometry.ro;
     let n = model
         .mesh
@@ -522,7 +523,7 @@ pub fn run_with_tolerances(
         Some(_) => {}
     }
     let mut warnings = steady_run::warnings(scene);
-    let tr_scene = with_csv(scene, Mode::Transient);
+    let tr_scene = for_mode(scene, Mode::Transient);
     let tr_opts = RunOptions {
         out_dir: opts.out_dir.join("transient"),
         ..opts.clone()
@@ -534,7 +535,7 @@ pub fn run_with_tolerances(
         }
         Err(e) => return Err(e),
     };
-    let st_scene = with_csv(scene, Mode::Steady);
+    let st_scene = for_mode(scene, Mode::Steady);
     let st_opts = RunOptions {
         out_dir: opts.out_dir.join("steady"),
         ..opts.clone()
@@ -718,8 +719,8 @@ pub fn run_with_tolerances(
     }
     if scene.output.has(Sink::Png) {
         contact_plot(
-            &tr_opts.out_dir,
-            &st_opts.out_dir,
+            &tr.contact,
+            &st.contact,
             &opts.out_dir.join("contact_compare.png"),
             &crate::io::record::png::Units::parse(&scene.scene.units),
         );
@@ -770,6 +771,7 @@ pub fn run_with_tolerances(
         typed,
         field: None,
         history: None,
+        contact: Vec::new(),
         out_dir: opts.out_dir.clone(),
         converged,
         headline,
@@ -849,28 +851,29 @@ pub fn comparison_table(qs: &[CompareQuantity]) -> Vec<String> {
 /// Points (x1, value) of one curve.
 type Curve = Vec<(f64, f64)>;
 
-/// t_n and t_T along x1 from both modes' `contact.csv` (warnings only on failure).
-fn contact_plot(tr: &Path, st: &Path, out: &Path, units: &crate::io::record::png::Units) {
-    let load = |dir: &Path| -> Option<(Curve, Curve)> {
-        let (h, rows) = read_csv(&dir.join("contact.csv")).ok()?;
-        let ix = h.iter().position(|c| c == "x1")?;
-        let in_ = h.iter().position(|c| c == "t_n")?;
-        let it = h.iter().position(|c| c == "t_t")?;
-        let width = ix.max(in_).max(it);
-        let mut rows: Vec<&Vec<f64>> = rows
+/// t_n and t_T along x1 of both modes' final contact tractions (warnings only on failure).
+fn contact_plot(
+    tr: &[ContactSample],
+    st: &[ContactSample],
+    out: &Path,
+    units: &crate::io::record::png::Units,
+) {
+    let curves = |samples: &[ContactSample]| -> (Curve, Curve) {
+        let mut rows: Vec<&ContactSample> = samples
             .iter()
-            .filter(|r| r.len() > width && r[in_] > 0.0)
+            .filter(|s| s.t_n > 0.0 && s.x1.is_finite())
             .collect();
-        rows.sort_by(|a, b| a[ix].total_cmp(&b[ix]));
-        Some((
-            rows.iter().map(|r| (r[ix], r[in_])).collect(),
-            rows.iter().map(|r| (r[ix], r[it])).collect(),
-        ))
+        rows.sort_by(|a, b| a.x1.total_cmp(&b.x1));
+        (
+            rows.iter().map(|s| (s.x1, s.t_n)).collect(),
+            rows.iter().map(|s| (s.x1, s.t_t)).collect(),
+        )
     };
-    let (Some((tn_t, tt_t)), Some((tn_s, tt_s))) = (load(tr), load(st)) else {
-        eprintln!("tread: warning: contact_compare.png: no contact.csv from both modes");
+    let ((tn_t, tt_t), (tn_s, tt_s)) = (curves(tr), curves(st));
+    if tn_t.is_empty() || tn_s.is_empty() {
+        eprintln!("tread: warning: contact_compare.png: no contact in one of the modes");
         return;
-    };
+    }
     if let Err(e) = crate::io::record::png::line_chart(
         out,
         "Contact tractions: transient (extracted) vs steady",

@@ -702,6 +702,9 @@ pub struct RunOutcome {
     /// steady solution's, or the transient run's at its last node passage
     /// ([`crate::driver::transient::SteadyMonitor::history`]). None otherwise.
     pub history: Option<crate::assembly::QpHistory>,
+    /// The contact tractions of the final state at the facet quadrature points (the rows of
+    /// `contact.csv`); empty without contact.
+    pub contact: Vec<crate::contact::ContactSample>,
     pub out_dir: std::path::PathBuf,
     pub converged: bool,
     /// Human-readable result lines for the terminal.

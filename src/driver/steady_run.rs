@@ -862,6 +862,7 @@ pub fn run_with_dump(
             typed,
             field,
             history: (!st.sys.model.history.is_empty()).then(|| st.sys.model.history.clone()),
+            contact: samples.clone(),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

@@ -198,6 +198,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             typed,
             field: None,
             history: None,
+            contact: Vec::new(),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,

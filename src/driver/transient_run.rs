@@ -413,6 +413,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             typed,
             field,
             history: tr.steady_history.clone(),
+            contact: samples.clone(),
             out_dir: opts.out_dir.clone(),
             converged,
             headline,
