@@ -626,6 +626,7 @@ impl Scene {
                 file: self.mesh.file.clone(),
                 hub: self.mesh.hub.clone(),
                 contact: self.mesh.contact.clone(),
+                dimension: self.mesh.dimension,
                 ..MeshSpec::default()
             };
             return match toml::Table::try_from(&scene)

@@ -1051,6 +1051,11 @@ mod tests {
                     file: Some("m.msh".into()),
                     hub: Some("hub".into()),
                     contact: Some("contact".into()),
+                    dimension: 3,
+                    width: Some(1.0),
+                    n_z: Some(2),
+                    crown_radius: Some(1.0),
+                    sides: Some(MeshSides::Free),
                     ..MeshSpec::default()
                 }),
             ),
@@ -1113,6 +1118,11 @@ mod tests {
                 file: Some("m.msh".into()),
                 hub: Some("hub".into()),
                 contact: Some("contact".into()),
+                dimension: 3,
+                width: Some(1.0),
+                n_z: Some(2),
+                crown_radius: Some(1.0),
+                sides: Some(MeshSides::Free),
                 ..MeshSpec::default()
             },
         );
