@@ -258,9 +258,11 @@ fn spinning_slab_matches_the_radial_solution() {
     // The discretisation error of Hex27 on 3 × 24 cells (h³ convergence is measured in
     // tests/solid3d.rs): this bound is a measured value with a margin, not a target.
     assert!(e < 1e-4, "relative error {e:.3e}");
-    // The sliding faces keep u3 = 0.
+    // The sliding faces keep u3 = 0 (the mid-layer of Hex27 nodes up to round-off).
     let (_, rows) = csv(&d.join("nodes.csv"));
-    assert!(rows.iter().all(|r| r[6] == 0.0));
+    let umax = f(r, "max_displacement");
+    assert!(rows.iter().all(|r| r[6].abs() <= 1e-12 * umax));
+    assert!(rows.iter().filter(|r| r[3].abs() > 0.0).all(|r| r[6] == 0.0));
     assert!(r["road_height"].is_null());
     assert_field_files(&d, s["solver"]["load_steps"].as_u64().expect("steps") as usize);
 }
