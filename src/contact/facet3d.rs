@@ -56,6 +56,13 @@
 //! and the local tangent K_{3a+i, 3b+j} = −∫ N_a N_b D_ij dA0. Frictionless and undamped it is
 //! symmetric: the residual is then the gradient of Φ = ∫ c_n δ^{m+1}/(m+1) dA0.
 //!
+//! # The road height as an unknown (load control)
+//!
+//! [`ContactSurface3D::facet_kernel_height`] appends H after the cell's dofs: its row is the
+//! facet's part −∫ t_n dA0 of the equation λ · load − ∫ t_n dA0 = 0 (the load added once by the
+//! caller), with ∂δ/∂H = −1, so that ∂T/∂H = (∂t1/∂t_n ∂t_n/∂H − ∂t1/∂δ, −∂t_n/∂δ,
+//! ∂t3/∂t_n ∂t_n/∂H − ∂t3/∂δ) and ∂R_H/∂U_b = −∫ N_b ∂t_n/∂u_b2 dA0; H moves no velocity.
+//!
 //! # Facets, rule and margin
 //!
 //! A facet is a [`HexFacet`] (cell, face) of a [`HexMesh`]; the reference surface, its area

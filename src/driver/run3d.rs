@@ -175,7 +175,7 @@ impl StepObserver<Solid3DSystem> for Run3DObserver {
         };
         self.rows.push(row);
         self.last = row;
-        if info.index % self.every != 0 && !info.is_final {
+        if !info.index.is_multiple_of(self.every) && !info.is_final {
             return;
         }
         if let Some(h) = self.hex.as_mut() {
