@@ -477,10 +477,7 @@ pub fn build_hex_mesh(scene: &Scene) -> Result<HexMesh, AppError> {
             "mesh"
         };
         let key = if e.key == "degree" { "order" } else { e.key };
-        AppError::Unsupported(format!(
-            "{section}.{key} = {}: {}",
-            e.value, e.reason
-        ))
+        AppError::Unsupported(format!("{section}.{key} = {}: {}", e.value, e.reason))
     })?;
     mesh.make_isoparametric();
     Ok(mesh)

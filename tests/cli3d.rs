@@ -63,7 +63,8 @@ fn f(v: &Value, path: &str) -> f64 {
             Err(_) => &x[k],
         };
     }
-    x.as_f64().unwrap_or_else(|| panic!("{path} is not a number: {x}"))
+    x.as_f64()
+        .unwrap_or_else(|| panic!("{path} is not a number: {x}"))
 }
 
 fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -78,7 +79,13 @@ fn csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let rows = lines
         .map(|l| {
             l.split(',')
-                .map(|v| if v.is_empty() { f64::NAN } else { v.parse().expect("number") })
+                .map(|v| {
+                    if v.is_empty() {
+                        f64::NAN
+                    } else {
+                        v.parse().expect("number")
+                    }
+                })
                 .collect::<Vec<f64>>()
         })
         .collect();
@@ -123,7 +130,10 @@ fn assert_field_files(dir: &Path, steps: usize) {
     }
     let mcap = std::fs::read(dir.join("hex.mcap")).expect("hex.mcap");
     let magic = b"\x89MCAP0\r\n";
-    assert!(mcap.starts_with(magic) && mcap.ends_with(magic), "hex.mcap magic");
+    assert!(
+        mcap.starts_with(magic) && mcap.ends_with(magic),
+        "hex.mcap magic"
+    );
 }
 
 #[test]
@@ -155,7 +165,10 @@ fn load_controlled_indentation_reaches_the_requested_load() {
         f(r, "road_height"),
         r["points_in_contact"]
     );
-    assert!((fy - load).abs() <= 1e-8 * load, "contact force {fy} vs load {load}");
+    assert!(
+        (fy - load).abs() <= 1e-8 * load,
+        "contact force {fy} vs load {load}"
+    );
     assert_eq!(f(r, "load"), load);
     assert!((f(r, "penetration") - (2.0 - f(r, "road_height"))).abs() < 1e-14);
     assert!(f(r, "penetration") > 0.0 && f(r, "max_pressure") > 0.0);
@@ -186,7 +199,10 @@ fn load_controlled_indentation_reaches_the_requested_load() {
     for c in &h {
         assert!(tread::io::reference::csv_column_documented("nodes.csv", c));
     }
-    assert_eq!(rows.len() as u64, s["mesh"]["nodes"].as_u64().expect("nodes"));
+    assert_eq!(
+        rows.len() as u64,
+        s["mesh"]["nodes"].as_u64().expect("nodes")
+    );
     let ur_max = rows
         .iter()
         .map(|r| (r[4] * r[4] + r[5] * r[5] + r[6] * r[6]).sqrt())
@@ -211,7 +227,11 @@ fn friction_indentation_under_displacement_control() {
     let s = run(
         &f_scene,
         &d.join("out"),
-        &["mesh.n_r=2", "mesh.n_theta=24", "output.sinks=[\"summary\"]"],
+        &[
+            "mesh.n_r=2",
+            "mesh.n_theta=24",
+            "output.sinks=[\"summary\"]",
+        ],
     );
     assert_eq!(s["converged"], Value::Bool(true), "{s}");
     let r = &s["results"];
@@ -229,8 +249,14 @@ fn friction_indentation_under_displacement_control() {
     // Symmetric about the vertical and about x3 = 0: the friction forces cancel.
     assert!(f(r, "contact_force.0").abs() <= 1e-8 * fy);
     assert!(f(r, "contact_force.2").abs() <= 1e-8 * fy);
-    assert!(!d.join("out/steps.csv").exists(), "csv written without the sink");
-    assert!(!d.join("out/hex.pvd").exists(), "vtu written without the sink");
+    assert!(
+        !d.join("out/steps.csv").exists(),
+        "csv written without the sink"
+    );
+    assert!(
+        !d.join("out/hex.pvd").exists(),
+        "vtu written without the sink"
+    );
 }
 
 #[test]
@@ -262,9 +288,15 @@ fn spinning_slab_matches_the_radial_solution() {
     let (_, rows) = csv(&d.join("nodes.csv"));
     let umax = f(r, "max_displacement");
     assert!(rows.iter().all(|r| r[6].abs() <= 1e-12 * umax));
-    assert!(rows.iter().filter(|r| r[3].abs() > 0.0).all(|r| r[6] == 0.0));
+    assert!(rows
+        .iter()
+        .filter(|r| r[3].abs() > 0.0)
+        .all(|r| r[6] == 0.0));
     assert!(r["road_height"].is_null());
-    assert_field_files(&d, s["solver"]["load_steps"].as_u64().expect("steps") as usize);
+    assert_field_files(
+        &d,
+        s["solver"]["load_steps"].as_u64().expect("steps") as usize,
+    );
 }
 
 fn bad(name: &str, set: &[&str], key: &str) {
@@ -288,7 +320,10 @@ fn bad(name: &str, set: &[&str], key: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{name}: panic: {stderr}");
     assert_eq!(out.status.code(), Some(2), "{name}: {stderr}");
-    assert!(stderr.contains(key), "{name}: key {key} not named in: {stderr}");
+    assert!(
+        stderr.contains(key),
+        "{name}: key {key} not named in: {stderr}"
+    );
     assert!(!d.join("summary.json").exists(), "{name}: ran anyway");
 }
 
@@ -311,7 +346,11 @@ fn bad_three_dimensional_inputs_name_the_key() {
         &["contact.quadrature=\"lobatto\"", "contact.points=6"],
         "contact.points",
     );
-    bad("file", &["mesh.file=\"missing.msh\"", "mesh.n_r=2"], "mesh.n_r");
+    bad(
+        "file",
+        &["mesh.file=\"missing.msh\"", "mesh.n_r=2"],
+        "mesh.n_r",
+    );
     // Keys of the three-dimensional wheel in a plane-strain scene.
     let d = TestDir::new("cli3d", "two_d");
     let out = Command::new(env!("CARGO_BIN_EXE_tread"))
@@ -328,7 +367,10 @@ fn bad_three_dimensional_inputs_name_the_key() {
         .expect("run tread");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("mesh.width") && stderr.contains("dimension = 3"), "{stderr}");
+    assert!(
+        stderr.contains("mesh.width") && stderr.contains("dimension = 3"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -338,9 +380,18 @@ fn missing_hexahedral_mesh_file_is_named() {
         .expect("scene")
         .lines()
         .filter(|l| {
-            !["width", "n_z", "sides", "n_r", "n_theta", "order", "grading_r", "grading_theta"]
-                .iter()
-                .any(|k| l.starts_with(&format!("{k} ")))
+            ![
+                "width",
+                "n_z",
+                "sides",
+                "n_r",
+                "n_theta",
+                "order",
+                "grading_r",
+                "grading_theta",
+            ]
+            .iter()
+            .any(|k| l.starts_with(&format!("{k} ")))
         })
         .collect::<Vec<_>>()
         .join("\n")
@@ -350,7 +401,10 @@ fn missing_hexahedral_mesh_file_is_named() {
     let out = tread(&["check", f_scene.to_str().expect("path")]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("mesh.file") && stderr.contains("nowhere.msh"), "{stderr}");
+    assert!(
+        stderr.contains("mesh.file") && stderr.contains("nowhere.msh"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -377,7 +431,10 @@ fn adapt_refuses_and_check_accepts_three_dimensional_scenes() {
             "{name}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
-        assert!(stdout.contains("valid") && stdout.contains("dimension = 3"), "{stdout}");
+        assert!(
+            stdout.contains("valid") && stdout.contains("dimension = 3"),
+            "{stdout}"
+        );
         // The listing loads back to the same scene.
         let listing: String = stdout
             .lines()

@@ -162,7 +162,10 @@ fn load_control_tangent_matches_central_differences() {
         );
         assert!(contact >= 4, "{name}: only {contact} contact points");
         if friction.is_active() {
-            assert!(slip >= contact / 2, "{name}: {slip} of {contact} points slip");
+            assert!(
+                slip >= contact / 2,
+                "{name}: {slip} of {contact} points slip"
+            );
         }
         assert!(err < 1e-6, "{name}: tangent error {err:.3e}");
     }
@@ -304,7 +307,10 @@ fn sliding_slab_under_load_control_equals_the_2d_indentation() {
         r2.road_height
     );
     assert!((fy2 - p).abs() <= 1e-9 * p, "2D force {fy2} vs load {p}");
-    assert!((fy3 - fy2).abs() <= 1e-8 * fy2.abs(), "3D {fy3} vs 2D {fy2}");
+    assert!(
+        (fy3 - fy2).abs() <= 1e-8 * fy2.abs(),
+        "3D {fy3} vs 2D {fy2}"
+    );
     let pen = RO - r2.road_height;
     assert!(
         (h3 - r2.road_height).abs() <= 1e-8 * pen,
@@ -336,5 +342,9 @@ fn sliding_slab_under_load_control_equals_the_2d_indentation() {
         "load-control slab: max |u_3D − u_2D| / max|u| = {:.2e}",
         worst / umax
     );
-    assert!(worst / umax < 1e-8, "slab field differs: {:.3e}", worst / umax);
+    assert!(
+        worst / umax < 1e-8,
+        "slab field differs: {:.3e}",
+        worst / umax
+    );
 }

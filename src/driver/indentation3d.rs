@@ -35,7 +35,8 @@ pub fn contact_force_scale_3d(sys: &Solid3DSystem) -> f64 {
             let g = sys.solid.material.small_strain_shear_modulus().abs();
             let fb = g * disp * width;
             let n = rc.surface.normal;
-            let fc = n.c_n.abs() * disp.powf(n.m_n) * (2.0 * rc.h_touch.abs() * disp).sqrt() * width;
+            let fc =
+                n.c_n.abs() * disp.powf(n.m_n) * (2.0 * rc.h_touch.abs() * disp).sqrt() * width;
             if fc + fb > 0.0 {
                 fc * fb / (fc + fb)
             } else {

@@ -34,8 +34,8 @@ use crate::io::scene::{Mode, Scene, Sink};
 use crate::mesh::hex_mesh::HexMesh;
 use crate::model::Solid3DSystem;
 use crate::setup::{build_system_3d, linear_kind_3d, solver_options, AppError, RunOptions};
-use crate::solver::{IterationRecord, StepInfo, StepObserver};
 use crate::solver::stepping::StepReport;
+use crate::solver::{IterationRecord, StepInfo, StepObserver};
 use crate::solver::{LinearKind, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -321,7 +321,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
 
 /// The results of the last accepted step (`accepted`: whether there was one; else the
 /// undeformed state's).
-fn results_3d(scene: &Scene, sys: &Solid3DSystem, last: &StepRow, accepted: bool) -> Solid3DResults {
+fn results_3d(
+    scene: &Scene,
+    sys: &Solid3DSystem,
+    last: &StepRow,
+    accepted: bool,
+) -> Solid3DResults {
     let n = sys.solid.mesh.n_nodes();
     let max_displacement = (0..n)
         .map(|i| {
@@ -335,7 +340,13 @@ fn results_3d(scene: &Scene, sys: &Solid3DSystem, last: &StepRow, accepted: bool
         ContactTotals3D::default()
     };
     let rc = sys.contact.as_ref();
-    let h = rc.map(|_| if accepted { last.road_height } else { sys.road_height().unwrap_or(f64::NAN) });
+    let h = rc.map(|_| {
+        if accepted {
+            last.road_height
+        } else {
+            sys.road_height().unwrap_or(f64::NAN)
+        }
+    });
     Solid3DResults {
         dimension: 3,
         contact_force: t.force,

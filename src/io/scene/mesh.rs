@@ -216,10 +216,7 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
             "mesh.width",
             "required with mesh.dimension = 3 (the wheel's width along the axle)",
         )),
-        Some(w) if !positive(w) => out.push(issue(
-            "mesh.width",
-            format!("must be > 0, got {w}"),
-        )),
+        Some(w) if !positive(w) => out.push(issue("mesh.width", format!("must be > 0, got {w}"))),
         Some(w) => {
             if let Some(rc) = m.crown_radius {
                 if !(rc.is_finite() && rc >= 0.5 * w) {
