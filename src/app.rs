@@ -37,7 +37,7 @@ use std::time::Instant;
 
 pub use crate::setup::{
     build_contact, build_material, build_material_spec, build_model, build_recorders, build_system,
-    linear_kind, solver_options, AppError, RunOptions,
+    AppError, RunOptions,
 };
 pub use crate::driver::results::RunOutcome;
 
@@ -64,8 +64,8 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let mut sys = build_system(scene)?;
-    let kind = linear_kind(scene, &sys);
-    let (newton_opts, step_opts) = solver_options(scene, opts.verbose);
+    let plan = crate::setup::solve_plan(scene, &sys).verbose(opts.verbose);
+    let (kind, newton_opts, step_opts) = (plan.kind, plan.newton, plan.steps);
     let mut report = StepReport::default();
     let clock = RunClock {
         mesh: Some(&sys.model.mesh),
@@ -76,7 +76,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let rec: &mut dyn Recorder = &mut env.recorders;
     let solve = match scene.analysis.mode {
         Mode::Static => {
-            sys.loading = crate::driver::steady_run::scene_loading(scene);
+            sys.loading = crate::setup::scene_loading(scene);
             indentation::solve_indentation(
                 &mut sys,
                 kind,

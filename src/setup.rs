@@ -12,6 +12,7 @@ use crate::contact::facet3d::ContactSurface3D;
 use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
 use crate::mesh::hex_mesh::HexMesh;
 use crate::mesh::revolved::{revolved, RevolvedSpec};
+use crate::model::system::Loading;
 use crate::model::{Solid3D, Solid3DSystem, SolidSystem};
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
@@ -24,7 +25,7 @@ use crate::math::Mat2;
 use crate::mesh::{annulus, AnnulusSpec};
 use crate::physics::{PressureMode, SolidModel};
 use crate::solver::stepping::StepOptions;
-use crate::solver::{LinearKind, NewtonOptions, SolveError};
+use crate::solver::{LinearKind, NewtonOptions, SolveError, SolvePlan};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, thiserror::Error)]
@@ -359,6 +360,29 @@ pub fn linear_kind(scene: &Scene, sys: &SolidSystem) -> LinearKind {
     }
 }
 
+/// The road of a scene: its load (load control) or its penetration (displacement control), as
+/// the load factor's target in static indentation and in the steady press.
+pub fn scene_loading(scene: &Scene) -> Loading {
+    match scene.road.as_ref().and_then(|r| r.load) {
+        Some(load) => Loading::Load { load },
+        None => Loading::Indent {
+            h_touch: scene.geometry.ro,
+            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
+        },
+    }
+}
+
+/// The run's solve plan for `sys`: [`linear_kind`] and [`solver_options`] (progress lines
+/// off; [`SolvePlan::verbose`] turns them on).
+pub fn solve_plan(scene: &Scene, sys: &SolidSystem) -> SolvePlan {
+    let (newton, steps) = solver_options(scene, false);
+    SolvePlan {
+        kind: linear_kind(scene, sys),
+        newton,
+        steps,
+    }
+}
+
 /// Newton and load-stepping options from the scene's `[solver]`.
 pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptions) {
     let newton_opts = NewtonOptions {
@@ -468,6 +492,9 @@ pub fn build_hex_mesh(scene: &Scene) -> Result<HexMesh, AppError> {
         degree: ms.order,
         grading_r: ms.grading_r,
         grading_theta: ms.grading_theta,
+        theta_ratio: 1.0,
+        grading_z: 1.0,
+        half_width: false,
         crown_radius: ms.crown_radius,
     };
     let mut mesh = revolved(&spec).map_err(|e| {

@@ -32,6 +32,9 @@ fn spec(n_r: usize, n_z: usize, n_theta: usize, degree: usize, width: f64) -> Re
         degree,
         grading_r: 1.0,
         grading_theta: 0.0,
+        theta_ratio: 1.0,
+        grading_z: 1.0,
+        half_width: false,
         crown_radius: None,
     }
 }
@@ -285,7 +288,7 @@ fn sliding_slab_under_load_control_equals_the_2d_indentation() {
     // 2D: the plane-strain program from its scene.
     let sc2 = slab_scene(None, p);
     let mut s2 = tread::app::build_system(&sc2).expect("2D system");
-    s2.loading = tread::driver::steady_run::scene_loading(&sc2);
+    s2.loading = tread::setup::scene_loading(&sc2);
     let kind = tread::app::linear_kind(&sc2, &s2);
     let (newton, step) = tread::app::solver_options(&sc2, false);
     let mut rep = StepReport::default();

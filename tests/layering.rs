@@ -465,8 +465,8 @@ fn the_graph_holds_known_imports() {
         ("solver/stepping.rs", "solver/newton.rs"),
         // An inline `super::run_one::run_dir(…)` call.
         ("sweep/slurm.rs", "sweep/run_one.rs"),
-        // An inline `crate::setup::solver_options(…)` call.
-        ("driver/steady_run.rs", "setup.rs"),
+        // An inline `crate::physics::recovery::recover_cauchy(…)` call.
+        ("driver/frame.rs", "physics/recovery.rs"),
     ] {
         assert!(
             g.get(a).is_some_and(|t| t.contains(b)),

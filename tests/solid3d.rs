@@ -32,6 +32,9 @@ fn spec(n_r: usize, n_z: usize, n_theta: usize, degree: usize, width: f64) -> Re
         degree,
         grading_r: 1.0,
         grading_theta: 0.0,
+        theta_ratio: 1.0,
+        grading_z: 1.0,
+        half_width: false,
         crown_radius: None,
     }
 }

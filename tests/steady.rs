@@ -9,6 +9,7 @@ use tread::assembly::FIXED;
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::steady::{solve_torque, SteadyRolling};
+use tread::driver::steady_report::SolveReports;
 use tread::driver::steady_run;
 use tread::model::SolidSystem;
 use tread::io::Scene;
@@ -26,11 +27,17 @@ fn scene(text: &str, set: &[&str]) -> Scene {
 }
 
 fn steady_solution(text: &str, set: &[&str]) -> (Scene, SteadyRolling) {
+    let (sc, st, _) = solved(text, set);
+    (sc, st)
+}
+
+/// [`steady_solution`] with what the solve reported.
+fn solved(text: &str, set: &[&str]) -> (Scene, SteadyRolling, SolveReports) {
     let sc = scene(text, set);
     let mut st = steady_run::build_steady(&sc).unwrap();
     let mut rep = Default::default();
-    steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
-    (sc, st)
+    let reports = steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
+    (sc, st, reports)
 }
 
 /// Hub force and torque of `a` and `b` agree to `rel` of |F| of `reference` (the torque to
@@ -151,8 +158,8 @@ fn steady_without_contact_is_steady_spinning() {
     let base = include_str!("../scenarios/spinning_neo_hookean.toml");
     let sp = scene(base, &[]);
     let mut sys = tread::app::build_system(&sp).unwrap();
-    let kind = tread::app::linear_kind(&sp, &sys);
-    let (nopt, sopt) = tread::app::solver_options(&sp, false);
+    let plan = tread::setup::solve_plan(&sp, &sys);
+    let (kind, nopt, sopt) = (plan.kind, plan.newton, plan.steps);
     let mut rep = Default::default();
     tread::driver::spinning::solve_spinning(
         &mut sys,
@@ -214,7 +221,7 @@ fn free_rolling(set: &[&str]) -> (f64, f64, f64, f64) {
     let t0 = st.hub_torque();
     let fy = st.sys.hub_reaction().0[1].abs();
     let scale = 0.3 * fy * sc.geometry.ro;
-    let (nopt, _) = tread::app::solver_options(&sc, false);
+    let nopt = st.plan.newton.clone();
     let mut newton = Newton::new(&st.sys, LinearKind::Lu, nopt).unwrap();
     let r = solve_torque(&mut st, 0.0, scale, 1e-6, &mut newton, 30).unwrap();
     println!(
@@ -380,8 +387,11 @@ fn direct_press_converges(sc: &Scene) -> bool {
     use tread::driver::steady::press;
     use tread::model::system::Loading;
     let mut st = steady_run::build_steady(sc).unwrap();
-    let (nopt, sopt) = tread::app::solver_options(sc, false);
-    let kind = tread::app::linear_kind(sc, &st.sys);
+    let tread::solver::SolvePlan {
+        kind,
+        newton: nopt,
+        steps: sopt,
+    } = st.plan.clone();
     let loading = Loading::Indent {
         h_touch: sc.geometry.ro,
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
@@ -425,12 +435,15 @@ fn omega_stepping_recovery_reaches_the_direct_solution() {
     // first applicable strategy, ω stepping from 0, must land on the direct solution.
     let set = steady_at(46.0);
     let set: Vec<&str> = set.iter().map(|s| s.as_str()).collect();
-    let (sc, direct) = steady_solution(ODEN, &set);
-    assert!(direct.recovery.is_none());
+    let (sc, direct, reports) = solved(ODEN, &set);
+    assert!(reports.recovery.is_none());
     let mut st = steady_run::build_steady(&sc).unwrap();
     let x_init = st.sys.x.clone();
-    let (nopt, sopt) = tread::app::solver_options(&sc, false);
-    let kind = tread::app::linear_kind(&sc, &st.sys);
+    let tread::solver::SolvePlan {
+        kind,
+        newton: nopt,
+        steps: sopt,
+    } = st.plan.clone();
     let loading = Loading::Indent {
         h_touch: sc.geometry.ro,
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
@@ -533,8 +546,8 @@ fn stiff_bulk_modulus_is_recovered_by_the_kappa_homotopy() {
         !direct_press_converges(&sc),
         "{set:?}: the direct press converged, nothing to recover"
     );
-    let (sc, st) = steady_solution(ODEN, &set);
-    let r = st.recovery.as_ref().expect("a recovery report");
+    let (sc, st, reports) = solved(ODEN, &set);
+    let r = reports.recovery.as_ref().expect("a recovery report");
     println!("{set:?}: {}", r.message);
     assert_eq!(r.strategy.map(|s| s.to_string()).as_deref(), Some(strategy));
     // Relative to the contact force scale (capped by G·DISP): Newton's test is relative to
@@ -571,8 +584,11 @@ fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() 
     //    after a failed press: its first applicable strategy.
     let mut st = steady_run::build_steady(&sc).unwrap();
     let x_init = st.sys.x.clone();
-    let (nopt, sopt) = tread::app::solver_options(&sc, false);
-    let kind = tread::app::linear_kind(&sc, &st.sys);
+    let tread::solver::SolvePlan {
+        kind,
+        newton: nopt,
+        steps: sopt,
+    } = st.plan.clone();
     let loading = Loading::Indent {
         h_touch: sc.geometry.ro,
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
@@ -598,9 +614,9 @@ fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() 
     assert!((-125.0..-80.0).contains(&fy), "recovery: Fy = {fy}");
     // 2. The run itself starts with the ε continuation (ε < 1e-2 v_ref) and needs no
     //    recovery; it lands on the same solution.
-    let (_, cont) = steady_solution(ODEN, &set);
-    assert!(cont.recovery.is_none());
-    let a = cont.eps_continuation.as_ref().expect("an eps continuation");
+    let (_, cont, reports) = solved(ODEN, &set);
+    assert!(reports.recovery.is_none());
+    let a = reports.eps_continuation.as_ref().expect("an eps continuation");
     assert!(a.succeeded && a.legs[0].steps >= 2, "{a:?}");
     let res = scene_residual(&sc, &cont);
     assert!(res < 1e-6, "continuation: residual {res:e}");
@@ -633,12 +649,15 @@ fn eps_continuation_lands_on_the_direct_solution() {
         "road.v0=21",
         "friction.eps=0.105",
     ];
-    let (sc, cont) = steady_solution(ODEN, &set);
-    let a = cont.eps_continuation.as_ref().expect("an eps continuation");
+    let (sc, cont, reports) = solved(ODEN, &set);
+    let a = reports.eps_continuation.as_ref().expect("an eps continuation");
     assert!(a.succeeded, "{a:?}");
     let mut direct = steady_run::build_steady(&sc).unwrap();
-    let (nopt, sopt) = tread::app::solver_options(&sc, false);
-    let kind = tread::app::linear_kind(&sc, &direct.sys);
+    let tread::solver::SolvePlan {
+        kind,
+        newton: nopt,
+        steps: sopt,
+    } = direct.plan.clone();
     let loading = Loading::Indent {
         h_touch: sc.geometry.ro,
         disp: sc.road.as_ref().and_then(|r| r.disp).unwrap(),
@@ -739,13 +758,13 @@ fn default_scene_steady_solve_converges_directly_from_1_to_60_rad_per_s() {
 #[test]
 fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
     let mesh = ["mesh.n_r=8", "mesh.n_theta=128"];
-    let (_, direct) = steady_solution(ODEN, &[&mesh[..], &["solver.coarse_start=false"]].concat());
-    assert!(direct.coarse_start.is_none());
+    let (_, direct, reports) = solved(ODEN, &[&mesh[..], &["solver.coarse_start=false"]].concat());
+    assert!(reports.coarse_start.is_none());
     let sc = scene(ODEN, &mesh);
     let mut st = steady_run::build_steady(&sc).unwrap();
     let mut rep = tread::solver::stepping::StepReport::default();
-    steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
-    let cs = st
+    let reports = steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
+    let cs = reports
         .coarse_start
         .clone()
         .expect("coarse start applies to 8 x 128");
@@ -759,7 +778,7 @@ fn coarse_start_reaches_the_same_steady_state_in_fewer_fine_iterations() {
     );
     assert_eq!(rep.total_iterations, cs.newton_iterations);
     assert_same_hub_loads(&direct, &st, &direct, 1e-7);
-    let (_, odd) = steady_solution(ODEN, &["mesh.n_r=3", "mesh.n_theta=64"]);
+    let (_, _, odd) = solved(ODEN, &["mesh.n_r=3", "mesh.n_theta=64"]);
     assert!(odd.coarse_start.is_none());
 }
 
@@ -774,14 +793,14 @@ fn single_precision_factors_give_the_double_precision_steady_state() {
         "mesh.n_theta=128",
         "time.strain_rate_damping=0",
     ];
-    let (_, single) = steady_solution(ODEN, &mesh);
-    let (_, double) = steady_solution(
+    let (_, single, single_reports) = solved(ODEN, &mesh);
+    let (_, double, double_reports) = solved(
         ODEN,
         &[&mesh[..], &["solver.single_precision=false"]].concat(),
     );
     let (a, b) = (
-        single.coarse_start.clone().unwrap(),
-        double.coarse_start.clone().unwrap(),
+        single_reports.coarse_start.clone().unwrap(),
+        double_reports.coarse_start.clone().unwrap(),
     );
     assert!(a.succeeded && b.succeeded);
     assert!(
@@ -829,30 +848,31 @@ fn nested_build_solves_the_coarse_meshes_while_the_scene_mesh_is_built() {
             .build()
             .unwrap();
         pool.install(|| {
-            let mut st = if nested {
-                steady_run::build_steady_nested(&sc).unwrap()
+            let (mut st, coarse) = if nested {
+                steady_run::build_nested(&sc).unwrap()
             } else {
-                steady_run::build_steady(&sc).unwrap()
+                (steady_run::build_steady(&sc).unwrap(), None)
             };
-            let ahead = st.coarse_solved.is_some();
+            let ahead = coarse.is_some();
             let mut rep = tread::solver::stepping::StepReport::default();
-            steady_run::solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap();
-            assert!(st.coarse_solved.is_none(), "the coarse state was not used");
-            (st, ahead)
+            let reports =
+                steady_run::solve_steady_from(&sc, &mut st, coarse, false, &mut rep, &mut ())
+                    .unwrap();
+            (st, reports, ahead)
         })
     };
-    let (plain, ahead) = solve(2, false);
+    let (plain, plain_reports, ahead) = solve(2, false);
     assert!(!ahead);
-    let (nested, ahead) = solve(2, true);
+    let (nested, nested_reports, ahead) = solve(2, true);
     assert!(
         ahead,
         "two workers: the coarse meshes are solved during the build"
     );
-    let (_, ahead) = solve(1, true);
+    let (_, _, ahead) = solve(1, true);
     assert!(!ahead, "one worker: build only");
     let (a, b) = (
-        plain.coarse_start.clone().unwrap(),
-        nested.coarse_start.clone().unwrap(),
+        plain_reports.coarse_start.clone().unwrap(),
+        nested_reports.coarse_start.clone().unwrap(),
     );
     assert!(b.succeeded, "{:?}", b.error);
     assert_eq!(a.meshes, b.meshes);

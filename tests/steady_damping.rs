@@ -254,8 +254,9 @@ fn matrix_free_and_assembled_reach_the_same_state() {
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         st.sys.set_steady_damping_tangent(mode);
         let mut rep = Default::default();
-        solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
-        assert!(st.damping_fallback.is_none() && st.recovery.is_none());
+        let r = solve_steady(&sc, &mut st, false, &mut rep, &mut ())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(r.damping_fallback.is_none() && r.recovery.is_none());
         assert_eq!(st.sys.steady_damping_tangent(), Some(mode));
         out.push((hub_force(&st), st.sys.x.clone()));
     }
@@ -291,8 +292,9 @@ fn damping_cell_weight_changes_only_the_preconditioner() {
         let sc = scene(ODEN, "weight", &[&base[..], &[key.as_str()]].concat());
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         let mut rep = Default::default();
-        solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
-        assert!(st.damping_fallback.is_none() && st.recovery.is_none());
+        let r = solve_steady(&sc, &mut st, false, &mut rep, &mut ())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(r.damping_fallback.is_none() && r.recovery.is_none());
         assert_eq!(
             st.sys.steady_damping_tangent(),
             Some(SteadyDampingTangent::MatrixFree)
@@ -446,6 +448,7 @@ fn ring_and_cell_average_velocities_converge_together() {
             let c = tread::setup::build_contact(&sc, &model).unwrap_or_else(|e| panic!("{e}"));
             let sys = tread::model::SolidSystem::with_contact(model, c);
             let mut st = SteadyRolling::new(sys, sc.motion.omega, sc.geometry.ro);
+            st.plan = tread::setup::solve_plan(&sc, &st.sys);
             solve_steady(&sc, &mut st, false, &mut Default::default(), &mut ())
                 .unwrap_or_else(|e| panic!("{e}"));
             let (force, torque) = st.sys.hub_reaction();

@@ -452,7 +452,7 @@ fn rolling_resistance_versus_speed_by_omega_continuation() {
     let mut rep = StepReport::default();
     solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
     st.param = SteadyParameter::Omega;
-    let (newton_opts, _) = tread::app::solver_options(&sc, false);
+    let newton_opts = st.plan.newton.clone();
     let mut newton = Newton::new(&st, LinearKind::Lu, newton_opts).unwrap();
     let dir = tempdir::TestDir::new("visco_steady", "resistance_vs_speed");
     let mut csv = String::from("omega,v0,load,hub_torque,resistance,hunter_resistance\n");

@@ -52,7 +52,7 @@ use common::{fnv1a, median};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use tread::app::{build_contact, build_model, linear_kind};
+use tread::app::{build_contact, build_model};
 use tread::contact::ContactModel;
 use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use tread::driver::transient::{
@@ -350,7 +350,7 @@ fn build(scene: &Scene, scheme: Scheme, lumped: bool) -> Result<(Transient, Line
     };
     let kin = tread::driver::transient_run::kinematics(scene);
     let tr = Transient::new(sys, scheme, kin, lumped);
-    let kind = linear_kind(scene, &tr.sys);
+    let kind = tread::setup::solve_plan(scene, &tr.sys).kind;
     Ok((tr, kind))
 }
 

@@ -34,6 +34,9 @@ fn main() {
             degree,
             grading_r: 1.0,
             grading_theta: 0.0,
+            theta_ratio: 1.0,
+            grading_z: 1.0,
+            half_width: false,
             crown_radius: Some(1.0),
         };
         let mesh = match revolved(&spec) {

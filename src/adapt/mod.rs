@@ -11,7 +11,9 @@
 //! h-method that estimates the error as the difference between the solutions on the current
 //! mesh and on its uniform refinement, refining and coarsening between steps; applied to
 //! convection-dominated heat conduction with SUPG ([`convection`]) and to the vector Burgers
-//! equations ([`burgers`]).
+//! equations ([`burgers`]). [`p_navier_stokes`] is a p-method for Navier–Stokes on a fixed
+//! quadtree (per-cell Q_p/Q_{p−1} pairs, estimate by enrichment, degrees raised before a step
+//! is accepted).
 
 pub mod burgers;
 pub mod convection;
@@ -19,6 +21,7 @@ pub mod driver;
 pub mod estimate;
 pub mod moving_mesh;
 pub mod navier_stokes;
+pub mod p_navier_stokes;
 pub mod poisson;
 pub mod quadtree;
 pub mod space;

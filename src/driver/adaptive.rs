@@ -47,7 +47,7 @@ use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::physics::SolidModel;
 use crate::physics::{equilibrated, estimate};
-use crate::setup::{build_contact, build_material, linear_kind, solver_options, AppError};
+use crate::setup::{build_contact, build_material, AppError};
 use crate::solver::stepping::{LoadedSystem, StepReport};
 use crate::solver::{Newton, NonlinearSystem, SolveError};
 use std::path::Path;
@@ -252,7 +252,7 @@ pub fn indentation_system(scene: &Scene, mesh: Mesh) -> Result<SolidSystem, AppE
     let model = SolidModel::new(mesh, material, scene.material.rho, pressure);
     let contact = build_contact(scene, &model)?;
     let mut sys = SolidSystem::with_contact(model, contact);
-    sys.loading = steady_run::scene_loading(scene);
+    sys.loading = crate::setup::scene_loading(scene);
     Ok(sys)
 }
 
@@ -266,8 +266,8 @@ pub fn solve_static(
     cold: Option<&[f64]>,
     out_dir: &Path,
 ) -> Result<usize, AppError> {
-    let kind = linear_kind(scene, sys);
-    let (newton_opts, step_opts) = solver_options(scene, false);
+    let plan = crate::setup::solve_plan(scene, sys);
+    let (kind, newton_opts, step_opts) = (plan.kind, plan.newton, plan.steps);
     if warm {
         sys.set_load(1.0);
         let ro = scene.geometry.ro;
@@ -375,6 +375,7 @@ fn solve_rolling(
     let fail = |e: SolveError| AppError::Solve(e, out_dir.to_path_buf());
     let mut report = StepReport::default();
     let mut solved = false;
+    let mut recovery_iterations = 0;
     if warm {
         match steady_run::press_once(scene, st, false, &mut report, &mut ()) {
             Ok(()) => solved = true,
@@ -383,12 +384,14 @@ fn solve_rolling(
         }
     }
     if !solved {
-        steady_run::solve_steady(scene, st, false, &mut report, &mut ()).map_err(fail)?;
+        recovery_iterations = steady_run::solve_steady(scene, st, false, &mut report, &mut ())
+            .map_err(|f| fail(f.error))?
+            .recovery_iterations();
     }
     let control = steady_run::apply_control(scene, st, false).map_err(fail)?;
     Ok(report.total_iterations
         + control.newton_iterations
-        + st.recovery.as_ref().map_or(0, |r| r.newton_iterations))
+        + recovery_iterations)
 }
 
 /// Run the adaptive loop on the scene (static indentation or steady rolling). `on_step` sees

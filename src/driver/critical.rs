@@ -787,7 +787,7 @@ fn rolling_critical(
     let mut rec = ();
     let mut steps = StepReport::default();
     solve_steady(scene, st, opts.verbose, &mut steps, &mut rec)
-        .map_err(|e| solve_err(e, "steady state at the scene's speed".into()))?;
+        .map_err(|f| solve_err(f.error, "steady state at the scene's speed".into()))?;
     let mut newton = newton_for(st, scene, opts.verbose)?;
     let mut probe = SingularProbe::new(st)?;
     let w0 = st.omega();

@@ -3,14 +3,18 @@
 //! * [`frame`]: what the recorder sees of the model's system
 //!   ([`crate::model::SolidSystem`]) at a step.
 //! * Static, spinning and indentation load stepping ([`spinning`], [`indentation`]), steady
-//!   rolling in the spatial frame ([`steady`], with [`steady_recovery`] when the direct press
-//!   fails, reported as [`steady_report::Recovery`]), time integration ([`transient`]), the
+//!   rolling in the spatial frame ([`steady`]: the system, the press, the torque control;
+//!   [`steady_solve`]: the first solve, with the nested iteration of [`steady_nested`], and
+//!   [`steady_recovery`] when the direct press fails, reported as
+//!   [`steady_report::SolveReports`]), time integration ([`transient`]), the
 //!   stick-slip oscillator, critical speeds ([`critical`]) and transient-vs-steady comparison
 //!   ([`compare`]).
 //! * Three dimensions: static indentation ([`indentation3d`]) and spinning ([`spinning3d`]) of
 //!   [`crate::model::Solid3DSystem`], run from a scene with `mesh.dimension = 3` by [`run3d`].
 //! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
 //!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
+//!   How a run solves (linear solver, Newton, load steps) is decided once when its system is
+//!   built ([`crate::solver::SolvePlan`], [`crate::setup::solve_plan`]).
 //!   Imports go one way: `app` → `*_run` → the analyses → the model ([`crate::model`]) → physics and solvers.
 //! * [`results`]: the typed contents of every mode's `summary.json`, which the `*_run` files
 //!   fill and [`crate::driver::results::RunOutcome`] carries in memory.
@@ -31,9 +35,11 @@ pub mod run3d;
 pub mod spinning;
 pub mod spinning3d;
 pub mod steady;
+pub mod steady_nested;
 pub mod steady_recovery;
 pub mod steady_report;
 pub mod steady_run;
+pub mod steady_solve;
 pub mod stick_slip_run;
 pub mod tables;
 pub mod transient;

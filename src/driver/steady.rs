@@ -36,7 +36,8 @@
 //! 1. At the scene's ω (and v0), the road is brought in by load stepping (displacement control:
 //!    H = Ro − λ DISP; load control: P = λ P, H unknown) from the undeformed state. If that
 //!    fails, [`super::steady_recovery`] tries homotopies (κ, ε, ω from benign values to the
-//!    scene's) before giving up; what it did is kept in [`SteadyRolling::recovery`].
+//!    scene's) before giving up; what it did is in the solve's
+//!    [`SolveReports`](super::steady_report::SolveReports).
 //!
 //!    Known hard case, measured: with normal damping and `l_n = 0` the traction of a point
 //!    entering the patch (δ̇ > 0) jumps from 0 to b_n δ̇ at first contact. The discrete steady
@@ -52,17 +53,23 @@
 //!    Newton solve from the previous state. Given creep: free rolling first (v0_free, rolling
 //!    radius R_e = v0_free / ω), then the creep ξ = (v0 − ω R_e) / (ω R_e) = v0 / v0_free − 1 is
 //!    reached by natural-parameter steps ([`step_parameter`], [`SteadyParameter::Creep`]). The
-//!    scene selects these with `motion.control` (see `steady_run::apply_control`).
+//!    scene selects these with `motion.control` (see [`super::steady_solve::apply_control`]).
 //! 3. Optionally, Riks–Crisfield continuation ([`crate::solver::continuation`]) in ω, the hub
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
 
-use super::steady_report::Recovery;
 use crate::model::system::{Loading, SolidSystem};
 use crate::io::record::Recorder;
 use crate::solver::continuation::ParametricSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
-use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError, SparseSolver};
+use crate::io::scene::{DampingTangentChoice, Scene, SteadyHistoryChoice};
+use crate::physics::viscoelastic_steady::StreamlineScheme;
+use crate::physics::SolidModel;
+use crate::setup::{build_contact, build_model, scene_loading, solve_plan, AppError};
+use crate::model::SteadyDampingTangent;
+use crate::solver::{
+    LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError, SolvePlan, SparseSolver,
+};
 
 /// The parameter of a continuation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -86,31 +93,22 @@ pub struct SteadyRolling {
     pub v0_per_omega: f64,
     /// Outer radius (H = ro − disp).
     pub ro: f64,
-    /// Why the steady damping's tangent differs from the one asked for
-    /// ([`crate::model::SteadyDampingTangent`]), if it does: switched from matrix-free or
-    /// banded to assembled after a failed press, or banded asked for on a mesh without
-    /// node rings (matrix-free then).
+    /// Why the steady damping's tangent the system was built with differs from the one asked
+    /// for ([`crate::model::SteadyDampingTangent`]): banded asked for on a mesh without node
+    /// rings (matrix-free then). The solve's own switches are in its
+    /// [`SolveReports`](super::steady_report::SolveReports).
     pub damping_fallback: Option<String>,
-    /// Set when the first solve needed a recovery strategy ([`super::steady_recovery`]).
-    pub recovery: Option<Recovery>,
-    /// Set when the scene's small friction regularisation was reached by the ε continuation
-    /// of [`super::steady_recovery::continue_in_eps`] (also when it failed and the direct
-    /// press-in was tried instead).
-    pub eps_continuation: Option<super::steady_report::Attempt>,
-    /// Set when the first solve started from a coarser mesh's steady state
-    /// (`[solver] coarse_start`; also when Newton failed from it).
-    pub coarse_start: Option<super::steady_report::CoarseStart>,
+    /// How this system is solved (linear solver, Newton, load steps), decided from the scene
+    /// when the system was built ([`steady_on`]; otherwise LU, Newton's default options and
+    /// 4 load steps with up to 10 cut-backs, the scene's defaults).
+    pub plan: SolvePlan,
     /// Free-rolling road speed at the current ω (zero hub torque), once solved for
     /// ([`solve_torque`] with target 0); the reference of the creep. NaN until then.
     pub v0_free: f64,
     /// A linear solver analysed for this system's matrix ahead of its first Newton solve
-    /// (while a coarser mesh was solved), and the wall time of that analysis: [`press`] takes
-    /// it when its kind and pattern still match.
+    /// (while a coarser mesh was solved, [`super::steady_nested`]), and the wall time of that
+    /// analysis: [`press`] takes it when its kind and pattern still match.
     pub analysed: Option<(SparseSolver, f64)>,
-    /// The coarser mesh's steady state of the nested iteration, solved while this system was
-    /// built ([`super::steady_run::build_steady_nested`]); [`super::steady_run::solve_steady`]
-    /// starts from it.
-    pub coarse_solved: Option<Box<CoarseSolved>>,
 }
 
 impl SteadyRolling {
@@ -122,13 +120,18 @@ impl SteadyRolling {
             param: SteadyParameter::Omega,
             v0_per_omega: if omega != 0.0 { v0 / omega } else { 0.0 },
             ro,
-            recovery: None,
-            eps_continuation: None,
-            coarse_start: None,
             v0_free: f64::NAN,
             damping_fallback: None,
+            plan: SolvePlan {
+                kind: LinearKind::Lu,
+                newton: NewtonOptions::default(),
+                steps: StepOptions {
+                    initial_steps: 4,
+                    max_cutbacks: 10,
+                    verbose: false,
+                },
+            },
             analysed: None,
-            coarse_solved: None,
         };
         s.set_omega(omega, v0);
         s.sys.enable_steady_slip();
@@ -471,12 +474,96 @@ pub fn step_parameter(
     Ok(iterations)
 }
 
-/// A coarser mesh's steady state for the nested iteration's coarse start: its system (or why it could not be
-/// built), the report and outcome of its solve, and the wall times of its set-up and solve.
-pub struct CoarseSolved {
-    pub(super) system: Result<Box<SteadyRolling>, String>,
-    pub(super) report: StepReport,
-    pub(super) solved: Result<(), SolveError>,
-    pub(super) setup_s: f64,
-    pub(super) solve_s: f64,
+/// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).
+pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
+    steady_on(scene, build_model(scene)?)
+}
+
+/// The scene's steady system on `model`, whose mesh may differ from the scene's (an adaptively
+/// refined one).
+pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, AppError> {
+    model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
+    let mut sys = match (&scene.road, &scene.contact) {
+        (Some(_), Some(_)) => {
+            let mut c = build_contact(scene, &model)?;
+            // The steady slip's contact elements before the assembler is built (otherwise
+            // `SteadyRolling::new` builds it a second time for them).
+            if c.friction.is_active() {
+                c.enable_steady_slip(&model.mesh);
+            }
+            // The assembler once its blocks are final (below).
+            SolidSystem::with_contact_deferred(model, c)
+        }
+        _ => SolidSystem::new(model, "hub"),
+    };
+    let scheme = match scene.solver.steady_history {
+        SteadyHistoryChoice::Auto => StreamlineScheme::Auto,
+        SteadyHistoryChoice::Rings => StreamlineScheme::Rings,
+        SteadyHistoryChoice::Upwind => StreamlineScheme::Upwind,
+    };
+    sys.enable_steady_viscoelastic(scheme)
+        .map_err(|e| AppError::Unsupported(format!("solver.steady_history: {e}")))?;
+    let mut st = SteadyRolling::new(sys, scene.motion.omega, scene.geometry.ro);
+    st.sys
+        .set_steady_damping_cell_weight(scene.solver.damping_cell_weight);
+    match scene.solver.damping_tangent {
+        DampingTangentChoice::Assembled => st
+            .sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Assembled),
+        DampingTangentChoice::Banded => st
+            .sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Banded),
+        DampingTangentChoice::Auto if st.sys.n_eq() >= BANDED_MIN_EQUATIONS => st
+            .sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Banded),
+        DampingTangentChoice::Auto | DampingTangentChoice::MatrixFree => {}
+    }
+    if scene.solver.damping_tangent == DampingTangentChoice::Banded
+        && st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree)
+    {
+        // The three-point ring differences need node rings (a generated annulus).
+        let why = "solver.damping_tangent = \"banded\" needs a mesh with node rings (a generated \
+                   annulus); this mesh has none, so the matrix-free damping tangent is used"
+            .to_string();
+        eprintln!("tread: warning: {why}");
+        st.damping_fallback = Some(why);
+    }
+    st.sys.finish_assembly();
+    st.plan = solve_plan(scene, &st.sys);
+    Ok(st)
+}
+
+/// From this many equations on, `[solver] damping_tangent = "auto"` takes the banded damping
+/// tangent (three-point ring differences in the matrix) on ring meshes; below, matrix-free.
+/// Measured on the damped default scene, one thread: the banded solve took 2.79 s against
+/// 3.18 s at 65,536 DOFs and 13.1 s against 25.4 s at 262,144 (GMRES 1–7 products per Newton
+/// iteration instead of 4–42), 2.09 s against 1.97 s at 49,152 and 0.31 s against 0.18 s at
+/// 8,192 (the wider pattern's set-up and factorization do not pay there); it holds about twice
+/// the LU memory.
+pub const BANDED_MIN_EQUATIONS: usize = 60_000;
+
+/// Newton at the full load from the current state (an interpolated steady state), without
+/// load steps or cutbacks; the load steps and iterations go into `report`.
+pub fn press_once(
+    scene: &Scene,
+    st: &mut SteadyRolling,
+    verbose: bool,
+    report: &mut StepReport,
+    rec: &mut dyn Recorder,
+) -> Result<(), SolveError> {
+    let plan = st.plan.verbose(verbose);
+    let once = StepOptions {
+        initial_steps: 1,
+        max_cutbacks: 0,
+        verbose,
+    };
+    press(
+        st,
+        scene_loading(scene),
+        plan.kind,
+        plan.newton,
+        &once,
+        report,
+        rec,
+    )
 }

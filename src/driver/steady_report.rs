@@ -205,3 +205,51 @@ impl Recovery {
         )
     }
 }
+
+/// What the first steady solve did besides the press (`summary.json`: `solver.recovery`,
+/// `solver.eps_continuation`, `solver.coarse_start`, `terms.damping_tangent_fallback`), returned
+/// by the solve whether it succeeded or not.
+#[derive(Clone, Debug, Default)]
+pub struct SolveReports {
+    /// The recovery strategies tried after the press failed.
+    pub recovery: Option<Recovery>,
+    /// The continuation down to the scene's small friction regularisation.
+    pub eps_continuation: Option<Attempt>,
+    /// The nested iteration's start from a coarser mesh.
+    pub coarse_start: Option<CoarseStart>,
+    /// Why the damping tangent differs from the one asked for (set when the system was built,
+    /// or when the fast tangent's press failed and the assembled one was used).
+    pub damping_fallback: Option<String>,
+}
+
+impl SolveReports {
+    /// Newton iterations of the recovery (outside the press's own report).
+    pub fn recovery_iterations(&self) -> usize {
+        self.recovery.as_ref().map_or(0, |r| r.newton_iterations)
+    }
+
+    /// Converged steps of the path that found the solution, when a recovery or the ε
+    /// continuation found it (`None`: the press did).
+    pub fn solution_steps(&self) -> Option<usize> {
+        self.recovery
+            .as_ref()
+            .and_then(|r| r.attempts.iter().find(|a| a.succeeded))
+            .or(self.eps_continuation.as_ref().filter(|a| a.succeeded))
+            .map(Attempt::steps)
+    }
+}
+
+/// A failed steady solve: why, and what it tried.
+#[derive(Debug)]
+pub struct SteadyFailure {
+    pub error: crate::solver::SolveError,
+    pub reports: SolveReports,
+}
+
+impl std::fmt::Display for SteadyFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.error.fmt(f)
+    }
+}
+
+impl std::error::Error for SteadyFailure {}

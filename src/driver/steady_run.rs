@@ -30,31 +30,29 @@ use super::results::{
     ContinuationSummary, MeshInfo, ModeSummary, RunStats, SteadyResults, SteadySolver,
     SteadySummary, SteadyTerms, Summary, Terms,
 };
-use super::spinning;
-use super::steady::{
-    press, solve_torque, step_parameter, CoarseSolved, SteadyParameter, SteadyRolling,
+pub use super::steady::{build_steady, press_once, steady_on, BANDED_MIN_EQUATIONS};
+use super::steady::{step_parameter, SteadyParameter, SteadyRolling};
+pub use super::steady_solve::{
+    apply_control, build_nested, solve_steady, solve_steady_from, TORQUE_RTOL,
 };
-use super::steady_recovery;
-use super::steady_report::CoarseStart;
-use crate::model::system::{Loading, SolidSystem, SteadyDampingTangent};
 use super::tables;
+pub use crate::setup::scene_loading;
+use crate::model::system::{SolidSystem, SteadyDampingTangent};
 use crate::contact::ContactModel;
 use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
 use crate::io::scene::{
-    ContinuationParameter, Control, DampingTangentChoice, LimitAction, Scene, Sink,
-    SteadyHistoryChoice,
+    ContinuationParameter, ContinuationSpec, Control, DampingTangentChoice, LimitAction, Scene,
+    Sink,
 };
-use crate::physics::viscoelastic_steady::StreamlineScheme;
-use crate::physics::SolidModel;
-use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions};
+use crate::setup::{AppError, RunOptions};
 use crate::driver::results::RunOutcome;
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
-use crate::solver::linear::{write_matrix_market, write_vector_market, SparseSolver};
-use crate::solver::stepping::{StepOptions, StepReport};
+use crate::solver::linear::{write_matrix_market, write_vector_market};
+use crate::solver::stepping::StepReport;
 use crate::solver::{LinearKind, Newton, NonlinearSystem, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -93,14 +91,13 @@ fn branch_row(st: &SteadyRolling, p: &BranchPoint) -> BranchRow {
 /// sees every converged point (return false to stop). On failure the points so far are left in
 /// `partial`.
 fn creep_sweep(
-    scene: &Scene,
     st: &mut SteadyRolling,
     opts: &ContinuationOptions,
     partial: &mut Option<ContinuationReport>,
     observe: &mut dyn FnMut(&SteadyRolling, &BranchPoint) -> bool,
 ) -> Result<ContinuationReport, SolveError> {
     use crate::solver::continuation::ParametricSystem;
-    let (newton_opts, _) = crate::setup::solver_options(scene, opts.verbose);
+    let newton_opts = st.plan.verbose(opts.verbose).newton;
     let mut newton = Newton::new(st, LinearKind::Lu, newton_opts)?;
     let start = st.parameter();
     let span = opts.target - start;
@@ -326,558 +323,6 @@ pub fn wave_number(sys: &SolidSystem) -> f64 {
     best
 }
 
-/// Build the steady system of a scene (contact when `[road]` and `[contact]` are given).
-pub fn build_steady(scene: &Scene) -> Result<SteadyRolling, AppError> {
-    steady_on(scene, build_model(scene)?)
-}
-
-/// The scene's steady system on `model`, whose mesh may differ from the scene's (an adaptively
-/// refined one).
-pub fn steady_on(scene: &Scene, mut model: SolidModel) -> Result<SteadyRolling, AppError> {
-    model.strain_rate_damping = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
-    let mut sys = match (&scene.road, &scene.contact) {
-        (Some(_), Some(_)) => {
-            let mut c = build_contact(scene, &model)?;
-            // The steady slip's contact elements before the assembler is built (otherwise
-            // `SteadyRolling::new` builds it a second time for them).
-            if c.friction.is_active() {
-                c.enable_steady_slip(&model.mesh);
-            }
-            // The assembler once its blocks are final (below).
-            SolidSystem::with_contact_deferred(model, c)
-        }
-        _ => SolidSystem::new(model, "hub"),
-    };
-    let scheme = match scene.solver.steady_history {
-        SteadyHistoryChoice::Auto => StreamlineScheme::Auto,
-        SteadyHistoryChoice::Rings => StreamlineScheme::Rings,
-        SteadyHistoryChoice::Upwind => StreamlineScheme::Upwind,
-    };
-    sys.enable_steady_viscoelastic(scheme)
-        .map_err(|e| AppError::Unsupported(format!("solver.steady_history: {e}")))?;
-    let mut st = SteadyRolling::new(sys, scene.motion.omega, scene.geometry.ro);
-    st.sys
-        .set_steady_damping_cell_weight(scene.solver.damping_cell_weight);
-    match scene.solver.damping_tangent {
-        DampingTangentChoice::Assembled => st
-            .sys
-            .set_steady_damping_tangent(SteadyDampingTangent::Assembled),
-        DampingTangentChoice::Banded => st
-            .sys
-            .set_steady_damping_tangent(SteadyDampingTangent::Banded),
-        DampingTangentChoice::Auto if st.sys.n_eq() >= BANDED_MIN_EQUATIONS => st
-            .sys
-            .set_steady_damping_tangent(SteadyDampingTangent::Banded),
-        DampingTangentChoice::Auto | DampingTangentChoice::MatrixFree => {}
-    }
-    if scene.solver.damping_tangent == DampingTangentChoice::Banded
-        && st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::MatrixFree)
-    {
-        // The three-point ring differences need node rings (a generated annulus).
-        let why = "solver.damping_tangent = \"banded\" needs a mesh with node rings (a generated \
-                   annulus); this mesh has none, so the matrix-free damping tangent is used"
-            .to_string();
-        eprintln!("tread: warning: {why}");
-        st.damping_fallback = Some(why);
-    }
-    st.sys.finish_assembly();
-    Ok(st)
-}
-
-/// From this many equations on, `[solver] damping_tangent = "auto"` takes the banded damping
-/// tangent (three-point ring differences in the matrix) on ring meshes; below, matrix-free.
-/// Measured on the damped default scene, one thread: the banded solve took 2.79 s against
-/// 3.18 s at 65,536 DOFs and 13.1 s against 25.4 s at 262,144 (GMRES 1–7 products per Newton
-/// iteration instead of 4–42), 2.09 s against 1.97 s at 49,152 and 0.31 s against 0.18 s at
-/// 8,192 (the wider pattern's set-up and factorization do not pay there); it holds about twice
-/// the LU memory.
-pub const BANDED_MIN_EQUATIONS: usize = 60_000;
-
-/// Solve the steady state at the scene's ω and v0 (pressing stage). `report` collects the
-/// load steps. When the press fails, the recovery strategies of [`steady_recovery`] are tried;
-/// what they did is left in `st.recovery` (also when they failed, and then the press's error is
-/// returned).
-pub fn solve_steady(
-    scene: &Scene,
-    st: &mut SteadyRolling,
-    verbose: bool,
-    report: &mut StepReport,
-    rec: &mut dyn Recorder,
-) -> Result<(), SolveError> {
-    let kind = linear_kind(scene, &st.sys);
-    let (newton_opts, step_opts) = crate::setup::solver_options(scene, verbose);
-    if st.sys.contact.is_none() {
-        // No contact: the steady problem is steady spinning.
-        return spinning::solve_spinning(
-            &mut st.sys,
-            scene.motion.omega,
-            kind,
-            newton_opts,
-            &step_opts,
-            report,
-            rec,
-        );
-    }
-    let loading = scene_loading(scene);
-    let mut x_init = Vec::new();
-    st.sys.save_state(&mut x_init);
-    st.recovery = None;
-    st.eps_continuation = None;
-    st.coarse_start = None;
-    if let Some(cs) = coarse_start(scene, st, verbose, report, rec)? {
-        let ok = cs.succeeded;
-        st.coarse_start = Some(cs);
-        if ok {
-            return Ok(());
-        }
-        st.sys.restore_state(&x_init);
-    }
-    let eps_leg = steady_recovery::eps_continuation_leg(&steady_recovery::Targets::of(st))
-        .filter(|_| scene.solver.eps_continuation);
-    if let Some(leg) = eps_leg {
-        let a = steady_recovery::continue_in_eps(
-            st,
-            &leg,
-            loading,
-            kind,
-            &newton_opts,
-            &step_opts,
-            &x_init,
-            report,
-            rec,
-        )?;
-        let ok = a.succeeded;
-        if verbose {
-            eprintln!(
-                "  friction eps continuation {:.3e} -> {:.3e}: {} ({} Newton iterations)",
-                leg.from,
-                leg.to,
-                if ok {
-                    "reached"
-                } else {
-                    "failed, pressing in directly"
-                },
-                a.newton_iterations
-            );
-        }
-        st.eps_continuation = Some(a);
-        if ok {
-            return Ok(());
-        }
-    }
-    let mut first = press(
-        st,
-        loading,
-        kind,
-        newton_opts.clone(),
-        &step_opts,
-        report,
-        rec,
-    );
-    if let Err(e) = &first {
-        if !matches!(e, SolveError::Interrupted { .. })
-            && matches!(
-                st.sys.steady_damping_tangent(),
-                Some(SteadyDampingTangent::MatrixFree | SteadyDampingTangent::Banded)
-            )
-            && scene.solver.damping_tangent == DampingTangentChoice::Auto
-        {
-            // The matrix-free and banded damping tangents are the fast paths; the assembled
-            // one is the robust one. Try it before any homotopy.
-            let why = format!(
-                "the press with the {} damping tangent failed ({e}); solved again with the \
-                 assembled tangent",
-                if st.sys.steady_damping_tangent() == Some(SteadyDampingTangent::Banded) {
-                    "banded"
-                } else {
-                    "matrix-free"
-                }
-            );
-            if verbose {
-                eprintln!("  {why}");
-            }
-            st.sys
-                .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
-            st.sys.restore_state(&x_init);
-            st.damping_fallback = Some(why);
-            first = press(
-                st,
-                loading,
-                kind,
-                newton_opts.clone(),
-                &step_opts,
-                report,
-                rec,
-            );
-        }
-    }
-    match first {
-        Ok(()) => Ok(()),
-        Err(SolveError::Interrupted { at }) => Err(SolveError::Interrupted { at }),
-        Err(e) => {
-            // The press-in path at the scene's ω failed: try the homotopies of
-            // `steady_recovery` before giving up (their counts go into `report`).
-            let r = steady_recovery::recover(
-                st,
-                loading,
-                kind,
-                &newton_opts,
-                &step_opts,
-                &x_init,
-                &e,
-                report,
-                rec,
-            )?;
-            let ok = r.succeeded();
-            st.recovery = Some(r);
-            if ok {
-                Ok(())
-            } else {
-                Err(e)
-            }
-        }
-    }
-}
-
-/// The road of a scene: its load (load control) or its penetration (displacement control), as
-/// the load factor's target in static indentation and in the steady press.
-pub fn scene_loading(scene: &Scene) -> Loading {
-    match scene.road.as_ref().and_then(|r| r.load) {
-        Some(load) => Loading::Load { load },
-        None => Loading::Indent {
-            h_touch: scene.geometry.ro,
-            disp: scene.road.as_ref().and_then(|r| r.disp).unwrap_or(0.0),
-        },
-    }
-}
-
-/// Newton at the full load from the current state (an interpolated steady state), without
-/// load steps or cutbacks; the load steps and iterations go into `report`.
-pub fn press_once(
-    scene: &Scene,
-    st: &mut SteadyRolling,
-    verbose: bool,
-    report: &mut StepReport,
-    rec: &mut dyn Recorder,
-) -> Result<(), SolveError> {
-    let kind = linear_kind(scene, &st.sys);
-    let (newton_opts, _) = crate::setup::solver_options(scene, verbose);
-    let once = StepOptions {
-        initial_steps: 1,
-        max_cutbacks: 0,
-        verbose,
-    };
-    press(
-        st,
-        scene_loading(scene),
-        kind,
-        newton_opts,
-        &once,
-        report,
-        rec,
-    )
-}
-
-/// The scene on the mesh with half the cells in r and in θ, when [`coarse_start`] applies:
-/// `[solver] coarse_start`, a generated annulus with n_r even ≥ 4 and n_theta a multiple of 4
-/// ≥ 64 (the coarse mesh keeps n_theta even and ≥ 32).
-fn coarse_scene(scene: &Scene) -> Option<Scene> {
-    let m = &scene.mesh;
-    let applies = scene.solver.coarse_start
-        && m.file.is_none()
-        && m.n_r >= 4
-        && m.n_r.is_multiple_of(2)
-        && m.n_theta >= 64
-        && m.n_theta.is_multiple_of(4);
-    applies.then(|| {
-        let mut c = scene.clone();
-        c.mesh.n_r /= 2;
-        c.mesh.n_theta /= 2;
-        c
-    })
-}
-
-/// Nested iteration: solve the steady state on the mesh with half the cells in r and θ (by
-/// [`solve_steady`], so that mesh starts from its own coarser one in turn), interpolate its
-/// displacements (and the road height under load control) to this mesh's nodes, and take
-/// Newton at full load from there (one load step, no cut-back). Most of the Newton iterations
-/// of a press-in from the undeformed state are spent finding the contact patch with damped
-/// steps; on the coarse mesh they are cheap, and from the interpolated state Newton on the
-/// fine mesh converges in a few full steps. `None` when it does not apply (see
-/// [`coarse_scene`]; also without contact or with cell-owned pressures); otherwise what it
-/// did. On failure the state is left for the caller to restore.
-#[allow(clippy::too_many_arguments)]
-fn coarse_start(
-    scene: &Scene,
-    st: &mut SteadyRolling,
-    verbose: bool,
-    report: &mut StepReport,
-    rec: &mut dyn Recorder,
-) -> Result<Option<CoarseStart>, SolveError> {
-    let Some(coarse) = coarse_scene(scene) else {
-        return Ok(None);
-    };
-    if st.sys.contact.is_none() || st.sys.dofs.per_cell != 0 {
-        return Ok(None);
-    }
-    let name = format!("{}x{}", coarse.mesh.n_r, coarse.mesh.n_theta);
-    let mut out = CoarseStart::default();
-    let solved_ahead = st.coarse_solved.take().map(|c| *c);
-    let CoarseSolved {
-        system,
-        report: crep,
-        solved,
-        setup_s,
-        solve_s,
-    } = match solved_ahead {
-        Some(c) => c,
-        None => {
-            // With a second worker in the pool, this mesh's symbolic analysis runs alongside
-            // the coarse solve (it depends on the sparsity only). One thread makes it after
-            // the coarse system is freed, as Newton does: made before, it would add its work
-            // arrays to the coarse system's memory (262k DOFs: 5 % more peak memory).
-            let kind = linear_kind(scene, &st.sys);
-            let sys = &st.sys;
-            let (c, analysed) = if rayon::current_num_threads() > 1 {
-                rayon::join(
-                    || solve_coarse(&coarse, build_steady),
-                    || analyse(sys, kind),
-                )
-            } else {
-                (solve_coarse(&coarse, build_steady), None)
-            };
-            st.analysed = analysed;
-            c
-        }
-    };
-    let cst = match system {
-        Ok(c) => c,
-        Err(e) => {
-            out.meshes.push(name);
-            out.error = Some(format!(
-                "the {} mesh could not be built: {e}",
-                out.meshes[0]
-            ));
-            return Ok(Some(out));
-        }
-    };
-    // The coarser meshes' time leaves out this mesh's analysis, which one thread makes after
-    // the coarse solve (and more threads alongside it).
-    let mut coarse_s = setup_s + solve_s;
-    if let Some(inner) = &cst.coarse_start {
-        out.meshes = inner.meshes.clone();
-        out.coarse_newton_iterations = inner.coarse_newton_iterations;
-    }
-    out.meshes.push(name);
-    out.coarse_newton_iterations += crep.total_iterations
-        + cst.recovery.as_ref().map_or(0, |r| r.newton_iterations)
-        + cst
-            .eps_continuation
-            .as_ref()
-            .map_or(0, |a| a.newton_iterations);
-    if let Err(e) = solved {
-        if let SolveError::Interrupted { .. } = e {
-            return Err(e);
-        }
-        out.coarse_wall_time_s = coarse_s;
-        out.error = Some(format!(
-            "the solve on the {} mesh failed: {e}",
-            out.meshes.last().map_or("", |m| m.as_str())
-        ));
-        return Ok(Some(out));
-    }
-    let t1 = Instant::now();
-    interpolate_state(&cst.sys, &mut st.sys);
-    // The coarse system (its matrix, factors, work vectors) is not needed any more: free it
-    // before the fine mesh's factorization.
-    drop(cst);
-    coarse_s += t1.elapsed().as_secs_f64();
-    out.coarse_wall_time_s = coarse_s;
-    if verbose {
-        eprintln!(
-            "  started from the steady state on the {} mesh ({} Newton iterations, {:.3} s)",
-            out.meshes.join(" -> "),
-            out.coarse_newton_iterations,
-            out.coarse_wall_time_s
-        );
-    }
-    let mut frep = StepReport::default();
-    let res = press_once(scene, st, verbose, &mut frep, rec);
-    out.newton_iterations = frep.total_iterations;
-    match res {
-        Ok(()) => {
-            out.succeeded = true;
-            report.steps.extend(frep.steps);
-            report.total_iterations += frep.total_iterations;
-        }
-        Err(e @ SolveError::Interrupted { .. }) => return Err(e),
-        Err(e) => {
-            if verbose {
-                eprintln!("  Newton from the interpolated state failed ({e}): pressing in from the undeformed state");
-            }
-            out.error = Some(format!("Newton from the interpolated state: {e}"));
-        }
-    }
-    Ok(Some(out))
-}
-
-/// Build the `coarse` scene's steady system with `build` and solve it (silently, by
-/// [`solve_steady`]: it starts from its own coarser mesh in turn).
-fn solve_coarse(
-    coarse: &Scene,
-    build: fn(&Scene) -> Result<SteadyRolling, AppError>,
-) -> CoarseSolved {
-    let t0 = Instant::now();
-    let mut report = StepReport::default();
-    let mut cst = match build(coarse) {
-        Ok(c) => c,
-        Err(e) => {
-            return CoarseSolved {
-                system: Err(e.to_string()),
-                report,
-                solved: Ok(()),
-                setup_s: t0.elapsed().as_secs_f64(),
-                solve_s: 0.0,
-            }
-        }
-    };
-    let setup_s = t0.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let solved = solve_steady(coarse, &mut cst, false, &mut report, &mut ());
-    CoarseSolved {
-        system: Ok(Box::new(cst)),
-        report,
-        solved,
-        setup_s,
-        solve_s: t.elapsed().as_secs_f64(),
-    }
-}
-
-/// The symbolic analysis of `sys`'s matrix for a `kind` solver and its wall time (`None` if
-/// it fails: Newton then makes and reports it).
-fn analyse(sys: &SolidSystem, kind: LinearKind) -> Option<(SparseSolver, f64)> {
-    let t = Instant::now();
-    let (cp, ri) = sys.pattern();
-    SparseSolver::new(sys.n_eq(), cp, ri, kind)
-        .ok()
-        .map(|s| (s, t.elapsed().as_secs_f64()))
-}
-
-/// [`build_steady`], and with more than one thread and a nested iteration ahead
-/// ([`coarse_start`]) the coarser mesh's steady state solved in the same time (on the other
-/// workers; it is built the same way, so each mesh of the hierarchy is built while the next
-/// coarser one is solved), together with this system's symbolic analysis. With one thread, as
-/// [`build_steady`]: the coarse solve then runs from [`solve_steady`], before the analysis.
-pub fn build_steady_nested(scene: &Scene) -> Result<SteadyRolling, AppError> {
-    let coarse = match coarse_scene(scene) {
-        Some(c)
-            if rayon::current_num_threads() > 1
-                && scene.road.is_some()
-                && scene.contact.is_some() =>
-        {
-            c
-        }
-        _ => return build_steady(scene),
-    };
-    let (built, ahead) = rayon::join(
-        || {
-            build_steady(scene).map(|mut st| {
-                st.analysed = analyse(&st.sys, linear_kind(scene, &st.sys));
-                st
-            })
-        },
-        || solve_coarse(&coarse, build_steady_nested),
-    );
-    let mut st = built?;
-    if st.sys.contact.is_some() && st.sys.dofs.per_cell == 0 {
-        st.coarse_solved = Some(Box::new(ahead));
-    }
-    Ok(st)
-}
-
-/// Interpolate the displacements of `from` (another mesh of the same body) at the nodes of
-/// `to`, and copy its global unknowns (the road height under load control); fixed dofs of
-/// `to` keep their values.
-fn interpolate_state(from: &SolidSystem, to: &mut SolidSystem) {
-    use crate::assembly::CONSTRAINED;
-    use crate::mesh::locate::{locate_points, vector_at};
-    let src = &from.model.mesh;
-    let mut x = to.x.clone();
-    let found = locate_points(src, &to.model.mesh.nodes);
-    for (a, &(c, xi, eta)) in found.iter().enumerate() {
-        let u = vector_at(src, &from.x, c, xi, eta);
-        for (i, &ui) in u.iter().enumerate() {
-            if to.dofs.eq[2 * a + i] < CONSTRAINED {
-                x[2 * a + i] = ui;
-            }
-        }
-    }
-    for k in 0..to.dofs.n_global.min(from.dofs.n_global) {
-        x[to.dofs.global(k)] = from.x[from.dofs.global(k)];
-    }
-    to.restore_state(&x);
-}
-
-/// Relative tolerance of the torque and free-rolling controls: converged when
-/// |T − T_target| ≤ `TORQUE_RTOL` · |F_y| · Ro (hub vertical force times outer radius).
-pub const TORQUE_RTOL: f64 = 1e-7;
-
-/// Apply the scene's rolling control after the press-in at `road.v0`:
-/// - `speed`: nothing (v0 = `road.v0`);
-/// - `torque` / `free_rolling`: v0 solved for hub torque = `motion.torque` / 0
-///   ([`solve_torque`], tolerance [`TORQUE_RTOL`]);
-/// - `creep`: free rolling first (v0_free, R_e), then v0 = (1 + ξ) v0_free reached by
-///   natural-parameter steps in ξ ([`step_parameter`]).
-pub fn apply_control(
-    scene: &Scene,
-    st: &mut SteadyRolling,
-    verbose: bool,
-) -> Result<ControlReport, SolveError> {
-    let control = scene.motion.control;
-    let mut rep = ControlReport {
-        control: control.as_str().to_string(),
-        v0_free: f64::NAN,
-        rolling_radius: f64::NAN,
-        creep: f64::NAN,
-        ..Default::default()
-    };
-    let target = match control {
-        Control::Speed => return Ok(rep),
-        Control::Torque => scene.motion.torque,
-        Control::FreeRolling | Control::Creep => 0.0,
-    };
-    rep.target_torque = target;
-    let kind = LinearKind::Lu;
-    let (newton_opts, _) = crate::setup::solver_options(scene, verbose);
-    let mut newton = Newton::new(st, kind, newton_opts)?;
-    let scale = st.sys.hub_reaction().0[1].abs() * st.ro;
-    let scale = if scale > 0.0 { scale } else { 1.0 };
-    rep.torque_tolerance = TORQUE_RTOL * scale;
-    let ts = solve_torque(st, target, scale, TORQUE_RTOL, &mut newton, 40)?;
-    rep.evaluations = ts.evaluations;
-    rep.newton_iterations = ts.newton_iterations;
-    rep.history = ts.history;
-    if matches!(control, Control::FreeRolling | Control::Creep) {
-        st.v0_free = st.v0();
-        rep.v0_free = st.v0_free;
-        rep.rolling_radius = st.rolling_radius();
-    }
-    if control == Control::Creep && scene.motion.creep != 0.0 {
-        let param = st.param;
-        st.param = SteadyParameter::Creep;
-        let r = step_parameter(
-            st,
-            scene.motion.creep,
-            &mut newton,
-            scene.solver.max_cutbacks,
-        );
-        st.param = param;
-        rep.newton_iterations += r?;
-    }
-    rep.creep = st.creep();
-    Ok(rep)
-}
-
 /// The warnings of a steady run of this scene (none so far: the steady residual has every
 /// term of the transient model).
 pub fn warnings(scene: &Scene) -> Vec<String> {
@@ -952,8 +397,8 @@ fn scene_at(scene: &Scene, st: &SteadyRolling, lambda: f64) -> Scene {
 /// undeformed state `x0`) at λ = `at` + `step`, retried at `at` + 2 `step` and `at` + 4 `step`
 /// (never past `target`). On success `st` is at the new state and the Newton iterations are
 /// returned; on failure `st`'s parameter is left at a tried value (the caller restores the
-/// state) and `None` is returned. What the first solve recorded about its path (recovery,
-/// coarse start, ε continuation, damping fallback) is kept.
+/// state) and `None` is returned. What these solves tried is not reported (the first solve's
+/// reports stand); the damping tangent is restored after them.
 fn jump_past_limit(
     scene: &Scene,
     st: &mut SteadyRolling,
@@ -964,13 +409,7 @@ fn jump_past_limit(
     verbose: bool,
 ) -> Option<usize> {
     use crate::solver::continuation::ParametricSystem;
-    let kept = (
-        st.recovery.take(),
-        st.eps_continuation.take(),
-        st.coarse_start.take(),
-        st.damping_fallback.clone(),
-        st.sys.steady_damping_tangent(),
-    );
+    let tangent = st.sys.steady_damping_tangent();
     let mut landed = None;
     for k in 0..3 {
         let mut lambda = at + step * f64::from(1 << k);
@@ -982,7 +421,7 @@ fn jump_past_limit(
         st.set_parameter(lambda);
         let direct = scene_at(scene, st, lambda);
         let mut report = StepReport::default();
-        let r = solve_steady(&direct, st, false, &mut report, &mut ());
+        let r = solve_steady(&direct, st, false, &mut report, &mut ()).map(|_| ());
         if verbose {
             eprintln!(
                 "  direct solve past the limit point at {at:.6e}: parameter {lambda:.6e}: {}",
@@ -1000,16 +439,157 @@ fn jump_past_limit(
             break;
         }
     }
-    if let Some(t) = kept.4 {
+    if let Some(t) = tangent {
         st.sys.set_steady_damping_tangent(t);
     }
-    (
-        st.recovery,
-        st.eps_continuation,
-        st.coarse_start,
-        st.damping_fallback,
-    ) = (kept.0, kept.1, kept.2, kept.3);
     landed
+}
+
+/// `[continuation]` from the first solution: the branch followed by arc-length continuation
+/// (or by natural-parameter steps in the creep), every converged point recorded as recorder
+/// step `n0` + its index and offered to the shape snapshots. Returns the continuation's report
+/// (the part before a failure, if it failed), one row per converged point (`branch.csv`) and
+/// how it ended.
+#[allow(clippy::too_many_arguments)]
+fn follow_branch(
+    scene: &Scene,
+    cs: &ContinuationSpec,
+    st: &mut SteadyRolling,
+    x_undeformed: &[f64],
+    n0: u64,
+    verbose: bool,
+    recorders: &mut dyn Recorder,
+    shapes: &mut Option<ShapeSnapshots>,
+) -> (Option<ContinuationReport>, Vec<BranchRow>, Result<(), SolveError>) {
+    let mut rows: Vec<BranchRow> = Vec::new();
+    st.param = match cs.parameter {
+        ContinuationParameter::Omega => SteadyParameter::Omega,
+        ContinuationParameter::Load => SteadyParameter::Load,
+        ContinuationParameter::Disp => SteadyParameter::Disp,
+        ContinuationParameter::Creep => SteadyParameter::Creep,
+    };
+    use crate::solver::continuation::ParametricSystem;
+    let start = st.parameter();
+    let u_norm = {
+        let n = st.sys.model.mesh.n_nodes();
+        st.sys.x[..2 * n].iter().map(|v| v * v).sum::<f64>().sqrt()
+    };
+    let copts = ContinuationOptions {
+        target: cs.target,
+        direction: if cs.target >= start { 1.0 } else { -1.0 },
+        ds0: cs.ds,
+        ds_min: cs.ds * 1e-4,
+        ds_max: cs.ds_max,
+        x_scale: u_norm.max(1e-12 * scene.geometry.ro),
+        lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
+        max_steps: cs.max_steps,
+        max_iterations: scene.solver.max_iterations.min(15),
+        desired_iterations: cs.desired_iterations,
+        max_cutbacks: scene.solver.max_cutbacks,
+        tol: scene.solver.tolerance,
+        test_function: true,
+        switch_branch: cs.switch_branch,
+        stop_at_limit: cs.on_limit == LimitAction::Jump,
+        verbose: verbose,
+    };
+    let jump_distance = cs.jump * copts.lambda_scale;
+    let jump_direction = copts.direction;
+    let jump_target = copts.target;
+        let mut partial = None;
+    let param_name = cs.parameter.as_str();
+    // Arc length along the branch (scaled units, the sum of the steps' lengths).
+    let mut arc = 0.0;
+    let sweep = st.param == SteadyParameter::Creep;
+    // Continuation passes limit points and critical speeds, where the matrix-free damping
+    // tangent's GMRES iteration can stall: follow branches with the assembled one.
+    if scene.solver.damping_tangent != DampingTangentChoice::MatrixFree {
+        st.sys
+            .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
+    }
+    let res = if sweep {
+        let rec: &mut dyn Recorder = recorders;
+        creep_sweep(st, &copts, &mut partial, &mut |s, p| {
+            let row = branch_row(s, p);
+            arc += p.ds.abs() * f64::from(p.step > 0);
+            record_branch_point(rec, n0, param_name, arc, p, &row);
+            rows.push(row);
+            // Time of a branch point: the continuation parameter (ω, load, DISP), as in
+            // branch.csv; the start point (p.step = 0) is the last load step, already
+            // recorded.
+            let info = StepInfo {
+                index: n0 + p.step as u64,
+                time: p.lambda,
+                dt: match rows.len() {
+                    0 | 1 => 0.0,
+                    n => rows[n - 1].lambda - rows[n - 2].lambda,
+                },
+                newton_iterations: p.iterations,
+                residual: 0.0,
+                is_final: false,
+            };
+            if p.step > 0 {
+                s.sys.record_step(&info, rec);
+            }
+            !record::interrupted()
+        })
+    } else {
+        let mut jump = |s: &mut SteadyRolling, at: f64| {
+            jump_past_limit(
+                scene,
+                s,
+                &x_undeformed,
+                at,
+                jump_direction * jump_distance,
+                jump_target,
+                verbose,
+            )
+        };
+        Continuation::new(st, LinearKind::Lu, copts).and_then(|mut c| {
+            let rec: &mut dyn Recorder = recorders;
+            let on_point = &mut |s: &SteadyRolling, p: &BranchPoint| {
+                let row = branch_row(s, p);
+                if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
+                    let frame = SolidFrame::capture(&s.sys, false);
+                    sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
+                }
+                arc += p.ds.abs() * f64::from(p.step > 0);
+                record_branch_point(rec, n0, param_name, arc, p, &row);
+                rows.push(row);
+                // Time of a branch point: the continuation parameter (ω, load, DISP), as
+                // in branch.csv; the start point (p.step = 0) is the last load step.
+                let info = StepInfo {
+                    index: n0 + p.step as u64,
+                    time: p.lambda,
+                    dt: match rows.len() {
+                        0 | 1 => 0.0,
+                        n => rows[n - 1].lambda - rows[n - 2].lambda,
+                    },
+                    newton_iterations: p.iterations,
+                    residual: 0.0,
+                    is_final: false,
+                };
+                if p.step > 0 {
+                    s.sys.record_step(&info, rec);
+                }
+                !record::interrupted()
+            };
+            let r = c.run_with_jumps(st, on_point, Some(&mut jump));
+            partial = c.partial.take();
+            r
+        })
+    };
+    match res {
+        Ok(r) => {
+            let result = if record::interrupted() {
+                Err(SolveError::Interrupted { at: st.parameter() })
+            } else {
+                Ok(())
+            };
+            (Some(r), rows, result)
+        }
+        // Keep the branch computed before the failure.
+        Err(e) => (partial, rows, Err(e)),
+    }
 }
 
 /// [`run`], and with `dump` = Some(PATH) the converged tangent written by [`dump_tangent`].
@@ -1021,7 +601,7 @@ pub fn run_with_dump(
     let t0 = Instant::now();
     ensure_dir(&opts.out_dir)?;
     let warn = warnings(scene);
-    let mut st = build_steady_nested(scene)?;
+    let (mut st, ahead) = build_nested(scene)?;
     // The undeformed state: the start of a direct solve past a limit point.
     let mut x_undeformed = Vec::new();
     st.sys.save_state(&mut x_undeformed);
@@ -1048,7 +628,11 @@ pub fn run_with_dump(
             )));
         }
     }
-    let mut solve = solve_steady(scene, &mut st, opts.verbose, &mut report, recorders);
+    let (mut solve, reports) =
+        match solve_steady_from(scene, &mut st, ahead, opts.verbose, &mut report, recorders) {
+            Ok(r) => (Ok(()), r),
+            Err(f) => (Err(f.error), f.reports),
+        };
     let mut control_report: Option<ControlReport> = None;
     if solve.is_ok() && scene.motion.control != Control::Speed {
         match apply_control(scene, &mut st, opts.verbose) {
@@ -1057,7 +641,7 @@ pub fn run_with_dump(
         }
     }
     let t_first = t0.elapsed().as_secs_f64();
-    if let Some(r) = &st.recovery {
+    if let Some(r) = &reports.recovery {
         if r.succeeded() {
             eprintln!("tread: recovered: {}", r.message);
         } else {
@@ -1068,135 +652,19 @@ pub fn run_with_dump(
     let mut rows: Vec<BranchRow> = Vec::new();
     let mut shapes = shape_snapshots(scene, &st);
     if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
-        st.param = match cs.parameter {
-            ContinuationParameter::Omega => SteadyParameter::Omega,
-            ContinuationParameter::Load => SteadyParameter::Load,
-            ContinuationParameter::Disp => SteadyParameter::Disp,
-            ContinuationParameter::Creep => SteadyParameter::Creep,
-        };
-        use crate::solver::continuation::ParametricSystem;
-        let start = st.parameter();
-        let u_norm = {
-            let n = st.sys.model.mesh.n_nodes();
-            st.sys.x[..2 * n].iter().map(|v| v * v).sum::<f64>().sqrt()
-        };
-        let copts = ContinuationOptions {
-            target: cs.target,
-            direction: if cs.target >= start { 1.0 } else { -1.0 },
-            ds0: cs.ds,
-            ds_min: cs.ds * 1e-4,
-            ds_max: cs.ds_max,
-            x_scale: u_norm.max(1e-12 * scene.geometry.ro),
-            lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
-            max_steps: cs.max_steps,
-            max_iterations: scene.solver.max_iterations.min(15),
-            desired_iterations: cs.desired_iterations,
-            max_cutbacks: scene.solver.max_cutbacks,
-            tol: scene.solver.tolerance,
-            test_function: true,
-            switch_branch: cs.switch_branch,
-            stop_at_limit: cs.on_limit == LimitAction::Jump,
-            verbose: opts.verbose,
-        };
-        let jump_distance = cs.jump * copts.lambda_scale;
-        let jump_direction = copts.direction;
-        let jump_target = copts.target;
-        let n0 = report.steps.len() as u64;
-        let mut partial = None;
-        let param_name = cs.parameter.as_str();
-        // Arc length along the branch (scaled units, the sum of the steps' lengths).
-        let mut arc = 0.0;
-        let sweep = st.param == SteadyParameter::Creep;
-        // Continuation passes limit points and critical speeds, where the matrix-free damping
-        // tangent's GMRES iteration can stall: follow branches with the assembled one.
-        if scene.solver.damping_tangent != DampingTangentChoice::MatrixFree {
-            st.sys
-                .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
-        }
-        let res = if sweep {
-            let rec: &mut dyn Recorder = recorders;
-            creep_sweep(scene, &mut st, &copts, &mut partial, &mut |s, p| {
-                let row = branch_row(s, p);
-                arc += p.ds.abs() * f64::from(p.step > 0);
-                record_branch_point(rec, n0, param_name, arc, p, &row);
-                rows.push(row);
-                // Time of a branch point: the continuation parameter (ω, load, DISP), as in
-                // branch.csv; the start point (p.step = 0) is the last load step, already
-                // recorded.
-                let info = StepInfo {
-                    index: n0 + p.step as u64,
-                    time: p.lambda,
-                    dt: match rows.len() {
-                        0 | 1 => 0.0,
-                        n => rows[n - 1].lambda - rows[n - 2].lambda,
-                    },
-                    newton_iterations: p.iterations,
-                    residual: 0.0,
-                    is_final: false,
-                };
-                if p.step > 0 {
-                    s.sys.record_step(&info, rec);
-                }
-                !record::interrupted()
-            })
-        } else {
-            let mut jump = |s: &mut SteadyRolling, at: f64| {
-                jump_past_limit(
-                    scene,
-                    s,
-                    &x_undeformed,
-                    at,
-                    jump_direction * jump_distance,
-                    jump_target,
-                    opts.verbose,
-                )
-            };
-            Continuation::new(&st, LinearKind::Lu, copts).and_then(|mut c| {
-                let rec: &mut dyn Recorder = recorders;
-                let on_point = &mut |s: &SteadyRolling, p: &BranchPoint| {
-                    let row = branch_row(s, p);
-                    if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
-                        let frame = SolidFrame::capture(&s.sys, false);
-                        sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
-                    }
-                    arc += p.ds.abs() * f64::from(p.step > 0);
-                    record_branch_point(rec, n0, param_name, arc, p, &row);
-                    rows.push(row);
-                    // Time of a branch point: the continuation parameter (ω, load, DISP), as
-                    // in branch.csv; the start point (p.step = 0) is the last load step.
-                    let info = StepInfo {
-                        index: n0 + p.step as u64,
-                        time: p.lambda,
-                        dt: match rows.len() {
-                            0 | 1 => 0.0,
-                            n => rows[n - 1].lambda - rows[n - 2].lambda,
-                        },
-                        newton_iterations: p.iterations,
-                        residual: 0.0,
-                        is_final: false,
-                    };
-                    if p.step > 0 {
-                        s.sys.record_step(&info, rec);
-                    }
-                    !record::interrupted()
-                };
-                let r = c.run_with_jumps(&mut st, on_point, Some(&mut jump));
-                partial = c.partial.take();
-                r
-            })
-        };
-        match res {
-            Ok(r) => {
-                if record::interrupted() {
-                    solve = Err(SolveError::Interrupted { at: st.parameter() });
-                }
-                cont = Some(r);
-            }
-            Err(e) => {
-                // Keep the branch computed before the failure.
-                cont = partial;
-                solve = Err(e);
-            }
+        let (c, r, result) = follow_branch(
+            scene,
+            cs,
+            &mut st,
+            &x_undeformed,
+            report.steps.len() as u64,
+            opts.verbose,
+            recorders,
+            &mut shapes,
+        );
+        (cont, rows) = (c, r);
+        if let Err(e) = result {
+            solve = Err(e);
         }
     }
     let wall = t0.elapsed().as_secs_f64();
@@ -1210,15 +678,9 @@ pub fn run_with_dump(
     let (f, m) = st.sys.hub_reaction();
     // Steps of the path to the first solution: the press's, or those of the recovery that
     // found it (the failed press's steps are not on that path).
-    let first_steps = match st
-        .recovery
-        .as_ref()
-        .and_then(|r| r.attempts.iter().find(|a| a.succeeded))
-        .or(st.eps_continuation.as_ref().filter(|a| a.succeeded))
-    {
-        Some(a) => a.steps(),
-        None => report.steps.iter().filter(|s| s.converged).count(),
-    };
+    let first_steps = reports
+        .solution_steps()
+        .unwrap_or_else(|| report.steps.iter().filter(|s| s.converged).count());
     let steps = first_steps
         + cont
             .as_ref()
@@ -1278,7 +740,7 @@ pub fn run_with_dump(
     let linear = if report.switched_to_lu {
         LinearKind::Lu
     } else {
-        linear_kind(scene, &st.sys)
+        st.plan.kind
     };
     let typed = Summary::new(
         &scene.scene.name,
@@ -1306,7 +768,7 @@ pub fn run_with_dump(
                 },
                 strain_rate_damping: st.sys.model.strain_rate_damping > 0.0,
                 damping_tangent: st.sys.steady_damping_tangent(),
-                damping_tangent_fallback: st.damping_fallback.clone(),
+                damping_tangent_fallback: reports.damping_fallback.clone(),
             },
             mesh: MeshInfo {
                 n_r: scene.mesh.n_r,
@@ -1320,9 +782,9 @@ pub fn run_with_dump(
                 load_steps: report.steps.iter().filter(|s| s.converged).count(),
                 cutbacks: report.cutbacks,
                 threads: rayon::current_num_threads(),
-                recovery: st.recovery.clone(),
-                eps_continuation: st.eps_continuation.clone(),
-                coarse_start: st.coarse_start.clone(),
+                recovery: reports.recovery.clone(),
+                eps_continuation: reports.eps_continuation.clone(),
+                coarse_start: reports.coarse_start.clone(),
             },
         })),
     );
@@ -1339,8 +801,7 @@ pub fn run_with_dump(
     // The final state is already recorded as the last load step or branch point, except when
     // a recovery homotopy (which records no steps) found it.
     if recorders.steps_recorded() == 0
-        || st.recovery.as_ref().is_some_and(|r| r.succeeded())
-        || st.eps_continuation.as_ref().is_some_and(|a| a.succeeded)
+        || reports.solution_steps().is_some()
     {
         st.sys.record_step(&final_info, recorders);
     }
@@ -1356,92 +817,15 @@ pub fn run_with_dump(
         }
     }
     if scene.output.has(Sink::Png) {
-        let dir = &opts.out_dir;
-        let pts = |g: &dyn Fn(&BranchRow) -> f64| -> Vec<(f64, f64)> {
-            rows.iter()
-                .map(|r| (r.lambda, g(r)))
-                .filter(|p| p.0.is_finite() && p.1.is_finite())
-                .collect()
-        };
-        if let Some(sh) = &shapes {
-            let units = record::png::Units::parse(&scene.scene.units);
-            if let Err(e) = sh.write(dir, &units) {
-                eprintln!("tread: warning: shape pictures: {e}");
-            }
-        }
-        if rows.len() > 1 && st.param == SteadyParameter::Creep {
-            creep_plots(scene, &rows, dir);
-        }
-        if resistance_curve {
-            if let Err(e) = resistance::plot(
-                &dir.join("resistance.png"),
-                &branch_loads(&rows),
-                scene.geometry.ro,
-            ) {
-                eprintln!("tread: warning: resistance.png: {e}");
-            }
-        }
-        if rows.len() > 1 {
-            // One panel per quantity (each with its unit) against the continuation parameter.
-            let u = record::png::Units::parse(&scene.scene.units);
-            let fx = pts(&|r| r.hub_force_x);
-            let fy = pts(&|r| r.hub_force_y);
-            let tq = pts(&|r| r.hub_torque);
-            let wa = pts(&|r| r.wave_amplitude);
-            let (name, unit) = match scene.continuation.as_ref().map(|c| c.parameter) {
-                Some(ContinuationParameter::Omega) | None => ("omega", u.of_scalar("omega")),
-                Some(ContinuationParameter::Load) => ("hub load", u.force_per_thickness()),
-                Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
-                Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
-            };
-            let x = record::png::with_unit(name, &unit);
-            let f = u.force_per_thickness();
-            let ps: Vec<record::png::Panel> = vec![
-                (
-                    record::png::with_unit("hub force F_x", &f),
-                    vec![("hub_force_x", fx.as_slice())],
-                ),
-                (
-                    record::png::with_unit("hub force F_y", &f),
-                    vec![("hub_force_y", fy.as_slice())],
-                ),
-                (
-                    record::png::with_unit("hub torque", &u.moment_per_thickness()),
-                    vec![("hub_torque", tq.as_slice())],
-                ),
-                (
-                    record::png::with_unit("wave amplitude", &u.length),
-                    vec![("wave_amplitude", wa.as_slice())],
-                ),
-            ];
-            if let Err(e) = record::png::panels(
-                &dir.join("branch.png"),
-                "Steady branch: hub loads and standing-wave amplitude",
-                &x,
-                &ps,
-            ) {
-                eprintln!("tread: warning: branch.png: {e}");
-            }
-        }
-        if !samples.is_empty() {
-            let (tn, tt) = record::png::contact_curves(samples.iter().filter(|s| s.t_n > 0.0));
-            if !tn.is_empty() {
-                let u = record::png::Units::parse(&scene.scene.units);
-                if let Err(e) = record::png::line_chart(
-                    &dir.join("contact.png"),
-                    &format!(
-                        "Steady contact tractions at omega = {} rad/{}",
-                        st.omega(),
-                        u.time
-                    ),
-                    &record::png::with_unit("x1", &u.length),
-                    &record::png::with_unit("traction", &u.stress()),
-                    &[("t_n", &tn), ("t_T", &tt)],
-                ) {
-                    eprintln!("tread: warning: contact.png: {e}");
-                }
-            }
-        }
+        write_steady_pngs(
+            scene,
+            &st,
+            &rows,
+            &samples,
+            shapes.as_ref(),
+            resistance_curve,
+            &opts.out_dir,
+        );
     }
     let mut headline = vec![format!(
         "steady at omega = {:.6} rad/s, v0 = {:.6}: hub force = ({:.6e}, {:.6e}), torque = {:.4e}, contact patch x1 in [{:.4}, {:.4}], max pressure = {:.4e}",
@@ -1483,6 +867,105 @@ pub fn run_with_dump(
             headline,
         },
     )
+}
+
+/// The steady run's pictures (`png` sink) in `dir`: the shape snapshots, the creep and
+/// rolling-resistance curves, the branch's hub loads against the continuation parameter and
+/// the contact tractions. A picture that cannot be written is a warning, not a failure.
+fn write_steady_pngs(
+    scene: &Scene,
+    st: &SteadyRolling,
+    rows: &[BranchRow],
+    samples: &[crate::contact::ContactSample],
+    shapes: Option<&ShapeSnapshots>,
+    resistance_curve: bool,
+    dir: &Path,
+) {
+    let pts = |g: &dyn Fn(&BranchRow) -> f64| -> Vec<(f64, f64)> {
+        rows.iter()
+            .map(|r| (r.lambda, g(r)))
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect()
+    };
+    if let Some(sh) = shapes {
+        let units = record::png::Units::parse(&scene.scene.units);
+        if let Err(e) = sh.write(dir, &units) {
+            eprintln!("tread: warning: shape pictures: {e}");
+        }
+    }
+    if rows.len() > 1 && st.param == SteadyParameter::Creep {
+        creep_plots(scene, rows, dir);
+    }
+    if resistance_curve {
+        if let Err(e) = resistance::plot(
+            &dir.join("resistance.png"),
+            &branch_loads(rows),
+            scene.geometry.ro,
+        ) {
+            eprintln!("tread: warning: resistance.png: {e}");
+        }
+    }
+    if rows.len() > 1 {
+        // One panel per quantity (each with its unit) against the continuation parameter.
+        let u = record::png::Units::parse(&scene.scene.units);
+        let fx = pts(&|r| r.hub_force_x);
+        let fy = pts(&|r| r.hub_force_y);
+        let tq = pts(&|r| r.hub_torque);
+        let wa = pts(&|r| r.wave_amplitude);
+        let (name, unit) = match scene.continuation.as_ref().map(|c| c.parameter) {
+            Some(ContinuationParameter::Omega) | None => ("omega", u.of_scalar("omega")),
+            Some(ContinuationParameter::Load) => ("hub load", u.force_per_thickness()),
+            Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
+            Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
+        };
+        let x = record::png::with_unit(name, &unit);
+        let f = u.force_per_thickness();
+        let ps: Vec<record::png::Panel> = vec![
+            (
+                record::png::with_unit("hub force F_x", &f),
+                vec![("hub_force_x", fx.as_slice())],
+            ),
+            (
+                record::png::with_unit("hub force F_y", &f),
+                vec![("hub_force_y", fy.as_slice())],
+            ),
+            (
+                record::png::with_unit("hub torque", &u.moment_per_thickness()),
+                vec![("hub_torque", tq.as_slice())],
+            ),
+            (
+                record::png::with_unit("wave amplitude", &u.length),
+                vec![("wave_amplitude", wa.as_slice())],
+            ),
+        ];
+        if let Err(e) = record::png::panels(
+            &dir.join("branch.png"),
+            "Steady branch: hub loads and standing-wave amplitude",
+            &x,
+            &ps,
+        ) {
+            eprintln!("tread: warning: branch.png: {e}");
+        }
+    }
+    if !samples.is_empty() {
+        let (tn, tt) = record::png::contact_curves(samples.iter().filter(|s| s.t_n > 0.0));
+        if !tn.is_empty() {
+            let u = record::png::Units::parse(&scene.scene.units);
+            if let Err(e) = record::png::line_chart(
+                &dir.join("contact.png"),
+                &format!(
+                    "Steady contact tractions at omega = {} rad/{}",
+                    st.omega(),
+                    u.time
+                ),
+                &record::png::with_unit("x1", &u.length),
+                &record::png::with_unit("traction", &u.stress()),
+                &[("t_n", &tn), ("t_T", &tt)],
+            ) {
+                eprintln!("tread: warning: contact.png: {e}");
+            }
+        }
+    }
 }
 
 /// The shape snapshots of `[output] snapshot_omegas` when they apply: PNG output and an

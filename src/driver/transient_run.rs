@@ -39,7 +39,7 @@ use crate::io::record::{
     self, Energy, HubLoads, Recorder, RejectedStep, SteadyReached, StepInfo, StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink, TimeSpec};
-use crate::setup::{build_contact, build_model, linear_kind, AppError, RunOptions};
+use crate::setup::{build_contact, build_model, AppError, RunOptions};
 use crate::driver::results::RunOutcome;
 use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
@@ -75,11 +75,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme.clone(), kin, lumped);
     let torque_control = scene.motion.control == Control::Torque;
+    let plan = crate::setup::solve_plan(scene, &tr.sys).verbose(opts.verbose);
     let kind = if torque_control {
         // The φ row and column make the tangent indefinite-looking to Cholesky in general.
         LinearKind::Lu
     } else {
-        linear_kind(scene, &tr.sys)
+        plan.kind
     };
     if torque_control {
         // The φ coupling block holds a cell's dofs plus φ; with the exact Q2/P1 pressure that
@@ -146,7 +147,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         lumped,
         land_on_passages: true,
     };
-    let (newton_opts, _) = crate::setup::solver_options(scene, opts.verbose);
+    let newton_opts = plan.newton.clone();
     let clock = RunClock {
         mesh: Some(&tr.sys.model.mesh),
         time_name: "time",

@@ -360,6 +360,9 @@ mod tests {
             degree: p,
             grading_r: 1.0,
             grading_theta: 0.0,
+            theta_ratio: 1.0,
+            grading_z: 1.0,
+            half_width: false,
             crown_radius: None,
         }
     }

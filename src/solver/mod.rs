@@ -19,3 +19,23 @@ pub use newton::{
 };
 pub use observe::{RejectedStep, StepInfo, StepObserver};
 pub use stepping::{solve_load_steps, StepOptions, StepReport};
+
+/// How a run solves its system, decided once from the scene when the run starts: the linear
+/// solver, the Newton options and the load stepping. The drivers take it from the model they
+/// are given instead of deriving it again at every solve.
+#[derive(Clone, Debug)]
+pub struct SolvePlan {
+    pub kind: LinearKind,
+    pub newton: NewtonOptions,
+    pub steps: StepOptions,
+}
+
+impl SolvePlan {
+    /// The plan with the progress lines of Newton and of the load stepping on or off.
+    pub fn verbose(&self, verbose: bool) -> Self {
+        let mut p = self.clone();
+        p.newton.verbose = verbose;
+        p.steps.verbose = verbose;
+        p
+    }
+}
