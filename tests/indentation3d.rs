@@ -289,8 +289,8 @@ fn sliding_slab_under_load_control_equals_the_2d_indentation() {
     let sc2 = slab_scene(None, p);
     let mut s2 = tread::app::build_system(&sc2).expect("2D system");
     s2.loading = tread::setup::scene_loading(&sc2);
-    let kind = tread::app::linear_kind(&sc2, &s2);
-    let (newton, step) = tread::app::solver_options(&sc2, false);
+    let kind = tread::setup::linear_kind(&sc2, &s2);
+    let (newton, step) = tread::setup::solver_options(&sc2, false);
     let mut rep = StepReport::default();
     solve_indentation(&mut s2, kind, newton, &step, &mut rep, &mut ()).expect("2D converges");
     let r2 = results_2d(&s2, RO);
@@ -298,7 +298,7 @@ fn sliding_slab_under_load_control_equals_the_2d_indentation() {
     let sc3 = slab_scene(Some(width), p);
     let mut s3 = tread::setup::build_system_3d(&sc3).expect("3D system");
     let kind = tread::setup::linear_kind_3d(&sc3, &s3);
-    let (newton, step) = tread::app::solver_options(&sc3, false);
+    let (newton, step) = tread::setup::solver_options(&sc3, false);
     let mut rep3 = StepReport::default();
     solve_indentation_3d(&mut s3, kind, newton, &step, &mut rep3, &mut NoObserver)
         .expect("3D converges");
