@@ -49,6 +49,9 @@ pub fn default_out_dir(scene: &Scene) -> PathBuf {
 /// Run a scene and write its outputs. A failed solve still writes every output (with the last
 /// converged state) and returns `Err(AppError::Solve)`.
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
+    if scene.mesh.is_3d() {
+        return crate::driver::run3d::run(scene, opts);
+    }
     match scene.analysis.mode {
         Mode::Spinning | Mode::Static => run_solid(scene, opts),
         Mode::StickSlip => crate::driver::stick_slip_run::run(scene, opts),
@@ -263,6 +266,9 @@ pub fn estimate_memory(scene: &Scene) -> f64 {
     if scene.analysis.mode == Mode::StickSlip {
         return 0.0;
     }
+    if scene.mesh.is_3d() {
+        return estimate_memory_3d(scene);
+    }
     let p = scene.mesh.order.max(1) as f64;
     let (nr, nt) = (scene.mesh.n_r as f64, scene.mesh.n_theta as f64);
     let nodes = (p * nr + 1.0) * (p * nt);
@@ -273,6 +279,30 @@ pub fn estimate_memory(scene: &Scene) -> f64 {
     let vectors = 40.0 * dofs * 8.0 + nodes * 64.0;
     let matrix = nnz * 16.0;
     let factor = 2.0 * 4.0 * dofs * dofs.max(2.0).log2() * 16.0;
+    vectors + matrix + factor
+}
+
+/// [`estimate_memory`] of a three-dimensional scene: the generated wheel's nodes
+/// (p n_r + 1)(p n_θ)(p n_z + 1), three dofs each, every cell coupling its 3 (p+1)³ + 4 dofs,
+/// and sparse L and U factors with 8 n^{4/3} entries each (nested-dissection fill of a 3D
+/// mesh). A mesh file's size is not known before it is read (the reader bounds the file).
+fn estimate_memory_3d(scene: &Scene) -> f64 {
+    if scene.mesh.file.is_some() {
+        return 0.0;
+    }
+    let p = scene.mesh.order.max(1) as f64;
+    let (nr, nt, nz) = (
+        scene.mesh.n_r as f64,
+        scene.mesh.n_theta as f64,
+        scene.mesh.resolved_n_z() as f64,
+    );
+    let nodes = (p * nr + 1.0) * (p * nt) * (p * nz + 1.0);
+    let dofs = 3.0 * nodes;
+    let cells = nr * nt * nz;
+    let nd = 3.0 * (p + 1.0).powi(3) + 4.0;
+    let matrix = cells * nd * nd * 16.0;
+    let vectors = 40.0 * dofs * 8.0 + nodes * 96.0;
+    let factor = 2.0 * 8.0 * dofs.powf(4.0 / 3.0) * 16.0;
     vectors + matrix + factor
 }
 
@@ -294,8 +324,13 @@ pub fn check_memory(scene: &Scene) -> Result<(), AppError> {
             format!("{g:.2e}")
         }
     };
+    let n_z = if scene.mesh.is_3d() {
+        format!(", n_z = {}", scene.mesh.resolved_n_z())
+    } else {
+        String::new()
+    };
     Err(AppError::TooBig(format!(
-        "the mesh n_r = {}, n_theta = {}, order = {} would need about {} GiB of memory, more than the {} GiB allowed ({}); use a coarser [mesh] or raise --max-memory",
+        "the mesh n_r = {}, n_theta = {}{n_z}, order = {} would need about {} GiB of memory, more than the {} GiB allowed ({}); use a coarser [mesh] or raise --max-memory",
         scene.mesh.n_r,
         scene.mesh.n_theta,
         scene.mesh.order,
@@ -319,9 +354,28 @@ pub fn preflight(scene: &Scene) -> Result<(), AppError> {
     if scene.analysis.mode == Mode::StickSlip {
         return Ok(());
     }
+    if scene.mesh.is_3d() {
+        let mesh = crate::setup::build_hex_mesh(scene)?;
+        if scene.analysis.mode == Mode::Static {
+            crate::setup::build_contact_3d(scene, &mesh)?;
+        }
+        return Ok(());
+    }
     let model = crate::setup::build_model(scene)?;
     if scene.analysis.mode == Mode::Static {
         crate::setup::build_contact(scene, &model)?;
+    }
+    Ok(())
+}
+
+/// Refuse a three-dimensional scene in a command that runs the plane-strain program only
+/// (`command`, e.g. "adapt"): exit status 2.
+pub fn refuse_3d(scene: &Scene, command: &str) -> Result<(), AppError> {
+    if scene.mesh.is_3d() {
+        return Err(AppError::Unsupported(format!(
+            "mesh.dimension = 3: `tread {command}` runs plane-strain scenes only; three-dimensional \
+             scenes run with `tread run` (modes \"static\" and \"spinning\")"
+        )));
     }
     Ok(())
 }

@@ -253,6 +253,12 @@ fn preflight(path: &Path, set: &[String], scene: &Scene) -> Result<(), String> {
     Err(format!("{source}: {e}"))
 }
 
+/// The scene, or the message of [`app::refuse_3d`] for a command that runs plane strain only.
+fn refuse_3d(scene: Scene, command: &str) -> Result<Scene, String> {
+    app::refuse_3d(&scene, command).map_err(|e| e.to_string())?;
+    Ok(scene)
+}
+
 enum LoadError {
     Read(String),
     Scene(tread::io::scene::SceneErrors),
@@ -602,7 +608,7 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             field_tol,
             contact_tol,
             pressure_tol,
-        }) => match load(&scene, &set) {
+        }) => match load(&scene, &set).and_then(|s| refuse_3d(s, "compare")) {
             Ok(s) => {
                 let d = CompareTolerances::default();
                 let tol = CompareTolerances {
@@ -629,7 +635,7 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             no_contact,
             set,
             verbose,
-        }) => match load(&scene, &set) {
+        }) => match load(&scene, &set).and_then(|s| refuse_3d(s, "critical")) {
             Ok(s) => {
                 let opts = tread::driver::critical::CriticalOptions {
                     n_max,
@@ -678,7 +684,7 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             uniform,
             refine,
             set,
-        }) => match load(&scene, &set) {
+        }) => match load(&scene, &set).and_then(|s| refuse_3d(s, "adapt")) {
             Ok(s) => {
                 use tread::driver::adaptive;
                 let opts = adaptive::AdaptOptions {

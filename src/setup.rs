@@ -8,13 +8,16 @@
 //! physics modules the values are handed to (road at x2 = −H below the hub centre, ω > 0
 //! counter-clockwise).
 
+use crate::contact::facet3d::ContactSurface3D;
 use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
+use crate::mesh::hex_mesh::HexMesh;
+use crate::mesh::revolved::{revolved, RevolvedSpec};
 use crate::model::system::Loading;
-use crate::model::SolidSystem;
+use crate::model::{Solid3D, Solid3DSystem, SolidSystem};
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
-    ClampKind, ContactQuadrature, Formulation, LinearChoice, Mode, Scene, Sink,
+    ClampKind, ContactQuadrature, Formulation, LinearChoice, MeshSides, Mode, Scene, Sink,
     DEFAULT_CLAMP_WIDTH_OVER_G,
 };
 use crate::material::{Hyperelastic, Material};
@@ -161,16 +164,7 @@ pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, 
             }),
         },
     };
-    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
-    let Some(friction) = scene.friction.params() else {
-        return Err(AppError::Unsupported(
-            "friction: a parameter required by `friction.law` is missing".into(),
-        ));
-    };
-    let rule = match cs.quadrature {
-        ContactQuadrature::Gauss => FacetRule::Gauss(cs.points),
-        ContactQuadrature::Lobatto => FacetRule::Lobatto(cs.points),
-    };
+    let (normal, friction, rule) = contact_laws(scene, clamp)?;
     let ro = scene.geometry.ro;
     // Load control starts with a small penetration (1e-3 Ro) so that the road-height equation
     // has a non-zero tangent; displacement control starts at first touch (H = Ro).
@@ -187,6 +181,30 @@ pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, 
         rule,
         load,
     ))
+}
+
+/// The normal compliance (with `clamp`), friction law and facet rule of a scene's `[contact]`
+/// and `[friction]`.
+fn contact_laws(
+    scene: &Scene,
+    clamp: Clamp,
+) -> Result<(NormalCompliance, crate::contact::Friction, FacetRule), AppError> {
+    let Some(cs) = &scene.contact else {
+        return Err(AppError::Unsupported(
+            "mode \"static\" needs the [road] and [contact] sections".into(),
+        ));
+    };
+    let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
+    let Some(friction) = scene.friction.params() else {
+        return Err(AppError::Unsupported(
+            "friction: a parameter required by `friction.law` is missing".into(),
+        ));
+    };
+    let rule = match cs.quadrature {
+        ContactQuadrature::Gauss => FacetRule::Gauss(cs.points),
+        ContactQuadrature::Lobatto => FacetRule::Lobatto(cs.points),
+    };
+    Ok((normal, friction, rule))
 }
 
 /// Mesh, material and solid model of a scene.
@@ -382,4 +400,216 @@ pub fn solver_options(scene: &Scene, verbose: bool) -> (NewtonOptions, StepOptio
         verbose,
     };
     (newton_opts, step_opts)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Three dimensions (`mesh.dimension = 3`)
+// ---------------------------------------------------------------------------------------------
+
+/// Material law and pressure treatment of a three-dimensional scene: as [`build_material`],
+/// with the reference pressure p0 = tr P(F = I) / 3 of the 3 × 3 law (the unconstrained W of
+/// an incompressible law is not stress free at F = I; by isotropy it equals the plane-strain
+/// program's tr P / 2).
+pub fn build_material_3d(scene: &Scene) -> Result<(Material, PressureMode), AppError> {
+    let (material, mode) = build_material(scene)?;
+    let p0 = <Material as Hyperelastic<crate::math::Mat3>>::stress(
+        &material,
+        &crate::math::Mat3::zeros(),
+    )
+    .trace()
+        / 3.0;
+    let mode = match mode {
+        PressureMode::None => PressureMode::None,
+        PressureMode::Exact { .. } => PressureMode::Exact { p0 },
+        PressureMode::Perturbed { kappa, .. } => PressureMode::Perturbed { kappa, p0 },
+    };
+    Ok((material, mode))
+}
+
+/// The hexahedral mesh of a three-dimensional scene: the annulus of `[geometry]` and `[mesh]`
+/// revolved about the axle (`width`, `n_z`, `crown_radius`; isoparametric cells, as the
+/// plane-strain program's), or the hexahedra of `mesh.file` (node and facet sets `hub` and
+/// `outer` from the groups `mesh.hub` and `mesh.contact`), whose largest distance of a node
+/// from the axle must be `geometry.ro` (the road is placed from it).
+pub fn build_hex_mesh(scene: &Scene) -> Result<HexMesh, AppError> {
+    use crate::io::scene::{DEFAULT_CONTACT_GROUP, DEFAULT_HUB_GROUP};
+    use crate::mesh::gmsh::{GmshGroups, MeshError};
+    let ms = &scene.mesh;
+    let (_, pressure) = build_material_3d(scene)?;
+    let incompressible = !matches!(pressure, PressureMode::None);
+    if let Some(file) = &ms.file {
+        let groups = GmshGroups {
+            hub: ms.hub.clone().unwrap_or_else(|| DEFAULT_HUB_GROUP.into()),
+            contact: ms
+                .contact
+                .clone()
+                .unwrap_or_else(|| DEFAULT_CONTACT_GROUP.into()),
+            regions: Vec::new(),
+        };
+        let mesh = crate::mesh::gmsh3d::read_msh_hex(Path::new(file), &groups)
+            .map_err(AppError::MeshFile)?;
+        let bad = |message: String| {
+            AppError::MeshFile(MeshError {
+                file: std::path::absolute(file)
+                    .map_or_else(|_| file.to_string(), |p| p.display().to_string()),
+                message,
+            })
+        };
+        if incompressible && mesh.degree.iter().any(|&p| p != 2) {
+            return Err(bad(
+                "incompressible materials need 27-node hexahedra (Q2 displacements with P1 \
+                 pressures); the file has 8-node ones"
+                    .into(),
+            ));
+        }
+        let ro = mesh
+            .nodes
+            .iter()
+            .map(|x| x[0].hypot(x[1]))
+            .fold(0.0, f64::max);
+        let ro_scene = scene.geometry.ro;
+        if (ro - ro_scene).abs() > 1e-6 * ro_scene.abs().max(f64::MIN_POSITIVE) {
+            return Err(bad(format!(
+                "the mesh's outer radius (largest distance of a node from the axle x3) is {ro}, \
+                 but geometry.ro = {ro_scene}"
+            )));
+        }
+        return Ok(mesh);
+    }
+    if incompressible && ms.order != 2 {
+        return Err(AppError::Unsupported(format!(
+            "mesh.order = {}: incompressible materials need order = 2 (Q2 displacements with P1 pressures)",
+            ms.order
+        )));
+    }
+    let spec = RevolvedSpec {
+        ri: scene.geometry.ri,
+        ro: scene.geometry.ro,
+        width: ms.width.unwrap_or(f64::NAN),
+        n_r: ms.n_r,
+        n_z: ms.resolved_n_z(),
+        n_theta: ms.n_theta,
+        degree: ms.order,
+        grading_r: ms.grading_r,
+        grading_theta: ms.grading_theta,
+        theta_ratio: 1.0,
+        grading_z: 1.0,
+        half_width: false,
+        crown_radius: ms.crown_radius,
+    };
+    let mut mesh = revolved(&spec).map_err(|e| {
+        let section = if matches!(e.key, "ri" | "ro") {
+            "geometry"
+        } else {
+            "mesh"
+        };
+        let key = if e.key == "degree" { "order" } else { e.key };
+        AppError::Unsupported(format!("{section}.{key} = {}: {}", e.value, e.reason))
+    })?;
+    mesh.make_isoparametric();
+    Ok(mesh)
+}
+
+/// The fixed displacement components of a three-dimensional scene's mesh: every component of
+/// the hub nodes; with `mesh.sides = "sliding"` u3 on both flat faces too.
+pub fn fixed_dofs_3d(scene: &Scene, mesh: &HexMesh) -> Vec<bool> {
+    let mut f = vec![false; 3 * mesh.n_nodes()];
+    for &n in mesh.node_set("hub") {
+        f[3 * n as usize..3 * n as usize + 3].fill(true);
+    }
+    if scene.mesh.resolved_sides() == MeshSides::Sliding {
+        for set in ["side_neg", "side_pos"] {
+            for &n in mesh.node_set(set) {
+                f[3 * n as usize + 2] = true;
+            }
+        }
+    }
+    f
+}
+
+/// The road contact of a three-dimensional static scene on the tread facets (`outer`):
+/// under load control (`road.load`, a total force) H starts at ro (1 − 10⁻³) as in the
+/// plane-strain program, under displacement control at first touch.
+pub fn build_contact_3d(scene: &Scene, mesh: &HexMesh) -> Result<ContactSurface3D, AppError> {
+    let (Some(road), Some(cs)) = (&scene.road, &scene.contact) else {
+        return Err(AppError::Unsupported(
+            "mode \"static\" needs the [road] and [contact] sections".into(),
+        ));
+    };
+    let (material, _) = build_material_3d(scene)?;
+    let clamp = match cs.clamp {
+        ClampKind::Hard => Clamp::Hard,
+        ClampKind::Smooth => Clamp::Smooth {
+            width: cs.clamp_width.unwrap_or_else(|| {
+                DEFAULT_CLAMP_WIDTH_OVER_G * material.small_strain_shear_modulus()
+            }),
+        },
+    };
+    let (normal, friction, rule) = contact_laws(scene, clamp)?;
+    let facets = mesh.facet_set("outer").to_vec();
+    if facets.is_empty() {
+        return Err(AppError::Unsupported(
+            "mesh: the three-dimensional mesh has no contact facets (mesh.contact)".into(),
+        ));
+    }
+    ContactSurface3D::new(
+        facets,
+        scene.geometry.ro,
+        nalgebra::Vector2::new(road.v0, 0.0),
+        normal,
+        friction,
+        rule,
+    )
+    .map_err(|e| AppError::Unsupported(format!("contact: {e}")))
+}
+
+/// The three-dimensional solid system of a scene: the solid on [`build_hex_mesh`] with
+/// [`fixed_dofs_3d`], and in the static mode the road contact under load control
+/// (`road.load`) or displacement control (`road.disp`). The road height of first touch is
+/// `geometry.ro`.
+pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
+    let mesh = build_hex_mesh(scene)?;
+    let (material, pressure) = build_material_3d(scene)?;
+    let fixed = fixed_dofs_3d(scene, &mesh);
+    let contact = match scene.analysis.mode {
+        Mode::Static => Some(build_contact_3d(scene, &mesh)?),
+        Mode::Spinning => None,
+        m => {
+            return Err(AppError::Unsupported(format!(
+                "analysis.mode: mode \"{m}\" does not run in three dimensions yet"
+            )))
+        }
+    };
+    let solid = Solid3D::new(mesh, material, scene.material.rho, pressure);
+    let sys = Solid3DSystem::new(solid, &fixed);
+    let Some(surface) = contact else {
+        return Ok(sys);
+    };
+    let ro = scene.geometry.ro;
+    let road = scene.road.as_ref();
+    let sys = match road.and_then(|r| r.load) {
+        Some(load) => sys.with_contact_load(surface, ro, ro * (1.0 - 1e-3), load),
+        None => sys.with_contact(surface, ro, road.and_then(|r| r.disp).unwrap_or(0.0)),
+    };
+    sys.map_err(|e| AppError::Unsupported(format!("contact: {e}")))
+}
+
+/// Linear solver of a three-dimensional system: as [`linear_kind`] (LU for the exact
+/// incompressible saddle point and with friction).
+pub fn linear_kind_3d(scene: &Scene, sys: &Solid3DSystem) -> LinearKind {
+    match scene.solver.linear {
+        LinearChoice::Cholesky => LinearKind::Cholesky,
+        LinearChoice::Lu => LinearKind::Lu,
+        LinearChoice::Auto => {
+            let friction = sys
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.surface.friction.is_active());
+            if matches!(sys.solid.pressure, PressureMode::Exact { .. }) || friction {
+                LinearKind::Lu
+            } else {
+                LinearKind::Cholesky
+            }
+        }
+    }
 }

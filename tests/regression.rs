@@ -134,6 +134,8 @@ scenes! {
     indentation_friction: "indentation_friction.toml" => "indentation_friction.json";
     indentation_frictionless: "indentation_frictionless.toml" => "indentation_frictionless.json";
     indentation_load_control: "indentation_load_control.toml" => "indentation_load_control.json";
+    indentation_3d: "indentation_3d.toml" => "indentation_3d.json";
+    spinning_3d: "spinning_3d.toml" => "spinning_3d.json";
     oden_hollow_cylinder: "oden_hollow_cylinder.toml" => "oden_hollow_cylinder.json";
     oden_hollow_cylinder_steady: "oden_hollow_cylinder.toml", "--mode", "steady" => "oden_hollow_cylinder_steady.json";
     oden_steady_sweep: "oden_steady_sweep.toml" => "oden_steady_sweep.json";

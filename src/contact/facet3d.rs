@@ -56,6 +56,13 @@
 //! and the local tangent K_{3a+i, 3b+j} = −∫ N_a N_b D_ij dA0. Frictionless and undamped it is
 //! symmetric: the residual is then the gradient of Φ = ∫ c_n δ^{m+1}/(m+1) dA0.
 //!
+//! # The road height as an unknown (load control)
+//!
+//! [`ContactSurface3D::facet_kernel_height`] appends H after the cell's dofs: its row is the
+//! facet's part −∫ t_n dA0 of the equation λ · load − ∫ t_n dA0 = 0 (the load added once by the
+//! caller), with ∂δ/∂H = −1, so that ∂T/∂H = (∂t1/∂t_n ∂t_n/∂H − ∂t1/∂δ, −∂t_n/∂δ,
+//! ∂t3/∂t_n ∂t_n/∂H − ∂t3/∂δ) and ∂R_H/∂U_b = −∫ N_b ∂t_n/∂u_b2 dA0; H moves no velocity.
+//!
 //! # Facets, rule and margin
 //!
 //! A facet is a [`HexFacet`] (cell, face) of a [`HexMesh`]; the reference surface, its area
@@ -387,13 +394,34 @@ impl ContactSurface3D {
         totals: &mut ContactTotals3D,
     ) -> bool {
         if mesh.degree[facet.cell as usize] == 1 {
-            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, totals)
+            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, false, totals)
         } else {
-            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, totals)
+            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, false, totals)
         }
     }
 
-    #[allow(clippy::needless_range_loop)] // D[i][j], N_a N_b: indices as in the formulas
+    /// [`Self::facet_kernel`] with the road height H as one more unknown after the cell's 3N
+    /// dofs (load control): `r` has 3N + 1 entries, `k` (3N + 1)² (row-major, stride 3N + 1).
+    /// Row 3N is −∫ t_n dA0 (the facet's part of the road-height equation
+    /// λ·load − ∫ t_n dA0 = 0, whose load term the caller adds once); column 3N holds
+    /// ∂R/∂H, with ∂δ/∂H = −1 (δ = −H − x2; H moves no velocity).
+    pub fn facet_kernel_height(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        m: &CellMotion,
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+        totals: &mut ContactTotals3D,
+    ) -> bool {
+        if mesh.degree[facet.cell as usize] == 1 {
+            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, true, totals)
+        } else {
+            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, true, totals)
+        }
+    }
+
+    #[allow(clippy::needless_range_loop, clippy::too_many_arguments)] // D[i][j], N_a N_b: indices as in the formulas
     fn kernel_impl<E: Lagrange3D>(
         &self,
         mesh: &HexMesh,
@@ -401,9 +429,12 @@ impl ContactSurface3D {
         m: &CellMotion,
         r: &mut [f64],
         mut k: Option<&mut [f64]>,
+        with_h: bool,
         totals: &mut ContactTotals3D,
     ) -> bool {
-        let nd = 3 * E::N;
+        // Local size: the cell's 3N dofs, then H under load control (index `ih`).
+        let ih = 3 * E::N;
+        let nd = ih + usize::from(with_h);
         r[..nd].fill(0.0);
         if let Some(k) = k.as_deref_mut() {
             k[..nd * nd].fill(0.0);
@@ -431,6 +462,8 @@ impl ContactSurface3D {
             let mut tr = Vector3::new(0.0, nv.t, 0.0);
             let mut d = Matrix3::zeros();
             d[(1, 1)] = g;
+            // ∂T/∂H: δ moves by −1, no velocity does.
+            let mut dt_dh = Vector3::new(0.0, -nv.d_delta, 0.0);
             if friction {
                 let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
                 let fv = eval_vec(&self.friction, w, nv.t, delta);
@@ -442,6 +475,7 @@ impl ContactSurface3D {
                         d[(ci, cj)] = kv * fv.d_w[(i, j)];
                     }
                     d[(ci, 1)] = fv.d_tn[i] * g - fv.d_delta[i] * kx;
+                    dt_dh[ci] = -fv.d_tn[i] * nv.d_delta - fv.d_delta[i];
                 }
             }
             let da = pt.da0;
@@ -449,6 +483,9 @@ impl ContactSurface3D {
                 for i in 0..3 {
                     r[3 * a + i] -= pt.n[a] * tr[i] * da;
                 }
+            }
+            if with_h {
+                r[ih] -= nv.t * da;
             }
             if nv.t > 0.0 {
                 let f = tr * da;
@@ -474,6 +511,17 @@ impl ContactSurface3D {
                             }
                         }
                     }
+                }
+                if with_h {
+                    // Column H of the displacement rows; row H: −∫ ∂t_n/∂U, −∫ ∂t_n/∂H.
+                    for &a in &fn_[..nf] {
+                        let na = pt.n[a] * da;
+                        for i in 0..3 {
+                            k[(3 * a + i) * nd + ih] -= na * dt_dh[i];
+                            k[ih * nd + 3 * a + i] -= na * d[(1, i)];
+                        }
+                    }
+                    k[ih * nd + ih] -= dt_dh[1] * da;
                 }
             }
         });

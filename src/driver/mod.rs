@@ -9,6 +9,8 @@
 //!   [`steady_report::SolveReports`]), time integration ([`transient`]), the
 //!   stick-slip oscillator, critical speeds ([`critical`]) and transient-vs-steady comparison
 //!   ([`compare`]).
+//! * Three dimensions: static indentation ([`indentation3d`]) and spinning ([`spinning3d`]) of
+//!   [`crate::model::Solid3DSystem`], run from a scene with `mesh.dimension = 3` by [`run3d`].
 //! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
 //!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
 //!   How a run solves (linear solver, Newton, load steps) is decided once when its system is
@@ -26,8 +28,10 @@ pub mod critical;
 pub mod envelope;
 pub mod frame;
 pub mod indentation;
+pub mod indentation3d;
 pub mod resistance;
 pub mod results;
+pub mod run3d;
 pub mod spinning;
 pub mod spinning3d;
 pub mod steady;

@@ -78,6 +78,7 @@ impl Summary {
     pub fn run_stats(&self) -> Option<&RunStats> {
         match &self.body {
             ModeSummary::Solid(s) => Some(&s.run),
+            ModeSummary::Solid3D(s) => Some(&s.run),
             ModeSummary::Transient(s) => Some(&s.run),
             ModeSummary::Steady(s) => Some(&s.run),
             ModeSummary::StickSlip(s) => Some(&s.run),
@@ -127,6 +128,8 @@ impl Summary {
 pub enum ModeSummary {
     /// `static` and `spinning`.
     Solid(SolidSummary),
+    /// `static` and `spinning` of a three-dimensional scene (`mesh.dimension = 3`).
+    Solid3D(Solid3DSummary),
     Transient(TransientSummary),
     Steady(Box<SteadySummary>),
     StickSlip(StickSlipSummary),
@@ -241,6 +244,67 @@ pub struct SolidSummary {
     pub terms: Terms,
     pub mesh: SolidMesh,
     pub solver: SolidSolver,
+}
+
+/// summary.json of a three-dimensional static or spinning run (forces are totals, not per
+/// width).
+#[derive(Clone, Debug, Serialize)]
+pub struct Solid3DSummary {
+    #[serde(flatten)]
+    pub run: RunStats,
+    pub results: Solid3DResults,
+    pub mesh: Solid3DMesh,
+    pub solver: SolidSolver,
+}
+
+/// `results` of a three-dimensional run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Solid3DResults {
+    /// Always 3.
+    pub dimension: usize,
+    /// Resultant of the contact tractions on the body ∫ T dA0 (F1 along the road, F2 up, F3
+    /// along the axle); zero without contact.
+    pub contact_force: [f64; 3],
+    /// Moment of the contact tractions about the hub centre.
+    pub contact_moment: [f64; 3],
+    /// The hub load of load control (`road.load`; null under displacement control and in the
+    /// spinning mode).
+    pub load: Option<f64>,
+    /// Final road height H and penetration h_touch − H (null without contact).
+    pub road_height: Option<f64>,
+    pub penetration: Option<f64>,
+    /// Reference area of the facet points in contact, largest pressure and penetration.
+    pub contact_area: f64,
+    pub max_pressure: f64,
+    pub max_penetration: f64,
+    /// Facet quadrature points in contact.
+    pub points_in_contact: usize,
+    /// Angular speed reached (spinning; 0 in the static mode).
+    pub omega: f64,
+    /// Mean radial displacement of the outer surface nodes, Σ u·e_R / n.
+    pub u_r_outer_mean: f64,
+    /// Largest nodal |u|.
+    pub max_displacement: f64,
+}
+
+/// `mesh` of a three-dimensional run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Solid3DMesh {
+    /// Generated wheel: the cells in r, θ and x3 and the order (null for a mesh file).
+    pub n_r: Option<usize>,
+    pub n_theta: Option<usize>,
+    pub n_z: Option<usize>,
+    pub order: Option<usize>,
+    /// Width of the generated wheel (null for a mesh file).
+    pub width: Option<f64>,
+    /// `mesh.sides` of the generated wheel (null for a mesh file).
+    pub sides: Option<String>,
+    pub crown_radius: Option<f64>,
+    pub nodes: usize,
+    pub cells: usize,
+    pub pressure_dofs: usize,
+    /// Facets of the contact surface (0 in the spinning mode).
+    pub contact_facets: usize,
 }
 
 /// `results` of the transient mode (the final state, or the last node passage where stated).

@@ -37,6 +37,7 @@ const fn k(
 }
 
 const N: &str = "–";
+const D3: &str = "mesh.dimension = 3";
 const TR: &str = "transient";
 const SD: &str = "steady";
 const TS: &str = "transient, steady";
@@ -85,6 +86,11 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("mesh.nodes", N, "", "number of nodes"),
     k("mesh.cells", N, "", "number of cells"),
     k("mesh.pressure_dofs", N, "", "pressure unknowns (incompressible material)"),
+    k("mesh.n_z", N, D3, "axial cells of the generated wheel (null for a mesh file)"),
+    k("mesh.width", "L", D3, "width of the generated wheel (null for a mesh file)"),
+    k("mesh.sides", N, D3, "`free` or `sliding` flat faces of the generated wheel (null for a mesh file)"),
+    k("mesh.crown_radius", "L", D3, "crown radius of the generated wheel (null: flat, or a mesh file)"),
+    k("mesh.contact_facets", N, D3, "facets of the contact surface (0 in the spinning mode)"),
     // solver
     k("solver", N, "", "solver statistics"),
     k("solver.linear", N, "", "sparse solver used (`cholesky` or `lu`)"),
@@ -168,6 +174,14 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.contact_centroid", "L", TS, "x̄: pressure-weighted mean x1 of the patch"),
     k("results.contact_moment", "F·L/L", TS, "moment of the contact tractions about the hub centre"),
     k("results.road_height", "L", "static", "final road height H"),
+    k("results.dimension", N, D3, "3"),
+    k("results.contact_force", "F", D3, "[F1, F2, F3]: resultant of the contact tractions on the body (along the road, up, along the axle; totals, not per width)"),
+    k("results.contact_moment", "F·L", D3, "[M1, M2, M3]: moment of the contact tractions about the hub centre"),
+    k("results.load", "F", D3, "the hub load of load control (`road.load`; null under displacement control and when spinning)"),
+    k("results.contact_area", "L²", D3, "reference area of the facet quadrature points with t_n > 0"),
+    k("results.max_penetration", "L", D3, "largest penetration at a facet quadrature point"),
+    k("results.points_in_contact", N, D3, "facet quadrature points with t_n > 0"),
+    k("results.u_r_outer_mean", "L", D3, "mean radial displacement of the outer surface nodes, Σ u·e_R / n"),
     k("results.penetration", "L", "static, steady", "final penetration DISP = Ro − H"),
     k("results.contact_facets_per_iteration", N, "static", "mean facets integrated per assembly"),
     k("results.contact_facets_total", N, "static", "facets on the outer surface"),
@@ -421,18 +435,36 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "nodes.csv",
-        when: "sink `csv`; spinning, static, steady",
+        when: "sink `csv`; spinning, static, steady (X3, u3: mesh.dimension = 3)",
         columns: &[
             k("node", N, "", "node index"),
             k("X1", "L", "", "reference position, x1"),
             k("X2", "L", "", "reference position, x2"),
+            k("X3", "L", D3, "reference position, x3 (along the axle)"),
             k("u1", "L", "", "displacement, x1"),
             k("u2", "L", "", "displacement, x2"),
+            k("u3", "L", D3, "displacement, x3"),
+        ],
+    },
+    CsvFile {
+        name: "steps.csv",
+        when: "sink `csv`; mesh.dimension = 3; one row per accepted load step",
+        columns: &[
+            k("step", N, "", "index of the accepted step"),
+            k("load_factor", N, "", "load factor λ of the step"),
+            k("newton_iterations", N, "", "Newton iterations of the step"),
+            k("road_height", "L", "static", "road height H (empty when spinning)"),
+            k("contact_force_1", "F", "", "resultant contact traction on the body, x1"),
+            k("contact_force_2", "F", "", "resultant contact traction on the body, x2"),
+            k("contact_force_3", "F", "", "resultant contact traction on the body, x3"),
+            k("max_pressure", "F/L²", "", "peak normal traction"),
+            k("points_in_contact", N, "", "facet quadrature points with t_n > 0"),
+            k("u_r_outer_mean", "L", "", "mean radial displacement of the outer surface nodes"),
         ],
     },
     CsvFile {
         name: "convergence.csv",
-        when: "sink `csv`; spinning, static",
+        when: "sink `csv`; spinning, static (also in three dimensions)",
         columns: &[
             k("step", N, "", "load step"),
             k("load_factor", N, "", "load factor λ of the step"),

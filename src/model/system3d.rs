@@ -6,11 +6,23 @@
 //! [`Assembler::add_block_large`]); the coefficients at load factor λ are λ times the target's
 //! ([`Solid3DSystem::set_target`]), so a spinning solve steps ω² from 0 as the plane-strain one
 //! does.
+//!
+//! Contact with the road (the plane x2 = −H) on the tread facets, in the load-stepping
+//! pseudo-time of [`super::system`]'s static analysis:
+//! * displacement control ([`Solid3DSystem::with_contact`]): H = h_touch − λ · disp;
+//! * load control ([`Solid3DSystem::with_contact_load`]): H is the last global unknown (field 2,
+//!   "H") with the equation R_H = λ · load − ∫ t_n dA0 = 0, `load` the downward force the hub
+//!   pushes the body onto the road with (a total force, not per width), as the plane-strain
+//!   program's R_H = P − ∫ t_n ds0; frictionless, the tangent stays symmetric (the Hessian of
+//!   W + Φ_c(δ) + λ · load · H). The load enters the residual once, through the first contact
+//!   facet; the floor of the H equation's convergence reference is |load|.
 
 use super::kernel::{Coefficients, Inadmissible};
 use super::solid3d::Solid3D;
-use crate::assembly::{Assembler, DofMap, CONSTRAINED};
-use crate::contact::facet3d::{CellMotion, Contact3DError, ContactSurface3D, ContactTotals3D};
+use crate::assembly::{Assembler, DofMap, CONSTRAINED, FIXED};
+use crate::contact::facet3d::{
+    CellMotion, Contact3DError, ContactSample3D, ContactSurface3D, ContactTotals3D, Kinematics3D,
+};
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -33,12 +45,20 @@ pub struct Solid3DSystem {
     pub contact: Option<RoadContact3D>,
 }
 
-/// The road under displacement control: H = `h_touch` − λ · `disp`, and the state of the
+/// The road under displacement control (H = `h_touch` − λ · `disp`) or load control (H the
+/// global unknown at `h_dof`, the equation λ · `load` − ∫ t_n dA0 = 0), and the state of the
 /// load-stepping pseudo-time the friction slip is measured in.
 pub struct RoadContact3D {
     pub surface: ContactSurface3D,
+    /// Road height of first touch (the outer radius): the penetration is h_touch − H.
     pub h_touch: f64,
     pub disp: f64,
+    /// Downward hub load at λ = 1 under load control.
+    pub load: Option<f64>,
+    /// Full index of the road height H under load control.
+    pub h_dof: Option<usize>,
+    /// Current load factor.
+    pub lambda: f64,
     /// Full state at the start of the step and the step's pseudo-time length.
     x_prev: Vec<f64>,
     lambda_prev: f64,
@@ -71,7 +91,7 @@ impl Solid3DSystem {
             x,
             coefficients: Coefficients::default(),
             target: Coefficients::default(),
-            ref_norms: vec![0.0, 1e-3 * volume],
+            ref_norms: vec![0.0, 1e-3 * volume, 0.0],
             inadmissible: None,
             contact: None,
         }
@@ -80,20 +100,67 @@ impl Solid3DSystem {
     /// Add contact with the road on `surface` under displacement control (road height
     /// H = h_touch − λ · disp), after checking the surface against the mesh.
     pub fn with_contact(
-        mut self,
-        mut surface: ContactSurface3D,
+        self,
+        surface: ContactSurface3D,
         h_touch: f64,
         disp: f64,
     ) -> Result<Self, Contact3DError> {
+        self.attach_contact(surface, h_touch, h_touch, disp, None)
+    }
+
+    /// Add contact with the road on `surface` under load control: the road height H becomes
+    /// the last global unknown, starting at `h0` (below `h_touch`, so that the first contact
+    /// points give its equation a non-zero tangent), with the equation
+    /// λ · `load` − ∫ t_n dA0 = 0 (`load` > 0 presses the body onto the road).
+    pub fn with_contact_load(
+        self,
+        surface: ContactSurface3D,
+        h_touch: f64,
+        h0: f64,
+        load: f64,
+    ) -> Result<Self, Contact3DError> {
+        if !(h0.is_finite() && load.is_finite()) {
+            return Err(Contact3DError::NonFinite(h0));
+        }
+        self.attach_contact(surface, h_touch, h0, 0.0, Some(load))
+    }
+
+    fn attach_contact(
+        mut self,
+        mut surface: ContactSurface3D,
+        h_touch: f64,
+        h0: f64,
+        disp: f64,
+        load: Option<f64>,
+    ) -> Result<Self, Contact3DError> {
         let n_u = self.dofs.n_u;
         surface.check(&self.solid.mesh, &[("u", &self.x[..n_u])])?;
-        surface.h = h_touch;
+        surface.h = h0;
+        let h_dof = if load.is_some() {
+            // The same map with one global unknown (H) after the cell pressures.
+            let fixed_u: Vec<bool> = self.dofs.eq[..n_u].iter().map(|&e| e == FIXED).collect();
+            let dofs = self.solid.dof_map(&fixed_u, self.dofs.n_global + 1);
+            let mut x = vec![0.0; dofs.n_full()];
+            let n_old = self.x.len();
+            x[..n_old].copy_from_slice(&self.x);
+            let ih = dofs.global(dofs.n_global - 1);
+            x[ih] = h0;
+            self.dofs = dofs;
+            self.x = x;
+            self.ref_norms[2] = load.unwrap_or(0.0).abs();
+            Some(ih)
+        } else {
+            None
+        };
         let mesh = &self.solid.mesh;
         let (mut d, mut o) = (Vec::new(), vec![0]);
         for f in &surface.facets {
             let c = f.cell as usize;
             let nd = 3 * mesh.cell_nodes(c).len();
             d.extend_from_slice(&self.dofs.cell(c)[..nd]);
+            if let Some(ih) = h_dof {
+                d.push(ih as u32);
+            }
             o.push(d.len());
         }
         self.asm = Assembler::with_blocks(
@@ -107,6 +174,9 @@ impl Solid3DSystem {
             surface,
             h_touch,
             disp,
+            load,
+            h_dof,
+            lambda: 0.0,
             x_prev: self.x.clone(),
             lambda_prev: 0.0,
             dtau: 1.0,
@@ -140,6 +210,32 @@ impl Solid3DSystem {
     /// of the problem (e.g. the centrifugal force ρ ω² Ro V).
     pub fn set_reference_force(&mut self, f: f64) {
         self.ref_norms[0] = f;
+        if self.ref_norms[2] == 0.0 {
+            self.ref_norms[2] = f;
+        }
+    }
+
+    /// The road height H: the unknown under load control, else the prescribed one; `None`
+    /// without contact.
+    pub fn road_height(&self) -> Option<f64> {
+        let rc = self.contact.as_ref()?;
+        Some(rc.h_dof.map_or(rc.surface.h, |i| self.x[i]))
+    }
+
+    /// The contact state at every quadrature point of the contact facets (slip measured over
+    /// the current load step, as the residual does); empty without contact.
+    pub fn contact_samples(&self) -> Result<Vec<ContactSample3D>, Contact3DError> {
+        let Some(rc) = self.contact.as_ref() else {
+            return Ok(Vec::new());
+        };
+        let mut surface = rc.surface.clone();
+        surface.h = rc.h_dof.map_or(surface.h, |i| self.x[i]);
+        let n_u = self.dofs.n_u;
+        let kin = Kinematics3D::Static {
+            u_prev: &rc.x_prev[..n_u],
+            dtau: rc.dtau,
+        };
+        surface.samples(&self.solid.mesh, &self.x[..n_u], &kin)
     }
 
     /// Why the last evaluation failed, if it did.
@@ -168,11 +264,16 @@ impl Solid3DSystem {
         if let Some(rc) = self.contact.as_mut() {
             let mesh = &solid.mesh;
             let totals = std::sync::Mutex::new(ContactTotals3D::default());
+            if let Some(ih) = rc.h_dof {
+                rc.surface.h = x[ih];
+            }
+            let load = rc.load.map(|p| rc.lambda * p);
             let (surface, x_prev, dtau) = (&rc.surface, &rc.x_prev, rc.dtau);
             self.asm.add_block_large(1, dofs, with_matrix, |e, r, k| {
                 let f = surface.facets[e];
                 let cd = dofs.cell(f.cell as usize);
-                let nd = r.len();
+                // The cell's dofs (and H last under load control).
+                let nd = 3 * mesh.cell_nodes(f.cell as usize).len();
                 let (mut ul, mut vl) = ([0.0; 81], [0.0; 81]);
                 for i in 0..nd {
                     let g = cd[i] as usize;
@@ -188,7 +289,18 @@ impl Solid3DSystem {
                 };
                 let mut t = ContactTotals3D::default();
                 let kb = if k.is_empty() { None } else { Some(k) };
-                surface.facet_kernel(mesh, f, &m, r, kb, &mut t);
+                match load {
+                    Some(p) => {
+                        surface.facet_kernel_height(mesh, f, &m, r, kb, &mut t);
+                        if e == 0 {
+                            // R_H = λ · load − ∫ t_n dA0: the load enters once.
+                            r[nd] += p;
+                        }
+                    }
+                    None => {
+                        surface.facet_kernel(mesh, f, &m, r, kb, &mut t);
+                    }
+                }
                 if let Ok(mut all) = totals.lock() {
                     all.add(&t);
                 }
@@ -212,7 +324,7 @@ impl NonlinearSystem for Solid3DSystem {
         &self.dofs.field
     }
     fn field_names(&self) -> &'static [&'static str] {
-        &["u", "p"]
+        &["u", "p", "H"]
     }
     fn reference_norms(&self) -> Vec<f64> {
         self.ref_norms.clone()
@@ -268,7 +380,10 @@ impl LoadedSystem for Solid3DSystem {
             body_load: lambda * self.target.body_load,
         };
         if let Some(rc) = self.contact.as_mut() {
-            rc.surface.h = rc.h_touch - lambda * rc.disp;
+            rc.lambda = lambda;
+            if rc.h_dof.is_none() {
+                rc.surface.h = rc.h_touch - lambda * rc.disp;
+            }
             rc.dtau = (lambda - rc.lambda_prev).max(f64::MIN_POSITIVE);
         }
     }

@@ -1,8 +1,26 @@
 //! `[mesh]`: the structured annulus (`n_r`, `n_theta`, `order`, gradings) or a Gmsh `.msh` 4.1 file
-//! with its hub and contact groups.
+//! with its hub and contact groups; with `dimension = 3` the annulus revolved about the axle
+//! into a wheel of width `width` (`n_z` axial cells, optionally crowned) or a hexahedral Gmsh
+//! file.
 
+use super::analysis::Mode;
 use super::issue::{issue, issue_near, positive, table_has, Issue};
 use serde::{Deserialize, Serialize};
+
+keyword_enum! {
+    /// The flat faces x3 = ±W/2 of a three-dimensional wheel (`[mesh] sides`).
+    #[derive(Default)]
+    MeshSides, "mesh sides" {
+        #[default]
+        /// Traction free.
+        Free => "free",
+        /// u3 = 0 on both faces, sliding freely in their plane: the plane-strain slab.
+        Sliding => "sliding",
+    }
+}
+
+/// Default `[mesh] n_z` (axial cells of a three-dimensional generated mesh).
+pub const DEFAULT_N_Z: usize = 2;
 
 /// Smallest allowed `mesh.n_theta`.
 pub const MIN_N_THETA: usize = 8;
@@ -31,6 +49,25 @@ pub struct MeshSpec {
     /// 1D physical group of `file` where contact with the road can happen (default "contact").
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<String>,
+    /// 2 (plane strain, default) or 3 (the revolved wheel, or hexahedra from `file`).
+    #[serde(skip_serializing_if = "is_plane")]
+    pub dimension: usize,
+    /// Width W of the generated three-dimensional wheel (along the axle x3, centred on 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Axial cells of the generated three-dimensional wheel (default [`DEFAULT_N_Z`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_z: Option<usize>,
+    /// Crown radius R_c of a toroidal tread (generated three-dimensional wheel; none: flat).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crown_radius: Option<f64>,
+    /// The flat faces of the generated three-dimensional wheel: `free` (default) or `sliding`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sides: Option<MeshSides>,
+}
+
+fn is_plane(d: &usize) -> bool {
+    *d == 2
 }
 
 /// Default `[mesh] hub` group name.
@@ -43,6 +80,24 @@ impl MeshSpec {
     /// The keys of the generated annulus, not used (and refused) with `file`.
     pub const GENERATOR_KEYS: &'static [&'static str] =
         &["n_r", "n_theta", "order", "grading_r", "grading_theta"];
+
+    /// The keys of the three-dimensional generated wheel.
+    pub const KEYS_3D: &'static [&'static str] = &["width", "n_z", "crown_radius", "sides"];
+
+    /// Whether the scene is three-dimensional.
+    pub fn is_3d(&self) -> bool {
+        self.dimension == 3
+    }
+
+    /// Axial cells of the generated three-dimensional wheel.
+    pub fn resolved_n_z(&self) -> usize {
+        self.n_z.unwrap_or(DEFAULT_N_Z)
+    }
+
+    /// The flat faces of the generated three-dimensional wheel.
+    pub fn resolved_sides(&self) -> MeshSides {
+        self.sides.unwrap_or_default()
+    }
 }
 
 impl Default for MeshSpec {
@@ -56,7 +111,131 @@ impl Default for MeshSpec {
             file: None,
             hub: None,
             contact: None,
+            dimension: 2,
+            width: None,
+            n_z: None,
+            crown_radius: None,
+            sides: None,
         }
+    }
+}
+
+/// What the three-dimensional program does not run yet, and the keys that belong to one
+/// dimension only. `doc` is the scene's table (for keys given explicitly), `None` for a scene
+/// built in code.
+pub(super) struct Dimension3DContext<'a> {
+    pub(super) mode: Option<Mode>,
+    pub(super) has_regions: bool,
+    pub(super) doc: Option<&'a toml::Table>,
+    /// `contact.quadrature` is Lobatto, with `contact.points`.
+    pub(super) lobatto_points: Option<usize>,
+    /// `[material.viscoelastic]` is given.
+    pub(super) viscoelastic: bool,
+}
+
+pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mut Vec<Issue>) {
+    let given = |key: &str| cx.doc.is_some_and(|d| table_has(d, "mesh", key));
+    if m.dimension != 2 && m.dimension != 3 {
+        out.push(issue(
+            "mesh.dimension",
+            format!(
+                "must be 2 (plane strain) or 3 (three-dimensional wheel), got {}",
+                m.dimension
+            ),
+        ));
+        return;
+    }
+    if !m.is_3d() {
+        let set = [
+            ("width", m.width.is_some()),
+            ("n_z", m.n_z.is_some()),
+            ("crown_radius", m.crown_radius.is_some()),
+            ("sides", m.sides.is_some()),
+        ];
+        for (key, present) in set {
+            if present {
+                out.push(issue(
+                    format!("mesh.{key}"),
+                    "only with mesh.dimension = 3 (a three-dimensional wheel); remove it or set \
+                     mesh.dimension = 3",
+                ));
+            }
+        }
+        return;
+    }
+    if let Some(mode) = cx.mode {
+        if !matches!(mode, Mode::Static | Mode::Spinning) {
+            out.push(issue(
+                "analysis.mode",
+                format!(
+                    "mode \"{mode}\" does not run in three dimensions yet (mesh.dimension = 3 \
+                     runs \"static\" and \"spinning\")"
+                ),
+            ));
+        }
+    }
+    if cx.has_regions {
+        out.push(issue_near(
+            "material",
+            "[[material]] (a material per mesh region) is not supported with mesh.dimension = 3 \
+             yet; use a single [material]",
+            "mesh",
+        ));
+    }
+    if cx.viscoelastic {
+        out.push(issue(
+            "material.viscoelastic",
+            "not supported with mesh.dimension = 3 yet",
+        ));
+    }
+    if let Some(points) = cx.lobatto_points {
+        if points > 4 {
+            out.push(issue(
+                "contact.points",
+                format!(
+                    "with mesh.dimension = 3 and quadrature = \"lobatto\" must be 2..=4 per \
+                     direction, got {points} (\"gauss\" takes up to 6)"
+                ),
+            ));
+        }
+    }
+    if m.file.is_some() {
+        for key in MeshSpec::KEYS_3D {
+            if given(key) {
+                out.push(issue(
+                    format!("mesh.{key}"),
+                    "not used with mesh.file (the three-dimensional mesh comes from the file); \
+                     remove it",
+                ));
+            }
+        }
+        return;
+    }
+    match m.width {
+        None => out.push(issue(
+            "mesh.width",
+            "required with mesh.dimension = 3 (the wheel's width along the axle)",
+        )),
+        Some(w) if !positive(w) => out.push(issue("mesh.width", format!("must be > 0, got {w}"))),
+        Some(w) => {
+            if let Some(rc) = m.crown_radius {
+                if !(rc.is_finite() && rc >= 0.5 * w) {
+                    out.push(issue(
+                        "mesh.crown_radius",
+                        format!("must be >= width/2 = {}, got {rc}", 0.5 * w),
+                    ));
+                }
+            }
+        }
+    }
+    if m.n_z == Some(0) {
+        out.push(issue("mesh.n_z", "must be >= 1, got 0"));
+    }
+    if m.crown_radius.is_some() && m.resolved_sides() == MeshSides::Sliding {
+        out.push(issue(
+            "mesh.sides",
+            "\"sliding\" (the plane-strain slab) needs flat sides: remove mesh.crown_radius",
+        ));
     }
 }
 

@@ -414,6 +414,21 @@ impl Scene {
         if let Some(o) = &output {
             validate_output(o, &mut out);
         }
+        if let Some(m) = &mesh {
+            let cx = Dimension3DContext {
+                mode,
+                has_regions: !region_tables.is_empty(),
+                doc: Some(&doc),
+                lobatto_points: lobatto_points(contact.as_ref().and_then(|c| c.as_ref())),
+                viscoelastic: material.as_ref().is_some_and(|m| m.viscoelastic.is_some()),
+            };
+            validate_dimension(m, &cx, &mut out);
+            if m.is_3d() && table_has(&doc, "output", "sinks") {
+                if let Some(o) = &output {
+                    validate_output_3d(o, &mut out);
+                }
+            }
+        }
         // A key already reported by the schema pass (unknown or ill-typed) is not reported again
         // (e.g. as "required" because its ill-typed value was dropped).
         let reported: BTreeSet<String> = ctx.issues.iter().map(|i| i.key.clone()).collect();
@@ -528,6 +543,17 @@ impl Scene {
         validate_info(&self.scene, &mut out);
         validate_geometry(&self.geometry, &mut out);
         validate_mesh(&self.mesh, &mut out);
+        validate_dimension(
+            &self.mesh,
+            &Dimension3DContext {
+                mode: Some(self.analysis.mode),
+                has_regions: !self.regions.is_empty(),
+                doc: None,
+                lobatto_points: lobatto_points(self.contact.as_ref()),
+                viscoelastic: self.material.viscoelastic.is_some(),
+            },
+            &mut out,
+        );
         validate_material(&self.material, &mut out);
         let mode = Some(self.analysis.mode);
         validate_motion(mode, &self.motion, true, &mut out);
@@ -600,6 +626,7 @@ impl Scene {
                 file: self.mesh.file.clone(),
                 hub: self.mesh.hub.clone(),
                 contact: self.mesh.contact.clone(),
+                dimension: self.mesh.dimension,
                 ..MeshSpec::default()
             };
             return match toml::Table::try_from(&scene)
@@ -674,6 +701,23 @@ struct SectionsGiven {
 }
 
 /// `"a", "b" or "c"`.
+/// `contact.points` when `contact.quadrature` is Lobatto.
+fn lobatto_points(c: Option<&ContactSpec>) -> Option<usize> {
+    c.filter(|c| c.quadrature == ContactQuadrature::Lobatto)
+        .map(|c| c.points)
+}
+
+/// The sinks a three-dimensional run writes: every one but the PNG plots.
+fn validate_output_3d(o: &OutputSpec, out: &mut Vec<Issue>) {
+    if o.sinks.contains(&Sink::Png) {
+        out.push(issue(
+            "output.sinks",
+            "\"png\" is not written by three-dimensional runs (mesh.dimension = 3) yet; remove \
+             it (summary, csv, vtu, mcap and rerun are)",
+        ));
+    }
+}
+
 fn or_list(names: &[&str]) -> String {
     let quoted: Vec<String> = names.iter().map(|n| format!("\"{n}\"")).collect();
     match quoted.split_last() {

@@ -248,7 +248,17 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
                 "a Gmsh `.msh` 4.1 mesh instead of the generated annulus (relative to the scene file); then n_r, n_theta, order, grading_* are not used"),
             opt("hub", Kind::Str, NONE, "1D physical group of `file` bonded to the hub (default \"hub\")"),
             opt("contact", Kind::Str, NONE,
-                "1D physical group of `file` where contact can happen (default \"contact\")"),
+                "1D physical group of `file` where contact can happen (default \"contact\"; 2D groups of a hexahedral file with dimension = 3)"),
+            opt("dimension", Kind::UInt, NONE,
+                "2 (plane strain, default) or 3: the annulus revolved about the axle x3 into a wheel of width `width` (or the hexahedra of `file`); modes static and spinning, forces total (not per width)"),
+            opt("width", Kind::Float, "L",
+                "dimension = 3, generated mesh (required): width W of the wheel along the axle, > 0, centred on x3 = 0"),
+            opt("n_z", Kind::UInt, NONE,
+                "dimension = 3, generated mesh: axial cells, >= 1 (default 2)"),
+            opt("crown_radius", Kind::Float, "L",
+                "dimension = 3, generated mesh: crown radius R_c >= width/2 of a toroidal tread (outer radius ro at x3 = 0); absent: flat"),
+            opt("sides", Kind::Keyword(super::mesh::MeshSides::NAMES), NONE,
+                "dimension = 3, generated mesh: the flat faces x3 = ±W/2, \"free\" (default) or \"sliding\" (u3 = 0: the plane-strain slab)"),
         ] },
     },
     SectionSchema {
@@ -663,7 +673,8 @@ pub(super) fn section_defaults(sec: &SectionSchema) -> toml::Table {
 /// The loader's bounds of the integer keys that have more than `>= 0`: (minimum, maximum).
 fn uint_bounds(key: &str) -> (u64, Option<u64>) {
     match key {
-        "n_r" | "max_iterations" | "load_steps" => (1, None),
+        "n_r" | "n_z" | "max_iterations" | "load_steps" => (1, None),
+        "dimension" => (2, Some(3)),
         "n_theta" => (8, None),
         "order" => (1, Some(2)),
         "max_cutbacks" => (0, Some(super::solver::MAX_CUTBACKS as u64)),
@@ -1040,6 +1051,11 @@ mod tests {
                     file: Some("m.msh".into()),
                     hub: Some("hub".into()),
                     contact: Some("contact".into()),
+                    dimension: 3,
+                    width: Some(1.0),
+                    n_z: Some(2),
+                    crown_radius: Some(1.0),
+                    sides: Some(MeshSides::Free),
                     ..MeshSpec::default()
                 }),
             ),
@@ -1102,6 +1118,11 @@ mod tests {
                 file: Some("m.msh".into()),
                 hub: Some("hub".into()),
                 contact: Some("contact".into()),
+                dimension: 3,
+                width: Some(1.0),
+                n_z: Some(2),
+                crown_radius: Some(1.0),
+                sides: Some(MeshSides::Free),
                 ..MeshSpec::default()
             },
         );
