@@ -767,7 +767,7 @@ pub struct RunOutcome {
     /// ([`crate::driver::transient::SteadyMonitor::history`]). None otherwise.
     pub history: Option<crate::assembly::QpHistory>,
     /// The contact tractions of the final state at the facet quadrature points (the rows of
-    /// `contact.csv`); empty without contact.
+    /// `contact.csv`); empty without contact and in the three-dimensional runs.
     pub contact: Vec<crate::contact::ContactSample>,
     pub out_dir: std::path::PathBuf,
     pub converged: bool,

@@ -312,6 +312,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             typed,
             field: None,
             history: None,
+            contact: Vec::new(),
             out_dir: PathBuf::from(&opts.out_dir),
             converged,
             headline,

@@ -138,7 +138,7 @@ pub(super) fn coarse_start(
     let mut coarse_s = setup_s + solve_s;
     let inner = match &solved {
         Ok(r) => r,
-        Err(f) => &f.reports,
+        Err(f) => &*f.reports,
     };
     if let Some(inner) = &inner.coarse_start {
         out.meshes = inner.meshes.clone();

@@ -243,7 +243,7 @@ impl SolveReports {
 #[derive(Debug)]
 pub struct SteadyFailure {
     pub error: crate::solver::SolveError,
-    pub reports: SolveReports,
+    pub reports: Box<SolveReports>,
 }
 
 impl std::fmt::Display for SteadyFailure {

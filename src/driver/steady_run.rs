@@ -490,7 +490,7 @@ fn follow_branch(
         test_function: true,
         switch_branch: cs.switch_branch,
         stop_at_limit: cs.on_limit == LimitAction::Jump,
-        verbose: verbose,
+        verbose,
     };
     let jump_distance = cs.jump * copts.lambda_scale;
     let jump_direction = copts.direction;
@@ -537,7 +537,7 @@ fn follow_branch(
             jump_past_limit(
                 scene,
                 s,
-                &x_undeformed,
+                x_undeformed,
                 at,
                 jump_direction * jump_distance,
                 jump_target,
@@ -631,7 +631,7 @@ pub fn run_with_dump(
     let (mut solve, reports) =
         match solve_steady_from(scene, &mut st, ahead, opts.verbose, &mut report, recorders) {
             Ok(r) => (Ok(()), r),
-            Err(f) => (Err(f.error), f.reports),
+            Err(f) => (Err(f.error), *f.reports),
         };
     let mut control_report: Option<ControlReport> = None;
     if solve.is_ok() && scene.motion.control != Control::Speed {

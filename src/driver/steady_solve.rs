@@ -47,7 +47,10 @@ pub fn solve_steady_from(
     };
     match first_solve(scene, st, ahead, verbose, report, rec, &mut reports) {
         Ok(()) => Ok(reports),
-        Err(error) => Err(SteadyFailure { error, reports }),
+        Err(error) => Err(SteadyFailure {
+            error,
+            reports: Box::new(reports),
+        }),
     }
 }
 
