@@ -573,7 +573,18 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
     let fixed = fixed_dofs_3d(scene, &mesh);
     let contact = match scene.analysis.mode {
         Mode::Static => Some(build_contact_3d(scene, &mesh)?),
-        Mode::Spinning => None,
+        Mode::Spinning => {
+            // The θ-referential inertia −ω² ∫ ρ ∂θχ · ∂θη is the centrifugal load only on
+            // closed circumferential lines: on a sector its boundary terms on the cut faces
+            // are missing.
+            if let Some(x) = mesh.circumferential_cut() {
+                return Err(AppError::Unsupported(format!(
+                    "mesh.file: the mesh does not close around the axle (the boundary face at                      ({:.4}, {:.4}, {:.4}) faces the circumferential direction); the spinning                      mode needs the body meshed all the way round",
+                    x[0], x[1], x[2]
+                )));
+            }
+            None
+        }
         m => {
             return Err(AppError::Unsupported(format!(
                 "analysis.mode: mode \"{m}\" does not run in three dimensions yet"

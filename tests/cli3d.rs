@@ -458,42 +458,16 @@ fn spinning_runs_on_a_hexahedral_gmsh_file() {
     use tread::solver::stepping::{StepOptions, StepReport};
     use tread::solver::{LinearKind, NewtonOptions};
     let d = TestDir::new("cli3d", "gmsh");
-    // A quarter annulus 1 ≤ r ≤ 2, width 0.5, of 27-node hexahedra (3 × 4 × 2 cells). (The
-    // θ-referential spin is the physical one on closed rings only: this checks that the file
-    // runs as the library solves it, not a physical reference.)
-    let msh = root().join("tests/gmsh_data/annular_hex27.msh");
-    let text = std::fs::read_to_string(scene("spinning_3d.toml"))
-        .expect("scene")
-        .lines()
-        .filter(|l| {
-            ![
-                "width",
-                "n_z",
-                "sides",
-                "n_r",
-                "n_theta",
-                "order",
-                "grading_r",
-                "grading_theta",
-            ]
-            .iter()
-            .any(|k| l.starts_with(&format!("{k} ")))
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
-        .replace(
-            "dimension = 3",
-            &format!(
-                "dimension = 3\nfile = \"{}\"\nhub = \"hub\"\ncontact = \"outer\"",
-                msh.display()
-            ),
-        );
+    // The whole annulus 1 ≤ r ≤ 2, width 0.5, of 8-node hexahedra (4 patches of 3 × 4 cells,
+    // 2 across the width; tools/gmsh_hex_meshes.py), free flat faces.
+    let msh = root().join("tests/gmsh_data/ring_hex8.msh");
+    let text = gmsh_spinning_scene(&msh);
     let f_scene = d.join("gmsh_3d.toml");
     std::fs::write(&f_scene, text).expect("write");
     let s = run(&f_scene, &d.join("out"), &[]);
     assert_eq!(s["converged"], Value::Bool(true), "{s}");
-    assert_eq!(s["mesh"]["nodes"], 315);
-    assert_eq!(s["mesh"]["cells"], 24);
+    assert_eq!(s["mesh"]["nodes"], 192);
+    assert_eq!(s["mesh"]["cells"], 96);
     assert!(s["mesh"]["n_r"].is_null() && s["mesh"]["width"].is_null());
     // The library on the same file: hub fixed in every component, the scene's material,
     // speed and solver settings.
@@ -532,7 +506,7 @@ fn spinning_runs_on_a_hexahedral_gmsh_file() {
     )
     .expect("library solve");
     let (_, rows) = csv(&d.join("out/nodes.csv"));
-    assert_eq!(rows.len(), 315);
+    assert_eq!(rows.len(), 192);
     let umax = f(&s["results"], "max_displacement");
     let mut worst: f64 = 0.0;
     for r in &rows {
@@ -546,8 +520,73 @@ fn spinning_runs_on_a_hexahedral_gmsh_file() {
         worst / umax
     );
     assert!(worst <= 1e-9 * umax, "{worst:e}");
+    // Spun all the way round, the rim moves outwards.
+    let mesh = &sys.solid.mesh;
+    let rim = mesh.node_set("outer");
+    let mean_ur = rim
+        .iter()
+        .map(|&n| {
+            let (x, u) = (mesh.nodes[n as usize], sys.node_displacement(n as usize));
+            (x[0] * u[0] + x[1] * u[1]) / x[0].hypot(x[1])
+        })
+        .sum::<f64>()
+        / rim.len() as f64;
+    assert!(mean_ur > 0.0, "mean radial displacement of the rim {mean_ur:e}");
     assert_field_files(
         &d.join("out"),
         s["solver"]["load_steps"].as_u64().expect("steps") as usize,
+    );
+}
+
+/// The spinning scene on the hexahedral Gmsh file `msh` (groups `hub` and `outer`).
+fn gmsh_spinning_scene(msh: &Path) -> String {
+    std::fs::read_to_string(scene("spinning_3d.toml"))
+        .expect("scene")
+        .lines()
+        .filter(|l| {
+            ![
+                "width",
+                "n_z",
+                "sides",
+                "n_r",
+                "n_theta",
+                "order",
+                "grading_r",
+                "grading_theta",
+            ]
+            .iter()
+            .any(|k| l.starts_with(&format!("{k} ")))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .replace(
+            "dimension = 3",
+            &format!(
+                "dimension = 3\nfile = \"{}\"\nhub = \"hub\"\ncontact = \"outer\"",
+                msh.display()
+            ),
+        )
+}
+
+/// A sector (the quarter annulus of tests/gmsh_data/annular_hex27.msh) is refused by the
+/// spinning mode: its θ-referential inertia would miss the terms on the cut faces.
+#[test]
+fn spinning_refuses_a_mesh_that_does_not_close_around_the_axle() {
+    let d = TestDir::new("cli3d", "gmsh_sector");
+    let msh = root().join("tests/gmsh_data/annular_hex27.msh");
+    let f_scene = d.join("sector.toml");
+    std::fs::write(&f_scene, gmsh_spinning_scene(&msh)).expect("write");
+    let out = tread(&[
+        "run",
+        f_scene.to_str().expect("path"),
+        "--out",
+        d.join("out").to_str().expect("path"),
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("mesh.file") && stderr.contains("does not close around the axle"),
+        "{stderr}"
     );
 }

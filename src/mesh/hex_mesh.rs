@@ -248,6 +248,32 @@ impl HexMesh {
         local.iter().filter_map(|&a| cn.get(a).copied()).collect()
     }
 
+    /// The centre of a boundary face that faces the circumferential direction (|n · e_θ| > 1/2
+    /// there, e_θ about the axle x3), if the mesh has one: the mesh then does not close around
+    /// the axle (a sector). `None` for a body of revolution meshed all the way round.
+    pub fn circumferential_cut(&self) -> Option<Vector3<f64>> {
+        for f in self.boundary_faces() {
+            let axis = usize::from(f.face / 2);
+            let mut xi = [0.0; 3];
+            xi[axis] = if f.face % 2 == 0 { -1.0 } else { 1.0 };
+            let (x, jac) = self.map(f.cell as usize, xi);
+            let Some(inv) = jac.try_inverse() else {
+                continue;
+            };
+            // The face normal is the gradient of the cell coordinate that is fixed on it.
+            let n = inv.transpose().column(axis).into_owned();
+            let r = x[0].hypot(x[1]);
+            if r <= 0.0 || n.norm() == 0.0 {
+                continue;
+            }
+            let e_theta = Vector3::new(-x[1] / r, x[0] / r, 0.0);
+            if n.dot(&e_theta).abs() > 0.5 * n.norm() {
+                return Some(x);
+            }
+        }
+        None
+    }
+
     /// The faces that belong to exactly one cell (the boundary of the body), in the order of
     /// their cells and local faces. Two faces are the same when their four corner nodes are.
     pub fn boundary_faces(&self) -> Vec<HexFacet> {
