@@ -211,6 +211,63 @@ fn load_controlled_indentation_reaches_the_requested_load() {
     assert_field_files(&d, steps);
 }
 
+/// `contact.csv` of a frictional 3D indentation: the tractions at the facet points sum to the
+/// summary's contact force, obey the Coulomb bound |t_T| ≤ μ t_n pointwise, and the friction
+/// they carry is that of the last load step (not the zero slip of the committed state).
+#[test]
+fn contact_table_of_a_frictional_indentation() {
+    let d = TestDir::new("cli3d", "contact_table");
+    let mu = 0.5;
+    let text = std::fs::read_to_string(scene("indentation_3d.toml"))
+        .expect("scene")
+        .replace("load = 50.0", "disp = 0.03")
+        .replace(
+            "law = \"none\"",
+            &format!("law = \"coulomb_tanh\"\nmu = {mu}\neps = 0.001"),
+        );
+    let f_scene = d.join("friction_3d.toml");
+    std::fs::write(&f_scene, text).expect("write scene");
+    let s = run(
+        &f_scene,
+        &d.join("out"),
+        &[
+            "mesh.n_r=2",
+            "mesh.n_theta=24",
+            "output.sinks=[\"summary\",\"csv\"]",
+        ],
+    );
+    assert_eq!(s["converged"], Value::Bool(true), "{s}");
+    let r = &s["results"];
+    let (h, rows) = csv(&d.join("out/contact.csv"));
+    let col = |k: &str| h.iter().position(|c| c == k).unwrap_or_else(|| panic!("{k}: {h:?}"));
+    let (tn, t1, t3, da) = (col("t_n"), col("t_1"), col("t_3"), col("dA0"));
+    let sum = |c: usize| rows.iter().map(|q| q[c] * q[da]).sum::<f64>();
+    let (f1, f2, f3) = (
+        f(r, "contact_force.0"),
+        f(r, "contact_force.1"),
+        f(r, "contact_force.2"),
+    );
+    eprintln!(
+        "contact.csv: sum t_n dA0 = {:.12e} (summary F2 {f2:.12e}), sum t_1 dA0 = {:.3e}, sum t_3 dA0 = {:.3e}",
+        sum(tn),
+        sum(t1),
+        sum(t3)
+    );
+    assert!((sum(tn) - f2).abs() <= 1e-9 * f2.abs(), "{} vs {f2}", sum(tn));
+    assert!((sum(t1) - f1).abs() <= 1e-9 * f2.abs());
+    assert!((sum(t3) - f3).abs() <= 1e-9 * f2.abs());
+    let p_max = rows.iter().map(|q| q[tn]).fold(0.0, f64::max);
+    let mut t_max: f64 = 0.0;
+    for q in &rows {
+        let tt = q[t1].hypot(q[t3]);
+        assert!(tt <= mu * q[tn] * (1.0 + 1e-12) + 1e-12 * p_max, "{q:?}");
+        t_max = t_max.max(tt);
+    }
+    // The wheel's tread spreads under the load: friction resists it.
+    eprintln!("max |t_T| = {t_max:.4e}, max t_n = {p_max:.4e}");
+    assert!(t_max > 1e-2 * mu * p_max, "no friction traction in contact.csv: {t_max:e}");
+}
+
 #[test]
 fn friction_indentation_under_displacement_control() {
     let d = TestDir::new("cli3d", "friction");

@@ -8,8 +8,10 @@
 //!   why, `results` hold the last accepted load step): the [`Solid3DSummary`] (contact force
 //!   and moment components, road height, penetration, iterations, DOFs, wall time);
 //! * sink `csv`: `steps.csv` (one row per accepted load step), `nodes.csv` (reference
-//!   position and displacement of every node) and `convergence.csv` (the Newton table of
-//!   every load step);
+//!   position and displacement of every node), `convergence.csv` (the Newton table of
+//!   every load step) and, with contact, `contact.csv` (one row per facet quadrature point of
+//!   the final state: `cell, face, x1, x2, x3, penetration, t_n, t_1, t_3, slip_1, slip_3,
+//!   stick, dA0`; the slip is the load-stepping pseudo-time rate over the last step);
 //! * sinks `vtu`, `mcap`, `rerun`: `hex.pvd` + `hex/step_*.vtu`, `hex.mcap`, `hex.rrd` through
 //!   [`HexOutputs`], every `[output] every` accepted steps and the last one. PNG plots are not
 //!   drawn in three dimensions (the scene refuses an explicit `"png"`; the default list skips
@@ -441,5 +443,48 @@ fn write_tables(sys: &Solid3DSystem, obs: &Run3DObserver, dir: &Path) -> Result<
             "alpha",
         ],
         obs.convergence.iter().cloned(),
+    )?;
+    if sys.contact.is_none() {
+        return Ok(());
+    }
+    // The samples fail only where the residual failed (a facet map), which a converged or
+    // accepted state has not; then the table is left out rather than the run failed.
+    let Ok(samples) = sys.contact_samples() else {
+        return Ok(());
+    };
+    write_csv(
+        &dir.join("contact.csv"),
+        &[
+            "cell",
+            "face",
+            "x1",
+            "x2",
+            "x3",
+            "penetration",
+            "t_n",
+            "t_1",
+            "t_3",
+            "slip_1",
+            "slip_3",
+            "stick",
+            "dA0",
+        ],
+        samples.iter().map(|s| {
+            vec![
+                f64::from(s.cell),
+                f64::from(s.face),
+                s.x1,
+                s.x2,
+                s.x3,
+                s.delta,
+                s.p,
+                s.t1,
+                s.t3,
+                s.w1,
+                s.w3,
+                f64::from(u8::from(s.stick)),
+                s.da0,
+            ]
+        }),
     )
 }

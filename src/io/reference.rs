@@ -38,6 +38,7 @@ const fn k(
 
 const N: &str = "–";
 const D3: &str = "mesh.dimension = 3";
+const D2: &str = "mesh.dimension = 2";
 const TR: &str = "transient";
 const SD: &str = "steady";
 const TS: &str = "transient, steady";
@@ -493,31 +494,40 @@ pub static CSV_FILES: &[CsvFile] = &[
     },
     CsvFile {
         name: "contact.csv",
-        when: "sink `csv`; static, transient, steady",
+        when: "sink `csv`; static, transient, steady (mesh.dimension = 3: static, the columns marked so)",
         columns: &[
+            k("cell", N, D3, "cell of the contact facet"),
+            k("face", N, D3, "local face of the cell (0..6: ξ = ∓1, η = ∓1, ζ = ∓1)"),
             k(
                 "theta",
                 "rad",
-                "",
+                D2,
                 "reference angle of the facet point (−π/2 = bottom)",
             ),
             k("x1", "L", "", "current position, x1"),
             k("x2", "L", "", "current position, x2"),
+            k("x3", "L", D3, "current position, x3"),
             k("penetration", "L", "", "penetration δ"),
             k(
                 "t_n",
                 "F/L²",
                 "",
-                "normal traction on the body per unit reference length",
+                "normal traction on the body (per unit reference length and thickness; 3D: per unit reference area)",
             ),
-            k("t_t", "F/L²", "", "tangential traction on the body"),
+            k("t_t", "F/L²", D2, "tangential traction on the body"),
+            k("t_1", "F/L²", D3, "tangential traction on the body, x1"),
+            k("t_3", "F/L²", D3, "tangential traction on the body, x3"),
             k(
                 "slip_velocity",
                 "L/T (static: L)",
-                "",
+                D2,
                 "slip velocity w (static: slip per unit pseudo-time)",
             ),
-            k("ds0", "L", "", "reference length weight"),
+            k("slip_1", "L", D3, "slip per unit pseudo-time of the last load step, x1"),
+            k("slip_3", "L", D3, "slip per unit pseudo-time of the last load step, x3"),
+            k("stick", N, D3, "1 where |slip| is below the regularisation ε (with friction)"),
+            k("dA0", "L²", D3, "reference area weight"),
+            k("ds0", "L", D2, "reference length weight"),
         ],
     },
     CsvFile {

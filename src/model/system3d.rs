@@ -63,6 +63,9 @@ pub struct RoadContact3D {
     x_prev: Vec<f64>,
     lambda_prev: f64,
     dtau: f64,
+    /// The last committed step, when no step has started since: its start and length (the
+    /// slip of [`Solid3DSystem::contact_samples`] is measured over it).
+    committed: Option<(Vec<f64>, f64)>,
     /// Resultants of the last evaluation.
     pub totals: ContactTotals3D,
 }
@@ -180,6 +183,7 @@ impl Solid3DSystem {
             x_prev: self.x.clone(),
             lambda_prev: 0.0,
             dtau: 1.0,
+            committed: None,
             totals: ContactTotals3D::default(),
         });
         Ok(self)
@@ -222,8 +226,10 @@ impl Solid3DSystem {
         Some(rc.h_dof.map_or(rc.surface.h, |i| self.x[i]))
     }
 
-    /// The contact state at every quadrature point of the contact facets (slip measured over
-    /// the current load step, as the residual does); empty without contact.
+    /// The contact state at every quadrature point of the contact facets, the slip measured
+    /// over the current load step as the residual does (after a commit: over the step just
+    /// committed, so the friction tractions are those of the converged step); empty without
+    /// contact.
     pub fn contact_samples(&self) -> Result<Vec<ContactSample3D>, Contact3DError> {
         let Some(rc) = self.contact.as_ref() else {
             return Ok(Vec::new());
@@ -231,9 +237,13 @@ impl Solid3DSystem {
         let mut surface = rc.surface.clone();
         surface.h = rc.h_dof.map_or(surface.h, |i| self.x[i]);
         let n_u = self.dofs.n_u;
+        let (start, dtau) = rc
+            .committed
+            .as_ref()
+            .map_or((&rc.x_prev, rc.dtau), |(x, d)| (x, *d));
         let kin = Kinematics3D::Static {
-            u_prev: &rc.x_prev[..n_u],
-            dtau: rc.dtau,
+            u_prev: &start[..n_u],
+            dtau,
         };
         surface.samples(&self.solid.mesh, &self.x[..n_u], &kin)
     }
@@ -385,10 +395,12 @@ impl LoadedSystem for Solid3DSystem {
                 rc.surface.h = rc.h_touch - lambda * rc.disp;
             }
             rc.dtau = (lambda - rc.lambda_prev).max(f64::MIN_POSITIVE);
+            rc.committed = None;
         }
     }
     fn commit(&mut self) {
         if let Some(rc) = self.contact.as_mut() {
+            rc.committed = Some((rc.x_prev.clone(), rc.dtau));
             rc.x_prev.copy_from_slice(&self.x);
             rc.lambda_prev += rc.dtau;
         }
