@@ -320,7 +320,7 @@ fn parse_size(s: &str) -> Option<usize> {
 }
 
 fn size_label(n: usize) -> String {
-    if n % 1000 == 0 {
+    if n.is_multiple_of(1000) {
         format!("{}k", n / 1000)
     } else {
         n.to_string()
