@@ -25,21 +25,21 @@ use crate::driver::results::{
 };
 use crate::driver::spinning;
 use crate::driver::tables;
-use crate::model::SolidSystem;
 use crate::io::output::{ensure_dir, write_csv, OutputError};
 use crate::io::record::Recorder;
 use crate::io::scene::{Mode, Scene, Sink};
+use crate::model::SolidSystem;
 use crate::physics::PressureMode;
 use crate::solver::stepping::StepReport;
 use crate::solver::{LinearKind, SolveError};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub use crate::driver::results::RunOutcome;
 pub use crate::setup::{
     build_contact, build_material, build_material_spec, build_model, build_recorders, build_system,
     AppError, RunOptions,
 };
-pub use crate::driver::results::RunOutcome;
 
 /// Default output directory of a scene: `out/<scene name>/`.
 pub fn default_out_dir(scene: &Scene) -> PathBuf {

@@ -10,10 +10,6 @@
 
 use crate::contact::facet3d::ContactSurface3D;
 use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
-use crate::mesh::hex_mesh::HexMesh;
-use crate::mesh::revolved::{revolved, RevolvedSpec};
-use crate::model::system::Loading;
-use crate::model::{Solid3D, Solid3DSystem, SolidSystem};
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
@@ -22,7 +18,11 @@ use crate::io::scene::{
 };
 use crate::material::{Hyperelastic, Material};
 use crate::math::Mat2;
+use crate::mesh::hex_mesh::HexMesh;
+use crate::mesh::revolved::{revolved, RevolvedSpec};
 use crate::mesh::{annulus, AnnulusSpec};
+use crate::model::system::Loading;
+use crate::model::{Solid3D, Solid3DSystem, SolidSystem};
 use crate::physics::{PressureMode, SolidModel};
 use crate::solver::stepping::StepOptions;
 use crate::solver::{LinearKind, NewtonOptions, SolveError, SolvePlan};

@@ -223,9 +223,9 @@ fn steady_slip_is_continuous_across_facets() {
     use tread::contact::laws::CoulombTanh;
     use tread::contact::{FacetRule, Friction, NormalCompliance};
     use tread::driver::steady::SteadyRolling;
-    use tread::model::SolidSystem;
     use tread::material::{Material, MooneyRivlin};
     use tread::mesh::{annulus, AnnulusSpec};
+    use tread::model::SolidSystem;
     use tread::physics::{PressureMode, SolidModel};
 
     let mesh = annulus(&AnnulusSpec {

@@ -239,7 +239,11 @@ fn contact_table_of_a_frictional_indentation() {
     assert_eq!(s["converged"], Value::Bool(true), "{s}");
     let r = &s["results"];
     let (h, rows) = csv(&d.join("out/contact.csv"));
-    let col = |k: &str| h.iter().position(|c| c == k).unwrap_or_else(|| panic!("{k}: {h:?}"));
+    let col = |k: &str| {
+        h.iter()
+            .position(|c| c == k)
+            .unwrap_or_else(|| panic!("{k}: {h:?}"))
+    };
     let (tn, t1, t3, da) = (col("t_n"), col("t_1"), col("t_3"), col("dA0"));
     let sum = |c: usize| rows.iter().map(|q| q[c] * q[da]).sum::<f64>();
     let (f1, f2, f3) = (
@@ -253,7 +257,11 @@ fn contact_table_of_a_frictional_indentation() {
         sum(t1),
         sum(t3)
     );
-    assert!((sum(tn) - f2).abs() <= 1e-9 * f2.abs(), "{} vs {f2}", sum(tn));
+    assert!(
+        (sum(tn) - f2).abs() <= 1e-9 * f2.abs(),
+        "{} vs {f2}",
+        sum(tn)
+    );
     assert!((sum(t1) - f1).abs() <= 1e-9 * f2.abs());
     assert!((sum(t3) - f3).abs() <= 1e-9 * f2.abs());
     let p_max = rows.iter().map(|q| q[tn]).fold(0.0, f64::max);
@@ -265,7 +273,10 @@ fn contact_table_of_a_frictional_indentation() {
     }
     // The wheel's tread spreads under the load: friction resists it.
     eprintln!("max |t_T| = {t_max:.4e}, max t_n = {p_max:.4e}");
-    assert!(t_max > 1e-2 * mu * p_max, "no friction traction in contact.csv: {t_max:e}");
+    assert!(
+        t_max > 1e-2 * mu * p_max,
+        "no friction traction in contact.csv: {t_max:e}"
+    );
 }
 
 #[test]
@@ -588,7 +599,10 @@ fn spinning_runs_on_a_hexahedral_gmsh_file() {
         })
         .sum::<f64>()
         / rim.len() as f64;
-    assert!(mean_ur > 0.0, "mean radial displacement of the rim {mean_ur:e}");
+    assert!(
+        mean_ur > 0.0,
+        "mean radial displacement of the rim {mean_ur:e}"
+    );
     assert_field_files(
         &d.join("out"),
         s["solver"]["load_steps"].as_u64().expect("steps") as usize,

@@ -5,10 +5,10 @@
 use tread::app::build_system;
 use tread::driver::indentation::solve_indentation;
 use tread::driver::spinning::{results, solve_spinning};
-use tread::model::system::Loading;
-use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::math::Vec2;
+use tread::model::system::Loading;
+use tread::model::SolidSystem;
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NewtonOptions};
 

@@ -3,10 +3,10 @@
 //! serial and parallel assembly agree; Newton converges quadratically.
 
 use tread::assembly::FIXED;
-use tread::model::SolidSystem;
 use tread::material::{Material, MooneyRivlin, MooneyRivlinIncompressible, NeoHookean};
 use tread::math::Vec2;
 use tread::mesh::{annulus, AnnulusSpec};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::NonlinearSystem;
 

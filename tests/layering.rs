@@ -483,7 +483,8 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     let mut s = Sources::new();
     s.insert(
         "lib.rs".into(),
-        "pub mod a;\npub mod app;\npub mod driver;\npub mod io;\npub mod setup;\npub mod solver;\n".into(),
+        "pub mod a;\npub mod app;\npub mod driver;\npub mod io;\npub mod setup;\npub mod solver;\n"
+            .into(),
     );
     s.insert(
         "a/mod.rs".into(),
@@ -524,7 +525,10 @@ fn the_checks_catch_a_cycle_and_a_solver_to_io_import() {
     // An inline `super::` path is an edge; an inline `self::` path stays in the file.
     assert!(g["a/d.rs"].contains("a/b.rs"), "{g:#?}");
     assert_eq!(below_the_face_to_app(&g), vec!["a/e.rs -> app.rs"]);
-    assert_eq!(below_the_drivers_to_driver(&g), vec!["setup.rs -> driver/mod.rs"]);
+    assert_eq!(
+        below_the_drivers_to_driver(&g),
+        vec!["setup.rs -> driver/mod.rs"]
+    );
     // Neither the façade's `pub use` nor the test module's import is an edge.
     assert!(!g["a/mod.rs"].contains("a/b.rs"), "{g:#?}");
     assert!(!g["a/c.rs"].iter().any(|t| t.starts_with("io/")), "{g:#?}");

@@ -7,10 +7,10 @@
 //! the hub and the outer surface by nodal interpolation.
 
 use nalgebra::{Matrix2, Vector2};
-use tread::model::SolidSystem;
 use tread::material::{Hyperelastic, Material, NeoHookean};
 use tread::math::v;
 use tread::mesh::{annulus, AnnulusSpec, Forest};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, Newton, NewtonOptions};
 

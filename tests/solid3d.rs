@@ -392,9 +392,9 @@ fn plane_strain_slab_reproduces_the_2d_indentation() {
     use tread::contact::facet3d::ContactSurface3D;
     use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
     use tread::driver::indentation::{results, solve_indentation};
+    use tread::mesh::{annulus, AnnulusSpec};
     use tread::model::system::Loading;
     use tread::model::SolidSystem;
-    use tread::mesh::{annulus, AnnulusSpec};
     use tread::physics::SolidModel;
     let (n_r, n_theta, grading_theta, disp, c_n, width) = (3, 32, 0.6, 0.05, 2.0e4, 0.25);
     let normal = NormalCompliance::new(c_n, 1.0, 0.0, 0.0);

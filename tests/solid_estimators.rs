@@ -9,8 +9,8 @@ mod common;
 use common::reference::{neo_hookean_omega_for_growth, neo_hookean_radial, RadialSolution};
 use tread::app::build_system;
 use tread::driver::spinning::solve_spinning;
-use tread::model::SolidSystem;
 use tread::math::{Mat2, Vec2};
+use tread::model::SolidSystem;
 use tread::physics::estimate::{
     energy_error, energy_norm, explicit_residual, interpolation, recovery,
 };

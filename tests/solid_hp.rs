@@ -7,11 +7,11 @@
 #[path = "common/fixtures.rs"]
 mod fixtures;
 
-use tread::model::SolidSystem;
 use tread::material::{Material, MooneyRivlin, NeoHookean};
 use tread::math::{Mat2, Vec2};
 use tread::mesh::locate::{point_at, vector_at, PointLocator};
 use tread::mesh::{annulus, AnnulusSpec, Forest, Mesh};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::NonlinearSystem;
 

@@ -5,8 +5,8 @@ mod common;
 use common::reference::{incompressible_sigma_r, linear_annulus, neo_hookean_radial};
 use tread::app::build_system;
 use tread::driver::spinning::{profile, results, solve_spinning};
-use tread::model::SolidSystem;
 use tread::io::Scene;
+use tread::model::SolidSystem;
 use tread::solver::stepping::{StepOptions, StepReport};
 use tread::solver::{LinearKind, NewtonOptions};
 

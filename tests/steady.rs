@@ -11,10 +11,10 @@ use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::steady::{solve_torque, SteadyRolling};
 use tread::driver::steady_report::SolveReports;
 use tread::driver::steady_run;
-use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::material::{Material, MooneyRivlin};
 use tread::mesh::{annulus, AnnulusSpec};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, Newton, NonlinearSystem};
 
@@ -616,7 +616,10 @@ fn small_eps_is_reached_by_the_eps_homotopy_recovery_and_the_eps_continuation() 
     //    recovery; it lands on the same solution.
     let (_, cont, reports) = solved(ODEN, &set);
     assert!(reports.recovery.is_none());
-    let a = reports.eps_continuation.as_ref().expect("an eps continuation");
+    let a = reports
+        .eps_continuation
+        .as_ref()
+        .expect("an eps continuation");
     assert!(a.succeeded && a.legs[0].steps >= 2, "{a:?}");
     let res = scene_residual(&sc, &cont);
     assert!(res < 1e-6, "continuation: residual {res:e}");
@@ -650,7 +653,10 @@ fn eps_continuation_lands_on_the_direct_solution() {
         "friction.eps=0.105",
     ];
     let (sc, cont, reports) = solved(ODEN, &set);
-    let a = reports.eps_continuation.as_ref().expect("an eps continuation");
+    let a = reports
+        .eps_continuation
+        .as_ref()
+        .expect("an eps continuation");
     assert!(a.succeeded, "{a:?}");
     let mut direct = steady_run::build_steady(&sc).unwrap();
     let tread::solver::SolvePlan {

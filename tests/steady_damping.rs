@@ -17,8 +17,8 @@ mod fixtures;
 use tread::assembly::CONSTRAINED;
 use tread::driver::steady::SteadyRolling;
 use tread::driver::steady_run::{build_steady, solve_steady};
-use tread::model::SteadyDampingTangent;
 use tread::io::Scene;
+use tread::model::SteadyDampingTangent;
 use tread::physics::ThetaDerivativeSource;
 use tread::solver::NonlinearSystem;
 
@@ -254,8 +254,8 @@ fn matrix_free_and_assembled_reach_the_same_state() {
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         st.sys.set_steady_damping_tangent(mode);
         let mut rep = Default::default();
-        let r = solve_steady(&sc, &mut st, false, &mut rep, &mut ())
-            .unwrap_or_else(|e| panic!("{e}"));
+        let r =
+            solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
         assert!(r.damping_fallback.is_none() && r.recovery.is_none());
         assert_eq!(st.sys.steady_damping_tangent(), Some(mode));
         out.push((hub_force(&st), st.sys.x.clone()));
@@ -292,8 +292,8 @@ fn damping_cell_weight_changes_only_the_preconditioner() {
         let sc = scene(ODEN, "weight", &[&base[..], &[key.as_str()]].concat());
         let mut st = build_steady(&sc).unwrap_or_else(|e| panic!("{e}"));
         let mut rep = Default::default();
-        let r = solve_steady(&sc, &mut st, false, &mut rep, &mut ())
-            .unwrap_or_else(|e| panic!("{e}"));
+        let r =
+            solve_steady(&sc, &mut st, false, &mut rep, &mut ()).unwrap_or_else(|e| panic!("{e}"));
         assert!(r.damping_fallback.is_none() && r.recovery.is_none());
         assert_eq!(
             st.sys.steady_damping_tangent(),

@@ -9,8 +9,8 @@ use fixtures::*;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
 use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod, OdeTolerances};
 use tread::driver::transient::{GenAlpha, Ramp, Scheme, TimeOptions, Transient};
-use tread::model::SolidSystem;
 use tread::material::{ViscoModel, Viscoelastic};
+use tread::model::SolidSystem;
 use tread::physics::SolidModel;
 use tread::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem};
 

@@ -646,11 +646,7 @@ struct Options {
     out: Option<std::path::PathBuf>,
 }
 
-fn parse_list<T>(
-    flag: &str,
-    v: &str,
-    f: impl Fn(&str) -> Option<T>,
-) -> Result<Vec<T>, String> {
+fn parse_list<T>(flag: &str, v: &str, f: impl Fn(&str) -> Option<T>) -> Result<Vec<T>, String> {
     let out: Option<Vec<T>> = v.split(',').map(|s| f(s.trim())).collect();
     match out {
         Some(o) if !o.is_empty() => Ok(o),
@@ -807,7 +803,10 @@ fn main() -> ExitCode {
                                 degree,
                                 threads,
                                 solver: solver.name().into(),
-                                note: format!("the case's process ended without a result: {}", out.status),
+                                note: format!(
+                                    "the case's process ended without a result: {}",
+                                    out.status
+                                ),
                                 ..Default::default()
                             }),
                         Err(e) => {

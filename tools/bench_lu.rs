@@ -46,8 +46,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use tread::driver::steady_run::{build_steady, solve_steady};
-use tread::model::SteadyDampingTangent;
 use tread::io::Scene;
+use tread::model::SteadyDampingTangent;
 use tread::solver::linear::{write_matrix_market, write_vector_market, LuOrdering};
 use tread::solver::{LinearKind, NonlinearSystem, SparseSolver, StepReport};
 

@@ -19,9 +19,9 @@ mod common;
 use common::median;
 
 use std::time::Instant;
-use tread::model::SolidSystem;
 use tread::material::{Material, NeoHookean};
 use tread::mesh::{annulus, AnnulusSpec};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, NonlinearSystem, SparseSolver};
 

@@ -58,10 +58,10 @@ use tread::driver::transient::ode_first_order::{integrate_first_order, OdeMethod
 use tread::driver::transient::{
     integrate, GenAlpha, Scheme, TimeOptions, Transient, TransientReport,
 };
-use tread::model::SolidSystem;
 use tread::io::record::png::{self, AxisLayout, Scale};
 use tread::io::scene::{DEFAULT_ERROR_TOL, DEFAULT_RHO_INF, DEFAULT_STEADY_TOL};
 use tread::io::Scene;
+use tread::model::SolidSystem;
 use tread::solver::{LinearKind, NewtonOptions};
 
 const SCENE_TEXT: &str = include_str!("../scenarios/oden_hollow_cylinder.toml");

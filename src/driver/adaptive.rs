@@ -38,13 +38,13 @@
 use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
 use super::steady_run;
-use crate::model::system::SolidSystem;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
 use crate::io::scene::{Mode, Scene, SteadyHistoryChoice};
 use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
+use crate::model::system::SolidSystem;
 use crate::physics::SolidModel;
 use crate::physics::{equilibrated, estimate};
 use crate::setup::{build_contact, build_material, AppError};
@@ -389,9 +389,7 @@ fn solve_rolling(
             .recovery_iterations();
     }
     let control = steady_run::apply_control(scene, st, false).map_err(fail)?;
-    Ok(report.total_iterations
-        + control.newton_iterations
-        + recovery_iterations)
+    Ok(report.total_iterations + control.newton_iterations + recovery_iterations)
 }
 
 /// Run the adaptive loop on the scene (static indentation or steady rolling). `on_step` sees

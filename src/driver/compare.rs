@@ -36,12 +36,12 @@ use super::results::{
 use super::steady_run;
 use crate::assembly::QpHistory;
 use crate::contact::ContactSample;
+use crate::driver::results::RunOutcome;
 use crate::element::QuadRule;
 use crate::io::output::{ensure_dir, write_json, write_text_csv};
 use crate::io::scene::{Mode, Scene, Sink};
 use crate::math::Vec2;
 use crate::setup::{build_model, AppError, RunOptions};
-use crate::driver::results::RunOutcome;
 use std::path::Path;
 
 /// Exit status of `tread compare` (and of `tread` without arguments) when both runs finished

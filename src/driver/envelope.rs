@@ -15,12 +15,12 @@
 //!    `Ok(RunOutcome)`, [`AppError::Interrupted`] (exit status 130) or [`AppError::Solve`]
 //!    (exit status 1), both naming the output folder that holds the partial results.
 
+use crate::driver::results::RunOutcome;
 use crate::io::output::{ensure_dir, write_json};
 use crate::io::record::{self, Recorder, Recorders, RunEnd, RunMeta};
 use crate::io::scene::Scene;
 use crate::mesh::Mesh;
 use crate::setup::{build_recorders, AppError, RunOptions};
-use crate::driver::results::RunOutcome;
 use crate::solver::SolveError;
 use std::path::PathBuf;
 

@@ -14,12 +14,12 @@
 //! goes to [`SolidSystem::record_step`], the Newton table to the recorder's iteration events,
 //! and the interrupt flag answers whether to stop.
 
-use crate::model::SolidSystem;
 use crate::contact::ContactSample;
 use crate::element::QuadRule;
 use crate::io::record::{self, Energy, HubLoads, Recorder, StepView};
 use crate::material::Hyperelastic;
 use crate::math::{Mat2, Vec2};
+use crate::model::SolidSystem;
 use crate::solver::{IterationRecord, RejectedStep, StepInfo, StepObserver};
 
 /// Owned data of a view; [`SolidFrame::view`] lends it out with the system's state.

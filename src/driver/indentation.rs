@@ -8,9 +8,9 @@
 //! with t_n > 0), the peak normal traction (`max_pressure`, per unit reference length), the
 //! final road height and penetration DISP = Ro − H.
 
-use crate::model::system::{Loading, SolidSystem};
 use crate::contact::ContactModel;
 use crate::io::record::Recorder;
+use crate::model::system::{Loading, SolidSystem};
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 

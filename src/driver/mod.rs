@@ -44,4 +44,3 @@ pub mod stick_slip_run;
 pub mod tables;
 pub mod transient;
 pub mod transient_run;
-

@@ -22,10 +22,10 @@ use super::indentation::IndentationResults;
 use super::resistance::RollingResistance;
 use super::spinning::SpinningResults;
 use super::steady_report::{Attempt, CoarseStart, Recovery};
-use crate::model::system::SteadyDampingTangent;
 pub use super::transient::energy::{ViscousEnergy, ENERGY_CREATED_TOL};
 use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
 use crate::io::output::sanitize;
+use crate::model::system::SteadyDampingTangent;
 use crate::solver::continuation::{LimitJump, PointKind, SpecialPoint};
 use serde::Serialize;
 

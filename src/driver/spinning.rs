@@ -18,11 +18,11 @@
 //!   constant taken as 1: an upper indicator, ≈ 14–19 times the error on the annulus), the
 //!   energy norm of the solution and the relative recovery estimate.
 
-use crate::model::system::SolidSystem;
 use crate::element::gauss_1d;
 use crate::io::record::Recorder;
 use crate::math::{Mat2, Vec2};
 use crate::mesh::Facet;
+use crate::model::system::SolidSystem;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
 

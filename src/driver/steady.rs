@@ -58,15 +58,15 @@
 //!    load or the penetration. In ω the road speed follows v0 = (v0 / ω)_start · ω (constant
 //!    ratio: the creep stays put while the speed changes).
 
-use crate::model::system::{Loading, SolidSystem};
 use crate::io::record::Recorder;
-use crate::solver::continuation::ParametricSystem;
-use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::io::scene::{DampingTangentChoice, Scene, SteadyHistoryChoice};
+use crate::model::system::{Loading, SolidSystem};
+use crate::model::SteadyDampingTangent;
 use crate::physics::viscoelastic_steady::StreamlineScheme;
 use crate::physics::SolidModel;
 use crate::setup::{build_contact, build_model, scene_loading, solve_plan, AppError};
-use crate::model::SteadyDampingTangent;
+use crate::solver::continuation::ParametricSystem;
+use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
 use crate::solver::{
     LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError, SolvePlan, SparseSolver,
 };

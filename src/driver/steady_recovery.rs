@@ -49,8 +49,8 @@ use super::steady::{press, SteadyRolling};
 pub use super::steady_report::{
     Attempt, HomotopyParameter, LegReport, Recovery, Spacing, Strategy,
 };
-use crate::model::system::Loading;
 use crate::io::record::{self, Recorder};
+use crate::model::system::Loading;
 use crate::physics::PressureMode;
 use crate::solver::stepping::{StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};

@@ -36,9 +36,8 @@ pub use super::steady_solve::{
     apply_control, build_nested, solve_steady, solve_steady_from, TORQUE_RTOL,
 };
 use super::tables;
-pub use crate::setup::scene_loading;
-use crate::model::system::{SolidSystem, SteadyDampingTangent};
 use crate::contact::ContactModel;
+use crate::driver::results::RunOutcome;
 use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
@@ -46,8 +45,9 @@ use crate::io::scene::{
     ContinuationParameter, ContinuationSpec, Control, DampingTangentChoice, LimitAction, Scene,
     Sink,
 };
+use crate::model::system::{SolidSystem, SteadyDampingTangent};
+pub use crate::setup::scene_loading;
 use crate::setup::{AppError, RunOptions};
-use crate::driver::results::RunOutcome;
 use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, PointKind,
 };
@@ -460,7 +460,11 @@ fn follow_branch(
     verbose: bool,
     recorders: &mut dyn Recorder,
     shapes: &mut Option<ShapeSnapshots>,
-) -> (Option<ContinuationReport>, Vec<BranchRow>, Result<(), SolveError>) {
+) -> (
+    Option<ContinuationReport>,
+    Vec<BranchRow>,
+    Result<(), SolveError>,
+) {
     let mut rows: Vec<BranchRow> = Vec::new();
     st.param = match cs.parameter {
         ContinuationParameter::Omega => SteadyParameter::Omega,
@@ -495,7 +499,7 @@ fn follow_branch(
     let jump_distance = cs.jump * copts.lambda_scale;
     let jump_direction = copts.direction;
     let jump_target = copts.target;
-        let mut partial = None;
+    let mut partial = None;
     let param_name = cs.parameter.as_str();
     // Arc length along the branch (scaled units, the sum of the steps' lengths).
     let mut arc = 0.0;
@@ -800,9 +804,7 @@ pub fn run_with_dump(
     };
     // The final state is already recorded as the last load step or branch point, except when
     // a recovery homotopy (which records no steps) found it.
-    if recorders.steps_recorded() == 0
-        || reports.solution_steps().is_some()
-    {
+    if recorders.steps_recorded() == 0 || reports.solution_steps().is_some() {
         st.sys.record_step(&final_info, recorders);
     }
     let summary = env.finish(&typed, steps as u64, wall, error.as_deref(), interrupted)?;

@@ -13,6 +13,7 @@ use crate::contact::stick_slip::{
     closed_form_cycle, simulate, supported_law_list, Phase, StickSlipSpec,
 };
 use crate::contact::Friction;
+use crate::driver::results::RunOutcome;
 use crate::driver::results::{
     ModeSummary, RunStats, StickSlipResults, StickSlipSummary, Summary, Terms,
 };
@@ -20,7 +21,6 @@ use crate::io::output::ensure_dir;
 use crate::io::record::{self, Recorder, StepInfo, StepView};
 use crate::io::scene::{stick_slip_law, Scene};
 use crate::setup::{AppError, RunOptions};
-use crate::driver::results::RunOutcome;
 use std::time::Instant;
 
 pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {

@@ -29,18 +29,18 @@ use super::results::{
     MeshInfo, ModeSummary, RunStats, Summary, Terms, TransientResults, TransientSummary,
     TransientTerms,
 };
-use crate::model::system::SolidSystem;
 use super::tables;
 use super::transient::ode_first_order::OdeTolerances;
 use super::transient::{Kinematics, Ramp, Scheme, Setup, TimeOptions, Transient, TransientReport};
 use crate::contact::ContactModel;
+use crate::driver::results::RunOutcome;
 use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::{
     self, Energy, HubLoads, Recorder, RejectedStep, SteadyReached, StepInfo, StepView,
 };
 use crate::io::scene::{Control, IntegratorName, MassKind, Scene, Sink, TimeSpec};
+use crate::model::system::SolidSystem;
 use crate::setup::{build_contact, build_model, AppError, RunOptions};
-use crate::driver::results::RunOutcome;
 use crate::solver::stepping::final_residual;
 use crate::solver::{LinearKind, SolveError};
 use std::time::Instant;

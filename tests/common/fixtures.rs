@@ -4,10 +4,10 @@
 
 use tread::app::{run, RunOptions};
 use tread::driver::transient::{integrate, Kinematics, Ramp, Scheme, TimeOptions, Transient};
-use tread::model::SolidSystem;
 use tread::io::Scene;
 use tread::material::NeoHookean;
 use tread::mesh::{annulus, AnnulusSpec};
+use tread::model::SolidSystem;
 use tread::physics::{PressureMode, SolidModel};
 use tread::solver::{LinearKind, NewtonOptions};
 

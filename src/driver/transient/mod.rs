@@ -37,11 +37,11 @@
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
-use crate::model::system::SolidSystem;
-use crate::model::terms::{CellHook, Inertia, Rates, Terms};
 use crate::assembly::{LocalSystem, SharedMut, CONSTRAINED, MAX_LOCAL};
 use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
+use crate::model::system::SolidSystem;
+use crate::model::terms::{CellHook, Inertia, Rates, Terms};
 use crate::physics::SolidModel;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
 use energy::ViscousEnergy;
