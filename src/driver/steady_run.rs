@@ -510,32 +510,37 @@ fn follow_branch(
         st.sys
             .set_steady_damping_tangent(SteadyDampingTangent::Assembled);
     }
+    let rec: &mut dyn Recorder = recorders;
+    // Every converged point: its row, the shape snapshots (continuation in ω only) and the
+    // recorder step. Time of a branch point: the continuation parameter (ω, load, DISP), as
+    // in branch.csv; the start point (p.step = 0) is the last load step, already recorded.
+    let mut on_point = |s: &SteadyRolling, p: &BranchPoint| {
+        let row = branch_row(s, p);
+        if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
+            let frame = SolidFrame::capture(&s.sys, false);
+            sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
+        }
+        arc += p.ds.abs() * f64::from(p.step > 0);
+        record_branch_point(rec, n0, param_name, arc, p, &row);
+        rows.push(row);
+        let info = StepInfo {
+            index: n0 + p.step as u64,
+            time: p.lambda,
+            dt: match rows.len() {
+                0 | 1 => 0.0,
+                n => rows[n - 1].lambda - rows[n - 2].lambda,
+            },
+            newton_iterations: p.iterations,
+            residual: 0.0,
+            is_final: false,
+        };
+        if p.step > 0 {
+            s.sys.record_step(&info, rec);
+        }
+        !record::interrupted()
+    };
     let res = if sweep {
-        let rec: &mut dyn Recorder = recorders;
-        creep_sweep(st, &copts, &mut partial, &mut |s, p| {
-            let row = branch_row(s, p);
-            arc += p.ds.abs() * f64::from(p.step > 0);
-            record_branch_point(rec, n0, param_name, arc, p, &row);
-            rows.push(row);
-            // Time of a branch point: the continuation parameter (ω, load, DISP), as in
-            // branch.csv; the start point (p.step = 0) is the last load step, already
-            // recorded.
-            let info = StepInfo {
-                index: n0 + p.step as u64,
-                time: p.lambda,
-                dt: match rows.len() {
-                    0 | 1 => 0.0,
-                    n => rows[n - 1].lambda - rows[n - 2].lambda,
-                },
-                newton_iterations: p.iterations,
-                residual: 0.0,
-                is_final: false,
-            };
-            if p.step > 0 {
-                s.sys.record_step(&info, rec);
-            }
-            !record::interrupted()
-        })
+        creep_sweep(st, &copts, &mut partial, &mut on_point)
     } else {
         let mut jump = |s: &mut SteadyRolling, at: f64| {
             jump_past_limit(
@@ -549,35 +554,7 @@ fn follow_branch(
             )
         };
         Continuation::new(st, LinearKind::Lu, copts).and_then(|mut c| {
-            let rec: &mut dyn Recorder = recorders;
-            let on_point = &mut |s: &SteadyRolling, p: &BranchPoint| {
-                let row = branch_row(s, p);
-                if let Some(sh) = shapes.as_mut().filter(|sh| sh.wants(row.omega)) {
-                    let frame = SolidFrame::capture(&s.sys, false);
-                    sh.offer(row.omega, &frame.view(&s.sys, &[]), row.wave_amplitude);
-                }
-                arc += p.ds.abs() * f64::from(p.step > 0);
-                record_branch_point(rec, n0, param_name, arc, p, &row);
-                rows.push(row);
-                // Time of a branch point: the continuation parameter (ω, load, DISP), as
-                // in branch.csv; the start point (p.step = 0) is the last load step.
-                let info = StepInfo {
-                    index: n0 + p.step as u64,
-                    time: p.lambda,
-                    dt: match rows.len() {
-                        0 | 1 => 0.0,
-                        n => rows[n - 1].lambda - rows[n - 2].lambda,
-                    },
-                    newton_iterations: p.iterations,
-                    residual: 0.0,
-                    is_final: false,
-                };
-                if p.step > 0 {
-                    s.sys.record_step(&info, rec);
-                }
-                !record::interrupted()
-            };
-            let r = c.run_with_jumps(st, on_point, Some(&mut jump));
+            let r = c.run_with_jumps(st, &mut on_point, Some(&mut jump));
             partial = c.partial.take();
             r
         })
