@@ -152,9 +152,10 @@ pub fn build_system(scene: &Scene) -> Result<SolidSystem, AppError> {
 /// The road contact of a scene (`[road]`, `[contact]`, `[friction]`).
 pub fn build_contact(scene: &Scene, model: &SolidModel) -> Result<ContactModel, AppError> {
     let (Some(road), Some(cs)) = (&scene.road, &scene.contact) else {
-        return Err(AppError::Unsupported(
-            "mode \"static\" needs the [road] and [contact] sections".into(),
-        ));
+        return Err(AppError::Unsupported(format!(
+            "mode \"{}\" needs the [road] and [contact] sections",
+            scene.analysis.mode
+        )));
     };
     let clamp = match cs.clamp {
         ClampKind::Hard => Clamp::Hard,
@@ -190,9 +191,10 @@ fn contact_laws(
     clamp: Clamp,
 ) -> Result<(NormalCompliance, crate::contact::Friction, FacetRule), AppError> {
     let Some(cs) = &scene.contact else {
-        return Err(AppError::Unsupported(
-            "mode \"static\" needs the [road] and [contact] sections".into(),
-        ));
+        return Err(AppError::Unsupported(format!(
+            "mode \"{}\" needs the [road] and [contact] sections",
+            scene.analysis.mode
+        )));
     };
     let normal = NormalCompliance::new(cs.c_n, cs.m_n, cs.b_n, cs.l_n).with_clamp(clamp);
     let Some(friction) = scene.friction.params() else {
@@ -532,9 +534,10 @@ pub fn fixed_dofs_3d(scene: &Scene, mesh: &HexMesh) -> Vec<bool> {
 /// plane-strain program, under displacement control at first touch.
 pub fn build_contact_3d(scene: &Scene, mesh: &HexMesh) -> Result<ContactSurface3D, AppError> {
     let (Some(road), Some(cs)) = (&scene.road, &scene.contact) else {
-        return Err(AppError::Unsupported(
-            "mode \"static\" needs the [road] and [contact] sections".into(),
-        ));
+        return Err(AppError::Unsupported(format!(
+            "mode \"{}\" needs the [road] and [contact] sections",
+            scene.analysis.mode
+        )));
     };
     let (material, _) = build_material_3d(scene)?;
     let clamp = match cs.clamp {
@@ -564,16 +567,18 @@ pub fn build_contact_3d(scene: &Scene, mesh: &HexMesh) -> Result<ContactSurface3
 }
 
 /// The three-dimensional solid system of a scene: the solid on [`build_hex_mesh`] with
-/// [`fixed_dofs_3d`], and in the static mode the road contact under load control
+/// [`fixed_dofs_3d`], and in the static and steady modes the road contact under load control
 /// (`road.load`) or displacement control (`road.disp`). The road height of first touch is
-/// `geometry.ro`.
+/// `geometry.ro`. In the steady mode the body rolls at `motion.omega` on the road moving at
+/// `road.v0` turned by `road.slip_angle` ([`Solid3DSystem::set_steady_rolling`]).
 pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
     let mesh = build_hex_mesh(scene)?;
     let (material, pressure) = build_material_3d(scene)?;
     let fixed = fixed_dofs_3d(scene, &mesh);
+    let steady = scene.analysis.mode == Mode::Steady;
     let contact = match scene.analysis.mode {
         Mode::Static => Some(build_contact_3d(scene, &mesh)?),
-        Mode::Spinning => {
+        Mode::Spinning | Mode::Steady => {
             // The θ-referential inertia −ω² ∫ ρ ∂θχ · ∂θη is the centrifugal load only on
             // closed circumferential lines: on a sector its boundary terms on the cut faces
             // are missing.
@@ -583,7 +588,7 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
                     x[0], x[1], x[2]
                 )));
             }
-            None
+            steady.then(|| build_contact_3d(scene, &mesh)).transpose()?
         }
         m => {
             return Err(AppError::Unsupported(format!(
@@ -602,7 +607,19 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
         Some(load) => sys.with_contact_load(surface, ro, ro * (1.0 - 1e-3), load),
         None => sys.with_contact(surface, ro, road.and_then(|r| r.disp).unwrap_or(0.0)),
     };
-    sys.map_err(|e| AppError::Unsupported(format!("contact: {e}")))
+    let mut sys = sys.map_err(|e| AppError::Unsupported(format!("contact: {e}")))?;
+    if steady {
+        let (v0, alpha) = road.map_or((0.0, 0.0), |r| (r.v0, r.slip_angle.to_radians()));
+        sys.set_steady_rolling(scene.motion.omega, road_velocity_3d(v0, alpha))
+            .map_err(|e| AppError::Unsupported(format!("motion: {e}")))?;
+    }
+    Ok(sys)
+}
+
+/// The road velocity (V1, V3) in the road plane for the speed `v0` and the slip angle `alpha`
+/// (radians): the road's velocity turned by α about +x2, V = v0 (cos α, −sin α).
+pub fn road_velocity_3d(v0: f64, alpha: f64) -> [f64; 2] {
+    [v0 * alpha.cos(), -v0 * alpha.sin()]
 }
 
 /// Linear solver of a three-dimensional system: as [`linear_kind`] (LU for the exact

@@ -397,7 +397,22 @@ fn bad(name: &str, set: &[&str], key: &str) {
 
 #[test]
 fn bad_three_dimensional_inputs_name_the_key() {
-    bad("steady", &["analysis.mode=\"steady\""], "analysis.mode");
+    bad(
+        "transient",
+        &["analysis.mode=\"transient\""],
+        "analysis.mode",
+    );
+    bad("slip_static", &["road.slip_angle=2.0"], "road.slip_angle");
+    bad(
+        "steady_torque",
+        &[
+            "analysis.mode=\"steady\"",
+            "motion.omega=1.0",
+            "road.v0=1.9",
+            "motion.control=\"torque\"",
+        ],
+        "motion.control",
+    );
     bad("dimension", &["mesh.dimension=4"], "mesh.dimension");
     bad("width", &["mesh.width=-1.0"], "mesh.width");
     bad("crown", &["mesh.crown_radius=0.1"], "mesh.crown_radius");

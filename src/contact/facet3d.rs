@@ -42,9 +42,20 @@
 //! * `Dynamic { v, kx, kv }`: the velocity field of the time integrator; δu = kx δU and
 //!   δv = kv δU (generalized-α: kx = 1 − α_f, kv = (1 − α_f) γ/(β Δt)); damping active.
 //!
-//! The 2D steady (θ-referential) kinematics v = ω ∂θχ are not provided here. With the
-//! derivatives of the laws, ∂T/∂U_b = N_b D with the 3 × 3 matrix (rows and columns in the
-//! component order 1, 2, 3; d_w the 2 × 2 ∂t_T/∂w in the (1, 3) components)
+//! * `Steady { omega }`: steady rolling in the θ-referential description, v = ω ∂θχ, the
+//!   θ-derivative taken along the facet as the plane program's steady contact element does:
+//!   along the direction d = α a + β b of the facet's tangent plane (a, b the reference
+//!   tangents of its two parameters) along which the polar angle advances by 1 and x3 stays,
+//!   so v = ω (d + Σ_b (∂_d N_b) u_b) with ∂_d N_b = α ∂N_b/∂ξ_a + β ∂N_b/∂ξ_b. On an exact
+//!   cylindrical facet d = t = e3 × X = (−X2, X1, 0); on an isoparametric one d is the
+//!   interpolated surface's, and a plane-strain slab reproduces the plane program's
+//!   dx/dθ = (dX/dη)/(dθ/dη). δv = ω Σ_b (∂_d N_b) δU_b (facet nodes only); damping active.
+//!   The slip w is the 3D form of the plane program's w = ω ∂θχ1 − v0, facet-wise (the plane
+//!   program's steady mode takes the friction slip from nodal θ-differences along the
+//!   contact boundary by default, see [`super::steady_slip`]).
+//!
+//! With the derivatives of the laws, ∂T/∂U_b = N_b D with the 3 × 3 matrix (rows and columns
+//! in the component order 1, 2, 3; d_w the 2 × 2 ∂t_T/∂w in the (1, 3) components)
 //!
 //! ```text
 //! g = −(∂t_n/∂δ kx + ∂t_n/∂δ̇ kv)
@@ -53,7 +64,9 @@
 //!     | kv d_w31   ∂t3/∂t_n g − ∂t3/∂δ kx   kv d_w33 |
 //! ```
 //!
-//! and the local tangent K_{3a+i, 3b+j} = −∫ N_a N_b D_ij dA0. Frictionless and undamped it is
+//! and the local tangent K_{3a+i, 3b+j} = −∫ N_a N_b D_ij dA0. In the kernel D is kept as
+//! its two parts, ∂T/∂x (the column of x2) and ∂T/∂v, so that each takes its own weight: kx N_b
+//! for the position, kv N_b (nodal velocities) or ω ∇N_b · t (steady) for the velocity. Frictionless and undamped it is
 //! symmetric: the residual is then the gradient of Φ = ∫ c_n δ^{m+1}/(m+1) dA0.
 //!
 //! # The road height as an unknown (load control)
@@ -123,14 +136,20 @@ pub enum Kinematics3D<'a> {
     /// Dynamic analysis: `v` is the velocity field; a unit change of the unknown moves the
     /// positions by `kx` and the velocities by `kv`. Normal damping active.
     Dynamic { v: &'a [f64], kx: f64, kv: f64 },
+    /// Steady rolling in the θ-referential description (ω in rad/s about +x3): the unknown is
+    /// the motion χ = X + u of the material point at the referential position X, and the
+    /// velocity is v = ω ∂θχ, the θ-derivative taken along the facet (module docs; t =
+    /// e3 × X = (−X2, X1, 0) on exact cylindrical facets). Normal damping active.
+    Steady { omega: f64 },
 }
 
 impl Kinematics3D<'_> {
-    /// (kx, kv, damping active).
+    /// (kx, kv, damping active); in the steady kinematics kv = ω (δv = ω ∇δu t).
     pub fn factors(&self) -> (f64, f64, bool) {
         match *self {
             Kinematics3D::Static { dtau, .. } => (1.0, 1.0 / dtau.max(f64::MIN_POSITIVE), false),
             Kinematics3D::Dynamic { kx, kv, .. } => (kx, kv, true),
+            Kinematics3D::Steady { omega } => (1.0, omega, true),
         }
     }
 }
@@ -219,12 +238,40 @@ pub struct ContactSurface3D {
     rules: Vec<FacetRule3D>,
 }
 
-/// One facet quadrature point: shape values, reference and current position, velocity.
+/// One facet quadrature point: shape values, reference and current position, velocity, and
+/// how the velocity moves with the cell's nodal displacements: δv = Σ_b `sv[b]` δu_b over the
+/// cell nodes `cols` (the facet's nodes).
 struct Point<'a> {
     n: &'a [f64],
     x: Vector3<f64>,
     vel: Vector3<f64>,
     da0: f64,
+    sv: &'a [f64],
+    cols: &'a [usize],
+}
+
+/// Where the velocity of a facet point comes from inside the kernel.
+#[derive(Clone, Copy, Debug)]
+enum PointVelocity<'a> {
+    /// Interpolated from the cell's nodal velocities; δx = kx N δU, δv = kv N δU.
+    Nodal {
+        v: &'a [f64],
+        kx: f64,
+        kv: f64,
+        damping: bool,
+    },
+    /// Steady rolling: v = ω ∂θχ, ∂θ along the facet (module docs).
+    Steady { omega: f64 },
+}
+
+impl PointVelocity<'_> {
+    /// (kx, damping active).
+    fn kx_damping(&self) -> (f64, bool) {
+        match *self {
+            PointVelocity::Nodal { kx, damping, .. } => (kx, damping),
+            PointVelocity::Steady { .. } => (1.0, true),
+        }
+    }
 }
 
 impl ContactSurface3D {
@@ -323,13 +370,14 @@ impl ContactSurface3D {
         fn_[..nf].iter().any(|&a| pos(a)[1] < -self.h + margin)
     }
 
-    /// Visit the quadrature points of a facet with the cell-local motion.
+    /// Visit the quadrature points of a facet with the cell-local displacement `u` and the
+    /// velocity source `vel`.
     fn for_points<E: Lagrange3D>(
         &self,
         mesh: &HexMesh,
         facet: HexFacet,
         u: &[f64],
-        v: &[f64],
+        vel: &PointVelocity,
         mut f: impl FnMut(&Point),
     ) {
         let c = facet.cell as usize;
@@ -339,6 +387,7 @@ impl ContactSurface3D {
         let (fn_, nf) = face_nodes_fixed::<E>(face);
         let mut n = [0.0; 27];
         let mut dn = [[0.0; 3]; 27];
+        let mut sv = [0.0; 27];
         for (xi, &wq) in rule.points.iter().zip(&rule.weights) {
             E::eval(*xi, &mut n[..E::N], &mut dn[..E::N]);
             let (xref, jac) = match mesh.geometry[c].exact_map(*xi) {
@@ -360,18 +409,58 @@ impl ContactSurface3D {
             };
             let (da, _) = surface_map(&jac, face);
             let mut x = xref;
-            let mut vel = Vector3::zeros();
             for &a in &fn_[..nf] {
                 for i in 0..3 {
                     x[i] += n[a] * u[3 * a + i];
-                    vel[i] += n[a] * v[3 * a + i];
                 }
             }
+            let mut v = Vector3::zeros();
+            let cols: &[usize] = match *vel {
+                PointVelocity::Nodal { v: vn, kv, .. } => {
+                    for &a in &fn_[..nf] {
+                        for i in 0..3 {
+                            v[i] += n[a] * vn[3 * a + i];
+                        }
+                        sv[a] = kv * n[a];
+                    }
+                    &fn_[..nf]
+                }
+                PointVelocity::Steady { omega } => {
+                    // ∂θ along the facet: the direction d = α a + β b of the facet's tangent
+                    // plane (a, b its parameter tangents) along which θ advances by 1 and x3
+                    // stays, d = t = e3 × X on an exact cylindrical facet.
+                    let [p, q] = face_free_axes(face);
+                    let (ta, tb) = (jac.column(p), jac.column(q));
+                    let r2 = xref[0] * xref[0] + xref[1] * xref[1];
+                    let rate =
+                        |w: &nalgebra::MatrixView3x1<f64>| (xref[0] * w[1] - xref[1] * w[0]) / r2;
+                    let (ga, gb) = (rate(&ta), rate(&tb));
+                    let det = ga * tb[2] - gb * ta[2];
+                    let scale = ta.norm() * tb.norm() / r2.sqrt().max(f64::MIN_POSITIVE);
+                    let (al, be) = if r2 > 0.0 && det.abs() > 1e-12 * scale {
+                        (tb[2] / det, -ta[2] / det)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    v = ta * al + tb * be;
+                    for &b in &fn_[..nf] {
+                        let gt = al * dn[b][p] + be * dn[b][q];
+                        for i in 0..3 {
+                            v[i] += u[3 * b + i] * gt;
+                        }
+                        sv[b] = omega * gt;
+                    }
+                    v *= omega;
+                    &fn_[..nf]
+                }
+            };
             f(&Point {
                 n: &n[..E::N],
                 x,
-                vel,
+                vel: v,
                 da0: da * wq,
+                sv: &sv[..E::N],
+                cols,
             });
         }
     }
@@ -393,11 +482,13 @@ impl ContactSurface3D {
         k: Option<&mut [f64]>,
         totals: &mut ContactTotals3D,
     ) -> bool {
-        if mesh.degree[facet.cell as usize] == 1 {
-            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, false, totals)
-        } else {
-            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, false, totals)
-        }
+        let vel = PointVelocity::Nodal {
+            v: m.v,
+            kx: m.kx,
+            kv: m.kv,
+            damping: m.damping,
+        };
+        self.kernel(mesh, facet, m.u, &vel, r, k, false, totals)
     }
 
     /// [`Self::facet_kernel`] with the road height H as one more unknown after the cell's 3N
@@ -414,10 +505,59 @@ impl ContactSurface3D {
         k: Option<&mut [f64]>,
         totals: &mut ContactTotals3D,
     ) -> bool {
+        let vel = PointVelocity::Nodal {
+            v: m.v,
+            kx: m.kx,
+            kv: m.kv,
+            damping: m.damping,
+        };
+        self.kernel(mesh, facet, m.u, &vel, r, k, true, totals)
+    }
+
+    /// The facet kernel of steady rolling ([`Kinematics3D::Steady`]): as
+    /// [`Self::facet_kernel`] (with `with_h`: [`Self::facet_kernel_height`]) with the velocity
+    /// v = ω ∂θχ of the cell-local displacement `u` (3N entries), the θ-derivative taken along
+    /// the facet (module docs).
+    #[allow(clippy::too_many_arguments)]
+    pub fn facet_kernel_steady(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        u: &[f64],
+        omega: f64,
+        with_h: bool,
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+        totals: &mut ContactTotals3D,
+    ) -> bool {
+        self.kernel(
+            mesh,
+            facet,
+            u,
+            &PointVelocity::Steady { omega },
+            r,
+            k,
+            with_h,
+            totals,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn kernel(
+        &self,
+        mesh: &HexMesh,
+        facet: HexFacet,
+        u: &[f64],
+        vel: &PointVelocity,
+        r: &mut [f64],
+        k: Option<&mut [f64]>,
+        with_h: bool,
+        totals: &mut ContactTotals3D,
+    ) -> bool {
         if mesh.degree[facet.cell as usize] == 1 {
-            self.kernel_impl::<Hex8>(mesh, facet, m, r, k, true, totals)
+            self.kernel_impl::<Hex8>(mesh, facet, u, vel, r, k, with_h, totals)
         } else {
-            self.kernel_impl::<Hex27>(mesh, facet, m, r, k, true, totals)
+            self.kernel_impl::<Hex27>(mesh, facet, u, vel, r, k, with_h, totals)
         }
     }
 
@@ -426,7 +566,8 @@ impl ContactSurface3D {
         &self,
         mesh: &HexMesh,
         facet: HexFacet,
-        m: &CellMotion,
+        u: &[f64],
+        vel: &PointVelocity,
         r: &mut [f64],
         mut k: Option<&mut [f64]>,
         with_h: bool,
@@ -439,15 +580,15 @@ impl ContactSurface3D {
         if let Some(k) = k.as_deref_mut() {
             k[..nd * nd].fill(0.0);
         }
-        if !self.can_touch::<E>(mesh, facet, m.u) {
+        if !self.can_touch::<E>(mesh, facet, u) {
             return false;
         }
         totals.facets_integrated += 1;
         let (fn_, nf) = face_nodes_fixed::<E>(facet.face as usize);
         let friction = self.friction.is_active();
-        let damping = m.damping && self.normal.has_damping();
-        let (kx, kv) = (m.kx, m.kv);
-        self.for_points::<E>(mesh, facet, m.u, m.v, |pt| {
+        let (kx, damping) = vel.kx_damping();
+        let damping = damping && self.normal.has_damping();
+        self.for_points::<E>(mesh, facet, u, vel, |pt| {
             let delta = -self.h - pt.x[1];
             if delta <= 0.0 {
                 return;
@@ -458,12 +599,11 @@ impl ContactSurface3D {
                 return;
             }
             let d_rate = if damping { nv.d_rate } else { 0.0 };
-            let g = -(nv.d_delta * kx + d_rate * kv);
+            // ∂T/∂x (only the column of x2: δ = −H − x2) and ∂T/∂v (δ̇ = −v2, w = (v1, v3) − V).
             let mut tr = Vector3::new(0.0, nv.t, 0.0);
-            let mut d = Matrix3::zeros();
-            d[(1, 1)] = g;
-            // ∂T/∂H: δ moves by −1, no velocity does.
-            let mut dt_dh = Vector3::new(0.0, -nv.d_delta, 0.0);
+            let mut dx = Vector3::new(0.0, -nv.d_delta, 0.0);
+            let mut dv = Matrix3::zeros();
+            dv[(1, 1)] = -d_rate;
             if friction {
                 let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
                 let fv = eval_vec(&self.friction, w, nv.t, delta);
@@ -472,10 +612,10 @@ impl ContactSurface3D {
                 const C: [usize; 2] = [0, 2];
                 for (i, &ci) in C.iter().enumerate() {
                     for (j, &cj) in C.iter().enumerate() {
-                        d[(ci, cj)] = kv * fv.d_w[(i, j)];
+                        dv[(ci, cj)] = fv.d_w[(i, j)];
                     }
-                    d[(ci, 1)] = fv.d_tn[i] * g - fv.d_delta[i] * kx;
-                    dt_dh[ci] = -fv.d_tn[i] * nv.d_delta - fv.d_delta[i];
+                    dv[(ci, 1)] = -fv.d_tn[i] * d_rate;
+                    dx[ci] = -fv.d_tn[i] * nv.d_delta - fv.d_delta[i];
                 }
             }
             let da = pt.da0;
@@ -500,28 +640,37 @@ impl ContactSurface3D {
                 totals.max_pressure = totals.max_pressure.max(nv.t);
             }
             if let Some(k) = k.as_deref_mut() {
+                // ∂T_i/∂u_bj = ∂T_i/∂x_j kx N_b + ∂T_i/∂v_j sv_b.
                 for &a in &fn_[..nf] {
                     let na = pt.n[a] * da;
-                    for &b in &fn_[..nf] {
-                        let nab = na * pt.n[b];
+                    for &b in pt.cols {
+                        let (cx, cv) = (na * kx * pt.n[b], na * pt.sv[b]);
                         for i in 0..3 {
                             let row = (3 * a + i) * nd + 3 * b;
+                            k[row + 1] -= cx * dx[i];
                             for j in 0..3 {
-                                k[row + j] -= nab * d[(i, j)];
+                                k[row + j] -= cv * dv[(i, j)];
                             }
                         }
                     }
                 }
                 if with_h {
-                    // Column H of the displacement rows; row H: −∫ ∂t_n/∂U, −∫ ∂t_n/∂H.
+                    // Column H of the displacement rows (∂T/∂H = ∂T/∂x2: δ = −H − x2, H moves
+                    // no velocity); row H: −∫ ∂t_n/∂U, −∫ ∂t_n/∂H.
                     for &a in &fn_[..nf] {
                         let na = pt.n[a] * da;
                         for i in 0..3 {
-                            k[(3 * a + i) * nd + ih] -= na * dt_dh[i];
-                            k[ih * nd + 3 * a + i] -= na * d[(1, i)];
+                            k[(3 * a + i) * nd + ih] -= na * dx[i];
                         }
                     }
-                    k[ih * nd + ih] -= dt_dh[1] * da;
+                    for &b in pt.cols {
+                        let (cx, cv) = (da * kx * pt.n[b], da * pt.sv[b]);
+                        k[ih * nd + 3 * b + 1] -= cx * dx[1];
+                        for j in 0..3 {
+                            k[ih * nd + 3 * b + j] -= cv * dv[(1, j)];
+                        }
+                    }
+                    k[ih * nd + ih] -= dx[1] * da;
                 }
             }
         });
@@ -546,6 +695,7 @@ impl ContactSurface3D {
                         (u[3 * n + i] - u_prev[3 * n + i]) / dtau.max(f64::MIN_POSITIVE)
                     }
                     Kinematics3D::Dynamic { v, .. } => v[3 * n + i],
+                    Kinematics3D::Steady { .. } => 0.0,
                 };
             }
         }
@@ -555,6 +705,7 @@ impl ContactSurface3D {
         match *kin {
             Kinematics3D::Static { u_prev, .. } => [("u", u), ("u_prev", u_prev)],
             Kinematics3D::Dynamic { v, .. } => [("u", u), ("v", v)],
+            Kinematics3D::Steady { .. } => [("u", u), ("u", u)],
         }
     }
 
@@ -591,7 +742,20 @@ impl ContactSurface3D {
                 damping,
             };
             let kb = with_k.then_some(&mut k[..nd * nd]);
-            if self.facet_kernel(mesh, f, &m, &mut r, kb, &mut totals) {
+            let integrated = match *kin {
+                Kinematics3D::Steady { omega } => self.facet_kernel_steady(
+                    mesh,
+                    f,
+                    &ul[..nd],
+                    omega,
+                    false,
+                    &mut r,
+                    kb,
+                    &mut totals,
+                ),
+                _ => self.facet_kernel(mesh, f, &m, &mut r, kb, &mut totals),
+            };
+            if integrated {
                 sink(c, &r[..nd], with_k.then_some(&k[..nd * nd]));
             }
         }
@@ -643,10 +807,20 @@ impl ContactSurface3D {
                     da0: pt.da0,
                 });
             };
+            let nd = 3 * mesh.cell_nodes(c).len();
+            let vel = match *kin {
+                Kinematics3D::Steady { omega } => PointVelocity::Steady { omega },
+                _ => PointVelocity::Nodal {
+                    v: &vl[..nd],
+                    kx: 1.0,
+                    kv: 1.0,
+                    damping,
+                },
+            };
             if mesh.degree[c] == 1 {
-                self.for_points::<Hex8>(mesh, f, &ul, &vl, &mut visit);
+                self.for_points::<Hex8>(mesh, f, &ul, &vel, &mut visit);
             } else {
-                self.for_points::<Hex27>(mesh, f, &ul, &vl, &mut visit);
+                self.for_points::<Hex27>(mesh, f, &ul, &vel, &mut visit);
             }
         }
         Ok(out)

@@ -35,6 +35,7 @@ pub mod run3d;
 pub mod spinning;
 pub mod spinning3d;
 pub mod steady;
+pub mod steady3d;
 pub mod steady_nested;
 pub mod steady_recovery;
 pub mod steady_report;

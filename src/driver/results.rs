@@ -279,12 +279,52 @@ pub struct Solid3DResults {
     pub max_penetration: f64,
     /// Facet quadrature points in contact.
     pub points_in_contact: usize,
-    /// Angular speed reached (spinning; 0 in the static mode).
+    /// Angular speed reached (spinning, steady; 0 in the static mode).
     pub omega: f64,
     /// Mean radial displacement of the outer surface nodes, Σ u·e_R / n.
     pub u_r_outer_mean: f64,
     /// Largest nodal |u|.
     pub max_displacement: f64,
+    /// The six loads of the road on the body at the hub centre, named (null without contact).
+    pub hub_loads: Option<HubLoads3D>,
+    /// Steady mode: the road velocity (V1, V3) in its plane.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub road_velocity: Option<[f64; 2]>,
+    /// Steady mode: the slip angle α (degrees).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip_angle: Option<f64>,
+}
+
+/// The loads of the road on the body reduced to the hub centre (the origin), in the frame of
+/// the wheel (x1 along the road, x2 up, x3 along the axle): totals over the width.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct HubLoads3D {
+    /// F1: longitudinal force (+x1, along the road).
+    pub longitudinal_force: f64,
+    /// F2: vertical force (+x2, up; the wheel load).
+    pub vertical_force: f64,
+    /// F3: lateral force (+x3, along the axle).
+    pub lateral_force: f64,
+    /// M1: overturning moment (about +x1).
+    pub overturning_moment: f64,
+    /// M2: aligning moment (about the vertical +x2).
+    pub aligning_moment: f64,
+    /// M3: moment about the axle +x3 (the drive torque the hub must supply is −M3).
+    pub axle_moment: f64,
+}
+
+impl HubLoads3D {
+    /// From the contact resultant `f` and its moment `m` about the hub centre.
+    pub fn new(f: [f64; 3], m: [f64; 3]) -> Self {
+        Self {
+            longitudinal_force: f[0],
+            vertical_force: f[1],
+            lateral_force: f[2],
+            overturning_moment: m[0],
+            aligning_moment: m[1],
+            axle_moment: m[2],
+        }
+    }
 }
 
 /// `mesh` of a three-dimensional run.

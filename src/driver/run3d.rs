@@ -1,17 +1,20 @@
 //! The run of a three-dimensional scene (`mesh.dimension = 3`): static indentation
-//! (displacement or load control, with or without friction, [`super::indentation3d`]) and
-//! steady spinning ([`super::spinning3d`]) of the solid that [`crate::setup::build_system_3d`]
+//! (displacement or load control, with or without friction, [`super::indentation3d`]),
+//! steady spinning ([`super::spinning3d`]) and steady rolling with a slip angle
+//! ([`super::steady3d`]) of the solid that [`crate::setup::build_system_3d`]
 //! builds, with the outputs of the plane-strain runs where they apply. Files in the run
 //! directory:
 //!
 //! * `summary.json` — always (also when the solve fails: `converged = false`, `error` says
 //!   why, `results` hold the last accepted load step): the [`Solid3DSummary`] (contact force
-//!   and moment components, road height, penetration, iterations, DOFs, wall time);
-//! * sink `csv`: `steps.csv` (one row per accepted load step), `nodes.csv` (reference
+//!   and moment components, the named hub loads, road height, penetration, iterations, DOFs,
+//!   wall time);
+//! * sink `csv`: `steps.csv` (one row per accepted load step: force and moment components), `nodes.csv` (reference
 //!   position and displacement of every node), `convergence.csv` (the Newton table of
 //!   every load step) and, with contact, `contact.csv` (one row per facet quadrature point of
 //!   the final state: `cell, face, x1, x2, x3, penetration, t_n, t_1, t_3, slip_1, slip_3,
-//!   stick, dA0`; the slip is the load-stepping pseudo-time rate over the last step);
+//!   stick, dA0`; the slip is the load-stepping pseudo-time rate over the last step, in the
+//!   steady mode the slip velocity w = ω ∂θχ − V);
 //! * sinks `vtu`, `mcap`, `rerun`: `hex.pvd` + `hex/step_*.vtu`, `hex.mcap`, `hex.rrd` through
 //!   [`HexOutputs`], every `[output] every` accepted steps and the last one. PNG plots are not
 //!   drawn in three dimensions (the scene refuses an explicit `"png"`; the default list skips
@@ -24,9 +27,11 @@
 use super::envelope::conclude;
 use super::indentation3d::solve_indentation_3d;
 use super::results::{
-    RunOutcome, RunStats, Solid3DMesh, Solid3DResults, Solid3DSummary, SolidSolver, Summary,
+    HubLoads3D, RunOutcome, RunStats, Solid3DMesh, Solid3DResults, Solid3DSummary, SolidSolver,
+    Summary,
 };
 use super::spinning3d::solve_spinning_3d;
+use super::steady3d::solve_steady_3d;
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::hex_out::{HexOutputOptions, HexOutputs, HexState};
@@ -220,6 +225,14 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             &mut report,
             &mut obs,
         ),
+        Mode::Steady => solve_steady_3d(
+            &mut sys,
+            kind,
+            newton_opts,
+            &step_opts,
+            &mut report,
+            &mut obs,
+        ),
         _ => solve_spinning_3d(
             &mut sys,
             scene.motion.omega,
@@ -361,13 +374,19 @@ fn results_3d(
         max_pressure: t.max_pressure,
         max_penetration: t.max_penetration,
         points_in_contact: t.points_in_contact,
-        omega: if scene.analysis.mode == Mode::Spinning {
+        omega: if matches!(scene.analysis.mode, Mode::Spinning | Mode::Steady) {
             scene.motion.omega
         } else {
             0.0
         },
         u_r_outer_mean: u_r_outer_mean(sys),
         max_displacement,
+        hub_loads: rc.map(|_| HubLoads3D::new(t.force, t.moment)),
+        road_velocity: rc
+            .filter(|c| c.steady_omega.is_some())
+            .map(|c| [c.surface.v_road[0], c.surface.v_road[1]]),
+        slip_angle: (scene.analysis.mode == Mode::Steady)
+            .then(|| scene.road.as_ref().map_or(0.0, |r| r.slip_angle)),
     }
 }
 
@@ -381,6 +400,17 @@ fn headline(scene: &Scene, r: &Solid3DResults) -> String {
             r.contact_force[1],
             r.contact_force[2],
             r.max_pressure
+        ),
+        Mode::Steady => format!(
+            "3D steady rolling: omega = {:.6} rad/s, penetration = {:.6e}: hub forces (F1, F2, F3) = ({:.6e}, {:.6e}, {:.6e}), moments (M1, M2, M3) = ({:.6e}, {:.6e}, {:.6e})",
+            r.omega,
+            r.penetration.unwrap_or(f64::NAN),
+            r.contact_force[0],
+            r.contact_force[1],
+            r.contact_force[2],
+            r.contact_moment[0],
+            r.contact_moment[1],
+            r.contact_moment[2]
         ),
         _ => format!(
             "3D: omega = {:.6} rad/s: mean u_r(outer) = {:.6e}, max |u| = {:.6e}",
@@ -401,6 +431,9 @@ fn write_tables(sys: &Solid3DSystem, obs: &Run3DObserver, dir: &Path) -> Result<
             "contact_force_1",
             "contact_force_2",
             "contact_force_3",
+            "contact_moment_1",
+            "contact_moment_2",
+            "contact_moment_3",
             "max_pressure",
             "points_in_contact",
             "u_r_outer_mean",
@@ -414,6 +447,9 @@ fn write_tables(sys: &Solid3DSystem, obs: &Run3DObserver, dir: &Path) -> Result<
                 r.totals.force[0],
                 r.totals.force[1],
                 r.totals.force[2],
+                r.totals.moment[0],
+                r.totals.moment[1],
+                r.totals.moment[2],
                 r.totals.max_pressure,
                 r.totals.points_in_contact as f64,
                 r.u_r_outer_mean,

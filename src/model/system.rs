@@ -372,6 +372,22 @@ impl SolidSystem {
         self.set_blocks(lists, cores);
     }
 
+    /// Back to the facet-wise θ-derivative for the steady friction slip (the default of
+    /// [`Self::enable_steady_slip`] undone), as the three-dimensional steady contact takes it:
+    /// the contact elements shrink to their facets' nodes and the assembler is rebuilt.
+    pub fn disable_steady_slip(&mut self) {
+        let Some(c) = &mut self.contact else {
+            return;
+        };
+        if c.steady_slip.take().is_none() {
+            return;
+        }
+        let elements = c.element_dofs(&self.model.mesh, &self.dofs);
+        let (mut lists, cores) = self.take_block_lists();
+        lists[1] = elements;
+        self.set_blocks(lists, cores);
+    }
+
     /// Steady (θ-referential) mode with strain-rate damping: the damping acts on the material
     /// rate Ė = sym(Fᵀ ∇v_h), v_h the interpolant of the nodal velocities
     /// v_a = ω (t_a + (∂θu)_a) ([`NodalThetaDerivative`]: ring differences, or the cell average

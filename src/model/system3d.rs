@@ -68,6 +68,10 @@ pub struct RoadContact3D {
     committed: Option<(Vec<f64>, f64)>,
     /// Resultants of the last evaluation.
     pub totals: ContactTotals3D,
+    /// Steady rolling at this ω (rad/s): the contact velocity is v = ω ∂θχ
+    /// ([`Kinematics3D::Steady`]) instead of the load-stepping rate, and the load factor
+    /// moves only the road (the coefficients stay at the target's).
+    pub steady_omega: Option<f64>,
 }
 
 impl Solid3DSystem {
@@ -185,6 +189,7 @@ impl Solid3DSystem {
             dtau: 1.0,
             committed: None,
             totals: ContactTotals3D::default(),
+            steady_omega: None,
         });
         Ok(self)
     }
@@ -208,6 +213,36 @@ impl Solid3DSystem {
     /// The coefficients reached at load factor 1 ([`LoadedSystem::set_load`] scales them).
     pub fn set_target(&mut self, target: Coefficients) {
         self.target = target;
+    }
+
+    /// Steady rolling in the θ-referential description: the body turns at `omega` (rad/s
+    /// about +x3) and the road moves at `v_road` = (V1, V3) in its plane (hub frame). The
+    /// inertia −ω² ∫ ρ ∂θχ · ∂θη is on at once (the coefficients no longer follow the load
+    /// factor, which then moves only the road), and the contact takes the steady velocity
+    /// v = ω ∂θχ. Needs the contact ([`Self::with_contact`] or [`Self::with_contact_load`]).
+    pub fn set_steady_rolling(
+        &mut self,
+        omega: f64,
+        v_road: [f64; 2],
+    ) -> Result<(), Contact3DError> {
+        if !(omega.is_finite() && v_road.iter().all(|v| v.is_finite())) {
+            return Err(Contact3DError::NonFinite(omega));
+        }
+        self.target = Coefficients {
+            omega2: omega * omega,
+            ..self.target
+        };
+        self.coefficients = self.target;
+        if let Some(rc) = self.contact.as_mut() {
+            rc.steady_omega = Some(omega);
+            rc.surface.v_road = nalgebra::Vector2::new(v_road[0], v_road[1]);
+        }
+        Ok(())
+    }
+
+    /// ω of steady rolling, if set.
+    pub fn steady_omega(&self) -> Option<f64> {
+        self.contact.as_ref().and_then(|c| c.steady_omega)
     }
 
     /// The floor of the displacement residual's convergence reference: a physical force scale
@@ -237,6 +272,10 @@ impl Solid3DSystem {
         let mut surface = rc.surface.clone();
         surface.h = rc.h_dof.map_or(surface.h, |i| self.x[i]);
         let n_u = self.dofs.n_u;
+        if let Some(omega) = rc.steady_omega {
+            let kin = Kinematics3D::Steady { omega };
+            return surface.samples(&self.solid.mesh, &self.x[..n_u], &kin);
+        }
         let (start, dtau) = rc
             .committed
             .as_ref()
@@ -279,6 +318,7 @@ impl Solid3DSystem {
             }
             let load = rc.load.map(|p| rc.lambda * p);
             let (surface, x_prev, dtau) = (&rc.surface, &rc.x_prev, rc.dtau);
+            let steady = rc.steady_omega;
             self.asm.add_block_large(1, dofs, with_matrix, |e, r, k| {
                 let f = surface.facets[e];
                 let cd = dofs.cell(f.cell as usize);
@@ -299,6 +339,17 @@ impl Solid3DSystem {
                 };
                 let mut t = ContactTotals3D::default();
                 let kb = if k.is_empty() { None } else { Some(k) };
+                if let Some(omega) = steady {
+                    let with_h = load.is_some();
+                    surface.facet_kernel_steady(mesh, f, &ul[..nd], omega, with_h, r, kb, &mut t);
+                    if let (Some(p), 0) = (load, e) {
+                        r[nd] += p;
+                    }
+                    if let Ok(mut all) = totals.lock() {
+                        all.add(&t);
+                    }
+                    return;
+                }
                 match load {
                     Some(p) => {
                         surface.facet_kernel_height(mesh, f, &m, r, kb, &mut t);
@@ -385,9 +436,14 @@ impl NonlinearSystem for Solid3DSystem {
 
 impl LoadedSystem for Solid3DSystem {
     fn set_load(&mut self, lambda: f64) {
-        self.coefficients = Coefficients {
-            omega2: lambda * self.target.omega2,
-            body_load: lambda * self.target.body_load,
+        let steady = self.steady_omega().is_some();
+        self.coefficients = if steady {
+            self.target
+        } else {
+            Coefficients {
+                omega2: lambda * self.target.omega2,
+                body_load: lambda * self.target.body_load,
+            }
         };
         if let Some(rc) = self.contact.as_mut() {
             rc.lambda = lambda;

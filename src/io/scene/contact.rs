@@ -59,6 +59,10 @@ pub struct RoadSpec {
     /// `None` = `motion.ramp`. Only in `transient`: must be 0 or omitted in `static`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub v0_ramp: Option<f64>,
+    /// Slip angle α (degrees, |α| < 90): the road's velocity turned by α about the vertical
+    /// +x2, V = v0 (cos α, −sin α) in (e1, e3). Only in the three-dimensional steady mode.
+    #[serde(default)]
+    pub slip_angle: f64,
 }
 
 impl RoadSpec {
@@ -173,6 +177,15 @@ pub(super) fn validate_road(
     validate_road_ramp("ramp", r.ramp, "road ramp", mode, out);
     if let Some(v) = r.v0_ramp {
         validate_road_ramp("v0_ramp", v, "road-speed ramp", mode, out);
+    }
+    if !(r.slip_angle.is_finite() && r.slip_angle.abs() < 90.0) {
+        out.push(issue(
+            "road.slip_angle",
+            format!(
+                "slip angle (degrees) must be in (−90, 90), got {}",
+                r.slip_angle
+            ),
+        ));
     }
     if let Some(d) = r.disp {
         if !(d.is_finite() && d >= 0.0) {
@@ -314,7 +327,8 @@ mod tests {
                 load: None,
                 v0: 0.0,
                 ramp: 0.0,
-                v0_ramp: None
+                v0_ramp: None,
+                slip_angle: 0.0
             })
         );
         assert_eq!(
@@ -368,7 +382,8 @@ mod tests {
                 load: Some(300.0),
                 v0: 0.0,
                 ramp: 0.0,
-                v0_ramp: None
+                v0_ramp: None,
+                slip_angle: 0.0
             })
         );
         let base = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));

@@ -135,6 +135,19 @@ pub(super) struct Dimension3DContext<'a> {
 
 pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mut Vec<Issue>) {
     let given = |key: &str| cx.doc.is_some_and(|d| table_has(d, "mesh", key));
+    let slip_angle = cx
+        .doc
+        .and_then(|d| d.get("road"))
+        .and_then(|r| r.get("slip_angle"))
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .unwrap_or(0.0);
+    if slip_angle != 0.0 && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
+        out.push(issue(
+            "road.slip_angle",
+            "a slip angle needs the three-dimensional steady mode (mesh.dimension = 3, \
+             analysis.mode = \"steady\"); remove it or set it to 0",
+        ));
+    }
     if m.dimension != 2 && m.dimension != 3 {
         out.push(issue(
             "mesh.dimension",
@@ -164,14 +177,17 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         return;
     }
     if let Some(mode) = cx.mode {
-        if !matches!(mode, Mode::Static | Mode::Spinning) {
+        if !matches!(mode, Mode::Static | Mode::Spinning | Mode::Steady) {
             out.push(issue(
                 "analysis.mode",
                 format!(
                     "mode \"{mode}\" does not run in three dimensions yet (mesh.dimension = 3 \
-                     runs \"static\" and \"spinning\")"
+                     runs \"static\", \"spinning\" and \"steady\")"
                 ),
             ));
+        }
+        if mode == Mode::Steady {
+            validate_steady_3d(cx.doc, out);
         }
     }
     if cx.has_regions {
@@ -235,6 +251,40 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         out.push(issue(
             "mesh.sides",
             "\"sliding\" (the plane-strain slab) needs flat sides: remove mesh.crown_radius",
+        ));
+    }
+}
+
+/// What the three-dimensional steady mode does not take yet: creep and torque control, the
+/// strain-rate damping, continuation.
+fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
+    let Some(doc) = doc else {
+        return;
+    };
+    let control = doc
+        .get("motion")
+        .and_then(|m| m.get("control"))
+        .and_then(|v| v.as_str());
+    if let Some(c) = control.filter(|c| *c != "speed") {
+        out.push(issue(
+            "motion.control",
+            format!(
+                "control \"{c}\" does not run in the three-dimensional steady mode yet; use \
+                 \"speed\" (motion.omega and road.v0 given)"
+            ),
+        ));
+    }
+    if table_has(doc, "time", "strain_rate_damping") {
+        out.push(issue(
+            "time.strain_rate_damping",
+            "not supported in the three-dimensional steady mode yet",
+        ));
+    }
+    if doc.contains_key("continuation") {
+        out.push(issue_near(
+            "continuation",
+            "[continuation] is not supported in the three-dimensional steady mode yet",
+            "analysis",
         ));
     }
 }

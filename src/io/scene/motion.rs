@@ -534,6 +534,7 @@ mod tests {
             v0: 20.0,
             ramp: 0.1,
             v0_ramp: None,
+            slip_angle: 0.0,
         };
         assert!((road.ramp_factor(0.05) - 0.5).abs() < 1e-12);
         assert_eq!(road.ramp_factor(0.2), 1.0);

@@ -304,6 +304,8 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("ramp", Kind::Float, "T", "time of the smoothstep ramp of disp (or load); transient only"),
             opt("v0_ramp", Kind::Float, "T",
                 "time of the smoothstep ramp of v0 (default: motion.ramp); transient only"),
+            opt("slip_angle", Kind::Float, "deg",
+                "slip angle α, |α| < 90: the road velocity turned by α about +x2, V = v0 (cos α, −sin α) in (e1, e3); three-dimensional steady mode only"),
         ] },
     },
     SectionSchema {

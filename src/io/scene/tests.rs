@@ -481,6 +481,7 @@ pub(super) fn full_road() -> RoadSpec {
         v0: 0.0,
         ramp: 0.0,
         v0_ramp: Some(0.0),
+        slip_angle: 0.0,
     }
 }
 

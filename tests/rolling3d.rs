@@ -1,0 +1,373 @@
+//! Steady rolling of the three-dimensional body in the θ-referential description
+//! ([`tread::driver::steady3d`]): the global tangent against central differences of the
+//! residual (Hex8 and Hex27, displacement and load control, friction, normal damping and a
+//! slip angle), the plane-strain limit (a slab with u3 = 0 on its faces reproduces the 2D
+//! steady mode, with damping and friction, the 2D friction slip taken facet-wise as the 3D
+//! one is), and the symmetry of the hub loads in the slip angle.
+
+use tread::contact::facet3d::ContactSurface3D;
+use tread::contact::laws::CoulombTanh;
+use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
+use tread::driver::steady3d::solve_steady_3d;
+use tread::driver::steady_run;
+use tread::io::Scene;
+use tread::material::{Material, MaterialKind};
+use tread::mesh::revolved::{revolved, RevolvedSpec};
+use tread::model::{Solid3D, Solid3DSystem};
+use tread::physics::PressureMode;
+use tread::setup::road_velocity_3d;
+use tread::solver::observe::NoObserver;
+use tread::solver::stepping::{LoadedSystem, StepReport};
+use tread::solver::NonlinearSystem;
+
+const RI: f64 = 1.0;
+const RO: f64 = 2.0;
+
+fn spec(n_r: usize, n_z: usize, n_theta: usize, degree: usize, width: f64) -> RevolvedSpec {
+    RevolvedSpec {
+        ri: RI,
+        ro: RO,
+        width,
+        n_r,
+        n_z,
+        n_theta,
+        degree,
+        grading_r: 1.0,
+        grading_theta: 0.0,
+        theta_ratio: 1.0,
+        grading_z: 1.0,
+        half_width: false,
+        crown_radius: None,
+    }
+}
+
+fn neo_hookean() -> Material {
+    MaterialKind::NeoHookean.build(&[200.0, 1800.0])
+}
+
+/// A deterministic pseudo-random sequence in [-1, 1].
+fn noise(k: usize) -> f64 {
+    let x = ((k as f64 + 1.0) * 12.9898).sin() * 43758.5453;
+    2.0 * (x - x.floor()) - 1.0
+}
+
+/// Worst |K − K_fd| / max |K| of the steady system (ω = 3, road at 0.99 ωRo turned by 3°,
+/// damped normal compliance, tanh friction) at a perturbed state with the road 0.08 into the
+/// wheel; also the contact points and those in the regularised stick zone (|w| < ε).
+fn tangent_check(degree: usize, load: bool) -> (f64, usize, usize) {
+    let mesh = revolved(&spec(1, 1, 8, degree, 0.4)).expect("mesh");
+    let mut fx = vec![false; 3 * mesh.n_nodes()];
+    for &n in mesh.node_set("hub") {
+        fx[3 * n as usize..3 * n as usize + 3].fill(true);
+    }
+    let omega = 3.0;
+    let eps = 0.37;
+    let s = ContactSurface3D::new(
+        mesh.facet_set("outer").to_vec(),
+        RO,
+        nalgebra::Vector2::zeros(),
+        NormalCompliance::new(2.0e3, 1.0, 40.0, 0.0),
+        Friction::CoulombTanh(CoulombTanh::new(0.3, eps)),
+        FacetRule::Gauss(3),
+    )
+    .expect("contact surface");
+    let sys = Solid3DSystem::new(
+        Solid3D::new(mesh, neo_hookean(), 1.0, PressureMode::None),
+        &fx,
+    );
+    let mut sys = if load {
+        sys.with_contact_load(s, RO, RO - 0.08, 30.0)
+    } else {
+        sys.with_contact(s, RO, 0.08)
+    }
+    .expect("contact on the mesh");
+    sys.set_steady_rolling(
+        omega,
+        road_velocity_3d(0.99 * omega * RO, 3f64.to_radians()),
+    )
+    .expect("steady");
+    sys.set_load(if load { 0.7 } else { 1.0 });
+    let n = sys.n_eq();
+    let dx: Vec<f64> = (0..n).map(|k| 0.02 * noise(k)).collect();
+    sys.update(1.0, &dx);
+    assert!(sys.evaluate(true));
+    let samples = sys.contact_samples().expect("samples");
+    let in_contact = samples.iter().filter(|p| p.p > 0.0).count();
+    let sticking = samples
+        .iter()
+        .filter(|p| p.p > 0.0 && p.w1.hypot(p.w3) < eps)
+        .count();
+    let dense = sys.asm.to_dense();
+    let scale = dense.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let h = 1e-6;
+    let mut e = vec![0.0; n];
+    let mut worst: f64 = 0.0;
+    for j in 0..n {
+        e[j] = 1.0;
+        sys.update(h, &e);
+        assert!(sys.evaluate(false));
+        let rp = sys.residual().to_vec();
+        sys.update(-2.0 * h, &e);
+        assert!(sys.evaluate(false));
+        let rm = sys.residual().to_vec();
+        sys.update(h, &e);
+        e[j] = 0.0;
+        for i in 0..n {
+            let fd = (rp[i] - rm[i]) / (2.0 * h);
+            worst = worst.max((fd - dense[i][j]).abs() / scale);
+        }
+    }
+    (worst, in_contact, sticking)
+}
+
+#[test]
+fn steady_tangent_matches_central_differences() {
+    for (name, degree, load) in [
+        ("Hex8, displacement control", 1, false),
+        ("Hex27, displacement control", 2, false),
+        ("Hex8, load control", 1, true),
+        ("Hex27, load control", 2, true),
+    ] {
+        let (err, contact, stick) = tangent_check(degree, load);
+        eprintln!(
+            "{name}: worst |K − K_fd| / max|K| = {err:.2e}; {contact} contact points, {stick} with |w| < ε"
+        );
+        assert!(contact >= 4, "{name}: only {contact} contact points");
+        assert!(
+            stick >= 1 && stick < contact,
+            "{name}: {stick} of {contact} in the regularised zone"
+        );
+        assert!(err < 1e-6, "{name}: tangent error {err:.3e}");
+    }
+}
+
+/// The plane-strain steady scene (or, with `width`, its slab with sliding sides), rolling at
+/// ω = 10 on the road at `v0`, with damping `b_n` and the friction table `friction`.
+fn slab_scene(width: Option<f64>, v0: f64, b_n: f64, friction: &str, alpha: f64) -> Scene {
+    let mesh3 = match width {
+        Some(w) => format!("dimension = 3\nwidth = {w}\nn_z = 1\nsides = \"sliding\"\n"),
+        None => String::new(),
+    };
+    let slip = if alpha != 0.0 {
+        format!("slip_angle = {alpha}\n")
+    } else {
+        String::new()
+    };
+    let text = format!(
+        r#"
+[scene]
+name = "slab"
+[geometry]
+ri = 1.0
+ro = 2.0
+[mesh]
+{mesh3}n_r = 3
+n_theta = 48
+order = 2
+grading_theta = 0.6
+[material]
+model = "mooney_rivlin"
+c1 = 80.0
+c2 = 20.0
+kappa = 2000.0
+rho = 0.027
+[analysis]
+mode = "steady"
+[motion]
+omega = 10.0
+[road]
+disp = 0.05
+v0 = {v0}
+{slip}[contact]
+c_n = 2.0e4
+b_n = {b_n}
+quadrature = "gauss"
+points = 4
+[friction]
+{friction}
+[solver]
+tolerance = 1e-11
+load_steps = 4
+linear = "lu"
+"#
+    );
+    Scene::from_toml_str(&text, "slab", &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The 2D steady state of the scene, friction slip facet-wise (as the 3D contact takes it).
+fn steady_2d(sc: &Scene) -> (tread::driver::steady::SteadyRolling, ContactModelTotals) {
+    let mut st = steady_run::build_steady(sc).unwrap_or_else(|e| panic!("{e}"));
+    st.sys.disable_steady_slip();
+    let mut rep = StepReport::default();
+    steady_run::solve_steady(sc, &mut st, false, &mut rep, &mut ())
+        .unwrap_or_else(|e| panic!("2D steady: {}", e.error));
+    let t = ContactModel::totals(&st.sys.contact_samples());
+    (st, (t.force_x, t.force_y, t.moment))
+}
+
+type ContactModelTotals = (f64, f64, f64);
+
+fn steady_3d(sc: &Scene) -> Solid3DSystem {
+    let mut s3 = tread::setup::build_system_3d(sc).unwrap_or_else(|e| panic!("{e}"));
+    let kind = tread::setup::linear_kind_3d(sc, &s3);
+    let (newton, step) = tread::setup::solver_options(sc, false);
+    let mut rep = StepReport::default();
+    solve_steady_3d(&mut s3, kind, newton, &step, &mut rep, &mut NoObserver)
+        .unwrap_or_else(|e| panic!("3D steady: {e}"));
+    s3
+}
+
+#[test]
+fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
+    let width = 0.25;
+    let v0 = 0.995 * 10.0 * RO;
+    for (name, b_n, friction) in [
+        ("frictionless, damped", 2.0, "law = \"none\""),
+        (
+            "tanh friction, damped",
+            2.0,
+            "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05",
+        ),
+    ] {
+        let (st, (fx2, fy2, m2)) = steady_2d(&slab_scene(None, v0, b_n, friction, 0.0));
+        let s3 = steady_3d(&slab_scene(Some(width), v0, b_n, friction, 0.0));
+        let t3 = s3.contact.as_ref().expect("contact").totals;
+        let (f, m) = (t3.force, t3.moment);
+        eprintln!(
+            "{name}: 2D (F1, F2, M3) = ({fx2:.12e}, {fy2:.12e}, {m2:.12e}); 3D per width ({:.12e}, {:.12e}, {:.12e}); F3 = {:.2e}, M1 = {:.2e}, M2 = {:.2e}",
+            f[0] / width,
+            f[1] / width,
+            m[2] / width,
+            f[2],
+            m[0],
+            m[1]
+        );
+        let fscale = fy2.abs();
+        for (a, b, what) in [
+            (f[0] / width, fx2, "F1"),
+            (f[1] / width, fy2, "F2"),
+            (m[2] / width, m2, "M3"),
+        ] {
+            assert!(
+                (a - b).abs() <= 1e-8 * fscale * if what == "M3" { RO } else { 1.0 },
+                "{name}: {what} 3D {a} vs 2D {b}"
+            );
+        }
+        assert!(f[2].abs() <= 1e-9 * fscale, "{name}: F3 = {}", f[2]);
+        let key = |x: f64, y: f64| ((x * 1e9).round() as i64, (y * 1e9).round() as i64);
+        let mesh2 = &st.sys.model.mesh;
+        let index: std::collections::HashMap<_, _> = mesh2
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (key(x[0], x[1]), i))
+            .collect();
+        let x2 = &st.sys.x;
+        let umax = (0..mesh2.n_nodes())
+            .map(|n| x2[2 * n].hypot(x2[2 * n + 1]))
+            .fold(0.0f64, f64::max);
+        let mut worst: f64 = 0.0;
+        for (n, x) in s3.solid.mesh.nodes.iter().enumerate() {
+            let i = index[&key(x[0], x[1])];
+            let u = s3.node_displacement(n);
+            worst = worst
+                .max((u[0] - x2[2 * i]).abs())
+                .max((u[1] - x2[2 * i + 1]).abs())
+                .max(u[2].abs());
+        }
+        eprintln!("{name}: max |u_3D − u_2D| / max|u| = {:.2e}", worst / umax);
+        assert!(
+            worst / umax < 1e-8,
+            "{name}: field differs {:.3e}",
+            worst / umax
+        );
+    }
+}
+
+/// α → −α mirrors the wheel in x3: the lateral force, the overturning and the aligning
+/// moments change sign, the rest stays. A free-sided wheel (no symmetry imposed), friction and
+/// damping (l_n = 1: with l_n = 0 the damping term jumps where points enter the patch at the
+/// leading edge, and Newton stalls when one enters at the final load).
+#[test]
+fn slip_angle_sign_flips_lateral_force_and_aligning_moment() {
+    let scene = |alpha: f64| {
+        let text = format!(
+            r#"
+[scene]
+name = "cornering"
+[geometry]
+ri = 1.0
+ro = 2.0
+[mesh]
+dimension = 3
+width = 0.6
+n_z = 2
+n_r = 2
+n_theta = 32
+order = 1
+grading_theta = 0.6
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[analysis]
+mode = "steady"
+[motion]
+omega = 10.0
+[road]
+disp = 0.04
+v0 = 19.9
+slip_angle = {alpha}
+[contact]
+c_n = 2.0e4
+b_n = 2.0
+l_n = 1.0
+quadrature = "gauss"
+points = 3
+[friction]
+law = "coulomb_tanh"
+mu = 0.5
+eps = 0.2
+[solver]
+tolerance = 1e-11
+load_steps = 3
+linear = "lu"
+"#
+        );
+        Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let plus = steady_3d(&scene(2.0));
+    let minus = steady_3d(&scene(-2.0));
+    let tp = plus.contact.as_ref().expect("contact").totals;
+    let tm = minus.contact.as_ref().expect("contact").totals;
+    eprintln!(
+        "α = +2°: F = {:?}, M = {:?}\nα = −2°: F = {:?}, M = {:?}",
+        tp.force, tp.moment, tm.force, tm.moment
+    );
+    let fs = tp.force[1].abs();
+    // The slip angle makes a lateral force of the order of μ F2 |sin α| / (|sin α| + ...):
+    // it must be clearly non-zero for the symmetry to mean something.
+    assert!(
+        tp.force[2].abs() > 1e-3 * fs,
+        "no lateral force: {:?}",
+        tp.force
+    );
+    let tol = 1e-8 * fs;
+    let odd = [
+        (tp.force[2], tm.force[2]),
+        (tp.moment[0], tm.moment[0]),
+        (tp.moment[1], tm.moment[1]),
+    ];
+    for (a, b) in odd {
+        assert!((a + b).abs() <= tol * RO, "odd: {a} vs {b}");
+    }
+    let even = [
+        (tp.force[0], tm.force[0]),
+        (tp.force[1], tm.force[1]),
+        (tp.moment[2], tm.moment[2]),
+    ];
+    for (a, b) in even {
+        assert!((a - b).abs() <= tol * RO, "even: {a} vs {b}");
+    }
+}
