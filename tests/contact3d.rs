@@ -355,8 +355,9 @@ fn cube_patch<E: Lagrange3D>(
                 kv: 1.0,
             },
             true,
-            |c, r, k| {
+            |c, extra, r, k| {
                 assert_eq!(c, 0);
+                assert!(extra.is_empty());
                 assert_eq!(r.len(), nd);
                 assert_eq!(k.map(<[f64]>::len), Some(nd * nd));
                 seen += 1;
@@ -480,7 +481,7 @@ fn bad_input_is_reported() {
         dtau: 1.0,
     };
     assert!(s
-        .for_each_facet(&mesh, &u, &kin, false, |_, _, _| {})
+        .for_each_facet(&mesh, &u, &kin, false, |_, _, _, _| {})
         .is_err());
 }
 

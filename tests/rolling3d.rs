@@ -1,9 +1,10 @@
 //! Steady rolling of the three-dimensional body in the θ-referential description
 //! ([`tread::driver::steady3d`]): the global tangent against central differences of the
-//! residual (Hex8 and Hex27, displacement and load control, friction, normal damping and a
-//! slip angle), the plane-strain limit (a slab with u3 = 0 on its faces reproduces the 2D
-//! steady mode, with damping and friction, the 2D friction slip taken facet-wise as the 3D
-//! one is), and the symmetry of the hub loads in the slip angle.
+//! residual (Hex8 and Hex27, displacement and load control, friction with the slip from nodal
+//! ring derivatives and facet-wise, normal damping and a slip angle), the plane-strain limit
+//! (a slab with u3 = 0 on its faces reproduces the 2D steady mode, with damping and friction,
+//! the friction slip taken the same way in both), and the symmetry of the hub loads in the
+//! slip angle.
 
 use tread::contact::facet3d::ContactSurface3D;
 use tread::contact::laws::CoulombTanh;
@@ -54,7 +55,7 @@ fn noise(k: usize) -> f64 {
 /// Worst |K − K_fd| / max |K| of the steady system (ω = 3, road at 0.99 ωRo turned by 3°,
 /// damped normal compliance, tanh friction) at a perturbed state with the road 0.08 into the
 /// wheel; also the contact points and those in the regularised stick zone (|w| < ε).
-fn tangent_check(degree: usize, load: bool) -> (f64, usize, usize) {
+fn tangent_check(degree: usize, load: bool, facet_wise: bool) -> (f64, usize, usize) {
     let mesh = revolved(&spec(1, 1, 8, degree, 0.4)).expect("mesh");
     let mut fx = vec![false; 3 * mesh.n_nodes()];
     for &n in mesh.node_set("hub") {
@@ -86,6 +87,9 @@ fn tangent_check(degree: usize, load: bool) -> (f64, usize, usize) {
         road_velocity_3d(0.99 * omega * RO, 3f64.to_radians()),
     )
     .expect("steady");
+    if facet_wise {
+        sys.disable_steady_slip();
+    }
     sys.set_load(if load { 0.7 } else { 1.0 });
     let n = sys.n_eq();
     let dx: Vec<f64> = (0..n).map(|k| 0.02 * noise(k)).collect();
@@ -122,13 +126,14 @@ fn tangent_check(degree: usize, load: bool) -> (f64, usize, usize) {
 
 #[test]
 fn steady_tangent_matches_central_differences() {
-    for (name, degree, load) in [
-        ("Hex8, displacement control", 1, false),
-        ("Hex27, displacement control", 2, false),
-        ("Hex8, load control", 1, true),
-        ("Hex27, load control", 2, true),
+    for (name, degree, load, facet_wise) in [
+        ("Hex8, displacement control", 1, false, false),
+        ("Hex27, displacement control", 2, false, false),
+        ("Hex8, load control", 1, true, false),
+        ("Hex27, load control", 2, true, false),
+        ("Hex27, load control, facet-wise slip", 2, true, true),
     ] {
-        let (err, contact, stick) = tangent_check(degree, load);
+        let (err, contact, stick) = tangent_check(degree, load, facet_wise);
         eprintln!(
             "{name}: worst |K − K_fd| / max|K| = {err:.2e}; {contact} contact points, {stick} with |w| < ε"
         );
@@ -194,10 +199,16 @@ linear = "lu"
     Scene::from_toml_str(&text, "slab", &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The 2D steady state of the scene, friction slip facet-wise (as the 3D contact takes it).
-fn steady_2d(sc: &Scene) -> (tread::driver::steady::SteadyRolling, ContactModelTotals) {
+/// The 2D steady state of the scene, the friction slip from nodal θ-derivatives (the
+/// default) or facet-wise.
+fn steady_2d(
+    sc: &Scene,
+    facet_wise: bool,
+) -> (tread::driver::steady::SteadyRolling, ContactModelTotals) {
     let mut st = steady_run::build_steady(sc).unwrap_or_else(|e| panic!("{e}"));
-    st.sys.disable_steady_slip();
+    if facet_wise {
+        st.sys.disable_steady_slip();
+    }
     let mut rep = StepReport::default();
     steady_run::solve_steady(sc, &mut st, false, &mut rep, &mut ())
         .unwrap_or_else(|e| panic!("2D steady: {}", e.error));
@@ -207,8 +218,11 @@ fn steady_2d(sc: &Scene) -> (tread::driver::steady::SteadyRolling, ContactModelT
 
 type ContactModelTotals = (f64, f64, f64);
 
-fn steady_3d(sc: &Scene) -> Solid3DSystem {
+fn steady_3d(sc: &Scene, facet_wise: bool) -> Solid3DSystem {
     let mut s3 = tread::setup::build_system_3d(sc).unwrap_or_else(|e| panic!("{e}"));
+    if facet_wise {
+        s3.disable_steady_slip();
+    }
     let kind = tread::setup::linear_kind_3d(sc, &s3);
     let (newton, step) = tread::setup::solver_options(sc, false);
     let mut rep = StepReport::default();
@@ -221,16 +235,14 @@ fn steady_3d(sc: &Scene) -> Solid3DSystem {
 fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
     let width = 0.25;
     let v0 = 0.995 * 10.0 * RO;
-    for (name, b_n, friction) in [
-        ("frictionless, damped", 2.0, "law = \"none\""),
-        (
-            "tanh friction, damped",
-            2.0,
-            "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05",
-        ),
+    let tanh = "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05";
+    for (name, b_n, friction, facet_wise) in [
+        ("frictionless, damped", 2.0, "law = \"none\"", false),
+        ("tanh friction, damped, nodal slip", 2.0, tanh, false),
+        ("tanh friction, damped, facet-wise slip", 2.0, tanh, true),
     ] {
-        let (st, (fx2, fy2, m2)) = steady_2d(&slab_scene(None, v0, b_n, friction, 0.0));
-        let s3 = steady_3d(&slab_scene(Some(width), v0, b_n, friction, 0.0));
+        let (st, (fx2, fy2, m2)) = steady_2d(&slab_scene(None, v0, b_n, friction, 0.0), facet_wise);
+        let s3 = steady_3d(&slab_scene(Some(width), v0, b_n, friction, 0.0), facet_wise);
         let t3 = s3.contact.as_ref().expect("contact").totals;
         let (f, m) = (t3.force, t3.moment);
         eprintln!(
@@ -337,8 +349,8 @@ linear = "lu"
         );
         Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
     };
-    let plus = steady_3d(&scene(2.0));
-    let minus = steady_3d(&scene(-2.0));
+    let plus = steady_3d(&scene(2.0), false);
+    let minus = steady_3d(&scene(-2.0), false);
     let tp = plus.contact.as_ref().expect("contact").totals;
     let tm = minus.contact.as_ref().expect("contact").totals;
     eprintln!(

@@ -88,14 +88,26 @@
 use super::facet::FacetRule;
 use super::laws::{Friction, LawError, NormalCompliance};
 use super::laws_vec::eval_vec;
+use super::steady_slip3d::{SteadySlip3D, MAX_EXTRA, MAX_FACET_NODES};
 use crate::element::hex::{
     face_axis, face_free_axes, surface_map, FacetPoints, FacetRule3D, Hex27, Hex8, Lagrange3D,
 };
 use crate::mesh::hex_mesh::{HexFacet, HexMesh};
+use crate::physics::ring_derivative::WIDTH;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Largest number of dofs of a cell (Hex27).
 pub const MAX_CELL_DOFS: usize = 81;
+
+/// Most nodes of a contact element: a Hex27 cell and the stencil nodes of the steady nodal
+/// slip outside it ([`super::steady_slip3d`]).
+pub const MAX_ELEMENT_NODES: usize = 27 + MAX_EXTRA;
+
+/// Most dofs of a contact element (its nodes' and the road height under load control).
+pub const MAX_ELEMENT_DOFS: usize = 3 * MAX_ELEMENT_NODES + 1;
+
+/// Nodal-slip weights of one facet ([`SteadySlip3D::stencil`]).
+type Stencil = [[(u8, f64); WIDTH]; MAX_FACET_NODES];
 
 /// Error in the set-up or the input of a 3D contact surface.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -236,6 +248,9 @@ pub struct ContactSurface3D {
     pub facets: Vec<HexFacet>,
     /// The facet rule on each of the six faces.
     rules: Vec<FacetRule3D>,
+    /// Steady kinematics: the friction slip from nodal θ-derivatives along the node rings
+    /// ([`super::steady_slip3d`]); set by [`Self::enable_steady_slip`].
+    steady_slip: Option<SteadySlip3D>,
 }
 
 /// One facet quadrature point: shape values, reference and current position, velocity, and
@@ -248,6 +263,12 @@ struct Point<'a> {
     da0: f64,
     sv: &'a [f64],
     cols: &'a [usize],
+    /// The velocity of the friction slip and its sensitivity δv_w = Σ_m `sw[m]` δu_m over
+    /// the element's local nodes `wcols`: `vel`, `sv`, `cols` except with the steady nodal
+    /// slip.
+    vw: Vector3<f64>,
+    sw: &'a [f64],
+    wcols: &'a [usize],
 }
 
 /// Where the velocity of a facet point comes from inside the kernel.
@@ -260,8 +281,12 @@ enum PointVelocity<'a> {
         kv: f64,
         damping: bool,
     },
-    /// Steady rolling: v = ω ∂θχ, ∂θ along the facet (module docs).
-    Steady { omega: f64 },
+    /// Steady rolling: v = ω ∂θχ, ∂θ along the facet (module docs); with `stencil` the
+    /// friction slip's ∂θu from nodal derivatives ([`super::steady_slip3d`]).
+    Steady {
+        omega: f64,
+        stencil: Option<&'a Stencil>,
+    },
 }
 
 impl PointVelocity<'_> {
@@ -311,7 +336,36 @@ impl ContactSurface3D {
             rule,
             facets,
             rules: (0..6).map(|f| FacetRule3D::new(f, q, kind)).collect(),
+            steady_slip: None,
         })
+    }
+
+    /// Take the steady friction slip from nodal θ-derivatives along the node rings of the
+    /// facets ([`super::steady_slip3d`]); each facet's element then extends over the stencil
+    /// nodes outside its cell ([`Self::extra_nodes`]). `false` (and the facet-wise derivative
+    /// kept) when the facets do not form rings of at least five nodes. Only the steady
+    /// kinematics use it.
+    pub fn enable_steady_slip(&mut self, mesh: &HexMesh) -> bool {
+        if self.steady_slip.is_none() {
+            self.steady_slip = SteadySlip3D::new(mesh, &self.facets);
+        }
+        self.steady_slip.is_some()
+    }
+
+    /// Back to the facet-wise derivative of the steady friction slip.
+    pub fn disable_steady_slip(&mut self) {
+        self.steady_slip = None;
+    }
+
+    /// Whether the steady friction slip is taken from nodal derivatives.
+    pub fn has_steady_slip(&self) -> bool {
+        self.steady_slip.is_some()
+    }
+
+    /// The nodes of facet `e`'s element beyond its cell's (the nodal slip's stencil nodes;
+    /// empty without it). The element's dofs are the cell's, then these nodes', 3 per node.
+    pub fn extra_nodes(&self, e: usize) -> &[u32] {
+        self.steady_slip.as_ref().map_or(&[], |s| s.extra(e))
     }
 
     /// Check that every facet's cell exists in `mesh` with degree 1 or 2, and the lengths of
@@ -388,6 +442,25 @@ impl ContactSurface3D {
         let mut n = [0.0; 27];
         let mut dn = [[0.0; 3]; 27];
         let mut sv = [0.0; 27];
+        let mut sw = [0.0; MAX_ELEMENT_NODES];
+        let mut wcols = [0usize; MAX_ELEMENT_NODES];
+        let mut nw = 0;
+        if let PointVelocity::Steady {
+            stencil: Some(st), ..
+        } = *vel
+        {
+            // The element's nodes the nodal slip reaches (the same at every point).
+            let mut seen = [false; MAX_ELEMENT_NODES];
+            for row in &st[..nf] {
+                for &(m, _) in row {
+                    if !seen[m as usize] {
+                        seen[m as usize] = true;
+                        wcols[nw] = m as usize;
+                        nw += 1;
+                    }
+                }
+            }
+        }
         for (xi, &wq) in rule.points.iter().zip(&rule.weights) {
             E::eval(*xi, &mut n[..E::N], &mut dn[..E::N]);
             let (xref, jac) = match mesh.geometry[c].exact_map(*xi) {
@@ -415,6 +488,7 @@ impl ContactSurface3D {
                 }
             }
             let mut v = Vector3::zeros();
+            let mut vw = None;
             let cols: &[usize] = match *vel {
                 PointVelocity::Nodal { v: vn, kv, .. } => {
                     for &a in &fn_[..nf] {
@@ -425,7 +499,7 @@ impl ContactSurface3D {
                     }
                     &fn_[..nf]
                 }
-                PointVelocity::Steady { omega } => {
+                PointVelocity::Steady { omega, stencil } => {
                     // ∂θ along the facet: the direction d = α a + β b of the facet's tangent
                     // plane (a, b its parameter tangents) along which θ advances by 1 and x3
                     // stays, d = t = e3 × X on an exact cylindrical facet.
@@ -442,7 +516,8 @@ impl ContactSurface3D {
                     } else {
                         (0.0, 0.0)
                     };
-                    v = ta * al + tb * be;
+                    let d = ta * al + tb * be;
+                    v = d;
                     for &b in &fn_[..nf] {
                         let gt = al * dn[b][p] + be * dn[b][q];
                         for i in 0..3 {
@@ -451,8 +526,30 @@ impl ContactSurface3D {
                         sv[b] = omega * gt;
                     }
                     v *= omega;
+                    if let Some(st) = stencil {
+                        // v_w = ω (d + Σ_j N_j (∂θu)_j), (∂θu)_j = Σ_k W_jk u_k.
+                        let mut w = d;
+                        for &m in &wcols[..nw] {
+                            sw[m] = 0.0;
+                        }
+                        for (j, row) in st[..nf].iter().enumerate() {
+                            let nj = n[fn_[j]];
+                            for &(m, wk) in row {
+                                let m = m as usize;
+                                for i in 0..3 {
+                                    w[i] += nj * wk * u[3 * m + i];
+                                }
+                                sw[m] += omega * nj * wk;
+                            }
+                        }
+                        vw = Some(w * omega);
+                    }
                     &fn_[..nf]
                 }
+            };
+            let (vw, sw, wcols): (Vector3<f64>, &[f64], &[usize]) = match vw {
+                Some(w) => (w, &sw[..], &wcols[..nw]),
+                None => (v, &sv[..E::N], cols),
             };
             f(&Point {
                 n: &n[..E::N],
@@ -461,6 +558,9 @@ impl ContactSurface3D {
                 da0: da * wq,
                 sv: &sv[..E::N],
                 cols,
+                vw,
+                sw,
+                wcols,
             });
         }
     }
@@ -488,7 +588,7 @@ impl ContactSurface3D {
             kv: m.kv,
             damping: m.damping,
         };
-        self.kernel(mesh, facet, m.u, &vel, r, k, false, totals)
+        self.kernel(mesh, facet, m.u, &vel, 0, r, k, false, totals)
     }
 
     /// [`Self::facet_kernel`] with the road height H as one more unknown after the cell's 3N
@@ -511,18 +611,21 @@ impl ContactSurface3D {
             kv: m.kv,
             damping: m.damping,
         };
-        self.kernel(mesh, facet, m.u, &vel, r, k, true, totals)
+        self.kernel(mesh, facet, m.u, &vel, 0, r, k, true, totals)
     }
 
-    /// The facet kernel of steady rolling ([`Kinematics3D::Steady`]): as
+    /// The facet kernel of steady rolling ([`Kinematics3D::Steady`]) of facet `e`: as
     /// [`Self::facet_kernel`] (with `with_h`: [`Self::facet_kernel_height`]) with the velocity
-    /// v = ω ∂θχ of the cell-local displacement `u` (3N entries), the θ-derivative taken along
-    /// the facet (module docs).
+    /// v = ω ∂θχ of the element-local displacement `u`, the θ-derivative taken along the facet
+    /// (module docs), the friction slip's from nodal derivatives when enabled
+    /// ([`Self::enable_steady_slip`]). The element's local nodes are the cell's N, then the
+    /// [`Self::extra_nodes`] of the facet (M of them): `u` holds 3(N + M) entries, `r` 3(N + M)
+    /// (+ 1 with H), `k` the square of that, row-major.
     #[allow(clippy::too_many_arguments)]
     pub fn facet_kernel_steady(
         &self,
         mesh: &HexMesh,
-        facet: HexFacet,
+        e: usize,
         u: &[f64],
         omega: f64,
         with_h: bool,
@@ -530,16 +633,12 @@ impl ContactSurface3D {
         k: Option<&mut [f64]>,
         totals: &mut ContactTotals3D,
     ) -> bool {
-        self.kernel(
-            mesh,
-            facet,
-            u,
-            &PointVelocity::Steady { omega },
-            r,
-            k,
-            with_h,
-            totals,
-        )
+        let vel = PointVelocity::Steady {
+            omega,
+            stencil: self.steady_slip.as_ref().map(|s| s.stencil(e)),
+        };
+        let n_extra = self.extra_nodes(e).len();
+        self.kernel(mesh, self.facets[e], u, &vel, n_extra, r, k, with_h, totals)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -549,15 +648,16 @@ impl ContactSurface3D {
         facet: HexFacet,
         u: &[f64],
         vel: &PointVelocity,
+        n_extra: usize,
         r: &mut [f64],
         k: Option<&mut [f64]>,
         with_h: bool,
         totals: &mut ContactTotals3D,
     ) -> bool {
         if mesh.degree[facet.cell as usize] == 1 {
-            self.kernel_impl::<Hex8>(mesh, facet, u, vel, r, k, with_h, totals)
+            self.kernel_impl::<Hex8>(mesh, facet, u, vel, n_extra, r, k, with_h, totals)
         } else {
-            self.kernel_impl::<Hex27>(mesh, facet, u, vel, r, k, with_h, totals)
+            self.kernel_impl::<Hex27>(mesh, facet, u, vel, n_extra, r, k, with_h, totals)
         }
     }
 
@@ -568,13 +668,14 @@ impl ContactSurface3D {
         facet: HexFacet,
         u: &[f64],
         vel: &PointVelocity,
+        n_extra: usize,
         r: &mut [f64],
         mut k: Option<&mut [f64]>,
         with_h: bool,
         totals: &mut ContactTotals3D,
     ) -> bool {
-        // Local size: the cell's 3N dofs, then H under load control (index `ih`).
-        let ih = 3 * E::N;
+        // Local size: the element's 3(N + M) dofs, then H under load control (index `ih`).
+        let ih = 3 * (E::N + n_extra);
         let nd = ih + usize::from(with_h);
         r[..nd].fill(0.0);
         if let Some(k) = k.as_deref_mut() {
@@ -605,7 +706,7 @@ impl ContactSurface3D {
             let mut dv = Matrix3::zeros();
             dv[(1, 1)] = -d_rate;
             if friction {
-                let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
+                let w = Vector2::new(pt.vw[0] - self.v_road[0], pt.vw[2] - self.v_road[1]);
                 let fv = eval_vec(&self.friction, w, nv.t, delta);
                 tr[0] = fv.t[0];
                 tr[2] = fv.t[1];
@@ -640,17 +741,22 @@ impl ContactSurface3D {
                 totals.max_pressure = totals.max_pressure.max(nv.t);
             }
             if let Some(k) = k.as_deref_mut() {
-                // ∂T_i/∂u_bj = ∂T_i/∂x_j kx N_b + ∂T_i/∂v_j sv_b.
+                // ∂T_i/∂u_bj = ∂T_i/∂x_j kx N_b + ∂T_i/∂v_2 δ_j2 sv_b (the rate δ̇ = −v2)
+                // + ∂T_i/∂v_j sw_b (j = 1, 3: the friction slip).
                 for &a in &fn_[..nf] {
                     let na = pt.n[a] * da;
                     for &b in pt.cols {
                         let (cx, cv) = (na * kx * pt.n[b], na * pt.sv[b]);
                         for i in 0..3 {
+                            k[(3 * a + i) * nd + 3 * b + 1] -= cx * dx[i] + cv * dv[(i, 1)];
+                        }
+                    }
+                    for &b in pt.wcols {
+                        let cw = na * pt.sw[b];
+                        for i in 0..3 {
                             let row = (3 * a + i) * nd + 3 * b;
-                            k[row + 1] -= cx * dx[i];
-                            for j in 0..3 {
-                                k[row + j] -= cv * dv[(i, j)];
-                            }
+                            k[row] -= cw * dv[(i, 0)];
+                            k[row + 2] -= cw * dv[(i, 2)];
                         }
                     }
                 }
@@ -665,10 +771,12 @@ impl ContactSurface3D {
                     }
                     for &b in pt.cols {
                         let (cx, cv) = (da * kx * pt.n[b], da * pt.sv[b]);
-                        k[ih * nd + 3 * b + 1] -= cx * dx[1];
-                        for j in 0..3 {
-                            k[ih * nd + 3 * b + j] -= cv * dv[(1, j)];
-                        }
+                        k[ih * nd + 3 * b + 1] -= cx * dx[1] + cv * dv[(1, 1)];
+                    }
+                    for &b in pt.wcols {
+                        let cw = da * pt.sw[b];
+                        k[ih * nd + 3 * b] -= cw * dv[(1, 0)];
+                        k[ih * nd + 3 * b + 2] -= cw * dv[(1, 2)];
                     }
                     k[ih * nd + ih] -= dx[1] * da;
                 }
@@ -709,54 +817,80 @@ impl ContactSurface3D {
         }
     }
 
-    /// Loop the facets at the full displacement `u` (3 per node): call `sink(cell, r, k)` with
-    /// each integrated facet's local residual and (with `with_k`) tangent in the cell's dofs
-    /// (3·a + i, row-major), for a global assembler to scatter; return the totals.
+    /// Gather the element-local displacement of facet `e` (its cell's nodes, then its
+    /// [`Self::extra_nodes`]) from the full `u` into `ul`; returns the element's dof count.
+    fn gather_element(&self, mesh: &HexMesh, e: usize, u: &[f64], ul: &mut [f64]) -> usize {
+        let c = self.facets[e].cell as usize;
+        let mut k = 0;
+        for &n in mesh.cell_nodes(c).iter().chain(self.extra_nodes(e)) {
+            let n = n as usize;
+            ul[k..k + 3].copy_from_slice(&u[3 * n..3 * n + 3]);
+            k += 3;
+        }
+        k
+    }
+
+    /// Loop the facets at the full displacement `u` (3 per node): call
+    /// `sink(cell, extra, r, k)` with each integrated facet's local residual and (with
+    /// `with_k`) tangent in the dofs of its element (3·a + i, row-major): the cell's nodes,
+    /// then the nodes `extra` ([`Self::extra_nodes`]: the steady nodal slip's, otherwise
+    /// none), for a global assembler to scatter; return the totals.
     pub fn for_each_facet(
         &self,
         mesh: &HexMesh,
         u: &[f64],
         kin: &Kinematics3D,
         with_k: bool,
-        mut sink: impl FnMut(usize, &[f64], Option<&[f64]>),
+        mut sink: impl FnMut(usize, &[u32], &[f64], Option<&[f64]>),
     ) -> Result<ContactTotals3D, Contact3DError> {
         self.check(mesh, &Self::kin_vectors(u, kin))?;
         let (kx, kv, damping) = kin.factors();
         let mut totals = ContactTotals3D::default();
-        let (mut ul, mut vl) = ([0.0; MAX_CELL_DOFS], [0.0; MAX_CELL_DOFS]);
-        let mut r = [0.0; MAX_CELL_DOFS];
+        let (mut ul, mut vl) = ([0.0; MAX_ELEMENT_DOFS], [0.0; MAX_CELL_DOFS]);
+        let mut r = [0.0; MAX_ELEMENT_DOFS];
         let mut k = if with_k {
-            vec![0.0; MAX_CELL_DOFS * MAX_CELL_DOFS]
+            vec![0.0; MAX_ELEMENT_DOFS * MAX_ELEMENT_DOFS]
         } else {
             Vec::new()
         };
-        for &f in &self.facets {
+        for (e, &f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
-            let nd = 3 * mesh.cell_nodes(c).len();
-            Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
-            let m = CellMotion {
-                u: &ul[..nd],
-                v: &vl[..nd],
-                kx,
-                kv,
-                damping,
-            };
-            let kb = with_k.then_some(&mut k[..nd * nd]);
-            let integrated = match *kin {
-                Kinematics3D::Steady { omega } => self.facet_kernel_steady(
-                    mesh,
-                    f,
-                    &ul[..nd],
-                    omega,
-                    false,
-                    &mut r,
-                    kb,
-                    &mut totals,
-                ),
-                _ => self.facet_kernel(mesh, f, &m, &mut r, kb, &mut totals),
+            let (integrated, nd) = match *kin {
+                Kinematics3D::Steady { omega } => {
+                    let nd = self.gather_element(mesh, e, u, &mut ul);
+                    let kb = with_k.then_some(&mut k[..nd * nd]);
+                    let ok = self.facet_kernel_steady(
+                        mesh,
+                        e,
+                        &ul,
+                        omega,
+                        false,
+                        &mut r,
+                        kb,
+                        &mut totals,
+                    );
+                    (ok, nd)
+                }
+                _ => {
+                    let nd = 3 * mesh.cell_nodes(c).len();
+                    Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
+                    let m = CellMotion {
+                        u: &ul[..nd],
+                        v: &vl[..nd],
+                        kx,
+                        kv,
+                        damping,
+                    };
+                    let kb = with_k.then_some(&mut k[..nd * nd]);
+                    (self.facet_kernel(mesh, f, &m, &mut r, kb, &mut totals), nd)
+                }
             };
             if integrated {
-                sink(c, &r[..nd], with_k.then_some(&k[..nd * nd]));
+                let extra = match *kin {
+                    Kinematics3D::Steady { .. } => self.extra_nodes(e),
+                    _ => &[],
+                };
+                sink(c, extra, &r[..nd], with_k.then_some(&k[..nd * nd]));
             }
         }
         Ok(totals)
@@ -776,13 +910,12 @@ impl ContactSurface3D {
         let friction = self.friction.is_active();
         let eps = self.friction.eps().unwrap_or(0.0);
         let mut out = Vec::new();
-        let (mut ul, mut vl) = ([0.0; MAX_CELL_DOFS], [0.0; MAX_CELL_DOFS]);
-        for &f in &self.facets {
+        let (mut ul, mut vl) = ([0.0; MAX_ELEMENT_DOFS], [0.0; MAX_CELL_DOFS]);
+        for (e, &f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
-            Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
             let mut visit = |pt: &Point| {
                 let delta = -self.h - pt.x[1];
-                let w = Vector2::new(pt.vel[0] - self.v_road[0], pt.vel[2] - self.v_road[1]);
+                let w = Vector2::new(pt.vw[0] - self.v_road[0], pt.vw[2] - self.v_road[1]);
                 let nv = self
                     .normal
                     .eval(delta, if damping { -pt.vel[1] } else { 0.0 });
@@ -809,13 +942,22 @@ impl ContactSurface3D {
             };
             let nd = 3 * mesh.cell_nodes(c).len();
             let vel = match *kin {
-                Kinematics3D::Steady { omega } => PointVelocity::Steady { omega },
-                _ => PointVelocity::Nodal {
-                    v: &vl[..nd],
-                    kx: 1.0,
-                    kv: 1.0,
-                    damping,
-                },
+                Kinematics3D::Steady { omega } => {
+                    self.gather_element(mesh, e, u, &mut ul);
+                    PointVelocity::Steady {
+                        omega,
+                        stencil: self.steady_slip.as_ref().map(|s| s.stencil(e)),
+                    }
+                }
+                _ => {
+                    Self::gather(mesh, c, u, kin, &mut ul, &mut vl);
+                    PointVelocity::Nodal {
+                        v: &vl[..nd],
+                        kx: 1.0,
+                        kv: 1.0,
+                        damping,
+                    }
+                }
             };
             if mesh.degree[c] == 1 {
                 self.for_points::<Hex8>(mesh, f, &ul, &vel, &mut visit);

@@ -21,6 +21,7 @@ pub mod laws;
 pub mod laws_vec;
 pub mod steady_elastic;
 pub mod steady_slip;
+pub mod steady_slip3d;
 pub mod stick_slip;
 
 pub use facet::{ContactModel, ContactSample, ContactTotals, FacetRule, SlipKinematics};

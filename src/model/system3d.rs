@@ -22,6 +22,7 @@ use super::solid3d::Solid3D;
 use crate::assembly::{Assembler, DofMap, CONSTRAINED, FIXED};
 use crate::contact::facet3d::{
     CellMotion, Contact3DError, ContactSample3D, ContactSurface3D, ContactTotals3D, Kinematics3D,
+    MAX_ELEMENT_DOFS,
 };
 use crate::solver::stepping::LoadedSystem;
 use crate::solver::NonlinearSystem;
@@ -159,24 +160,6 @@ impl Solid3DSystem {
         } else {
             None
         };
-        let mesh = &self.solid.mesh;
-        let (mut d, mut o) = (Vec::new(), vec![0]);
-        for f in &surface.facets {
-            let c = f.cell as usize;
-            let nd = 3 * mesh.cell_nodes(c).len();
-            d.extend_from_slice(&self.dofs.cell(c)[..nd]);
-            if let Some(ih) = h_dof {
-                d.push(ih as u32);
-            }
-            o.push(d.len());
-        }
-        self.asm = Assembler::with_blocks(
-            &self.dofs,
-            vec![
-                (self.dofs.cell_dofs.clone(), self.dofs.cell_offsets.clone()),
-                (d, o),
-            ],
-        );
         self.contact = Some(RoadContact3D {
             surface,
             h_touch,
@@ -191,6 +174,7 @@ impl Solid3DSystem {
             totals: ContactTotals3D::default(),
             steady_omega: None,
         });
+        self.rebuild_assembler();
         Ok(self)
     }
 
@@ -219,7 +203,9 @@ impl Solid3DSystem {
     /// about +x3) and the road moves at `v_road` = (V1, V3) in its plane (hub frame). The
     /// inertia −ω² ∫ ρ ∂θχ · ∂θη is on at once (the coefficients no longer follow the load
     /// factor, which then moves only the road), and the contact takes the steady velocity
-    /// v = ω ∂θχ. Needs the contact ([`Self::with_contact`] or [`Self::with_contact_load`]).
+    /// v = ω ∂θχ, with the friction slip from nodal θ-derivatives along the node rings of the
+    /// surface ([`crate::contact::steady_slip3d`]; [`Self::disable_steady_slip`] takes it
+    /// facet-wise). Needs the contact ([`Self::with_contact`] or [`Self::with_contact_load`]).
     pub fn set_steady_rolling(
         &mut self,
         omega: f64,
@@ -233,11 +219,56 @@ impl Solid3DSystem {
             ..self.target
         };
         self.coefficients = self.target;
+        let mut rebuild = false;
         if let Some(rc) = self.contact.as_mut() {
             rc.steady_omega = Some(omega);
             rc.surface.v_road = nalgebra::Vector2::new(v_road[0], v_road[1]);
+            if rc.surface.friction.is_active() && !rc.surface.has_steady_slip() {
+                rebuild = rc.surface.enable_steady_slip(&self.solid.mesh);
+            }
+        }
+        if rebuild {
+            self.rebuild_assembler();
         }
         Ok(())
+    }
+
+    /// Take the steady friction slip facet-wise (the θ-derivative of the facet's own
+    /// interpolant, discontinuous across facets) instead of from nodal derivatives.
+    pub fn disable_steady_slip(&mut self) {
+        if let Some(rc) = self.contact.as_mut() {
+            if rc.surface.has_steady_slip() {
+                rc.surface.disable_steady_slip();
+                self.rebuild_assembler();
+            }
+        }
+    }
+
+    /// The assembler of the cells and, with contact, of the facet elements: each facet's
+    /// cell dofs, then those of its extra nodes ([`ContactSurface3D::extra_nodes`]), then H
+    /// under load control.
+    fn rebuild_assembler(&mut self) {
+        let mut blocks = vec![(self.dofs.cell_dofs.clone(), self.dofs.cell_offsets.clone())];
+        if let Some(rc) = self.contact.as_ref() {
+            let mesh = &self.solid.mesh;
+            let (mut d, mut o) = (Vec::new(), vec![0]);
+            for (e, f) in rc.surface.facets.iter().enumerate() {
+                let c = f.cell as usize;
+                let nd = 3 * mesh.cell_nodes(c).len();
+                d.extend_from_slice(&self.dofs.cell(c)[..nd]);
+                for &n in rc.surface.extra_nodes(e) {
+                    for i in 0..3 {
+                        d.push(self.dofs.node_dof(n as usize, i) as u32);
+                    }
+                }
+                if let Some(ih) = rc.h_dof {
+                    d.push(ih as u32);
+                }
+                o.push(d.len());
+            }
+            blocks.push((d, o));
+        }
+        self.asm = Assembler::with_blocks(&self.dofs, blocks);
     }
 
     /// ω of steady rolling, if set.
@@ -322,6 +353,29 @@ impl Solid3DSystem {
             self.asm.add_block_large(1, dofs, with_matrix, |e, r, k| {
                 let f = surface.facets[e];
                 let cd = dofs.cell(f.cell as usize);
+                if let Some(omega) = steady {
+                    // The element's dofs: the cell's, its extra nodes', H last (load control).
+                    let mut ul = [0.0; MAX_ELEMENT_DOFS];
+                    let mut nd = 0;
+                    let cell = mesh.cell_nodes(f.cell as usize);
+                    for &n in cell.iter().chain(surface.extra_nodes(e)) {
+                        for i in 0..3 {
+                            ul[nd] = x[dofs.node_dof(n as usize, i)];
+                            nd += 1;
+                        }
+                    }
+                    let mut t = ContactTotals3D::default();
+                    let kb = if k.is_empty() { None } else { Some(k) };
+                    let with_h = load.is_some();
+                    surface.facet_kernel_steady(mesh, e, &ul[..nd], omega, with_h, r, kb, &mut t);
+                    if let (Some(p), 0) = (load, e) {
+                        r[nd] += p;
+                    }
+                    if let Ok(mut all) = totals.lock() {
+                        all.add(&t);
+                    }
+                    return;
+                }
                 // The cell's dofs (and H last under load control).
                 let nd = 3 * mesh.cell_nodes(f.cell as usize).len();
                 let (mut ul, mut vl) = ([0.0; 81], [0.0; 81]);
@@ -339,17 +393,6 @@ impl Solid3DSystem {
                 };
                 let mut t = ContactTotals3D::default();
                 let kb = if k.is_empty() { None } else { Some(k) };
-                if let Some(omega) = steady {
-                    let with_h = load.is_some();
-                    surface.facet_kernel_steady(mesh, f, &ul[..nd], omega, with_h, r, kb, &mut t);
-                    if let (Some(p), 0) = (load, e) {
-                        r[nd] += p;
-                    }
-                    if let Ok(mut all) = totals.lock() {
-                        all.add(&t);
-                    }
-                    return;
-                }
                 match load {
                     Some(p) => {
                         surface.facet_kernel_height(mesh, f, &m, r, kb, &mut t);

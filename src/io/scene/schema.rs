@@ -250,7 +250,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("contact", Kind::Str, NONE,
                 "1D physical group of `file` where contact can happen (default \"contact\"; 2D groups of a hexahedral file with dimension = 3)"),
             opt("dimension", Kind::UInt, NONE,
-                "2 (plane strain, default) or 3: the annulus revolved about the axle x3 into a wheel of width `width` (or the hexahedra of `file`); modes static and spinning, forces total (not per width)"),
+                "2 (plane strain, default) or 3: the annulus revolved about the axle x3 into a wheel of width `width` (or the hexahedra of `file`); modes static, spinning and steady, forces total (not per width)"),
             opt("width", Kind::Float, "L",
                 "dimension = 3, generated mesh (required): width W of the wheel along the axle, > 0, centred on x3 = 0"),
             opt("n_z", Kind::UInt, NONE,
