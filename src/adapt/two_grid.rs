@@ -424,6 +424,9 @@ pub struct TransientRun {
     /// Final mesh, space and solution (time t_0 + n_steps dt).
     pub tree: Quadtree,
     pub x: Vec<f64>,
+    /// The fine solution of the two-grid estimate at the same time, on `tree` refined once
+    /// (empty without the estimate).
+    pub x_fine: Vec<f64>,
 }
 
 impl TransientRun {
@@ -436,7 +439,8 @@ impl TransientRun {
     }
 }
 
-fn refined(tree: &Quadtree) -> Quadtree {
+/// `tree` with every leaf split once (the fine mesh of the two-grid estimate).
+pub fn refined(tree: &Quadtree) -> Quadtree {
     let mut f = tree.clone();
     let leaves = f.leaves();
     f.refine(&leaves);
@@ -564,6 +568,7 @@ pub fn run(
         wall_seconds: clock.elapsed().as_secs_f64(),
         tree,
         x: xn,
+        x_fine: if two_grid { xfn } else { Vec::new() },
     })
 }
 

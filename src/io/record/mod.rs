@@ -110,6 +110,7 @@ pub mod interrupt;
 pub mod mcap;
 pub mod png;
 pub mod progress;
+pub mod quad;
 #[cfg(feature = "rerun")]
 pub mod rrd;
 #[cfg(feature = "rerun")]
