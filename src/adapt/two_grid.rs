@@ -454,6 +454,28 @@ pub fn run(
     t0: f64,
     opts: &TransientOptions,
 ) -> Result<TransientRun, TransientError> {
+    run_observed(kernel, tree0, t0, opts, &mut |_| {})
+}
+
+/// One accepted step as [`run_observed`] shows it: its record, the mesh and space it was
+/// computed on, the solution, and the two-grid indicators η_K (None without the estimate),
+/// before the mesh is adapted.
+pub struct StepView<'a> {
+    pub record: &'a StepRecord,
+    pub tree: &'a Quadtree,
+    pub space: &'a Space,
+    pub x: &'a [f64],
+    pub indicators: Option<&'a [f64]>,
+}
+
+/// [`run`], calling `each` on every accepted step.
+pub fn run_observed(
+    kernel: &dyn Kernel,
+    tree0: &Quadtree,
+    t0: f64,
+    opts: &TransientOptions,
+    each: &mut dyn FnMut(&StepView),
+) -> Result<TransientRun, TransientError> {
     if !(opts.dt > 0.0 && opts.dt.is_finite()) {
         return Err(TransientError::Parameter(format!(
             "time step must be positive and finite, got {}",
@@ -517,6 +539,15 @@ pub fn run(
                 est = Some(e);
             }
             let last_sweep = sweep + 1 == sweeps;
+            if last_sweep || !opts.adaptive {
+                each(&StepView {
+                    record: &rec,
+                    tree: &tree,
+                    space: &space_new,
+                    x: &x,
+                    indicators: est.as_ref().map(|e| e.indicators.as_slice()),
+                });
+            }
             if !opts.adaptive {
                 steps.push(rec);
                 xn = x;

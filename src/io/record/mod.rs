@@ -112,6 +112,8 @@ pub mod png;
 pub mod progress;
 pub mod quad;
 #[cfg(feature = "rerun")]
+pub mod quad_rrd;
+#[cfg(feature = "rerun")]
 pub mod rrd;
 #[cfg(feature = "rerun")]
 pub mod rrd_draw;

@@ -8,7 +8,7 @@
 //! [scene]    name, description = ""
 //! [problem]  kind = "cavity" | "heat" | "burgers" | "p_navier_stokes" | "lshape",
 //!            and the keys of that kind (every one optional, with the defaults of [`KEYS`])
-//! [output]   sinks = ["summary", "csv", "vtu", "png"]
+//! [output]   sinks = ["summary", "csv", "vtu", "png"] (and "rerun")
 //! ```
 //!
 //! The keys of every kind, with type, default, unit and meaning, are the table [`KEYS`]; it is
@@ -333,14 +333,19 @@ pub static KEYS: &[KeyDoc] = &[
 
 /// Keys of `[scene]`.
 const SCENE_KEYS: &[&str] = &["name", "description"];
-/// Sinks a model problem writes.
-const SINKS: &[Sink] = &[Sink::Summary, Sink::Csv, Sink::Vtu, Sink::Png];
+/// Sinks a model problem writes (`rerun`: in builds with the `rerun` feature).
+const SINKS: &[Sink] = &[Sink::Summary, Sink::Csv, Sink::Vtu, Sink::Png, Sink::Rerun];
+/// Default of `[output] sinks` (the Rerun recording is opt-in, as in the rolling scenes).
+const DEFAULT_SINKS: &[Sink] = &[Sink::Summary, Sink::Csv, Sink::Vtu, Sink::Png];
 
 /// Whether a scene text is a model-problem scene (it has a `[problem]` table). A text that is
 /// not TOML is not (the rolling loader then reports its syntax error).
 pub fn is_model_problem(text: &str) -> bool {
     matches!(
-        text.parse::<toml::Table>().ok().as_ref().and_then(|t| t.get("problem")),
+        text.parse::<toml::Table>()
+            .ok()
+            .as_ref()
+            .and_then(|t| t.get("problem")),
         Some(toml::Value::Table(_))
     )
 }
@@ -364,11 +369,7 @@ impl Loader<'_> {
         let over = self.overridden.contains(key);
         self.errors.push(SceneError {
             key: key.to_string(),
-            line: if over {
-                None
-            } else {
-                self.locator.locate(key)
-            },
+            line: if over { None } else { self.locator.locate(key) },
             message: message.into(),
             source_name: if over {
                 format!("{}{OVERRIDE_TAG}", self.source_name)
@@ -533,11 +534,41 @@ fn two_grid(l: &mut Loader, v: &Values, dt: f64, steps: usize) -> TwoGridSpec {
         coarsen: v.f("coarsen", 0.01),
         initial_sweeps: v.i("initial_sweeps", 4),
     };
-    check(l, "degree", (1..=2).contains(&s.degree), "must be 1 or 2", s.degree);
-    check(l, "dt", s.dt.is_finite() && s.dt > 0.0, "must be positive", s.dt);
-    check(l, "steps", (1..=100_000).contains(&s.steps), "must be in 1..=100000", s.steps);
-    check(l, "levels", (1..=9).contains(&s.levels), "must be in 1..=9", s.levels);
-    check(l, "max_level", s.max_level <= 10, "must be at most 10", s.max_level);
+    check(
+        l,
+        "degree",
+        (1..=2).contains(&s.degree),
+        "must be 1 or 2",
+        s.degree,
+    );
+    check(
+        l,
+        "dt",
+        s.dt.is_finite() && s.dt > 0.0,
+        "must be positive",
+        s.dt,
+    );
+    check(
+        l,
+        "steps",
+        (1..=100_000).contains(&s.steps),
+        "must be in 1..=100000",
+        s.steps,
+    );
+    check(
+        l,
+        "levels",
+        (1..=9).contains(&s.levels),
+        "must be in 1..=9",
+        s.levels,
+    );
+    check(
+        l,
+        "max_level",
+        s.max_level <= 10,
+        "must be at most 10",
+        s.max_level,
+    );
     check(
         l,
         "min_level",
@@ -590,7 +621,13 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 "must be 100, 400 or 1000 (the stations of the continuation)",
                 s.reynolds,
             );
-            check(l, "levels", (1..=7).contains(&s.levels), "must be in 1..=7", s.levels);
+            check(
+                l,
+                "levels",
+                (1..=7).contains(&s.levels),
+                "must be in 1..=7",
+                s.levels,
+            );
             check(
                 l,
                 "recalculations",
@@ -598,8 +635,20 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 "must be at most 50",
                 s.recalculations,
             );
-            check(l, "alpha", s.alpha.is_finite() && s.alpha >= 0.0, "must be >= 0", s.alpha);
-            check(l, "beta", s.beta.is_finite() && s.beta >= 1.0, "must be >= 1", s.beta);
+            check(
+                l,
+                "alpha",
+                s.alpha.is_finite() && s.alpha >= 0.0,
+                "must be >= 0",
+                s.alpha,
+            );
+            check(
+                l,
+                "beta",
+                s.beta.is_finite() && s.beta >= 1.0,
+                "must be >= 1",
+                s.beta,
+            );
             check(
                 l,
                 "gamma",
@@ -636,7 +685,13 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 centre: v.point("centre", [0.5, 0.0]),
                 supg: v.b("supg", true),
             };
-            check(l, "kappa", s.kappa.is_finite() && s.kappa > 0.0, "must be positive", s.kappa);
+            check(
+                l,
+                "kappa",
+                s.kappa.is_finite() && s.kappa > 0.0,
+                "must be positive",
+                s.kappa,
+            );
             check(
                 l,
                 "sigma2",
@@ -659,7 +714,13 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 time,
                 nu: v.f("nu", 0.01),
             };
-            check(l, "nu", s.nu.is_finite() && s.nu > 0.0, "must be positive", s.nu);
+            check(
+                l,
+                "nu",
+                s.nu.is_finite() && s.nu > 0.0,
+                "must be positive",
+                s.nu,
+            );
             Problem::Burgers(s)
         }
         ProblemKind::PNavierStokes => {
@@ -692,12 +753,21 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                     );
                 }
             }
-            check(l, "enrich", (1..=2).contains(&s.enrich), "must be 1 or 2", s.enrich);
+            check(
+                l,
+                "enrich",
+                (1..=2).contains(&s.enrich),
+                "must be 1 or 2",
+                s.enrich,
+            );
             check(
                 l,
                 "max_degree",
                 s.max_degree >= 2 && s.max_degree + s.enrich <= 10,
-                &format!("must be at least 2 and max_degree + enrich <= 10 (enrich = {})", s.enrich),
+                &format!(
+                    "must be at least 2 and max_degree + enrich <= 10 (enrich = {})",
+                    s.enrich
+                ),
                 s.max_degree,
             );
             check(
@@ -722,7 +792,13 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 s.max_sweeps,
             );
             if let Some(re) = s.reynolds {
-                check(l, "reynolds", re.is_finite() && re > 0.0, "must be positive", re);
+                check(
+                    l,
+                    "reynolds",
+                    re.is_finite() && re > 0.0,
+                    "must be positive",
+                    re,
+                );
             }
             if let Some(nu) = s.nu {
                 check(l, "nu", nu.is_finite() && nu > 0.0, "must be positive", nu);
@@ -731,7 +807,13 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                 check(l, "dt", dt.is_finite() && dt > 0.0, "must be positive", dt);
             }
             if let Some(n) = s.steps {
-                check(l, "steps", (1..=10_000).contains(&n), "must be in 1..=10000", n);
+                check(
+                    l,
+                    "steps",
+                    (1..=10_000).contains(&n),
+                    "must be in 1..=10000",
+                    n,
+                );
             }
             Problem::PNavierStokes(s)
         }
@@ -773,7 +855,10 @@ fn read_problem(l: &mut Loader, kind: ProblemKind, v: &Values) -> Problem {
                     l,
                     "degree",
                     s.degree >= 1 && (s.degree as usize) <= s.max_degree.min(8),
-                    &format!("must be in 1..={} (max_degree, at most 8)", s.max_degree.min(8)),
+                    &format!(
+                        "must be in 1..={} (max_degree, at most 8)",
+                        s.max_degree.min(8)
+                    ),
                     s.degree,
                 );
             }
@@ -883,7 +968,10 @@ impl ModelScene {
             None => None,
             Some(toml::Value::String(s)) => Some(s.clone()),
             Some(v) => {
-                l.push(&format!("scene.{k}"), format!("must be a string, got {}", describe(v)));
+                l.push(
+                    &format!("scene.{k}"),
+                    format!("must be a string, got {}", describe(v)),
+                );
                 None
             }
         };
@@ -901,7 +989,7 @@ impl ModelScene {
         }
         // [output]
         let output = table("output");
-        let mut sinks = SINKS.to_vec();
+        let mut sinks = DEFAULT_SINKS.to_vec();
         for (k, v) in output {
             if k != "sinks" {
                 l.push(
@@ -911,7 +999,10 @@ impl ModelScene {
                 continue;
             }
             let toml::Value::Array(a) = v else {
-                l.push("output.sinks", format!("must be a list of sinks, got {}", describe(v)));
+                l.push(
+                    "output.sinks",
+                    format!("must be a list of sinks, got {}", describe(v)),
+                );
                 continue;
             };
             sinks.clear();
@@ -923,7 +1014,7 @@ impl ModelScene {
                         "output.sinks",
                         format!(
                             "sink \"{s}\" is not written by model problems; they write \"summary\", \
-                             \"csv\", \"vtu\" and \"png\""
+                             \"csv\", \"vtu\", \"png\" and \"rerun\""
                         ),
                     ),
                     Some(Err(e)) => l.push("output.sinks", e),
@@ -955,7 +1046,10 @@ impl ModelScene {
                 }
             },
             Some(v) => {
-                l.push("problem.kind", format!("must be a string, got {}", describe(v)));
+                l.push(
+                    "problem.kind",
+                    format!("must be a string, got {}", describe(v)),
+                );
                 None
             }
         };
@@ -1097,8 +1191,8 @@ pub fn markdown_reference() -> String {
         "A scene with a `[problem]` table runs one of the adaptive model problems of `src/adapt/` \
          (`tread run scenarios/model_problems/NAME.toml`). Its sections are `[scene]` (`name`, \
          required; `description`), `[problem]` and `[output]` (`sinks`, from \"summary\", \
-         \"csv\", \"vtu\", \"png\"; default all four). Any other section or key, or a key of \
-         another kind, is an error.\n\n",
+         \"csv\", \"vtu\", \"png\", \"rerun\"; default the first four). Any other section or \
+         key, or a key of another kind, is an error.\n\n",
     );
     out.push_str(&format!(
         "`problem.kind` (required): {}.\n\n",
