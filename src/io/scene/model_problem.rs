@@ -1176,12 +1176,22 @@ impl ModelScene {
             "sinks".into(),
             toml::Value::Array(self.sinks.iter().map(|s| s.as_str().into()).collect()),
         );
-        let mut doc = toml::Table::new();
-        doc.insert("scene".into(), scene.into());
-        doc.insert("problem".into(), p.into());
-        doc.insert("output".into(), output.into());
-        toml::to_string_pretty(&doc)
-            .unwrap_or_else(|e| format!("# cannot write scene as TOML: {e}\n"))
+        // Sections in the order of a scene file: [scene], [problem], [output].
+        let mut text = String::new();
+        for (name, table) in [("scene", scene), ("problem", p), ("output", output)] {
+            let mut doc = toml::Table::new();
+            doc.insert(name.into(), table.into());
+            match toml::to_string_pretty(&doc) {
+                Ok(t) => {
+                    if !text.is_empty() {
+                        text.push('\n');
+                    }
+                    text.push_str(&t);
+                }
+                Err(e) => return format!("# cannot write scene as TOML: {e}\n"),
+            }
+        }
+        text
     }
 }
 
