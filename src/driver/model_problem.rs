@@ -1034,8 +1034,7 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
         max_sweeps: s.max_sweeps,
     };
     let zero = |_: [f64; 2], _: f64| [0.0, 0.0];
-    let (tree, reports, fin, t, exact_at): (
-        Quadtree,
+    let (reports, fin, t, exact_at): (
         Vec<SweepReport>,
         (Field, Vec<f64>),
         f64,
@@ -1062,7 +1061,6 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
                 table.rows.push(pns_row(r, i));
             }
             (
-                tree,
                 reps,
                 (est.coarse, est.indicators),
                 0.0,
@@ -1112,7 +1110,6 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
             let fin = last.ok_or_else(|| solve_failed("no time step was taken", 0, 0))?;
             let t = time.dt * time.n_steps as f64;
             (
-                tree,
                 reps,
                 fin,
                 t,
@@ -1120,7 +1117,6 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
             )
         }
     };
-    let _ = &tree;
     let newton: usize = reports.iter().map(|r| r.newton_iterations).sum();
     let last = reports
         .iter()
