@@ -1157,6 +1157,10 @@ pub fn run_transient(
     run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {})
 }
 
+/// What [`run_transient_observed`] calls on every accepted step: (report, solution, enriched
+/// solution, indicators).
+pub type StepObserver<'a> = &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]);
+
 /// [`run_transient`], calling `each(report, solution, enriched solution, indicators)` on every
 /// accepted step.
 pub fn run_transient_observed(
@@ -1165,7 +1169,7 @@ pub fn run_transient_observed(
     problem: &TransientProblem,
     time: &TimeParams,
     params: &PAdaptParams,
-    each: &mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]),
+    each: StepObserver,
 ) -> Result<Vec<SweepReport>, PnsError> {
     params.check()?;
     check_time(time)?;

@@ -941,6 +941,9 @@ fn comp_value(
 // ---------------------------------------------------------------------------------------------
 // p_navier_stokes
 
+/// The exact velocity and its gradient at a point (of the final time).
+type ExactAt = dyn Fn([f64; 2]) -> ([f64; 2], [[f64; 2]; 2]);
+
 /// Kovasznay flow at Reynolds number `re`: u = 1 − e^{λx} cos 2πy, v = λ/(2π) e^{λx} sin 2πy,
 /// λ = Re/2 − (Re²/4 + 4π²)^{1/2}.
 fn kovasznay(re: f64, x: [f64; 2]) -> ([f64; 2], [[f64; 2]; 2]) {
@@ -1034,89 +1037,80 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
         max_sweeps: s.max_sweeps,
     };
     let zero = |_: [f64; 2], _: f64| [0.0, 0.0];
-    let (reports, fin, t, exact_at): (
-        Vec<SweepReport>,
-        (Field, Vec<f64>),
-        f64,
-        Box<dyn Fn([f64; 2]) -> ([f64; 2], [[f64; 2]; 2])>,
-    ) = match s.flow {
-        Flow::Kovasznay => {
-            let re = s.reynolds.unwrap_or(40.0);
-            let coarse: Vec<(i64, i64)> =
-                (0..4).flat_map(|j| (0..3).map(move |i| (i, j))).collect();
-            let tree = Quadtree::new([-0.5, -0.5], 0.5, &coarse, 2);
-            let n = tree.leaves().len();
-            let g = |x: [f64; 2], c: usize| kovasznay(re, x).0[c];
-            let ex = |x: [f64; 2]| kovasznay(re, x);
-            let problem = SteadyProblem {
-                nu: 1.0 / re,
-                g: &g,
-                f: &zero,
-                exact: Some(&ex),
-            };
-            let (reps, est) = adapt_steady(&tree, &vec![s.degree; n], &problem, &params)
+    let (reports, fin, t, exact_at): (Vec<SweepReport>, (Field, Vec<f64>), f64, Box<ExactAt>) =
+        match s.flow {
+            Flow::Kovasznay => {
+                let re = s.reynolds.unwrap_or(40.0);
+                let coarse: Vec<(i64, i64)> =
+                    (0..4).flat_map(|j| (0..3).map(move |i| (i, j))).collect();
+                let tree = Quadtree::new([-0.5, -0.5], 0.5, &coarse, 2);
+                let n = tree.leaves().len();
+                let g = |x: [f64; 2], c: usize| kovasznay(re, x).0[c];
+                let ex = |x: [f64; 2]| kovasznay(re, x);
+                let problem = SteadyProblem {
+                    nu: 1.0 / re,
+                    g: &g,
+                    f: &zero,
+                    exact: Some(&ex),
+                };
+                let (reps, est) = adapt_steady(&tree, &vec![s.degree; n], &problem, &params)
+                    .map_err(|e| solve_failed(e, 0, 0))?;
+                for r in &reps {
+                    let i = table.rows.len();
+                    table.rows.push(pns_row(r, i));
+                }
+                (
+                    reps,
+                    (est.coarse, est.indicators),
+                    0.0,
+                    Box::new(move |x| kovasznay(re, x)),
+                )
+            }
+            Flow::TaylorGreen => {
+                let nu = s.nu.unwrap_or(0.01);
+                let tree = graded_unit_square();
+                let n = tree.leaves().len();
+                let g = |x: [f64; 2], t: f64, c: usize| taylor_green(nu, x, t).0[c];
+                let u0 = |x: [f64; 2]| taylor_green(nu, x, 0.0).0;
+                let ex = |x: [f64; 2], t: f64| taylor_green(nu, x, t);
+                let problem = TransientProblem {
+                    nu,
+                    g: &g,
+                    f: &zero,
+                    u0: &u0,
+                    exact: Some(&ex),
+                };
+                let time = TimeParams {
+                    dt: s.dt.unwrap_or(0.02),
+                    n_steps: s.steps.unwrap_or(5),
+                    theta: 0.5,
+                };
+                let mut last: Option<(Field, Vec<f64>)> = None;
+                let mut step = 0;
+                let reps = run_transient_observed(
+                    &tree,
+                    &vec![s.degree; n],
+                    &problem,
+                    &time,
+                    &params,
+                    &mut |r, new, _fine, eta| {
+                        if out.recording() {
+                            pns_frame(out, step, Some(r.t), new, eta, r);
+                        }
+                        step += 1;
+                        last = Some((new.clone(), eta.to_vec()));
+                    },
+                )
                 .map_err(|e| solve_failed(e, 0, 0))?;
-            for r in &reps {
-                let i = table.rows.len();
-                table.rows.push(pns_row(r, i));
+                for r in &reps {
+                    let i = table.rows.len();
+                    table.rows.push(pns_row(r, i));
+                }
+                let fin = last.ok_or_else(|| solve_failed("no time step was taken", 0, 0))?;
+                let t = time.dt * time.n_steps as f64;
+                (reps, fin, t, Box::new(move |x| taylor_green(nu, x, t)))
             }
-            (
-                reps,
-                (est.coarse, est.indicators),
-                0.0,
-                Box::new(move |x| kovasznay(re, x)),
-            )
-        }
-        Flow::TaylorGreen => {
-            let nu = s.nu.unwrap_or(0.01);
-            let tree = graded_unit_square();
-            let n = tree.leaves().len();
-            let g = |x: [f64; 2], t: f64, c: usize| taylor_green(nu, x, t).0[c];
-            let u0 = |x: [f64; 2]| taylor_green(nu, x, 0.0).0;
-            let ex = |x: [f64; 2], t: f64| taylor_green(nu, x, t);
-            let problem = TransientProblem {
-                nu,
-                g: &g,
-                f: &zero,
-                u0: &u0,
-                exact: Some(&ex),
-            };
-            let time = TimeParams {
-                dt: s.dt.unwrap_or(0.02),
-                n_steps: s.steps.unwrap_or(5),
-                theta: 0.5,
-            };
-            let mut last: Option<(Field, Vec<f64>)> = None;
-            let mut step = 0;
-            let reps = run_transient_observed(
-                &tree,
-                &vec![s.degree; n],
-                &problem,
-                &time,
-                &params,
-                &mut |r, new, _fine, eta| {
-                    if out.recording() {
-                        pns_frame(out, step, Some(r.t), new, eta, r);
-                    }
-                    step += 1;
-                    last = Some((new.clone(), eta.to_vec()));
-                },
-            )
-            .map_err(|e| solve_failed(e, 0, 0))?;
-            for r in &reps {
-                let i = table.rows.len();
-                table.rows.push(pns_row(r, i));
-            }
-            let fin = last.ok_or_else(|| solve_failed("no time step was taken", 0, 0))?;
-            let t = time.dt * time.n_steps as f64;
-            (
-                reps,
-                fin,
-                t,
-                Box::new(move |x| taylor_green(nu, x, t)),
-            )
-        }
-    };
+        };
     let newton: usize = reports.iter().map(|r| r.newton_iterations).sum();
     let last = reports
         .iter()

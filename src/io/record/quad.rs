@@ -21,11 +21,14 @@ pub struct QuadCells<'a> {
     pub map: &'a dyn Fn(usize, f64, f64) -> [f64; 2],
 }
 
+/// `eval(k, ξ, η, out)`: the components of a field at (ξ, η) of cell `k`.
+pub type PointEval<'a> = &'a dyn Fn(usize, f64, f64, &mut [f64]);
+
 /// A field sampled at points: `eval(k, ξ, η, out)` writes its `n_comp` components in cell `k`.
 pub struct PointField<'a> {
     pub name: &'a str,
     pub n_comp: usize,
-    pub eval: &'a dyn Fn(usize, f64, f64, &mut [f64]),
+    pub eval: PointEval<'a>,
 }
 
 fn num(v: f64) -> String {
@@ -294,12 +297,12 @@ pub struct Shading<'a> {
 /// edges crossed) is split by the mean of the corners.
 fn contour_segments(p: &[[f64; 2]; 4], v: &[f64; 4], c: f64, out: &mut Vec<[[f64; 2]; 2]>) {
     let mut cut: [Option<[f64; 2]>; 4] = [None; 4];
-    for e in 0..4 {
-        let (a, b) = (e, (e + 1) % 4);
+    for (a, x) in cut.iter_mut().enumerate() {
+        let b = (a + 1) % 4;
         let (va, vb) = (v[a] - c, v[b] - c);
         if (va < 0.0) != (vb < 0.0) {
             let t = va / (va - vb);
-            cut[e] = Some([
+            *x = Some([
                 p[a][0] + t * (p[b][0] - p[a][0]),
                 p[a][1] + t * (p[b][1] - p[a][1]),
             ]);
@@ -385,7 +388,8 @@ pub fn solution_png(
     if !(x1 > x0 && y1 > y0) {
         return Err("the mesh has no extent to draw".into());
     }
-    if !(hi >= lo) {
+    if lo > hi {
+        // No finite value.
         (lo, hi) = (0.0, 1.0);
     }
     if hi - lo < 1e-300 {
