@@ -1,8 +1,9 @@
 //! Small writers for the quadrilateral meshes of the model problems (`src/adapt/`): a VTU of
 //! the cells, each sampled on a `s × s` grid of sub-quads with point fields evaluated there
 //! (the solution), or with one quad per cell and cell fields only (the mesh with its error
-//! indicator); and a PNG of the mesh with every cell shaded by the base-10 logarithm of a cell
-//! value (the local error level), with a colour bar.
+//! indicator); a PNG of the mesh with every cell shaded by the base-10 logarithm of a cell
+//! value (the local error level), with a colour bar; and a PNG of a scalar over the mesh,
+//! shaded, with contour lines (marching squares on the sub-quads), with a colour bar.
 //!
 //! A cell is given by its map from the reference square [−1, 1]² (ξ, η) to the plane; its
 //! corners are the images of (±1, ±1), its edges straight lines between them (true for the
