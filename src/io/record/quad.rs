@@ -457,7 +457,14 @@ pub fn solution_png(
                     let v = id.map(|a| c.vals[a]);
                     let mean = v.iter().sum::<f64>() / 4.0;
                     let poly: Vec<(i32, i32)> = p.iter().map(|&q| px(q)).collect();
-                    root.draw(&Polygon::new(poly, colour(mean).filled()))
+                    let fill = colour(mean);
+                    root.draw(&Polygon::new(poly.clone(), fill.filled()))
+                        .map_err(e)?;
+                    // The outline in the same colour: the fill leaves out the right and lower
+                    // pixel rows of a polygon, which would show as white seams.
+                    let mut ring = poly;
+                    ring.push(ring[0]);
+                    root.draw(&PathElement::new(ring, fill.stroke_width(1)))
                         .map_err(e)?;
                     if v.iter().all(|x| x.is_finite()) {
                         for &lv in &levels {
