@@ -6,9 +6,11 @@
 //! its cell fields are summed against the summary; every summary key and `steps.csv` column is
 //! in the generated reference; bad scenes fail with the key and line named, exit status 2.
 
+mod logread;
 #[path = "common/tempdir.rs"]
 mod tempdir;
 
+use logread::{parse_vtu, Vtu};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -117,88 +119,36 @@ fn steps(dir: &Path) -> BTreeMap<String, Vec<f64>> {
     cols
 }
 
-/// An ASCII VTU read back: point and cell counts and every data array by name.
-struct Vtu {
-    points: usize,
-    cells: usize,
-    arrays: BTreeMap<String, (usize, Vec<f64>)>,
-}
-
-fn attr(tag: &str, name: &str) -> Option<String> {
-    let key = format!("{name}=\"");
-    let i = tag.find(&key)? + key.len();
-    let j = tag[i..].find('"')? + i;
-    Some(tag[i..j].to_string())
-}
-
+/// `solution.vtu` read back by the tests' XML reader ([`logread::parse_vtu`]).
 fn read_vtu(path: &Path) -> Vtu {
-    let text = std::fs::read_to_string(path).expect("solution.vtu");
-    assert!(text.contains("<VTKFile type=\"UnstructuredGrid\""));
-    let piece = &text[text.find("<Piece").unwrap()..];
-    let tag = &piece[..piece.find('>').unwrap()];
-    let points = attr(tag, "NumberOfPoints").unwrap().parse().unwrap();
-    let cells = attr(tag, "NumberOfCells").unwrap().parse().unwrap();
-    let mut arrays = BTreeMap::new();
-    let mut rest = text.as_str();
-    let mut unnamed = 0;
-    while let Some(i) = rest.find("<DataArray") {
-        rest = &rest[i..];
-        let end = rest.find('>').unwrap();
-        let tag = &rest[..end];
-        let body_end = rest.find("</DataArray>").unwrap();
-        let body = &rest[end + 1..body_end];
-        let name = attr(tag, "Name").unwrap_or_else(|| {
-            unnamed += 1;
-            format!("unnamed{unnamed}")
-        });
-        let comps = attr(tag, "NumberOfComponents").map_or(1, |c| c.parse().unwrap());
-        let values: Vec<f64> = body
-            .split_whitespace()
-            .map(|v| v.parse().expect("a number"))
-            .collect();
-        arrays.insert(name, (comps, values));
-        rest = &rest[body_end..];
-    }
-    Vtu {
-        points,
-        cells,
-        arrays,
-    }
+    let v = parse_vtu(path);
+    assert!(v.n_points > 0 && v.n_cells > 0, "{}", path.display());
+    v
 }
 
-impl Vtu {
-    fn array(&self, name: &str) -> &[f64] {
-        &self
-            .arrays
+/// Structure: quads only, point and cell arrays of the right lengths.
+fn check_vtu(v: &Vtu, point_fields: &[(&str, usize)], cell_fields: &[&str]) {
+    let a = |name: &str| -> &[f64] {
+        v.arrays
             .get(name)
             .unwrap_or_else(|| panic!("no array {name}"))
-            .1
+    };
+    assert_eq!(v.points.len(), 3 * v.n_points);
+    assert_eq!(a("connectivity").len(), 4 * v.n_cells);
+    assert_eq!(a("offsets").len(), v.n_cells);
+    assert!(a("types").iter().all(|&t| t == 9.0));
+    assert!(a("connectivity").iter().all(|&i| (i as usize) < v.n_points));
+    for (f, c) in point_fields {
+        assert_eq!(a(f).len(), c * v.n_points, "point field {f}");
     }
+    for f in cell_fields {
+        assert_eq!(a(f).len(), v.n_cells, "cell field {f}");
+    }
+}
 
-    /// Structure: quads only, point and cell arrays of the right lengths.
-    fn check(&self, point_fields: &[&str], cell_fields: &[&str]) {
-        assert_eq!(self.array("connectivity").len(), 4 * self.cells);
-        assert_eq!(self.array("offsets").len(), self.cells);
-        assert!(self.array("types").iter().all(|&t| t == 9.0));
-        let (c, pts) = &self.arrays["unnamed1"];
-        assert_eq!((*c, pts.len()), (3, 3 * self.points), "points");
-        assert!(self
-            .array("connectivity")
-            .iter()
-            .all(|&i| (i as usize) < self.points));
-        for f in point_fields {
-            let (c, v) = &self.arrays[*f];
-            assert_eq!(v.len(), c * self.points, "point field {f}");
-        }
-        for f in cell_fields {
-            assert_eq!(self.array(f).len(), self.cells, "cell field {f}");
-        }
-    }
-
-    /// (Σ v²)^{1/2} of a cell field over the mesh cells, each written on `sub²` sub-quads.
-    fn root_sum_sq(&self, name: &str, sub: usize) -> f64 {
-        (self.array(name).iter().map(|v| v * v).sum::<f64>() / (sub * sub) as f64).sqrt()
-    }
+/// (Σ v²)^{1/2} of a cell field over the mesh cells, each written on `sub²` sub-quads.
+fn root_sum_sq(v: &Vtu, name: &str, sub: usize) -> f64 {
+    (v.arrays[name].iter().map(|x| x * x).sum::<f64>() / (sub * sub) as f64).sqrt()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -247,16 +197,17 @@ fn cavity_moving_mesh_against_botella_peyret() {
     // The last row is the final state of the summary.
     assert!(rel(*st["psi_min"].last().unwrap(), num(&r["psi_min"])) < 1e-14);
     let v = read_vtu(&dir.join("solution.vtu"));
-    assert_eq!(v.cells, 256 * 4, "16 × 16 cells, 2 × 2 sub-quads each");
-    v.check(
-        &["velocity", "pressure", "stream_function"],
+    assert_eq!(v.n_cells, 256 * 4, "16 × 16 cells, 2 × 2 sub-quads each");
+    check_vtu(
+        &v,
+        &[("velocity", 2), ("pressure", 1), ("stream_function", 1)],
         &["error_indicator", "monitor", "degree", "level"],
     );
     // The lid: u = 1 on the top edge outside the two corner cells (whose edge carries the
     // H¹ projection of the jump to 0 at the corner, see `adapt::space`).
-    let pts = &v.arrays["unnamed1"].1;
-    let vel = v.array("velocity");
-    let lid: Vec<f64> = (0..v.points)
+    let pts = &v.points;
+    let vel = &v.arrays["velocity"];
+    let lid: Vec<f64> = (0..v.n_points)
         .filter(|&i| pts[3 * i + 1] == 1.0 && pts[3 * i] > 0.1 && pts[3 * i] < 0.9)
         .map(|i| vel[2 * i])
         .collect();
@@ -313,13 +264,14 @@ fn heat_two_grid_effectivity() {
     // The VTU's cell fields are the final step's: their root sums of squares are the
     // summary's L² error and two-grid estimate.
     let v = read_vtu(&dir.join("solution.vtu"));
-    v.check(
-        &["u", "u_exact"],
+    check_vtu(
+        &v,
+        &[("u", 1), ("u_exact", 1)],
         &["error_indicator", "error", "degree", "level"],
     );
-    assert_eq!(v.cells, num(&r["cells"]) as usize);
-    assert!(rel(v.root_sum_sq("error", 1), num(&r["l2_error"])) < 1e-9);
-    assert!(rel(v.root_sum_sq("error_indicator", 1), num(&r["estimate"])) < 1e-9);
+    assert_eq!(v.n_cells, num(&r["cells"]) as usize);
+    assert!(rel(root_sum_sq(&v, "error", 1), num(&r["l2_error"])) < 1e-9);
+    assert!(rel(root_sum_sq(&v, "error_indicator", 1), num(&r["estimate"])) < 1e-9);
     assert_eq!(steps(&dir)["step"].len(), 10);
 }
 
@@ -333,13 +285,14 @@ fn burgers_two_grid_effectivity() {
     let eff = num(&r["effectivity"]);
     assert!((0.5..1.5).contains(&eff), "effectivity {eff}");
     let v = read_vtu(&dir.join("solution.vtu"));
-    v.check(
-        &["u", "u_exact"],
+    check_vtu(
+        &v,
+        &[("u", 2), ("u_exact", 2)],
         &["error_indicator", "error", "degree", "level"],
     );
     // Q2: 2 × 2 sub-quads per cell.
-    assert_eq!(v.cells, 4 * num(&r["cells"]) as usize);
-    assert!(rel(v.root_sum_sq("error", 2), num(&r["l2_error"])) < 1e-9);
+    assert_eq!(v.n_cells, 4 * num(&r["cells"]) as usize);
+    assert!(rel(root_sum_sq(&v, "error", 2), num(&r["l2_error"])) < 1e-9);
 }
 
 /// Target of tests/ns_p_adaptive.rs (`kovasznay_…`, the adaptive loop at τ = 1e-3): the loop
@@ -356,8 +309,9 @@ fn kovasznay_p_adaptive_reaches_the_tolerance() {
     assert!(num(&r["estimate"]) <= tol && num(&r["l2_error"]) <= tol);
     assert!(num(&r["solves"]) > 1.0, "the loop raised degrees");
     let v = read_vtu(&dir.join("solution.vtu"));
-    v.check(
-        &["velocity", "velocity_exact", "pressure"],
+    check_vtu(
+        &v,
+        &[("velocity", 2), ("velocity_exact", 2), ("pressure", 1)],
         &["error_indicator", "error", "degree", "level"],
     );
 }
@@ -399,15 +353,64 @@ fn lshape_h_adaptive_rate() {
     let rate = num(&r["rate"]);
     assert!((rate + 0.5).abs() < 0.1, "rate {rate}");
     let v = read_vtu(&dir.join("solution.vtu"));
-    v.check(
-        &["u", "u_exact"],
+    check_vtu(
+        &v,
+        &[("u", 1), ("u_exact", 1)],
         &["error_indicator", "error", "degree", "level"],
     );
-    assert_eq!(v.cells, num(&r["cells"]) as usize);
-    assert!(rel(v.root_sum_sq("error", 1), num(&r["energy_error"])) < 1e-9);
-    assert!(rel(v.root_sum_sq("error_indicator", 1), num(&r["estimate"])) < 1e-9);
+    assert_eq!(v.n_cells, num(&r["cells"]) as usize);
+    assert!(rel(root_sum_sq(&v, "error", 1), num(&r["energy_error"])) < 1e-9);
+    assert!(rel(root_sum_sq(&v, "error_indicator", 1), num(&r["estimate"])) < 1e-9);
     let st = steps(&dir);
     assert_eq!(st["step"].len(), num(&s["steps"]) as usize);
+}
+
+/// `run.rrd` (builds with the `rerun` feature): one frame of the solution and the error level
+/// per row of `steps.csv`, the series equal to the table; without the feature the sink is
+/// skipped with a warning.
+#[test]
+fn rerun_recording_frames_the_passes() {
+    let dir = TestDir::new("model", "rerun");
+    let sc = scene("lshape.toml");
+    let out = tread(&[
+        "-q",
+        "run",
+        sc.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+        "--set",
+        "problem.max_dofs=300",
+        "--set",
+        "output.sinks=[\"summary\", \"csv\", \"rerun\"]",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let st = steps(&dir);
+    #[cfg(feature = "rerun")]
+    {
+        let r = logread::read_rrd(&dir.join("run.rrd"));
+        let n = st["step"].len();
+        for e in ["/solution/mesh", "/error/mesh", "/solution/edges"] {
+            assert_eq!(r[e].times.len(), n, "{e}");
+        }
+        let frames: Vec<i64> = r["/solution/mesh"].times.iter().map(|t| t.0).collect();
+        assert_eq!(frames, (0..n as i64).collect::<Vec<_>>());
+        let series = &r["/series/energy_error"].scalars;
+        assert_eq!(series.len(), n);
+        for (a, b) in series.iter().zip(&st["energy_error"]) {
+            assert!(rel(*a, *b) < 1e-14, "{a} vs {b}");
+        }
+        assert_eq!(r["/scene"].static_rows, 1);
+    }
+    #[cfg(not(feature = "rerun"))]
+    {
+        assert!(!st["step"].is_empty());
+        assert!(!dir.join("run.rrd").exists());
+        assert!(String::from_utf8_lossy(&out.stderr).contains("no `rerun` feature"));
+    }
 }
 
 /// A bad scene: exit status 2, every problem named by key and line, no panic.
