@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use tread::app::{self, RunOptions};
 use tread::driver::compare::CompareTolerances;
 use tread::io::output::tidy_numbers;
+use tread::io::scene::model_problem::ModelScene;
 use tread::io::Scene;
 
 /// The scene run by `tread` without arguments (also `cargo run --release`): it is run in both
@@ -218,6 +219,17 @@ enum Command {
 const MAX_SCENE_BYTES: u64 = 4 << 20;
 
 fn load(path: &Path, set: &[String]) -> Result<Scene, String> {
+    if let Some(m) = load_model(path, set) {
+        let head = format!(
+            "{}: a model-problem scene (it has [problem]): run it with `tread run`, check it \
+             with `tread check`",
+            path.display()
+        );
+        return Err(match m {
+            Ok(_) => head,
+            Err(e) => format!("{head}\n{e}"),
+        });
+    }
     let scene = load_checked(path, set).map_err(|e| match e {
         LoadError::Read(m) => m,
         LoadError::Scene(e) => e.to_string(),
@@ -382,25 +394,94 @@ fn strip_for_mode(path: &Path, set: &[String], keys: &[String]) -> Option<(Scene
     None
 }
 
-fn load_checked(path: &Path, set: &[String]) -> Result<Scene, LoadError> {
+/// The text of a scene file (at most [`MAX_SCENE_BYTES`], UTF-8).
+fn read_scene_text(path: &Path) -> Result<String, String> {
     use std::io::Read;
     let mut bytes = Vec::new();
     std::fs::File::open(path)
         .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
-        .map_err(|e| LoadError::Read(format!("cannot read scene {}: {e}", path.display())))?;
+        .map_err(|e| format!("cannot read scene {}: {e}", path.display()))?;
     if bytes.len() as u64 > MAX_SCENE_BYTES {
-        return Err(LoadError::Read(format!(
+        return Err(format!(
             "cannot read scene {}: larger than {} MiB, not a scene file",
             path.display(),
             MAX_SCENE_BYTES >> 20
-        )));
+        ));
     }
-    let text = String::from_utf8(bytes).map_err(|e| {
-        LoadError::Read(format!(
-            "cannot read scene {}: not UTF-8 text ({e})",
-            path.display()
-        ))
-    })?;
+    String::from_utf8(bytes)
+        .map_err(|e| format!("cannot read scene {}: not UTF-8 text ({e})", path.display()))
+}
+
+/// A model-problem scene (one with `[problem]`, or `--set problem.…`), loaded and checked;
+/// `None` for a rolling scene (or a file that cannot be read: the rolling loader says why).
+fn load_model(path: &Path, set: &[String]) -> Option<Result<ModelScene, String>> {
+    use tread::io::scene::model_problem::{is_model_problem, overrides_set_problem};
+    let text = read_scene_text(path).ok()?;
+    if !(is_model_problem(&text) || overrides_set_problem(set)) {
+        return None;
+    }
+    Some(
+        ModelScene::from_toml_str(&text, &path.display().to_string(), set)
+            .map_err(|e| e.to_string()),
+    )
+}
+
+/// Run a model-problem scene (`tread run` on a scene with `[problem]`).
+fn run_model(scene: ModelScene, out: Option<PathBuf>, quiet: bool) -> ExitCode {
+    let started = std::time::Instant::now();
+    let out_dir = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
+    if !quiet {
+        eprintln!(
+            "tread: running model problem `{}` (kind \"{}\")",
+            scene.name,
+            scene.problem.kind()
+        );
+    }
+    let _lock = match tread::io::output::OutDirLock::take(&out_dir) {
+        Ok(l) => {
+            if l.removed > 0 && !quiet {
+                eprintln!(
+                    "tread: removed {} result files of an earlier run from {}",
+                    l.removed,
+                    out_dir.display()
+                );
+            }
+            l
+        }
+        Err(msg) => {
+            let e = app::AppError::OutDir(out_dir.clone(), msg);
+            eprintln!("tread: error: {e}");
+            return ExitCode::from(e.exit_code());
+        }
+    };
+    let opts = RunOptions {
+        out_dir,
+        verbose: false,
+        quiet,
+    };
+    match tread::driver::model_problem::run(&scene, &opts) {
+        Ok(o) => {
+            if !quiet {
+                say(&status_line(&o.typed, started.elapsed().as_secs_f64()));
+                for line in &o.headline {
+                    say(line);
+                }
+            }
+            say(&format!(
+                "results written to {}",
+                o.out_dir.join("summary.json").display()
+            ));
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("tread: error: {}", tidy_numbers(&e.to_string()));
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+fn load_checked(path: &Path, set: &[String]) -> Result<Scene, LoadError> {
+    let text = read_scene_text(path).map_err(LoadError::Read)?;
     let mut scene =
         Scene::from_toml_str(&text, &path.display().to_string(), set).map_err(LoadError::Scene)?;
     // A relative mesh file is relative to the scene file.
@@ -581,22 +662,41 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             mode,
             verbose,
             dump_matrix,
-        }) => match load_with_mode(&scene, &set, mode.as_deref()) {
-            Ok(s) if dump_matrix.is_some() && s.analysis.mode != tread::io::scene::Mode::Steady => {
+        }) => match load_model(&scene, &set) {
+            Some(Ok(_)) if mode.is_some() || dump_matrix.is_some() => {
                 eprintln!(
-                        "tread: --dump-matrix writes the steady tangent: it needs analysis mode \"steady\" (--mode steady), not \"{}\"",
-                        s.analysis.mode
-                    );
+                    "tread: {}: a model-problem scene (it has [problem]): --mode and --dump-matrix apply to rolling scenes only",
+                    scene.display()
+                );
                 ExitCode::from(2)
             }
-            Ok(s) if threads == 0 && s.solver.threads > 0 => app::in_pool(s.solver.threads, || {
-                run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref())
-            }),
-            Ok(s) => run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref()),
-            Err(e) => {
+            Some(Ok(m)) => run_model(m, out, cli.quiet),
+            Some(Err(e)) => {
                 eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
                 ExitCode::from(2)
             }
+            None => match load_with_mode(&scene, &set, mode.as_deref()) {
+                Ok(s)
+                    if dump_matrix.is_some()
+                        && s.analysis.mode != tread::io::scene::Mode::Steady =>
+                {
+                    eprintln!(
+                        "tread: --dump-matrix writes the steady tangent: it needs analysis mode \"steady\" (--mode steady), not \"{}\"",
+                        s.analysis.mode
+                    );
+                    ExitCode::from(2)
+                }
+                Ok(s) if threads == 0 && s.solver.threads > 0 => {
+                    app::in_pool(s.solver.threads, || {
+                        run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref())
+                    })
+                }
+                Ok(s) => run_with(s, out, verbose, cli.quiet, None, dump_matrix.as_deref()),
+                Err(e) => {
+                    eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
+                    ExitCode::from(2)
+                }
+            },
         },
         Some(Command::Compare {
             scene,
@@ -750,6 +850,23 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Some(Command::Check { scene, set }) if load_model(&scene, &set).is_some() => {
+            match load_model(&scene, &set) {
+                Some(Ok(m)) => {
+                    say(&format!(
+                        "# {}: valid; resolved scene with defaults:",
+                        scene.display()
+                    ));
+                    say(m.to_toml_string().trim_end());
+                    ExitCode::SUCCESS
+                }
+                Some(Err(e)) => {
+                    eprintln!("tread: invalid scene:\n{}", tidy_numbers(&e));
+                    ExitCode::from(2)
+                }
+                None => ExitCode::from(2),
+            }
+        }
         Some(Command::Check { scene, set }) => match load(&scene, &set) {
             Ok(mut s) => {
                 // The listing loads back from any folder: the mesh file by its absolute path.

@@ -1,6 +1,7 @@
 """Read every output of a tread run back with independent readers and check it.
 
-Usage: read_outputs.py OUT_DIR [OUT_DIR ...]
+Usage: read_outputs.py OUT_DIR [OUT_DIR ...]; a folder of a model-problem scene (summary
+`mode` = `model_problem`) is checked by `check_model_dir`.
 
 Readers: Python `mcap` (with the protobuf schemas embedded in run.mcap, decoded by the
 `protobuf` runtime), meshio (every .vtu of fields.pvd and steady.vtu), the csv module, json.
@@ -126,7 +127,46 @@ def check_dir(d):
         print(f"read_outputs:   friction: max |t_t| = {tt:.4g}, max t_n = {tn:.4g}")
 
 
+def check_model_dir(d):
+    """A model problem: steps.csv against summary.json, solution.vtu by meshio (quads only,
+    the cell fields per cell, their root sum of squares against the summary's error and
+    estimate where the VTU has one sub-quad per cell)."""
+    s = json.load(open(os.path.join(d, "summary.json")))
+    r = s["results"]
+    print(f"read_outputs: {d}: model problem {s['kind']} ({s['scene']}), converged {s['converged']}")
+    check(s["converged"], f"{d}: not converged")
+    rows = read_csv(os.path.join(d, "steps.csv"))
+    check(len(rows) == s["steps"], f"{d}/steps.csv: {len(rows)} rows, summary steps {s['steps']}")
+    m = meshio.read(os.path.join(d, "solution.vtu"))
+    check([c.type for c in m.cells] == ["quad"], f"{d}/solution.vtu cells {[c.type for c in m.cells]}")
+    n = len(m.cells[0].data)
+    for f in ("error_indicator", "degree", "level"):
+        check(f in m.cell_data and len(m.cell_data[f][0]) == n, f"{d}/solution.vtu: cell field {f}")
+    check(len(m.point_data) >= 1, f"{d}/solution.vtu: no point field")
+    for name, v in m.point_data.items():
+        check(len(v) == len(m.points), f"{d}/solution.vtu: point field {name}")
+    if s["kind"] == "lshape" and r["max_degree"] == 1:
+        ind = m.cell_data["error_indicator"][0]
+        err = m.cell_data["error"][0]
+        est = math.sqrt(sum(float(x) ** 2 for x in ind))
+        e = math.sqrt(sum(float(x) ** 2 for x in err))
+        check(abs(est - r["estimate"]) <= 1e-9 * r["estimate"], f"VTU estimate {est} vs {r['estimate']}")
+        check(abs(e - r["energy_error"]) <= 1e-9 * r["energy_error"], f"VTU error {e} vs {r['energy_error']}")
+    if s["kind"] == "cavity":
+        check(n == 4 * r["cells"], f"{d}/solution.vtu: {n} quads for {r['cells']} cells")
+        check(r["centreline_error"] < r["uniform_centreline_error"], "moved mesh not better")
+    for png in ("error_mesh.png", "solution.png"):
+        with open(os.path.join(d, png), "rb") as f:
+            check(f.read(8) == b"\x89PNG\r\n\x1a\n", f"{d}/{png}: not a PNG")
+    print(f"read_outputs:   steps.csv {len(rows)} rows, solution.vtu {n} quads, {len(m.points)} points")
+
+
 if __name__ == "__main__":
     for d in sys.argv[1:]:
-        check_dir(d)
+        with open(os.path.join(d, "summary.json")) as f:
+            mode = json.load(f).get("mode")
+        if mode == "model_problem":
+            check_model_dir(d)
+        else:
+            check_dir(d)
     print("read_outputs: all checks passed")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Read every output of two scenes (and the 3D outputs of tools/hex_outputs.rs,
+# Read every output of two scenes, of two model-problem scenes (and the 3D outputs of tools/hex_outputs.rs,
 # tools/check_hex_outputs.py) back with independent readers (Python mcap + protobuf,
 # meshio, and `rerun rrd verify` when a run.rrd is written, plus the `omega` timeline of a steady
 # continuation, tools/check_rrd_timeline.py; zlib-compressed VTU against the
@@ -26,6 +26,12 @@ RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$
     --set mesh.n_r=3 --set mesh.n_theta=48 --set "$SINKS"
 RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/free_rolling.toml --out "$OUT/free_rolling" --set "$SINKS"
 "$VENV/bin/python" tools/read_outputs.py "$OUT/indentation_friction" "$OUT/free_rolling"
+# Model problems (scenes with [problem]): steps.csv, solution.vtu by meshio, the PNGs, run.rrd.
+for k in cavity lshape; do
+    RAYON_NUM_THREADS=1 "$TREAD" -q run "scenarios/model_problems/$k.toml" --out "$OUT/model_$k" \
+        --set 'output.sinks=["summary","csv","vtu","png","rerun"]'
+done
+"$VENV/bin/python" tools/read_outputs.py "$OUT/model_cavity" "$OUT/model_lshape"
 # zlib-compressed VTU: the same scene with `output.vtu_compression = "zlib"` must give the same
 # arrays (decoded independently, then by meshio, and by VTK when the `vtk` package is there).
 RAYON_NUM_THREADS=1 "$TREAD" -q run scenarios/indentation_friction.toml --out "$OUT/indentation_friction_zlib" \

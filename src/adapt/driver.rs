@@ -327,10 +327,31 @@ pub struct StepRecord {
 /// Run the adapt loop on a problem posed on `tree` (the exact solution gives the Dirichlet
 /// data, the source and the error).
 pub fn run(
+    tree: Quadtree,
+    problem: &dyn Exact,
+    u_norm: f64,
+    opts: &AdaptOptions,
+) -> Result<Vec<StepRecord>, SpaceError> {
+    run_observed(tree, problem, u_norm, opts, &mut |_| {})
+}
+
+/// One pass of the loop as [`run_observed`] shows it: the record, the mesh, the space, the
+/// solution and the driving estimate, before the mesh is refined.
+pub struct StepView<'a> {
+    pub record: &'a StepRecord,
+    pub tree: &'a Quadtree,
+    pub space: &'a Space,
+    pub x: &'a [f64],
+    pub estimate: &'a Estimate,
+}
+
+/// [`run`], calling `each` on every pass (the last one sees the final mesh and solution).
+pub fn run_observed(
     mut tree: Quadtree,
     problem: &dyn Exact,
     u_norm: f64,
     opts: &AdaptOptions,
+    each: &mut dyn FnMut(&StepView),
 ) -> Result<Vec<StepRecord>, SpaceError> {
     for c in tree.leaves() {
         tree.cells[c as usize].degree = opts.degree;
@@ -440,9 +461,23 @@ pub fn run(
         };
         if done {
             rec.t_total = clock.elapsed().as_secs_f64() - t_excluded;
+            each(&StepView {
+                record: &rec,
+                tree: &tree,
+                space: &space,
+                x: &x,
+                estimate: &est,
+            });
             records.push(rec);
             break;
         }
+        each(&StepView {
+            record: &rec,
+            tree: &tree,
+            space: &space,
+            x: &x,
+            estimate: &est,
+        });
         // 4. Refine.
         let t0 = Instant::now();
         let old_tree = tree.clone();

@@ -16,6 +16,7 @@
 //! is accepted).
 
 pub mod burgers;
+pub mod cavity_reference;
 pub mod convection;
 pub mod driver;
 pub mod estimate;

@@ -1154,6 +1154,23 @@ pub fn run_transient(
     time: &TimeParams,
     params: &PAdaptParams,
 ) -> Result<Vec<SweepReport>, PnsError> {
+    run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {})
+}
+
+/// What [`run_transient_observed`] calls on every accepted step: (report, solution, enriched
+/// solution, indicators).
+pub type StepObserver<'a> = &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]);
+
+/// [`run_transient`], calling `each(report, solution, enriched solution, indicators)` on every
+/// accepted step.
+pub fn run_transient_observed(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &TransientProblem,
+    time: &TimeParams,
+    params: &PAdaptParams,
+    each: StepObserver,
+) -> Result<Vec<SweepReport>, PnsError> {
     params.check()?;
     check_time(time)?;
     let initial = |d: &[usize]| initial_field(tree, d, problem);
@@ -1186,6 +1203,7 @@ pub fn run_transient(
             let marked = mark_cells(&new.th, &eta, params);
             if marked.is_empty() || sweep + 1 >= params.max_sweeps {
                 rep.accepted = true;
+                each(&rep, &new, &new_fine, &eta);
                 reports.push(rep);
                 old = new;
                 old_fine = new_fine;

@@ -424,6 +424,9 @@ pub struct TransientRun {
     /// Final mesh, space and solution (time t_0 + n_steps dt).
     pub tree: Quadtree,
     pub x: Vec<f64>,
+    /// The fine solution of the two-grid estimate at the same time, on `tree` refined once
+    /// (empty without the estimate).
+    pub x_fine: Vec<f64>,
 }
 
 impl TransientRun {
@@ -436,7 +439,8 @@ impl TransientRun {
     }
 }
 
-fn refined(tree: &Quadtree) -> Quadtree {
+/// `tree` with every leaf split once (the fine mesh of the two-grid estimate).
+pub fn refined(tree: &Quadtree) -> Quadtree {
     let mut f = tree.clone();
     let leaves = f.leaves();
     f.refine(&leaves);
@@ -449,6 +453,28 @@ pub fn run(
     tree0: &Quadtree,
     t0: f64,
     opts: &TransientOptions,
+) -> Result<TransientRun, TransientError> {
+    run_observed(kernel, tree0, t0, opts, &mut |_| {})
+}
+
+/// One accepted step as [`run_observed`] shows it: its record, the mesh and space it was
+/// computed on, the solution, and the two-grid indicators η_K (None without the estimate),
+/// before the mesh is adapted.
+pub struct StepView<'a> {
+    pub record: &'a StepRecord,
+    pub tree: &'a Quadtree,
+    pub space: &'a Space,
+    pub x: &'a [f64],
+    pub indicators: Option<&'a [f64]>,
+}
+
+/// [`run`], calling `each` on every accepted step.
+pub fn run_observed(
+    kernel: &dyn Kernel,
+    tree0: &Quadtree,
+    t0: f64,
+    opts: &TransientOptions,
+    each: &mut dyn FnMut(&StepView),
 ) -> Result<TransientRun, TransientError> {
     if !(opts.dt > 0.0 && opts.dt.is_finite()) {
         return Err(TransientError::Parameter(format!(
@@ -513,6 +539,15 @@ pub fn run(
                 est = Some(e);
             }
             let last_sweep = sweep + 1 == sweeps;
+            if last_sweep || !opts.adaptive {
+                each(&StepView {
+                    record: &rec,
+                    tree: &tree,
+                    space: &space_new,
+                    x: &x,
+                    indicators: est.as_ref().map(|e| e.indicators.as_slice()),
+                });
+            }
             if !opts.adaptive {
                 steps.push(rec);
                 xn = x;
@@ -564,6 +599,7 @@ pub fn run(
         wall_seconds: clock.elapsed().as_secs_f64(),
         tree,
         x: xn,
+        x_fine: if two_grid { xfn } else { Vec::new() },
     })
 }
 

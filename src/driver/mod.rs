@@ -16,6 +16,9 @@
 //!   How a run solves (linear solver, Newton, load steps) is decided once when its system is
 //!   built ([`crate::solver::SolvePlan`], [`crate::setup::solve_plan`]).
 //!   Imports go one way: `app` → `*_run` → the analyses → the model ([`crate::model`]) → physics and solvers.
+//! * [`model_problem`]: the adaptive model problems of [`crate::adapt`] (lid-driven cavity with
+//!   a moving mesh, convection-dominated heat and Burgers with the two-grid method, the
+//!   p-method for Navier–Stokes, the L-shape) run from a scene with `[problem]`.
 //! * [`results`]: the typed contents of every mode's `summary.json`, which the `*_run` files
 //!   fill and [`crate::driver::results::RunOutcome`] carries in memory.
 //!
@@ -29,6 +32,7 @@ pub mod envelope;
 pub mod frame;
 pub mod indentation;
 pub mod indentation3d;
+pub mod model_problem;
 pub mod resistance;
 pub mod results;
 pub mod run3d;

@@ -82,6 +82,7 @@ impl Summary {
             ModeSummary::Transient(s) => Some(&s.run),
             ModeSummary::Steady(s) => Some(&s.run),
             ModeSummary::StickSlip(s) => Some(&s.run),
+            ModeSummary::ModelProblem(s) => Some(&s.run),
             ModeSummary::Compare(_) => None,
         }
     }
@@ -134,6 +135,8 @@ pub enum ModeSummary {
     Steady(Box<SteadySummary>),
     StickSlip(StickSlipSummary),
     Compare(CompareSummary),
+    /// A model problem of `src/adapt/` (a scene with `[problem]`).
+    ModelProblem(Box<super::model_problem::ModelProblemSummary>),
 }
 
 /// Counts, wall time and error of a run (every mode but `compare`).

@@ -279,7 +279,8 @@ pub fn sanitize(v: &mut serde_json::Value) {
 /// Name of the lock file a run keeps in its output folder.
 pub const LOCK_FILE: &str = ".tread.lock";
 
-/// Files (and `*.png`, `fields/step_*.vtu`) a run writes into its output folder; a new run
+/// Files (and `*.png`, `fields/step_*.vtu`) a run writes into its output folder (the rolling
+/// scenes' and the model problems'); a new run
 /// removes those an earlier run left, so the folder holds only this run's results.
 const OUTPUT_NAMES: &[&str] = &[
     "summary.json",
@@ -299,6 +300,8 @@ const OUTPUT_NAMES: &[&str] = &[
     "contact.pvd",
     "run.mcap",
     "run.rrd",
+    "steps.csv",
+    "solution.vtu",
 ];
 
 /// The output folder of a run, held for its duration: created, checked writable, locked

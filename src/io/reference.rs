@@ -49,12 +49,19 @@ const CMP: &str = "tread compare";
 const SDC: &str = "steady with motion.control other than speed";
 const REC: &str = "steady, when the first solve failed";
 const EPSC: &str = "steady, friction with ε < 1e-2 v_ref";
+const MP: &str = "model problems";
+const MPC: &str = "model problem cavity";
+const MPT: &str = "model problems heat, burgers";
+const MPP: &str = "model problem p_navier_stokes";
+const MPL: &str = "model problem lshape";
+const MPTPL: &str = "model problems heat, burgers, p_navier_stokes, lshape";
+const MPTP: &str = "model problems heat, burgers, p_navier_stokes";
 const CST: &str = "steady, solver.coarse_start on a generated annulus with n_r even >= 4, n_theta a multiple of 4 >= 64";
 
 /// Every key of `summary.json` (objects are listed with their keys).
 pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("scene", N, "", "scene name"),
-    k("mode", N, "", "analysis mode that ran (`spinning`, `static`, `stick_slip`, `transient`, `steady`, `compare`)"),
+    k("mode", N, "", "analysis mode that ran (`spinning`, `static`, `stick_slip`, `transient`, `steady`, `compare`; `model_problem` for a scene with `[problem]`)"),
     k("dofs", N, "", "number of unknowns solved for (free displacement dofs + pressure dofs + global unknowns)"),
     k("newton_iterations", N, "", "Newton iterations summed over the run"),
     k("wall_time_s", "s", "", "wall time of the run (set-up, solve, results), seconds"),
@@ -354,6 +361,42 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.compare.quantities[].within", N, CMP, "rel_diff <= tolerance (false for a non-finite difference)"),
     k("results.compare.validated", N, CMP, "every quantity within its tolerance and the transient run steady; `tread compare` (and `tread` without a command) exits with status 4 when false"),
     k("results.compare.verdict", N, CMP, "the sentence printed last: `steady solution validated against the transient: …` or `not validated: …` (what failed)"),
+    // model problems (scenes with [problem])
+    k("kind", N, MP, "`problem.kind`: `cavity`, `heat`, `burgers`, `p_navier_stokes`, `lshape`"),
+    k("problem", N, MP, "the resolved `[problem]` table (every key with its value, defaults filled)"),
+    k("steps", N, MP, "rows of `steps.csv`: time steps, adaptive passes (every attempt of a p-adaptive time step) or mesh recalculations"),
+    k("results.equations", N, MP, "equations (unknowns) of the final solution"),
+    k("results.cells", N, "model problems cavity, heat, burgers, lshape", "cells of the final mesh"),
+    k("results.reynolds", N, MPC, "Reynolds number (ν = 1/Re, lid speed 1)"),
+    k("results.recalculations", N, MPC, "moving-mesh relocations made (0 on the uniform mesh)"),
+    k("results.min_det_j", "L²", MPC, "smallest corner det J of the final cells"),
+    k("results.psi_min", "L²/T", MPC, "minimum of the stream function (primary vortex)"),
+    k("results.psi_min_at", "L", MPC, "[x, y] where it is reached"),
+    k("results.reference", N, MPC, "source of the reference tables (`Ghia et al. (1982)` at Re = 100, 400; `Botella & Peyret (1998)` at Re = 1000); null for the regularised lid"),
+    k("results.centreline_u_error", "L/T", MPC, "largest |u(0.5, y) − u_ref| over the tabulated stations (null without a reference)"),
+    k("results.centreline_v_error", "L/T", MPC, "largest |v(x, 0.5) − v_ref| over the tabulated stations (Ghia's misprinted Re = 400 station x = 0.9063 left out)"),
+    k("results.centreline_error", "L/T", MPC, "the larger of the two"),
+    k("results.psi_min_error", "L²/T", MPC, "|ψ_min − ψ_min,ref| (Re = 1000 only)"),
+    k("results.uniform_centreline_error", "L/T", MPC, "centreline_error on the starting uniform mesh (recalculation 0)"),
+    k("results.uniform_psi_min_error", "L²/T", MPC, "psi_min_error on the starting uniform mesh"),
+    k("results.t", "T", MPTP, "time of the final solution (Kovasznay: 0)"),
+    k("results.max_equations", N, MPT, "largest number of equations over the steps"),
+    k("results.l2_error", "as u", MPTP, "‖u − u_h‖_L² at the final time against the exact solution (p_navier_stokes: the velocity)"),
+    k("results.h1_error", "as u / L", MPT, "|u − u_h|_H¹ at the final time"),
+    k("results.estimate", "as the error", MPTPL, "the error estimate of the final solution: two-grid ‖u_f − u_h‖ (heat, burgers), enrichment ‖u_{p+r} − u_p‖ (p_navier_stokes), the driving estimator's energy estimate (lshape)"),
+    k("results.effectivity", N, MPTPL, "estimate / error"),
+    k("results.flow", N, MPP, "`kovasznay` or `taylor_green`"),
+    k("results.equations_enriched", N, MPP, "equations of the enriched pair (every degree + `enrich`)"),
+    k("results.tolerance", "L·L/T", MPP, "`problem.tolerance` τ on the L² velocity estimate"),
+    k("results.worst_ratio", N, MPP, "largest η_K / τ_K, τ_K = τ (|K| / |Ω|)^{1/2} (≤ 1: every cell within its share)"),
+    k("results.accepted", N, MPP, "the final solution met the tolerance (no cell left to raise)"),
+    k("results.solves", N, MPP, "solves made (Kovasznay: sweeps; Taylor–Green: attempts over all steps)"),
+    k("results.degrees", N, MPP, "cells per velocity degree of the final solution, pairs [degree, cells]"),
+    k("results.max_level", N, MPL, "finest refinement level of the final mesh"),
+    k("results.max_degree", N, MPL, "largest polynomial degree of the final mesh"),
+    k("results.energy_error", "as u", MPL, "|u − u_h|₁ against u = r^{2/3} sin(2θ/3)"),
+    k("results.relative_error", N, MPL, "energy_error / |u|₁"),
+    k("results.rate", N, MPL, "least-squares slope of log energy_error against log equations over the meshes with at least 400 equations (null with fewer than three); optimal −p/2, uniform refinement −1/3"),
 ];
 
 /// One CSV file and its columns.
@@ -615,6 +658,42 @@ pub static CSV_FILES: &[CsvFile] = &[
             k("within", N, "", "`true` or `false`: rel_diff <= tolerance"),
         ],
     },
+    CsvFile {
+        name: "steps.csv",
+        when: "model problems (sink `csv`): one row per time step (heat, burgers), adaptive pass (lshape; p_navier_stokes: every sweep or attempt of a step) or mesh recalculation (cavity); the columns depend on the kind",
+        columns: &[
+            k("recalculation", N, MPC, "0: the uniform mesh after the continuation in Re, then one per relocation"),
+            k("equations", N, MP, "equations of the solve"),
+            k("min_det_j", "L²", MPC, "smallest corner det J of the cells"),
+            k("relocation_step", N, MPC, "accepted relocation step λ (1: the full relocation)"),
+            k("newton_iterations", N, "model problems cavity, heat, burgers, p_navier_stokes", "Newton iterations of the solve (cavity recalculation 0: of the whole continuation)"),
+            k("psi_min", "L²/T", MPC, "minimum of the stream function"),
+            k("psi_min_x", "L", MPC, "where, x"),
+            k("psi_min_y", "L", MPC, "where, y"),
+            k("centreline_u_error", "L/T", MPC, "largest |u(0.5, y) − u_ref| (empty without a reference)"),
+            k("centreline_v_error", "L/T", MPC, "largest |v(x, 0.5) − v_ref|"),
+            k("psi_min_error", "L²/T", MPC, "|ψ_min − ψ_min,ref| (Re = 1000)"),
+            k("step", N, "model problems heat, burgers, lshape", "index of the time step or mesh"),
+            k("t", "T", MPTP, "time of the solution (Kovasznay: 0)"),
+            k("cells", N, "model problems heat, burgers, lshape", "cells of the mesh"),
+            k("l2_error", "as u", MPTP, "‖u − u_h‖_L² against the exact solution"),
+            k("h1_error", "as u / L", MPT, "|u − u_h|_H¹"),
+            k("estimate", "as the error", MPTPL, "the error estimate (two-grid, enrichment or the driving estimator)"),
+            k("effectivity", N, MPTPL, "estimate / error"),
+            k("solve", N, MPP, "index of the solve"),
+            k("attempt", N, MPP, "attempt within the time step (steady: the sweep)"),
+            k("accepted", N, MPP, "1: the solution was accepted (time advanced after it)"),
+            k("equations_enriched", N, MPP, "equations of the enriched pair"),
+            k("worst_ratio", N, MPP, "largest η_K / τ_K"),
+            k("min_degree", N, MPP, "smallest velocity degree"),
+            k("max_degree", N, "model problems p_navier_stokes, lshape", "largest (velocity) degree"),
+            k("max_level", N, MPL, "finest refinement level"),
+            k("energy_error", "as u", MPL, "|u − u_h|₁"),
+            k("relative_error", N, MPL, "energy_error / |u|₁"),
+            k("t_solve", "s", MPL, "wall time of the solve step"),
+            k("t_estimate", "s", MPL, "wall time of the estimate step"),
+        ],
+    },
 ];
 
 /// Whether a `summary.json` key (dotted, `[]` for array elements) is in [`SUMMARY_KEYS`].
@@ -653,6 +732,8 @@ pub fn markdown() -> String {
          hand (a test compares this file with the program's output).\n\n## Scene keys\n\n",
     );
     out.push_str(&markdown_reference());
+    out.push_str("\n### Model-problem scenes (`[problem]`)\n\n");
+    out.push_str(&crate::io::scene::model_problem::markdown_reference());
     out.push_str(
         "\n## summary.json\n\nUnits as above (L, F, T of the scene; s = seconds of wall time). \
          `[]` marks the elements of an array. Non-finite numbers are written as null.\n\n",
@@ -678,7 +759,10 @@ time (transient) or load factor, written only for two or more distinct recorded 
 clock: a steady solve pressed in one load step (the default, `solver.load_steps = 1`) has a \
 single state and writes none of them, and a steady run with `[continuation]` writes \
 `branch.png` instead (its loads against the continuation parameter). A steady press in \
-several load steps plots them against the load factor.\n";
+several load steps plots them against the load factor. A model problem (a scene with \
+`[problem]`) writes `error_mesh.png` (its final mesh, every cell shaded by log10 of its error \
+indicator over at most six decades) and `solution.png` (the final solution shaded, with contour \
+lines; the cavity's stream function at the contour values of Ghia et al.).\n";
 
 /// The exit statuses of `tread`.
 const EXIT_STATUS: &str = "\n## Exit status\n\n\

@@ -110,6 +110,9 @@ pub mod interrupt;
 pub mod mcap;
 pub mod png;
 pub mod progress;
+pub mod quad;
+#[cfg(feature = "rerun")]
+pub mod quad_rrd;
 #[cfg(feature = "rerun")]
 pub mod rrd;
 #[cfg(feature = "rerun")]

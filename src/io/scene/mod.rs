@@ -194,6 +194,7 @@ mod issue;
 mod load;
 mod material;
 mod mesh;
+pub mod model_problem;
 mod motion;
 mod output;
 mod schema;
