@@ -555,7 +555,7 @@ pub fn build_contact_3d(scene: &Scene, mesh: &HexMesh) -> Result<ContactSurface3
             "mesh: the three-dimensional mesh has no contact facets (mesh.contact)".into(),
         ));
     }
-    ContactSurface3D::new(
+    let mut surface = ContactSurface3D::new(
         facets,
         scene.geometry.ro,
         nalgebra::Vector2::new(road.v0, 0.0),
@@ -563,7 +563,28 @@ pub fn build_contact_3d(scene: &Scene, mesh: &HexMesh) -> Result<ContactSurface3
         friction,
         rule,
     )
-    .map_err(|e| AppError::Unsupported(format!("contact: {e}")))
+    .map_err(|e| AppError::Unsupported(format!("contact: {e}")))?;
+    surface
+        .set_camber(road.camber.to_radians())
+        .map_err(|e| AppError::Unsupported(format!("road.camber: {e}")))?;
+    Ok(surface)
+}
+
+/// The road height H of first touch: `geometry.ro` without camber, else the largest
+/// −n·X over the tread facets' nodes (the lowest node relative to the cambered road).
+fn first_touch_3d(scene: &Scene, mesh: &HexMesh, surface: &ContactSurface3D) -> f64 {
+    let camber = scene.road.as_ref().map_or(0.0, |r| r.camber);
+    if camber == 0.0 {
+        return scene.geometry.ro;
+    }
+    let n = surface.frame().n;
+    let mut h = f64::NEG_INFINITY;
+    for f in &surface.facets {
+        for &a in mesh.cell_nodes(f.cell as usize) {
+            h = h.max(-n.dot(&mesh.nodes[a as usize]));
+        }
+    }
+    h
 }
 
 /// The three-dimensional solid system of a scene: the solid on [`build_hex_mesh`] with
@@ -596,12 +617,14 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
             )))
         }
     };
+    let ro = contact
+        .as_ref()
+        .map_or(scene.geometry.ro, |s| first_touch_3d(scene, &mesh, s));
     let solid = Solid3D::new(mesh, material, scene.material.rho, pressure);
     let sys = Solid3DSystem::new(solid, &fixed);
     let Some(surface) = contact else {
         return Ok(sys);
     };
-    let ro = scene.geometry.ro;
     let road = scene.road.as_ref();
     let sys = match road.and_then(|r| r.load) {
         Some(load) => sys.with_contact_load(surface, ro, ro * (1.0 - 1e-3), load),

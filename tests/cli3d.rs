@@ -403,6 +403,7 @@ fn bad_three_dimensional_inputs_name_the_key() {
         "analysis.mode",
     );
     bad("slip_static", &["road.slip_angle=2.0"], "road.slip_angle");
+    bad("camber_range", &["road.camber=95.0"], "road.camber");
     bad(
         "steady_torque",
         &[

@@ -137,6 +137,7 @@ scenes! {
     indentation_3d: "indentation_3d.toml" => "indentation_3d.json";
     spinning_3d: "spinning_3d.toml" => "spinning_3d.json";
     cornering_3d: "cornering_3d.toml" => "cornering_3d.json";
+    camber_3d: "camber_3d.toml" => "camber_3d.json";
     oden_hollow_cylinder: "oden_hollow_cylinder.toml" => "oden_hollow_cylinder.json";
     oden_hollow_cylinder_steady: "oden_hollow_cylinder.toml", "--mode", "steady" => "oden_hollow_cylinder_steady.json";
     oden_steady_sweep: "oden_steady_sweep.toml" => "oden_steady_sweep.json";

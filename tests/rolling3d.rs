@@ -55,7 +55,7 @@ fn noise(k: usize) -> f64 {
 /// Worst |K − K_fd| / max |K| of the steady system (ω = 3, road at 0.99 ωRo turned by 3°,
 /// damped normal compliance, tanh friction) at a perturbed state with the road 0.08 into the
 /// wheel; also the contact points and those in the regularised stick zone (|w| < ε).
-fn tangent_check(degree: usize, load: bool, facet_wise: bool) -> (f64, usize, usize) {
+fn tangent_check(degree: usize, load: bool, facet_wise: bool, camber: f64) -> (f64, usize, usize) {
     let mesh = revolved(&spec(1, 1, 8, degree, 0.4)).expect("mesh");
     let mut fx = vec![false; 3 * mesh.n_nodes()];
     for &n in mesh.node_set("hub") {
@@ -63,7 +63,7 @@ fn tangent_check(degree: usize, load: bool, facet_wise: bool) -> (f64, usize, us
     }
     let omega = 3.0;
     let eps = 0.37;
-    let s = ContactSurface3D::new(
+    let mut s = ContactSurface3D::new(
         mesh.facet_set("outer").to_vec(),
         RO,
         nalgebra::Vector2::zeros(),
@@ -72,6 +72,7 @@ fn tangent_check(degree: usize, load: bool, facet_wise: bool) -> (f64, usize, us
         FacetRule::Gauss(3),
     )
     .expect("contact surface");
+    s.set_camber(camber.to_radians()).expect("camber");
     let sys = Solid3DSystem::new(
         Solid3D::new(mesh, neo_hookean(), 1.0, PressureMode::None),
         &fx,
@@ -132,8 +133,17 @@ fn steady_tangent_matches_central_differences() {
         ("Hex8, load control", 1, true, false),
         ("Hex27, load control", 2, true, false),
         ("Hex27, load control, facet-wise slip", 2, true, true),
+        ("Hex8, load control, camber 3°", 1, true, false),
+        ("Hex27, displacement control, camber −3°", 2, false, false),
     ] {
-        let (err, contact, stick) = tangent_check(degree, load, facet_wise);
+        let camber = if name.contains("camber 3") {
+            3.0
+        } else if name.contains("camber −3") {
+            -3.0
+        } else {
+            0.0
+        };
+        let (err, contact, stick) = tangent_check(degree, load, facet_wise, camber);
         eprintln!(
             "{name}: worst |K − K_fd| / max|K| = {err:.2e}; {contact} contact points, {stick} with |w| < ε"
         );
@@ -296,13 +306,13 @@ fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
     }
 }
 
-/// α → −α mirrors the wheel in x3: the lateral force, the overturning and the aligning
-/// moments change sign, the rest stays. A free-sided wheel (no symmetry imposed), friction and
+/// α → −α and γ → −γ mirror the wheel in x3: the lateral force, the overturning and the
+/// aligning moments (in the road frame) change sign, the rest stays. A free-sided wheel (no symmetry imposed), friction and
 /// damping (l_n = 1: with l_n = 0 the damping term jumps where points enter the patch at the
 /// leading edge, and Newton stalls when one enters at the final load).
 #[test]
-fn slip_angle_sign_flips_lateral_force_and_aligning_moment() {
-    let scene = |alpha: f64| {
+fn slip_angle_and_camber_signs_flip_lateral_force_and_aligning_moment() {
+    let scene = |alpha: f64, camber: f64| {
         let text = format!(
             r#"
 [scene]
@@ -331,6 +341,7 @@ omega = 10.0
 disp = 0.04
 v0 = 19.9
 slip_angle = {alpha}
+camber = {camber}
 [contact]
 c_n = 2.0e4
 b_n = 2.0
@@ -349,37 +360,26 @@ linear = "lu"
         );
         Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
     };
-    let plus = steady_3d(&scene(2.0), false);
-    let minus = steady_3d(&scene(-2.0), false);
-    let tp = plus.contact.as_ref().expect("contact").totals;
-    let tm = minus.contact.as_ref().expect("contact").totals;
-    eprintln!(
-        "α = +2°: F = {:?}, M = {:?}\nα = −2°: F = {:?}, M = {:?}",
-        tp.force, tp.moment, tm.force, tm.moment
-    );
-    let fs = tp.force[1].abs();
-    // The slip angle makes a lateral force of the order of μ F2 |sin α| / (|sin α| + ...):
-    // it must be clearly non-zero for the symmetry to mean something.
-    assert!(
-        tp.force[2].abs() > 1e-3 * fs,
-        "no lateral force: {:?}",
-        tp.force
-    );
-    let tol = 1e-8 * fs;
-    let odd = [
-        (tp.force[2], tm.force[2]),
-        (tp.moment[0], tm.moment[0]),
-        (tp.moment[1], tm.moment[1]),
-    ];
-    for (a, b) in odd {
-        assert!((a + b).abs() <= tol * RO, "odd: {a} vs {b}");
-    }
-    let even = [
-        (tp.force[0], tm.force[0]),
-        (tp.force[1], tm.force[1]),
-        (tp.moment[2], tm.moment[2]),
-    ];
-    for (a, b) in even {
-        assert!((a - b).abs() <= tol * RO, "even: {a} vs {b}");
+    for (what, (ap, gp)) in [("slip angle", (2.0, 0.0)), ("camber", (0.0, 2.0))] {
+        let plus = steady_3d(&scene(ap, gp), false);
+        let minus = steady_3d(&scene(-ap, -gp), false);
+        // The hub loads in the road frame (longitudinal, vertical, lateral).
+        let loads = |s: &Solid3DSystem| {
+            let c = s.contact.as_ref().expect("contact");
+            let f = c.surface.frame();
+            (f.components(c.totals.force), f.components(c.totals.moment))
+        };
+        let ((fp, mp), (fm, mm)) = (loads(&plus), loads(&minus));
+        eprintln!("{what} +2°: F = {fp:?}, M = {mp:?}\n{what} −2°: F = {fm:?}, M = {mm:?}");
+        let fs = fp[1].abs();
+        // The lateral force must be clearly non-zero for the symmetry to mean something.
+        assert!(fp[2].abs() > 1e-3 * fs, "{what}: no lateral force: {fp:?}");
+        let tol = 1e-8 * fs;
+        for (a, b) in [(fp[2], fm[2]), (mp[0], mm[0]), (mp[1], mm[1])] {
+            assert!((a + b).abs() <= tol * RO, "{what}, odd: {a} vs {b}");
+        }
+        for (a, b) in [(fp[0], fm[0]), (fp[1], fm[1]), (mp[2], mm[2])] {
+            assert!((a - b).abs() <= tol * RO, "{what}, even: {a} vs {b}");
+        }
     }
 }

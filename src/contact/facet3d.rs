@@ -1,5 +1,5 @@
 //! Three-dimensional contact of the quadrilateral facets of a hexahedral mesh with the rigid
-//! road plane x2 = −H.
+//! road plane x2 = −H (n·x = −H with camber).
 //!
 //! # Frame, sign conventions and units
 //!
@@ -7,7 +7,11 @@
 //! axle; the road is the plane x2 = −H (H > 0 the road height below the axle) and moves in its
 //! own plane with the velocity V = (V1, V3) (hub frame; components along e1 and e3). A point of
 //! the facet at the reference position X has the current position x = X + u and the material
-//! velocity v. At every facet quadrature point
+//! velocity v. The formulas below are written for the uncambered road; with a camber γ
+//! ([`ContactSurface3D::set_camber`], [`RoadFrame`]) the road's frame (e1, n, e3) replaces
+//! (x1, x2, x3) in them: δ = −H − n·x, δ̇ = −n·v, w = (e1·v − V1, e3·v − V3),
+//! T = t1 e1 + t_n n + t3 e3, and the tangent's x2 column becomes the rank-one −(∂T/∂δ) nᵀ.
+//! At every facet quadrature point
 //!
 //! ```text
 //! δ = −H − x2                       penetration (> 0 in contact)
@@ -251,6 +255,38 @@ pub struct ContactSurface3D {
     /// Steady kinematics: the friction slip from nodal θ-derivatives along the node rings
     /// ([`super::steady_slip3d`]); set by [`Self::enable_steady_slip`].
     steady_slip: Option<SteadySlip3D>,
+    /// The road's frame in the wheel's (camber, [`Self::set_camber`]).
+    frame: RoadFrame,
+}
+
+/// The road's frame in the wheel frame: `n` its upward unit normal, `e1` and `e3` its
+/// in-plane directions (longitudinal, lateral). Without camber (e1, n, e3) = (x1, x2, x3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoadFrame {
+    pub e1: Vector3<f64>,
+    pub n: Vector3<f64>,
+    pub e3: Vector3<f64>,
+}
+
+impl RoadFrame {
+    /// The frame of a wheel cambered by `gamma` (radians): the wheel plane tilted by γ about
+    /// the rolling direction x1 relative to the road, so that in the wheel frame the road is
+    /// turned by −γ about x1: n = (0, cos γ, −sin γ), e3 = (0, sin γ, cos γ), e1 = x1. γ > 0
+    /// lowers the wheel's +x3 side toward the road (its top leans toward −x3).
+    pub fn cambered(gamma: f64) -> Self {
+        let (s, c) = gamma.sin_cos();
+        Self {
+            e1: Vector3::x(),
+            n: Vector3::new(0.0, c, -s),
+            e3: Vector3::new(0.0, s, c),
+        }
+    }
+
+    /// Components of a wheel-frame vector in the road frame (along e1, n, e3).
+    pub fn components(&self, v: [f64; 3]) -> [f64; 3] {
+        let v = Vector3::from(v);
+        [self.e1.dot(&v), self.n.dot(&v), self.e3.dot(&v)]
+    }
 }
 
 /// One facet quadrature point: shape values, reference and current position, velocity, and
@@ -337,7 +373,24 @@ impl ContactSurface3D {
             facets,
             rules: (0..6).map(|f| FacetRule3D::new(f, q, kind)).collect(),
             steady_slip: None,
+            frame: RoadFrame::cambered(0.0),
         })
+    }
+
+    /// Camber the wheel by `gamma` (radians, |γ| < π/2) relative to the road
+    /// ([`RoadFrame::cambered`]): the road becomes the plane n·x = −H, its velocity (V1, V3)
+    /// is along (e1, e3), the slip is w = (e1·v − V1, e3·v − V3), δ = −H − n·x, δ̇ = −n·v.
+    pub fn set_camber(&mut self, gamma: f64) -> Result<(), Contact3DError> {
+        if !(gamma.is_finite() && gamma.abs() < std::f64::consts::FRAC_PI_2) {
+            return Err(Contact3DError::NonFinite(gamma));
+        }
+        self.frame = RoadFrame::cambered(gamma);
+        Ok(())
+    }
+
+    /// The road's frame ([`Self::set_camber`]).
+    pub fn frame(&self) -> RoadFrame {
+        self.frame
     }
 
     /// Take the steady friction slip from nodal θ-derivatives along the node rings of the
@@ -421,7 +474,9 @@ impl ContactSurface3D {
             .norm()
             .max((pos(c[2]) - pos(c[1])).norm());
         let margin = 0.1 * chord;
-        fn_[..nf].iter().any(|&a| pos(a)[1] < -self.h + margin)
+        fn_[..nf]
+            .iter()
+            .any(|&a| self.frame.n.dot(&pos(a)) < -self.h + margin)
     }
 
     /// Visit the quadrature points of a facet with the cell-local displacement `u` and the
@@ -689,36 +744,48 @@ impl ContactSurface3D {
         let friction = self.friction.is_active();
         let (kx, damping) = vel.kx_damping();
         let damping = damping && self.normal.has_damping();
+        let RoadFrame { e1, n: nr, e3 } = self.frame;
         self.for_points::<E>(mesh, facet, u, vel, |pt| {
-            let delta = -self.h - pt.x[1];
+            let delta = -self.h - nr.dot(&pt.x);
             if delta <= 0.0 {
                 return;
             }
-            let rate = if damping { -pt.vel[1] } else { 0.0 };
+            let rate = if damping { -nr.dot(&pt.vel) } else { 0.0 };
             let nv = self.normal.eval(delta, rate);
             if nv.t <= 0.0 && nv.d_delta == 0.0 {
                 return;
             }
             let d_rate = if damping { nv.d_rate } else { 0.0 };
-            // ∂T/∂x (only the column of x2: δ = −H − x2) and ∂T/∂v (δ̇ = −v2, w = (v1, v3) − V).
-            let mut tr = Vector3::new(0.0, nv.t, 0.0);
-            let mut dx = Vector3::new(0.0, -nv.d_delta, 0.0);
-            let mut dv = Matrix3::zeros();
-            dv[(1, 1)] = -d_rate;
+            // The traction in the road frame, τ = (τ1, τn, τ3) on (e1, n, e3), and its
+            // derivatives in δ (g_δ), δ̇ (g_r) and the slip w (d_w); T = e1 τ1 + n τn + e3 τ3.
+            let mut tau = Vector3::new(0.0, nv.t, 0.0);
+            let mut g_d = Vector3::new(0.0, nv.d_delta, 0.0);
+            let mut g_r = Vector3::new(0.0, d_rate, 0.0);
+            let mut dw = Matrix3::zeros();
             if friction {
-                let w = Vector2::new(pt.vw[0] - self.v_road[0], pt.vw[2] - self.v_road[1]);
+                let w = Vector2::new(
+                    e1.dot(&pt.vw) - self.v_road[0],
+                    e3.dot(&pt.vw) - self.v_road[1],
+                );
                 let fv = eval_vec(&self.friction, w, nv.t, delta);
-                tr[0] = fv.t[0];
-                tr[2] = fv.t[1];
-                const C: [usize; 2] = [0, 2];
-                for (i, &ci) in C.iter().enumerate() {
-                    for (j, &cj) in C.iter().enumerate() {
-                        dv[(ci, cj)] = fv.d_w[(i, j)];
-                    }
-                    dv[(ci, 1)] = -fv.d_tn[i] * d_rate;
-                    dx[ci] = -fv.d_tn[i] * nv.d_delta - fv.d_delta[i];
-                }
+                tau[0] = fv.t[0];
+                tau[2] = fv.t[1];
+                g_d[0] = fv.d_tn[0] * nv.d_delta + fv.d_delta[0];
+                g_d[2] = fv.d_tn[1] * nv.d_delta + fv.d_delta[1];
+                g_r[0] = fv.d_tn[0] * d_rate;
+                g_r[2] = fv.d_tn[1] * d_rate;
+                // ∂T/∂v through w = (e1·v − V1, e3·v − V3).
+                let c0 = e1 * fv.d_w[(0, 0)] + e3 * fv.d_w[(1, 0)];
+                let c1 = e1 * fv.d_w[(0, 1)] + e3 * fv.d_w[(1, 1)];
+                dw = c0 * e1.transpose() + c1 * e3.transpose();
             }
+            let global = |t: &Vector3<f64>| e1 * t[0] + nr * t[1] + e3 * t[2];
+            let tr = global(&tau);
+            // δ = −H − n·x, δ̇ = −n·v: ∂T/∂x = −(Q g_δ) nᵀ, ∂T/∂v (rate) = −(Q g_r) nᵀ,
+            // ∂T/∂H = −Q g_δ.
+            let q_d = global(&g_d);
+            let dx = -q_d * nr.transpose();
+            let dr = -global(&g_r) * nr.transpose();
             let da = pt.da0;
             for &a in &fn_[..nf] {
                 for i in 0..3 {
@@ -741,44 +808,46 @@ impl ContactSurface3D {
                 totals.max_pressure = totals.max_pressure.max(nv.t);
             }
             if let Some(k) = k.as_deref_mut() {
-                // ∂T_i/∂u_bj = ∂T_i/∂x_j kx N_b + ∂T_i/∂v_2 δ_j2 sv_b (the rate δ̇ = −v2)
-                // + ∂T_i/∂v_j sw_b (j = 1, 3: the friction slip).
+                // ∂T_i/∂u_bj = ∂T_i/∂x_j kx N_b + (∂T/∂v, rate)_ij sv_b + (∂T/∂v, slip)_ij sw_b.
                 for &a in &fn_[..nf] {
                     let na = pt.n[a] * da;
                     for &b in pt.cols {
                         let (cx, cv) = (na * kx * pt.n[b], na * pt.sv[b]);
                         for i in 0..3 {
-                            k[(3 * a + i) * nd + 3 * b + 1] -= cx * dx[i] + cv * dv[(i, 1)];
+                            let row = (3 * a + i) * nd + 3 * b;
+                            for j in 0..3 {
+                                k[row + j] -= cx * dx[(i, j)] + cv * dr[(i, j)];
+                            }
                         }
                     }
-                    for &b in pt.wcols {
-                        let cw = na * pt.sw[b];
-                        for i in 0..3 {
-                            let row = (3 * a + i) * nd + 3 * b;
-                            k[row] -= cw * dv[(i, 0)];
-                            k[row + 2] -= cw * dv[(i, 2)];
+                    if friction {
+                        for &b in pt.wcols {
+                            let cw = na * pt.sw[b];
+                            for i in 0..3 {
+                                let row = (3 * a + i) * nd + 3 * b;
+                                for j in 0..3 {
+                                    k[row + j] -= cw * dw[(i, j)];
+                                }
+                            }
                         }
                     }
                 }
                 if with_h {
-                    // Column H of the displacement rows (∂T/∂H = ∂T/∂x2: δ = −H − x2, H moves
-                    // no velocity); row H: −∫ ∂t_n/∂U, −∫ ∂t_n/∂H.
+                    // Column H of the displacement rows (∂δ/∂H = −1, H moves no velocity);
+                    // row H: −∫ ∂t_n/∂U, −∫ ∂t_n/∂H (t_n does not depend on the slip).
                     for &a in &fn_[..nf] {
                         let na = pt.n[a] * da;
                         for i in 0..3 {
-                            k[(3 * a + i) * nd + ih] -= na * dx[i];
+                            k[(3 * a + i) * nd + ih] += na * q_d[i];
                         }
                     }
                     for &b in pt.cols {
                         let (cx, cv) = (da * kx * pt.n[b], da * pt.sv[b]);
-                        k[ih * nd + 3 * b + 1] -= cx * dx[1] + cv * dv[(1, 1)];
+                        for j in 0..3 {
+                            k[ih * nd + 3 * b + j] += (cx * nv.d_delta + cv * d_rate) * nr[j];
+                        }
                     }
-                    for &b in pt.wcols {
-                        let cw = da * pt.sw[b];
-                        k[ih * nd + 3 * b] -= cw * dv[(1, 0)];
-                        k[ih * nd + 3 * b + 2] -= cw * dv[(1, 2)];
-                    }
-                    k[ih * nd + ih] -= dx[1] * da;
+                    k[ih * nd + ih] += nv.d_delta * da;
                 }
             }
         });
@@ -913,12 +982,16 @@ impl ContactSurface3D {
         let (mut ul, mut vl) = ([0.0; MAX_ELEMENT_DOFS], [0.0; MAX_CELL_DOFS]);
         for (e, &f) in self.facets.iter().enumerate() {
             let c = f.cell as usize;
+            let RoadFrame { e1, n: nr, e3 } = self.frame;
             let mut visit = |pt: &Point| {
-                let delta = -self.h - pt.x[1];
-                let w = Vector2::new(pt.vw[0] - self.v_road[0], pt.vw[2] - self.v_road[1]);
+                let delta = -self.h - nr.dot(&pt.x);
+                let w = Vector2::new(
+                    e1.dot(&pt.vw) - self.v_road[0],
+                    e3.dot(&pt.vw) - self.v_road[1],
+                );
                 let nv = self
                     .normal
-                    .eval(delta, if damping { -pt.vel[1] } else { 0.0 });
+                    .eval(delta, if damping { -nr.dot(&pt.vel) } else { 0.0 });
                 let t = if friction && nv.t > 0.0 {
                     eval_vec(&self.friction, w, nv.t, delta).t
                 } else {

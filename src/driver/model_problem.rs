@@ -50,7 +50,10 @@ use crate::adapt::poisson::{energy_error_sq, lshape_energy_sq, LShape};
 use crate::adapt::quadtree::Quadtree;
 use crate::adapt::space::Space;
 use crate::adapt::two_grid::{self, error_sq, Kernel, TransientOptions};
-use crate::driver::results::{ModeSummary, RunOutcome, RunStats, Summary};
+use crate::driver::results::{
+    CavityResults, LShapeResults, ModeSummary, ModelProblemSummary, ModelResults, PnsResults,
+    RunOutcome, RunStats, Summary, TwoGridResults,
+};
 use crate::element::hierarchical::Basis1d;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::quad::{self, PointField, QuadCells, Shading};
@@ -60,117 +63,9 @@ use crate::io::scene::model_problem::{
 };
 use crate::io::scene::Sink;
 use crate::setup::{AppError, RunOptions};
-use serde::Serialize;
 use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
-
-/// The `summary.json` keys of a model problem besides the common envelope.
-#[derive(Clone, Debug, Serialize)]
-pub struct ModelProblemSummary {
-    /// `problem.kind`.
-    pub kind: String,
-    #[serde(flatten)]
-    pub run: RunStats,
-    /// The resolved `[problem]` table (every default filled).
-    pub problem: serde_json::Value,
-    /// The final results (null when the run failed before its first step or pass).
-    pub results: Option<ModelResults>,
-    /// Steps, passes or recalculations (rows of `steps.csv`).
-    pub steps: usize,
-}
-
-/// `results` of one kind.
-#[derive(Clone, Debug, Serialize)]
-#[serde(untagged)]
-pub enum ModelResults {
-    Cavity(CavityResults),
-    TwoGrid(TwoGridResults),
-    PNavierStokes(PnsResults),
-    LShape(LShapeResults),
-}
-
-/// `results` of `cavity`.
-#[derive(Clone, Debug, Serialize)]
-pub struct CavityResults {
-    pub reynolds: f64,
-    pub equations: usize,
-    pub cells: usize,
-    /// Mesh relocations made (0 on the uniform mesh).
-    pub recalculations: usize,
-    /// Smallest corner det J of the final cells.
-    pub min_det_j: f64,
-    pub psi_min: f64,
-    pub psi_min_at: [f64; 2],
-    /// Source of the reference tables (null: no published reference for this lid and Re).
-    pub reference: Option<String>,
-    /// Largest |u(0.5, y) − u_ref| and |v(x, 0.5) − v_ref| over the tabulated stations.
-    pub centreline_u_error: Option<f64>,
-    pub centreline_v_error: Option<f64>,
-    /// The larger of the two.
-    pub centreline_error: Option<f64>,
-    /// |ψ_min − ψ_min,ref| (Re = 1000, Botella & Peyret).
-    pub psi_min_error: Option<f64>,
-    /// The same two errors on the starting uniform mesh (recalculation 0).
-    pub uniform_centreline_error: Option<f64>,
-    pub uniform_psi_min_error: Option<f64>,
-}
-
-/// `results` of `heat` and `burgers`.
-#[derive(Clone, Debug, Serialize)]
-pub struct TwoGridResults {
-    /// Time of the final solution.
-    pub t: f64,
-    pub equations: usize,
-    pub max_equations: usize,
-    pub cells: usize,
-    /// ‖u − u_h‖_{L²} and |u − u_h|_{H¹} at the final time against the exact solution.
-    pub l2_error: f64,
-    pub h1_error: f64,
-    /// The two-grid estimate ‖u_f − u_h‖ and its effectivity estimate / l2_error.
-    pub estimate: f64,
-    pub effectivity: f64,
-}
-
-/// `results` of `p_navier_stokes`.
-#[derive(Clone, Debug, Serialize)]
-pub struct PnsResults {
-    pub flow: String,
-    /// Time of the final solution (Kovasznay: 0).
-    pub t: f64,
-    pub equations: usize,
-    pub equations_enriched: usize,
-    /// The enrichment estimate, the true L² velocity error and their ratio.
-    pub estimate: f64,
-    pub l2_error: f64,
-    pub effectivity: f64,
-    pub tolerance: f64,
-    /// Largest η_K / τ_K (≤ 1: every cell within its share of the tolerance).
-    pub worst_ratio: f64,
-    /// Whether the final solution met the tolerance (no cell left to raise).
-    pub accepted: bool,
-    /// Solves made (steady: sweeps; transient: attempts over all steps).
-    pub solves: usize,
-    /// Cells per velocity degree of the final solution: [degree, cells].
-    pub degrees: Vec<[usize; 2]>,
-}
-
-/// `results` of `lshape`.
-#[derive(Clone, Debug, Serialize)]
-pub struct LShapeResults {
-    pub equations: usize,
-    pub cells: usize,
-    pub max_level: u32,
-    pub max_degree: usize,
-    /// |u − u_h|₁, relative to |u|₁, the estimate and estimate / energy_error.
-    pub energy_error: f64,
-    pub relative_error: f64,
-    pub estimate: f64,
-    pub effectivity: f64,
-    /// Least-squares slope of log(energy_error) against log(equations) over the meshes with at
-    /// least 400 equations (null with fewer than three).
-    pub rate: Option<f64>,
-}
 
 /// `steps.csv`: header and rows.
 struct Table {

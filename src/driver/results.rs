@@ -136,7 +136,7 @@ pub enum ModeSummary {
     StickSlip(StickSlipSummary),
     Compare(CompareSummary),
     /// A model problem of `src/adapt/` (a scene with `[problem]`).
-    ModelProblem(Box<super::model_problem::ModelProblemSummary>),
+    ModelProblem(Box<ModelProblemSummary>),
 }
 
 /// Counts, wall time and error of a run (every mode but `compare`).
@@ -298,26 +298,29 @@ pub struct Solid3DResults {
     pub slip_angle: Option<f64>,
 }
 
-/// The loads of the road on the body reduced to the hub centre (the origin), in the frame of
-/// the wheel (x1 along the road, x2 up, x3 along the axle): totals over the width.
+/// The loads of the road on the body reduced to the hub centre (the origin), totals over the
+/// width, in the road frame (e1, n, e3) of [`crate::contact::facet3d::RoadFrame`]: without
+/// camber (x1 along the road, x2 up, x3 along the axle).
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct HubLoads3D {
-    /// F1: longitudinal force (+x1, along the road).
+    /// Longitudinal force, along e1.
     pub longitudinal_force: f64,
-    /// F2: vertical force (+x2, up; the wheel load).
+    /// Vertical force, along the road normal n (up; the wheel load).
     pub vertical_force: f64,
-    /// F3: lateral force (+x3, along the axle).
+    /// Lateral force, along e3.
     pub lateral_force: f64,
-    /// M1: overturning moment (about +x1).
+    /// Overturning moment, about e1.
     pub overturning_moment: f64,
-    /// M2: aligning moment (about the vertical +x2).
+    /// Aligning moment, about n.
     pub aligning_moment: f64,
-    /// M3: moment about the axle +x3 (the drive torque the hub must supply is −M3).
+    /// Moment about e3 (the axle without camber; the drive torque the hub supplies is its
+    /// negative).
     pub axle_moment: f64,
 }
 
 impl HubLoads3D {
-    /// From the contact resultant `f` and its moment `m` about the hub centre.
+    /// From the road-frame components of the contact resultant `f` and of its moment `m`
+    /// about the hub centre.
     pub fn new(f: [f64; 3], m: [f64; 3]) -> Self {
         Self {
             longitudinal_force: f[0],
@@ -816,4 +819,111 @@ pub struct RunOutcome {
     pub converged: bool,
     /// Human-readable result lines for the terminal.
     pub headline: Vec<String>,
+}
+
+/// The `summary.json` keys of a model problem besides the common envelope.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelProblemSummary {
+    /// `problem.kind`.
+    pub kind: String,
+    #[serde(flatten)]
+    pub run: RunStats,
+    /// The resolved `[problem]` table (every default filled).
+    pub problem: serde_json::Value,
+    /// The final results (null when the run failed before its first step or pass).
+    pub results: Option<ModelResults>,
+    /// Steps, passes or recalculations (rows of `steps.csv`).
+    pub steps: usize,
+}
+
+/// `results` of one kind.
+#[derive(Clone, Debug, Serialize)]
+#[serde(untagged)]
+pub enum ModelResults {
+    Cavity(CavityResults),
+    TwoGrid(TwoGridResults),
+    PNavierStokes(PnsResults),
+    LShape(LShapeResults),
+}
+
+/// `results` of `cavity`.
+#[derive(Clone, Debug, Serialize)]
+pub struct CavityResults {
+    pub reynolds: f64,
+    pub equations: usize,
+    pub cells: usize,
+    /// Mesh relocations made (0 on the uniform mesh).
+    pub recalculations: usize,
+    /// Smallest corner det J of the final cells.
+    pub min_det_j: f64,
+    pub psi_min: f64,
+    pub psi_min_at: [f64; 2],
+    /// Source of the reference tables (null: no published reference for this lid and Re).
+    pub reference: Option<String>,
+    /// Largest |u(0.5, y) − u_ref| and |v(x, 0.5) − v_ref| over the tabulated stations.
+    pub centreline_u_error: Option<f64>,
+    pub centreline_v_error: Option<f64>,
+    /// The larger of the two.
+    pub centreline_error: Option<f64>,
+    /// |ψ_min − ψ_min,ref| (Re = 1000, Botella & Peyret).
+    pub psi_min_error: Option<f64>,
+    /// The same two errors on the starting uniform mesh (recalculation 0).
+    pub uniform_centreline_error: Option<f64>,
+    pub uniform_psi_min_error: Option<f64>,
+}
+
+/// `results` of `heat` and `burgers`.
+#[derive(Clone, Debug, Serialize)]
+pub struct TwoGridResults {
+    /// Time of the final solution.
+    pub t: f64,
+    pub equations: usize,
+    pub max_equations: usize,
+    pub cells: usize,
+    /// ‖u − u_h‖_{L²} and |u − u_h|_{H¹} at the final time against the exact solution.
+    pub l2_error: f64,
+    pub h1_error: f64,
+    /// The two-grid estimate ‖u_f − u_h‖ and its effectivity estimate / l2_error.
+    pub estimate: f64,
+    pub effectivity: f64,
+}
+
+/// `results` of `p_navier_stokes`.
+#[derive(Clone, Debug, Serialize)]
+pub struct PnsResults {
+    pub flow: String,
+    /// Time of the final solution (Kovasznay: 0).
+    pub t: f64,
+    pub equations: usize,
+    pub equations_enriched: usize,
+    /// The enrichment estimate, the true L² velocity error and their ratio.
+    pub estimate: f64,
+    pub l2_error: f64,
+    pub effectivity: f64,
+    pub tolerance: f64,
+    /// Largest η_K / τ_K (≤ 1: every cell within its share of the tolerance).
+    pub worst_ratio: f64,
+    /// Whether the final solution met the tolerance (no cell left to raise).
+    pub accepted: bool,
+    /// Solves made (steady: sweeps; transient: attempts over all steps).
+    pub solves: usize,
+    /// Cells per velocity degree of the final solution: [degree, cells].
+    pub degrees: Vec<[usize; 2]>,
+}
+
+/// `results` of `lshape`.
+#[derive(Clone, Debug, Serialize)]
+pub struct LShapeResults {
+    pub equations: usize,
+    pub cells: usize,
+    pub max_level: u32,
+    pub max_degree: usize,
+    /// |u − u_h|₁, relative to |u|₁, the estimate and estimate / energy_error.
+    pub energy_error: f64,
+    pub relative_error: f64,
+    pub estimate: f64,
+    pub effectivity: f64,
+    /// Least-squares slope of log(energy_error) against log(equations) over the meshes with at
+    /// least 400 equations (null with fewer than three).
+    pub rate: Option<f64>,
 }

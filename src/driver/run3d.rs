@@ -381,7 +381,10 @@ fn results_3d(
         },
         u_r_outer_mean: u_r_outer_mean(sys),
         max_displacement,
-        hub_loads: rc.map(|_| HubLoads3D::new(t.force, t.moment)),
+        hub_loads: rc.map(|c| {
+            let frame = c.surface.frame();
+            HubLoads3D::new(frame.components(t.force), frame.components(t.moment))
+        }),
         road_velocity: rc
             .filter(|c| c.steady_omega.is_some())
             .map(|c| [c.surface.v_road[0], c.surface.v_road[1]]),
@@ -401,17 +404,22 @@ fn headline(scene: &Scene, r: &Solid3DResults) -> String {
             r.contact_force[2],
             r.max_pressure
         ),
-        Mode::Steady => format!(
-            "3D steady rolling: omega = {:.6} rad/s, penetration = {:.6e}: hub forces (F1, F2, F3) = ({:.6e}, {:.6e}, {:.6e}), moments (M1, M2, M3) = ({:.6e}, {:.6e}, {:.6e})",
-            r.omega,
-            r.penetration.unwrap_or(f64::NAN),
-            r.contact_force[0],
-            r.contact_force[1],
-            r.contact_force[2],
-            r.contact_moment[0],
-            r.contact_moment[1],
-            r.contact_moment[2]
-        ),
+        Mode::Steady => {
+            let h = r
+                .hub_loads
+                .unwrap_or_else(|| HubLoads3D::new([f64::NAN; 3], [f64::NAN; 3]));
+            format!(
+                "3D steady rolling: omega = {:.6} rad/s, penetration = {:.6e}: hub forces (longitudinal, vertical, lateral) = ({:.6e}, {:.6e}, {:.6e}), moments (overturning, aligning, axle) = ({:.6e}, {:.6e}, {:.6e})",
+                r.omega,
+                r.penetration.unwrap_or(f64::NAN),
+                h.longitudinal_force,
+                h.vertical_force,
+                h.lateral_force,
+                h.overturning_moment,
+                h.aligning_moment,
+                h.axle_moment
+            )
+        }
         _ => format!(
             "3D: omega = {:.6} rad/s: mean u_r(outer) = {:.6e}, max |u| = {:.6e}",
             r.omega, r.u_r_outer_mean, r.max_displacement

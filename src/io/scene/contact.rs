@@ -63,6 +63,11 @@ pub struct RoadSpec {
     /// +x2, V = v0 (cos α, −sin α) in (e1, e3). Only in the three-dimensional steady mode.
     #[serde(default)]
     pub slip_angle: f64,
+    /// Camber γ (degrees, |γ| < 90): the wheel plane tilted by γ about the rolling direction
+    /// relative to the road; in the wheel frame the road's normal is n = (0, cos γ, −sin γ)
+    /// (γ > 0 brings the wheel's +x3 side down). Three-dimensional static and steady modes.
+    #[serde(default)]
+    pub camber: f64,
 }
 
 impl RoadSpec {
@@ -185,6 +190,12 @@ pub(super) fn validate_road(
                 "slip angle (degrees) must be in (−90, 90), got {}",
                 r.slip_angle
             ),
+        ));
+    }
+    if !(r.camber.is_finite() && r.camber.abs() < 90.0) {
+        out.push(issue(
+            "road.camber",
+            format!("camber (degrees) must be in (−90, 90), got {}", r.camber),
         ));
     }
     if let Some(d) = r.disp {
@@ -328,7 +339,8 @@ mod tests {
                 v0: 0.0,
                 ramp: 0.0,
                 v0_ramp: None,
-                slip_angle: 0.0
+                slip_angle: 0.0,
+                camber: 0.0
             })
         );
         assert_eq!(
@@ -383,7 +395,8 @@ mod tests {
                 v0: 0.0,
                 ramp: 0.0,
                 v0_ramp: None,
-                slip_angle: 0.0
+                slip_angle: 0.0,
+                camber: 0.0
             })
         );
         let base = load(FRICTIONLESS).unwrap_or_else(|e| panic!("{e}"));

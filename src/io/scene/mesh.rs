@@ -141,6 +141,19 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         .and_then(|r| r.get("slip_angle"))
         .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
         .unwrap_or(0.0);
+    let camber = cx
+        .doc
+        .and_then(|d| d.get("road"))
+        .and_then(|r| r.get("camber"))
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .unwrap_or(0.0);
+    if camber != 0.0 && !(m.is_3d() && matches!(cx.mode, Some(Mode::Steady | Mode::Static))) {
+        out.push(issue(
+            "road.camber",
+            "a camber needs the three-dimensional static or steady mode (mesh.dimension = 3); \
+             remove it or set it to 0",
+        ));
+    }
     if slip_angle != 0.0 && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
         out.push(issue(
             "road.slip_angle",

@@ -535,6 +535,7 @@ mod tests {
             ramp: 0.1,
             v0_ramp: None,
             slip_angle: 0.0,
+            camber: 0.0,
         };
         assert!((road.ramp_factor(0.05) - 0.5).abs() < 1e-12);
         assert_eq!(road.ramp_factor(0.2), 1.0);

@@ -482,6 +482,7 @@ pub(super) fn full_road() -> RoadSpec {
         ramp: 0.0,
         v0_ramp: Some(0.0),
         slip_angle: 0.0,
+        camber: 0.0,
     }
 }
 
