@@ -424,7 +424,6 @@ fn bad_three_dimensional_inputs_name_the_key() {
     );
     bad("sides", &["mesh.sides=\"glued\""], "mesh.sides");
     bad("n_z", &["mesh.n_z=0"], "mesh.n_z");
-    bad("png", &["output.sinks=[\"png\"]"], "output.sinks");
     bad(
         "lobatto",
         &["contact.quadrature=\"lobatto\"", "contact.points=6"],
@@ -676,4 +675,51 @@ fn spinning_refuses_a_mesh_that_does_not_close_around_the_axle() {
         stderr.contains("mesh.file") && stderr.contains("does not close around the axle"),
         "{stderr}"
     );
+}
+
+/// The steady cornering scene on a small mesh: the hub loads in summary.json are the sums of
+/// the contact table (the load-control equation holds the wheel load), the lateral force at a
+/// positive slip angle is negative (the documented convention), and the `png` sink writes the
+/// three footprint maps.
+#[test]
+fn steady_cornering_writes_hub_loads_and_footprints() {
+    let d = TestDir::new("cli3d", "cornering");
+    let s = run(
+        &scene("cornering_3d.toml"),
+        &d.join("out"),
+        &[
+            "mesh.n_theta=32",
+            "mesh.order=1",
+            "solver.load_steps=4",
+            "output.sinks=[\"summary\", \"csv\", \"png\"]",
+        ],
+    );
+    assert_documented(&s, "");
+    let load = 50.0;
+    let vertical = f(&s, "results.hub_loads.vertical_force");
+    let lateral = f(&s, "results.hub_loads.lateral_force");
+    assert!(
+        (vertical - load).abs() <= 1e-8 * load,
+        "vertical {vertical}"
+    );
+    assert!(lateral < -1e-3 * load, "lateral force {lateral} at α = +2°");
+    assert_eq!(f(&s, "results.slip_angle"), 2.0);
+    let (h, rows) = csv(&d.join("out").join("contact.csv"));
+    let col = |name: &str| h.iter().position(|c| c == name).expect(name);
+    let (tn, t3, da) = (col("t_n"), col("t_3"), col("dA0"));
+    let fz: f64 = rows.iter().map(|r| r[tn] * r[da]).sum();
+    let fy: f64 = rows.iter().map(|r| r[t3] * r[da]).sum();
+    assert!((fz - vertical).abs() <= 1e-9 * load, "Σ t_n dA0 = {fz}");
+    assert!((fy - lateral).abs() <= 1e-9 * load, "Σ t_3 dA0 = {fy}");
+    for file in [
+        "footprint_pressure.png",
+        "footprint_traction.png",
+        "footprint_stick_slip.png",
+    ] {
+        let bytes = std::fs::read(d.join("out").join(file)).expect(file);
+        assert!(
+            bytes.starts_with(b"\x89PNG\r\n\x1a\n"),
+            "{file} is not a PNG"
+        );
+    }
 }

@@ -79,8 +79,9 @@ impl Run3DObserver {
             warnings
                 .push("output sink \"rerun\" skipped: this build has no `rerun` feature".into());
         }
-        if o.has(Sink::Png) {
-            warnings.push("output sink \"png\" skipped: no PNG plots in three dimensions".into());
+        if o.has(Sink::Png) && scene.analysis.mode == Mode::Spinning {
+            warnings
+                .push("output sink \"png\" skipped: no contact patch to draw when spinning".into());
         }
         let opts = HexOutputOptions {
             vtu: o.has(Sink::Vtu),
@@ -298,6 +299,9 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 .push(RecordError::new("csv", opts.out_dir.clone(), e));
         }
     }
+    if scene.output.has(Sink::Png) && sys.contact.is_some() {
+        write_footprints(scene, &sys, &opts.out_dir, &mut obs.errors);
+    }
     let mut summary = typed.to_json();
     for e in &obs.errors {
         eprintln!("tread: warning: {e}");
@@ -424,6 +428,51 @@ fn headline(scene: &Scene, r: &Solid3DResults) -> String {
             "3D: omega = {:.6} rad/s: mean u_r(outer) = {:.6e}, max |u| = {:.6e}",
             r.omega, r.u_r_outer_mean, r.max_displacement
         ),
+    }
+}
+
+/// The footprint maps of the final state (sink `png`): `footprint_pressure.png`,
+/// `footprint_traction.png` and, with friction, `footprint_stick_slip.png`
+/// ([`crate::io::record::footprint`]).
+fn write_footprints(scene: &Scene, sys: &Solid3DSystem, dir: &Path, errors: &mut Vec<RecordError>) {
+    use crate::io::record::footprint::{footprint_png, FootprintField};
+    let Ok(samples) = sys.contact_samples() else {
+        return;
+    };
+    let units = Units::parse(&scene.scene.units);
+    let stress = format!("{}/{}²", units.force, units.length);
+    let friction = sys
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.surface.friction.is_active());
+    let mut maps = vec![
+        (
+            "footprint_pressure.png",
+            "contact pressure",
+            FootprintField::Pressure,
+        ),
+        (
+            "footprint_traction.png",
+            "tangential traction (arrows: direction)",
+            FootprintField::Traction,
+        ),
+    ];
+    if friction {
+        maps.push((
+            "footprint_stick_slip.png",
+            "stick and slip zones",
+            FootprintField::StickSlip,
+        ));
+    }
+    for (file, what, field) in maps {
+        let title = format!(
+            "{}: {what} over the patch (x1 along the road, x3 across)",
+            scene.scene.name
+        );
+        let path = dir.join(file);
+        if let Err(e) = footprint_png(&path, &title, &samples, field, &stress, &units.length) {
+            errors.push(RecordError::new("png", path, e));
+        }
     }
 }
 

@@ -105,6 +105,7 @@
 //! MCAP readable up to its last completed chunk (one chunk is closed per recorded step).
 
 pub mod csv;
+pub mod footprint;
 pub mod hex_out;
 pub mod interrupt;
 pub mod mcap;
