@@ -112,46 +112,59 @@ pub fn boundary_weights(
         arcs
     };
     let closed = breaks.is_empty();
-    let two_pi = 2.0 * std::f64::consts::PI;
     let mut out = HashMap::with_capacity(n);
     for arc in &arcs {
-        let len = arc.len();
-        if len < WIDTH {
-            return None;
-        }
-        for i in 0..len {
-            let t0 = angle(arc[i]);
-            let mut t = [0.0; WIDTH];
-            let mut s = [(0u32, 0.0); WIDTH];
-            for k in 0..WIDTH {
-                let pos = if closed {
-                    (i as i64 + k as i64 - HALF as i64).rem_euclid(len as i64) as usize
-                } else {
-                    let first = i.saturating_sub(HALF).min(len - WIDTH);
-                    first + k
-                };
-                let mut d = angle(arc[pos]) - t0;
-                d -= two_pi * (d / two_pi).round();
-                t[k] = d;
-                s[k].0 = arc[pos];
-            }
-            // Distinct angles are needed (a boundary that is not a circle about the hub could
-            // put two nodes on one ray).
-            for a in 0..WIDTH {
-                for b in a + 1..WIDTH {
-                    if (t[a] - t[b]).abs() < 1e-12 {
-                        return None;
-                    }
-                }
-            }
-            let w = lagrange_derivative_weights(&t, 0.0);
-            for k in 0..WIDTH {
-                s[k].1 = w[k];
-            }
-            out.insert(arc[i], s);
-        }
+        arc_weights(arc, closed, angle, &mut out)?;
     }
     Some(out)
+}
+
+/// Five-point θ-derivative weights of the nodes of one arc (sorted by the angle `angle`,
+/// periodic when `closed`; on an open arc the window is shifted inward at its ends) into
+/// `out`. `None` when the arc has fewer than five nodes or two nodes on one ray.
+pub(crate) fn arc_weights(
+    arc: &[u32],
+    closed: bool,
+    angle: impl Fn(u32) -> f64,
+    out: &mut HashMap<u32, [(u32, f64); WIDTH]>,
+) -> Option<()> {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let len = arc.len();
+    if len < WIDTH {
+        return None;
+    }
+    for i in 0..len {
+        let t0 = angle(arc[i]);
+        let mut t = [0.0; WIDTH];
+        let mut s = [(0u32, 0.0); WIDTH];
+        let first = i.saturating_sub(HALF).min(len - WIDTH);
+        for k in 0..WIDTH {
+            let pos = if closed {
+                (i as i64 + k as i64 - HALF as i64).rem_euclid(len as i64) as usize
+            } else {
+                first + k
+            };
+            let mut d = angle(arc[pos]) - t0;
+            d -= two_pi * (d / two_pi).round();
+            t[k] = d;
+            s[k].0 = arc[pos];
+        }
+        // Distinct angles are needed (a boundary that is not a circle about the hub could
+        // put two nodes on one ray).
+        for a in 0..WIDTH {
+            for b in a + 1..WIDTH {
+                if (t[a] - t[b]).abs() < 1e-12 {
+                    return None;
+                }
+            }
+        }
+        let w = lagrange_derivative_weights(&t, 0.0);
+        for k in 0..WIDTH {
+            s[k].1 = w[k];
+        }
+        out.insert(arc[i], s);
+    }
+    Some(())
 }
 
 impl SteadySlip {

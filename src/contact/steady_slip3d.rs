@@ -35,9 +35,10 @@
 //! tangent. The normal damping rate δ̇ = −v2 keeps the facet-wise derivative (its law is smooth
 //! in δ̇: the jump at a node is a discretisation error, not a switch of the traction's sign).
 
+use super::steady_slip::arc_weights;
 use crate::element::hex::{face_nodes, Hex27, Hex8};
 use crate::mesh::hex_mesh::{HexFacet, HexMesh};
-use crate::physics::ring_derivative::{lagrange_derivative_weights, HALF, WIDTH};
+use crate::physics::ring_derivative::WIDTH;
 use std::collections::{HashMap, HashSet};
 
 /// Most stencil nodes of a facet outside its cell (Hex27: 4 per ring × 3 rings).
@@ -108,7 +109,6 @@ pub fn ring_weights(
             rings.entry(key(a)).or_default().push(a);
         }
     }
-    let two_pi = 2.0 * std::f64::consts::PI;
     let mut out = HashMap::new();
     for nodes in rings.values_mut() {
         nodes.sort_unstable();
@@ -135,39 +135,7 @@ pub fn ring_weights(
                 .collect()
         };
         for arc in &arcs {
-            let len = arc.len();
-            if len < WIDTH {
-                return None;
-            }
-            for i in 0..len {
-                let t0 = angle(arc[i]);
-                let mut t = [0.0; WIDTH];
-                let mut s = [(0u32, 0.0); WIDTH];
-                let first = i.saturating_sub(HALF).min(len - WIDTH);
-                for k in 0..WIDTH {
-                    let pos = if closed {
-                        (i as i64 + k as i64 - HALF as i64).rem_euclid(len as i64) as usize
-                    } else {
-                        first + k
-                    };
-                    let mut d = angle(arc[pos]) - t0;
-                    d -= two_pi * (d / two_pi).round();
-                    t[k] = d;
-                    s[k].0 = arc[pos];
-                }
-                for a in 0..WIDTH {
-                    for b in a + 1..WIDTH {
-                        if (t[a] - t[b]).abs() < 1e-12 {
-                            return None;
-                        }
-                    }
-                }
-                let w = lagrange_derivative_weights(&t, 0.0);
-                for k in 0..WIDTH {
-                    s[k].1 = w[k];
-                }
-                out.insert(arc[i], s);
-            }
+            arc_weights(arc, closed, angle, &mut out)?;
         }
     }
     Some(out)
