@@ -605,7 +605,9 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
             // are missing.
             if let Some(x) = mesh.circumferential_cut() {
                 return Err(AppError::Unsupported(format!(
-                    "mesh.file: the mesh does not close around the axle (the boundary face at                      ({:.4}, {:.4}, {:.4}) faces the circumferential direction); the spinning                      mode needs the body meshed all the way round",
+                    "mesh.file: the mesh does not close around the axle (the boundary face at \
+                     ({:.4}, {:.4}, {:.4}) faces the circumferential direction); the spinning \
+                     mode needs the body meshed all the way round",
                     x[0], x[1], x[2]
                 )));
             }
@@ -633,17 +635,13 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
     let mut sys = sys.map_err(|e| AppError::Unsupported(format!("contact: {e}")))?;
     if steady {
         let (v0, alpha) = road.map_or((0.0, 0.0), |r| (r.v0, r.slip_angle.to_radians()));
-        sys.set_steady_rolling(scene.motion.omega, road_velocity_3d(v0, alpha))
+        sys.set_steady_rolling(scene.motion.omega, v0, alpha)
             .map_err(|e| AppError::Unsupported(format!("motion: {e}")))?;
     }
     Ok(sys)
 }
 
-/// The road velocity (V1, V3) in the road plane for the speed `v0` and the slip angle `alpha`
-/// (radians): the road's velocity turned by α about +x2, V = v0 (cos α, −sin α).
-pub fn road_velocity_3d(v0: f64, alpha: f64) -> [f64; 2] {
-    [v0 * alpha.cos(), -v0 * alpha.sin()]
-}
+pub use crate::model::system3d::road_velocity_3d;
 
 /// Linear solver of a three-dimensional system: as [`linear_kind`] (LU for the exact
 /// incompressible saddle point and with friction).

@@ -405,14 +405,15 @@ fn bad_three_dimensional_inputs_name_the_key() {
     bad("slip_static", &["road.slip_angle=2.0"], "road.slip_angle");
     bad("camber_range", &["road.camber=95.0"], "road.camber");
     bad(
-        "steady_torque",
+        "steady_creep_range",
         &[
             "analysis.mode=\"steady\"",
             "motion.omega=1.0",
             "road.v0=1.9",
-            "motion.control=\"torque\"",
+            "motion.control=\"creep\"",
+            "motion.creep=-1.0",
         ],
-        "motion.control",
+        "motion.creep",
     );
     bad("dimension", &["mesh.dimension=4"], "mesh.dimension");
     bad("width", &["mesh.width=-1.0"], "mesh.width");

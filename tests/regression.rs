@@ -138,6 +138,7 @@ scenes! {
     spinning_3d: "spinning_3d.toml" => "spinning_3d.json";
     cornering_3d: "cornering_3d.toml" => "cornering_3d.json";
     camber_3d: "camber_3d.toml" => "camber_3d.json";
+    traction_3d: "traction_3d.toml" => "traction_3d.json";
     oden_hollow_cylinder: "oden_hollow_cylinder.toml" => "oden_hollow_cylinder.json";
     oden_hollow_cylinder_steady: "oden_hollow_cylinder.toml", "--mode", "steady" => "oden_hollow_cylinder_steady.json";
     oden_steady_sweep: "oden_steady_sweep.toml" => "oden_steady_sweep.json";

@@ -3,20 +3,20 @@
 //! residual (Hex8 and Hex27, displacement and load control, friction with the slip from nodal
 //! ring derivatives and facet-wise, normal damping and a slip angle), the plane-strain limit
 //! (a slab with u3 = 0 on its faces reproduces the 2D steady mode, with damping and friction,
-//! the friction slip taken the same way in both), and the symmetry of the hub loads in the
-//! slip angle.
+//! the friction slip taken the same way in both, also under the free-rolling, creep and
+//! torque controls), and the symmetry of the hub loads in the slip angle.
 
 use tread::contact::facet3d::ContactSurface3D;
 use tread::contact::laws::CoulombTanh;
 use tread::contact::{ContactModel, FacetRule, Friction, NormalCompliance};
-use tread::driver::steady3d::solve_steady_3d;
+use tread::driver::steady3d::{apply_control_3d, solve_steady_3d};
 use tread::driver::steady_run;
+use tread::io::scene::Control;
 use tread::io::Scene;
 use tread::material::{Material, MaterialKind};
 use tread::mesh::revolved::{revolved, RevolvedSpec};
 use tread::model::{Solid3D, Solid3DSystem};
 use tread::physics::PressureMode;
-use tread::setup::road_velocity_3d;
 use tread::solver::observe::NoObserver;
 use tread::solver::stepping::{LoadedSystem, StepReport};
 use tread::solver::NonlinearSystem;
@@ -83,11 +83,8 @@ fn tangent_check(degree: usize, load: bool, facet_wise: bool, camber: f64) -> (f
         sys.with_contact(s, RO, 0.08)
     }
     .expect("contact on the mesh");
-    sys.set_steady_rolling(
-        omega,
-        road_velocity_3d(0.99 * omega * RO, 3f64.to_radians()),
-    )
-    .expect("steady");
+    sys.set_steady_rolling(omega, 0.99 * omega * RO, 3f64.to_radians())
+        .expect("steady");
     if facet_wise {
         sys.disable_steady_slip();
     }
@@ -380,6 +377,97 @@ linear = "lu"
         }
         for (a, b) in [(fp[0], fm[0]), (fp[1], fm[1]), (mp[2], mm[2])] {
             assert!((a - b).abs() <= tol * RO, "{what}, even: {a} vs {b}");
+        }
+    }
+}
+
+/// The rolling controls on the plane-strain slab: free rolling, a given creep and a given
+/// torque find the same road speed as the 2D steady mode (the same secant iteration on the
+/// same torque, per unit width), and the hub's reaction balances the contact force exactly
+/// (the θ-referential inertia has no resultant on closed rings).
+#[test]
+fn rolling_controls_on_the_slab_match_the_2d_steady_mode() {
+    let width = 0.25;
+    let v0 = 0.995 * 10.0 * RO;
+    let tanh = "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05";
+    let torque_2d = 1.0;
+    for (control, creep, torque) in [
+        (Control::FreeRolling, 0.0, 0.0),
+        (Control::Creep, -2e-3, 0.0),
+        (Control::Torque, 0.0, torque_2d),
+    ] {
+        let mut sc2 = slab_scene(None, v0, 2.0, tanh, 0.0);
+        let mut sc3 = slab_scene(Some(width), v0, 2.0, tanh, 0.0);
+        for (sc, t) in [(&mut sc2, torque), (&mut sc3, torque * width)] {
+            sc.motion.control = control;
+            sc.motion.creep = creep;
+            sc.motion.torque = t;
+        }
+        let (mut st, _) = steady_2d(&sc2, false);
+        let rep2 = steady_run::apply_control(&sc2, &mut st, false)
+            .unwrap_or_else(|e| panic!("2D {control:?}: {e}"));
+        let mut s3 = steady_3d(&sc3, false);
+        let kind = tread::setup::linear_kind_3d(&sc3, &s3);
+        let (newton, _) = tread::setup::solver_options(&sc3, false);
+        let rep3 = apply_control_3d(&sc3, &mut s3, kind, newton)
+            .unwrap_or_else(|e| panic!("3D {control:?}: {e}"));
+        let (f3, m3) = s3.hub_reaction();
+        let (f2, m2) = st.sys.hub_reaction();
+        eprintln!(
+            "{control:?}: v0 2D {:.12e} 3D {:.12e}; hub torque 2D {:.6e}, 3D per width {:.6e}; \
+             F1 2D {:.9e}, 3D per width {:.9e}; evaluations {} / {}",
+            st.v0(),
+            s3.road_speed(),
+            m2,
+            m3[2] / width,
+            f2[0],
+            f3[0] / width,
+            rep2.evaluations,
+            rep3.evaluations,
+        );
+        // The torque and free-rolling controls reached their torque.
+        if control != Control::Creep {
+            assert!(
+                (m3[2] - torque * width).abs() <= rep3.torque_tolerance,
+                "{control:?}: 3D hub torque {} vs {}",
+                m3[2],
+                torque * width
+            );
+            assert!((m2 - torque).abs() <= rep2.torque_tolerance);
+        }
+        // The road speed of both (the torque tolerance 1e-7 |F| Ro bounds the difference).
+        let dv = (s3.road_speed() - st.v0()).abs() / v0;
+        assert!(dv < 1e-6, "{control:?}: v0 differs by {dv:.3e} (relative)");
+        if control == Control::Creep {
+            assert!((rep3.creep - creep).abs() < 1e-12, "creep {}", rep3.creep);
+            assert!(
+                (rep3.v0_free / rep2.v0_free - 1.0).abs() < 1e-6,
+                "v0_free {} vs {}",
+                rep3.v0_free,
+                rep2.v0_free
+            );
+            // ξ < 0, the road slower than the free-rolling speed: the tread slides forward
+            // (+x1 at the bottom) over the road, the road's friction on it points to −x1
+            // (the direction of travel: a driven wheel) and the hub holds it with F1 > 0.
+            assert!(f3[0] > 0.0, "hub F1 = {}", f3[0]);
+        }
+        let fscale = f2[1].abs();
+        assert!(
+            (f3[0] / width - f2[0]).abs() < 1e-5 * fscale,
+            "{control:?}: F1 3D per width {} vs 2D {}",
+            f3[0] / width,
+            f2[0]
+        );
+        // The hub balances the contact exactly (no inertia resultant).
+        let tc = s3.contact.as_ref().expect("contact").totals.force;
+        for i in 0..3 {
+            assert!(
+                (f3[i] + tc[i]).abs() <= 1e-9 * fscale * width,
+                "{control:?}: hub F{} = {} vs contact {}",
+                i + 1,
+                f3[i],
+                tc[i]
+            );
         }
     }
 }

@@ -296,6 +296,13 @@ pub struct Solid3DResults {
     /// Steady mode: the slip angle α (degrees).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub slip_angle: Option<f64>,
+    /// Steady mode: the road speed v0 of the final state (`road.v0`, or the one the rolling
+    /// control found).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub v0: Option<f64>,
+    /// Steady mode with `motion.control` other than `speed`: what the control did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub control: Option<ControlReport>,
 }
 
 /// The loads of the road on the body reduced to the hub centre (the origin), totals over the

@@ -31,13 +31,13 @@ use super::results::{
     Summary,
 };
 use super::spinning3d::solve_spinning_3d;
-use super::steady3d::solve_steady_3d;
+use super::steady3d::{apply_control_3d, solve_steady_3d};
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::hex_out::{HexOutputOptions, HexOutputs, HexState};
 use crate::io::record::png::Units;
 use crate::io::record::{self, RecordError};
-use crate::io::scene::{Mode, Scene, Sink};
+use crate::io::scene::{Control, Mode, Scene, Sink};
 use crate::mesh::hex_mesh::HexMesh;
 use crate::model::Solid3DSystem;
 use crate::setup::{build_system_3d, linear_kind_3d, solver_options, AppError, RunOptions};
@@ -217,6 +217,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         eprintln!("tread: warning: {w}");
     }
     let mut report = StepReport::default();
+    let mut control = None;
     let solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
@@ -229,11 +230,34 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         Mode::Steady => solve_steady_3d(
             &mut sys,
             kind,
-            newton_opts,
+            newton_opts.clone(),
             &step_opts,
             &mut report,
             &mut obs,
-        ),
+        )
+        .and_then(|()| {
+            if scene.motion.control == Control::Speed {
+                return Ok(());
+            }
+            let rep = apply_control_3d(scene, &mut sys, kind, newton_opts.clone())?;
+            report.total_iterations += rep.newton_iterations;
+            // The controlled state is the run's final one: one more row, field and
+            // footprint at it.
+            let last = obs.last;
+            obs.observe_accepted(
+                &sys,
+                &StepInfo {
+                    index: last.index + 1,
+                    time: 1.0,
+                    dt: 0.0,
+                    newton_iterations: rep.newton_iterations,
+                    residual: 0.0,
+                    is_final: true,
+                },
+            );
+            control = Some(rep);
+            Ok(())
+        }),
         _ => solve_spinning_3d(
             &mut sys,
             scene.motion.omega,
@@ -247,7 +271,8 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     obs.finish();
     let wall = t0.elapsed().as_secs_f64();
     let converged = solve.is_ok();
-    let results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
+    let mut results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
+    results.control = control;
     let linear = if report.switched_to_lu {
         LinearKind::Lu
     } else {
@@ -394,6 +419,8 @@ fn results_3d(
             .map(|c| [c.surface.v_road[0], c.surface.v_road[1]]),
         slip_angle: (scene.analysis.mode == Mode::Steady)
             .then(|| scene.road.as_ref().map_or(0.0, |r| r.slip_angle)),
+        v0: rc.filter(|c| c.steady_omega.is_some()).map(|c| c.v0),
+        control: None,
     }
 }
 

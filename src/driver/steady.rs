@@ -321,13 +321,48 @@ pub struct TorqueSolve {
     pub newton_iterations: usize,
     /// (v0, torque) of every evaluation.
     pub history: Vec<(f64, f64)>,
+    /// Trial speeds whose Newton solve failed (each followed by a halved trial).
+    pub failed_trials: usize,
+}
+
+/// A steady rolling system whose road speed the rolling controls move: the plane-strain
+/// [`SteadyRolling`] and the three-dimensional [`crate::model::Solid3DSystem`].
+pub trait RoadSpeedSystem: NonlinearSystem {
+    /// The road speed v0.
+    fn road_speed(&self) -> f64;
+    fn set_road_speed(&mut self, v0: f64);
+    /// The torque the hub exerts on the body about the axle +x3 (counter-clockwise positive;
+    /// per unit thickness in the plane, total in three dimensions) at the current state.
+    fn hub_torque(&self) -> f64;
+    /// The rolling speed |ω| Ro: the velocity scale of the secant's first step.
+    fn rolling_speed(&self) -> f64;
+    /// ω with its sign.
+    fn angular_speed(&self) -> f64;
+}
+
+impl RoadSpeedSystem for SteadyRolling {
+    fn road_speed(&self) -> f64 {
+        self.v0()
+    }
+    fn set_road_speed(&mut self, v0: f64) {
+        self.set_v0(v0)
+    }
+    fn hub_torque(&self) -> f64 {
+        SteadyRolling::hub_torque(self)
+    }
+    fn rolling_speed(&self) -> f64 {
+        (self.omega() * self.ro).abs()
+    }
+    fn angular_speed(&self) -> f64 {
+        self.omega_signed()
+    }
 }
 
 /// Step 2: adjust v0 until the hub torque equals `target` (0 = free rolling), by a secant
 /// iteration safeguarded by bisection once the root is bracketed. Converged when
 /// |T − target| ≤ `tol` · `torque_scale`.
-pub fn solve_torque(
-    st: &mut SteadyRolling,
+pub fn solve_torque<S: RoadSpeedSystem>(
+    st: &mut S,
     target: f64,
     torque_scale: f64,
     tol: f64,
@@ -336,31 +371,31 @@ pub fn solve_torque(
 ) -> Result<TorqueSolve, SolveError> {
     let mut out = TorqueSolve::default();
     let mut saved = Vec::new();
-    let mut eval =
-        |st: &mut SteadyRolling, v0: f64, out: &mut TorqueSolve| -> Result<f64, SolveError> {
-            st.sys.save_state(&mut saved);
-            st.set_v0(v0);
-            match newton.solve(st) {
-                Ok(r) => {
-                    out.newton_iterations += r.iterations;
-                    out.evaluations += 1;
-                    let t = st.hub_torque() - target;
-                    out.history.push((v0, t + target));
-                    Ok(t)
-                }
-                Err(e) => {
-                    st.sys.restore_state(&saved);
-                    Err(e)
-                }
+    let mut eval = |st: &mut S, v0: f64, out: &mut TorqueSolve| -> Result<f64, SolveError> {
+        st.save_state(&mut saved);
+        let v_prev = st.road_speed();
+        st.set_road_speed(v0);
+        match newton.solve(st) {
+            Ok(r) => {
+                out.newton_iterations += r.iterations;
+                out.evaluations += 1;
+                let t = st.hub_torque() - target;
+                out.history.push((v0, t + target));
+                Ok(t)
             }
-        };
-    let omega = st.omega();
+            Err(e) => {
+                st.restore_state(&saved);
+                st.set_road_speed(v_prev);
+                Err(e)
+            }
+        }
+    };
     // Velocity scale for the first secant step: 1e-3 of the rolling speed.
-    let vs = (omega * st.ro)
-        .abs()
-        .max(st.v0().abs())
+    let vs = st
+        .rolling_speed()
+        .max(st.road_speed().abs())
         .max(f64::MIN_POSITIVE);
-    let mut a = st.v0();
+    let mut a = st.road_speed();
     let mut fa = eval(st, a, &mut out)?;
     if fa.abs() <= tol * torque_scale {
         out.v0 = a;
@@ -396,7 +431,21 @@ pub fn solve_torque(
             let max_step = 0.2 * vs;
             c = b + (c - b).clamp(-max_step, max_step);
         }
-        let fc = eval(st, c, &mut out)?;
+        // A trial the Newton solve does not reach from the previous state (a large step into
+        // full sliding, say) is halved toward it, a few times, before giving up.
+        let mut halvings = 0;
+        let fc = loop {
+            match eval(st, c, &mut out) {
+                Ok(f) => break f,
+                Err(SolveError::Interrupted { at }) => return Err(SolveError::Interrupted { at }),
+                Err(e) if halvings >= 6 => return Err(e),
+                Err(_) => {
+                    halvings += 1;
+                    out.failed_trials += 1;
+                    c = b + 0.5 * (c - b);
+                }
+            }
+        };
         if let Some((lo, flo, hi, fhi)) = bracket {
             // Keep the bracket around the root.
             if flo * fc < 0.0 {
@@ -423,13 +472,32 @@ pub fn solve_torque(
 /// never below 2^−max_cutbacks of the requested step, so the walk cannot stall); a
 /// converged step lets the next one grow by 1.5 up to the whole remaining distance. Returns the
 /// Newton iterations spent.
-pub fn step_parameter(
-    st: &mut SteadyRolling,
+pub fn step_parameter<S: ParametricSystem>(
+    st: &mut S,
     target: f64,
     newton: &mut Newton,
     max_cutbacks: usize,
 ) -> Result<usize, SolveError> {
-    let mut lambda = st.parameter();
+    step_parameter_with(
+        st,
+        target,
+        newton,
+        max_cutbacks,
+        S::parameter,
+        S::set_parameter,
+    )
+}
+
+/// [`step_parameter`] with the parameter read by `get` and set by `set`.
+pub fn step_parameter_with<S: NonlinearSystem>(
+    st: &mut S,
+    target: f64,
+    newton: &mut Newton,
+    max_cutbacks: usize,
+    get: impl Fn(&S) -> f64,
+    set: impl Fn(&mut S, f64),
+) -> Result<usize, SolveError> {
+    let mut lambda = get(st);
     let mut step = target - lambda;
     // The smallest step allowed: `max_cutbacks` halvings of the requested one. Without it a
     // residual that is discontinuous just ahead (a node crossing the patch edge with l_n = 0
@@ -450,8 +518,8 @@ pub fn step_parameter(
                 step: next - lambda,
             });
         }
-        st.sys.save_state(&mut saved);
-        st.set_parameter(next);
+        st.save_state(&mut saved);
+        set(st, next);
         match newton.solve(st) {
             Ok(r) => {
                 iterations += r.iterations;
@@ -461,8 +529,8 @@ pub fn step_parameter(
             }
             Err(SolveError::Interrupted { at }) => return Err(SolveError::Interrupted { at }),
             Err(e) => {
-                st.sys.restore_state(&saved);
-                st.set_parameter(lambda);
+                st.restore_state(&saved);
+                set(st, lambda);
                 cutbacks += 1;
                 if cutbacks > max_cutbacks || (0.5 * step).abs() < min_step {
                     return Err(e);

@@ -6,7 +6,7 @@
 
 use super::results::ControlReport;
 use super::spinning;
-use super::steady::{press, solve_torque, step_parameter, SteadyParameter, SteadyRolling};
+use super::steady::{press, solve_torque, step_parameter_with, RoadSpeedSystem, SteadyRolling};
 use super::steady_nested::{self, CoarseSolved};
 use super::steady_recovery;
 use super::steady_report::{SolveReports, SteadyFailure};
@@ -207,53 +207,80 @@ pub const TORQUE_RTOL: f64 = 1e-7;
 /// - `torque` / `free_rolling`: v0 solved for hub torque = `motion.torque` / 0
 ///   ([`solve_torque`], tolerance [`TORQUE_RTOL`]);
 /// - `creep`: free rolling first (v0_free, R_e), then v0 = (1 + ξ) v0_free reached by
-///   natural-parameter steps in ξ ([`step_parameter`]).
+///   natural-parameter steps in ξ ([`super::steady::step_parameter`]).
 pub fn apply_control(
     scene: &Scene,
     st: &mut SteadyRolling,
     verbose: bool,
 ) -> Result<ControlReport, SolveError> {
-    let control = scene.motion.control;
-    let mut rep = ControlReport {
-        control: control.as_str().to_string(),
+    if scene.motion.control == Control::Speed {
+        return Ok(speed_control_report());
+    }
+    let newton_opts = st.plan.verbose(verbose).newton;
+    let mut newton = Newton::new(st, LinearKind::Lu, newton_opts)?;
+    let scale = st.sys.hub_reaction().0[1].abs() * st.ro;
+    let rep = control_road_speed(scene, st, scale, &mut newton)?;
+    if rep.v0_free.is_finite() {
+        st.v0_free = rep.v0_free;
+    }
+    Ok(rep)
+}
+
+/// The report of the speed control (nothing done).
+pub fn speed_control_report() -> ControlReport {
+    ControlReport {
+        control: Control::Speed.as_str().to_string(),
         v0_free: f64::NAN,
         rolling_radius: f64::NAN,
         creep: f64::NAN,
         ..Default::default()
-    };
+    }
+}
+
+/// The torque, free-rolling and creep controls of [`apply_control`] on any steady rolling
+/// system, plane or three-dimensional: `torque_scale` is |F_vertical| · Ro at the press-in
+/// state (the torque tolerance is [`TORQUE_RTOL`] times it).
+pub fn control_road_speed<S: RoadSpeedSystem>(
+    scene: &Scene,
+    st: &mut S,
+    torque_scale: f64,
+    newton: &mut Newton,
+) -> Result<ControlReport, SolveError> {
+    let control = scene.motion.control;
+    let mut rep = speed_control_report();
+    rep.control = control.as_str().to_string();
     let target = match control {
         Control::Speed => return Ok(rep),
         Control::Torque => scene.motion.torque,
         Control::FreeRolling | Control::Creep => 0.0,
     };
     rep.target_torque = target;
-    let newton_opts = st.plan.verbose(verbose).newton;
-    let mut newton = Newton::new(st, LinearKind::Lu, newton_opts)?;
-    let scale = st.sys.hub_reaction().0[1].abs() * st.ro;
-    let scale = if scale > 0.0 { scale } else { 1.0 };
+    let scale = if torque_scale > 0.0 {
+        torque_scale
+    } else {
+        1.0
+    };
     rep.torque_tolerance = TORQUE_RTOL * scale;
-    let ts = solve_torque(st, target, scale, TORQUE_RTOL, &mut newton, 40)?;
+    let ts = solve_torque(st, target, scale, TORQUE_RTOL, newton, 40)?;
     rep.evaluations = ts.evaluations;
     rep.newton_iterations = ts.newton_iterations;
     rep.history = ts.history;
     if matches!(control, Control::FreeRolling | Control::Creep) {
-        st.v0_free = st.v0();
-        rep.v0_free = st.v0_free;
-        rep.rolling_radius = st.rolling_radius();
+        rep.v0_free = st.road_speed();
+        rep.rolling_radius = rep.v0_free / st.angular_speed();
     }
     if control == Control::Creep && scene.motion.creep != 0.0 {
-        let param = st.param;
-        st.param = SteadyParameter::Creep;
-        let r = step_parameter(
+        let v0_free = rep.v0_free;
+        rep.newton_iterations += step_parameter_with(
             st,
             scene.motion.creep,
-            &mut newton,
+            newton,
             scene.solver.max_cutbacks,
-        );
-        st.param = param;
-        rep.newton_iterations += r?;
+            |s| s.road_speed() / v0_free - 1.0,
+            |s, xi| s.set_road_speed((1.0 + xi) * v0_free),
+        )?;
     }
-    rep.creep = st.creep();
+    rep.creep = st.road_speed() / rep.v0_free - 1.0;
     Ok(rep)
 }
 

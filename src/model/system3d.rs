@@ -73,6 +73,10 @@ pub struct RoadContact3D {
     /// ([`Kinematics3D::Steady`]) instead of the load-stepping rate, and the load factor
     /// moves only the road (the coefficients stay at the target's).
     pub steady_omega: Option<f64>,
+    /// Steady rolling: the road speed v0 and the slip angle α (radians); the road velocity in
+    /// its plane is V = v0 (cos α, −sin α) ([`road_velocity_3d`]).
+    pub v0: f64,
+    pub slip_angle: f64,
 }
 
 impl Solid3DSystem {
@@ -173,6 +177,8 @@ impl Solid3DSystem {
             committed: None,
             totals: ContactTotals3D::default(),
             steady_omega: None,
+            v0: 0.0,
+            slip_angle: 0.0,
         });
         self.rebuild_assembler();
         Ok(self)
@@ -200,7 +206,8 @@ impl Solid3DSystem {
     }
 
     /// Steady rolling in the θ-referential description: the body turns at `omega` (rad/s
-    /// about +x3) and the road moves at `v_road` = (V1, V3) in its plane (hub frame). The
+    /// about +x3) and the road moves at the speed `v0` turned by the slip angle `slip_angle`
+    /// (radians) in its plane, V = (V1, V3) = v0 (cos α, −sin α) (hub frame). The
     /// inertia −ω² ∫ ρ ∂θχ · ∂θη is on at once (the coefficients no longer follow the load
     /// factor, which then moves only the road), and the contact takes the steady velocity
     /// v = ω ∂θχ, with the friction slip from nodal θ-derivatives along the node rings of the
@@ -209,11 +216,15 @@ impl Solid3DSystem {
     pub fn set_steady_rolling(
         &mut self,
         omega: f64,
-        v_road: [f64; 2],
+        v0: f64,
+        slip_angle: f64,
     ) -> Result<(), Contact3DError> {
-        if !(omega.is_finite() && v_road.iter().all(|v| v.is_finite())) {
-            return Err(Contact3DError::NonFinite(omega));
+        for v in [omega, v0, slip_angle] {
+            if !v.is_finite() {
+                return Err(Contact3DError::NonFinite(v));
+            }
         }
+        let v_road = road_velocity_3d(v0, slip_angle);
         self.target = Coefficients {
             omega2: omega * omega,
             ..self.target
@@ -222,6 +233,8 @@ impl Solid3DSystem {
         let mut rebuild = false;
         if let Some(rc) = self.contact.as_mut() {
             rc.steady_omega = Some(omega);
+            rc.v0 = v0;
+            rc.slip_angle = slip_angle;
             rc.surface.v_road = nalgebra::Vector2::new(v_road[0], v_road[1]);
             if rc.surface.friction.is_active() && !rc.surface.has_steady_slip() {
                 rebuild = rc.surface.enable_steady_slip(&self.solid.mesh);
@@ -274,6 +287,88 @@ impl Solid3DSystem {
     /// ω of steady rolling, if set.
     pub fn steady_omega(&self) -> Option<f64> {
         self.contact.as_ref().and_then(|c| c.steady_omega)
+    }
+
+    /// The road speed v0 of steady rolling (0 without contact).
+    pub fn road_speed(&self) -> f64 {
+        self.contact.as_ref().map_or(0.0, |c| c.v0)
+    }
+
+    /// Set the road speed v0 of steady rolling, keeping the slip angle.
+    pub fn set_road_speed(&mut self, v0: f64) {
+        if let Some(rc) = self.contact.as_mut() {
+            rc.v0 = v0;
+            let v = road_velocity_3d(v0, rc.slip_angle);
+            rc.surface.v_road = nalgebra::Vector2::new(v[0], v[1]);
+        }
+    }
+
+    /// The slip angle α of steady rolling (radians; 0 without contact).
+    pub fn slip_angle(&self) -> f64 {
+        self.contact.as_ref().map_or(0.0, |c| c.slip_angle)
+    }
+
+    /// Set the slip angle α (radians) of steady rolling, keeping the road speed.
+    pub fn set_slip_angle(&mut self, slip_angle: f64) {
+        if let Some(rc) = self.contact.as_mut() {
+            rc.slip_angle = slip_angle;
+            let v = road_velocity_3d(rc.v0, slip_angle);
+            rc.surface.v_road = nalgebra::Vector2::new(v[0], v[1]);
+        }
+    }
+
+    /// Force and moment (about the hub centre, the origin) that the hub exerts on the body, in
+    /// the wheel frame: the cell residuals R = f_int − f_ext at the fixed displacement dofs
+    /// of the `hub` nodes (at a support R equals the reaction), with the inertia of the
+    /// current coefficients. Moment component 3 is the torque about the axle +x3
+    /// (counter-clockwise positive), the drive torque of the rolling controls.
+    pub fn hub_reaction(&self) -> ([f64; 3], [f64; 3]) {
+        let mesh = &self.solid.mesh;
+        let mut is_hub = vec![false; mesh.n_nodes()];
+        for &n in mesh.node_set("hub") {
+            is_hub[n as usize] = true;
+        }
+        let is_hub_dof = |d: usize| is_hub[d / 3] && self.dofs.eq[d] == FIXED;
+        let (mut force, mut moment) = ([0.0; 3], [0.0; 3]);
+        let mut r = vec![0.0; 3 * 27 + 8];
+        for c in 0..mesh.n_cells() {
+            let nodes = mesh.cell_nodes(c);
+            if !nodes.iter().any(|&n| is_hub[n as usize]) {
+                continue;
+            }
+            let cd = self.dofs.cell(c);
+            r.clear();
+            r.resize(cd.len(), 0.0);
+            if self
+                .solid
+                .cell(c, &self.dofs, &self.x, &self.coefficients, &mut r, &mut [])
+                .is_err()
+            {
+                return ([f64::NAN; 3], [f64::NAN; 3]);
+            }
+            for (a, &n) in nodes.iter().enumerate() {
+                let n = n as usize;
+                let u = self.node_displacement(n);
+                let xp = [
+                    mesh.nodes[n][0] + u[0],
+                    mesh.nodes[n][1] + u[1],
+                    mesh.nodes[n][2] + u[2],
+                ];
+                let mut f = [0.0; 3];
+                for (i, fi) in f.iter_mut().enumerate() {
+                    if is_hub_dof(3 * n + i) {
+                        *fi = r[3 * a + i];
+                    }
+                }
+                for i in 0..3 {
+                    force[i] += f[i];
+                }
+                moment[0] += xp[1] * f[2] - xp[2] * f[1];
+                moment[1] += xp[2] * f[0] - xp[0] * f[2];
+                moment[2] += xp[0] * f[1] - xp[1] * f[0];
+            }
+        }
+        (force, moment)
     }
 
     /// The floor of the displacement residual's convergence reference: a physical force scale
@@ -418,6 +513,12 @@ impl Solid3DSystem {
     pub fn node_displacement(&self, n: usize) -> [f64; 3] {
         [self.x[3 * n], self.x[3 * n + 1], self.x[3 * n + 2]]
     }
+}
+
+/// The road velocity (V1, V3) in the road plane for the speed `v0` and the slip angle `alpha`
+/// (radians): the road's velocity turned by α about +x2, V = v0 (cos α, −sin α).
+pub fn road_velocity_3d(v0: f64, alpha: f64) -> [f64; 2] {
+    [v0 * alpha.cos(), -v0 * alpha.sin()]
 }
 
 impl NonlinearSystem for Solid3DSystem {

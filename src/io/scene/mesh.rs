@@ -268,25 +268,12 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
     }
 }
 
-/// What the three-dimensional steady mode does not take yet: creep and torque control, the
-/// strain-rate damping, continuation.
+/// What the three-dimensional steady mode does not take yet: the strain-rate damping,
+/// continuation.
 fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let Some(doc) = doc else {
         return;
     };
-    let control = doc
-        .get("motion")
-        .and_then(|m| m.get("control"))
-        .and_then(|v| v.as_str());
-    if let Some(c) = control.filter(|c| *c != "speed") {
-        out.push(issue(
-            "motion.control",
-            format!(
-                "control \"{c}\" does not run in the three-dimensional steady mode yet; use \
-                 \"speed\" (motion.omega and road.v0 given)"
-            ),
-        ));
-    }
     if table_has(doc, "time", "strain_rate_damping") {
         out.push(issue(
             "time.strain_rate_damping",
