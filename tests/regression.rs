@@ -139,6 +139,7 @@ scenes! {
     cornering_3d: "cornering_3d.toml" => "cornering_3d.json";
     camber_3d: "camber_3d.toml" => "camber_3d.json";
     traction_3d: "traction_3d.toml" => "traction_3d.json";
+    cornering_curve_3d: "cornering_curve_3d.toml" => "cornering_curve_3d.json";
     oden_hollow_cylinder: "oden_hollow_cylinder.toml" => "oden_hollow_cylinder.json";
     oden_hollow_cylinder_steady: "oden_hollow_cylinder.toml", "--mode", "steady" => "oden_hollow_cylinder_steady.json";
     oden_steady_sweep: "oden_steady_sweep.toml" => "oden_steady_sweep.json";

@@ -309,54 +309,7 @@ fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
 /// leading edge, and Newton stalls when one enters at the final load).
 #[test]
 fn slip_angle_and_camber_signs_flip_lateral_force_and_aligning_moment() {
-    let scene = |alpha: f64, camber: f64| {
-        let text = format!(
-            r#"
-[scene]
-name = "cornering"
-[geometry]
-ri = 1.0
-ro = 2.0
-[mesh]
-dimension = 3
-width = 0.6
-n_z = 2
-n_r = 2
-n_theta = 32
-order = 1
-grading_theta = 0.6
-[material]
-model = "neo_hookean"
-mu = 200.0
-lambda = 1800.0
-rho = 0.027
-[analysis]
-mode = "steady"
-[motion]
-omega = 10.0
-[road]
-disp = 0.04
-v0 = 19.9
-slip_angle = {alpha}
-camber = {camber}
-[contact]
-c_n = 2.0e4
-b_n = 2.0
-l_n = 1.0
-quadrature = "gauss"
-points = 3
-[friction]
-law = "coulomb_tanh"
-mu = 0.5
-eps = 0.2
-[solver]
-tolerance = 1e-11
-load_steps = 3
-linear = "lu"
-"#
-        );
-        Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
-    };
+    let scene = cornering_scene;
     for (what, (ap, gp)) in [("slip angle", (2.0, 0.0)), ("camber", (0.0, 2.0))] {
         let plus = steady_3d(&scene(ap, gp), false);
         let minus = steady_3d(&scene(-ap, -gp), false);
@@ -469,5 +422,114 @@ fn rolling_controls_on_the_slab_match_the_2d_steady_mode() {
                 tc[i]
             );
         }
+    }
+}
+
+/// A free-sided Hex8 wheel rolling at ω = 10 on the road at 19.9 in/s turned by the slip angle
+/// `alpha` (degrees), with the camber `camber` (degrees), tanh friction and damping.
+fn cornering_scene(alpha: f64, camber: f64) -> Scene {
+    let text = format!(
+        r#"
+[scene]
+name = "cornering"
+[geometry]
+ri = 1.0
+ro = 2.0
+[mesh]
+dimension = 3
+width = 0.6
+n_z = 2
+n_r = 2
+n_theta = 32
+order = 1
+grading_theta = 0.6
+[material]
+model = "neo_hookean"
+mu = 200.0
+lambda = 1800.0
+rho = 0.027
+[analysis]
+mode = "steady"
+[motion]
+omega = 10.0
+[road]
+disp = 0.04
+v0 = 19.9
+slip_angle = {alpha}
+camber = {camber}
+[contact]
+c_n = 2.0e4
+b_n = 2.0
+l_n = 1.0
+quadrature = "gauss"
+points = 3
+[friction]
+law = "coulomb_tanh"
+mu = 0.5
+eps = 0.2
+[solver]
+tolerance = 1e-11
+load_steps = 3
+linear = "lu"
+"#
+    );
+    Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Arc-length continuation in the slip angle: every converged point of the path is the steady
+/// state of a direct solve at its slip angle (the lateral force and the aligning moment to the
+/// solver tolerance), and the path reaches the target.
+#[test]
+fn slip_angle_continuation_points_are_steady_states() {
+    use tread::driver::steady3d::{follow_path_3d, Path3DParameter};
+    use tread::io::scene::{ContinuationParameter, ContinuationSpec};
+    let sc = cornering_scene(0.0, 0.0);
+    let mut sys = steady_3d(&sc, false);
+    let cs = ContinuationSpec {
+        parameter: ContinuationParameter::SlipAngle,
+        target: 3.0,
+        ds: 0.2,
+        ..Default::default()
+    };
+    let mut points: Vec<(f64, f64, f64)> = Vec::new();
+    let mut on_point = |p: &tread::driver::steady3d::SteadyPath3D,
+                        b: &tread::solver::continuation::BranchPoint| {
+        let c = p.sys.contact.as_ref().expect("contact");
+        points.push((b.lambda, c.totals.force[2], c.totals.moment[1]));
+        true
+    };
+    let parameter = Path3DParameter::of(ContinuationParameter::SlipAngle, f64::NAN).expect("α");
+    let (rep, res) = follow_path_3d(&sc, &cs, parameter, &mut sys, false, &mut on_point);
+    res.unwrap_or_else(|e| panic!("continuation: {e}"));
+    let rep = rep.expect("report");
+    eprintln!(
+        "{} points, {} corrector iterations: {:?}",
+        points.len(),
+        rep.total_iterations,
+        points
+    );
+    let last = points.last().copied().expect("points");
+    assert!(last.0 >= 3.0 - 1e-9, "target not reached: {}", last.0);
+    assert!(points.len() >= 4);
+    let fz = sys.contact.as_ref().expect("contact").totals.force[1].abs();
+    // Two points of the path, each against a direct solve from the undeformed state.
+    for &(alpha, f3, m2) in [points[2], last].iter() {
+        let direct = steady_3d(&cornering_scene(alpha, 0.0), false);
+        let t = direct.contact.as_ref().expect("contact").totals;
+        eprintln!(
+            "α = {alpha:.6}: path F3 {f3:.10e} M2 {m2:.10e}; direct F3 {:.10e} M2 {:.10e}",
+            t.force[2], t.moment[1]
+        );
+        assert!(f3 < 0.0);
+        assert!(
+            (f3 - t.force[2]).abs() <= 1e-7 * fz,
+            "F3 {f3} vs {}",
+            t.force[2]
+        );
+        assert!(
+            (m2 - t.moment[1]).abs() <= 1e-7 * fz * RO,
+            "M2 {m2} vs {}",
+            t.moment[1]
+        );
     }
 }

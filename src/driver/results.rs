@@ -26,7 +26,7 @@ pub use super::transient::energy::{ViscousEnergy, ENERGY_CREATED_TOL};
 use crate::contact::stick_slip::{ClosedFormCycle, SolverStats};
 use crate::io::output::sanitize;
 use crate::model::system::SteadyDampingTangent;
-use crate::solver::continuation::{LimitJump, PointKind, SpecialPoint};
+use crate::solver::continuation::{BranchPoint, LimitJump, PointKind, SpecialPoint};
 use serde::Serialize;
 
 /// The whole `summary.json` of a run: the keys every mode writes and the mode's own part.
@@ -303,6 +303,55 @@ pub struct Solid3DResults {
     /// Steady mode with `motion.control` other than `speed`: what the control did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub control: Option<ControlReport>,
+    /// Steady mode with `[continuation]`: how the path went, and its converged points.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuation: Option<ContinuationSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub branch: Option<Vec<BranchRow3D>>,
+}
+
+/// A converged point of a three-dimensional continuation (`results.branch`, `branch.csv`).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct BranchRow3D {
+    /// Continuation step (0 = the start) and its parameter value.
+    pub step: usize,
+    pub lambda: f64,
+    /// Corrector iterations of the step.
+    pub iterations: usize,
+    /// Slip angle (degrees), road speed and road height of the point.
+    pub slip_angle: f64,
+    pub v0: f64,
+    pub road_height: f64,
+    /// The six hub loads (road frame) of the point.
+    #[serde(flatten)]
+    pub hub_loads: HubLoads3D,
+    pub points_in_contact: usize,
+}
+
+impl BranchRow3D {
+    /// The row of the converged point `p` of `sys`'s path (the contact totals of its last
+    /// evaluation).
+    pub fn new(sys: &crate::model::Solid3DSystem, p: &BranchPoint) -> Self {
+        let rc = sys.contact.as_ref();
+        let t = rc.map(|c| c.totals).unwrap_or_default();
+        let hub_loads = match rc {
+            Some(c) => {
+                let f = c.surface.frame();
+                HubLoads3D::new(f.components(t.force), f.components(t.moment))
+            }
+            None => HubLoads3D::new([f64::NAN; 3], [f64::NAN; 3]),
+        };
+        Self {
+            step: p.step,
+            lambda: p.lambda,
+            iterations: p.iterations,
+            slip_angle: sys.slip_angle().to_degrees(),
+            v0: sys.road_speed(),
+            road_height: sys.road_height().unwrap_or(f64::NAN),
+            hub_loads,
+            points_in_contact: t.points_in_contact,
+        }
+    }
 }
 
 /// The loads of the road on the body reduced to the hub centre (the origin), totals over the

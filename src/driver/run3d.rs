@@ -27,11 +27,13 @@
 use super::envelope::conclude;
 use super::indentation3d::solve_indentation_3d;
 use super::results::{
-    HubLoads3D, RunOutcome, RunStats, Solid3DMesh, Solid3DResults, Solid3DSummary, SolidSolver,
-    Summary,
+    BranchRow3D, ContinuationSummary, HubLoads3D, RunOutcome, RunStats, Solid3DMesh,
+    Solid3DResults, Solid3DSummary, SolidSolver, Summary,
 };
 use super::spinning3d::solve_spinning_3d;
-use super::steady3d::{apply_control_3d, solve_steady_3d};
+use super::steady3d::{
+    apply_control_3d, follow_path_3d, solve_steady_3d, Path3DParameter, SteadyPath3D,
+};
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::hex_out::{HexOutputOptions, HexOutputs, HexState};
@@ -41,6 +43,7 @@ use crate::io::scene::{Control, Mode, Scene, Sink};
 use crate::mesh::hex_mesh::HexMesh;
 use crate::model::Solid3DSystem;
 use crate::setup::{build_system_3d, linear_kind_3d, solver_options, AppError, RunOptions};
+use crate::solver::continuation::BranchPoint;
 use crate::solver::stepping::StepReport;
 use crate::solver::{IterationRecord, StepInfo, StepObserver};
 use crate::solver::{LinearKind, SolveError};
@@ -218,7 +221,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     }
     let mut report = StepReport::default();
     let mut control = None;
-    let solve = match scene.analysis.mode {
+    let mut solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
             kind,
@@ -268,11 +271,73 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             &mut obs,
         ),
     };
+    // `[continuation]` from the first solution: every converged point a row of branch.csv,
+    // of steps.csv and a field output.
+    let mut branch: Vec<BranchRow3D> = Vec::new();
+    let mut cont = None;
+    if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
+        let v0_free = control.as_ref().map_or(f64::NAN, |c| c.v0_free);
+        let Some(parameter) = Path3DParameter::of(cs.parameter, v0_free) else {
+            obs.finish();
+            return Err(AppError::Unsupported(format!(
+                "continuation.parameter: \"{}\" does not run in the three-dimensional steady \
+                 mode (slip_angle; creep after motion.control = \"creep\" or \"free_rolling\"; \
+                 load under load control)",
+                cs.parameter
+            )));
+        };
+        let n0 = obs.last.index;
+        let mut on_point = |p: &SteadyPath3D, b: &BranchPoint| {
+            let s = &*p.sys;
+            if b.step > 0 {
+                obs.observe_accepted(
+                    s,
+                    &StepInfo {
+                        index: n0 + b.step as u64,
+                        time: b.lambda,
+                        dt: 0.0,
+                        newton_iterations: b.iterations,
+                        residual: 0.0,
+                        is_final: false,
+                    },
+                );
+            }
+            branch.push(BranchRow3D::new(s, b));
+            !record::interrupted()
+        };
+        let (r, res) = follow_path_3d(scene, cs, parameter, &mut sys, opts.verbose, &mut on_point);
+        if let Some(r) = &r {
+            report.total_iterations += r.total_iterations;
+        }
+        cont = r;
+        solve = res.and_then(|()| {
+            if record::interrupted() {
+                Err(SolveError::Interrupted { at: f64::NAN })
+            } else {
+                Ok(())
+            }
+        });
+    }
     obs.finish();
     let wall = t0.elapsed().as_secs_f64();
     let converged = solve.is_ok();
     let mut results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
     results.control = control;
+    results.continuation = cont.as_ref().map(|c| ContinuationSummary {
+        parameter: scene.continuation.as_ref().map(|c| c.parameter.to_string()),
+        stop_reason: c.stop_reason.clone(),
+        steps: c.points.len().saturating_sub(1),
+        corrector_iterations: c.total_iterations,
+        cutbacks: c.cutbacks,
+        assemblies: c.assemblies,
+        factorizations: c.factorizations,
+        switched_at: c.switched_at,
+        jumps: c.jumps.clone(),
+        failed_jumps: c.failed_jumps.clone(),
+    });
+    if scene.continuation.is_some() {
+        results.branch = Some(branch.clone());
+    }
     let linear = if report.switched_to_lu {
         LinearKind::Lu
     } else {
@@ -322,6 +387,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         if let Err(e) = write_tables(&sys, &obs, &opts.out_dir) {
             obs.errors
                 .push(RecordError::new("csv", opts.out_dir.clone(), e));
+        }
+        if scene.continuation.is_some() {
+            if let Err(e) = write_branch(&branch, &opts.out_dir) {
+                obs.errors
+                    .push(RecordError::new("csv", opts.out_dir.clone(), e));
+            }
         }
     }
     if scene.output.has(Sink::Png) && sys.contact.is_some() {
@@ -421,6 +492,8 @@ fn results_3d(
             .then(|| scene.road.as_ref().map_or(0.0, |r| r.slip_angle)),
         v0: rc.filter(|c| c.steady_omega.is_some()).map(|c| c.v0),
         control: None,
+        continuation: None,
+        branch: None,
     }
 }
 
@@ -504,6 +577,46 @@ fn write_footprints(scene: &Scene, sys: &Solid3DSystem, dir: &Path, errors: &mut
 }
 
 /// `steps.csv`, `nodes.csv` and `convergence.csv`.
+/// `branch.csv`: one row per converged point of the continuation.
+fn write_branch(rows: &[BranchRow3D], dir: &Path) -> Result<(), OutputError> {
+    write_csv(
+        &dir.join("branch.csv"),
+        &[
+            "step",
+            "lambda",
+            "iterations",
+            "slip_angle",
+            "v0",
+            "road_height",
+            "longitudinal_force",
+            "vertical_force",
+            "lateral_force",
+            "overturning_moment",
+            "aligning_moment",
+            "axle_moment",
+            "points_in_contact",
+        ],
+        rows.iter().map(|r| {
+            let h = &r.hub_loads;
+            vec![
+                r.step as f64,
+                r.lambda,
+                r.iterations as f64,
+                r.slip_angle,
+                r.v0,
+                r.road_height,
+                h.longitudinal_force,
+                h.vertical_force,
+                h.lateral_force,
+                h.overturning_moment,
+                h.aligning_moment,
+                h.axle_moment,
+                r.points_in_contact as f64,
+            ]
+        }),
+    )
+}
+
 fn write_tables(sys: &Solid3DSystem, obs: &Run3DObserver, dir: &Path) -> Result<(), OutputError> {
     write_csv(
         &dir.join("steps.csv"),

@@ -22,11 +22,14 @@ use super::indentation3d::contact_force_scale_3d;
 use super::results::ControlReport;
 use super::steady::RoadSpeedSystem;
 use super::steady_solve::{control_road_speed, speed_control_report};
-use crate::io::scene::{Control, Scene};
+use crate::io::scene::{ContinuationParameter, ContinuationSpec, Control, Scene};
 use crate::model::Solid3DSystem;
+use crate::solver::continuation::{
+    BranchPoint, Continuation, ContinuationOptions, ContinuationReport, ParametricSystem,
+};
 use crate::solver::observe::StepObserver;
 use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
-use crate::solver::{LinearKind, Newton, NewtonOptions, SolveError};
+use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
 
 /// Solve the steady rolling of `sys` (built with contact and
 /// [`Solid3DSystem::set_steady_rolling`]) to λ = 1.
@@ -84,4 +87,155 @@ pub fn apply_control_3d(
     let ro = sys.contact.as_ref().map_or(0.0, |c| c.h_touch);
     let scale = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() * ro;
     control_road_speed(scene, sys, scale, &mut newton)
+}
+
+/// The parameter of a continuation of the three-dimensional steady state (`[continuation]
+/// parameter`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Path3DParameter {
+    /// The slip angle α in degrees, at a fixed road speed.
+    SlipAngle,
+    /// The creep ξ = v0 / v0_free − 1 from the free-rolling speed `v0_free`, at fixed ω.
+    Creep { v0_free: f64 },
+    /// The hub load of load control (a total force).
+    Load,
+}
+
+impl Path3DParameter {
+    /// The path parameter of `[continuation] parameter`; the creep needs the free-rolling
+    /// speed `v0_free` (from the creep or free-rolling control, else NaN). `None` for the
+    /// parameters the three-dimensional steady mode does not continue in (ω, the penetration)
+    /// and for the creep without a free-rolling speed.
+    pub fn of(p: ContinuationParameter, v0_free: f64) -> Option<Self> {
+        match p {
+            ContinuationParameter::SlipAngle => Some(Self::SlipAngle),
+            ContinuationParameter::Creep => v0_free.is_finite().then_some(Self::Creep { v0_free }),
+            ContinuationParameter::Load => Some(Self::Load),
+            ContinuationParameter::Omega | ContinuationParameter::Disp => None,
+        }
+    }
+}
+
+/// The three-dimensional steady system with one of its parameters exposed
+/// ([`ParametricSystem`]) for the arc-length continuation.
+pub struct SteadyPath3D<'a> {
+    pub sys: &'a mut Solid3DSystem,
+    pub parameter: Path3DParameter,
+}
+
+impl NonlinearSystem for SteadyPath3D<'_> {
+    fn n_eq(&self) -> usize {
+        self.sys.n_eq()
+    }
+    fn fields(&self) -> &[u8] {
+        self.sys.fields()
+    }
+    fn field_names(&self) -> &'static [&'static str] {
+        self.sys.field_names()
+    }
+    fn reference_norms(&self) -> Vec<f64> {
+        self.sys.reference_norms()
+    }
+    fn force_scale(&self) -> &[f64] {
+        self.sys.force_scale()
+    }
+    fn state_magnitudes(&self, out: &mut Vec<f64>) {
+        self.sys.state_magnitudes(out)
+    }
+    fn pattern(&self) -> (&[usize], &[usize]) {
+        self.sys.pattern()
+    }
+    fn evaluate(&mut self, with_matrix: bool) -> bool {
+        self.sys.evaluate(with_matrix)
+    }
+    fn residual(&self) -> &[f64] {
+        self.sys.residual()
+    }
+    fn matrix_values(&self) -> &[f64] {
+        self.sys.matrix_values()
+    }
+    fn update(&mut self, alpha: f64, dx: &[f64]) {
+        self.sys.update(alpha, dx)
+    }
+    fn save_state(&self, buf: &mut Vec<f64>) {
+        self.sys.save_state(buf)
+    }
+    fn restore_state(&mut self, buf: &[f64]) {
+        self.sys.restore_state(buf)
+    }
+}
+
+impl ParametricSystem for SteadyPath3D<'_> {
+    fn parameter(&self) -> f64 {
+        match self.parameter {
+            Path3DParameter::SlipAngle => self.sys.slip_angle().to_degrees(),
+            Path3DParameter::Creep { v0_free } => self.sys.road_speed() / v0_free - 1.0,
+            Path3DParameter::Load => self
+                .sys
+                .contact
+                .as_ref()
+                .and_then(|c| c.load)
+                .unwrap_or(0.0),
+        }
+    }
+    fn set_parameter(&mut self, lambda: f64) {
+        match self.parameter {
+            Path3DParameter::SlipAngle => self.sys.set_slip_angle(lambda.to_radians()),
+            Path3DParameter::Creep { v0_free } => self.sys.set_road_speed((1.0 + lambda) * v0_free),
+            Path3DParameter::Load => {
+                if let Some(c) = self.sys.contact.as_mut() {
+                    c.load = Some(lambda);
+                }
+            }
+        }
+    }
+}
+
+/// Follow the steady state of `sys` (converged) in the parameter of `cs` to its target by the
+/// Riks–Crisfield arc-length continuation of the plane-strain steady mode
+/// ([`crate::solver::continuation`]; arc lengths scaled by the displacement norm of the start
+/// and |target − start|), calling `on_point` at the start and at every converged point
+/// (`parameter` from [`Path3DParameter::of`]). No
+/// bifurcation test function is evaluated (the determinant's sign is still tracked). Returns
+/// the continuation's report, also the part before a failure.
+pub fn follow_path_3d(
+    scene: &Scene,
+    cs: &ContinuationSpec,
+    parameter: Path3DParameter,
+    sys: &mut Solid3DSystem,
+    verbose: bool,
+    on_point: &mut dyn FnMut(&SteadyPath3D, &BranchPoint) -> bool,
+) -> (Option<ContinuationReport>, Result<(), SolveError>) {
+    let n_u = sys.dofs.n_u;
+    let u_norm = sys.x[..n_u].iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mut path = SteadyPath3D { sys, parameter };
+    let start = path.parameter();
+    let copts = ContinuationOptions {
+        target: cs.target,
+        direction: if cs.target >= start { 1.0 } else { -1.0 },
+        ds0: cs.ds,
+        ds_min: cs.ds * 1e-4,
+        ds_max: cs.ds_max,
+        x_scale: u_norm.max(1e-12 * scene.geometry.ro),
+        lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
+        max_steps: cs.max_steps,
+        max_iterations: scene.solver.max_iterations.min(15),
+        desired_iterations: cs.desired_iterations,
+        max_cutbacks: scene.solver.max_cutbacks,
+        tol: scene.solver.tolerance,
+        test_function: false,
+        switch_branch: false,
+        stop_at_limit: false,
+        verbose,
+    };
+    let mut partial = None;
+    let res = Continuation::new(&path, LinearKind::Lu, copts).and_then(|mut c| {
+        let r = c.run(&mut path, on_point);
+        partial = c.partial.take();
+        r
+    });
+    match res {
+        Ok(r) => (Some(r), Ok(())),
+        Err(e) => (partial, Err(e)),
+    }
 }

@@ -471,6 +471,11 @@ fn follow_branch(
         ContinuationParameter::Load => SteadyParameter::Load,
         ContinuationParameter::Disp => SteadyParameter::Disp,
         ContinuationParameter::Creep => SteadyParameter::Creep,
+        // The plane has no slip angle (the scene check refuses the parameter there).
+        ContinuationParameter::SlipAngle => {
+            eprintln!("tread: warning: continuation in the slip angle needs mesh.dimension = 3");
+            return (None, rows, Ok(()));
+        }
     };
     use crate::solver::continuation::ParametricSystem;
     let start = st.parameter();
@@ -897,6 +902,7 @@ fn write_steady_pngs(
             Some(ContinuationParameter::Load) => ("hub load", u.force_per_thickness()),
             Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
             Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
+            Some(ContinuationParameter::SlipAngle) => ("slip angle", "deg".to_string()),
         };
         let x = record::png::with_unit(name, &unit);
         let f = u.force_per_thickness();

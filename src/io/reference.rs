@@ -43,6 +43,7 @@ const TR: &str = "transient";
 const SD: &str = "steady";
 const TS: &str = "transient, steady";
 const CONT: &str = "steady with [continuation]";
+const C3: &str = "steady with [continuation], mesh.dimension = 3";
 const VCONT: &str = "steady, [material.viscoelastic], continuation in omega";
 const SS: &str = "stick_slip";
 const CMP: &str = "tread compare";
@@ -264,6 +265,15 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.branch[].hub_force_x", "F/L", CONT, "hub force, x1"),
     k("results.branch[].hub_force_y", "F/L", CONT, "hub force, x2"),
     k("results.branch[].hub_torque", "F·L/L", CONT, "hub torque"),
+    k("results.branch[].slip_angle", "deg", C3, "slip angle α of the point"),
+    k("results.branch[].road_height", "L", C3, "road height H of the point"),
+    k("results.branch[].longitudinal_force", "F", C3, "hub load of the road on the body along e1 (the hub loads below as in `results.hub_loads`)"),
+    k("results.branch[].vertical_force", "F", C3, "along the road normal n"),
+    k("results.branch[].lateral_force", "F", C3, "along e3"),
+    k("results.branch[].overturning_moment", "F·L", C3, "about e1"),
+    k("results.branch[].aligning_moment", "F·L", C3, "about n"),
+    k("results.branch[].axle_moment", "F·L", C3, "about e3"),
+    k("results.branch[].points_in_contact", N, C3, "facet quadrature points in contact"),
     k("results.branch[].contact_x_min", "L", CONT, "lower end of the contact patch"),
     k("results.branch[].contact_x_max", "L", CONT, "upper end of the contact patch"),
     k("results.branch[].max_pressure", "F/L²", CONT, "peak normal traction"),

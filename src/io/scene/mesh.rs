@@ -154,6 +154,18 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
              remove it or set it to 0",
         ));
     }
+    let continued_in = cx
+        .doc
+        .and_then(|d| d.get("continuation"))
+        .and_then(|c| c.get("parameter"))
+        .and_then(|v| v.as_str());
+    if continued_in == Some("slip_angle") && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
+        out.push(issue(
+            "continuation.parameter",
+            "parameter \"slip_angle\" needs the three-dimensional steady mode \
+             (mesh.dimension = 3, analysis.mode = \"steady\")",
+        ));
+    }
     if slip_angle != 0.0 && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
         out.push(issue(
             "road.slip_angle",
@@ -269,7 +281,7 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
 }
 
 /// What the three-dimensional steady mode does not take yet: the strain-rate damping,
-/// continuation.
+/// continuation in ω or in the penetration.
 fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let Some(doc) = doc else {
         return;
@@ -280,11 +292,24 @@ fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
             "not supported in the three-dimensional steady mode yet",
         ));
     }
-    if doc.contains_key("continuation") {
-        out.push(issue_near(
-            "continuation",
-            "[continuation] is not supported in the three-dimensional steady mode yet",
-            "analysis",
+    let parameter = doc
+        .get("continuation")
+        .and_then(|c| c.get("parameter"))
+        .and_then(|v| v.as_str());
+    if let Some(p) = parameter.filter(|p| matches!(*p, "omega" | "disp")) {
+        out.push(issue(
+            "continuation.parameter",
+            format!(
+                "parameter \"{p}\" is not supported in the three-dimensional steady mode yet; \
+                 use \"slip_angle\", \"creep\" or \"load\""
+            ),
+        ));
+    }
+    if doc.contains_key("continuation") && parameter.is_none() {
+        out.push(issue(
+            "continuation.parameter",
+            "give the parameter explicitly in the three-dimensional steady mode: \"slip_angle\", \
+             \"creep\" or \"load\"",
         ));
     }
 }

@@ -381,8 +381,8 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
         doc: "Arc-length continuation of the steady solution (steady mode); arc lengths in scaled units.",
         fields: &const { [
             opt("parameter", Kind::Keyword(ContinuationParameter::NAMES), NONE, "continuation parameter"),
-            req("target", Kind::Float, "rad/T, F/L, L or –",
-                "final parameter value (omega, load, disp or creep)"),
+            req("target", Kind::Float, "rad/T, F/L, L, – or deg",
+                "final parameter value (omega, load, disp, creep or slip_angle; in three dimensions the load is a total force)"),
             opt("ds", Kind::Float, NONE, "initial arc length (scaled), > 0"),
             opt("ds_max", Kind::Float, NONE, "largest arc length (scaled), >= ds"),
             opt("max_steps", Kind::UInt, NONE, "maximum number of continuation steps, >= 1"),

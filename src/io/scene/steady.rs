@@ -21,6 +21,9 @@ keyword_enum! {
         /// Creep ξ (see `motion.control = "creep"`; needs `motion.control = "creep"` or
         /// `"free_rolling"`): v0 = (1 + ξ) v0_free at fixed ω, from braking to driving.
         Creep => "creep",
+        /// Slip angle α (degrees, |α| < 90; three-dimensional steady mode only): the road
+        /// velocity turned by α at a fixed road speed.
+        SlipAngle => "slip_angle",
     }
 }
 
@@ -109,6 +112,16 @@ pub(super) fn validate_continuation(
                  \"creep\" or \"free_rolling\"",
             ));
         }
+    } else if c.parameter == ContinuationParameter::SlipAngle {
+        if !(c.target.is_finite() && c.target.abs() < 90.0) {
+            out.push(issue(
+                "continuation.target",
+                format!(
+                    "final slip angle must be finite and within (-90, 90) degrees, got {}",
+                    c.target
+                ),
+            ));
+        }
     } else if !(c.target.is_finite() && c.target >= 0.0) {
         out.push(issue(
             "continuation.target",
@@ -142,11 +155,16 @@ pub(super) fn validate_continuation(
             ),
         ));
     }
-    if c.on_limit == LimitAction::Jump && c.parameter == ContinuationParameter::Creep {
+    if c.on_limit == LimitAction::Jump
+        && matches!(
+            c.parameter,
+            ContinuationParameter::Creep | ContinuationParameter::SlipAngle
+        )
+    {
         out.push(issue(
             "continuation.on_limit",
-            "\"jump\" applies to arc-length continuation (omega, load, disp); the creep sweep \
-             has natural-parameter steps",
+            "\"jump\" applies to arc-length continuation in omega, load and disp, not to \
+             the creep and slip-angle paths",
         ));
     }
     if c.max_steps < 1 {
