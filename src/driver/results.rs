@@ -130,7 +130,7 @@ pub enum ModeSummary {
     /// `static` and `spinning`.
     Solid(SolidSummary),
     /// `static` and `spinning` of a three-dimensional scene (`mesh.dimension = 3`).
-    Solid3D(Solid3DSummary),
+    Solid3D(Box<Solid3DSummary>),
     Transient(TransientSummary),
     Steady(Box<SteadySummary>),
     StickSlip(StickSlipSummary),

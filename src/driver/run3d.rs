@@ -350,7 +350,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         scene.analysis.mode.to_string(),
         sys.dofs.n_eq,
         converged,
-        super::results::ModeSummary::Solid3D(Solid3DSummary {
+        super::results::ModeSummary::Solid3D(Box::new(Solid3DSummary {
             run: RunStats {
                 newton_iterations: report.total_iterations,
                 wall_time_s: wall,
@@ -381,7 +381,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     _ => None,
                 },
             },
-        }),
+        })),
     );
     if scene.output.has(Sink::Csv) {
         if let Err(e) = write_tables(&sys, &obs, &opts.out_dir) {
