@@ -21,9 +21,7 @@
 use tread::adapt::burgers::{Burgers, ColeHopf};
 use tread::adapt::convection::{ConvectionDiffusion, RotatingHill};
 use tread::adapt::driver::Marking;
-use tread::adapt::two_grid::{
-    run, square, Kernel, TransientError, TransientOptions, TransientRun,
-};
+use tread::adapt::two_grid::{run, square, Kernel, TransientError, TransientOptions, TransientRun};
 
 /// One problem of the study: kernel, domain, degree, steps and the test's adaptive settings.
 struct Problem {
