@@ -16,9 +16,12 @@
 //!
 //! Lid-driven cavity on [0, 1]² ([`CavityLid`]): u = (U(x), 0) on y = 1, u = 0 elsewhere. The
 //! discontinuous lid has U = 1 on the open top edge and U = 0 at the two top corners (the corner
-//! nodes belong to the walls); on the top edge of a corner cell the space's boundary projection
-//! (vertex values, then the H¹-seminorm projection of the rest) gives the linear ramp from 0 at
-//! the corner to 1. The regularised lid is U = 16 x² (1 − x)².
+//! nodes belong to the walls). On the top edge of a corner cell the space's boundary projection
+//! (vertex values, then the edge mode from −∫ (g − vertex part) b″, the H¹-seminorm projection
+//! of g with its jump at the corner counted) keeps the edge integral of U: the Q2 trace is
+//! U = s (4 − 3s) with s the distance from the corner in units of the edge: 0 at the corner, 5/4
+//! at the midside node, 1 at the other end, largest value 4/3 at s = 2/3; so every lid edge
+//! carries the flux ∫ U dx = h of the lid. The regularised lid is U = 16 x² (1 − x)².
 //!
 //! Cell geometry. Every leaf is the bilinear image of the reference square of its four corner
 //! points ([`TaylorHood::corners`], tensor order: lower-left, lower-right, upper-left,

@@ -19,8 +19,8 @@
 //! ([`super::driver::mark`]) for refinement (cells below `max_level`); leaves with
 //! η_K² < `coarsen_fraction` · η² / N_cells and level > `min_level` are coarsened (four
 //! siblings at once, one-irregularity kept by [`Quadtree::coarsen`]); then u_h and u_f are
-//! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times from
-//! the interpolated initial data so the initial mesh resolves u_0.
+//! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times, each
+//! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0.
 
 use super::driver::{mark, Marking};
 use super::estimate::Estimate;
@@ -577,15 +577,13 @@ pub fn run_observed(
                 space_old = s_new;
                 fspace_old = fs_new;
             } else {
-                // Redo the step from u^n interpolated onto the new mesh.
+                // Redo the first step on the new mesh from the initial data interpolated there
+                // (not from the interpolant on the old mesh: that would keep the coarse mesh's
+                // interpolation error of u_0 for the whole run).
                 let s_new = space_at(&tree, kernel, t)?;
                 let fs_new = space_at(&ftree, kernel, t)?;
-                xn = interpolate(&tree, &s_new, &|p, c| {
-                    value_at(&old_tree, &space_old, &xn, p, c)
-                })?;
-                xfn = interpolate(&ftree, &fs_new, &|p, c| {
-                    value_at(&old_ftree, &fspace_old, &xfn, p, c)
-                })?;
+                xn = interpolate(&tree, &s_new, &exact0)?;
+                xfn = interpolate(&ftree, &fs_new, &exact0)?;
                 space_old = s_new;
                 fspace_old = fs_new;
             }
