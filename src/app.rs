@@ -164,6 +164,7 @@ fn run_solid(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     Err(SolveError::Interrupted { at }) => Some(*at),
                     _ => None,
                 },
+                coarse_start: None,
             },
         }),
     );

@@ -533,3 +533,55 @@ fn slip_angle_continuation_points_are_steady_states() {
         );
     }
 }
+
+/// The nested iteration of the 3D steady mode: from the coarser mesh's steady state
+/// (interpolated) Newton reaches the same steady state as the press-in from the undeformed
+/// state, in fewer iterations on the scene's mesh.
+#[test]
+fn nested_iteration_reaches_the_press_in_state() {
+    use tread::driver::steady3d::solve_steady_3d_nested;
+    let mut sc = cornering_scene(2.0, 0.0);
+    sc.mesh.n_theta = 64;
+    let solve = |coarse_start: bool| {
+        let mut sc = sc.clone();
+        sc.solver.coarse_start = coarse_start;
+        let mut s3 = tread::setup::build_system_3d(&sc).unwrap_or_else(|e| panic!("{e}"));
+        let kind = tread::setup::linear_kind_3d(&sc, &s3);
+        let (newton, step) = tread::setup::solver_options(&sc, false);
+        let mut rep = StepReport::default();
+        let (cs, res) =
+            solve_steady_3d_nested(&sc, &mut s3, kind, newton, &step, &mut rep, &mut NoObserver);
+        res.unwrap_or_else(|e| panic!("coarse_start = {coarse_start}: {e}"));
+        (s3, cs, rep.total_iterations)
+    };
+    let (nested, cs, it_nested) = solve(true);
+    let (direct, none, it_direct) = solve(false);
+    assert!(none.is_none());
+    let cs = cs.expect("the nested iteration applies at n_theta = 64");
+    eprintln!(
+        "nested: {:?}, {} Newton iterations on the scene's mesh; press-in: {}",
+        cs, it_nested, it_direct
+    );
+    assert!(cs.succeeded, "{:?}", cs.error);
+    assert_eq!(cs.meshes, vec!["1x1x32".to_string()]);
+    assert!(it_nested < it_direct);
+    let (a, b) = (
+        nested.contact.as_ref().expect("contact").totals,
+        direct.contact.as_ref().expect("contact").totals,
+    );
+    let fz = b.force[1].abs();
+    for i in 0..3 {
+        assert!((a.force[i] - b.force[i]).abs() <= 1e-8 * fz, "F{}", i + 1);
+        assert!(
+            (a.moment[i] - b.moment[i]).abs() <= 1e-8 * fz * RO,
+            "M{}",
+            i + 1
+        );
+    }
+    let n = nested.dofs.n_u;
+    let du = (0..n)
+        .map(|i| (nested.x[i] - direct.x[i]).abs())
+        .fold(0.0, f64::max);
+    let umax = direct.x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(du <= 1e-7 * umax, "field differs by {du:e} of {umax:e}");
+}

@@ -226,6 +226,10 @@ pub struct SolidSolver {
     /// Load factor at which an interrupt stopped the run (absent when not interrupted).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interrupted_at: Option<f64>,
+    /// Three-dimensional steady mode: how the solve started from the steady state of a
+    /// coarser mesh (absent when the nested iteration does not apply).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coarse_start: Option<CoarseStart>,
 }
 
 /// `results` of the static and spinning modes.

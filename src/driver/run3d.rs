@@ -32,7 +32,7 @@ use super::results::{
 };
 use super::spinning3d::solve_spinning_3d;
 use super::steady3d::{
-    apply_control_3d, follow_path_3d, solve_steady_3d, Path3DParameter, SteadyPath3D,
+    apply_control_3d, follow_path_3d, solve_steady_3d_nested, Path3DParameter, SteadyPath3D,
 };
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
@@ -221,6 +221,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     }
     let mut report = StepReport::default();
     let mut control = None;
+    let mut coarse_start = None;
     let mut solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
@@ -230,14 +231,19 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             &mut report,
             &mut obs,
         ),
-        Mode::Steady => solve_steady_3d(
-            &mut sys,
-            kind,
-            newton_opts.clone(),
-            &step_opts,
-            &mut report,
-            &mut obs,
-        )
+        Mode::Steady => {
+            let (cs, res) = solve_steady_3d_nested(
+                scene,
+                &mut sys,
+                kind,
+                newton_opts.clone(),
+                &step_opts,
+                &mut report,
+                &mut obs,
+            );
+            coarse_start = cs;
+            res
+        }
         .and_then(|()| {
             if scene.motion.control == Control::Speed {
                 return Ok(());
@@ -380,6 +386,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                     Err(SolveError::Interrupted { at }) => Some(*at),
                     _ => None,
                 },
+                coarse_start,
             },
         })),
     );

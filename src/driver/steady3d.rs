@@ -21,6 +21,7 @@
 use super::indentation3d::contact_force_scale_3d;
 use super::results::ControlReport;
 use super::steady::RoadSpeedSystem;
+use super::steady_report::CoarseStart;
 use super::steady_solve::{control_road_speed, speed_control_report};
 use crate::io::scene::{ContinuationParameter, ContinuationSpec, Control, Scene};
 use crate::model::Solid3DSystem;
@@ -28,7 +29,7 @@ use crate::solver::continuation::{
     BranchPoint, Continuation, ContinuationOptions, ContinuationReport, ParametricSystem,
 };
 use crate::solver::observe::StepObserver;
-use crate::solver::stepping::{solve_load_steps, StepOptions, StepReport};
+use crate::solver::stepping::{solve_load_steps, LoadedSystem, StepOptions, StepReport};
 use crate::solver::{LinearKind, Newton, NewtonOptions, NonlinearSystem, SolveError};
 
 /// Solve the steady rolling of `sys` (built with contact and
@@ -238,4 +239,196 @@ pub fn follow_path_3d(
         Ok(r) => (Some(r), Ok(())),
         Err(e) => (partial, Err(e)),
     }
+}
+
+/// The scene on the mesh with half the cells in θ (and in r and along the axle where their
+/// counts are even) for the nested iteration of [`solve_steady_3d_nested`]: `[solver]
+/// coarse_start`, a generated revolved mesh with n_theta a multiple of 4 ≥ 64 (the coarse mesh
+/// keeps n_theta even and ≥ 32).
+pub fn coarse_scene_3d(scene: &Scene) -> Option<Scene> {
+    let m = &scene.mesh;
+    let applies = scene.solver.coarse_start
+        && m.file.is_none()
+        && m.n_theta >= 64
+        && m.n_theta.is_multiple_of(4);
+    applies.then(|| {
+        let mut c = scene.clone();
+        c.mesh.n_theta /= 2;
+        if c.mesh.n_r >= 2 && c.mesh.n_r.is_multiple_of(2) {
+            c.mesh.n_r /= 2;
+        }
+        let n_z = c.mesh.resolved_n_z();
+        if n_z >= 2 && n_z.is_multiple_of(2) {
+            c.mesh.n_z = Some(n_z / 2);
+        }
+        c
+    })
+}
+
+/// The steady state of `sys` (the scene's system) by the nested iteration where it applies
+/// ([`coarse_scene_3d`]): the coarser mesh's steady state (solved the same way, so it starts
+/// from its own coarser mesh in turn) interpolated to this mesh's nodes (the displacements, and
+/// the road height under load control; [`crate::mesh::locate3d`]), then Newton at full load
+/// from there. Most of the Newton iterations of a press-in from the undeformed state find the
+/// contact patch with damped steps; on the coarse mesh they are cheap. If the coarse solve or
+/// Newton from the interpolated state fails, the state is restored and the road is pressed in
+/// from the undeformed state ([`solve_steady_3d`]). Returns what the nested iteration did
+/// (`None` where it does not apply).
+pub fn solve_steady_3d_nested<O: StepObserver<Solid3DSystem> + ?Sized>(
+    scene: &Scene,
+    sys: &mut Solid3DSystem,
+    kind: LinearKind,
+    newton_opts: NewtonOptions,
+    step_opts: &StepOptions,
+    report: &mut StepReport,
+    rec: &mut O,
+) -> (Option<CoarseStart>, Result<(), SolveError>) {
+    let Some(coarse) = coarse_scene_3d(scene) else {
+        return (
+            None,
+            solve_steady_3d(sys, kind, newton_opts, step_opts, report, rec),
+        );
+    };
+    let t0 = std::time::Instant::now();
+    let name = format!(
+        "{}x{}x{}",
+        coarse.mesh.n_r,
+        coarse.mesh.resolved_n_z(),
+        coarse.mesh.n_theta
+    );
+    let mut out = CoarseStart::default();
+    let mut undeformed = Vec::new();
+    sys.save_state(&mut undeformed);
+    let solved = crate::setup::build_system_3d(&coarse)
+        .map_err(|e| format!("the {name} mesh could not be built: {e}"))
+        .and_then(|mut csys| {
+            let ckind = crate::setup::linear_kind_3d(&coarse, &csys);
+            let (cnewton, csteps) = crate::setup::solver_options(&coarse, false);
+            let mut crep = StepReport::default();
+            let (inner, res) = solve_steady_3d_nested(
+                &coarse,
+                &mut csys,
+                ckind,
+                cnewton,
+                &csteps,
+                &mut crep,
+                &mut crate::solver::observe::NoObserver,
+            );
+            if let Some(inner) = inner {
+                out.meshes = inner.meshes;
+                out.coarse_newton_iterations = inner.coarse_newton_iterations;
+            }
+            out.coarse_newton_iterations += crep.total_iterations;
+            res.map(|()| csys)
+                .map_err(|e| format!("the solve on the {name} mesh failed: {e}"))
+        });
+    out.meshes.push(name);
+    let csys = match solved {
+        Ok(c) => c,
+        Err(e) => {
+            out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+            out.error = Some(e);
+            return (
+                Some(out),
+                solve_steady_3d(sys, kind, newton_opts, step_opts, report, rec),
+            );
+        }
+    };
+    let interpolated = interpolate_state_3d(&csys, sys);
+    drop(csys);
+    if let Err(e) = interpolated {
+        out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+        out.error = Some(format!("interpolation from the coarse mesh: {e}"));
+        sys.restore_state(&undeformed);
+        return (
+            Some(out),
+            solve_steady_3d(sys, kind, newton_opts, step_opts, report, rec),
+        );
+    }
+    out.coarse_wall_time_s = t0.elapsed().as_secs_f64();
+    if newton_opts.verbose {
+        eprintln!(
+            "  started from the steady state on the {} mesh ({} Newton iterations, {:.3} s)",
+            out.meshes.join(" -> "),
+            out.coarse_newton_iterations,
+            out.coarse_wall_time_s
+        );
+    }
+    sys.set_reference_force(contact_force_scale_3d(sys));
+    sys.set_load(1.0);
+    let res = Newton::new(sys, kind, newton_opts.clone()).and_then(|mut n| n.solve(sys));
+    match res {
+        Ok(r) => {
+            sys.commit();
+            out.newton_iterations = r.iterations;
+            out.succeeded = true;
+            report.total_iterations += r.iterations;
+            report.steps.push(crate::solver::stepping::StepRecord {
+                lambda: 1.0,
+                converged: true,
+                iterations: r.iterations,
+                table: r.table.clone(),
+                timing: r.timing,
+            });
+            rec.observe_newton(0, 1.0, &r.table, sys.field_names());
+            rec.observe_accepted(
+                sys,
+                &crate::solver::StepInfo {
+                    index: 0,
+                    time: 1.0,
+                    dt: 1.0,
+                    newton_iterations: r.iterations,
+                    residual: 0.0,
+                    is_final: true,
+                },
+            );
+            (Some(out), Ok(()))
+        }
+        Err(e @ SolveError::Interrupted { .. }) => (Some(out), Err(e)),
+        Err(e) => {
+            if newton_opts.verbose {
+                eprintln!(
+                    "  Newton from the interpolated state failed ({e}): pressing in from the undeformed state"
+                );
+            }
+            out.error = Some(format!("Newton from the interpolated state: {e}"));
+            sys.restore_state(&undeformed);
+            sys.set_load(0.0);
+            (
+                Some(out),
+                solve_steady_3d(sys, kind, newton_opts, step_opts, report, rec),
+            )
+        }
+    }
+}
+
+/// Interpolate the displacements of `from` (a coarser revolved mesh of the same body) to the
+/// nodes of `to`, and copy its global unknowns (the road height under load control). Fails
+/// when a node of `to` lies outside `from`'s mesh or a mesh has no ring layout.
+fn interpolate_state_3d(from: &Solid3DSystem, to: &mut Solid3DSystem) -> Result<(), String> {
+    use crate::assembly::CONSTRAINED;
+    let src = &from.solid.mesh;
+    let found = crate::mesh::locate3d::locate_points_revolved(src, &to.solid.mesh.nodes)
+        .ok_or("the coarse mesh has no ring layout")?;
+    let mut x = to.x.clone();
+    for (a, f) in found.iter().enumerate() {
+        let (c, xi) = f.ok_or_else(|| {
+            let p = to.solid.mesh.nodes[a];
+            format!(
+                "node {a} at ({:.4}, {:.4}, {:.4}) is outside the coarse mesh",
+                p[0], p[1], p[2]
+            )
+        })?;
+        let u = crate::mesh::locate3d::vector_at(src, &from.x, c, xi);
+        for (i, &ui) in u.iter().enumerate() {
+            if to.dofs.eq[3 * a + i] < CONSTRAINED {
+                x[3 * a + i] = ui;
+            }
+        }
+    }
+    for k in 0..to.dofs.n_global.min(from.dofs.n_global) {
+        x[to.dofs.global(k)] = from.x[from.dofs.global(k)];
+    }
+    to.restore_state(&x);
+    Ok(())
 }

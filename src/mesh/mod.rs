@@ -17,6 +17,7 @@ pub mod gmsh;
 pub mod gmsh3d;
 pub mod hex_mesh;
 pub mod locate;
+pub mod locate3d;
 pub mod refine;
 pub mod revolved;
 
