@@ -476,61 +476,85 @@ linear = "lu"
     Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Arc-length continuation in the slip angle: every converged point of the path is the steady
-/// state of a direct solve at its slip angle (the lateral force and the aligning moment to the
-/// solver tolerance), and the path reaches the target.
+/// Arc-length continuation in the slip angle and in the camber: every converged point of the
+/// path is the steady state of a direct solve at its parameter (the lateral force and the
+/// aligning moment to the solver tolerance), and the path reaches the target.
 #[test]
-fn slip_angle_continuation_points_are_steady_states() {
+fn slip_angle_and_camber_continuation_points_are_steady_states() {
     use tread::driver::steady3d::{follow_path_3d, Path3DParameter};
     use tread::io::scene::{ContinuationParameter, ContinuationSpec};
-    let sc = cornering_scene(0.0, 0.0);
-    let mut sys = steady_3d(&sc, false);
-    let cs = ContinuationSpec {
-        parameter: ContinuationParameter::SlipAngle,
-        target: 3.0,
-        ds: 0.2,
-        ..Default::default()
-    };
-    let mut points: Vec<(f64, f64, f64)> = Vec::new();
-    let mut on_point = |p: &tread::driver::steady3d::SteadyPath3D,
-                        b: &tread::solver::continuation::BranchPoint| {
-        let c = p.sys.contact.as_ref().expect("contact");
-        points.push((b.lambda, c.totals.force[2], c.totals.moment[1]));
-        true
-    };
-    let parameter = Path3DParameter::of(ContinuationParameter::SlipAngle, f64::NAN).expect("α");
-    let (rep, res) = follow_path_3d(&sc, &cs, parameter, &mut sys, false, &mut on_point);
-    res.unwrap_or_else(|e| panic!("continuation: {e}"));
-    let rep = rep.expect("report");
-    eprintln!(
-        "{} points, {} corrector iterations: {:?}",
-        points.len(),
-        rep.total_iterations,
-        points
-    );
-    let last = points.last().copied().expect("points");
-    assert!(last.0 >= 3.0 - 1e-9, "target not reached: {}", last.0);
-    assert!(points.len() >= 4);
-    let fz = sys.contact.as_ref().expect("contact").totals.force[1].abs();
-    // Two points of the path, each against a direct solve from the undeformed state.
-    for &(alpha, f3, m2) in [points[2], last].iter() {
-        let direct = steady_3d(&cornering_scene(alpha, 0.0), false);
-        let t = direct.contact.as_ref().expect("contact").totals;
+    for parameter in [
+        ContinuationParameter::SlipAngle,
+        ContinuationParameter::Camber,
+    ] {
+        let sc = cornering_scene(0.0, 0.0);
+        let mut sys = steady_3d(&sc, false);
+        let cs = ContinuationSpec {
+            parameter,
+            target: 3.0,
+            ds: 0.2,
+            ..Default::default()
+        };
+        let mut points: Vec<(f64, f64, f64)> = Vec::new();
+        let mut on_point =
+            |p: &tread::driver::steady3d::SteadyPath3D,
+             b: &tread::solver::continuation::BranchPoint| {
+                let c = p.sys.contact.as_ref().expect("contact");
+                let (f, m) = (
+                    c.surface.frame().components(c.totals.force),
+                    c.surface.frame().components(c.totals.moment),
+                );
+                points.push((b.lambda, f[2], m[1]));
+                true
+            };
+        let path = Path3DParameter::of(parameter, f64::NAN).expect("parameter");
+        let (rep, res) = follow_path_3d(&sc, &cs, path, &mut sys, false, &mut on_point);
+        res.unwrap_or_else(|e| panic!("{parameter} continuation: {e}"));
+        let rep = rep.expect("report");
         eprintln!(
-            "α = {alpha:.6}: path F3 {f3:.10e} M2 {m2:.10e}; direct F3 {:.10e} M2 {:.10e}",
-            t.force[2], t.moment[1]
+            "{parameter}: {} points, {} corrector iterations: {:?}",
+            points.len(),
+            rep.total_iterations,
+            points
         );
-        assert!(f3 < 0.0);
+        let last = points.last().copied().expect("points");
         assert!(
-            (f3 - t.force[2]).abs() <= 1e-7 * fz,
-            "F3 {f3} vs {}",
-            t.force[2]
+            last.0 >= 3.0 - 1e-9,
+            "{parameter}: target not reached: {}",
+            last.0
         );
-        assert!(
-            (m2 - t.moment[1]).abs() <= 1e-7 * fz * RO,
-            "M2 {m2} vs {}",
-            t.moment[1]
-        );
+        assert!(points.len() >= 4);
+        let fz = sys.contact.as_ref().expect("contact").totals.force[1].abs();
+        // Two points of the path, each against a direct solve from the undeformed state.
+        for &(value, f3, m2) in [points[2], last].iter() {
+            let direct = steady_3d(
+                &match parameter {
+                    ContinuationParameter::SlipAngle => cornering_scene(value, 0.0),
+                    _ => cornering_scene(0.0, value),
+                },
+                false,
+            );
+            let c = direct.contact.as_ref().expect("contact");
+            let (f, m) = (
+                c.surface.frame().components(c.totals.force),
+                c.surface.frame().components(c.totals.moment),
+            );
+            eprintln!(
+                "{parameter} = {value:.6}: path F3 {f3:.10e} M2 {m2:.10e}; direct F3 {:.10e} M2 {:.10e}",
+                f[2], m[1]
+            );
+            assert!(f3 < 0.0, "{parameter}: lateral force {f3}");
+            assert!(
+                (f3 - f[2]).abs() <= 1e-7 * fz,
+                "{parameter}: F3 {f3} vs {}",
+                f[2]
+            );
+            assert!(
+                (m2 - m[1]).abs() <= 1e-7 * fz * RO,
+                "{parameter}: M2 {m2} vs {}",
+                m[1]
+            );
+        }
     }
 }
 

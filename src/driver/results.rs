@@ -322,8 +322,9 @@ pub struct BranchRow3D {
     pub lambda: f64,
     /// Corrector iterations of the step.
     pub iterations: usize,
-    /// Slip angle (degrees), road speed and road height of the point.
+    /// Slip angle and camber (degrees), road speed and road height of the point.
     pub slip_angle: f64,
+    pub camber: f64,
     pub v0: f64,
     pub road_height: f64,
     /// The six hub loads (road frame) of the point.
@@ -350,6 +351,7 @@ impl BranchRow3D {
             lambda: p.lambda,
             iterations: p.iterations,
             slip_angle: sys.slip_angle().to_degrees(),
+            camber: sys.camber().to_degrees(),
             v0: sys.road_speed(),
             road_height: sys.road_height().unwrap_or(f64::NAN),
             hub_loads,

@@ -287,7 +287,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             obs.finish();
             return Err(AppError::Unsupported(format!(
                 "continuation.parameter: \"{}\" does not run in the three-dimensional steady \
-                 mode (slip_angle; creep after motion.control = \"creep\" or \"free_rolling\"; \
+                 mode (slip_angle, camber; creep after motion.control = \"creep\" or \"free_rolling\"; \
                  load under load control)",
                 cs.parameter
             )));
@@ -593,6 +593,7 @@ fn write_branch(rows: &[BranchRow3D], dir: &Path) -> Result<(), OutputError> {
             "lambda",
             "iterations",
             "slip_angle",
+            "camber",
             "v0",
             "road_height",
             "longitudinal_force",
@@ -610,6 +611,7 @@ fn write_branch(rows: &[BranchRow3D], dir: &Path) -> Result<(), OutputError> {
                 r.lambda,
                 r.iterations as f64,
                 r.slip_angle,
+                r.camber,
                 r.v0,
                 r.road_height,
                 h.longitudinal_force,

@@ -96,6 +96,8 @@ pub fn apply_control_3d(
 pub enum Path3DParameter {
     /// The slip angle α in degrees, at a fixed road speed.
     SlipAngle,
+    /// The camber γ in degrees (the road height of first touch follows it).
+    Camber,
     /// The creep ξ = v0 / v0_free − 1 from the free-rolling speed `v0_free`, at fixed ω.
     Creep { v0_free: f64 },
     /// The hub load of load control (a total force).
@@ -110,6 +112,7 @@ impl Path3DParameter {
     pub fn of(p: ContinuationParameter, v0_free: f64) -> Option<Self> {
         match p {
             ContinuationParameter::SlipAngle => Some(Self::SlipAngle),
+            ContinuationParameter::Camber => Some(Self::Camber),
             ContinuationParameter::Creep => v0_free.is_finite().then_some(Self::Creep { v0_free }),
             ContinuationParameter::Load => Some(Self::Load),
             ContinuationParameter::Omega | ContinuationParameter::Disp => None,
@@ -170,6 +173,7 @@ impl ParametricSystem for SteadyPath3D<'_> {
     fn parameter(&self) -> f64 {
         match self.parameter {
             Path3DParameter::SlipAngle => self.sys.slip_angle().to_degrees(),
+            Path3DParameter::Camber => self.sys.camber().to_degrees(),
             Path3DParameter::Creep { v0_free } => self.sys.road_speed() / v0_free - 1.0,
             Path3DParameter::Load => self
                 .sys
@@ -182,6 +186,10 @@ impl ParametricSystem for SteadyPath3D<'_> {
     fn set_parameter(&mut self, lambda: f64) {
         match self.parameter {
             Path3DParameter::SlipAngle => self.sys.set_slip_angle(lambda.to_radians()),
+            Path3DParameter::Camber => {
+                // |γ| ≥ 90° leaves the frame as it was (the corrector then fails there).
+                let _ = self.sys.set_camber(lambda.to_radians());
+            }
             Path3DParameter::Creep { v0_free } => self.sys.set_road_speed((1.0 + lambda) * v0_free),
             Path3DParameter::Load => {
                 if let Some(c) = self.sys.contact.as_mut() {

@@ -472,8 +472,11 @@ fn follow_branch(
         ContinuationParameter::Disp => SteadyParameter::Disp,
         ContinuationParameter::Creep => SteadyParameter::Creep,
         // The plane has no slip angle (the scene check refuses the parameter there).
-        ContinuationParameter::SlipAngle => {
-            eprintln!("tread: warning: continuation in the slip angle needs mesh.dimension = 3");
+        ContinuationParameter::SlipAngle | ContinuationParameter::Camber => {
+            eprintln!(
+                "tread: warning: continuation in the {} needs mesh.dimension = 3",
+                cs.parameter
+            );
             return (None, rows, Ok(()));
         }
     };
@@ -903,6 +906,7 @@ fn write_steady_pngs(
             Some(ContinuationParameter::Disp) => ("penetration DISP", u.length.clone()),
             Some(ContinuationParameter::Creep) => ("creep", "1".to_string()),
             Some(ContinuationParameter::SlipAngle) => ("slip angle", "deg".to_string()),
+            Some(ContinuationParameter::Camber) => ("camber", "deg".to_string()),
         };
         let x = record::png::with_unit(name, &unit);
         let f = u.force_per_thickness();

@@ -57,7 +57,7 @@ const MPP: &str = "model problem p_navier_stokes";
 const MPL: &str = "model problem lshape";
 const MPTPL: &str = "model problems heat, burgers, p_navier_stokes, lshape";
 const MPTP: &str = "model problems heat, burgers, p_navier_stokes";
-const CST: &str = "steady, solver.coarse_start on a generated annulus with n_r even >= 4, n_theta a multiple of 4 >= 64";
+const CST: &str = "steady, solver.coarse_start on a generated annulus with n_r even >= 4, n_theta a multiple of 4 >= 64 (three dimensions: a generated revolved mesh with n_theta a multiple of 4 >= 64)";
 
 /// Every key of `summary.json` (objects are listed with their keys).
 pub static SUMMARY_KEYS: &[OutputKey] = &[
@@ -142,7 +142,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("solver.eps_continuation.newton_iterations", N, EPSC, "Newton iterations (press-in and ε steps)"),
     k("solver.eps_continuation.wall_time_s", "s", EPSC, "wall time of the continuation"),
     k("solver.coarse_start", N, SD, "null, or how the steady solve started from the steady state of the mesh with half the cells in r and θ (nested iteration, `[solver] coarse_start`)"),
-    k("solver.coarse_start.meshes", N, CST, "the coarser meshes solved first, coarsest first, as `n_r x n_theta`"),
+    k("solver.coarse_start.meshes", N, CST, "the coarser meshes solved first, coarsest first, as `n_r x n_theta` (three dimensions: `n_r x n_z x n_theta`)"),
     k("solver.coarse_start.coarse_newton_iterations", N, CST, "Newton iterations on the coarser meshes"),
     k("solver.coarse_start.coarse_wall_time_s", "s", CST, "wall time of the coarser meshes' set-up and solves and of the interpolation (not of this mesh's symbolic analysis, made alongside)"),
     k("solver.coarse_start.newton_iterations", N, CST, "Newton iterations on the scene's mesh from the interpolated state"),
@@ -266,6 +266,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.branch[].hub_force_y", "F/L", CONT, "hub force, x2"),
     k("results.branch[].hub_torque", "F·L/L", CONT, "hub torque"),
     k("results.branch[].slip_angle", "deg", C3, "slip angle α of the point"),
+    k("results.branch[].camber", "deg", C3, "camber γ of the point"),
     k("results.branch[].road_height", "L", C3, "road height H of the point"),
     k("results.branch[].longitudinal_force", "F", C3, "hub load of the road on the body along e1 (the hub loads below as in `results.hub_loads`)"),
     k("results.branch[].vertical_force", "F", C3, "along the road normal n"),

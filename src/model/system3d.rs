@@ -317,6 +317,39 @@ impl Solid3DSystem {
         }
     }
 
+    /// The camber γ of the road (radians; 0 without contact), from the road normal
+    /// n = (0, cos γ, −sin γ).
+    pub fn camber(&self) -> f64 {
+        self.contact.as_ref().map_or(0.0, |c| {
+            let n = c.surface.frame().n;
+            (-n[2]).atan2(n[1])
+        })
+    }
+
+    /// Set the camber γ (radians, |γ| < π/2) of the road: its frame, and the road height of
+    /// first touch (the largest −n·X of the tread's nodes), so that displacement control keeps
+    /// its penetration below the first touch; under load control the road height stays the
+    /// unknown.
+    pub fn set_camber(&mut self, gamma: f64) -> Result<(), Contact3DError> {
+        let Some(rc) = self.contact.as_mut() else {
+            return Ok(());
+        };
+        rc.surface.set_camber(gamma)?;
+        let n = rc.surface.frame().n;
+        let mesh = &self.solid.mesh;
+        let mut h = f64::NEG_INFINITY;
+        for f in &rc.surface.facets {
+            for &a in mesh.cell_nodes(f.cell as usize) {
+                h = h.max(-n.dot(&mesh.nodes[a as usize]));
+            }
+        }
+        rc.h_touch = h;
+        if rc.h_dof.is_none() {
+            rc.surface.h = rc.h_touch - rc.lambda * rc.disp;
+        }
+        Ok(())
+    }
+
     /// Force and moment (about the hub centre, the origin) that the hub exerts on the body, in
     /// the wheel frame: the cell residuals R = f_int − f_ext at the fixed displacement dofs
     /// of the `hub` nodes (at a support R equals the reaction), with the inertia of the

@@ -159,12 +159,16 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         .and_then(|d| d.get("continuation"))
         .and_then(|c| c.get("parameter"))
         .and_then(|v| v.as_str());
-    if continued_in == Some("slip_angle") && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
-        out.push(issue(
-            "continuation.parameter",
-            "parameter \"slip_angle\" needs the three-dimensional steady mode \
-             (mesh.dimension = 3, analysis.mode = \"steady\")",
-        ));
+    if let Some(p) = continued_in.filter(|p| matches!(*p, "slip_angle" | "camber")) {
+        if !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
+            out.push(issue(
+                "continuation.parameter",
+                format!(
+                    "parameter \"{p}\" needs the three-dimensional steady mode \
+                     (mesh.dimension = 3, analysis.mode = \"steady\")"
+                ),
+            ));
+        }
     }
     if slip_angle != 0.0 && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
         out.push(issue(
@@ -301,7 +305,7 @@ fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
             "continuation.parameter",
             format!(
                 "parameter \"{p}\" is not supported in the three-dimensional steady mode yet; \
-                 use \"slip_angle\", \"creep\" or \"load\""
+                 use \"slip_angle\", \"camber\", \"creep\" or \"load\""
             ),
         ));
     }
@@ -309,7 +313,7 @@ fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
         out.push(issue(
             "continuation.parameter",
             "give the parameter explicitly in the three-dimensional steady mode: \"slip_angle\", \
-             \"creep\" or \"load\"",
+             \"camber\", \"creep\" or \"load\"",
         ));
     }
 }

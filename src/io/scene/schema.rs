@@ -382,7 +382,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
         fields: &const { [
             opt("parameter", Kind::Keyword(ContinuationParameter::NAMES), NONE, "continuation parameter"),
             req("target", Kind::Float, "rad/T, F/L, L, – or deg",
-                "final parameter value (omega, load, disp, creep or slip_angle; in three dimensions the load is a total force)"),
+                "final parameter value (omega, load, disp, creep, slip_angle or camber; in three dimensions the load is a total force)"),
             opt("ds", Kind::Float, NONE, "initial arc length (scaled), > 0"),
             opt("ds_max", Kind::Float, NONE, "largest arc length (scaled), >= ds"),
             opt("max_steps", Kind::UInt, NONE, "maximum number of continuation steps, >= 1"),
@@ -414,7 +414,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("eps_continuation", Kind::Bool, NONE,
                 "steady mode with friction: reach a regularisation eps < 1e-2 v_ref (v_ref = max(|v0|, |omega| Ro)) by pressing in at 1e-2 v_ref and walking eps down geometrically; false: press in at the scene's eps directly"),
             opt("coarse_start", Kind::Bool, NONE,
-                "steady mode on a generated annulus (n_r even >= 4, n_theta a multiple of 4 >= 64, no cell pressures): start Newton from the steady state on the mesh with half the cells in r and theta (solved the same way), interpolated; falls back to the press-in from the undeformed state if Newton fails from it. false: always press in from the undeformed state"),
+                "steady mode on a generated annulus (n_r even >= 4, n_theta a multiple of 4 >= 64, no cell pressures): start Newton from the steady state on the mesh with half the cells in r and theta (solved the same way), interpolated; falls back to the press-in from the undeformed state if Newton fails from it. Three dimensions: a generated revolved mesh with n_theta a multiple of 4 >= 64, the coarse mesh with half the cells in theta and in r and z where even. false: always press in from the undeformed state"),
             opt("single_precision", Kind::Bool, NONE,
                 "Newton solves with the sparse LU (linear = auto or lu; steady, transient and static modes): factorize the assembled tangent in single precision and refine each Newton step by GMRES to the accuracy of a direct solve (relative residual 1e-10), keeping the factors from one iteration to the next while they reach it in a few products; a preconditioner that does not is replaced by fresh, then double-precision factors. The Newton steps and iterations are those of double precision; the factors take half the memory (steady undamped default scene at 262k DOFs: 615 MB instead of 767 MB peak). With time.strain_rate_damping the steady damping tangent's GMRES uses these factors as its preconditioner. false: double-precision factors throughout (one factorization and direct solve per Newton iteration where the tangent is assembled whole, double-precision preconditioner factors for the damping tangent's GMRES)"),
             opt("steady_history", Kind::Keyword(SteadyHistoryChoice::NAMES), NONE,

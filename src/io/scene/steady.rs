@@ -24,6 +24,9 @@ keyword_enum! {
         /// Slip angle α (degrees, |α| < 90; three-dimensional steady mode only): the road
         /// velocity turned by α at a fixed road speed.
         SlipAngle => "slip_angle",
+        /// Camber γ (degrees, |γ| < 90; three-dimensional steady mode only): the road's frame
+        /// tilted by γ about the rolling direction.
+        Camber => "camber",
     }
 }
 
@@ -112,13 +115,16 @@ pub(super) fn validate_continuation(
                  \"creep\" or \"free_rolling\"",
             ));
         }
-    } else if c.parameter == ContinuationParameter::SlipAngle {
+    } else if matches!(
+        c.parameter,
+        ContinuationParameter::SlipAngle | ContinuationParameter::Camber
+    ) {
         if !(c.target.is_finite() && c.target.abs() < 90.0) {
             out.push(issue(
                 "continuation.target",
                 format!(
-                    "final slip angle must be finite and within (-90, 90) degrees, got {}",
-                    c.target
+                    "final {} must be finite and within (-90, 90) degrees, got {}",
+                    c.parameter, c.target
                 ),
             ));
         }
@@ -158,13 +164,15 @@ pub(super) fn validate_continuation(
     if c.on_limit == LimitAction::Jump
         && matches!(
             c.parameter,
-            ContinuationParameter::Creep | ContinuationParameter::SlipAngle
+            ContinuationParameter::Creep
+                | ContinuationParameter::SlipAngle
+                | ContinuationParameter::Camber
         )
     {
         out.push(issue(
             "continuation.on_limit",
             "\"jump\" applies to arc-length continuation in omega, load and disp, not to \
-             the creep and slip-angle paths",
+             the creep, slip-angle and camber paths",
         ));
     }
     if c.max_steps < 1 {
