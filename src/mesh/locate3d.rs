@@ -14,12 +14,15 @@ use crate::element::hex::{Hex27, Hex8, Lagrange3D};
 use nalgebra::Vector3;
 use std::f64::consts::TAU;
 
+/// A located point: its cell and reference coordinates ξ.
+pub type Located = (usize, [f64; 3]);
+
 /// The located points of `points` in the revolved mesh `mesh`: (cell, ξ) of each, `None` for a
 /// point outside the mesh; `None` altogether for a mesh without a ring layout.
 pub fn locate_points_revolved(
     mesh: &HexMesh,
     points: &[Vector3<f64>],
-) -> Option<Vec<Option<(usize, [f64; 3])>>> {
+) -> Option<Vec<Option<Located>>> {
     let rl = mesh.rings?;
     if rl.n_theta == 0 || rl.degree == 0 {
         return None;
@@ -50,7 +53,7 @@ fn locate_in_slab(
     rl: &RingLayout3D,
     k: usize,
     p: &Vector3<f64>,
-) -> Option<(usize, [f64; 3])> {
+) -> Option<Located> {
     let nt = rl.n_theta;
     let mut best: Option<(usize, [f64; 3], f64)> = None;
     for dk in [0, 1, nt - 1] {
