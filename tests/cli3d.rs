@@ -5,6 +5,7 @@
 //! `tread check` accepts them.
 
 mod common;
+mod logread;
 #[path = "common/tempdir.rs"]
 mod tempdir;
 
@@ -723,4 +724,41 @@ fn steady_cornering_writes_hub_loads_and_footprints() {
             "{file} is not a PNG"
         );
     }
+}
+
+/// The Rerun recording of a steady run with contact carries the contact patch at every
+/// recorded step: the points coloured by pressure, the traction arrows, the stick points and
+/// the legend, on the same frames as the body (builds with the `rerun` feature; without it the
+/// sink is skipped).
+#[test]
+fn steady_rerun_recording_has_the_footprint() {
+    let d = TestDir::new("cli3d", "footprint_rrd");
+    let out = d.join("out");
+    let s = run(
+        &scene("cornering_3d.toml"),
+        &out,
+        &[
+            "mesh.n_theta=32",
+            "mesh.order=1",
+            "solver.load_steps=4",
+            "output.sinks=[\"summary\", \"rerun\"]",
+        ],
+    );
+    assert!(f(&s, "results.hub_loads.lateral_force") < 0.0);
+    #[cfg(feature = "rerun")]
+    {
+        let r = logread::read_rrd(&out.join("hex.rrd"));
+        let frames = &r["/body/mesh"].times;
+        assert!(!frames.is_empty());
+        for e in [
+            "/footprint/pressure",
+            "/footprint/traction",
+            "/footprint/stick",
+            "/footprint/legend",
+        ] {
+            assert_eq!(&r[e].times, frames, "{e}");
+        }
+    }
+    #[cfg(not(feature = "rerun"))]
+    assert!(!out.join("hex.rrd").exists());
 }

@@ -36,7 +36,7 @@ use super::steady3d::{
 };
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
-use crate::io::record::hex_out::{HexOutputOptions, HexOutputs, HexState};
+use crate::io::record::hex_out::{FootprintState, HexOutputOptions, HexOutputs, HexState};
 use crate::io::record::png::Units;
 use crate::io::record::{self, RecordError};
 use crate::io::scene::{Control, Mode, Scene, Sink};
@@ -199,7 +199,20 @@ impl StepObserver<Solid3DSystem> for Run3DObserver {
                 point_fields: &[],
                 cell_fields: &[],
             };
-            if let Err(e) = h.write_step(mesh, &state) {
+            let mut res = h.write_step(mesh, &state);
+            if let (Ok(()), true, Some(rc)) = (&res, h.logs_footprint(), sys.contact.as_ref()) {
+                if let Ok(samples) = sys.contact_samples() {
+                    let fr = rc.surface.frame();
+                    res = h.write_footprint(&FootprintState {
+                        index: info.index,
+                        time: info.time,
+                        samples: &samples,
+                        e1: [fr.e1[0], fr.e1[1], fr.e1[2]],
+                        e3: [fr.e3[0], fr.e3[1], fr.e3[2]],
+                    });
+                }
+            }
+            if let Err(e) = res {
                 self.errors.push(e);
                 // One failure stops the field outputs (the next step would fail alike).
                 self.hex = None;

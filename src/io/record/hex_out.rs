@@ -5,7 +5,7 @@
 //! |---|---|
 //! | `hex.pvd`, `hex/step_NNNNNN.vtu` | ParaView: reference nodes, `displacement`, the point and cell fields ([`super::vtu3d`]); the `.pvd` lists every step with its time and is rewritten (through a temporary file and a rename) after each |
 //! | `hex.mcap` | MCAP, protobuf channels: `/tread/hex/nodes` (`foxglove.PointCloud`: deformed surface nodes x, y, z, the colour field, u1, u2, u3 as f32 and red/green/blue/alpha) and `/tread/hex/mesh` (`foxglove.SceneUpdate`, entity `body`: one `TriangleListPrimitive`, the triangulated boundary at the deformed positions with per-vertex colours); metadata `hex` (units, colour field and its range, counts) |
-//! | `hex.rrd` | Rerun (cargo feature `rerun`): `body/mesh` (Mesh3D: the triangulated boundary at the deformed positions, vertex colours from the colour field), `body/colour_scale` (Mesh3D bar) with labels (`body/colour_scale/labels`: field name, 0 and maximum with unit), `scene` (TextDocument: units, displacement scale, colour field); timelines `step` and `sim_time` |
+//! | `hex.rrd` | Rerun (cargo feature `rerun`): `body/mesh` (Mesh3D: the triangulated boundary at the deformed positions, vertex colours from the colour field), `body/colour_scale` (Mesh3D bar) with labels (`body/colour_scale/labels`: field name, 0 and maximum with unit), `scene` (TextDocument: units, displacement scale, colour field); with contact (`HexOutputs::write_footprint`) `footprint/pressure` (Points3D at the contact points, viridis by the contact pressure, radius half the point's √dA0), `footprint/traction` (Arrows3D: the tangential traction on the body, the longest 2 √dA0 long), `footprint/stick` (Points3D: the stick zone, white), `footprint/legend` (TextDocument: the ranges and units); timelines `step` and `sim_time` |
 //!
 //! The viewer surface is the boundary of the body ([`HexMesh::boundary_faces`]) triangulated
 //! through all face nodes ([`HexMesh::surface_triangulation`]: 2 triangles per Hex8 face, 8
@@ -77,6 +77,20 @@ pub struct HexState<'a> {
     pub u: &'a [f64],
     pub point_fields: &'a [Field3D<'a>],
     pub cell_fields: &'a [Field3D<'a>],
+}
+
+/// The contact patch of one state, for the Rerun recording (`footprint/…`, see the module
+/// docs).
+#[derive(Clone, Copy, Debug)]
+pub struct FootprintState<'a> {
+    /// Step index and time of the state (the same as its [`HexState`]'s).
+    pub index: u64,
+    pub time: f64,
+    pub samples: &'a [crate::contact::facet3d::ContactSample3D],
+    /// The road's in-plane directions (e1, e3) in the wheel frame: the tangential traction on
+    /// the body is t1 e1 + t3 e3.
+    pub e1: [f64; 3],
+    pub e3: [f64; 3],
 }
 
 /// The writers of a 3D run (see the module docs).
@@ -156,6 +170,29 @@ impl HexOutputs {
             rrd,
             radius,
         })
+    }
+
+    /// Whether [`Self::write_footprint`] records anything (a Rerun recording is open).
+    pub fn logs_footprint(&self) -> bool {
+        #[cfg(feature = "rerun")]
+        let open = self.rrd.is_some();
+        #[cfg(not(feature = "rerun"))]
+        let open = false;
+        open
+    }
+
+    /// Log the contact patch of a state (written by [`Self::write_step`] before) to the
+    /// Rerun recording; nothing without it (sink `rerun` off, or a build without the
+    /// feature).
+    pub fn write_footprint(&mut self, f: &FootprintState) -> Result<(), RecordError> {
+        #[cfg(feature = "rerun")]
+        if let Some((rec, _)) = &self.rrd {
+            self::rrd3d::log_footprint(rec, f, &self.opts.units)
+                .map_err(|e| RecordError::new("rerun", self.dir.join("hex.rrd"), e))?;
+        }
+        #[cfg(not(feature = "rerun"))]
+        let _ = f;
+        Ok(())
     }
 
     /// Write one state to every file.
@@ -454,6 +491,84 @@ mod rrd3d {
         );
         rec.log(
             "scene",
+            &rerun::TextDocument::new(doc).with_media_type(rerun::MediaType::markdown()),
+        )
+    }
+
+    /// Log the contact patch: the points in contact coloured by pressure, the tangential
+    /// tractions as arrows, the stick points, and a legend with the ranges and units.
+    pub(super) fn log_footprint(
+        rec: &rerun::RecordingStream,
+        f: &FootprintState,
+        units: &Units,
+    ) -> Result<(), rerun::RecordingStreamError> {
+        rec.set_time_sequence("step", f.index as i64);
+        rec.set_duration_secs("sim_time", or_zero(f.time));
+        let pts: Vec<_> = f
+            .samples
+            .iter()
+            .filter(|s| s.p > 0.0 && s.p.is_finite())
+            .collect();
+        let pmax = pts.iter().map(|s| s.p).fold(0.0, f64::max);
+        let pos: Vec<[f32; 3]> = pts
+            .iter()
+            .map(|s| [s.x1, s.x2, s.x3].map(|v| or_zero(v) as f32))
+            .collect();
+        let size = |s: &&crate::contact::facet3d::ContactSample3D| s.da0.max(0.0).sqrt();
+        rec.log(
+            "footprint/pressure",
+            &rerun::Points3D::new(pos.clone())
+                .with_colors(pts.iter().map(|s| {
+                    let c = colormap(if pmax > 0.0 { s.p / pmax } else { 0.0 });
+                    rerun::Color::from_rgb(c[0], c[1], c[2])
+                }))
+                .with_radii(
+                    pts.iter()
+                        .map(|s| rerun::Radius::new_scene_units(0.5 * size(s) as f32)),
+                ),
+        )?;
+        let tmax = pts
+            .iter()
+            .map(|s| or_zero(s.t1.hypot(s.t3)))
+            .fold(0.0, f64::max);
+        let mean = pts.iter().map(size).sum::<f64>() / pts.len().max(1) as f64;
+        let scale = if tmax > 0.0 { 2.0 * mean / tmax } else { 0.0 };
+        let vectors: Vec<[f32; 3]> = pts
+            .iter()
+            .map(|s| {
+                let (t1, t3) = (or_zero(s.t1), or_zero(s.t3));
+                [0, 1, 2].map(|i| (scale * (t1 * f.e1[i] + t3 * f.e3[i])) as f32)
+            })
+            .collect();
+        rec.log(
+            "footprint/traction",
+            &rerun::Arrows3D::from_vectors(vectors).with_origins(pos.clone()),
+        )?;
+        let stick: Vec<[f32; 3]> = pts
+            .iter()
+            .zip(&pos)
+            .filter(|(s, _)| s.stick)
+            .map(|(_, p)| *p)
+            .collect();
+        rec.log(
+            "footprint/stick",
+            &rerun::Points3D::new(stick)
+                .with_colors([rerun::Color::from_rgb(255, 255, 255)])
+                .with_radii([rerun::Radius::new_scene_units((0.2 * mean) as f32)]),
+        )?;
+        let su = units.stress();
+        let doc = format!(
+            "# Contact patch\n\n`footprint/pressure`: the {} points in contact, coloured by the \
+             contact pressure from 0 to {pmax:.6e} {su} (viridis). `footprint/traction`: the \
+             tangential traction of the road on the body, the longest arrow ({tmax:.6e} {su}) \
+             drawn {:.3e} {} long. `footprint/stick`: the points of the stick zone (|w| below \
+             the regularisation ε), white.\n",
+            pts.len(),
+            2.0 * mean,
+            units.length
+        );
+        rec.log(
+            "footprint/legend",
             &rerun::TextDocument::new(doc).with_media_type(rerun::MediaType::markdown()),
         )
     }
