@@ -609,3 +609,30 @@ fn nested_iteration_reaches_the_press_in_state() {
     let umax = direct.x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(du <= 1e-7 * umax, "field differs by {du:e} of {umax:e}");
 }
+
+/// A torque beyond what friction transmits (μ |F| Ro) cannot be reached: the torque control
+/// says so, with the range of torques its trials reached, instead of failing at a trial.
+#[test]
+fn unreachable_torque_is_reported() {
+    let mut sc = cornering_scene(0.0, 0.0);
+    sc.motion.control = Control::Torque;
+    sc.motion.torque = 1e3;
+    let mut s3 = steady_3d(&sc, false);
+    let kind = tread::setup::linear_kind_3d(&sc, &s3);
+    let (newton, _) = tread::setup::solver_options(&sc, false);
+    let e = apply_control_3d(&sc, &mut s3, kind, newton).expect_err("beyond friction");
+    let msg = e.to_string();
+    eprintln!("{msg}");
+    match e {
+        tread::solver::SolveError::TorqueUnreachable { target, t_max, .. } => {
+            assert_eq!(target, 1e3);
+            // The wheel load is 13 lbf, μ = 0.5, Ro = 2: friction transmits about 13 lbf·in.
+            assert!(
+                t_max < 20.0 && t_max > 0.0,
+                "largest torque reached {t_max}"
+            );
+        }
+        other => panic!("expected TorqueUnreachable, got {other}"),
+    }
+    assert!(msg.contains("no road speed"), "{msg}");
+}

@@ -497,6 +497,7 @@ fn solve_class(e: &SolveError) -> &'static str {
         SolveError::ContinuationStalled { .. } => "continuation",
         SolveError::TooManyCutbacks { last, .. } => solve_class(last),
         SolveError::StepBelowRoundOff { .. } => "step_below_round_off",
+        SolveError::TorqueUnreachable { .. } => "torque_unreachable",
     }
 }
 

@@ -438,7 +438,7 @@ pub fn solve_torque<S: RoadSpeedSystem>(
             match eval(st, c, &mut out) {
                 Ok(f) => break f,
                 Err(SolveError::Interrupted { at }) => return Err(SolveError::Interrupted { at }),
-                Err(e) if halvings >= 6 => return Err(e),
+                Err(e) if halvings >= 6 => return Err(unreachable_torque(&out, target, e)),
                 Err(_) => {
                     halvings += 1;
                     out.failed_trials += 1;
@@ -459,11 +459,37 @@ pub fn solve_torque<S: RoadSpeedSystem>(
         b = c;
         fb = fc;
     }
-    Err(SolveError::NotConverged {
-        iterations: out.evaluations,
-        residual: fb.abs() / torque_scale.max(f64::MIN_POSITIVE),
-        stagnation: None,
-    })
+    Err(unreachable_torque(
+        &out,
+        target,
+        SolveError::NotConverged {
+            iterations: out.evaluations,
+            residual: fb.abs() / torque_scale.max(f64::MIN_POSITIVE),
+            stagnation: None,
+        },
+    ))
+}
+
+/// The failure of [`solve_torque`] with the range its trials covered.
+fn unreachable_torque(out: &TorqueSolve, target: f64, last: SolveError) -> SolveError {
+    let range = |f: fn(&(f64, f64)) -> f64| {
+        out.history
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+    };
+    let (v_min, v_max) = range(|h| h.0);
+    let (t_min, t_max) = range(|h| h.1);
+    SolveError::TorqueUnreachable {
+        target,
+        v_min,
+        v_max,
+        t_min,
+        t_max,
+        last: Box::new(last),
+    }
 }
 
 /// Move the parameter of `st` (its [`SteadyRolling::param`]) from its current value to `target`

@@ -106,6 +106,16 @@ pub enum SolveError {
         cutbacks: usize,
         last: Box<SolveError>,
     },
+    /// The torque or free-rolling control found no road speed with the target hub torque.
+    #[error("the rolling control found no road speed with the hub torque {target:.6e}: its trials (road speeds {v_min:.6e} to {v_max:.6e}) reached hub torques from {t_min:.6e} to {t_max:.6e}; a target beyond what friction transmits (about mu |F| Ro) cannot be reached. Last failure: {last}")]
+    TorqueUnreachable {
+        target: f64,
+        v_min: f64,
+        v_max: f64,
+        t_min: f64,
+        t_max: f64,
+        last: Box<SolveError>,
+    },
 }
 
 /// How a Newton solve that ran out of iterations behaved: the evidence that tells a residual
