@@ -13,8 +13,8 @@ use crate::contact::{Clamp, ContactModel, FacetRule, NormalCompliance};
 use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
-    ClampKind, ContactQuadrature, Formulation, LinearChoice, MeshSides, Mode, Scene, Sink,
-    DEFAULT_CLAMP_WIDTH_OVER_G,
+    ClampKind, ContactQuadrature, ContinuationSpec, Formulation, LimitAction, LinearChoice,
+    MeshSides, Mode, Scene, Sink, DEFAULT_CLAMP_WIDTH_OVER_G,
 };
 use crate::material::{Hyperelastic, Material};
 use crate::math::Mat2;
@@ -24,6 +24,7 @@ use crate::mesh::{annulus, AnnulusSpec};
 use crate::model::system::Loading;
 use crate::model::{Solid3D, Solid3DSystem, SolidSystem};
 use crate::physics::{PressureMode, SolidModel};
+use crate::solver::continuation::ContinuationOptions;
 use crate::solver::stepping::StepOptions;
 use crate::solver::{LinearKind, NewtonOptions, SolveError, SolvePlan};
 use std::path::{Path, PathBuf};
@@ -577,14 +578,7 @@ fn first_touch_3d(scene: &Scene, mesh: &HexMesh, surface: &ContactSurface3D) -> 
     if camber == 0.0 {
         return scene.geometry.ro;
     }
-    let n = surface.frame().n;
-    let mut h = f64::NEG_INFINITY;
-    for f in &surface.facets {
-        for &a in mesh.cell_nodes(f.cell as usize) {
-            h = h.max(-n.dot(&mesh.nodes[a as usize]));
-        }
-    }
-    h
+    surface.first_touch(mesh)
 }
 
 /// The three-dimensional solid system of a scene: the solid on [`build_hex_mesh`] with
@@ -642,6 +636,36 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
 }
 
 pub use crate::model::system3d::road_velocity_3d;
+
+/// The arc-length continuation's options of `[continuation]` `cs` from the parameter value
+/// `start` and the norm `u_norm` of the start's displacements (the arc-length scales:
+/// ‖Δu‖ / u_norm and Δλ / |target − start|), both modes and dimensions alike.
+pub fn continuation_options(
+    scene: &Scene,
+    cs: &ContinuationSpec,
+    start: f64,
+    u_norm: f64,
+    verbose: bool,
+) -> ContinuationOptions {
+    ContinuationOptions {
+        target: cs.target,
+        direction: if cs.target >= start { 1.0 } else { -1.0 },
+        ds0: cs.ds,
+        ds_min: cs.ds * 1e-4,
+        ds_max: cs.ds_max,
+        x_scale: u_norm.max(1e-12 * scene.geometry.ro),
+        lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
+        max_steps: cs.max_steps,
+        max_iterations: scene.solver.max_iterations.min(15),
+        desired_iterations: cs.desired_iterations,
+        max_cutbacks: scene.solver.max_cutbacks,
+        tol: scene.solver.tolerance,
+        test_function: true,
+        switch_branch: cs.switch_branch,
+        stop_at_limit: cs.on_limit == LimitAction::Jump,
+        verbose,
+    }
+}
 
 /// Linear solver of a three-dimensional system: as [`linear_kind`] (LU for the exact
 /// incompressible saddle point and with friction).

@@ -43,6 +43,18 @@ fn uniform_rates_q1_q2() {
     }
 }
 
+/// The adaptive options of the hill runs: levels 3 to 7, Dörfler marking at 0.7, light
+/// coarsening.
+fn adaptive_hill_options(dt: f64, n: usize) -> TransientOptions {
+    let mut o = TransientOptions::new(1, dt, n);
+    o.adaptive = true;
+    o.min_level = 3;
+    o.max_level = 7;
+    o.marking = tread::adapt::driver::Marking::Dorfler(0.7);
+    o.coarsen_fraction = 0.01;
+    o
+}
+
 /// The two-grid adaptive run reaches a smaller final error than uniform refinement on a mesh
 /// with at least as many equations as the adaptive run ever had, and its estimate tracks the
 /// true error.
@@ -57,12 +69,7 @@ fn adaptive_beats_uniform_hill() {
         &TransientOptions::new(1, dt, n),
     )
     .unwrap();
-    let mut o = TransientOptions::new(1, dt, n);
-    o.adaptive = true;
-    o.min_level = 3;
-    o.max_level = 7;
-    o.marking = tread::adapt::driver::Marking::Dorfler(0.7);
-    o.coarsen_fraction = 0.01;
+    let o = adaptive_hill_options(dt, n);
     let ad = run(&k, &square([-1.0, -1.0], 2.0, 4, 1), 0.0, &o).unwrap();
     let (u, a) = (uni.last().unwrap(), ad.last().unwrap());
     let eff = a.estimate / a.l2_error;
@@ -103,12 +110,7 @@ fn initial_sweeps_resolve_the_initial_data() {
         &TransientOptions::new(1, dt, n),
     )
     .unwrap();
-    let mut o = TransientOptions::new(1, dt, n);
-    o.adaptive = true;
-    o.min_level = 3;
-    o.max_level = 7;
-    o.marking = tread::adapt::driver::Marking::Dorfler(0.7);
-    o.coarsen_fraction = 0.01;
+    let o = adaptive_hill_options(dt, n);
     let ad = run(&k, &square([-1.0, -1.0], 2.0, 4, 1), 0.0, &o).unwrap();
     let (c, a) = (coarse.last().unwrap(), ad.last().unwrap());
     println!(

@@ -393,6 +393,17 @@ impl ContactSurface3D {
         self.frame
     }
 
+    /// The road height of first touch in the road's frame: the largest −n·X over the nodes
+    /// of the facets' cells.
+    pub fn first_touch(&self, mesh: &HexMesh) -> f64 {
+        let n = self.frame.n;
+        self.facets
+            .iter()
+            .flat_map(|f| mesh.cell_nodes(f.cell as usize))
+            .map(|&a| -n.dot(&mesh.nodes[a as usize]))
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// Take the steady friction slip from nodal θ-derivatives along the node rings of the
     /// facets ([`super::steady_slip3d`]); each facet's element then extends over the stencil
     /// nodes outside its cell ([`Self::extra_nodes`]). `false` (and the facet-wise derivative

@@ -642,6 +642,27 @@ pub struct ContinuationSummary {
     pub failed_jumps: Vec<f64>,
 }
 
+impl ContinuationSummary {
+    /// The summary of the continuation `c` of `scene`'s `[continuation]`.
+    pub fn new(
+        scene: &crate::io::scene::Scene,
+        c: &crate::solver::continuation::ContinuationReport,
+    ) -> Self {
+        Self {
+            parameter: scene.continuation.as_ref().map(|c| c.parameter.to_string()),
+            stop_reason: c.stop_reason.clone(),
+            steps: c.points.len().saturating_sub(1),
+            corrector_iterations: c.total_iterations,
+            cutbacks: c.cutbacks,
+            assemblies: c.assemblies,
+            factorizations: c.factorizations,
+            switched_at: c.switched_at,
+            jumps: c.jumps.clone(),
+            failed_jumps: c.failed_jumps.clone(),
+        }
+    }
+}
+
 /// `results` of the steady mode (the final state; the keys shared with the transient mode have
 /// the same meaning).
 #[derive(Clone, Debug, Serialize)]

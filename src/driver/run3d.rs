@@ -342,18 +342,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let converged = solve.is_ok();
     let mut results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
     results.control = control;
-    results.continuation = cont.as_ref().map(|c| ContinuationSummary {
-        parameter: scene.continuation.as_ref().map(|c| c.parameter.to_string()),
-        stop_reason: c.stop_reason.clone(),
-        steps: c.points.len().saturating_sub(1),
-        corrector_iterations: c.total_iterations,
-        cutbacks: c.cutbacks,
-        assemblies: c.assemblies,
-        factorizations: c.factorizations,
-        switched_at: c.switched_at,
-        jumps: c.jumps.clone(),
-        failed_jumps: c.failed_jumps.clone(),
-    });
+    results.continuation = cont.as_ref().map(|c| ContinuationSummary::new(scene, c));
     if scene.continuation.is_some() {
         results.branch = Some(branch.clone());
     }

@@ -191,51 +191,7 @@ impl SteadyRolling {
 }
 
 impl NonlinearSystem for SteadyRolling {
-    fn n_eq(&self) -> usize {
-        self.sys.n_eq()
-    }
-    fn fields(&self) -> &[u8] {
-        self.sys.fields()
-    }
-    fn field_names(&self) -> &'static [&'static str] {
-        self.sys.field_names()
-    }
-    fn reference_norms(&self) -> Vec<f64> {
-        self.sys.reference_norms()
-    }
-    fn force_scale(&self) -> &[f64] {
-        self.sys.force_scale()
-    }
-    fn state_magnitudes(&self, out: &mut Vec<f64>) {
-        self.sys.state_magnitudes(out)
-    }
-    fn pattern(&self) -> (&[usize], &[usize]) {
-        self.sys.pattern()
-    }
-    fn evaluate(&mut self, with_matrix: bool) -> bool {
-        self.sys.evaluate(with_matrix)
-    }
-    fn residual(&self) -> &[f64] {
-        self.sys.residual()
-    }
-    fn matrix_values(&self) -> &[f64] {
-        self.sys.matrix_values()
-    }
-    fn update(&mut self, alpha: f64, dx: &[f64]) {
-        self.sys.update(alpha, dx)
-    }
-    fn save_state(&self, buf: &mut Vec<f64>) {
-        self.sys.save_state(buf)
-    }
-    fn restore_state(&mut self, buf: &[f64]) {
-        self.sys.restore_state(buf)
-    }
-    fn has_tangent_correction(&self) -> bool {
-        self.sys.has_tangent_correction()
-    }
-    fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
-        self.sys.tangent_correction(v, out)
-    }
+    crate::solver::system::delegate_nonlinear_system!(sys);
 }
 
 impl ParametricSystem for SteadyRolling {

@@ -128,45 +128,7 @@ pub struct SteadyPath3D<'a> {
 }
 
 impl NonlinearSystem for SteadyPath3D<'_> {
-    fn n_eq(&self) -> usize {
-        self.sys.n_eq()
-    }
-    fn fields(&self) -> &[u8] {
-        self.sys.fields()
-    }
-    fn field_names(&self) -> &'static [&'static str] {
-        self.sys.field_names()
-    }
-    fn reference_norms(&self) -> Vec<f64> {
-        self.sys.reference_norms()
-    }
-    fn force_scale(&self) -> &[f64] {
-        self.sys.force_scale()
-    }
-    fn state_magnitudes(&self, out: &mut Vec<f64>) {
-        self.sys.state_magnitudes(out)
-    }
-    fn pattern(&self) -> (&[usize], &[usize]) {
-        self.sys.pattern()
-    }
-    fn evaluate(&mut self, with_matrix: bool) -> bool {
-        self.sys.evaluate(with_matrix)
-    }
-    fn residual(&self) -> &[f64] {
-        self.sys.residual()
-    }
-    fn matrix_values(&self) -> &[f64] {
-        self.sys.matrix_values()
-    }
-    fn update(&mut self, alpha: f64, dx: &[f64]) {
-        self.sys.update(alpha, dx)
-    }
-    fn save_state(&self, buf: &mut Vec<f64>) {
-        self.sys.save_state(buf)
-    }
-    fn restore_state(&mut self, buf: &[f64]) {
-        self.sys.restore_state(buf)
-    }
+    crate::solver::system::delegate_nonlinear_system!(sys);
 }
 
 impl ParametricSystem for SteadyPath3D<'_> {
@@ -220,22 +182,10 @@ pub fn follow_path_3d(
     let mut path = SteadyPath3D { sys, parameter };
     let start = path.parameter();
     let copts = ContinuationOptions {
-        target: cs.target,
-        direction: if cs.target >= start { 1.0 } else { -1.0 },
-        ds0: cs.ds,
-        ds_min: cs.ds * 1e-4,
-        ds_max: cs.ds_max,
-        x_scale: u_norm.max(1e-12 * scene.geometry.ro),
-        lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
-        max_steps: cs.max_steps,
-        max_iterations: scene.solver.max_iterations.min(15),
-        desired_iterations: cs.desired_iterations,
-        max_cutbacks: scene.solver.max_cutbacks,
-        tol: scene.solver.tolerance,
         test_function: false,
         switch_branch: false,
         stop_at_limit: false,
-        verbose,
+        ..crate::setup::continuation_options(scene, cs, start, u_norm, verbose)
     };
     let mut partial = None;
     let res = Continuation::new(&path, LinearKind::Lu, copts).and_then(|mut c| {

@@ -42,8 +42,7 @@ use crate::io::output::{ensure_dir, write_csv};
 use crate::io::record::shape::ShapeSnapshots;
 use crate::io::record::{self, Recorder, StepInfo};
 use crate::io::scene::{
-    ContinuationParameter, ContinuationSpec, Control, DampingTangentChoice, LimitAction, Scene,
-    Sink,
+    ContinuationParameter, ContinuationSpec, Control, DampingTangentChoice, Scene, Sink,
 };
 use crate::model::system::{SolidSystem, SteadyDampingTangent};
 pub use crate::setup::scene_loading;
@@ -486,24 +485,7 @@ fn follow_branch(
         let n = st.sys.model.mesh.n_nodes();
         st.sys.x[..2 * n].iter().map(|v| v * v).sum::<f64>().sqrt()
     };
-    let copts = ContinuationOptions {
-        target: cs.target,
-        direction: if cs.target >= start { 1.0 } else { -1.0 },
-        ds0: cs.ds,
-        ds_min: cs.ds * 1e-4,
-        ds_max: cs.ds_max,
-        x_scale: u_norm.max(1e-12 * scene.geometry.ro),
-        lambda_scale: (cs.target - start).abs().max(f64::MIN_POSITIVE),
-        max_steps: cs.max_steps,
-        max_iterations: scene.solver.max_iterations.min(15),
-        desired_iterations: cs.desired_iterations,
-        max_cutbacks: scene.solver.max_cutbacks,
-        tol: scene.solver.tolerance,
-        test_function: true,
-        switch_branch: cs.switch_branch,
-        stop_at_limit: cs.on_limit == LimitAction::Jump,
-        verbose,
-    };
+    let copts = crate::setup::continuation_options(scene, cs, start, u_norm, verbose);
     let jump_distance = cs.jump * copts.lambda_scale;
     let jump_direction = copts.direction;
     let jump_target = copts.target;
@@ -703,18 +685,7 @@ pub fn run_with_dump(
             .then(|| resistance::rolling_resistance(&branch_loads(&rows), scene.geometry.ro)),
         branch: cont.as_ref().map(|_| rows.clone()),
         special_points: cont.as_ref().map(|c| c.special.clone()),
-        continuation: cont.as_ref().map(|c| ContinuationSummary {
-            parameter: scene.continuation.as_ref().map(|c| c.parameter.to_string()),
-            stop_reason: c.stop_reason.clone(),
-            steps: c.points.len().saturating_sub(1),
-            corrector_iterations: c.total_iterations,
-            cutbacks: c.cutbacks,
-            assemblies: c.assemblies,
-            factorizations: c.factorizations,
-            switched_at: c.switched_at,
-            jumps: c.jumps.clone(),
-            failed_jumps: c.failed_jumps.clone(),
-        }),
+        continuation: cont.as_ref().map(|c| ContinuationSummary::new(scene, c)),
     };
     let friction = st
         .sys

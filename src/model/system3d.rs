@@ -79,6 +79,14 @@ pub struct RoadContact3D {
     pub slip_angle: f64,
 }
 
+impl RoadContact3D {
+    /// The road velocity in its plane from the road speed and the slip angle.
+    fn update_road_velocity(&mut self) {
+        let v = road_velocity_3d(self.v0, self.slip_angle);
+        self.surface.v_road = nalgebra::Vector2::new(v[0], v[1]);
+    }
+}
+
 impl Solid3DSystem {
     /// The system with displacement component i of node n fixed where `fixed_u[3n + i]`.
     pub fn new(solid: Solid3D, fixed_u: &[bool]) -> Self {
@@ -224,7 +232,7 @@ impl Solid3DSystem {
                 return Err(Contact3DError::NonFinite(v));
             }
         }
-        let v_road = road_velocity_3d(v0, slip_angle);
+
         self.target = Coefficients {
             omega2: omega * omega,
             ..self.target
@@ -235,7 +243,7 @@ impl Solid3DSystem {
             rc.steady_omega = Some(omega);
             rc.v0 = v0;
             rc.slip_angle = slip_angle;
-            rc.surface.v_road = nalgebra::Vector2::new(v_road[0], v_road[1]);
+            rc.update_road_velocity();
             if rc.surface.friction.is_active() && !rc.surface.has_steady_slip() {
                 rebuild = rc.surface.enable_steady_slip(&self.solid.mesh);
             }
@@ -298,8 +306,7 @@ impl Solid3DSystem {
     pub fn set_road_speed(&mut self, v0: f64) {
         if let Some(rc) = self.contact.as_mut() {
             rc.v0 = v0;
-            let v = road_velocity_3d(v0, rc.slip_angle);
-            rc.surface.v_road = nalgebra::Vector2::new(v[0], v[1]);
+            rc.update_road_velocity();
         }
     }
 
@@ -312,8 +319,7 @@ impl Solid3DSystem {
     pub fn set_slip_angle(&mut self, slip_angle: f64) {
         if let Some(rc) = self.contact.as_mut() {
             rc.slip_angle = slip_angle;
-            let v = road_velocity_3d(rc.v0, slip_angle);
-            rc.surface.v_road = nalgebra::Vector2::new(v[0], v[1]);
+            rc.update_road_velocity();
         }
     }
 
@@ -335,15 +341,7 @@ impl Solid3DSystem {
             return Ok(());
         };
         rc.surface.set_camber(gamma)?;
-        let n = rc.surface.frame().n;
-        let mesh = &self.solid.mesh;
-        let mut h = f64::NEG_INFINITY;
-        for f in &rc.surface.facets {
-            for &a in mesh.cell_nodes(f.cell as usize) {
-                h = h.max(-n.dot(&mesh.nodes[a as usize]));
-            }
-        }
-        rc.h_touch = h;
+        rc.h_touch = rc.surface.first_touch(&self.solid.mesh);
         if rc.h_dof.is_none() {
             rc.surface.h = rc.h_touch - rc.lambda * rc.disp;
         }

@@ -51,3 +51,61 @@ pub trait NonlinearSystem {
     /// (the system may then offer another way to form its tangent).
     fn tangent_correction_stalled(&mut self) {}
 }
+
+/// The methods of [`NonlinearSystem`] for a wrapper that forwards all of them to its field
+/// `$inner` (a system or a mutable reference to one): used inside the wrapper's `impl
+/// NonlinearSystem` block, so that a wrapper that changes nothing of the system forwards every
+/// method, the optional ones included.
+macro_rules! delegate_nonlinear_system {
+    ($inner:ident) => {
+        fn n_eq(&self) -> usize {
+            self.$inner.n_eq()
+        }
+        fn fields(&self) -> &[u8] {
+            self.$inner.fields()
+        }
+        fn field_names(&self) -> &'static [&'static str] {
+            self.$inner.field_names()
+        }
+        fn reference_norms(&self) -> Vec<f64> {
+            self.$inner.reference_norms()
+        }
+        fn force_scale(&self) -> &[f64] {
+            self.$inner.force_scale()
+        }
+        fn state_magnitudes(&self, out: &mut Vec<f64>) {
+            self.$inner.state_magnitudes(out)
+        }
+        fn pattern(&self) -> (&[usize], &[usize]) {
+            self.$inner.pattern()
+        }
+        fn evaluate(&mut self, with_matrix: bool) -> bool {
+            self.$inner.evaluate(with_matrix)
+        }
+        fn residual(&self) -> &[f64] {
+            self.$inner.residual()
+        }
+        fn matrix_values(&self) -> &[f64] {
+            self.$inner.matrix_values()
+        }
+        fn update(&mut self, alpha: f64, dx: &[f64]) {
+            self.$inner.update(alpha, dx)
+        }
+        fn save_state(&self, buf: &mut Vec<f64>) {
+            self.$inner.save_state(buf)
+        }
+        fn restore_state(&mut self, buf: &[f64]) {
+            self.$inner.restore_state(buf)
+        }
+        fn has_tangent_correction(&self) -> bool {
+            self.$inner.has_tangent_correction()
+        }
+        fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+            self.$inner.tangent_correction(v, out)
+        }
+        fn tangent_correction_stalled(&mut self) {
+            self.$inner.tangent_correction_stalled()
+        }
+    };
+}
+pub(crate) use delegate_nonlinear_system;
