@@ -593,6 +593,10 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
     let steady = scene.analysis.mode == Mode::Steady;
     let contact = match scene.analysis.mode {
         Mode::Static => Some(build_contact_3d(scene, &mesh)?),
+        // The road turns the body when there is one; without, the hub spins it freely.
+        Mode::Transient => (scene.road.is_some() && scene.contact.is_some())
+            .then(|| build_contact_3d(scene, &mesh))
+            .transpose()?,
         Mode::Spinning | Mode::Steady => {
             // The θ-referential inertia −ω² ∫ ρ ∂θχ · ∂θη is the centrifugal load only on
             // closed circumferential lines: on a sector its boundary terms on the cut faces
@@ -631,6 +635,12 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
         let (v0, alpha) = road.map_or((0.0, 0.0), |r| (r.v0, r.slip_angle.to_radians()));
         sys.set_steady_rolling(scene.motion.omega, v0, alpha)
             .map_err(|e| AppError::Unsupported(format!("motion: {e}")))?;
+    }
+    if scene.analysis.mode == Mode::Transient {
+        // The road starts at rest; the transient driver ramps its speed.
+        let alpha = road.map_or(0.0, |r| r.slip_angle.to_radians());
+        sys.set_transient(0.0, alpha)
+            .map_err(|e| AppError::Unsupported(format!("road.slip_angle: {e}")))?;
     }
     Ok(sys)
 }

@@ -976,6 +976,39 @@ impl ContactSurface3D {
         Ok(totals)
     }
 
+    /// Per mesh node a, Σ over the facets' quadrature points of |N_a| Σ_b |N_b| dA0 (0 off
+    /// the contact surface): an upper bound on the row sums |∫ N_a N_b dA0| of the surface
+    /// mass, hence (× ∂t_n/∂δ, ∂t_n/∂δ̇) on the eigenvalues of the contact penalty and
+    /// damping matrices, for stable-step estimates.
+    pub fn boundary_row_sums(&self, mesh: &HexMesh) -> Vec<f64> {
+        let mut out = vec![0.0; mesh.n_nodes()];
+        let ul = [0.0; MAX_ELEMENT_DOFS];
+        let vl = [0.0; MAX_CELL_DOFS];
+        for &f in &self.facets {
+            let c = f.cell as usize;
+            let nodes = mesh.cell_nodes(c);
+            let nd = 3 * nodes.len();
+            let vel = PointVelocity::Nodal {
+                v: &vl[..nd],
+                kx: 1.0,
+                kv: 0.0,
+                damping: false,
+            };
+            let mut visit = |pt: &Point| {
+                let s: f64 = pt.n.iter().map(|v| v.abs()).sum();
+                for (a, na) in pt.n.iter().enumerate() {
+                    out[nodes[a] as usize] += na.abs() * s * pt.da0;
+                }
+            };
+            if mesh.degree[c] == 1 {
+                self.for_points::<Hex8>(mesh, f, &ul, &vel, &mut visit);
+            } else {
+                self.for_points::<Hex27>(mesh, f, &ul, &vel, &mut visit);
+            }
+        }
+        out
+    }
+
     /// The contact state at every quadrature point of every facet (contact or not) at the full
     /// displacement `u`, for outputs of the pressure and traction over the patch.
     pub fn samples(

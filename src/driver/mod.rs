@@ -9,7 +9,9 @@
 //!   [`steady_report::SolveReports`]), time integration ([`transient`]), the
 //!   stick-slip oscillator, critical speeds ([`critical`]) and transient-vs-steady comparison
 //!   ([`compare`]).
-//! * Three dimensions: static indentation ([`indentation3d`]) and spinning ([`spinning3d`]) of
+//! * Three dimensions: static indentation ([`indentation3d`]), spinning ([`spinning3d`]),
+//!   steady rolling ([`steady3d`]) and transient rolling ([`transient3d`], the same time loop
+//!   and integrators as plane strain through [`transient::Body`]) of
 //!   [`crate::model::Solid3DSystem`], run from a scene with `mesh.dimension = 3` by [`run3d`].
 //! * The `*_run` files are one mode's whole run (outputs, summary, exit status); they take the
 //!   model, options and sinks from [`crate::setup`], and [`crate::app::run`] dispatches to them.
@@ -48,4 +50,5 @@ pub mod steady_solve;
 pub mod stick_slip_run;
 pub mod tables;
 pub mod transient;
+pub mod transient3d;
 pub mod transient_run;

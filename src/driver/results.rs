@@ -312,6 +312,9 @@ pub struct Solid3DResults {
     pub continuation: Option<ContinuationSummary>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub branch: Option<Vec<BranchRow3D>>,
+    /// Transient mode: the integration and the steady state it reached.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub transient: Option<super::transient3d::Transient3DResults>,
 }
 
 /// A converged point of a three-dimensional continuation (`results.branch`, `branch.csv`).

@@ -34,6 +34,8 @@ use super::spinning3d::solve_spinning_3d;
 use super::steady3d::{
     apply_control_3d, follow_path_3d, solve_steady_3d_nested, Path3DParameter, SteadyPath3D,
 };
+use super::transient::body3d::contact_samples_3d;
+use super::transient3d::integrate_3d;
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::hex_out::{FootprintState, HexOutputOptions, HexOutputs, HexState};
@@ -174,6 +176,14 @@ impl StepObserver<Solid3DSystem> for Run3DObserver {
         }
     }
     fn observe_accepted(&mut self, sys: &Solid3DSystem, info: &StepInfo) {
+        self.observe_state(sys, info, None);
+    }
+}
+
+impl Run3DObserver {
+    /// An accepted state: its row and, at `[output] every`, its field and footprint; the
+    /// footprint's slip is the transient's material velocity `velocity` when given.
+    fn observe_state(&mut self, sys: &Solid3DSystem, info: &StepInfo, velocity: Option<&[f64]>) {
         // The totals of the last evaluation: the converged state of this step (the friction
         // slip measured over it, before the commit reset the step's start).
         let row = StepRow {
@@ -201,7 +211,11 @@ impl StepObserver<Solid3DSystem> for Run3DObserver {
             };
             let mut res = h.write_step(mesh, &state);
             if let (Ok(()), true, Some(rc)) = (&res, h.logs_footprint(), sys.contact.as_ref()) {
-                if let Ok(samples) = sys.contact_samples() {
+                let samples = match velocity {
+                    Some(v) => contact_samples_3d(sys, &sys.x, v),
+                    None => sys.contact_samples(),
+                };
+                if let Ok(samples) = samples {
                     let fr = rc.surface.frame();
                     res = h.write_footprint(&FootprintState {
                         index: info.index,
@@ -235,6 +249,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut report = StepReport::default();
     let mut control = None;
     let mut coarse_start = None;
+    let mut transient = None;
     let mut solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
@@ -280,6 +295,18 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             control = Some(rep);
             Ok(())
         }),
+        Mode::Transient => {
+            let mut feed = |s: &Solid3DSystem, v: &[f64], info: &StepInfo| {
+                obs.observe_state(s, info, Some(v));
+            };
+            let csv = scene.output.has(Sink::Csv);
+            let (s, r, res) =
+                integrate_3d(scene, sys, kind, newton_opts, &mut feed, &opts.out_dir, csv)?;
+            sys = s;
+            report.total_iterations += r.newton_iterations;
+            transient = Some(r);
+            res
+        }
         _ => solve_spinning_3d(
             &mut sys,
             scene.motion.omega,
@@ -342,6 +369,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let converged = solve.is_ok();
     let mut results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
     results.control = control;
+    results.transient = transient;
     results.continuation = cont.as_ref().map(|c| ContinuationSummary::new(scene, c));
     if scene.continuation.is_some() {
         results.branch = Some(branch.clone());
@@ -483,7 +511,10 @@ fn results_3d(
         max_pressure: t.max_pressure,
         max_penetration: t.max_penetration,
         points_in_contact: t.points_in_contact,
-        omega: if matches!(scene.analysis.mode, Mode::Spinning | Mode::Steady) {
+        omega: if matches!(
+            scene.analysis.mode,
+            Mode::Spinning | Mode::Steady | Mode::Transient
+        ) {
             scene.motion.omega
         } else {
             0.0
@@ -497,12 +528,13 @@ fn results_3d(
         road_velocity: rc
             .filter(|c| c.steady_omega.is_some())
             .map(|c| [c.surface.v_road[0], c.surface.v_road[1]]),
-        slip_angle: (scene.analysis.mode == Mode::Steady)
+        slip_angle: matches!(scene.analysis.mode, Mode::Steady | Mode::Transient)
             .then(|| scene.road.as_ref().map_or(0.0, |r| r.slip_angle)),
         v0: rc.filter(|c| c.steady_omega.is_some()).map(|c| c.v0),
         control: None,
         continuation: None,
         branch: None,
+        transient: None,
     }
 }
 

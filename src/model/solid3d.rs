@@ -61,6 +61,10 @@ pub struct Solid3D {
     pub body_force: Option<Box<BodyForceD<3>>>,
     q1: Table3<8>,
     q2: Table3<27>,
+    /// The mass rules (one point per direction more than the stiffness's, as the plane-strain
+    /// program's: N_a N_b det J of a curved cell).
+    m1: Table3<8>,
+    m2: Table3<27>,
 }
 
 impl Solid3D {
@@ -73,6 +77,8 @@ impl Solid3D {
             body_force: None,
             q1: Table3::new::<Hex8>(2),
             q2: Table3::new::<Hex27>(3),
+            m1: Table3::new::<Hex8>(3),
+            m2: Table3::new::<Hex27>(4),
         }
     }
 
@@ -183,6 +189,32 @@ impl Solid3D {
             body_force: self.body_force.as_deref(),
         };
         solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)
+    }
+
+    /// Scalar mass matrix ρ0 ∫ N_a N_b dV of cell `c` (n × n row-major, n its node count) into
+    /// `out`, with Gauss rules of 3 (Hex8) and 4 (Hex27) points per direction.
+    pub fn cell_mass(&self, c: usize, out: &mut Vec<f64>) {
+        if self.mesh.degree[c] == 1 {
+            self.cell_mass_n::<8>(&self.m1, c, out)
+        } else {
+            self.cell_mass_n::<27>(&self.m2, c, out)
+        }
+    }
+
+    fn cell_mass_n<const N: usize>(&self, tab: &Table3<N>, c: usize, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(N * N, 0.0);
+        for (q, x) in tab.points.iter().enumerate() {
+            let (_, jac) = self.mesh.map(c, *x);
+            let w = tab.weights[q] * jac.determinant();
+            let n = &tab.n[q];
+            for a in 0..N {
+                let wa = self.rho * w * n[a];
+                for b in 0..N {
+                    out[a * N + b] += wa * n[b];
+                }
+            }
+        }
     }
 
     /// Strain energy ∫ W dV (compressible laws).

@@ -19,6 +19,7 @@
 
 use super::kernel::{Coefficients, Inadmissible};
 use super::solid3d::Solid3D;
+use super::terms::Inertia;
 use crate::assembly::{Assembler, DofMap, CONSTRAINED, FIXED};
 use crate::contact::facet3d::{
     CellMotion, Contact3DError, ContactSample3D, ContactSurface3D, ContactTotals3D, Kinematics3D,
@@ -77,6 +78,52 @@ pub struct RoadContact3D {
     /// its plane is V = v0 (cos α, −sin α) ([`road_velocity_3d`]).
     pub v0: f64,
     pub slip_angle: f64,
+}
+
+/// One evaluation of the transient (Lagrangian) dynamics: the forces at the configuration `x`
+/// with the velocity field `v` (full vectors; a unit change of the unknown moves `v` by `kv`),
+/// scaled by `force_scale`, plus the inertia rows.
+#[derive(Clone, Copy, Debug)]
+pub struct Dynamic3D<'a> {
+    pub x: &'a [f64],
+    pub v: &'a [f64],
+    pub kv: f64,
+    pub force_scale: f64,
+    pub inertia: Inertia<'a>,
+}
+
+impl Dynamic3D<'_> {
+    /// Scale the cell's static forces (and tangent) by the force scale and add its inertia rows
+    /// M a (and c_a M); `r`, `k` in the cell's dof order (3·a + i first).
+    fn finish_cell(&self, dofs: &DofMap, nodes: &[u32], c: usize, r: &mut [f64], k: &mut [f64]) {
+        let fs = self.force_scale;
+        if fs != 1.0 {
+            r.iter_mut().for_each(|v| *v *= fs);
+            k.iter_mut().for_each(|v| *v *= fs);
+        }
+        let Inertia {
+            mass,
+            offsets,
+            acc,
+            ca,
+        } = self.inertia;
+        let (cd, nn, nd) = (dofs.cell(c), nodes.len(), r.len());
+        let m = &mass[offsets[c]..offsets[c + 1]];
+        for a in 0..nn {
+            for b in 0..nn {
+                let mab = m[a * nn + b];
+                if mab == 0.0 {
+                    continue;
+                }
+                for i in 0..3 {
+                    r[3 * a + i] += mab * acc[cd[3 * b + i] as usize];
+                    if !k.is_empty() {
+                        k[(3 * a + i) * nd + 3 * b + i] += ca * mab;
+                    }
+                }
+            }
+        }
+    }
 }
 
 impl RoadContact3D {
@@ -192,6 +239,11 @@ impl Solid3DSystem {
         Ok(self)
     }
 
+    /// The body's reference volume.
+    pub fn reference_volume(&self) -> f64 {
+        Self::volume(&self.solid)
+    }
+
     fn volume(solid: &Solid3D) -> f64 {
         let mut v = 0.0;
         let (pts, ws) = crate::element::gauss_1d(2);
@@ -211,6 +263,29 @@ impl Solid3DSystem {
     /// The coefficients reached at load factor 1 ([`LoadedSystem::set_load`] scales them).
     pub fn set_target(&mut self, target: Coefficients) {
         self.target = target;
+    }
+
+    /// Transient (Lagrangian) dynamics ([`Self::assemble_dynamic`]): the body force at its
+    /// target, no centrifugal load (the inertia is M a), the road at load factor 1 and
+    /// moving at `v0` turned by the slip angle `slip_angle` (radians) in its plane.
+    pub fn set_transient(&mut self, v0: f64, slip_angle: f64) -> Result<(), Contact3DError> {
+        for v in [v0, slip_angle] {
+            if !v.is_finite() {
+                return Err(Contact3DError::NonFinite(v));
+            }
+        }
+        self.coefficients = Coefficients {
+            omega2: 0.0,
+            ..self.target
+        };
+        if let Some(rc) = self.contact.as_mut() {
+            rc.steady_omega = None;
+            rc.lambda = 1.0;
+            rc.v0 = v0;
+            rc.slip_angle = slip_angle;
+            rc.update_road_velocity();
+        }
+        Ok(())
     }
 
     /// Steady rolling in the θ-referential description: the body turns at `omega` (rad/s
@@ -354,7 +429,18 @@ impl Solid3DSystem {
     /// current coefficients. Moment component 3 is the torque about the axle +x3
     /// (counter-clockwise positive), the drive torque of the rolling controls.
     pub fn hub_reaction(&self) -> ([f64; 3], [f64; 3]) {
+        self.hub_reaction_at(None)
+    }
+
+    /// [`Self::hub_reaction`] of an evaluation of the transient dynamics (with its inertia and
+    /// force scale, at its configuration).
+    pub fn hub_reaction_dynamic(&self, d: &Dynamic3D) -> ([f64; 3], [f64; 3]) {
+        self.hub_reaction_at(Some(d))
+    }
+
+    fn hub_reaction_at(&self, dynamic: Option<&Dynamic3D>) -> ([f64; 3], [f64; 3]) {
         let mesh = &self.solid.mesh;
+        let x: &[f64] = dynamic.map_or(&self.x, |d| d.x);
         let mut is_hub = vec![false; mesh.n_nodes()];
         for &n in mesh.node_set("hub") {
             is_hub[n as usize] = true;
@@ -372,14 +458,17 @@ impl Solid3DSystem {
             r.resize(cd.len(), 0.0);
             if self
                 .solid
-                .cell(c, &self.dofs, &self.x, &self.coefficients, &mut r, &mut [])
+                .cell(c, &self.dofs, x, &self.coefficients, &mut r, &mut [])
                 .is_err()
             {
                 return ([f64::NAN; 3], [f64::NAN; 3]);
             }
+            if let Some(d) = dynamic {
+                d.finish_cell(&self.dofs, nodes, c, &mut r, &mut []);
+            }
             for (a, &n) in nodes.iter().enumerate() {
                 let n = n as usize;
-                let u = self.node_displacement(n);
+                let u = [x[3 * n], x[3 * n + 1], x[3 * n + 2]];
                 let xp = [
                     mesh.nodes[n][0] + u[0],
                     mesh.nodes[n][1] + u[1],
@@ -452,9 +541,22 @@ impl Solid3DSystem {
     /// Residual and tangent at the current state into the assembler; `false` if a cell was
     /// inadmissible.
     pub fn assemble(&mut self, with_matrix: bool) -> bool {
+        self.assemble_at(None, with_matrix)
+    }
+
+    /// Residual M a + s f(x, v) and its tangent of the transient dynamics into the assembler
+    /// ([`Self::set_transient`]): the solid's forces at `d.x`, the contact's at the velocity
+    /// `d.v` (normal damping on δ̇, friction on the slip v − V), both scaled by `d.force_scale`,
+    /// plus the inertia. `false` if a cell was inadmissible.
+    pub fn assemble_dynamic(&mut self, d: &Dynamic3D, with_matrix: bool) -> bool {
+        self.assemble_at(Some(d), with_matrix)
+    }
+
+    fn assemble_at(&mut self, dynamic: Option<&Dynamic3D>, with_matrix: bool) -> bool {
         let bad = AtomicBool::new(false);
         let why = std::sync::Mutex::new(None);
-        let (solid, dofs, x, co) = (&self.solid, &self.dofs, &self.x, self.coefficients);
+        let x: &[f64] = dynamic.map_or(&self.x, |d| d.x);
+        let (solid, dofs, co) = (&self.solid, &self.dofs, self.coefficients);
         self.asm.zero(with_matrix);
         self.asm.add_block_large(0, dofs, with_matrix, |c, r, k| {
             if let Err(e) = solid.cell(c, dofs, x, &co, r, k) {
@@ -464,6 +566,8 @@ impl Solid3DSystem {
                 }
                 r.fill(0.0);
                 k.fill(0.0);
+            } else if let Some(d) = dynamic {
+                d.finish_cell(dofs, solid.mesh.cell_nodes(c), c, r, k);
             }
         });
         self.inadmissible = why.into_inner().ok().flatten();
@@ -508,17 +612,29 @@ impl Solid3DSystem {
                 for i in 0..nd {
                     let g = cd[i] as usize;
                     ul[i] = x[g];
-                    vl[i] = (x[g] - x_prev[g]) / dtau;
+                    vl[i] = match dynamic {
+                        Some(d) => d.v[g],
+                        None => (x[g] - x_prev[g]) / dtau,
+                    };
                 }
-                let m = CellMotion {
-                    u: &ul[..nd],
-                    v: &vl[..nd],
-                    kx: 1.0,
-                    kv: 1.0 / dtau,
-                    damping: false,
+                let m = match dynamic {
+                    Some(d) => CellMotion {
+                        u: &ul[..nd],
+                        v: &vl[..nd],
+                        kx: 1.0,
+                        kv: d.kv,
+                        damping: true,
+                    },
+                    None => CellMotion {
+                        u: &ul[..nd],
+                        v: &vl[..nd],
+                        kx: 1.0,
+                        kv: 1.0 / dtau,
+                        damping: false,
+                    },
                 };
                 let mut t = ContactTotals3D::default();
-                let kb = if k.is_empty() { None } else { Some(k) };
+                let kb = if k.is_empty() { None } else { Some(&mut *k) };
                 match load {
                     Some(p) => {
                         surface.facet_kernel_height(mesh, f, &m, r, kb, &mut t);
@@ -529,6 +645,12 @@ impl Solid3DSystem {
                     }
                     None => {
                         surface.facet_kernel(mesh, f, &m, r, kb, &mut t);
+                    }
+                }
+                if let Some(d) = dynamic {
+                    if d.force_scale != 1.0 {
+                        r.iter_mut().for_each(|v| *v *= d.force_scale);
+                        k.iter_mut().for_each(|v| *v *= d.force_scale);
                     }
                 }
                 if let Ok(mut all) = totals.lock() {

@@ -3,7 +3,7 @@
 //! stable-step estimate ([`Transient::stable_step`]).
 
 use super::integrator::IntegratorSpec;
-use super::{Scheme, StepMethod, Transient};
+use super::{Body, Scheme, StepMethod, Transient};
 use crate::assembly::CONSTRAINED;
 use crate::solver::{Newton, SolveError};
 
@@ -11,6 +11,9 @@ use crate::solver::{Newton, SolveError};
 pub struct CentralDifference;
 
 impl IntegratorSpec for CentralDifference {
+    fn scheme_3d(_rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
+        Some(Scheme::central_difference())
+    }
     const NAME: &'static str = "central_difference";
     const ABOUT: &'static str = "Explicit central difference with the lumped (HRZ) mass; the step \
         is also bounded by a stable-step estimate.";
@@ -26,21 +29,21 @@ impl IntegratorSpec for CentralDifference {
 #[derive(Clone, Copy, Debug)]
 pub struct CentralDifferenceStep;
 
-impl StepMethod for CentralDifferenceStep {
+impl<B: Body> StepMethod<B> for CentralDifferenceStep {
     fn name(&self) -> &'static str {
         "central_difference"
     }
 
     fn attempt(
         &self,
-        tr: &mut Transient,
+        tr: &mut Transient<B>,
         _newton: &mut Newton,
         dt: f64,
     ) -> Result<(f64, usize), SolveError> {
         tr.attempt_central_difference(dt)
     }
 
-    fn evaluate(&self, _tr: &mut Transient, _with_matrix: bool) -> bool {
+    fn evaluate(&self, _tr: &mut Transient<B>, _with_matrix: bool) -> bool {
         false
     }
 
@@ -53,7 +56,7 @@ impl StepMethod for CentralDifferenceStep {
     }
 }
 
-impl Transient {
+impl<B: Body> Transient<B> {
     /// One central-difference step of size `dt` from the committed state (left pending).
     pub(super) fn attempt_central_difference(
         &mut self,
@@ -61,9 +64,9 @@ impl Transient {
     ) -> Result<(f64, usize), SolveError> {
         let t1 = self.state.t + dt;
         // v_n ≈ v_{n−1/2} for the contact rates; a_n = −M_L⁻¹ f(u_n).
-        self.sys.x.copy_from_slice(&self.state.u);
+        self.sys.x_mut().copy_from_slice(&self.state.u);
         self.prescribe(self.state.t);
-        self.xa.copy_from_slice(&self.sys.x);
+        self.xa.copy_from_slice(self.sys.x());
         self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
         self.t_eval = self.state.t;
@@ -80,20 +83,20 @@ impl Transient {
         // u_{n+1} = u_n + Δt v_{n+1/2}.
         self.next.a.copy_from_slice(&self.state.a);
         for d in 0..self.state.u.len() {
-            let e = self.sys.dofs.eq[d];
+            let e = self.sys.dof_map().eq[d];
             if e < CONSTRAINED && self.ml[d] > 0.0 {
-                self.next.a[d] = -self.sys.asm.residual[e as usize] / self.ml[d];
+                self.next.a[d] = -self.sys.assembler().residual[e as usize] / self.ml[d];
             }
         }
         // Prescribed dofs: velocity from the prescribed positions.
         self.prescribe(t1);
         self.next.v.copy_from_slice(&self.state.v);
         for d in 0..self.state.u.len() {
-            if self.sys.dofs.eq[d] < CONSTRAINED && self.ml[d] > 0.0 {
+            if self.sys.dof_map().eq[d] < CONSTRAINED && self.ml[d] > 0.0 {
                 self.next.v[d] += dt * self.next.a[d];
-                self.sys.x[d] = self.state.u[d] + dt * self.next.v[d];
+                self.sys.x_mut()[d] = self.state.u[d] + dt * self.next.v[d];
             } else {
-                self.next.v[d] = (self.sys.x[d] - self.state.u[d]) / dt;
+                self.next.v[d] = (self.sys.x()[d] - self.state.u[d]) / dt;
             }
         }
         self.pending = Some((t1, dt));
@@ -110,7 +113,7 @@ impl Transient {
     /// normal damping ∂t_n/∂δ̇ on the same boundary diagonal. 5 % margin on ω_max (power
     /// iteration approaches λ_max from below).
     pub fn stable_step(&mut self, delta_ref: f64) -> f64 {
-        self.sys.x.copy_from_slice(&self.state.u);
+        self.sys.x_mut().copy_from_slice(&self.state.u);
         self.xa.copy_from_slice(&self.state.u);
         self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
@@ -118,16 +121,16 @@ impl Transient {
         if !self.assemble_dynamic(true, 1.0, 0.0, 0.0, 0.0) {
             return f64::NAN;
         }
-        let k = self.sys.asm.values.clone();
-        let n = self.sys.dofs.n_eq;
+        let k = self.sys.assembler().values.clone();
+        let n = self.sys.dof_map().n_eq;
         let mut cmat = Vec::new();
-        if self.sys.model.strain_rate_damping > 0.0 {
+        if self.sys.has_rate_damping() {
             if !self.assemble_dynamic(true, 1.0, 1.0, 0.0, 0.0) {
                 return f64::NAN;
             }
             cmat = self
                 .sys
-                .asm
+                .assembler()
                 .values
                 .iter()
                 .zip(&k)
@@ -135,21 +138,14 @@ impl Transient {
                 .collect();
         }
         // Boundary diagonals of the contact penalty and damping (equation numbering).
-        let (mut kc, mut cc) = (vec![0.0; n], vec![0.0; n]);
-        if let Some(cm) = &self.sys.contact {
-            let nv = cm.normal.eval(delta_ref.max(f64::MIN_POSITIVE), 0.0);
-            let w = cm.boundary_row_sums(&self.sys.model.mesh);
-            for (node, wa) in w.iter().enumerate() {
-                let e = self.sys.dofs.eq[2 * node + 1];
-                if e < CONSTRAINED && *wa > 0.0 {
-                    kc[e as usize] = nv.d_delta * wa;
-                    cc[e as usize] = nv.d_rate * wa;
-                }
-            }
-        }
+        let (kc, cc) = self
+            .sys
+            .contact_diagonals(delta_ref)
+            .unwrap_or_else(|| (vec![0.0; n], vec![0.0; n]));
         let mut ml = vec![0.0; n];
-        for (d, &e) in self.sys.dofs.eq.iter().enumerate() {
-            if e < CONSTRAINED && d < self.sys.dofs.n_u {
+        let dofs = self.sys.dof_map();
+        for (d, &e) in dofs.eq.iter().enumerate() {
+            if e < CONSTRAINED && d < dofs.n_u {
                 ml[e as usize] = self.ml[d];
             }
         }
@@ -162,9 +158,9 @@ impl Transient {
             .collect();
         let mut y = vec![0.0; n];
         let mut lam = 0.0;
-        self.sys.asm.values.copy_from_slice(&k);
+        self.sys.assembler_mut().values.copy_from_slice(&k);
         for _ in 0..80 {
-            self.sys.asm.matvec(&x, &mut y);
+            self.sys.assembler().matvec(&x, &mut y);
             for i in 0..n {
                 y[i] = (y[i] + kc[i] * x[i]) * minv[i];
             }
@@ -179,10 +175,10 @@ impl Transient {
         // Damping ratio of the dominant mode.
         let mut xcx: f64 = (0..n).map(|i| cc[i] * x[i] * x[i]).sum();
         if !cmat.is_empty() {
-            self.sys.asm.values.copy_from_slice(&cmat);
-            self.sys.asm.matvec(&x, &mut y);
+            self.sys.assembler_mut().values.copy_from_slice(&cmat);
+            self.sys.assembler().matvec(&x, &mut y);
             xcx += x.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>();
-            self.sys.asm.values.copy_from_slice(&k);
+            self.sys.assembler_mut().values.copy_from_slice(&k);
         }
         let xmx: f64 = (0..n).map(|i| ml[i] * x[i] * x[i]).sum();
         let xi = (xcx / (2.0 * omega * xmx.max(f64::MIN_POSITIVE))).max(0.0);

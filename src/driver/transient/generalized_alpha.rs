@@ -14,13 +14,16 @@
 //! adaptive step.
 
 use super::integrator::IntegratorSpec;
-use super::{GenAlpha, StepMethod, Transient};
+use super::{Body, GenAlpha, Scheme, StepMethod, Transient};
 use crate::solver::{Newton, SolveError};
 
 /// The scene's `"generalized_alpha"`: the one-step loop of [`super::integrate`] with [`GenAlpha`].
 pub struct GeneralizedAlpha;
 
 impl IntegratorSpec for GeneralizedAlpha {
+    fn scheme_3d(rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
+        Some(Scheme::generalized_alpha(GenAlpha::new(rho_inf)))
+    }
     const NAME: &'static str = "generalized_alpha";
     const ABOUT: &'static str = "Generalized-α (Chung–Hulbert) on the second-order system, with \
         spectral radius at infinity `rho_inf` (1 = trapezoidal / Newmark average acceleration). \
@@ -33,25 +36,25 @@ impl IntegratorSpec for GeneralizedAlpha {
 #[derive(Clone, Copy, Debug)]
 pub struct GeneralizedAlphaStep(pub GenAlpha);
 
-impl StepMethod for GeneralizedAlphaStep {
+impl<B: Body> StepMethod<B> for GeneralizedAlphaStep {
     fn name(&self) -> &'static str {
         "generalized_alpha"
     }
 
     fn attempt(
         &self,
-        tr: &mut Transient,
+        tr: &mut Transient<B>,
         newton: &mut Newton,
         dt: f64,
     ) -> Result<(f64, usize), SolveError> {
         tr.attempt_generalized_alpha(self.0, newton, dt)
     }
 
-    fn evaluate(&self, tr: &mut Transient, with_matrix: bool) -> bool {
+    fn evaluate(&self, tr: &mut Transient<B>, with_matrix: bool) -> bool {
         tr.assemble_generalized_alpha(&self.0, with_matrix)
     }
 
-    fn committed(&self, tr: &mut Transient) {
+    fn committed(&self, tr: &mut Transient<B>) {
         tr.update_fprev();
     }
 
@@ -60,7 +63,7 @@ impl StepMethod for GeneralizedAlphaStep {
     }
 }
 
-impl Transient {
+impl<B: Body> Transient<B> {
     /// One generalized-α step of size `dt` from the committed state: constant-acceleration
     /// predictor, Newton on the force-averaged residual, Newmark update; returns the local
     /// error estimate and the Newton iterations, and leaves the step pending.
@@ -73,15 +76,15 @@ impl Transient {
         let t1 = self.state.t + dt;
         // Predictor: constant acceleration.
         for d in 0..self.state.u.len() {
-            self.sys.x[d] =
+            self.sys.x_mut()[d] =
                 self.state.u[d] + dt * self.state.v[d] + 0.5 * dt * dt * self.state.a[d];
         }
         self.prescribe(t1);
         // Viscoelastic history: the kernels evaluate the overstress over this step
         // from the committed state; it is committed only once Newton has converged.
-        self.sys.model.history_dt = dt;
+        self.sys.set_history_dt(dt);
         let rep = newton.solve(self);
-        self.sys.model.history_dt = 0.0;
+        self.sys.set_history_dt(0.0);
         let rep = rep?;
         self.last_table = rep.table;
         self.newmark(&ga);
@@ -90,28 +93,29 @@ impl Transient {
         // by the rigid rotation ωΔt R and made the estimate blind to error_tol). RMS
         // over the nodes, with a floor of 1e-3 of the wall thickness.
         let phi1 = match &self.hub_angle {
-            Some(h) => self.sys.x[h.iphi],
+            Some(h) => self.sys.x()[h.iphi],
             None => self.kin.phi(t1),
         };
         let (sn, cs) = phi1.sin_cos();
         let mut num = 0.0;
         let mut den = 0.0;
-        let mesh = &self.sys.model.mesh;
-        for n in 0..mesh.n_nodes() {
-            let xr = mesh.nodes[n];
+        let (dim, n_nodes) = (B::DIM, self.sys.n_nodes());
+        for n in 0..n_nodes {
+            let xr = self.sys.reference_node(n);
             let rigid = [
                 cs * xr[0] - sn * xr[1] - xr[0],
                 sn * xr[0] + cs * xr[1] - xr[1],
+                0.0,
             ];
-            for (i, r) in rigid.iter().enumerate() {
-                let d = 2 * n + i;
+            for (i, r) in rigid.iter().enumerate().take(dim) {
+                let d = dim * n + i;
                 let e = (ga.beta - 1.0 / 6.0) * dt * dt * (self.next.a[d] - self.state.a[d]);
                 num += e * e;
-                let ud = self.sys.x[d] - r;
+                let ud = self.sys.x()[d] - r;
                 den += ud * ud;
             }
         }
-        let nd = (2 * mesh.n_nodes()).max(1) as f64;
+        let nd = (dim * n_nodes).max(1) as f64;
         let floor = 1e-3 * self.wall;
         let err = (num / nd).sqrt() / (den / nd).sqrt().max(floor);
         self.pending = Some((t1, dt));
@@ -137,7 +141,7 @@ impl Transient {
         let dt = self.dt;
         let (b, g) = (ga.beta, ga.gamma);
         for d in 0..self.state.u.len() {
-            let a1 = (self.sys.x[d] - self.state.u[d] - dt * self.state.v[d]) / (b * dt * dt)
+            let a1 = (self.sys.x()[d] - self.state.u[d] - dt * self.state.v[d]) / (b * dt * dt)
                 - (0.5 / b - 1.0) * self.state.a[d];
             let v1 = self.state.v[d] + dt * ((1.0 - g) * self.state.a[d] + g * a1);
             self.next.a[d] = a1;
@@ -155,7 +159,7 @@ impl Transient {
             self.hub_rates(self.state.t + dt);
         }
         for d in 0..self.state.u.len() {
-            self.xa[d] = self.sys.x[d];
+            self.xa[d] = self.sys.x()[d];
             self.va[d] = self.next.v[d];
             self.aa[d] = (1.0 - ga.am) * self.next.a[d] + ga.am * self.state.a[d];
         }

@@ -33,6 +33,9 @@ pub fn hht_parameters(rho_inf: f64) -> GenAlpha {
 }
 
 impl IntegratorSpec for HhtAlpha {
+    fn scheme_3d(rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
+        Some(Scheme::generalized_alpha(hht_parameters(rho_inf)))
+    }
     const NAME: &'static str = "hht_alpha";
     const ABOUT: &'static str = "Hilber–Hughes–Taylor α (the α-method of Abaqus/Standard), with \
         spectral radius at infinity `rho_inf` in [0.5, 1]. Implicit.";

@@ -43,6 +43,13 @@ pub trait IntegratorSpec {
         Scheme::generalized_alpha(GenAlpha::new(rho_inf))
     }
 
+    /// The one-step scheme of the three-dimensional solid, when the integrator runs in 3D
+    /// (the one-step loop of [`integrate`] on [`crate::model::Solid3DSystem`]); `None` by
+    /// default.
+    fn scheme_3d(_rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
+        None
+    }
+
     /// Integrate from the committed state to the end of the run, calling `on_step` after every
     /// accepted step. On failure the model holds the last accepted step. By default the
     /// one-step loop of [`integrate`] (passages, steady-state detection, step control) with

@@ -37,13 +37,12 @@
 //!   with I φ̈ = T(t) − M_r solved in the same Newton; node passages are then taken at
 //!   multiples of the cell angle of the computed φ(t) (cubic Hermite in (φ, φ̇) within a step).
 
-use crate::assembly::{LocalSystem, SharedMut, CONSTRAINED, MAX_LOCAL};
+use crate::assembly::{CONSTRAINED, MAX_LOCAL};
 use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::model::system::SolidSystem;
-use crate::model::terms::{CellHook, Inertia, Rates, Terms};
-use crate::physics::SolidModel;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
+pub use body::{Body, DynamicTerms};
 use energy::ViscousEnergy;
 use std::f64::consts::PI;
 
@@ -152,7 +151,7 @@ impl GenAlpha {
 /// ([`registry`]) attempts a step, assembles its Newton system and commits. Each integrator
 /// that uses the loop supplies one from [`integrator::IntegratorSpec::scheme`]; a new one-step
 /// integrator is a type implementing this trait, in its own file, with no change to the loop.
-pub trait StepMethod: Send + Sync + std::fmt::Debug {
+pub trait StepMethod<B: Body = SolidSystem>: Send + Sync + std::fmt::Debug {
     /// The integrator's scene keyword.
     fn name(&self) -> &'static str;
     /// Attempt one step of size `dt` from the committed state of `tr`, leaving it pending (see
@@ -160,15 +159,15 @@ pub trait StepMethod: Send + Sync + std::fmt::Debug {
     /// Newton iterations.
     fn attempt(
         &self,
-        tr: &mut Transient,
+        tr: &mut Transient<B>,
         newton: &mut Newton,
         dt: f64,
     ) -> Result<(f64, usize), SolveError>;
     /// Assemble the step's Newton system at the iterate ([`NonlinearSystem::evaluate`]);
     /// false when there is none (an explicit step) or the iterate is inadmissible.
-    fn evaluate(&self, tr: &mut Transient, with_matrix: bool) -> bool;
+    fn evaluate(&self, tr: &mut Transient<B>, with_matrix: bool) -> bool;
     /// After a step is committed (e.g. the forces the next step averages with).
-    fn committed(&self, _tr: &mut Transient) {}
+    fn committed(&self, _tr: &mut Transient<B>) {}
     /// Estimates its local error, so that the adaptive step control applies.
     fn estimates_error(&self) -> bool;
     /// Explicit: the first step is bounded by a stable-step estimate, and a failed step ends
@@ -179,12 +178,23 @@ pub trait StepMethod: Send + Sync + std::fmt::Debug {
 }
 
 /// Time integration scheme of a [`Transient`]: a shared handle on its [`StepMethod`].
-#[derive(Clone, Debug)]
-pub struct Scheme(std::sync::Arc<dyn StepMethod>);
+pub struct Scheme<B: Body = SolidSystem>(std::sync::Arc<dyn StepMethod<B>>);
 
-impl Scheme {
+impl<B: Body> Clone for Scheme<B> {
+    fn clone(&self) -> Self {
+        Scheme(self.0.clone())
+    }
+}
+
+impl<B: Body> std::fmt::Debug for Scheme<B> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_tuple("Scheme").field(&self.0).finish()
+    }
+}
+
+impl<B: Body> Scheme<B> {
     /// The scheme of a step method.
-    pub fn new(method: impl StepMethod + 'static) -> Self {
+    pub fn new(method: impl StepMethod<B> + 'static) -> Self {
         Scheme(std::sync::Arc::new(method))
     }
 
@@ -213,7 +223,7 @@ impl Scheme {
     }
 
     /// The step method.
-    pub fn method(&self) -> &dyn StepMethod {
+    pub fn method(&self) -> &dyn StepMethod<B> {
         self.0.as_ref()
     }
 }
@@ -248,6 +258,10 @@ pub struct Snapshot {
     pub omega: f64,
     pub kinetic_energy: f64,
     pub strain_energy: f64,
+    /// The hub's force and moment on the body (F1, F2, F3, M1, M2, M3), global frame: in
+    /// plane strain (hub_force_x, hub_force_y, 0, 0, 0, hub_torque).
+    #[serde(skip)]
+    pub loads: [f64; 6],
 }
 
 /// Torque control of the hub (see [`Transient::enable_torque_control`]).
@@ -278,9 +292,9 @@ const HUB_STRIDE: usize = 2 * MAX_LOCAL + 2;
 
 /// The transient model: a [`SolidSystem`] (state x = u at t_{n+1} during a step) plus the
 /// mass, the kinematics and the time-stepping state.
-pub struct Transient {
-    pub sys: SolidSystem,
-    pub scheme: Scheme,
+pub struct Transient<B: Body = SolidSystem> {
+    pub sys: B,
+    pub scheme: Scheme<B>,
     pub kin: Kinematics,
     pub lumped: bool,
     /// Per-cell scalar mass matrices (n × n, row-major), `mass_off[c]..`.
@@ -326,19 +340,20 @@ pub struct Transient {
     pub viscous: Option<ViscousEnergy>,
 }
 
-impl Transient {
+impl<B: Body> Transient<B> {
     /// `sys` must have been built with the hub fixed (its hub values are overwritten by the
     /// prescribed rotation). Initial state: at rest (u = v = a = 0) unless the caller changes
     /// `state` and `sys.x` before the first step.
-    pub fn new(sys: SolidSystem, scheme: Scheme, kin: Kinematics, lumped: bool) -> Self {
-        let n = sys.dofs.n_full();
+    pub fn new(sys: B, scheme: Scheme<B>, kin: Kinematics, lumped: bool) -> Self {
+        let n = sys.dof_map().n_full();
+        let dim = B::DIM;
         let mut mass = Vec::new();
         let mut mass_off = vec![0];
         let mut m = Vec::new();
         let mut ml = vec![0.0; n];
-        for c in 0..sys.model.mesh.n_cells() {
-            sys.model.cell_mass(c, &mut m);
-            let nn = sys.model.mesh.cell_nodes(c).len();
+        for c in 0..sys.n_cells() {
+            sys.cell_mass(c, &mut m);
+            let nn = sys.cell_nodes(c).len();
             let lump = crate::physics::SolidModel::hrz_lump(&m, nn);
             if lumped {
                 for a in 0..nn {
@@ -347,21 +362,25 @@ impl Transient {
                     }
                 }
             }
-            for (a, &node) in sys.model.mesh.cell_nodes(c).iter().enumerate() {
-                ml[2 * node as usize] += lump[a];
-                ml[2 * node as usize + 1] += lump[a];
+            for (a, &node) in sys.cell_nodes(c).iter().enumerate() {
+                for i in 0..dim {
+                    ml[dim * node as usize + i] += lump[a];
+                }
             }
             mass.extend_from_slice(&m);
             mass_off.push(mass.len());
         }
-        let hub = sys.model.mesh.node_set("hub").to_vec();
-        let mut is_hub = vec![false; sys.model.mesh.n_nodes()];
+        let hub = sys.hub_nodes();
+        let mut is_hub = vec![false; sys.n_nodes()];
         for &h in &hub {
             is_hub[h as usize] = true;
         }
         let z = vec![0.0; n];
-        let un = sys.x.clone();
-        let radii = sys.model.mesh.nodes.iter().map(|x| x.norm());
+        let un = sys.x().to_vec();
+        let radii = (0..sys.n_nodes()).map(|n| {
+            let x = sys.reference_node(n);
+            x[0].hypot(x[1])
+        });
         let wall = radii.clone().fold(0.0, f64::max) - radii.fold(f64::INFINITY, f64::min);
         Self {
             sys,
@@ -391,7 +410,9 @@ impl Transient {
             viscous: None,
         }
     }
+}
 
+impl Transient {
     /// Torque control: the hub angle φ becomes an unknown with the equation of motion
     /// I φ̈ = T(t) − M_r, M_r = Σ_hub nodes (x_b × R_b) the moment that the hub exerts on the body
     /// (R_b: the residual rows of the hub nodes, internal + inertia forces). The hub nodes follow
@@ -439,6 +460,22 @@ impl Transient {
         });
     }
 
+    /// Contact traction samples of the configuration `x` with the velocity field `v` (full
+    /// vectors); empty without contact.
+    pub fn contact_samples(&self, x: &[f64], v: &[f64]) -> Vec<ContactSample> {
+        let Some(c) = &self.sys.contact else {
+            return Vec::new();
+        };
+        let kin = SlipKinematics::Dynamic {
+            v,
+            kx: 1.0,
+            kv: 0.0,
+        };
+        c.samples(&self.sys.model.mesh, &self.sys.dofs, x, &kin)
+    }
+}
+
+impl<B: Body> Transient<B> {
     /// Hub angle of the committed state.
     pub fn phi_now(&self) -> f64 {
         match &self.hub_angle {
@@ -457,8 +494,7 @@ impl Transient {
 
     /// Full index of the road height under load control.
     fn road_height_dof(&self) -> Option<usize> {
-        let c = self.sys.contact.as_ref()?;
-        (c.load.is_some() && self.sys.dofs.n_global > 0).then(|| self.sys.dofs.global(0))
+        self.sys.road_height_dof()
     }
 
     /// Hub angular acceleration of the committed state.
@@ -485,12 +521,20 @@ impl Transient {
         let Some(h) = &self.hub_angle else {
             return;
         };
-        let (s, c) = self.sys.x[h.iphi].sin_cos();
+        let phi = self.sys.x()[h.iphi];
+        self.place_hub_at(phi);
+    }
+
+    /// Hub displacements (Q(φ) − I) X_b into `sys.x` (u3 = 0 in 3D).
+    fn place_hub_at(&mut self, phi: f64) {
+        let (s, c) = phi.sin_cos();
+        let dim = B::DIM;
         for &n in &self.hub {
-            let x = self.sys.model.mesh.nodes[n as usize];
+            let x = self.sys.reference_node(n as usize);
             let n = n as usize;
-            self.sys.x[2 * n] = c * x[0] - s * x[1] - x[0];
-            self.sys.x[2 * n + 1] = s * x[0] + c * x[1] - x[1];
+            let xs = self.sys.x_mut();
+            xs[dim * n] = c * x[0] - s * x[1] - x[0];
+            xs[dim * n + 1] = s * x[0] + c * x[1] - x[1];
         }
     }
 
@@ -499,39 +543,26 @@ impl Transient {
         if self.hub_angle.is_some() {
             self.place_hub();
         } else {
-            let phi = self.kin.phi(t);
-            let (s, c) = phi.sin_cos();
-            for &n in &self.hub {
-                let x = self.sys.model.mesh.nodes[n as usize];
-                let n = n as usize;
-                self.sys.x[2 * n] = c * x[0] - s * x[1] - x[0];
-                self.sys.x[2 * n + 1] = s * x[0] + c * x[1] - x[1];
-            }
+            self.place_hub_at(self.kin.phi(t));
         }
-        if let Some(cm) = &mut self.sys.contact {
-            if let Some(d) = self.kin.disp {
-                cm.h = self.kin.h_touch - d.value(t);
-            }
-            if let Some(l) = self.kin.load {
-                cm.load = Some(l.value(t));
-            }
-            cm.v0 = self.kin.v0.value(t);
-        }
+        let h = self.kin.disp.map(|d| self.kin.h_touch - d.value(t));
+        let load = self.kin.load.map(|l| l.value(t));
+        self.sys.set_road(h, load, self.kin.v0.value(t));
     }
 
     /// Kinetic energy ½ vᵀ M v of a full velocity vector.
     pub fn kinetic_energy(&self, v: &[f64]) -> f64 {
         let mut e = 0.0;
-        for c in 0..self.sys.model.mesh.n_cells() {
-            let nodes = self.sys.model.mesh.cell_nodes(c);
+        let dim = B::DIM;
+        for c in 0..self.sys.n_cells() {
+            let nodes = self.sys.cell_nodes(c);
             let nn = nodes.len();
             let m = &self.mass[self.mass_off[c]..self.mass_off[c + 1]];
             for a in 0..nn {
                 for b in 0..nn {
                     let (na, nb) = (nodes[a] as usize, nodes[b] as usize);
-                    e += 0.5
-                        * m[a * nn + b]
-                        * (v[2 * na] * v[2 * nb] + v[2 * na + 1] * v[2 * nb + 1]);
+                    let vv: f64 = (0..dim).map(|i| v[dim * na + i] * v[dim * nb + i]).sum();
+                    e += 0.5 * m[a * nn + b] * vv;
                 }
             }
         }
@@ -542,49 +573,33 @@ impl Transient {
     /// (x, next.v, next.a): internal (elastic and viscous), contact-free cell residual plus inertia at
     /// the hub nodes.
     pub fn hub_reaction(&self) -> (Vec2, f64) {
-        // With the viscous (strain-rate) stress: it is part of what the hub transmits.
-        self.sys.hub_reaction_with(&Terms {
-            rates: Rates::Dynamic {
-                x: &self.sys.x,
-                v: &self.next.v,
-                kv: 0.0,
-            },
-            force_scale: 1.0,
-            inertia: Some(Inertia {
-                mass: &self.mass,
-                offsets: &self.mass_off,
-                acc: &self.next.a,
-                ca: 0.0,
-            }),
-            cell_hook: None,
-        })
+        let l = self.hub_loads();
+        (Vec2::new(l[0], l[1]), l[5])
     }
 
-    /// Contact traction samples of the configuration `x` with the velocity field `v` (full
-    /// vectors); empty without contact.
-    pub fn contact_samples(&self, x: &[f64], v: &[f64]) -> Vec<ContactSample> {
-        let Some(c) = &self.sys.contact else {
-            return Vec::new();
-        };
-        let kin = SlipKinematics::Dynamic {
-            v,
-            kx: 1.0,
+    /// The hub's force and moment on the body (F1, F2, F3, M1, M2, M3) at the end-of-step
+    /// state, as [`Self::hub_reaction`].
+    pub fn hub_loads(&self) -> [f64; 6] {
+        // With the viscous (strain-rate) stress: it is part of what the hub transmits.
+        let (f, m) = self.sys.hub_reaction_dynamic(&DynamicTerms {
+            x: self.sys.x(),
+            v: &self.next.v,
             kv: 0.0,
-        };
-        c.samples(&self.sys.model.mesh, &self.sys.dofs, x, &kin)
+            force_scale: 1.0,
+            mass: &self.mass,
+            offsets: &self.mass_off,
+            acc: &self.next.a,
+            ca: 0.0,
+            t: self.state.t,
+        });
+        [f[0], f[1], f[2], m[0], m[1], m[2]]
     }
 
     pub fn snapshot(&self) -> Snapshot {
-        let (f, m) = self.hub_reaction();
         Snapshot {
-            t: self.state.t,
-            phi: self.phi_now(),
-            hub_force_x: f[0],
-            hub_force_y: f[1],
-            hub_torque: m,
-            omega: self.omega_now(),
             kinetic_energy: self.kinetic_energy(&self.state.v),
-            strain_energy: self.sys.model.strain_energy(&self.sys.dofs, &self.state.u),
+            strain_energy: self.sys.strain_energy_of(&self.state.u),
+            ..self.snapshot_light()
         }
     }
 
@@ -594,14 +609,15 @@ impl Transient {
         let phi = self.kin.phi(t);
         let (w, wd) = (self.kin.omega.value(t), self.kin.omega.rate(t));
         let (s, c) = phi.sin_cos();
+        let dim = B::DIM;
         for &n in &self.hub {
-            let xr = self.sys.model.mesh.nodes[n as usize];
+            let xr = self.sys.reference_node(n as usize);
             let x = Vec2::new(c * xr[0] - s * xr[1], s * xr[0] + c * xr[1]);
             let n = n as usize;
-            self.next.v[2 * n] = -w * x[1];
-            self.next.v[2 * n + 1] = w * x[0];
-            self.next.a[2 * n] = -wd * x[1] - w * w * x[0];
-            self.next.a[2 * n + 1] = wd * x[0] - w * w * x[1];
+            self.next.v[dim * n] = -w * x[1];
+            self.next.v[dim * n + 1] = w * x[0];
+            self.next.a[dim * n] = -wd * x[1] - w * w * x[0];
+            self.next.a[dim * n + 1] = wd * x[0] - w * w * x[1];
         }
     }
 
@@ -619,128 +635,33 @@ impl Transient {
         cm: f64,
         prev: f64,
     ) -> bool {
-        let Transient {
-            sys,
-            xa,
-            va,
-            aa,
-            mass,
-            mass_off,
-            is_hub,
-            hub_angle,
-            ..
-        } = self;
-        // Torque control: each hub cell leaves its projections on t_b = e3 × x_b in `store`.
-        let (hub_slot, store) = match hub_angle {
-            Some(h) => (Some(&h.hub_slot), Some(SharedMut::new(&mut h.store))),
-            None => (None, None),
-        };
-        let xa: &[f64] = xa;
-        let hub_projections = |model: &SolidModel, c: usize, loc: &LocalSystem| {
-            let (Some(hs), Some(st)) = (hub_slot, &store) else {
-                return;
-            };
-            let slot = hs[c];
-            if slot == u32::MAX {
-                return;
-            }
-            let (nd, nn) = (loc.nd, model.mesh.cell_nodes(c).len());
-            let base = slot as usize * HUB_STRIDE;
-            // SAFETY: each hub cell writes only its own stride of `store`.
-            let w = |i: usize, v: f64| unsafe { st.set(base + i, v) };
-            let nodes = model.mesh.cell_nodes(c);
-            let pos = |a: usize| {
-                let n = nodes[a] as usize;
-                model.mesh.nodes[n] + Vec2::new(xa[2 * n], xa[2 * n + 1])
-            };
-            let hub_t = |a: usize| {
-                let x = pos(a);
-                Vec2::new(-x[1], x[0])
-            };
-            let (mut rphi, mut kpp) = (0.0, 0.0);
-            for a in (0..nn).filter(|&a| is_hub[nodes[a] as usize]) {
-                let (t, x) = (hub_t(a), pos(a));
-                rphi += t[0] * loc.r[2 * a] + t[1] * loc.r[2 * a + 1];
-                kpp -= x[0] * loc.r[2 * a] + x[1] * loc.r[2 * a + 1];
-            }
-            w(2 * MAX_LOCAL, rphi);
-            if with_matrix {
-                // Column K t and row tᵀ K over the local dofs.
-                for i in 0..nd {
-                    let (mut col, mut row) = (0.0, 0.0);
-                    for b in (0..nn).filter(|&b| is_hub[nodes[b] as usize]) {
-                        let t = hub_t(b);
-                        col += loc.k[i * nd + 2 * b] * t[0] + loc.k[i * nd + 2 * b + 1] * t[1];
-                        row += t[0] * loc.k[(2 * b) * nd + i] + t[1] * loc.k[(2 * b + 1) * nd + i];
-                    }
-                    w(i, col);
-                    w(MAX_LOCAL + i, row);
-                    if i < 2 * nn && is_hub[nodes[i / 2] as usize] {
-                        kpp += hub_t(i / 2)[i % 2] * col;
-                    }
-                }
-                w(2 * MAX_LOCAL + 1, kpp);
-            }
-        };
-        let terms = Terms {
-            rates: Rates::Dynamic { x: xa, v: va, kv },
+        let terms = DynamicTerms {
+            x: &self.xa,
+            v: &self.va,
+            kv,
             force_scale: fs,
-            inertia: Some(Inertia {
-                mass,
-                offsets: mass_off,
-                acc: aa,
-                ca: cm,
-            }),
-            cell_hook: hub_slot.map(|_| &hub_projections as CellHook),
+            mass: &self.mass,
+            offsets: &self.mass_off,
+            acc: &self.aa,
+            ca: cm,
+            t: self.t_eval,
         };
-        let ok = sys.assemble(&terms, with_matrix);
-        let sys = &mut self.sys;
-        if let Some(h) = &self.hub_angle {
-            // φ row: Σ_b t_b · R_b (scattered from the hub cells) + I φ̈_α − fs T(t).
-            if !h.frozen {
-                let st = &h.store;
-                sys.asm
-                    .add_block(h.block, &sys.dofs, with_matrix, |e, loc| {
-                        let base = e * HUB_STRIDE;
-                        let nd = loc.nd - 1;
-                        loc.r[nd] = st[base + 2 * MAX_LOCAL];
-                        if with_matrix {
-                            for i in 0..nd {
-                                loc.k[i * (nd + 1) + nd] = st[base + i];
-                                loc.k[nd * (nd + 1) + i] = st[base + MAX_LOCAL + i];
-                            }
-                            loc.k[nd * (nd + 1) + nd] = st[base + 2 * MAX_LOCAL + 1];
-                        }
-                    });
-                let (inertia, torque) = (
-                    h.inertia * self.aa[h.iphi],
-                    fs * h.torque.value(self.t_eval),
-                );
-                sys.asm.residual[h.eq] += inertia - torque;
-                sys.asm.scale[h.eq] += inertia.abs() + torque.abs();
-                if with_matrix && h.diag_slot != usize::MAX {
-                    sys.asm.values[h.diag_slot] += h.inertia * cm;
-                }
-            } else {
-                sys.asm.residual[h.eq] = 0.0;
-                if with_matrix && h.diag_slot != usize::MAX {
-                    sys.asm.values[h.diag_slot] = 1.0;
-                }
-            }
-        }
+        let ok =
+            self.sys
+                .assemble_dynamic(&terms, self.hub_angle.as_mut(), &self.is_hub, with_matrix);
+        let asm = self.sys.assembler_mut();
         if prev != 0.0 {
-            for ((r, q), f) in sys
-                .asm
+            for ((r, q), f) in asm
                 .residual
                 .iter_mut()
-                .zip(sys.asm.scale.iter_mut())
+                .zip(asm.scale.iter_mut())
                 .zip(&self.fprev)
             {
                 *r += prev * f;
                 *q += (prev * f).abs();
             }
         }
-        ok && sys.asm.residual.iter().all(|r| r.is_finite())
+        ok && asm.residual.iter().all(|r| r.is_finite())
     }
 
     /// Static forces f(u_n, v_n) of the committed state into `fprev`.
@@ -749,21 +670,19 @@ impl Transient {
         self.xa.copy_from_slice(&self.state.u);
         self.va.copy_from_slice(&self.state.v);
         self.aa.iter_mut().for_each(|v| *v = 0.0);
-        let saved_x = std::mem::take(&mut self.sys.x);
-        self.sys.x = self.state.u.clone();
+        let saved_x = std::mem::take(self.sys.x_mut());
+        *self.sys.x_mut() = self.state.u.clone();
         let ok = self.assemble_dynamic(false, 1.0, 0.0, 0.0, 0.0);
-        self.sys.x = saved_x;
+        *self.sys.x_mut() = saved_x;
         self.fprev.clear();
-        self.fprev.extend_from_slice(&self.sys.asm.residual);
+        self.fprev.extend_from_slice(&self.sys.assembler().residual);
         // Load control: the road-height equation P − ∫ t_n ds0 = 0 is algebraic (massless
         // road): it holds at t_{n+1}, not force-averaged (an inconsistent start would otherwise
         // be carried into every step and can demand a negative pressure).
-        if let Some(c) = &self.sys.contact {
-            if c.load.is_some() && self.sys.dofs.n_global > 0 {
-                let e = self.sys.dofs.eq[self.sys.dofs.global(0)];
-                if e < CONSTRAINED {
-                    self.fprev[e as usize] = 0.0;
-                }
+        if let Some(ih) = self.sys.road_height_dof() {
+            let e = self.sys.dof_map().eq[ih];
+            if e < CONSTRAINED {
+                self.fprev[e as usize] = 0.0;
             }
         }
         ok
@@ -807,22 +726,18 @@ impl Transient {
     /// committed `state`, and the quadrature-point history advances over a step `history_dt`
     /// (`None`: the integrator evaluated no history increment, so none is committed).
     pub(crate) fn commit_state(&mut self, t1: f64, history_dt: Option<f64>) {
-        if let Some(dt) = history_dt {
-            let (dofs, x) = (&self.sys.dofs, &self.sys.x);
-            let step = self.sys.model.commit_history(dofs, x, dt);
-            if self.sys.model.viscoelastic.is_some() {
-                self.viscous
-                    .get_or_insert(ViscousEnergy::start(0.0, self.state.t))
-                    .add(step.work, step.stored, t1);
-            }
+        if let Some(step) = history_dt.and_then(|dt| self.sys.commit_history(dt)) {
+            self.viscous
+                .get_or_insert(ViscousEnergy::start(0.0, self.state.t))
+                .add(step.work, step.stored, t1);
         }
         self.next.t = t1;
-        self.next.u.copy_from_slice(&self.sys.x);
+        self.next.u.copy_from_slice(self.sys.x());
         self.state.clone_from(&self.next);
     }
 }
 
-impl NonlinearSystem for Transient {
+impl<B: Body> NonlinearSystem for Transient<B> {
     fn n_eq(&self) -> usize {
         self.sys.n_eq()
     }
@@ -867,19 +782,19 @@ impl NonlinearSystem for Transient {
 }
 
 /// Steady-state monitor: the referential field at node passages.
-pub struct SteadyMonitor {
+pub struct SteadyMonitor<B: Body = SolidSystem> {
     pub dtheta: f64,
-    /// Ring structure used for re-indexing (0 and 0 when the field is interpolated).
-    pub rings: usize,
+    /// Nodes and cells per ring used for re-indexing (0 and 0 when the field is interpolated).
     pub per_ring: usize,
+    pub n_theta: usize,
     /// Point location for meshes without rings (the field is interpolated).
-    locator: Option<crate::mesh::locate::PointLocator>,
+    locator: Option<B::Locator>,
     last_k: i64,
     prev: Option<(Vec<f64>, Snapshot)>,
     /// Relative changes at the last passage: (field, force, torque).
     pub last_change: (f64, f64, f64, f64),
     pub passages: usize,
-    /// Referential displacement field at the last passage (2 per referential node).
+    /// Referential displacement field at the last passage (DIM per referential node).
     pub field: Vec<f64>,
     /// The quadrature-point history at the last passage, re-indexed to the referential cells
     /// (material cell (ring j, position l) sits on referential cell (j, l + k) after k cell
@@ -895,30 +810,21 @@ pub struct SteadyMonitor {
     /// the patch — by several per cent of |F| on coarse meshes — so the average over a
     /// passage, not the value at the passage instant, is the steady load).
     pub passage_mean: Option<[f64; 3]>,
-    /// ∫ (hub force x, y, torque) dt since `acc_t0`, the time of the last passage.
-    acc: [f64; 3],
+    /// The same for all six hub loads (F1, F2, F3, M1, M2, M3).
+    pub passage_mean_loads: Option<[f64; 6]>,
+    /// ∫ (hub loads) dt since `acc_t0`, the time of the last passage.
+    acc: [f64; 6],
     acc_t0: Option<f64>,
     below_once: bool,
 }
 
-impl SteadyMonitor {
-    pub fn new(sys: &SolidSystem) -> Option<Self> {
-        let mesh = &sys.model.mesh;
-        // The mesh repeats itself every cell, not every node (Q2: vertex and mid-side nodes
-        // alternate), so the passages are taken every p node steps = one cell. Without rings:
-        // about one passage per contact facet.
-        let (dtheta, rings, per_ring, locator) = match mesh.rings {
-            Some(rl) => (2.0 * PI / rl.n_theta as f64, rl.rings, rl.per_ring, None),
-            None => {
-                let n = mesh.facet_set("outer").len().max(8);
-                let loc = crate::mesh::locate::PointLocator::new(mesh);
-                (2.0 * PI / n as f64, 0, 0, Some(loc))
-            }
-        };
+impl<B: Body> SteadyMonitor<B> {
+    pub fn new(sys: &B) -> Option<Self> {
+        let (dtheta, per_ring, n_theta, locator) = sys.passage_geometry();
         Some(Self {
             dtheta,
-            rings,
             per_ring,
+            n_theta,
             locator,
             last_k: i64::MIN,
             prev: None,
@@ -928,7 +834,8 @@ impl SteadyMonitor {
             history: None,
             log: Vec::new(),
             passage_mean: None,
-            acc: [0.0; 3],
+            passage_mean_loads: None,
+            acc: [0.0; 6],
             acc_t0: None,
             below_once: false,
         })
@@ -943,7 +850,7 @@ impl SteadyMonitor {
     #[allow(clippy::too_many_arguments)]
     pub fn check(
         &mut self,
-        tr: &Transient,
+        tr: &Transient<B>,
         t0: f64,
         u0: &[f64],
         v0: &[f64],
@@ -955,16 +862,15 @@ impl SteadyMonitor {
         let q = phi_at(tr.state.t) / self.dtheta;
         let k1 = (q + 1e-9 * q.abs().max(1.0)).floor() as i64;
         // Hub loads linear in time within the step, for the passage average.
-        let loads = |s: &Snapshot| [s.hub_force_x, s.hub_force_y, s.hub_torque];
-        let (l0, l1) = (loads(snap0), loads(snap1));
+        let (l0, l1) = (snap0.loads, snap1.loads);
         let integral = |a: f64, b: f64| {
             let h = tr.state.t - t0;
             let at = |t: f64| {
                 let s = if h > 0.0 { (t - t0) / h } else { 1.0 };
-                [0, 1, 2].map(|i| l0[i] + s * (l1[i] - l0[i]))
+                std::array::from_fn::<f64, 6, _>(|i| l0[i] + s * (l1[i] - l0[i]))
             };
             let (fa, fb) = (at(a), at(b));
-            [0, 1, 2].map(|i| 0.5 * (fa[i] + fb[i]) * (b - a))
+            std::array::from_fn::<f64, 6, _>(|i| 0.5 * (fa[i] + fb[i]) * (b - a))
         };
         if self.last_k == i64::MIN {
             self.last_k = k1;
@@ -973,7 +879,7 @@ impl SteadyMonitor {
         if k1 <= self.last_k {
             if self.acc_t0.is_some() {
                 let d = integral(t0, tr.state.t);
-                (0..3).for_each(|i| self.acc[i] += d[i]);
+                (0..6).for_each(|i| self.acc[i] += d[i]);
             }
             return false;
         }
@@ -992,9 +898,11 @@ impl SteadyMonitor {
         let ts = 0.5 * (lo + hi);
         if let Some(tp) = self.acc_t0 {
             let d = integral(t0, ts);
-            (0..3).for_each(|i| self.acc[i] += d[i]);
+            (0..6).for_each(|i| self.acc[i] += d[i]);
             if ts > tp {
-                self.passage_mean = Some(self.acc.map(|v| v / (ts - tp)));
+                let m = self.acc.map(|v| v / (ts - tp));
+                self.passage_mean = Some([m[0], m[1], m[5]]);
+                self.passage_mean_loads = Some(m);
             }
         }
         self.acc = integral(ts, tr.state.t);
@@ -1006,46 +914,19 @@ impl SteadyMonitor {
         let h10 = s * s * s - 2.0 * s * s + s;
         let h01 = -2.0 * s * s * s + 3.0 * s * s;
         let h11 = s * s * s - s * s;
-        let mesh = &tr.sys.model.mesh;
         let per = self.per_ring;
-        let mut field = vec![0.0; 2 * mesh.n_nodes()];
-        if let Some(loc) = &self.locator {
-            // Interpolation: χ(Y_j) = X* + u(X*) with X* = Q(−φ) Y_j.
-            let n2 = 2 * mesh.n_nodes();
-            let u_ts: Vec<f64> = (0..n2)
-                .map(|i| {
-                    h00 * u0[i] + h10 * h * v0[i] + h01 * tr.state.u[i] + h11 * h * tr.state.v[i]
-                })
-                .collect();
-            let (sn, cs) = target.sin_cos();
-            for (j, y) in mesh.nodes.iter().enumerate() {
-                let xs = crate::math::Vec2::new(cs * y[0] + sn * y[1], -sn * y[0] + cs * y[1]);
-                let (c, xi, eta) = loc.locate_nearest(mesh, xs);
-                let chi = xs + crate::mesh::locate::vector_at(mesh, &u_ts, c, xi, eta);
-                field[2 * j] = chi[0] - y[0];
-                field[2 * j + 1] = chi[1] - y[1];
-            }
-        }
+        let n_u = B::DIM * tr.sys.n_nodes();
+        let u_ts: Vec<f64> = (0..n_u)
+            .map(|i| h00 * u0[i] + h10 * h * v0[i] + h01 * tr.state.u[i] + h11 * h * tr.state.v[i])
+            .collect();
         let kk = if per > 0 {
-            (k1 * (per / (2.0 * PI / self.dtheta).round() as usize) as i64).rem_euclid(per as i64)
-                as usize
+            (k1 * (per / self.n_theta) as i64).rem_euclid(per as i64) as usize
         } else {
             0
         };
-        for m in 0..self.rings {
-            for l in 0..per {
-                let i = m * per + l;
-                let j = m * per + (l + kk) % per;
-                for c in 0..2 {
-                    let u = h00 * u0[2 * i + c]
-                        + h10 * h * v0[2 * i + c]
-                        + h01 * tr.state.u[2 * i + c]
-                        + h11 * h * tr.state.v[2 * i + c];
-                    let xi = mesh.nodes[i][c] + u;
-                    field[2 * j + c] = xi - mesh.nodes[j][c];
-                }
-            }
-        }
+        let field = tr
+            .sys
+            .referential_field(self.locator.as_ref(), kk, target, &u_ts);
         let snap = Snapshot {
             t: ts,
             phi: target,
@@ -1053,6 +934,7 @@ impl SteadyMonitor {
             hub_force_y: snap0.hub_force_y + s * (snap1.hub_force_y - snap0.hub_force_y),
             hub_torque: snap0.hub_torque + s * (snap1.hub_torque - snap0.hub_torque),
             omega: snap0.omega + s * (snap1.omega - snap0.omega),
+            loads: std::array::from_fn(|i| snap0.loads[i] + s * (snap1.loads[i] - snap0.loads[i])),
             ..*snap1
         };
         self.passages += 1;
@@ -1070,14 +952,15 @@ impl SteadyMonitor {
                 .sum::<f64>()
                 .sqrt()
                 .max(f64::MIN_POSITIVE);
-            let fscale = snap
-                .hub_force_x
-                .hypot(snap.hub_force_y)
-                .max(f64::MIN_POSITIVE);
-            let df = (snap.hub_force_x - ps.hub_force_x).hypot(snap.hub_force_y - ps.hub_force_y)
-                / fscale;
-            let tscale = fscale * mesh.outer_radius();
-            let dm = (snap.hub_torque - ps.hub_torque).abs() / tscale.max(f64::MIN_POSITIVE);
+            // Changes of the hub force and moment (in plane strain: of (F1, F2) and the torque).
+            let norm3 = |v: &[f64]| v.iter().map(|a| a * a).sum::<f64>().sqrt();
+            let diff = |a: &[f64], b: &[f64]| -> Vec<f64> {
+                a.iter().zip(b).map(|(x, y)| x - y).collect()
+            };
+            let fscale = norm3(&snap.loads[..3]).max(f64::MIN_POSITIVE);
+            let df = norm3(&diff(&snap.loads[..3], &ps.loads[..3])) / fscale;
+            let tscale = fscale * tr.sys.outer_radius();
+            let dm = norm3(&diff(&snap.loads[3..], &ps.loads[3..])) / tscale.max(f64::MIN_POSITIVE);
             // Hub speed (varies under torque control; 0 change under speed control).
             let dw = (snap.omega - ps.omega).abs() / snap.omega.abs().max(f64::MIN_POSITIVE);
             self.last_change = (num / den, df, dm, dw);
@@ -1098,12 +981,10 @@ impl SteadyMonitor {
             self.last_change.3,
         ]);
         self.field = field.clone();
-        let hist = &tr.sys.model.history;
-        self.history = match mesh.rings {
-            Some(rl) if !hist.is_empty() && (1.0 - s).abs() < 1e-6 => {
-                Some(reindex_history(hist, rl.n_theta, k1, target))
-            }
-            _ => None,
+        self.history = if (1.0 - s).abs() < 1e-6 {
+            tr.sys.passage_history(k1, target)
+        } else {
+            None
         };
         self.prev = Some((field, snap));
         steady
@@ -1162,6 +1043,9 @@ pub struct TransientReport {
     /// Hub force x, y and torque averaged over the last node passage
     /// ([`SteadyMonitor::passage_mean`]).
     pub passage_mean: Option<[f64; 3]>,
+    /// All six hub loads averaged over the last node passage.
+    #[serde(skip)]
+    pub passage_mean_loads: Option<[f64; 6]>,
     pub history: Vec<Snapshot>,
     /// Rejected steps in order.
     pub rejections: Vec<Rejection>,
@@ -1181,12 +1065,12 @@ pub struct Rejection {
 /// Integrate until steady (or t_end). `on_step` is called after each accepted step.
 // The failed run's report rides with its error, once per run: boxing it would buy nothing.
 #[allow(clippy::result_large_err)]
-pub fn integrate(
-    tr: &mut Transient,
+pub fn integrate<B: Body>(
+    tr: &mut Transient<B>,
     opts: &TimeOptions,
     newton_opts: NewtonOptions,
     kind: crate::solver::LinearKind,
-    mut on_step: impl FnMut(&Transient, &TransientReport),
+    mut on_step: impl FnMut(&Transient<B>, &TransientReport),
 ) -> Result<TransientReport, (SolveError, TransientReport)> {
     let mut rep = TransientReport {
         dt_min_used: f64::INFINITY,
@@ -1197,9 +1081,8 @@ pub fn integrate(
         Err(e) => return Err((e, rep)),
     };
     // Reference force: weight-like scale ρ |Ω| ω² Ro + hub load.
-    let area = crate::model::system::domain_area(&tr.sys.model);
-    let ro = tr.sys.model.mesh.outer_radius();
-    let fref = tr.sys.model.rho * area * (tr.kin.omega.target.powi(2) * ro).max(1.0)
+    let ro = tr.sys.outer_radius();
+    let fref = tr.sys.mass_total() * (tr.kin.omega.target.powi(2) * ro).max(1.0)
         + tr.kin.load.map_or(0.0, |l| l.target.abs());
     tr.sys.set_reference_force(fref);
     let mut monitor = SteadyMonitor::new(&tr.sys);
@@ -1208,17 +1091,11 @@ pub fn integrate(
     // road starts). Start it a hair inside the lowest contact point (10⁻⁶ of the wall) so that
     // this point is in contact: the penalty then gives ∂R_H/∂H > 0, and the ramped load P(t) > 0 keeps it
     // in contact afterwards.
-    if let Some(c) = &tr.sys.contact {
-        if c.load.is_some() && tr.sys.dofs.n_global > 0 {
-            let ih = tr.sys.dofs.global(0);
-            let lowest = tr
-                .contact_samples(&tr.state.u, &tr.state.v)
-                .iter()
-                .map(|s| s.x2)
-                .fold(f64::INFINITY, f64::min);
+    if let Some(ih) = tr.sys.road_height_dof() {
+        if let Some(lowest) = tr.sys.lowest_contact_point(&tr.state.u, &tr.state.v) {
             let h0 = -lowest - 1e-6 * tr.wall;
             tr.state.u[ih] = h0;
-            tr.sys.x[ih] = h0;
+            tr.sys.x_mut()[ih] = h0;
         }
     }
     tr.prescribe(tr.state.t);
@@ -1436,22 +1313,24 @@ pub fn integrate(
         }
         rep.passage_log = m.log.clone();
         rep.passage_mean = m.passage_mean;
+        rep.passage_mean_loads = m.passage_mean_loads;
     }
     rep.history.push(tr.snapshot());
     Ok(rep)
 }
 
-impl Transient {
+impl<B: Body> Transient<B> {
     /// Hub reaction only (no energies): cheap per-step snapshot.
     pub fn snapshot_light(&self) -> Snapshot {
-        let (f, m) = self.hub_reaction();
+        let loads = self.hub_loads();
         Snapshot {
             t: self.state.t,
             phi: self.phi_now(),
-            hub_force_x: f[0],
-            hub_force_y: f[1],
-            hub_torque: m,
+            hub_force_x: loads[0],
+            hub_force_y: loads[1],
+            hub_torque: loads[5],
             omega: self.omega_now(),
+            loads,
             ..Default::default()
         }
     }
@@ -1618,6 +1497,8 @@ impl Transient {
 /// diffsol's BDF / SDIRK on the first-order form y = (u, v) (a child module: it drives the
 /// private assembly state of [`Transient`]).
 pub mod bdf;
+pub mod body;
+pub mod body3d;
 pub mod central_difference;
 pub mod energy;
 pub mod generalized_alpha;
@@ -1627,6 +1508,7 @@ pub mod ode_first_order;
 pub mod registry;
 pub mod sdirk;
 pub mod state;
+mod torque;
 
 pub use central_difference::CentralDifference;
 pub use generalized_alpha::GeneralizedAlpha;

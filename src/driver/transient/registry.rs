@@ -90,6 +90,13 @@ macro_rules! integrators {
                 }
             }
 
+            /// See [`IntegratorSpec::scheme_3d`].
+            pub fn scheme_3d(self, rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
+                match self {
+                    $(IntegratorName::$spec => <super::$file::$spec as IntegratorSpec>::scheme_3d(rho_inf),)+
+                }
+            }
+
             /// See [`IntegratorSpec::integrate`].
             #[allow(clippy::result_large_err)]
             pub fn integrate(

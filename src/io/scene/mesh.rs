@@ -133,6 +133,49 @@ pub(super) struct Dimension3DContext<'a> {
     pub(super) viscoelastic: bool,
 }
 
+/// What the three-dimensional transient mode does not run: torque control, the strain-rate
+/// damping and the integrators without a 3D scheme.
+fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
+    let get = |table: &str, key: &str| doc.and_then(|d| d.get(table)).and_then(|t| t.get(key));
+    if let Some(c) = get("motion", "control").and_then(|v| v.as_str()) {
+        if c != "speed" {
+            out.push(issue(
+                "motion.control",
+                format!(
+                    "\"{c}\" does not run in the three-dimensional transient mode (it runs \
+                     \"speed\": the hub turns at the prescribed ω)"
+                ),
+            ));
+        }
+    }
+    let damping = get("time", "strain_rate_damping")
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .unwrap_or(0.0);
+    if damping != 0.0 {
+        out.push(issue(
+            "time.strain_rate_damping",
+            "not supported with mesh.dimension = 3 yet; remove it or set it to 0 (the contact's \
+             normal damping and the integrator's ρ∞ dissipate)",
+        ));
+    }
+    if let Some(name) = get("time", "integrator").and_then(|v| v.as_str()) {
+        let known = crate::driver::transient::IntegratorName::ALL
+            .iter()
+            .find(|i| i.as_str() == name);
+        if let Some(i) = known.filter(|i| i.scheme_3d(1.0).is_none()) {
+            out.push(issue(
+                "time.integrator",
+                format!(
+                    "\"{i}\" does not run in three dimensions (use {})",
+                    crate::driver::transient::IntegratorName::quoted_with(|i| i
+                        .scheme_3d(1.0)
+                        .is_some())
+                ),
+            ));
+        }
+    }
+}
+
 pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mut Vec<Issue>) {
     let given = |key: &str| cx.doc.is_some_and(|d| table_has(d, "mesh", key));
     let slip_angle = cx
@@ -147,11 +190,13 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         .and_then(|r| r.get("camber"))
         .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
         .unwrap_or(0.0);
-    if camber != 0.0 && !(m.is_3d() && matches!(cx.mode, Some(Mode::Steady | Mode::Static))) {
+    if camber != 0.0
+        && !(m.is_3d() && matches!(cx.mode, Some(Mode::Steady | Mode::Static | Mode::Transient)))
+    {
         out.push(issue(
             "road.camber",
-            "a camber needs the three-dimensional static or steady mode (mesh.dimension = 3); \
-             remove it or set it to 0",
+            "a camber needs the three-dimensional static, steady or transient mode \
+             (mesh.dimension = 3); remove it or set it to 0",
         ));
     }
     let continued_in = cx
@@ -170,11 +215,13 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
             ));
         }
     }
-    if slip_angle != 0.0 && !(m.is_3d() && cx.mode == Some(Mode::Steady)) {
+    if slip_angle != 0.0 && !(m.is_3d() && matches!(cx.mode, Some(Mode::Steady | Mode::Transient)))
+    {
         out.push(issue(
             "road.slip_angle",
-            "a slip angle needs the three-dimensional steady mode (mesh.dimension = 3, \
-             analysis.mode = \"steady\"); remove it or set it to 0",
+            "a slip angle needs the three-dimensional steady or transient mode \
+             (mesh.dimension = 3, analysis.mode = \"steady\" or \"transient\"); remove it or \
+             set it to 0",
         ));
     }
     if m.dimension != 2 && m.dimension != 3 {
@@ -206,17 +253,23 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
         return;
     }
     if let Some(mode) = cx.mode {
-        if !matches!(mode, Mode::Static | Mode::Spinning | Mode::Steady) {
+        if !matches!(
+            mode,
+            Mode::Static | Mode::Spinning | Mode::Steady | Mode::Transient
+        ) {
             out.push(issue(
                 "analysis.mode",
                 format!(
                     "mode \"{mode}\" does not run in three dimensions yet (mesh.dimension = 3 \
-                     runs \"static\", \"spinning\" and \"steady\")"
+                     runs \"static\", \"spinning\", \"steady\" and \"transient\")"
                 ),
             ));
         }
         if mode == Mode::Steady {
             validate_steady_3d(cx.doc, out);
+        }
+        if mode == Mode::Transient {
+            validate_transient_3d(cx.doc, out);
         }
     }
     if cx.has_regions {
