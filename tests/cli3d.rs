@@ -398,11 +398,32 @@ fn bad(name: &str, set: &[&str], key: &str) {
 
 #[test]
 fn bad_three_dimensional_inputs_name_the_key() {
+    let transient = [
+        "analysis.mode=\"transient\"",
+        "time.dt=1e-3",
+        "time.t_end=0.1",
+    ];
+    let with = |extra: &'static str| {
+        let mut v = transient.to_vec();
+        v.push(extra);
+        v
+    };
     bad(
-        "transient",
-        &["analysis.mode=\"transient\""],
-        "analysis.mode",
+        "transient_torque",
+        &with("motion.control=\"torque\""),
+        "motion.control",
     );
+    bad(
+        "transient_bdf",
+        &with("time.integrator=\"bdf\""),
+        "time.integrator",
+    );
+    bad(
+        "transient_rate_damping",
+        &with("time.strain_rate_damping=1.0"),
+        "time.strain_rate_damping",
+    );
+    bad("mode", &["analysis.mode=\"stick_slip\""], "analysis.mode");
     bad("slip_static", &["road.slip_angle=2.0"], "road.slip_angle");
     bad("camber_range", &["road.camber=95.0"], "road.camber");
     bad(

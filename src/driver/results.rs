@@ -288,9 +288,10 @@ pub struct Solid3DResults {
     pub points_in_contact: usize,
     /// Angular speed reached (spinning, steady; 0 in the static mode).
     pub omega: f64,
-    /// Mean radial displacement of the outer surface nodes, Σ u·e_R / n.
+    /// Mean radial displacement of the outer surface nodes, Σ u·e_R / n (transient: of the
+    /// deformation χ − Q(φ) X, the rigid rotation taken out).
     pub u_r_outer_mean: f64,
-    /// Largest nodal |u|.
+    /// Largest nodal |u| (transient: |χ − Q(φ) X|).
     pub max_displacement: f64,
     /// The six loads of the road on the body at the hub centre, named (null without contact).
     pub hub_loads: Option<HubLoads3D>,

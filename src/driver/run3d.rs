@@ -35,7 +35,7 @@ use super::steady3d::{
     apply_control_3d, follow_path_3d, solve_steady_3d_nested, Path3DParameter, SteadyPath3D,
 };
 use super::transient::body3d::contact_samples_3d;
-use super::transient3d::integrate_3d;
+use super::transient3d::{deformation_measures, integrate_3d};
 use crate::contact::facet3d::ContactTotals3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
 use crate::io::record::hex_out::{FootprintState, HexOutputOptions, HexOutputs, HexState};
@@ -250,6 +250,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut control = None;
     let mut coarse_start = None;
     let mut transient = None;
+    let mut velocity: Option<Vec<f64>> = None;
     let mut solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
@@ -300,12 +301,12 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
                 obs.observe_state(s, info, Some(v));
             };
             let csv = scene.output.has(Sink::Csv);
-            let (s, r, res) =
-                integrate_3d(scene, sys, kind, newton_opts, &mut feed, &opts.out_dir, csv)?;
-            sys = s;
-            report.total_iterations += r.newton_iterations;
-            transient = Some(r);
-            res
+            let run = integrate_3d(scene, sys, kind, newton_opts, &mut feed, &opts.out_dir, csv)?;
+            sys = run.sys;
+            report.total_iterations += run.results.newton_iterations;
+            transient = Some(run.results);
+            velocity = Some(run.velocity);
+            run.outcome
         }
         _ => solve_spinning_3d(
             &mut sys,
@@ -369,6 +370,11 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let converged = solve.is_ok();
     let mut results = results_3d(scene, &sys, &obs.last, !obs.rows.is_empty());
     results.control = control;
+    if let Some(t) = &transient {
+        // The transient's displacements include the rigid rotation: report the deformation.
+        let phi = 2.0 * std::f64::consts::PI * t.revolutions;
+        (results.max_displacement, results.u_r_outer_mean) = deformation_measures(&sys, phi);
+    }
     results.transient = transient;
     results.continuation = cont.as_ref().map(|c| ContinuationSummary::new(scene, c));
     if scene.continuation.is_some() {
@@ -433,7 +439,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
         }
     }
     if scene.output.has(Sink::Png) && sys.contact.is_some() {
-        write_footprints(scene, &sys, &opts.out_dir, &mut obs.errors);
+        write_footprints(
+            scene,
+            &sys,
+            velocity.as_deref(),
+            &opts.out_dir,
+            &mut obs.errors,
+        );
     }
     let mut summary = typed.to_json();
     for e in &obs.errors {
@@ -565,6 +577,30 @@ fn headline(scene: &Scene, r: &Solid3DResults) -> String {
                 h.axle_moment
             )
         }
+        Mode::Transient => {
+            let t = r.transient.as_ref();
+            let h = t
+                .and_then(|t| t.hub_loads_passage_mean)
+                .or(r.hub_loads)
+                .unwrap_or_else(|| HubLoads3D::new([f64::NAN; 3], [f64::NAN; 3]));
+            format!(
+                "3D transient rolling: t = {:.6} s, {:.3} revolutions, steady: {}: hub forces (longitudinal, vertical, lateral) = ({:.6e}, {:.6e}, {:.6e}), moments (overturning, aligning, axle) = ({:.6e}, {:.6e}, {:.6e}) ({})",
+                t.map_or(f64::NAN, |t| t.final_time),
+                t.map_or(f64::NAN, |t| t.revolutions),
+                t.is_some_and(|t| t.steady),
+                h.longitudinal_force,
+                h.vertical_force,
+                h.lateral_force,
+                h.overturning_moment,
+                h.aligning_moment,
+                h.axle_moment,
+                if t.is_some_and(|t| t.hub_loads_passage_mean.is_some()) {
+                    "mean over the last node passage"
+                } else {
+                    "last step"
+                }
+            )
+        }
         _ => format!(
             "3D: omega = {:.6} rad/s: mean u_r(outer) = {:.6e}, max |u| = {:.6e}",
             r.omega, r.u_r_outer_mean, r.max_displacement
@@ -575,9 +611,19 @@ fn headline(scene: &Scene, r: &Solid3DResults) -> String {
 /// The footprint maps of the final state (sink `png`): `footprint_pressure.png`,
 /// `footprint_traction.png` and, with friction, `footprint_stick_slip.png`
 /// ([`crate::io::record::footprint`]).
-fn write_footprints(scene: &Scene, sys: &Solid3DSystem, dir: &Path, errors: &mut Vec<RecordError>) {
+fn write_footprints(
+    scene: &Scene,
+    sys: &Solid3DSystem,
+    velocity: Option<&[f64]>,
+    dir: &Path,
+    errors: &mut Vec<RecordError>,
+) {
     use crate::io::record::footprint::{footprint_png, FootprintField};
-    let Ok(samples) = sys.contact_samples() else {
+    let samples = match velocity {
+        Some(v) => contact_samples_3d(sys, &sys.x, v),
+        None => sys.contact_samples(),
+    };
+    let Ok(samples) = samples else {
         return;
     };
     let units = Units::parse(&scene.scene.units);

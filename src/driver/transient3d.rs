@@ -54,6 +54,15 @@ pub struct Transient3DResults {
     pub dt_max_used: f64,
 }
 
+/// What [`integrate_3d`] gives back: the system at the last accepted step, its velocity
+/// field (full vector), the results, and how the integration ended.
+pub struct Transient3DRun {
+    pub sys: Solid3DSystem,
+    pub velocity: Vec<f64>,
+    pub results: Transient3DResults,
+    pub outcome: Result<(), SolveError>,
+}
+
 /// One row of `history.csv`.
 #[derive(Clone, Copy, Debug)]
 struct HistoryRow {
@@ -86,7 +95,7 @@ pub fn integrate_3d(
     obs: &mut dyn FnMut(&Solid3DSystem, &[f64], &StepInfo),
     dir: &Path,
     csv: bool,
-) -> Result<(Solid3DSystem, Transient3DResults, Result<(), SolveError>), AppError> {
+) -> Result<Transient3DRun, AppError> {
     let Some(ts) = &scene.time else {
         return Err(AppError::Unsupported(
             "mode \"transient\" needs the [time] section".into(),
@@ -187,7 +196,12 @@ pub fn integrate_3d(
     // The system's state is the last accepted step's (the committed state).
     let Transient { mut sys, state, .. } = tr;
     sys.x.copy_from_slice(&state.u);
-    Ok((sys, results, res))
+    Ok(Transient3DRun {
+        sys,
+        velocity: state.v,
+        results,
+        outcome: res,
+    })
 }
 
 fn write_history(rows: &[HistoryRow], dir: &Path) -> Result<(), crate::io::output::OutputError> {
@@ -236,4 +250,44 @@ fn write_steady_field(
             ]
         }),
     )
+}
+
+/// The deformation of the state turned by the hub angle `phi`: the largest nodal
+/// |χ − Q(φ) X| and the mean over the `outer` nodes of its radial component (the transient's
+/// displacements include the rigid rotation Q(φ) X − X).
+pub fn deformation_measures(sys: &Solid3DSystem, phi: f64) -> (f64, f64) {
+    let mesh = &sys.solid.mesh;
+    let (s, c) = phi.sin_cos();
+    let d = |n: usize| {
+        let x = mesh.nodes[n];
+        let u = sys.node_displacement(n);
+        let q = [c * x[0] - s * x[1], s * x[0] + c * x[1], x[2]];
+        [
+            x[0] + u[0] - q[0],
+            x[1] + u[1] - q[1],
+            x[2] + u[2] - q[2],
+            q[0],
+            q[1],
+        ]
+    };
+    let max = (0..mesh.n_nodes())
+        .map(|n| {
+            let v = d(n);
+            (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+        })
+        .fold(0.0, f64::max);
+    let outer = mesh.node_set("outer");
+    let radial = if outer.is_empty() {
+        f64::NAN
+    } else {
+        outer
+            .iter()
+            .map(|&n| {
+                let v = d(n as usize);
+                (v[0] * v[3] + v[1] * v[4]) / v[3].hypot(v[4])
+            })
+            .sum::<f64>()
+            / outer.len() as f64
+    };
+    (max, radial)
 }

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 keyword_enum! {
-    /// What to compute (`[analysis] mode`). `steady` will be added as a further variant.
+    /// What to compute (`[analysis] mode`).
     Mode, "analysis mode" {
         /// Steady spinning about the hub at `[motion] omega`, no contact: the centrifugal load
         /// `ρ ω² X` is ramped in `load_steps` steps of ω².
