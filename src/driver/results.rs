@@ -315,7 +315,30 @@ pub struct Solid3DResults {
     pub branch: Option<Vec<BranchRow3D>>,
     /// Transient mode: the integration and the steady state it reached.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub transient: Option<super::transient3d::Transient3DResults>,
+    pub transient: Option<Transient3DResults>,
+}
+
+/// What the transient run reports in `results.transient`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Transient3DResults {
+    pub integrator: String,
+    pub steps: usize,
+    pub rejected: usize,
+    pub newton_iterations: usize,
+    /// Whether (and when) the passage-to-passage changes fell below `time.steady_tol` twice.
+    pub steady: bool,
+    pub time_to_steady: Option<f64>,
+    pub final_time: f64,
+    pub revolutions: f64,
+    pub passages: usize,
+    /// Relative changes over the last passage: referential field, hub force, hub moment.
+    pub last_change: [f64; 3],
+    /// The road's loads on the body at the hub centre, road frame, averaged over the last
+    /// passage (the negative of the hub's reaction: at a steady state the body's momentum
+    /// and angular momentum are constant); null before two passages.
+    pub hub_loads_passage_mean: Option<HubLoads3D>,
+    pub dt_min_used: f64,
+    pub dt_max_used: f64,
 }
 
 /// A converged point of a three-dimensional continuation (`results.branch`, `branch.csv`).

@@ -21,38 +21,14 @@
 //! speed, the six hub reactions in the wheel frame) and `steady_field_3d.csv` (the referential
 //! field of the last passage: node, X, u).
 
-use super::results::HubLoads3D;
+use super::results::{HubLoads3D, Transient3DResults};
 use super::transient::{integrate, Kinematics, TimeOptions, Transient, TransientReport};
 use crate::io::output::write_csv;
 use crate::io::scene::{MassKind, Scene};
 use crate::model::Solid3DSystem;
 use crate::setup::AppError;
 use crate::solver::{LinearKind, NewtonOptions, SolveError, StepInfo};
-use serde::Serialize;
 use std::path::Path;
-
-/// What the transient run reports in `results.transient`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Transient3DResults {
-    pub integrator: String,
-    pub steps: usize,
-    pub rejected: usize,
-    pub newton_iterations: usize,
-    /// Whether (and when) the passage-to-passage changes fell below `time.steady_tol` twice.
-    pub steady: bool,
-    pub time_to_steady: Option<f64>,
-    pub final_time: f64,
-    pub revolutions: f64,
-    pub passages: usize,
-    /// Relative changes over the last passage: referential field, hub force, hub moment.
-    pub last_change: [f64; 3],
-    /// The road's loads on the body at the hub centre, road frame, averaged over the last
-    /// passage (the negative of the hub's reaction: at a steady state the body's momentum
-    /// and angular momentum are constant); null before two passages.
-    pub hub_loads_passage_mean: Option<HubLoads3D>,
-    pub dt_min_used: f64,
-    pub dt_max_used: f64,
-}
 
 /// What [`integrate_3d`] gives back: the system at the last accepted step, its velocity
 /// field (full vector), the results, and how the integration ended.

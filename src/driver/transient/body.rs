@@ -10,29 +10,12 @@
 //! force and a moment about the hub centre in the global frame (in 2D F3 = M1 = M2 = 0 and
 //! M3 is the torque per unit thickness).
 
-use super::HubAngle;
+use super::{DynamicTerms, HubAngle};
 use crate::assembly::{Assembler, DofMap, QpHistory, CONSTRAINED};
 use crate::model::system::SolidSystem;
 use crate::model::terms::{Inertia, Rates, Terms};
 use crate::physics::solid::ViscousStep;
 use crate::solver::NonlinearSystem;
-
-/// The coefficients of one dynamic assembly: the static forces at the configuration `x` with
-/// the velocities `v` (∂v/∂x = `kv`), scaled by `force_scale`, plus the inertia rows
-/// `mass · acc` (∂acc/∂x = `ca`), the scalar cell mass matrices at `offsets[c]..`; `t` is the
-/// time at which applied loads (the torque of torque control) are evaluated.
-#[derive(Clone, Copy, Debug)]
-pub struct DynamicTerms<'a> {
-    pub x: &'a [f64],
-    pub v: &'a [f64],
-    pub kv: f64,
-    pub force_scale: f64,
-    pub mass: &'a [f64],
-    pub offsets: &'a [usize],
-    pub acc: &'a [f64],
-    pub ca: f64,
-    pub t: f64,
-}
 
 /// A solid the transient mode integrates.
 pub trait Body: NonlinearSystem + Sized + 'static {

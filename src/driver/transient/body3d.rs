@@ -7,8 +7,8 @@
 //! steady-state extraction in 3D. No quadrature-point history, no strain-rate damping and no
 //! torque control in 3D.
 
-use super::body::{Body, DynamicTerms};
-use super::HubAngle;
+use super::body::Body;
+use super::{DynamicTerms, HubAngle};
 use crate::assembly::{Assembler, DofMap, CONSTRAINED};
 use crate::contact::facet3d::Kinematics3D;
 use crate::model::system3d::Dynamic3D;

@@ -42,7 +42,7 @@ use crate::contact::{ContactSample, SlipKinematics};
 use crate::math::Vec2;
 use crate::model::system::SolidSystem;
 use crate::solver::{Newton, NewtonOptions, NonlinearSystem, SolveError};
-pub use body::{Body, DynamicTerms};
+pub use body::Body;
 use energy::ViscousEnergy;
 use std::f64::consts::PI;
 
@@ -226,6 +226,23 @@ impl<B: Body> Scheme<B> {
     pub fn method(&self) -> &dyn StepMethod<B> {
         self.0.as_ref()
     }
+}
+
+/// The coefficients of one dynamic assembly: the static forces at the configuration `x` with
+/// the velocities `v` (∂v/∂x = `kv`), scaled by `force_scale`, plus the inertia rows
+/// `mass · acc` (∂acc/∂x = `ca`), the scalar cell mass matrices at `offsets[c]..`; `t` is the
+/// time at which applied loads (the torque of torque control) are evaluated.
+#[derive(Clone, Copy, Debug)]
+pub struct DynamicTerms<'a> {
+    pub x: &'a [f64],
+    pub v: &'a [f64],
+    pub kv: f64,
+    pub force_scale: f64,
+    pub mass: &'a [f64],
+    pub offsets: &'a [usize],
+    pub acc: &'a [f64],
+    pub ca: f64,
+    pub t: f64,
 }
 
 /// Step-size control and stopping options.

@@ -3,8 +3,7 @@
 //! projections of its hub rows and columns on t_b = e3 × x_b in the [`HubAngle`] store inside
 //! the parallel assembly; the φ row and column are then scattered from them.
 
-use super::body::DynamicTerms;
-use super::{HubAngle, HUB_STRIDE};
+use super::{DynamicTerms, HubAngle, HUB_STRIDE};
 use crate::assembly::{LocalSystem, SharedMut, MAX_LOCAL};
 use crate::math::Vec2;
 use crate::model::system::SolidSystem;
