@@ -369,7 +369,57 @@ def solve_coulomb(g, M, xi_x, xi_y, phi, mu_p, v0=None, iters=100, tol=1e-11):
     return v, nslip, it
 
 
-def saturation_curve(a_over_b, nu, n, mu, creeps):
+def solve_regularised(g, M, xi_x, xi_y, phi, mu_p, eps, v0=None, iters=100, tol=1e-11):
+    """Tractions with tread's regularised Coulomb law q = -mu p tanh(|s|/eps) s/|s| (s the slip
+    per unit rolling speed, eps = epsilon / v0 the regularisation slip speed over the rolling
+    speed), by Newton's method with a backtracking line search."""
+    nc = g.nc
+    c = g.rigid_slip(xi_x, xi_y, phi)
+    v = np.zeros(2 * nc) if v0 is None else v0.copy()
+
+    def traction(sv):
+        sx, sy = sv[:nc], sv[nc:]
+        sn = np.hypot(sx, sy)
+        t = np.tanh(sn / eps)
+        # tanh(|s|/eps)/|s| -> 1/eps at s = 0.
+        k = np.where(sn > 1e-300, t / np.maximum(sn, 1e-300), 1.0 / eps)
+        return -mu_p * k * sx, -mu_p * k * sy, sn, t, k
+
+    def residual(v):
+        sv = c + M @ v
+        qx, qy, sn, t, k = traction(sv)
+        return v - np.concatenate([qx, qy]), sv, sn, t, k
+
+    res, sv, sn, t, k = residual(v)
+    idx = np.arange(nc)
+    for it in range(iters):
+        norm = np.linalg.norm(res)
+        if norm <= tol * max(np.abs(mu_p).max(), 1e-300) * np.sqrt(2 * nc):
+            break
+        ex = np.where(sn > 0, sv[:nc] / np.maximum(sn, 1e-300), 1.0)
+        ey = np.where(sn > 0, sv[nc:] / np.maximum(sn, 1e-300), 0.0)
+        dn = (1.0 - t * t) / eps  # d tanh(|s|/eps) / d|s|
+        # d q / d s = -mu p [dn e e^T + k (I - e e^T)].
+        D = np.zeros((2 * nc, 2 * nc))
+        D[idx, idx] = -mu_p * (dn * ex * ex + k * (1 - ex * ex))
+        D[idx + nc, idx + nc] = -mu_p * (dn * ey * ey + k * (1 - ey * ey))
+        off = -mu_p * (dn - k) * ex * ey
+        D[idx, idx + nc] = off
+        D[idx + nc, idx] = off
+        J = np.eye(2 * nc) - D @ M
+        dv = np.linalg.solve(J, -res)
+        step = 1.0
+        for _ in range(30):
+            trial = residual(v + step * dv)
+            if np.linalg.norm(trial[0]) < (1.0 - 1e-4 * step) * norm:
+                break
+            step *= 0.5
+        v = v + step * dv
+        res, sv, sn, t, k = trial
+    return v, it
+
+
+def saturation_curve(a_over_b, nu, n, mu, creeps, eps=None):
     """Lateral force F_y / (mu N) against xi_y by the Coulomb half-space solver, with the
     brush-model bound of the same initial slope."""
     a, b = a_over_b, 1.0
@@ -387,8 +437,12 @@ def saturation_curve(a_over_b, nu, n, mu, creeps):
         f"  grid {g.n} x {g.m} ({g.nc} cells), a/b = {a_over_b}, nu = {nu}, mu = {mu}; "
         f"C22 on this grid {c22_h:.4f}"
     )
-    print("   xi_y G/(mu p0)   F_y/(mu N) half-space   brush bound   linear   slip cells")
+    head = "   xi_y G/(mu p0)   F_y/(mu N) half-space   brush bound   linear   slip cells"
+    if eps is not None:
+        head += f"   regularised (eps/V = {eps:g} mu p0/G)"
+    print(head)
     v = None
+    vr = None
     out = []
     for xi in creeps:
         xi_y = xi * mu * p0 / g.G
@@ -397,11 +451,18 @@ def saturation_curve(a_over_b, nu, n, mu, creeps):
         psi = min(1.0, k * xi_y / (3.0 * mu * N))
         brush = 1.0 - (1.0 - psi) ** 3
         lin = k * xi_y / (mu * N)
-        out.append((xi, fy / (mu * N), brush, lin, nslip))
-        print(
+        line = (
             f"   {xi:12.4f}   {fy / (mu * N):20.4f}   {brush:11.4f}   {lin:6.3f}   "
-            f"{nslip:5d}/{g.nc}  ({iters} Newton iterations)"
+            f"{nslip:5d}/{g.nc}"
         )
+        row = [xi, fy / (mu * N), brush, lin, nslip]
+        if eps is not None:
+            vr, _ = solve_regularised(g, M, 0.0, xi_y, 0.0, mu * p, eps * mu * p0 / g.G, v0=vr)
+            fr = -g.forces(vr)[1] / (mu * N)
+            row.append(fr)
+            line += f"   {fr:10.4f}"
+        out.append(tuple(row))
+        print(line)
     return out
 
 
@@ -419,12 +480,24 @@ def main(argv=None):
     ap.add_argument("--curve", action="store_true", help="lateral force up to full sliding")
     ap.add_argument("--mu", type=float, default=1.0)
     ap.add_argument("--curve-grid", type=int, default=24)
+    ap.add_argument(
+        "--curve-eps",
+        type=float,
+        default=None,
+        help="also the regularised law of tread, eps/V in units of mu p0/G",
+    )
+    ap.add_argument(
+        "--creeps",
+        type=str,
+        default="0.05,0.1,0.2,0.3,0.4,0.5,0.6,0.8,1.0,1.2,1.5",
+        help="lateral creepages xi_y in units of mu p0 / G",
+    )
     args = ap.parse_args(argv)
     ns = [int(s) for s in args.grids.split(",")]
 
     if args.curve:
-        creeps = [0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.2, 1.5]
-        saturation_curve(args.ab, args.nu, args.curve_grid, args.mu, creeps)
+        creeps = [float(c) for c in args.creeps.split(",")]
+        saturation_curve(args.ab, args.nu, args.curve_grid, args.mu, creeps, args.curve_eps)
         return 0
 
     print(f"Kalker's linear theory, discretised half-space (grids {ns} cells along 2a):")

@@ -117,8 +117,17 @@ def main(argv=None):
     ap.add_argument("--mu-extrapolate", action="store_true", help="also run at 2 μ, extrapolate in 1/μ")
     ap.add_argument("--grids", default="16,24,32,48", help="half-space grids (cells along 2a)")
     ap.add_argument("--only", default="long,slip,camber", help="which runs (comma-separated)")
+    ap.add_argument(
+        "--curve",
+        action="store_true",
+        help="instead: the lateral force against the slip angle up to full sliding (μ = 1)",
+    )
+    ap.add_argument("--curve-target", type=float, default=4.0, help="largest slip angle, degrees")
+    ap.add_argument("--curve-grid", type=int, default=16, help="half-space grid of the curve")
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
+    if args.curve:
+        return curve(args)
     only = args.only.split(",")
 
     # Scene constants the coefficients need (tools/kalker_wheel.toml).
@@ -224,6 +233,47 @@ def main(argv=None):
         print(cells)
     if "camber" in only:
         print(f"camber thrust toward the side the wheel leans to: {r['camber_thrust_toward_lean']}")
+    return 0
+
+
+def curve(args):
+    """The cornering curve at μ = 1 by the continuation in the slip angle from 0, against the
+    half-space with Coulomb's law, with tread's regularised law (the same ε/v0) and the brush
+    bound (tools/halfspace_creep.py), in the variables F_y/(μ F_z) and ξ_y G_K/(μ p0)."""
+    GK, mu = 400.0, 1.0
+    out = os.path.join(args.out, "curve")
+    sets = args.set + [
+        f"friction.mu={mu}",
+        "road.slip_angle=0",
+        "continuation.parameter=slip_angle",
+        f"continuation.target={args.curve_target}",
+        "continuation.ds=0.1",
+        "continuation.ds_max=0.1",
+    ]
+    s, wall = run(args.tread, out, sets)
+    rows = branch(out)
+    a, b, n_load = semi_axes(out)
+    p0 = 1.5 * n_load / (math.pi * a * b)
+    eps = 0.02 / s["results"]["v0"]  # friction.eps of the scene over the rolling speed
+    for o in args.set:
+        if o.startswith("friction.eps="):
+            eps = float(o.split("=")[1]) / s["results"]["v0"]
+    scale = mu * p0 / GK
+    print(
+        f"FE: {len(rows)} points, {wall:.0f} s, DOFs {dofs(s)}; a = {a:.5f}, b = {b:.5f}, "
+        f"p0 = {p0:.3f} psi, mu p0 / G_K = {scale:.5f}, eps/v0 = {eps:.4f} = {eps / scale:.3f} mu p0/G_K"
+    )
+    pts = [(math.tan(math.radians(r["slip_angle"])) / scale, -r["lateral_force"] / (mu * r["vertical_force"]),
+            r["slip_angle"]) for r in rows[1:]]
+    hs = halfspace_creep.saturation_curve(
+        a / b, 0.5, args.curve_grid, mu, [x for x, _, _ in pts], eps / scale
+    )
+    print()
+    print("| slip angle | ξ_y G_K/(μ p0) | FE F_y/(μ F_z) | half-space, tread's regularised law | "
+          "half-space, Coulomb | brush bound |")
+    print("|---|---|---|---|---|---|")
+    for (x, f, al), h in zip(pts, hs):
+        print(f"| {al:.3f}° | {x:.3f} | {f:.4f} | {h[5]:.4f} | {h[1]:.4f} | {h[2]:.4f} |")
     return 0
 
 
