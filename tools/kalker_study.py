@@ -15,8 +15,10 @@ reference of tools/halfspace_creep.py (and Kalker's Table E.3):
   (G_K a b);
 * spin: free rolling at the camber γ, then the continuation to −γ: the spin creepage
   φ = ω sin γ / v0 (the component of the wheel's angular velocity along the road normal over
-  the rolling speed), C23 = |dF_lat/dφ| / (G_K (ab)^{3/2}) (the camber thrust points toward
-  the side the wheel leans to, −e3 for γ > 0, which the script checks).
+  the rolling speed), C23 = |dF_lat/dφ| / (G_K (ab)^{3/2}). In tread's frame the
+  material enters the patch at x1 = −a and the spin of the wheel about −n is +ω sin γ, so the
+  half-space (whose grid has the same orientation, y = x3) gives F_lat = +G_K (ab)^{3/2} C23 φ:
+  toward +e3, the side pressed onto the road, for γ > 0; the script checks the sign.
 
 G_K = 2 G: the combined shear modulus of Kalker's formulas for an elastic body on a rigid
 counter-body (tools/halfspace_creep.py derives it). a and b are the semi-axes of the FE
@@ -101,8 +103,7 @@ def slope(xs, ys):
 
 
 def dofs(summary):
-    m = summary["mesh"]
-    return 3 * m["nodes"] + m["pressure_dofs"]
+    return summary["dofs"]
 
 
 def main(argv=None):
@@ -124,6 +125,9 @@ def main(argv=None):
     )
     ap.add_argument("--curve-target", type=float, default=4.0, help="largest slip angle, degrees")
     ap.add_argument("--curve-grid", type=int, default=16, help="half-space grid of the curve")
+    ap.add_argument(
+        "--no-run", action="store_true", help="--curve: read the run directory of an earlier run"
+    )
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     if args.curve:
@@ -193,8 +197,7 @@ def main(argv=None):
             fs = [r["lateral_force"] for r in rows]
             k = slope(xs, fs)
             res["C23"] = abs(k) / (GK * ab**1.5)
-            # γ > 0 leans the wheel toward −x3: the thrust toward −e3 is a negative slope.
-            res["camber_thrust_toward_lean"] = k < 0.0
+            res["spin_force_sign_as_half_space"] = k > 0.0
             res["walls"].append(w)
         return res
 
@@ -232,7 +235,10 @@ def main(argv=None):
         cells += f" {ref[k]:.3f} | {table[k]:.3g} | {100 * (fe[name] / ref[k] - 1):+.1f} % |"
         print(cells)
     if "camber" in only:
-        print(f"camber thrust toward the side the wheel leans to: {r['camber_thrust_toward_lean']}")
+        print(
+            "spin force along +e3 for γ > 0, as the half-space gives: "
+            f"{r['spin_force_sign_as_half_space']}"
+        )
     return 0
 
 
@@ -250,7 +256,12 @@ def curve(args):
         "continuation.ds=0.1",
         "continuation.ds_max=0.1",
     ]
-    s, wall = run(args.tread, out, sets)
+    if args.no_run:
+        with open(os.path.join(out, "summary.json")) as f:
+            s = json.load(f)
+        wall = s["wall_time_s"]
+    else:
+        s, wall = run(args.tread, out, sets)
     rows = branch(out)
     a, b, n_load = semi_axes(out)
     p0 = 1.5 * n_load / (math.pi * a * b)
