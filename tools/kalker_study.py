@@ -115,6 +115,7 @@ def main(argv=None):
     ap.add_argument("--xi", type=float, default=0.002, help="longitudinal creep range ±ξ")
     ap.add_argument("--alpha", type=float, default=0.1, help="slip angle range ±α, degrees")
     ap.add_argument("--gamma", type=float, default=0.5, help="camber range ±γ, degrees")
+    ap.add_argument("--mu", type=float, default=50.0, help="friction coefficient of the runs")
     ap.add_argument("--mu-extrapolate", action="store_true", help="also run at 2 μ, extrapolate in 1/μ")
     ap.add_argument("--grids", default="16,24,32,48", help="half-space grids (cells along 2a)")
     ap.add_argument("--only", default="long,slip,camber", help="which runs (comma-separated)")
@@ -138,7 +139,7 @@ def main(argv=None):
     G = 200.0  # 2 (C1 + C2)
     GK = 2.0 * G  # Kalker's combined modulus with a rigid road
     omega = 1.0
-    mu0 = 50.0
+    mu0 = args.mu
     cont = ["continuation.ds=0.5", "continuation.ds_max=0.5"]
 
     def case(name, sets):
@@ -221,7 +222,7 @@ def main(argv=None):
     table = halfspace_creep.kalker_table(1.0, 0.5)
     print()
     print(
-        "| coefficient | FE (μ = 50) |"
+        f"| coefficient | FE (μ = {mu0:g}) |"
         + (" FE (1/μ → 0) |" if args.mu_extrapolate else "")
         + " half-space (this a/b) | Kalker Table E.3 (a/b = 1) | FE vs half-space |"
     )
