@@ -495,8 +495,8 @@ pub fn build_hex_mesh(scene: &Scene) -> Result<HexMesh, AppError> {
         degree: ms.order,
         grading_r: ms.grading_r,
         grading_theta: ms.grading_theta,
-        theta_ratio: 1.0,
-        grading_z: 1.0,
+        theta_ratio: ms.theta_ratio.unwrap_or(1.0),
+        grading_z: ms.grading_z.unwrap_or(1.0),
         half_width: false,
         crown_radius: ms.crown_radius,
     };

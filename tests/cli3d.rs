@@ -447,6 +447,8 @@ fn bad_three_dimensional_inputs_name_the_key() {
     );
     bad("sides", &["mesh.sides=\"glued\""], "mesh.sides");
     bad("n_z", &["mesh.n_z=0"], "mesh.n_z");
+    bad("theta_ratio", &["mesh.theta_ratio=0.0"], "mesh.theta_ratio");
+    bad("grading_z", &["mesh.grading_z=-2.0"], "mesh.grading_z");
     bad(
         "lobatto",
         &["contact.quadrature=\"lobatto\"", "contact.points=6"],

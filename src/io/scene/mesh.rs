@@ -64,6 +64,14 @@ pub struct MeshSpec {
     /// The flat faces of the generated three-dimensional wheel: `free` (default) or `sliding`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sides: Option<MeshSides>,
+    /// Generated three-dimensional wheel: size of the circumferential cells at the top over
+    /// the size at the bottom (θ = −π/2), geometric in between (default 1: the 2D breaks).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub theta_ratio: Option<f64>,
+    /// Generated three-dimensional wheel: size of the axial cells at the sides over the size
+    /// at the mid-plane x3 = 0, geometric in between (default 1: uniform).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub grading_z: Option<f64>,
 }
 
 fn is_plane(d: &usize) -> bool {
@@ -82,7 +90,14 @@ impl MeshSpec {
         &["n_r", "n_theta", "order", "grading_r", "grading_theta"];
 
     /// The keys of the three-dimensional generated wheel.
-    pub const KEYS_3D: &'static [&'static str] = &["width", "n_z", "crown_radius", "sides"];
+    pub const KEYS_3D: &'static [&'static str] = &[
+        "width",
+        "n_z",
+        "crown_radius",
+        "sides",
+        "theta_ratio",
+        "grading_z",
+    ];
 
     /// Whether the scene is three-dimensional.
     pub fn is_3d(&self) -> bool {
@@ -116,6 +131,8 @@ impl Default for MeshSpec {
             n_z: None,
             crown_radius: None,
             sides: None,
+            theta_ratio: None,
+            grading_z: None,
         }
     }
 }
@@ -240,6 +257,8 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
             ("n_z", m.n_z.is_some()),
             ("crown_radius", m.crown_radius.is_some()),
             ("sides", m.sides.is_some()),
+            ("theta_ratio", m.theta_ratio.is_some()),
+            ("grading_z", m.grading_z.is_some()),
         ];
         for (key, present) in set {
             if present {
@@ -328,6 +347,14 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
     }
     if m.n_z == Some(0) {
         out.push(issue("mesh.n_z", "must be >= 1, got 0"));
+    }
+    for (key, value) in [("theta_ratio", m.theta_ratio), ("grading_z", m.grading_z)] {
+        if let Some(v) = value.filter(|&v| !positive(v)) {
+            out.push(issue(
+                format!("mesh.{key}"),
+                format!("must be finite and > 0, got {v}"),
+            ));
+        }
     }
     if m.crown_radius.is_some() && m.resolved_sides() == MeshSides::Sliding {
         out.push(issue(

@@ -259,6 +259,10 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
                 "dimension = 3, generated mesh: crown radius R_c >= width/2 of a toroidal tread (outer radius ro at x3 = 0); absent: flat"),
             opt("sides", Kind::Keyword(super::mesh::MeshSides::NAMES), NONE,
                 "dimension = 3, generated mesh: the flat faces x3 = ±W/2, \"free\" (default) or \"sliding\" (u3 = 0: the plane-strain slab)"),
+            opt("theta_ratio", Kind::Float, NONE,
+                "dimension = 3, generated mesh: size of the circumferential cells at the top over the size at the bottom (θ = −π/2, the road), geometric in between, > 0 (default 1: the 2D breaks; > 1 clusters the cells toward the contact); grading_theta applies on top"),
+            opt("grading_z", Kind::Float, NONE,
+                "dimension = 3, generated mesh: size of the axial cells at the sides over the size at the mid-plane x3 = 0, geometric in between, > 0 (default 1: uniform; > 1 clusters the cells toward the mid-plane)"),
         ] },
     },
     SectionSchema {
@@ -1060,6 +1064,8 @@ mod tests {
                     n_z: Some(2),
                     crown_radius: Some(1.0),
                     sides: Some(MeshSides::Free),
+                    theta_ratio: Some(2.0),
+                    grading_z: Some(2.0),
                     ..MeshSpec::default()
                 }),
             ),
@@ -1127,6 +1133,8 @@ mod tests {
                 n_z: Some(2),
                 crown_radius: Some(1.0),
                 sides: Some(MeshSides::Free),
+                theta_ratio: Some(2.0),
+                grading_z: Some(2.0),
                 ..MeshSpec::default()
             },
         );
