@@ -272,7 +272,8 @@ impl RoadFrame {
     /// The frame of a wheel cambered by `gamma` (radians): the wheel plane tilted by γ about
     /// the rolling direction x1 relative to the road, so that in the wheel frame the road is
     /// turned by −γ about x1: n = (0, cos γ, −sin γ), e3 = (0, sin γ, cos γ), e1 = x1. γ > 0
-    /// lowers the wheel's +x3 side toward the road (its top leans toward −x3).
+    /// lowers the wheel's +x3 side toward the road: the wheel leans toward +e3 (its top is at
+    /// +R sin γ along e3 from its bottom).
     pub fn cambered(gamma: f64) -> Self {
         let (s, c) = gamma.sin_cos();
         Self {

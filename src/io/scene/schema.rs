@@ -309,9 +309,9 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("v0_ramp", Kind::Float, "T",
                 "time of the smoothstep ramp of v0 (default: motion.ramp); transient only"),
             opt("slip_angle", Kind::Float, "deg",
-                "slip angle α, |α| < 90: the road velocity turned by α about +x2, V = v0 (cos α, −sin α) in (e1, e3); three-dimensional steady mode only"),
+                "slip angle α, |α| < 90: the road velocity turned by α about +x2, V = v0 (cos α, −sin α) in (e1, e3); three-dimensional steady and transient modes"),
             opt("camber", Kind::Float, "deg",
-                "camber γ, |γ| < 90: the wheel plane tilted by γ about the rolling direction relative to the road, whose normal in the wheel frame is n = (0, cos γ, −sin γ); three-dimensional static and steady modes"),
+                "camber γ, |γ| < 90: the wheel plane tilted by γ about the rolling direction relative to the road, whose normal in the wheel frame is n = (0, cos γ, −sin γ); three-dimensional static, steady and transient modes"),
         ] },
     },
     SectionSchema {
