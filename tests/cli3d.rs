@@ -418,6 +418,7 @@ fn bad_three_dimensional_inputs_name_the_key() {
         &with("time.integrator=\"bdf\""),
         "time.integrator",
     );
+    bad("transient_load", &with("road.load=10.0"), "road.load");
     bad(
         "transient_rate_damping",
         &with("time.strain_rate_damping=1.0"),

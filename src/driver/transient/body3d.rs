@@ -116,21 +116,14 @@ impl Body for Solid3DSystem {
         self.contact.as_ref().and_then(|c| c.h_dof)
     }
 
-    fn lowest_contact_point(&self, u: &[f64], _v: &[f64]) -> Option<f64> {
-        let rc = self.contact.as_ref()?;
-        let n = rc.surface.frame().n;
-        let mesh = &self.solid.mesh;
-        let low = rc
-            .surface
-            .facets
+    fn lowest_contact_point(&self, u: &[f64], v: &[f64]) -> Option<f64> {
+        // The lowest facet quadrature point (not node): the first point the road's equation
+        // sees.
+        let n = self.contact.as_ref()?.surface.frame().n;
+        let samples = contact_samples_3d(self, u, v).ok()?;
+        let low = samples
             .iter()
-            .flat_map(|f| mesh.cell_nodes(f.cell as usize))
-            .map(|&a| {
-                let a = a as usize;
-                let x =
-                    mesh.nodes[a] + nalgebra::Vector3::new(u[3 * a], u[3 * a + 1], u[3 * a + 2]);
-                n.dot(&x)
-            })
+            .map(|s| n[0] * s.x1 + n[1] * s.x2 + n[2] * s.x3)
             .fold(f64::INFINITY, f64::min);
         low.is_finite().then_some(low)
     }

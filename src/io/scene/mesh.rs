@@ -150,8 +150,8 @@ pub(super) struct Dimension3DContext<'a> {
     pub(super) viscoelastic: bool,
 }
 
-/// What the three-dimensional transient mode does not run: torque control, the strain-rate
-/// damping and the integrators without a 3D scheme.
+/// What the three-dimensional transient mode does not run: torque control, load control, the
+/// strain-rate damping and the integrators without a 3D scheme.
 fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let get = |table: &str, key: &str| doc.and_then(|d| d.get(table)).and_then(|t| t.get(key));
     if let Some(c) = get("motion", "control").and_then(|v| v.as_str()) {
@@ -164,6 +164,14 @@ fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
                 ),
             ));
         }
+    }
+    if get("road", "load").is_some() {
+        out.push(issue(
+            "road.load",
+            "load control does not run in the three-dimensional transient mode yet (the road \
+             height's equation loses its stiffness when the first points leave the road); \
+             press the wheel in with road.disp",
+        ));
     }
     let damping = get("time", "strain_rate_damping")
         .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
