@@ -90,6 +90,8 @@ pub fn integrate_3d(
             crate::driver::transient::IntegratorName::quoted_with(|i| i.scheme_3d(1.0).is_some())
         )));
     };
+    let mut sys = sys;
+    sys.strain_rate_damping = ts.strain_rate_damping;
     let kin = kinematics_3d(scene, &sys);
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme, kin, lumped);

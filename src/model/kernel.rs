@@ -366,3 +366,96 @@ where
         .map(|p| material.energy(&grad_u::<T, D, N>(u, &p.g)) * p.w)
         .sum()
 }
+
+/// The strain-rate damping of one cell, added to `r` (the first D·N rows) and, unless `k` is
+/// empty, to its tangent `k` (row-major with row length `nd` ≥ D·N): the viscous second
+/// Piola–Kirchhoff stress S_v = η Ė on the Green-strain rate Ė = ½ (Ḟᵀ F + Fᵀ Ḟ), Ḟ = ∇v,
+/// as the first Piola–Kirchhoff stress F S_v (objective: a rigid rotation has Ė = 0). `u` and
+/// `v` hold the cell's nodal displacements and velocities (D·N, node-major); a unit change of
+/// the unknown moves v by `kv` (the tangent holds ∂/∂u + kv ∂/∂v).
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+pub fn viscous_cell<const D: usize, const N: usize>(
+    pts: &[Point<D, N>],
+    u: &[f64],
+    v: &[f64],
+    eta: f64,
+    kv: f64,
+    nd: usize,
+    r: &mut [f64],
+    k: &mut [f64],
+) {
+    let with_k = !k.is_empty();
+    for pt in pts {
+        let (mut f, mut fd) = ([[0.0; D]; D], [[0.0; D]; D]);
+        for i in 0..D {
+            f[i][i] = 1.0;
+            for b in 0..N {
+                for j in 0..D {
+                    f[i][j] += u[D * b + i] * pt.g[b][j];
+                    fd[i][j] += v[D * b + i] * pt.g[b][j];
+                }
+            }
+        }
+        let mut s = [[0.0; D]; D];
+        for i in 0..D {
+            for j in 0..D {
+                let e: f64 = (0..D)
+                    .map(|m| fd[m][i] * f[m][j] + f[m][i] * fd[m][j])
+                    .sum();
+                s[i][j] = 0.5 * eta * e;
+            }
+        }
+        let mut p = [[0.0; D]; D];
+        for i in 0..D {
+            for j in 0..D {
+                p[i][j] = (0..D).map(|m| f[i][m] * s[m][j]).sum();
+            }
+        }
+        let w = pt.w;
+        for a in 0..N {
+            for i in 0..D {
+                let ri: f64 = (0..D).map(|j| p[i][j] * pt.g[a][j]).sum();
+                r[D * a + i] += ri * w;
+            }
+        }
+        if !with_k {
+            continue;
+        }
+        for b in 0..N {
+            let gb = &pt.g[b];
+            // S g_b (for δF S with δF = e_c ⊗ g_b).
+            let mut sg = [0.0; D];
+            for j in 0..D {
+                sg[j] = (0..D).map(|m| gb[m] * s[m][j]).sum();
+            }
+            for c in 0..D {
+                // δĖ = ½ (g_b ⊗ Ḟ_c + Ḟ_c ⊗ g_b) + ½ kv (g_b ⊗ F_c + F_c ⊗ g_b), with Ḟ_c and
+                // F_c the c-th rows of Ḟ and F.
+                let mut ds = [[0.0; D]; D];
+                for i in 0..D {
+                    for j in 0..D {
+                        let de = gb[i] * fd[c][j]
+                            + fd[c][i] * gb[j]
+                            + kv * (gb[i] * f[c][j] + f[c][i] * gb[j]);
+                        ds[i][j] = 0.5 * eta * de;
+                    }
+                }
+                for a in 0..N {
+                    let ga = &pt.g[a];
+                    for i in 0..D {
+                        // δP_iJ = δ_ic (S g_b)_J + Σ_K F_iK δS_KJ.
+                        let mut kij = 0.0;
+                        for j in 0..D {
+                            let mut dp: f64 = (0..D).map(|m| f[i][m] * ds[m][j]).sum();
+                            if i == c {
+                                dp += sg[j];
+                            }
+                            kij += dp * ga[j];
+                        }
+                        k[(D * a + i) * nd + D * b + c] += kij * w;
+                    }
+                }
+            }
+        }
+    }
+}

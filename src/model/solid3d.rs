@@ -191,6 +191,62 @@ impl Solid3D {
         solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)
     }
 
+    /// The strain-rate damping η of cell `c` at the full state `x` with the full velocity `v`
+    /// (∂v/∂x = `kv`), added to `r` and `k` as [`Self::cell`] lays them out
+    /// ([`super::kernel::viscous_cell`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_viscous(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        v: &[f64],
+        eta: f64,
+        kv: f64,
+        r: &mut [f64],
+        k: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        if self.mesh.degree[c] == 1 {
+            self.cell_viscous_n::<8>(&self.q1, c, dofs, x, v, eta, kv, r, k)
+        } else {
+            self.cell_viscous_n::<27>(&self.q2, c, dofs, x, v, eta, kv, r, k)
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn cell_viscous_n<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        v: &[f64],
+        eta: f64,
+        kv: f64,
+        r: &mut [f64],
+        k: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts)?;
+        let cd = dofs.cell(c);
+        let (mut u, mut vl) = ([0.0; 81], [0.0; 81]);
+        for (i, &d) in cd[..3 * N].iter().enumerate() {
+            u[i] = x[d as usize];
+            vl[i] = v[d as usize];
+        }
+        super::kernel::viscous_cell::<3, N>(
+            &pts[..np],
+            &u[..3 * N],
+            &vl[..3 * N],
+            eta,
+            kv,
+            r.len(),
+            r,
+            k,
+        );
+        Ok(())
+    }
+
     /// Scalar mass matrix ρ0 ∫ N_a N_b dV of cell `c` (n × n row-major, n its node count) into
     /// `out`, with Gauss rules of 3 (Hex8) and 4 (Hex27) points per direction.
     pub fn cell_mass(&self, c: usize, out: &mut Vec<f64>) {

@@ -45,6 +45,9 @@ pub struct Solid3DSystem {
     inadmissible: Option<Inadmissible>,
     /// Contact with the road (block 1 of the assembler: the cells of the contact facets).
     pub contact: Option<RoadContact3D>,
+    /// Strain-rate damping η of the transient dynamics (S_v = η Ė on the Green-strain rate,
+    /// [`super::kernel::viscous_cell`]); 0: none.
+    pub strain_rate_damping: f64,
 }
 
 /// The road under displacement control (H = `h_touch` − λ · `disp`) or load control (H the
@@ -161,6 +164,7 @@ impl Solid3DSystem {
             ref_norms: vec![0.0, 1e-3 * volume, 0.0],
             inadmissible: None,
             contact: None,
+            strain_rate_damping: 0.0,
         }
     }
 
@@ -464,6 +468,15 @@ impl Solid3DSystem {
                 return ([f64::NAN; 3], [f64::NAN; 3]);
             }
             if let Some(d) = dynamic {
+                if self.strain_rate_damping > 0.0 {
+                    let eta = self.strain_rate_damping;
+                    let res =
+                        self.solid
+                            .cell_viscous(c, &self.dofs, x, d.v, eta, d.kv, &mut r, &mut []);
+                    if res.is_err() {
+                        return ([f64::NAN; 3], [f64::NAN; 3]);
+                    }
+                }
                 d.finish_cell(&self.dofs, nodes, c, &mut r, &mut []);
             }
             for (a, &n) in nodes.iter().enumerate() {
@@ -557,9 +570,14 @@ impl Solid3DSystem {
         let why = std::sync::Mutex::new(None);
         let x: &[f64] = dynamic.map_or(&self.x, |d| d.x);
         let (solid, dofs, co) = (&self.solid, &self.dofs, self.coefficients);
+        let eta = self.strain_rate_damping;
         self.asm.zero(with_matrix);
         self.asm.add_block_large(0, dofs, with_matrix, |c, r, k| {
-            if let Err(e) = solid.cell(c, dofs, x, &co, r, k) {
+            let mut res = solid.cell(c, dofs, x, &co, r, k);
+            if let (Ok(()), Some(d), true) = (&res, dynamic, eta > 0.0) {
+                res = solid.cell_viscous(c, dofs, x, d.v, eta, d.kv, r, k);
+            }
+            if let Err(e) = res {
                 bad.store(true, Ordering::Relaxed);
                 if let Ok(mut w) = why.lock() {
                     *w = Some(e);

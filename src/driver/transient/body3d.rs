@@ -4,8 +4,9 @@
 //! the slip v − V and normal damping on δ̇ of the material velocity. Node passages re-index
 //! the referential field along the node rings of the revolved mesh (every circumferential
 //! node line is a ring, [`crate::mesh::hex_mesh::RingLayout3D`]); a mesh without rings has no
-//! steady-state extraction in 3D. No quadrature-point history, no strain-rate damping and no
-//! torque control in 3D.
+//! steady-state extraction in 3D. The strain-rate damping (`time.strain_rate_damping`) acts on
+//! the Green-strain rate of the material velocity. No quadrature-point history and no torque
+//! control in 3D.
 
 use super::body::Body;
 use super::{DynamicTerms, HubAngle};
@@ -133,7 +134,7 @@ impl Body for Solid3DSystem {
     }
 
     fn has_rate_damping(&self) -> bool {
-        false
+        self.strain_rate_damping > 0.0
     }
 
     fn contact_diagonals(&self, delta_ref: f64) -> Option<(Vec<f64>, Vec<f64>)> {

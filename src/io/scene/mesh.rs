@@ -150,8 +150,8 @@ pub(super) struct Dimension3DContext<'a> {
     pub(super) viscoelastic: bool,
 }
 
-/// What the three-dimensional transient mode does not run: torque control, load control, the
-/// strain-rate damping and the integrators without a 3D scheme.
+/// What the three-dimensional transient mode does not run: torque control, load control and
+/// the integrators without a 3D scheme.
 fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let get = |table: &str, key: &str| doc.and_then(|d| d.get(table)).and_then(|t| t.get(key));
     if let Some(c) = get("motion", "control").and_then(|v| v.as_str()) {
@@ -171,16 +171,6 @@ fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
             "load control does not run in the three-dimensional transient mode yet (the road \
              height's equation loses its stiffness when the first points leave the road); \
              press the wheel in with road.disp",
-        ));
-    }
-    let damping = get("time", "strain_rate_damping")
-        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-        .unwrap_or(0.0);
-    if damping != 0.0 {
-        out.push(issue(
-            "time.strain_rate_damping",
-            "not supported with mesh.dimension = 3 yet; remove it or set it to 0 (the contact's \
-             normal damping and the integrator's ρ∞ dissipate)",
         ));
     }
     if let Some(name) = get("time", "integrator").and_then(|v| v.as_str()) {
