@@ -6,6 +6,9 @@
 
 use tread::driver::transient::body3d::contact_samples_3d;
 use tread::driver::transient::IntegratorName;
+#[path = "common/fixtures.rs"]
+mod fixtures;
+
 use tread::driver::transient::{integrate, TimeOptions, Transient, TransientReport};
 use tread::driver::transient3d::kinematics_3d;
 use tread::driver::transient_run::kinematics;
@@ -248,28 +251,6 @@ fn plane_strain_slab_rolls_as_the_2d_transient_central_difference() {
     compare("central_difference", 2e-5, 0.05);
 }
 
-/// Largest |K_ij − (R_i(x + h e_j) − R_i(x − h e_j)) / 2h| over the tangent `k`.
-fn fd_max_error<S: tread::solver::NonlinearSystem>(sys: &mut S, h: f64, k: &[Vec<f64>]) -> f64 {
-    let n = sys.n_eq();
-    let mut err = 0.0f64;
-    let mut e = vec![0.0; n];
-    for j in 0..n {
-        e.fill(0.0);
-        e[j] = h;
-        sys.update(1.0, &e);
-        assert!(sys.evaluate(false));
-        let rp = sys.residual().to_vec();
-        sys.update(-2.0, &e);
-        assert!(sys.evaluate(false));
-        let rm = sys.residual().to_vec();
-        sys.update(1.0, &e);
-        for i in 0..n {
-            err = err.max(((rp[i] - rm[i]) / (2.0 * h) - k[i][j]).abs());
-        }
-    }
-    err
-}
-
 /// The Newton system of a 3D time step (generalized-α, ρ∞ = 0.7) against central differences
 /// of its residual: Hex8 and Hex27, free sides, tanh friction at a slip angle of 3° on a
 /// road cambered by 2°, normal damping, strain-rate damping η = 2, mid-step state (rigid rotation plus a perturbation, in
@@ -364,7 +345,7 @@ t_end = 1.0
         assert!(in_contact > 3, "order {order}: {in_contact} contact points");
         let k = tr.sys.asm.to_dense();
         let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        let err = fd_max_error(&mut tr, 1e-7, &k) / kmax;
+        let err = fixtures::fd_max_error(&mut tr, 1e-7, |i, j| k[i][j]) / kmax;
         eprintln!(
             "order {order}: {} equations, {in_contact} contact points ({sliding} outside the \
              regularised zone), max|K − K_fd|/max|K| = {err:.2e}",

@@ -23,7 +23,7 @@
 //! field of the last passage: node, X, u).
 
 use super::results::{HubLoads3D, Transient3DResults};
-use super::transient::{integrate, Kinematics, TimeOptions, Transient, TransientReport};
+use super::transient::{integrate, Kinematics, Transient, TransientReport};
 use crate::io::output::write_csv;
 use crate::io::scene::{MassKind, Scene};
 use crate::model::Solid3DSystem;
@@ -95,19 +95,7 @@ pub fn integrate_3d(
     let kin = kinematics_3d(scene, &sys);
     let lumped = ts.effective_mass() == MassKind::Lumped;
     let mut tr = Transient::new(sys, scheme, kin, lumped);
-    let time_opts = TimeOptions {
-        dt: ts.dt,
-        dt_min: ts.resolved_dt_min(),
-        dt_max: ts.resolved_dt_max(),
-        t_end: ts.t_end,
-        adaptive: ts.adaptive,
-        error_tol: ts.error_tol,
-        steady_tol: ts.steady_tol,
-        stop_at_steady: ts.stop_at_steady,
-        max_steps: ts.max_steps,
-        lumped,
-        land_on_passages: true,
-    };
+    let time_opts = super::transient_run::time_options(ts, lumped);
     let mut rows: Vec<HistoryRow> = Vec::new();
     let mut its_prev = 0usize;
     let mut t_prev = 0.0;

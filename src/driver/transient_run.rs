@@ -134,19 +134,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             }
         }
     }
-    let time_opts = TimeOptions {
-        dt: ts.dt,
-        dt_min: ts.resolved_dt_min(),
-        dt_max: ts.resolved_dt_max(),
-        t_end: ts.t_end,
-        adaptive: ts.adaptive,
-        error_tol: ts.error_tol,
-        steady_tol: ts.steady_tol,
-        stop_at_steady: ts.stop_at_steady,
-        max_steps: ts.max_steps,
-        lumped,
-        land_on_passages: true,
-    };
+    let time_opts = time_options(ts, lumped);
     let newton_opts = plan.newton.clone();
     let clock = RunClock {
         mesh: Some(&tr.sys.model.mesh),
@@ -478,6 +466,24 @@ fn record_steady_field(
 /// Hub and road kinematics of a transient scene: ω, DISP (or the hub load) and v0 ramped in
 /// with the scene's ramp times. Under torque control ω is the initial spin (no ramp: the hub
 /// starts spinning at omega; `motion.ramp` ramps the torque instead).
+/// The step control and stopping options of `[time]` (steps landing on node passages), both
+/// dimensions alike.
+pub fn time_options(ts: &TimeSpec, lumped: bool) -> TimeOptions {
+    TimeOptions {
+        dt: ts.dt,
+        dt_min: ts.resolved_dt_min(),
+        dt_max: ts.resolved_dt_max(),
+        t_end: ts.t_end,
+        adaptive: ts.adaptive,
+        error_tol: ts.error_tol,
+        steady_tol: ts.steady_tol,
+        stop_at_steady: ts.stop_at_steady,
+        max_steps: ts.max_steps,
+        lumped,
+        land_on_passages: true,
+    }
+}
+
 pub fn kinematics(scene: &Scene) -> Kinematics {
     let road = scene.road.as_ref();
     let ramp = road.map_or(0.0, |r| r.ramp);
