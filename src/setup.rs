@@ -635,6 +635,11 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
         let (v0, alpha) = road.map_or((0.0, 0.0), |r| (r.v0, r.slip_angle.to_radians()));
         sys.set_steady_rolling(scene.motion.omega, v0, alpha)
             .map_err(|e| AppError::Unsupported(format!("motion: {e}")))?;
+        let eta = scene.time.as_ref().map_or(0.0, |t| t.strain_rate_damping);
+        if eta > 0.0 {
+            sys.enable_steady_viscosity(eta)
+                .map_err(|e| AppError::Unsupported(format!("time.strain_rate_damping: {e}")))?;
+        }
     }
     if scene.analysis.mode == Mode::Transient {
         // The road starts at rest; the transient driver ramps its speed.

@@ -55,7 +55,13 @@ fn noise(k: usize) -> f64 {
 /// Worst |K − K_fd| / max |K| of the steady system (ω = 3, road at 0.99 ωRo turned by 3°,
 /// damped normal compliance, tanh friction) at a perturbed state with the road 0.08 into the
 /// wheel; also the contact points and those in the regularised stick zone (|w| < ε).
-fn tangent_check(degree: usize, load: bool, facet_wise: bool, camber: f64) -> (f64, usize, usize) {
+fn tangent_check(
+    degree: usize,
+    load: bool,
+    facet_wise: bool,
+    camber: f64,
+    eta: f64,
+) -> (f64, usize, usize) {
     let mesh = revolved(&spec(1, 1, 8, degree, 0.4)).expect("mesh");
     let mut fx = vec![false; 3 * mesh.n_nodes()];
     for &n in mesh.node_set("hub") {
@@ -88,6 +94,7 @@ fn tangent_check(degree: usize, load: bool, facet_wise: bool, camber: f64) -> (f
     if facet_wise {
         sys.disable_steady_slip();
     }
+    sys.enable_steady_viscosity(eta).expect("ring mesh");
     sys.set_load(if load { 0.7 } else { 1.0 });
     let n = sys.n_eq();
     let dx: Vec<f64> = (0..n).map(|k| 0.02 * noise(k)).collect();
@@ -132,6 +139,19 @@ fn steady_tangent_matches_central_differences() {
         ("Hex27, load control, facet-wise slip", 2, true, true),
         ("Hex8, load control, camber 3°", 1, true, false),
         ("Hex27, displacement control, camber −3°", 2, false, false),
+        (
+            "Hex8, displacement control, strain-rate damping",
+            1,
+            false,
+            false,
+        ),
+        ("Hex27, load control, strain-rate damping", 2, true, false),
+        (
+            "Hex27, displacement control, camber 3°, strain-rate damping",
+            2,
+            false,
+            false,
+        ),
     ] {
         let camber = if name.contains("camber 3") {
             3.0
@@ -140,7 +160,13 @@ fn steady_tangent_matches_central_differences() {
         } else {
             0.0
         };
-        let (err, contact, stick) = tangent_check(degree, load, facet_wise, camber);
+        // η ω / G = 0.3: the viscous stresses are of the elastic ones' order.
+        let eta = if name.contains("strain-rate") {
+            20.0
+        } else {
+            0.0
+        };
+        let (err, contact, stick) = tangent_check(degree, load, facet_wise, camber, eta);
         eprintln!(
             "{name}: worst |K − K_fd| / max|K| = {err:.2e}; {contact} contact points, {stick} with |w| < ε"
         );
@@ -156,6 +182,18 @@ fn steady_tangent_matches_central_differences() {
 /// The plane-strain steady scene (or, with `width`, its slab with sliding sides), rolling at
 /// ω = 10 on the road at `v0`, with damping `b_n` and the friction table `friction`.
 fn slab_scene(width: Option<f64>, v0: f64, b_n: f64, friction: &str, alpha: f64) -> Scene {
+    slab_scene_with(width, v0, b_n, friction, alpha, "")
+}
+
+/// [`slab_scene`] with the tables `extra` appended.
+fn slab_scene_with(
+    width: Option<f64>,
+    v0: f64,
+    b_n: f64,
+    friction: &str,
+    alpha: f64,
+    extra: &str,
+) -> Scene {
     let mesh3 = match width {
         Some(w) => format!("dimension = 3\nwidth = {w}\nn_z = 1\nsides = \"sliding\"\n"),
         None => String::new(),
@@ -201,7 +239,7 @@ points = 4
 tolerance = 1e-11
 load_steps = 4
 linear = "lu"
-"#
+{extra}"#
     );
     Scene::from_toml_str(&text, "slab", &[]).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -243,13 +281,37 @@ fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
     let width = 0.25;
     let v0 = 0.995 * 10.0 * RO;
     let tanh = "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05";
-    for (name, b_n, friction, facet_wise) in [
-        ("frictionless, damped", 2.0, "law = \"none\"", false),
-        ("tanh friction, damped, nodal slip", 2.0, tanh, false),
-        ("tanh friction, damped, facet-wise slip", 2.0, tanh, true),
+    // η ω / G = 0.1 with G = 2 (c1 + c2) = 200.
+    let visc = "[time]\nstrain_rate_damping = 2.0\n";
+    for (name, b_n, friction, facet_wise, extra) in [
+        ("frictionless, damped", 2.0, "law = \"none\"", false, ""),
+        ("tanh friction, damped, nodal slip", 2.0, tanh, false, ""),
+        (
+            "tanh friction, damped, facet-wise slip",
+            2.0,
+            tanh,
+            true,
+            "",
+        ),
+        (
+            "frictionless, strain-rate damping",
+            0.0,
+            "law = \"none\"",
+            false,
+            visc,
+        ),
+        (
+            "tanh friction, damped, strain-rate damping",
+            2.0,
+            tanh,
+            false,
+            visc,
+        ),
     ] {
-        let (st, (fx2, fy2, m2)) = steady_2d(&slab_scene(None, v0, b_n, friction, 0.0), facet_wise);
-        let s3 = steady_3d(&slab_scene(Some(width), v0, b_n, friction, 0.0), facet_wise);
+        let sc2 = slab_scene_with(None, v0, b_n, friction, 0.0, extra);
+        let (st, (fx2, fy2, m2)) = steady_2d(&sc2, facet_wise);
+        let sc3 = slab_scene_with(Some(width), v0, b_n, friction, 0.0, extra);
+        let s3 = steady_3d(&sc3, facet_wise);
         let t3 = s3.contact.as_ref().expect("contact").totals;
         let (f, m) = (t3.force, t3.moment);
         eprintln!(

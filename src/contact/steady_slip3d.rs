@@ -77,6 +77,15 @@ pub fn ring_weights(
     mesh: &HexMesh,
     facets: &[HexFacet],
 ) -> Option<HashMap<u32, [(u32, f64); WIDTH]>> {
+    ring_weights_of(mesh, facets.iter().map(|f| facet_node_list(mesh, f)))
+}
+
+/// [`ring_weights`] of the nodes of `groups` (node lists, e.g. facets or cells): nodes of one
+/// ring are angle-consecutive neighbours when some group holds both.
+pub fn ring_weights_of(
+    mesh: &HexMesh,
+    groups: impl Iterator<Item = Vec<u32>>,
+) -> Option<HashMap<u32, [(u32, f64); WIDTH]>> {
     let scale = mesh
         .nodes
         .iter()
@@ -96,8 +105,7 @@ pub fn ring_weights(
     };
     let mut rings: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
     let mut shared: HashSet<(u32, u32)> = HashSet::new();
-    for f in facets {
-        let nodes = facet_node_list(mesh, f);
+    for nodes in groups {
         for (i, &a) in nodes.iter().enumerate() {
             for &b in &nodes[i + 1..] {
                 if key(a) == key(b) {

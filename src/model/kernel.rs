@@ -373,12 +373,31 @@ where
 /// as the first Piola–Kirchhoff stress F S_v (objective: a rigid rotation has Ė = 0). `u` and
 /// `v` hold the cell's nodal displacements and velocities (D·N, node-major); a unit change of
 /// the unknown moves v by `kv` (the tangent holds ∂/∂u + kv ∂/∂v).
-#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 pub fn viscous_cell<const D: usize, const N: usize>(
     pts: &[Point<D, N>],
     u: &[f64],
     v: &[f64],
     eta: f64,
+    kv: f64,
+    nd: usize,
+    r: &mut [f64],
+    k: &mut [f64],
+) {
+    viscous_cell_scaled::<D, N>(pts, u, v, eta, 1.0, kv, nd, r, k);
+}
+
+/// [`viscous_cell`] with the tangent kx ∂/∂u + kv ∂/∂v: `kx = 1, kv = 0` gives the
+/// derivative in the displacements at fixed nodal velocities, `kx = 0, kv = 1` the one in the
+/// velocities (the steady mode, whose velocities are ring differences of the displacements,
+/// combines the two).
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
+pub fn viscous_cell_scaled<const D: usize, const N: usize>(
+    pts: &[Point<D, N>],
+    u: &[f64],
+    v: &[f64],
+    eta: f64,
+    kx: f64,
     kv: f64,
     nd: usize,
     r: &mut [f64],
@@ -434,8 +453,7 @@ pub fn viscous_cell<const D: usize, const N: usize>(
                 let mut ds = [[0.0; D]; D];
                 for i in 0..D {
                     for j in 0..D {
-                        let de = gb[i] * fd[c][j]
-                            + fd[c][i] * gb[j]
+                        let de = kx * (gb[i] * fd[c][j] + fd[c][i] * gb[j])
                             + kv * (gb[i] * f[c][j] + f[c][i] * gb[j]);
                         ds[i][j] = 0.5 * eta * de;
                     }
@@ -448,7 +466,7 @@ pub fn viscous_cell<const D: usize, const N: usize>(
                         for j in 0..D {
                             let mut dp: f64 = (0..D).map(|m| f[i][m] * ds[m][j]).sum();
                             if i == c {
-                                dp += sg[j];
+                                dp += kx * sg[j];
                             }
                             kij += dp * ga[j];
                         }

@@ -19,6 +19,7 @@
 
 pub mod kernel;
 pub mod solid3d;
+pub mod steady_visc3d;
 pub mod system;
 pub mod system3d;
 pub mod terms;

@@ -247,6 +247,55 @@ impl Solid3D {
         Ok(())
     }
 
+    /// The strain-rate damping η of cell `c` from its nodal displacements `u` and velocities
+    /// `v` (3N each, node-major), as the steady mode takes it: the residual into `r` (its
+    /// first 3N rows), unless `k` is empty the derivative in `u` at fixed `v` into `k` (row
+    /// length `nd` ≥ 3N, the cell's columns first) and the derivative in `v` into `kv`
+    /// (3N × 3N, row-major).
+    #[allow(clippy::too_many_arguments)]
+    pub fn cell_viscous_split(
+        &self,
+        c: usize,
+        u: &[f64],
+        v: &[f64],
+        eta: f64,
+        nd: usize,
+        r: &mut [f64],
+        k: &mut [f64],
+        kv: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        if self.mesh.degree[c] == 1 {
+            self.cell_viscous_split_n::<8>(&self.q1, c, u, v, eta, nd, r, k, kv)
+        } else {
+            self.cell_viscous_split_n::<27>(&self.q2, c, u, v, eta, nd, r, k, kv)
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn cell_viscous_split_n<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        u: &[f64],
+        v: &[f64],
+        eta: f64,
+        nd: usize,
+        r: &mut [f64],
+        k: &mut [f64],
+        kv: &mut [f64],
+    ) -> Result<(), Inadmissible> {
+        use super::kernel::viscous_cell_scaled;
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts)?;
+        let (u, v) = (&u[..3 * N], &v[..3 * N]);
+        viscous_cell_scaled::<3, N>(&pts[..np], u, v, eta, 1.0, 0.0, nd, r, k);
+        if !k.is_empty() {
+            let mut scratch = [0.0; 81];
+            viscous_cell_scaled::<3, N>(&pts[..np], u, v, eta, 0.0, 1.0, 3 * N, &mut scratch, kv);
+        }
+        Ok(())
+    }
+
     /// Scalar mass matrix ρ0 ∫ N_a N_b dV of cell `c` (n × n row-major, n its node count) into
     /// `out`, with Gauss rules of 3 (Hex8) and 4 (Hex27) points per direction.
     pub fn cell_mass(&self, c: usize, out: &mut Vec<f64>) {

@@ -19,6 +19,7 @@
 
 use super::kernel::{Coefficients, Inadmissible};
 use super::solid3d::Solid3D;
+use super::steady_visc3d::{SteadyViscosity3D, MAX_DAMPING_DOFS};
 use super::terms::Inertia;
 use crate::assembly::{Assembler, DofMap, CONSTRAINED, FIXED};
 use crate::contact::facet3d::{
@@ -48,6 +49,9 @@ pub struct Solid3DSystem {
     /// Strain-rate damping η of the transient dynamics (S_v = η Ė on the Green-strain rate,
     /// [`super::kernel::viscous_cell`]); 0: none.
     pub strain_rate_damping: f64,
+    /// The steady mode's strain-rate damping: the cells' ring stencils and the assembler
+    /// block of their damping elements ([`Self::enable_steady_viscosity`]).
+    steady_visc: Option<(SteadyViscosity3D, usize)>,
 }
 
 /// The road under displacement control (H = `h_touch` − λ · `disp`) or load control (H the
@@ -165,6 +169,7 @@ impl Solid3DSystem {
             inadmissible: None,
             contact: None,
             strain_rate_damping: 0.0,
+            steady_visc: None,
         }
     }
 
@@ -344,9 +349,37 @@ impl Solid3DSystem {
         }
     }
 
+    /// The strain-rate damping S_v = η Ė in steady rolling, Ė from the nodal velocities
+    /// ω ∂θχ by ring differences ([`super::steady_visc3d`]); `eta` = 0 turns it off. An error
+    /// when the mesh has no node rings about the axle.
+    pub fn enable_steady_viscosity(&mut self, eta: f64) -> Result<(), String> {
+        if !(eta.is_finite() && eta >= 0.0) {
+            return Err(format!(
+                "strain-rate damping {eta} is not a finite value ≥ 0"
+            ));
+        }
+        self.strain_rate_damping = eta;
+        let had = self.steady_visc.is_some();
+        self.steady_visc = None;
+        if eta > 0.0 {
+            let sv = SteadyViscosity3D::new(&self.solid.mesh).ok_or_else(|| {
+                "the steady strain-rate damping takes the material velocity by differences \
+                 along the node rings about the axle, and the mesh's nodes do not form such \
+                 rings (use a generated revolved mesh)"
+                    .to_string()
+            })?;
+            self.steady_visc = Some((sv, 0));
+        }
+        if had || eta > 0.0 {
+            self.rebuild_assembler();
+        }
+        Ok(())
+    }
+
     /// The assembler of the cells and, with contact, of the facet elements: each facet's
     /// cell dofs, then those of its extra nodes ([`ContactSurface3D::extra_nodes`]), then H
-    /// under load control.
+    /// under load control; with the steady strain-rate damping, the cells' damping elements
+    /// (the cell's displacement dofs, then its extra nodes', rows of the cell only).
     fn rebuild_assembler(&mut self) {
         let mut blocks = vec![(self.dofs.cell_dofs.clone(), self.dofs.cell_offsets.clone())];
         if let Some(rc) = self.contact.as_ref() {
@@ -368,7 +401,25 @@ impl Solid3DSystem {
             }
             blocks.push((d, o));
         }
-        self.asm = Assembler::with_blocks(&self.dofs, blocks);
+        let mut cores = vec![None; blocks.len()];
+        if let Some((sv, block)) = self.steady_visc.as_mut() {
+            let mesh = &self.solid.mesh;
+            let (mut d, mut o, mut core) = (Vec::new(), vec![0], Vec::new());
+            for c in 0..mesh.n_cells() {
+                let cn = mesh.cell_nodes(c);
+                for &n in cn.iter().chain(sv.extra(c)) {
+                    for i in 0..3 {
+                        d.push(self.dofs.node_dof(n as usize, i) as u32);
+                    }
+                }
+                o.push(d.len());
+                core.push(3 * cn.len() as u32);
+            }
+            *block = blocks.len();
+            blocks.push((d, o));
+            cores.push(Some(core));
+        }
+        self.asm = Assembler::with_blocks_cored(&self.dofs, blocks, cores);
     }
 
     /// ω of steady rolling, if set.
@@ -466,6 +517,30 @@ impl Solid3DSystem {
                 .is_err()
             {
                 return ([f64::NAN; 3], [f64::NAN; 3]);
+            }
+            if let (Some((sv, _)), Some(omega), None) =
+                (self.steady_visc.as_ref(), self.steady_omega(), dynamic)
+            {
+                let eta = self.strain_rate_damping;
+                let n_ext = 3 * (nodes.len() + sv.extra(c).len());
+                let mut rv = [0.0; MAX_DAMPING_DOFS];
+                let res = steady_viscous_cell(
+                    &self.solid,
+                    sv,
+                    c,
+                    &self.dofs,
+                    x,
+                    omega,
+                    eta,
+                    &mut rv[..n_ext],
+                    &mut [],
+                );
+                if res.is_err() {
+                    return ([f64::NAN; 3], [f64::NAN; 3]);
+                }
+                for (ri, vi) in r.iter_mut().zip(&rv[..3 * nodes.len()]) {
+                    *ri += vi;
+                }
             }
             if let Some(d) = dynamic {
                 if self.strain_rate_damping > 0.0 {
@@ -588,6 +663,20 @@ impl Solid3DSystem {
                 d.finish_cell(dofs, solid.mesh.cell_nodes(c), c, r, k);
             }
         });
+        if let (Some((sv, block)), Some(omega), None) =
+            (self.steady_visc.as_ref(), self.steady_omega(), dynamic)
+        {
+            self.asm
+                .add_block_large(*block, dofs, with_matrix, |c, r, k| {
+                    if let Err(e) = steady_viscous_cell(solid, sv, c, dofs, x, omega, eta, r, k) {
+                        bad.store(true, Ordering::Relaxed);
+                        if let Ok(mut w) = why.lock() {
+                            *w = Some(e);
+                        }
+                        r.fill(0.0);
+                    }
+                });
+        }
         self.inadmissible = why.into_inner().ok().flatten();
         if let Some(rc) = self.contact.as_mut() {
             let mesh = &solid.mesh;
@@ -684,6 +773,31 @@ impl Solid3DSystem {
     pub fn node_displacement(&self, n: usize) -> [f64; 3] {
         [self.x[3 * n], self.x[3 * n + 1], self.x[3 * n + 2]]
     }
+}
+
+/// The steady strain-rate damping of cell `c` at the full state `x` into its damping element's
+/// `r` and `k` ([`SteadyViscosity3D::cell`]).
+#[allow(clippy::too_many_arguments)]
+fn steady_viscous_cell(
+    solid: &Solid3D,
+    sv: &SteadyViscosity3D,
+    c: usize,
+    dofs: &DofMap,
+    x: &[f64],
+    omega: f64,
+    eta: f64,
+    r: &mut [f64],
+    k: &mut [f64],
+) -> Result<(), Inadmissible> {
+    let mut ue = [0.0; MAX_DAMPING_DOFS];
+    let mut nd = 0;
+    for &n in solid.mesh.cell_nodes(c).iter().chain(sv.extra(c)) {
+        for i in 0..3 {
+            ue[nd] = x[dofs.node_dof(n as usize, i)];
+            nd += 1;
+        }
+    }
+    sv.cell(solid, c, &ue[..nd], omega, eta, r, k)
 }
 
 /// The road velocity (V1, V3) in the road plane for the speed `v0` and the slip angle `alpha`

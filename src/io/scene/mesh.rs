@@ -362,18 +362,12 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
     }
 }
 
-/// What the three-dimensional steady mode does not take yet: the strain-rate damping,
-/// continuation in ω or in the penetration.
+/// What the three-dimensional steady mode does not take yet: continuation in ω or in the
+/// penetration.
 fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let Some(doc) = doc else {
         return;
     };
-    if table_has(doc, "time", "strain_rate_damping") {
-        out.push(issue(
-            "time.strain_rate_damping",
-            "not supported in the three-dimensional steady mode yet",
-        ));
-    }
     let parameter = doc
         .get("continuation")
         .and_then(|c| c.get("parameter"))

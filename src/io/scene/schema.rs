@@ -412,7 +412,7 @@ pub(super) static SCHEMA: LazyLock<Vec<SectionSchema>> = LazyLock::new(|| {
             opt("threads", Kind::UInt, NONE, "worker threads; 0 = all cores"),
             opt("line_search", Kind::Bool, NONE, "backtracking line search on the residual norm"),
             opt("damping_tangent", Kind::Keyword(DampingTangentChoice::NAMES), NONE,
-                "steady mode with time.strain_rate_damping: Newton matrix of the damping (auto: matrix-free with GMRES for a solve below 60,000 equations, banded from there on ring meshes, assembled for continuation; banded needs node rings, a generated annulus, and is replaced by matrix-free with a warning on other meshes)"),
+                "plane-strain steady mode with time.strain_rate_damping (the three-dimensional steady mode assembles the damping whole): Newton matrix of the damping (auto: matrix-free with GMRES for a solve below 60,000 equations, banded from there on ring meshes, assembled for continuation; banded needs node rings, a generated annulus, and is replaced by matrix-free with a warning on other meshes)"),
             opt("damping_cell_weight", Kind::Float, NONE,
                 "steady mode with time.strain_rate_damping and the matrix-free (or auto below 60,000 equations) damping tangent: weight in (0, 1] of each cell's own theta-derivative in the assembled part of the Newton matrix, which preconditions GMRES; the Newton step is exact whatever the weight, only the GMRES products change (default 0.4: 24-28 % fewer than with 1 on the default scene from 16k to 262k DOFs, and no GMRES stall where 1 and 0.7 stall at eta omega / G = 30 %)"),
             opt("eps_continuation", Kind::Bool, NONE,
