@@ -105,6 +105,14 @@ enum Command {
         /// Tolerance of the peak pressure, relative to the steady peak [default: 0.05].
         #[arg(long, value_name = "REL")]
         pressure_tol: Option<f64>,
+        /// Three-dimensional scenes: tolerance of the footprint's contact pressure, L2 over the
+        /// tread relative to the steady one [default: 0.02].
+        #[arg(long, value_name = "REL")]
+        footprint_tol: Option<f64>,
+        /// Three-dimensional scenes: tolerance of the footprint's tangential traction, L2 over
+        /// the tread relative to the steady one [default: 0.05].
+        #[arg(long, value_name = "REL")]
+        traction_tol: Option<f64>,
     },
     /// Critical speeds of the steady operator (standing waves): OUT/critical.json with
     /// `omega_crit` (rad/s), `n_star` and the crossing speed of every wave number (spinning
@@ -708,7 +716,9 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             field_tol,
             contact_tol,
             pressure_tol,
-        }) => match load(&scene, &set).and_then(|s| refuse_3d(s, "compare")) {
+            footprint_tol,
+            traction_tol,
+        }) => match load(&scene, &set) {
             Ok(s) => {
                 let d = CompareTolerances::default();
                 let tol = CompareTolerances {
@@ -717,6 +727,8 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                     field: field_tol.unwrap_or(d.field),
                     contact_spacings: contact_tol.unwrap_or(d.contact_spacings),
                     pressure: pressure_tol.unwrap_or(d.pressure),
+                    footprint: footprint_tol.unwrap_or(d.footprint),
+                    footprint_traction: traction_tol.unwrap_or(d.footprint_traction),
                 };
                 run_with(s, out, verbose, cli.quiet, Some(tol), None)
             }

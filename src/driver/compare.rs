@@ -70,6 +70,11 @@ pub struct CompareTolerances {
     /// Peak pressure, relative to the steady peak (a pointwise maximum on the mesh, the
     /// least converged of the quantities; default 5e-2).
     pub pressure: f64,
+    /// Three dimensions: the footprint's contact pressure, L2 over the tread relative to the
+    /// steady one (default 2e-2).
+    pub footprint: f64,
+    /// Three dimensions: the footprint's tangential traction, likewise (default 5e-2).
+    pub footprint_traction: f64,
 }
 
 impl Default for CompareTolerances {
@@ -80,6 +85,8 @@ impl Default for CompareTolerances {
             field: 1e-2,
             contact_spacings: 1.0,
             pressure: 5e-2,
+            footprint: 2e-2,
+            footprint_traction: 5e-2,
         }
     }
 }
@@ -213,6 +220,18 @@ pub fn judge(
             tol.pressure,
         ),
     ];
+    let (validated, verdict) = verdict(&out, inp.transient_steady, inp.steady_tol);
+    (out, validated, verdict)
+}
+
+/// Whether the judged quantities `out` validate the steady solution (all within their
+/// tolerances and the transient run steady, `transient_steady`), and the verdict sentence;
+/// `steady_tol` is the transient's `time.steady_tol` for the hint.
+pub fn verdict(
+    out: &[CompareQuantity],
+    transient_steady: bool,
+    steady_tol: Option<f64>,
+) -> (bool, String) {
     let failed: Vec<String> = out
         .iter()
         .filter(|q| !q.within)
@@ -226,7 +245,7 @@ pub fn judge(
             )
         })
         .collect();
-    let validated = failed.is_empty() && inp.transient_steady;
+    let validated = failed.is_empty() && transient_steady;
     let verdict = if validated {
         let worst = out
             .iter()
@@ -244,7 +263,7 @@ pub fn judge(
         )
     } else {
         let mut why = Vec::new();
-        if !inp.transient_steady {
+        if !transient_steady {
             why.push(
                 "the transient run did not reach its steady state (raise time.t_end or lower time.steady_tol)"
                     .to_string(),
@@ -252,10 +271,10 @@ pub fn judge(
         }
         let any_failed = !failed.is_empty();
         why.extend(failed);
-        let hint = match inp.steady_tol {
+        let hint = match steady_tol {
             // A transient run stopped at a loose steady tolerance can still carry a slowly
             // decaying oscillation: the torque is the load it shows in first.
-            Some(t) if any_failed && inp.transient_steady => format!(
+            Some(t) if any_failed && transient_steady => format!(
                 " (the transient run stopped once it changed by less than time.steady_tol = {t:e} per node passage; a tighter time.steady_tol, e.g. --set time.steady_tol={:e}, lets it settle further)",
                 t / 10.0
             ),
@@ -263,7 +282,7 @@ pub fn judge(
         };
         format!("not validated: {}{hint}", why.join("; "))
     };
-    (out, validated, verdict)
+    (validated, verdict)
 }
 
 /// A ratio as a percentage with three significant digits: `0.0412 %`, `5.07 %`.
@@ -500,6 +519,21 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     run_with_tolerances(scene, opts, &CompareTolerances::default())
 }
 
+/// The transient half of a comparison needs `[time]` with its time steps.
+fn check_time(scene: &Scene) -> Result<(), AppError> {
+    match &scene.time {
+        None => Err(AppError::Unsupported(
+            "compare runs the transient mode, which needs the [time] section".into(),
+        )),
+        Some(t) if t.steady_only() => Err(AppError::Unsupported(
+            "compare runs the transient mode, which needs time.dt and time.t_end (this \
+             steady scene's [time] leaves them out)"
+                .into(),
+        )),
+        Some(_) => Ok(()),
+    }
+}
+
 /// Run `scene` in both modes, compare and judge them against `tol` (see the module docs).
 pub fn run_with_tolerances(
     scene: &Scene,
@@ -507,20 +541,9 @@ pub fn run_with_tolerances(
     tol: &CompareTolerances,
 ) -> Result<RunOutcome, AppError> {
     ensure_dir(&opts.out_dir)?;
-    match &scene.time {
-        None => {
-            return Err(AppError::Unsupported(
-                "compare runs the transient mode, which needs the [time] section".into(),
-            ))
-        }
-        Some(t) if t.steady_only() => {
-            return Err(AppError::Unsupported(
-                "compare runs the transient mode, which needs time.dt and time.t_end (this \
-                 steady scene's [time] leaves them out)"
-                    .into(),
-            ))
-        }
-        Some(_) => {}
+    check_time(scene)?;
+    if scene.mesh.dimension == 3 {
+        return super::compare3d::run(scene, opts, tol);
     }
     let mut warnings = steady_run::warnings(scene);
     let tr_scene = for_mode(scene, Mode::Transient);

@@ -29,6 +29,7 @@
 
 pub mod adaptive;
 pub mod compare;
+pub mod compare3d;
 pub mod critical;
 pub mod envelope;
 pub mod frame;

@@ -83,7 +83,23 @@ impl Summary {
             ModeSummary::Steady(s) => Some(&s.run),
             ModeSummary::StickSlip(s) => Some(&s.run),
             ModeSummary::ModelProblem(s) => Some(&s.run),
-            ModeSummary::Compare(_) => None,
+            ModeSummary::Compare(_) | ModeSummary::Compare3D(_) => None,
+        }
+    }
+
+    /// The results of a three-dimensional run (None for the other modes).
+    pub fn solid3d(&self) -> Option<&Solid3DResults> {
+        match &self.body {
+            ModeSummary::Solid3D(s) => Some(&s.results),
+            _ => None,
+        }
+    }
+
+    /// The three-dimensional comparison's results.
+    pub fn compare_3d(&self) -> Option<&Compare3DResults> {
+        match &self.body {
+            ModeSummary::Compare3D(s) => Some(&s.results.compare),
+            _ => None,
         }
     }
 
@@ -135,6 +151,8 @@ pub enum ModeSummary {
     Steady(Box<SteadySummary>),
     StickSlip(StickSlipSummary),
     Compare(CompareSummary),
+    /// `compare` of a three-dimensional scene.
+    Compare3D(Box<Compare3DSummary>),
     /// A model problem of `src/adapt/` (a scene with `[problem]`).
     ModelProblem(Box<ModelProblemSummary>),
 }
@@ -906,6 +924,58 @@ pub struct CompareSummary {
     pub steady_dir: String,
 }
 
+/// `results.compare` of `tread compare` on a three-dimensional scene (see
+/// [`super::compare3d`] for the definitions).
+#[derive(Clone, Debug, Serialize)]
+pub struct Compare3DResults {
+    /// The six hub loads of both modes (road frame, totals over the width; the transient's
+    /// averaged over its last node passage).
+    pub hub_loads_transient: HubLoads3D,
+    pub hub_loads_steady: HubLoads3D,
+    /// ‖u_t − u_s‖_L2 / ‖u_s‖_L2 of the referential fields (dimensionless).
+    pub field_rel_l2: f64,
+    /// max over nodes of |u_t − u_s| (length) and that over max |u_s|.
+    pub field_max_abs: f64,
+    pub field_rel_max: f64,
+    /// L2 differences over the tread of the contact pressure and of the tangential traction
+    /// of both fields at the same points, relative to the steady ones (dimensionless).
+    pub footprint_pressure_rel_l2: f64,
+    pub footprint_traction_rel_l2: f64,
+    /// Peak pressure (stress) and contact area (reference area in contact) of both.
+    pub max_pressure_transient: f64,
+    pub max_pressure_steady: f64,
+    pub contact_area_transient: f64,
+    pub contact_area_steady: f64,
+    /// Wall times of both runs (s) and their ratio transient / steady.
+    pub wall_time_transient_s: f64,
+    pub wall_time_steady_s: f64,
+    pub speedup: f64,
+    /// Whether the transient run reached its steady state, when (s) and in how many steps.
+    pub transient_steady: bool,
+    pub transient_time_to_steady: Option<f64>,
+    pub transient_steps: usize,
+    /// Every judged quantity: values, units, differences and the tolerance it is held to.
+    pub quantities: Vec<CompareQuantity>,
+    pub validated: bool,
+    pub verdict: String,
+}
+
+/// `results` of the three-dimensional `tread compare` (one key, `compare`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Compare3DSection {
+    pub compare: Compare3DResults,
+}
+
+/// summary.json of the three-dimensional `tread compare`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Compare3DSummary {
+    pub warnings: Vec<String>,
+    pub results: Compare3DSection,
+    /// Output folders of the two runs.
+    pub transient_dir: String,
+    pub steady_dir: String,
+}
+
 /// Everything a run produced.
 #[derive(Debug)]
 pub struct RunOutcome {
@@ -913,8 +983,9 @@ pub struct RunOutcome {
     pub summary: serde_json::Value,
     /// The same summary, typed (`summary` is its [`Summary::to_json`]).
     pub typed: Summary,
-    /// The referential displacement field of the rolling modes (2 per node, node order, the
-    /// numbers of `steady_field.csv`): the steady solution's nodal displacements, or the
+    /// The referential displacement field of the rolling modes (2 per node in plane strain, 3
+    /// in three dimensions; node order, the numbers of `steady_field.csv` and
+    /// `steady_field_3d.csv`): the steady solution's nodal displacements, or the
     /// transient run's field extracted at its last node passage. None for the other modes and
     /// for a transient run that saw no node passage.
     pub field: Option<Vec<f64>>,

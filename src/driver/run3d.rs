@@ -251,6 +251,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut coarse_start = None;
     let mut transient = None;
     let mut velocity: Option<Vec<f64>> = None;
+    let mut field: Option<Vec<f64>> = None;
     let mut solve = match scene.analysis.mode {
         Mode::Static => solve_indentation_3d(
             &mut sys,
@@ -306,6 +307,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
             report.total_iterations += run.results.newton_iterations;
             transient = Some(run.results);
             velocity = Some(run.velocity);
+            field = run.steady_field;
             run.outcome
         }
         _ => solve_spinning_3d(
@@ -469,12 +471,15 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     }
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     let headline = vec![headline(scene, &results)];
+    if scene.analysis.mode == Mode::Steady && scene.continuation.is_none() {
+        field = Some(sys.x[..3 * sys.solid.mesh.n_nodes()].to_vec());
+    }
     conclude(
         solve,
         RunOutcome {
             summary,
             typed,
-            field: None,
+            field,
             history: None,
             contact: Vec::new(),
             out_dir: PathBuf::from(&opts.out_dir),

@@ -32,10 +32,12 @@ use crate::solver::{LinearKind, NewtonOptions, SolveError, StepInfo};
 use std::path::Path;
 
 /// What [`integrate_3d`] gives back: the system at the last accepted step, its velocity
-/// field (full vector), the results, and how the integration ended.
+/// field (full vector), the referential field of the last node passage (3 per node; none
+/// before the first passage), the results, and how the integration ended.
 pub struct Transient3DRun {
     pub sys: Solid3DSystem,
     pub velocity: Vec<f64>,
+    pub steady_field: Option<Vec<f64>>,
     pub results: Transient3DResults,
     pub outcome: Result<(), SolveError>,
 }
@@ -161,11 +163,17 @@ pub fn integrate_3d(
         }
     }
     // The system's state is the last accepted step's (the committed state).
-    let Transient { mut sys, state, .. } = tr;
+    let Transient {
+        mut sys,
+        state,
+        steady_field,
+        ..
+    } = tr;
     sys.x.copy_from_slice(&state.u);
     Ok(Transient3DRun {
         sys,
         velocity: state.v,
+        steady_field,
         results,
         outcome: res,
     })
