@@ -74,8 +74,9 @@ enum Command {
         dump_matrix: Option<PathBuf>,
     },
     /// Run a rolling scene in both modes (transient until steady, then steady) and compare
-    /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png,
-    /// with each mode's own outputs in OUT/transient/ and OUT/steady/. Each quantity is judged
+    /// them: OUT/summary.json `results.compare`, OUT/compare.csv, OUT/contact_compare.png
+    /// (plane strain) or OUT/footprint_compare.csv (3D), with each mode's own outputs in
+    /// OUT/transient/ and OUT/steady/. Each quantity is judged
     /// against its tolerance; the last line says whether the steady solution is validated
     /// against the transient, and the exit status is 4 when it is not.
     Compare {

@@ -55,7 +55,11 @@ fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
         "aligning_moment",
         "axle_moment",
     ];
-    for q in c.quantities.iter().filter(|q| hub.contains(&q.name.as_str())) {
+    for q in c
+        .quantities
+        .iter()
+        .filter(|q| hub.contains(&q.name.as_str()))
+    {
         assert!(
             q.rel_diff < 5e-3,
             "{} differs by {:.3e} of {}",

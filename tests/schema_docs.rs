@@ -389,6 +389,17 @@ fn every_summary_key_and_csv_column_that_runs_write_is_documented() {
             vec!["compare".into(), sc("rolling_frictionless.toml")],
         ),
         (
+            "compare_3d",
+            vec![
+                "compare".into(),
+                sc("transient_cornering_3d.toml"),
+                "--set".into(),
+                "mesh.n_theta=32".into(),
+                "--set".into(),
+                "time.t_end=0.3".into(),
+            ],
+        ),
+        (
             "visco",
             vec![
                 "run".into(),
