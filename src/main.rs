@@ -550,7 +550,11 @@ fn run_with(
         quiet,
     };
     let result = if let Some(tol) = &compare {
-        tread::driver::compare::run_with_tolerances(&scene, &opts, tol)
+        if scene.mesh.dimension == 3 {
+            tread::driver::compare3d::run(&scene, &opts, tol)
+        } else {
+            tread::driver::compare::run_with_tolerances(&scene, &opts, tol)
+        }
     } else if let Some(p) = dump_matrix {
         tread::driver::steady_run::run_with_dump(&scene, &opts, Some(p))
     } else {

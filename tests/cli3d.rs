@@ -781,3 +781,29 @@ fn steady_rerun_recording_has_the_footprint() {
     #[cfg(not(feature = "rerun"))]
     assert!(!out.join("hex.rrd").exists());
 }
+
+/// `tread compare` on a 3D steady scene with a control the 3D transient does not run: exit 2,
+/// the key named, nothing compared.
+#[test]
+fn compare_refuses_what_the_3d_transient_does_not_run() {
+    let d = TestDir::new("cli3d", "compare_control");
+    let sc = scene("transient_cornering_3d.toml");
+    let out_dir = d.join("out");
+    let out = tread(&[
+        "compare",
+        sc.to_str().expect("path"),
+        "--set",
+        "analysis.mode=\"steady\"",
+        "--set",
+        "motion.control=\"free_rolling\"",
+        "--out",
+        out_dir.to_str().expect("path"),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("motion.control") && stderr.contains("free_rolling"),
+        "{stderr}"
+    );
+    assert!(!out_dir.join("compare.csv").exists());
+}

@@ -24,13 +24,14 @@ fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
     let scene = Scene::from_toml_str(SCENE, "transient_cornering_3d", &set)
         .unwrap_or_else(|e| panic!("{e}"));
     let dir = TestDir::new("compare3d", "cornering");
-    let out = tread::driver::compare::run(
+    let out = tread::driver::compare3d::run(
         &scene,
         &RunOptions {
             out_dir: dir.to_path_buf(),
             verbose: false,
             quiet: true,
         },
+        &tread::driver::compare::CompareTolerances::default(),
     )
     .unwrap_or_else(|e| panic!("compare: {e}"));
     let c = out.typed.compare_3d().expect("3D comparison").clone();

@@ -520,7 +520,7 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
 }
 
 /// The transient half of a comparison needs `[time]` with its time steps.
-fn check_time(scene: &Scene) -> Result<(), AppError> {
+pub fn check_time(scene: &Scene) -> Result<(), AppError> {
     match &scene.time {
         None => Err(AppError::Unsupported(
             "compare runs the transient mode, which needs the [time] section".into(),
@@ -543,7 +543,9 @@ pub fn run_with_tolerances(
     ensure_dir(&opts.out_dir)?;
     check_time(scene)?;
     if scene.mesh.dimension == 3 {
-        return super::compare3d::run(scene, opts, tol);
+        return Err(AppError::Unsupported(
+            "mesh.dimension = 3: the three-dimensional comparison is driver::compare3d::run".into(),
+        ));
     }
     let mut warnings = steady_run::warnings(scene);
     let tr_scene = for_mode(scene, Mode::Transient);

@@ -32,7 +32,7 @@ use super::results::{
 use crate::contact::facet3d::ContactSample3D;
 use crate::io::output::{ensure_dir, write_csv, write_json, write_text_csv};
 use crate::io::record::png::Units;
-use crate::io::scene::{Mode, Scene};
+use crate::io::scene::{Control, Mode, Scene};
 use crate::model::Solid3DSystem;
 use crate::setup::{build_system_3d, AppError, RunOptions};
 use crate::solver::stepping::LoadedSystem;
@@ -252,6 +252,22 @@ pub fn run(
     opts: &RunOptions,
     tol: &CompareTolerances,
 ) -> Result<RunOutcome, AppError> {
+    super::compare::check_time(scene)?;
+    // What the 3D transient half does not run (a steady scene may have it).
+    if scene.road.as_ref().is_some_and(|r| r.load.is_some()) {
+        return Err(AppError::Unsupported(
+            "road.load: compare runs the three-dimensional transient mode, which presses the \
+             wheel in under displacement control; give road.disp instead"
+                .into(),
+        ));
+    }
+    if scene.motion.control != Control::Speed {
+        return Err(AppError::Unsupported(format!(
+            "motion.control: compare runs the three-dimensional transient mode, which runs \
+             \"speed\" only (this scene has \"{}\")",
+            scene.motion.control
+        )));
+    }
     ensure_dir(&opts.out_dir)?;
     let mut warnings = Vec::new();
     let tr_opts = RunOptions {
