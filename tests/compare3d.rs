@@ -48,14 +48,7 @@ fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
     assert!(c.transient_steady, "transient run not steady");
     assert!(dir.join("compare.csv").exists());
     assert!(dir.join("footprint_compare.csv").exists());
-    let hub = [
-        "longitudinal_force",
-        "vertical_force",
-        "lateral_force",
-        "overturning_moment",
-        "aligning_moment",
-        "axle_moment",
-    ];
+    let hub = tread::driver::results::HubLoads3D::NAMES;
     for q in c
         .quantities
         .iter()

@@ -699,29 +699,7 @@ pub fn run_with_tolerances(
     let summary = typed.to_json();
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     let c = &compare;
-    let rows: Vec<Vec<String>> = c
-        .quantities
-        .iter()
-        .map(|q| {
-            let v = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-            vec![
-                q.name.clone(),
-                q.unit.clone(),
-                v(q.transient),
-                v(q.steady),
-                q.abs_diff.to_string(),
-                q.rel_diff.to_string(),
-                q.relative_to.clone(),
-                q.tolerance.to_string(),
-                q.within.to_string(),
-            ]
-        })
-        .collect();
-    write_text_csv(
-        &opts.out_dir.join("compare.csv"),
-        &COMPARE_CSV_COLUMNS,
-        rows,
-    )?;
+    write_compare_csv(&opts.out_dir.join("compare.csv"), &c.quantities)?;
     if let Some(h) = &history {
         let ring_rows: Vec<Vec<String>> = h
             .rings
@@ -801,6 +779,28 @@ pub fn run_with_tolerances(
         converged,
         headline,
     })
+}
+
+/// `compare.csv`: one row per judged quantity ([`COMPARE_CSV_COLUMNS`]).
+pub fn write_compare_csv(
+    path: &Path,
+    qs: &[CompareQuantity],
+) -> Result<(), crate::io::output::OutputError> {
+    let v = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
+    let rows = qs.iter().map(|q| {
+        vec![
+            q.name.clone(),
+            q.unit.clone(),
+            v(q.transient),
+            v(q.steady),
+            q.abs_diff.to_string(),
+            q.rel_diff.to_string(),
+            q.relative_to.clone(),
+            q.tolerance.to_string(),
+            q.within.to_string(),
+        ]
+    });
+    write_text_csv(path, &COMPARE_CSV_COLUMNS, rows)
 }
 
 /// Columns of `compare.csv` (one row per [`CompareQuantity`]).

@@ -30,7 +30,7 @@ use super::results::{
     RunOutcome, Summary,
 };
 use crate::contact::facet3d::ContactSample3D;
-use crate::io::output::{ensure_dir, write_csv, write_json, write_text_csv};
+use crate::io::output::{ensure_dir, write_csv, write_json};
 use crate::io::record::png::Units;
 use crate::io::scene::{Control, Mode, Scene};
 use crate::model::Solid3DSystem;
@@ -109,26 +109,8 @@ fn max_pressure(s: &[ContactSample3D]) -> f64 {
     s.iter().map(|p| p.p).fold(0.0f64, f64::max)
 }
 
-fn loads_array(h: &HubLoads3D) -> [f64; 6] {
-    [
-        h.longitudinal_force,
-        h.vertical_force,
-        h.lateral_force,
-        h.overturning_moment,
-        h.aligning_moment,
-        h.axle_moment,
-    ]
-}
-
-/// The names of the six hub loads, in [`HubLoads3D`] order.
-pub const HUB_LOADS: [&str; 6] = [
-    "longitudinal_force",
-    "vertical_force",
-    "lateral_force",
-    "overturning_moment",
-    "aligning_moment",
-    "axle_moment",
-];
+/// The names of the six hub loads, in [`HubLoads3D::to_array`] order.
+pub const HUB_LOADS: [&str; 6] = HubLoads3D::NAMES;
 
 /// What [`judge_3d`] compares.
 #[derive(Clone, Debug)]
@@ -154,7 +136,7 @@ pub fn judge_3d(
     tol: &CompareTolerances,
     units: &Units,
 ) -> Vec<CompareQuantity> {
-    let (t, s) = (loads_array(&inp.hub_loads.0), loads_array(&inp.hub_loads.1));
+    let (t, s) = (inp.hub_loads.0.to_array(), inp.hub_loads.1.to_array());
     let fmag = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
     let q = |name: &str,
              unit: String,
@@ -384,29 +366,7 @@ pub fn run(
     let summary = typed.to_json();
     write_json(&opts.out_dir.join("summary.json"), &summary)?;
     let c = &compare;
-    let rows: Vec<Vec<String>> = c
-        .quantities
-        .iter()
-        .map(|q| {
-            let v = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-            vec![
-                q.name.clone(),
-                q.unit.clone(),
-                v(q.transient),
-                v(q.steady),
-                q.abs_diff.to_string(),
-                q.rel_diff.to_string(),
-                q.relative_to.clone(),
-                q.tolerance.to_string(),
-                q.within.to_string(),
-            ]
-        })
-        .collect();
-    write_text_csv(
-        &opts.out_dir.join("compare.csv"),
-        &super::compare::COMPARE_CSV_COLUMNS,
-        rows,
-    )?;
+    super::compare::write_compare_csv(&opts.out_dir.join("compare.csv"), &c.quantities)?;
     write_csv(
         &opts.out_dir.join("footprint_compare.csv"),
         &[

@@ -426,6 +426,28 @@ pub struct HubLoads3D {
 }
 
 impl HubLoads3D {
+    /// The keys of the six loads, in [`Self::to_array`] order.
+    pub const NAMES: [&'static str; 6] = [
+        "longitudinal_force",
+        "vertical_force",
+        "lateral_force",
+        "overturning_moment",
+        "aligning_moment",
+        "axle_moment",
+    ];
+
+    /// The six loads in [`Self::NAMES`] order.
+    pub fn to_array(&self) -> [f64; 6] {
+        [
+            self.longitudinal_force,
+            self.vertical_force,
+            self.lateral_force,
+            self.overturning_moment,
+            self.aligning_moment,
+            self.axle_moment,
+        ]
+    }
+
     /// From the road-frame components of the contact resultant `f` and of its moment `m`
     /// about the hub centre.
     pub fn new(f: [f64; 3], m: [f64; 3]) -> Self {
