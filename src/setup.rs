@@ -620,7 +620,21 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
     let ro = contact
         .as_ref()
         .map_or(scene.geometry.ro, |s| first_touch_3d(scene, &mesh, s));
-    let solid = Solid3D::new(mesh, material, scene.material.rho, pressure);
+    let mut solid = Solid3D::new(mesh, material, scene.material.rho, pressure);
+    if let Some(vs) = &scene.material.viscoelastic {
+        let ve = vs
+            .build()
+            .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
+        check_viscoelastic_mode(scene)?;
+        if steady {
+            return Err(AppError::Unsupported(
+                "material.viscoelastic: not supported in the steady mode with mesh.dimension = \
+                 3 yet (the transient mode carries the history in three dimensions)"
+                    .into(),
+            ));
+        }
+        solid.set_viscoelastic(ve);
+    }
     let sys = Solid3DSystem::new(solid, &fixed);
     let Some(surface) = contact else {
         return Ok(sys);

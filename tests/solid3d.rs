@@ -87,7 +87,7 @@ fn tangent_check(material: Material, pressure: PressureMode, degree: usize) -> f
     let mut sys = Solid3DSystem::new(Solid3D::new(mesh, material, RHO, pressure), &fx);
     sys.coefficients = Coefficients {
         omega2: 900.0,
-        body_load: 0.0,
+        ..Default::default()
     };
     let n = sys.n_eq();
     let dx: Vec<f64> = (0..n).map(|k| 0.03 * noise(k)).collect();
@@ -331,8 +331,8 @@ fn manufactured_solution_converges_at_optimal_rates() {
                 }
             }
             sys.set_target(Coefficients {
-                omega2: 0.0,
                 body_load: 1.0,
+                ..Default::default()
             });
             sys.set_reference_force(1.0);
             let mut newton =

@@ -17,8 +17,9 @@ use tread::model::{Solid3DSystem, SolidSystem};
 
 /// The rolling scene in plane strain or, with `width`, as a slab with sliding sides: ω ramped
 /// to 10 rad/s, pressed in by 0.05 and the road brought to 0.995 ω Ro, tanh friction, normal
-/// damping; fixed steps.
-fn scene(width: Option<f64>, integrator: &str, dt: f64, t_end: f64) -> Scene {
+/// damping; fixed steps; `extra` appended to the scene text (e.g. a `[material.viscoelastic]`
+/// table).
+fn scene_with(width: Option<f64>, integrator: &str, dt: f64, t_end: f64, extra: &str) -> Scene {
     let mesh3 = match width {
         Some(w) => format!("dimension = 3\nwidth = {w}\nn_z = 1\nsides = \"sliding\"\n"),
         None => String::new(),
@@ -76,7 +77,7 @@ strain_rate_damping = 0.5
 [solver]
 tolerance = 1e-11
 linear = "lu"
-"#
+{extra}"#
     );
     Scene::from_toml_str(&text, "slab", &[]).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -166,9 +167,13 @@ fn run_3d(sc: &Scene) -> (Run, Vec<[f64; 3]>) {
 }
 
 fn compare(integrator: &str, dt: f64, t_end: f64) {
+    compare_with(integrator, dt, t_end, "");
+}
+
+fn compare_with(integrator: &str, dt: f64, t_end: f64, extra: &str) {
     let width = 0.25;
-    let (rows2, u2, rep2) = run_2d(&scene(None, integrator, dt, t_end));
-    let ((rows3, u3, rep3), off) = run_3d(&scene(Some(width), integrator, dt, t_end));
+    let (rows2, u2, rep2) = run_2d(&scene_with(None, integrator, dt, t_end, extra));
+    let ((rows3, u3, rep3), off) = run_3d(&scene_with(Some(width), integrator, dt, t_end, extra));
     assert_eq!(rep2.steps, rep3.steps, "{integrator}: steps");
     assert!(rep2.steps > 20, "{integrator}: {} steps", rep2.steps);
     let fscale = rows2.iter().map(|r| r[2].abs()).fold(0.0, f64::max);
@@ -210,7 +215,8 @@ fn compare(integrator: &str, dt: f64, t_end: f64) {
     // Field: every 3D node against the 2D node at the same (X1, X2).
     let n3 = u3.len() / 6;
     let (d3, x3) = u3.split_at(3 * n3);
-    let model = tread::setup::build_model(&scene(None, integrator, dt, t_end)).expect("2D model");
+    let model = tread::setup::build_model(&scene_with(None, integrator, dt, t_end, extra))
+        .expect("2D model");
     let key = |x: f64, y: f64| ((x * 1e9).round() as i64, (y * 1e9).round() as i64);
     let index: std::collections::HashMap<_, _> = model
         .mesh
@@ -251,15 +257,36 @@ fn plane_strain_slab_rolls_as_the_2d_transient_central_difference() {
     compare("central_difference", 2e-5, 0.05);
 }
 
+/// A viscoelastic slab (both models, two Prony terms with relaxation times of the order of the
+/// run, γ about a third of the shear modulus): the quadrature-point history of the 3D body
+/// gives the plane-strain transient's hub loads and field to 1e-8.
+#[test]
+fn viscoelastic_slab_rolls_as_the_2d_transient() {
+    for model in ["multiplicative", "convolution"] {
+        let extra = format!(
+            "[material.viscoelastic]\nmodel = \"{model}\"\ngamma = 60.0\nprony = [[0.6, 0.02], [0.4, 0.2]]\n"
+        );
+        eprintln!("viscoelastic model {model}:");
+        compare_with("generalized_alpha", 2e-3, 0.15, &extra);
+    }
+}
+
 /// The Newton system of a 3D time step (generalized-α, ρ∞ = 0.7) against central differences
 /// of its residual: Hex8 and Hex27, free sides, tanh friction at a slip angle of 3° on a
-/// road cambered by 2°, normal damping, strain-rate damping η = 2, mid-step state (rigid rotation plus a perturbation, in
+/// road cambered by 2°, normal damping, strain-rate damping η = 2, elastic and with either viscoelastic model (a committed history
+/// away from the reference, the step's overstress from it), mid-step state (rigid rotation plus a perturbation, in
 /// contact and sliding).
 #[test]
 fn time_step_tangent_matches_finite_differences_3d() {
     use tread::driver::transient::{Body, GenAlpha, Scheme};
     use tread::solver::NonlinearSystem;
-    for order in [1, 2] {
+    let models = [None, Some("multiplicative"), Some("convolution")];
+    for (order, visco) in [1, 2].into_iter().flat_map(|o| models.map(|m| (o, m))) {
+        let visco_table = visco.map_or(String::new(), |m| {
+            format!(
+                "[material.viscoelastic]\nmodel = \"{m}\"\ngamma = 60.0\nprony = [[0.6, 0.02], [0.4, 0.2]]\n"
+            )
+        });
         let text = format!(
             r#"
 [scene]
@@ -299,7 +326,7 @@ eps = 0.5
 [time]
 dt = 1e-3
 t_end = 1.0
-"#
+{visco_table}"#
         );
         let sc = Scene::from_toml_str(&text, "tangent", &[]).unwrap_or_else(|e| panic!("{e}"));
         let mut sys = tread::setup::build_system_3d(&sc).unwrap_or_else(|e| panic!("{e}"));
@@ -329,6 +356,20 @@ t_end = 1.0
             tr.state.a[3 * a + 1] = -omega * omega * x[1];
         }
         tr.dt = 1e-3;
+        if visco.is_some() {
+            // A committed history away from the reference (a sheared, stretched state), then
+            // the overstress over a step from it.
+            let mut xh = tr.sys.x.clone();
+            for a in 0..n {
+                let x = tr.sys.solid.mesh.nodes[a];
+                xh[3 * a] = 0.02 * x[1] + 0.01 * x[2];
+                xh[3 * a + 1] = -0.015 * x[1];
+                xh[3 * a + 2] = 0.01 * x[0];
+            }
+            let dofs = tr.sys.dofs.clone();
+            tr.sys.solid.commit_history(&dofs, &xh, 5e-3);
+            tr.sys.set_history_dt(1e-3);
+        }
         let (s, c) = (omega * 1e-3).sin_cos();
         for a in 0..n {
             let x = tr.sys.solid.mesh.nodes[a];
@@ -347,13 +388,13 @@ t_end = 1.0
         let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         let err = fixtures::fd_max_error(&mut tr, 1e-7, |i, j| k[i][j]) / kmax;
         eprintln!(
-            "order {order}: {} equations, {in_contact} contact points ({sliding} outside the \
-             regularised zone), max|K − K_fd|/max|K| = {err:.2e}",
+            "order {order}, viscoelastic {visco:?}: {} equations, {in_contact} contact points \
+             ({sliding} outside the regularised zone), max|K − K_fd|/max|K| = {err:.2e}",
             tr.n_eq()
         );
         assert!(
             err < 1e-6,
-            "order {order}: dynamic tangent differs from FD: {err:.3e}"
+            "order {order}, viscoelastic {visco:?}: dynamic tangent differs from FD: {err:.3e}"
         );
     }
 }

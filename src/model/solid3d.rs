@@ -8,14 +8,17 @@
 //! 3n + i); incompressible laws add the cell's four P1 pressures after them.
 
 use super::kernel::{
-    cell_energy, n_pressure, p1_basis, perturbed_pressure, pressure_frame, solid_cell, BodyForceD,
-    CellLaw, CellPressure, Coefficients, Inadmissible, Point,
+    cell_energy, grad_u, n_pressure, overstress_cell, p1_basis, perturbed_pressure, pressure_frame,
+    solid_cell, BodyForceD, CellLaw, CellPressure, Coefficients, Inadmissible, Point,
 };
-use crate::assembly::{CellTopology, DofMap};
+use crate::assembly::{CellTopology, DofMap, QpHistory};
 use crate::element::hex::{Hex27, Hex8, Lagrange3D, QuadRule3D};
+use crate::material::viscoelastic::MAX_STATE_3D;
+use crate::material::Viscoelastic;
 use crate::material::{Hyperelastic, Material};
 use crate::math::Mat3;
 use crate::mesh::hex_mesh::HexMesh;
+use crate::physics::solid::ViscousStep;
 use crate::physics::PressureMode;
 use nalgebra::{Vector3, Vector4};
 
@@ -59,6 +62,12 @@ pub struct Solid3D {
     pub pressure: PressureMode,
     /// Body force per unit reference volume (scaled by [`Coefficients::body_load`]).
     pub body_force: Option<Box<BodyForceD<3>>>,
+    /// Viscoelastic overstress (`None`: elastic, no history).
+    pub viscoelastic: Option<Viscoelastic>,
+    /// Committed state of the viscoelastic internal variables at the stiffness rule's points
+    /// (cell by cell, the points of [`Self::cell`]'s rule in order; empty when elastic). The
+    /// kernels only read it: [`Self::commit_history`] advances it once a step has converged.
+    pub history: QpHistory,
     q1: Table3<8>,
     q2: Table3<27>,
     /// The mass rules (one point per direction more than the stiffness's, as the plane-strain
@@ -75,6 +84,8 @@ impl Solid3D {
             rho,
             pressure,
             body_force: None,
+            viscoelastic: None,
+            history: QpHistory::none(),
             q1: Table3::new::<Hex8>(2),
             q2: Table3::new::<Hex27>(3),
             m1: Table3::new::<Hex8>(3),
@@ -188,7 +199,81 @@ impl Solid3D {
             pressure,
             body_force: self.body_force.as_deref(),
         };
-        solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)
+        solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)?;
+        if let Some(ve) = &self.viscoelastic {
+            let (old, dt) = (self.history.cell(c), co.history_dt);
+            overstress_cell::<Mat3, 3, N>(&pts[..np], &u[..3 * N], ve, old, dt, r.len(), r, k)?;
+        }
+        Ok(())
+    }
+
+    /// Make the material viscoelastic: the history of every point of the stiffness rules,
+    /// at the undisturbed reference state.
+    pub fn set_viscoelastic(&mut self, ve: Viscoelastic) {
+        let init = vec![0.0; ve.n_state_of::<Mat3>()];
+        let per_cell = (0..self.mesh.n_cells()).map(|c| match self.mesh.degree[c] {
+            1 => self.q1.points.len(),
+            _ => self.q2.points.len(),
+        });
+        self.history = QpHistory::new(per_cell, &init);
+        self.viscoelastic = Some(ve);
+    }
+
+    /// Replace the committed history by the state at the end of a step of length `dt` that
+    /// ended at the full state `x` (call once the step has converged; `dt = ∞` relaxes it).
+    /// Returns the overstress's work over the step and the energy its internal variables hold
+    /// at the end, summed over the body (zeros when elastic).
+    pub fn commit_history(&mut self, dofs: &DofMap, x: &[f64], dt: f64) -> ViscousStep {
+        let Some(ve) = self.viscoelastic else {
+            return ViscousStep::default();
+        };
+        let mut hist = std::mem::take(&mut self.history);
+        let mut step = ViscousStep::default();
+        for c in 0..self.mesh.n_cells() {
+            let s = if self.mesh.degree[c] == 1 {
+                self.commit_cell::<8>(&self.q1, &ve, c, dofs, x, dt, &mut hist)
+            } else {
+                self.commit_cell::<27>(&self.q2, &ve, c, dofs, x, dt, &mut hist)
+            };
+            step.work += s.work;
+            step.stored += s.stored;
+        }
+        self.history = hist;
+        step
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn commit_cell<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        ve: &Viscoelastic,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        dt: f64,
+        hist: &mut QpHistory,
+    ) -> ViscousStep {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let Ok(np) = self.points(tab, c, &mut pts) else {
+            return ViscousStep::default();
+        };
+        let cd = dofs.cell(c);
+        let mut u = [0.0; 81];
+        for (slot, &d) in u.iter_mut().zip(&cd[..3 * N]) {
+            *slot = x[d as usize];
+        }
+        let n = hist.n_state;
+        let mut new = [0.0; MAX_STATE_3D];
+        let mut step = ViscousStep::default();
+        for (q, pt) in pts[..np].iter().enumerate() {
+            let h: Mat3 = grad_u::<Mat3, 3, N>(&u[..3 * N], &pt.g);
+            let old = hist.point(c, q);
+            ve.overstress(&h, old, dt, &mut new[..n], false);
+            step.work += pt.w * ve.step_work_of::<Mat3>(old, &new[..n]);
+            step.stored += pt.w * ve.stored_energy_of::<Mat3>(&new[..n]);
+            hist.point_mut(c, q).copy_from_slice(&new[..n]);
+        }
+        step
     }
 
     /// The strain-rate damping η of cell `c` at the full state `x` with the full velocity `v`

@@ -285,6 +285,7 @@ impl Solid3DSystem {
         }
         self.coefficients = Coefficients {
             omega2: 0.0,
+            history_dt: self.coefficients.history_dt,
             ..self.target
         };
         if let Some(rc) = self.contact.as_mut() {
@@ -872,6 +873,7 @@ impl LoadedSystem for Solid3DSystem {
             Coefficients {
                 omega2: lambda * self.target.omega2,
                 body_load: lambda * self.target.body_load,
+                history_dt: self.coefficients.history_dt,
             }
         };
         if let Some(rc) = self.contact.as_mut() {

@@ -5,7 +5,8 @@
 //! the referential field along the node rings of the revolved mesh (every circumferential
 //! node line is a ring, [`crate::mesh::hex_mesh::RingLayout3D`]); a mesh without rings has no
 //! steady-state extraction in 3D. The strain-rate damping (`time.strain_rate_damping`) acts on
-//! the Green-strain rate of the material velocity. No quadrature-point history and no torque
+//! the Green-strain rate of the material velocity. A viscoelastic material carries its history
+//! at the quadrature points, advanced once per accepted step as in plane strain. No torque
 //! control in 3D.
 
 use super::body::Body;
@@ -14,6 +15,7 @@ use crate::assembly::{Assembler, DofMap, CONSTRAINED};
 use crate::contact::facet3d::Kinematics3D;
 use crate::model::system3d::Dynamic3D;
 use crate::model::{Inertia, Solid3DSystem};
+use crate::physics::ViscousStep;
 
 fn dynamic<'a>(t: &DynamicTerms<'a>) -> Dynamic3D<'a> {
     Dynamic3D {
@@ -157,6 +159,15 @@ impl Body for Solid3DSystem {
             }
         }
         Some((kc, cc))
+    }
+
+    fn set_history_dt(&mut self, dt: f64) {
+        self.coefficients.history_dt = dt;
+    }
+
+    fn commit_history(&mut self, dt: f64) -> Option<ViscousStep> {
+        let step = self.solid.commit_history(&self.dofs, &self.x, dt);
+        self.solid.viscoelastic.is_some().then_some(step)
     }
 
     fn passage_geometry(&self) -> (f64, usize, usize, Option<()>) {

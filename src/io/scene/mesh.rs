@@ -297,10 +297,11 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
             "mesh",
         ));
     }
-    if cx.viscoelastic {
+    if cx.viscoelastic && cx.mode == Some(Mode::Steady) {
         out.push(issue(
             "material.viscoelastic",
-            "not supported with mesh.dimension = 3 yet",
+            "not supported in the steady mode with mesh.dimension = 3 yet (the transient mode \
+             carries the history in three dimensions)",
         ));
     }
     if let Some(points) = cx.lobatto_points {
