@@ -14,7 +14,7 @@ use crate::io::output::OutputError;
 use crate::io::record::{self, Recorders};
 use crate::io::scene::{
     ClampKind, ContactQuadrature, ContinuationSpec, Formulation, LimitAction, LinearChoice,
-    MeshSides, Mode, Scene, Sink, DEFAULT_CLAMP_WIDTH_OVER_G,
+    MeshSides, Mode, Scene, Sink, SteadyHistoryChoice, DEFAULT_CLAMP_WIDTH_OVER_G,
 };
 use crate::material::{Hyperelastic, Material};
 use crate::math::Mat2;
@@ -626,10 +626,11 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
             .build()
             .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
         check_viscoelastic_mode(scene)?;
-        if steady {
+        if steady && scene.solver.steady_history == SteadyHistoryChoice::Upwind {
             return Err(AppError::Unsupported(
-                "material.viscoelastic: not supported in the steady mode with mesh.dimension = \
-                 3 yet (the transient mode carries the history in three dimensions)"
+                "solver.steady_history = \"upwind\": not offered with mesh.dimension = 3 (the \
+                 three-dimensional steady mode integrates the history along the rings of \
+                 quadrature points; use \"auto\" or \"rings\")"
                     .into(),
             ));
         }
@@ -653,6 +654,10 @@ pub fn build_system_3d(scene: &Scene) -> Result<Solid3DSystem, AppError> {
         if eta > 0.0 {
             sys.enable_steady_viscosity(eta)
                 .map_err(|e| AppError::Unsupported(format!("time.strain_rate_damping: {e}")))?;
+        }
+        if sys.solid.viscoelastic.is_some() {
+            sys.enable_steady_history()
+                .map_err(|e| AppError::Unsupported(format!("material.viscoelastic: {e}")))?;
         }
     }
     if scene.analysis.mode == Mode::Transient {

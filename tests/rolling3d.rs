@@ -1,8 +1,10 @@
 //! Steady rolling of the three-dimensional body in the θ-referential description
 //! ([`tread::driver::steady3d`]): the global tangent against central differences of the
 //! residual (Hex8 and Hex27, displacement and load control, friction with the slip from nodal
-//! ring derivatives and facet-wise, normal damping and a slip angle), the plane-strain limit
+//! ring derivatives and facet-wise, normal damping, a slip angle, the strain-rate damping and
+//! either viscoelastic model with its ring coupling), the plane-strain limit
 //! (a slab with u3 = 0 on its faces reproduces the 2D steady mode, with damping and friction,
+//! the strain-rate damping and either viscoelastic model,
 //! the friction slip taken the same way in both, also under the free-rolling, creep and
 //! torque controls), and the symmetry of the hub loads in the slip angle.
 
@@ -13,7 +15,8 @@ use tread::driver::steady3d::{apply_control_3d, solve_steady_3d};
 use tread::driver::steady_run;
 use tread::io::scene::Control;
 use tread::io::Scene;
-use tread::material::{Material, MaterialKind};
+use tread::material::viscoelastic::ViscoModel;
+use tread::material::{Material, MaterialKind, Viscoelastic};
 use tread::mesh::revolved::{revolved, RevolvedSpec};
 use tread::model::{Solid3D, Solid3DSystem};
 use tread::physics::PressureMode;
@@ -61,6 +64,7 @@ fn tangent_check(
     facet_wise: bool,
     camber: f64,
     eta: f64,
+    visco: Option<ViscoModel>,
 ) -> (f64, usize, usize) {
     let mesh = revolved(&spec(1, 1, 8, degree, 0.4)).expect("mesh");
     let mut fx = vec![false; 3 * mesh.n_nodes()];
@@ -79,10 +83,13 @@ fn tangent_check(
     )
     .expect("contact surface");
     s.set_camber(camber.to_radians()).expect("camber");
-    let sys = Solid3DSystem::new(
-        Solid3D::new(mesh, neo_hookean(), 1.0, PressureMode::None),
-        &fx,
-    );
+    let mut solid = Solid3D::new(mesh, neo_hookean(), 1.0, PressureMode::None);
+    if let Some(model) = visco {
+        // γ = 0.3 G, ω τ = 0.3 and 3.
+        let ve = Viscoelastic::new(model, 60.0, &[(0.6, 0.1), (0.4, 1.0)]).expect("prony");
+        solid.set_viscoelastic(ve);
+    }
+    let sys = Solid3DSystem::new(solid, &fx);
     let mut sys = if load {
         sys.with_contact_load(s, RO, RO - 0.08, 30.0)
     } else {
@@ -95,6 +102,9 @@ fn tangent_check(
         sys.disable_steady_slip();
     }
     sys.enable_steady_viscosity(eta).expect("ring mesh");
+    if visco.is_some() {
+        sys.enable_steady_history().expect("rings of points");
+    }
     sys.set_load(if load { 0.7 } else { 1.0 });
     let n = sys.n_eq();
     let dx: Vec<f64> = (0..n).map(|k| 0.02 * noise(k)).collect();
@@ -106,7 +116,22 @@ fn tangent_check(
         .iter()
         .filter(|p| p.p > 0.0 && p.w1.hypot(p.w3) < eps)
         .count();
-    let dense = sys.asm.to_dense();
+    let mut dense = sys.asm.to_dense();
+    if visco.is_some() {
+        // The ring coupling of the history, applied matrix-free, column by column.
+        assert!(sys.has_tangent_correction());
+        let mut col = vec![0.0; n];
+        let mut unit = vec![0.0; n];
+        for j in 0..n {
+            unit[j] = 1.0;
+            col.fill(0.0);
+            sys.tangent_correction(&unit, &mut col);
+            unit[j] = 0.0;
+            for i in 0..n {
+                dense[i][j] += col[i];
+            }
+        }
+    }
     let scale = dense.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let h = 1e-6;
     let mut e = vec![0.0; n];
@@ -152,6 +177,24 @@ fn steady_tangent_matches_central_differences() {
             false,
             false,
         ),
+        (
+            "Hex8, load control, viscoelastic (multiplicative)",
+            1,
+            true,
+            false,
+        ),
+        (
+            "Hex27, displacement control, camber 3°, viscoelastic (multiplicative)",
+            2,
+            false,
+            false,
+        ),
+        (
+            "Hex27, load control, viscoelastic (convolution)",
+            2,
+            true,
+            false,
+        ),
     ] {
         let camber = if name.contains("camber 3") {
             3.0
@@ -166,7 +209,14 @@ fn steady_tangent_matches_central_differences() {
         } else {
             0.0
         };
-        let (err, contact, stick) = tangent_check(degree, load, facet_wise, camber, eta);
+        let visco = if name.contains("multiplicative") {
+            Some(ViscoModel::Multiplicative)
+        } else if name.contains("convolution") {
+            Some(ViscoModel::Convolution)
+        } else {
+            None
+        };
+        let (err, contact, stick) = tangent_check(degree, load, facet_wise, camber, eta, visco);
         eprintln!(
             "{name}: worst |K − K_fd| / max|K| = {err:.2e}; {contact} contact points, {stick} with |w| < ε"
         );
@@ -283,6 +333,12 @@ fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
     let tanh = "law = \"coulomb_tanh\"\nmu = 0.3\neps = 0.05";
     // η ω / G = 0.1 with G = 2 (c1 + c2) = 200.
     let visc = "[time]\nstrain_rate_damping = 2.0\n";
+    // Two Prony terms with ω τ = 0.2 and 2, γ = 0.3 G.
+    let visco = |model: &str| {
+        format!(
+            "[material.viscoelastic]\nmodel = \"{model}\"\ngamma = 60.0\nprony = [[0.6, 0.02], [0.4, 0.2]]\n"
+        )
+    };
     for (name, b_n, friction, facet_wise, extra) in [
         ("frictionless, damped", 2.0, "law = \"none\"", false, ""),
         ("tanh friction, damped, nodal slip", 2.0, tanh, false, ""),
@@ -306,6 +362,20 @@ fn plane_strain_slab_rolls_as_the_2d_steady_mode() {
             tanh,
             false,
             visc,
+        ),
+        (
+            "tanh friction, damped, viscoelastic (multiplicative)",
+            2.0,
+            tanh,
+            false,
+            &visco("multiplicative"),
+        ),
+        (
+            "frictionless, viscoelastic (convolution)",
+            0.0,
+            "law = \"none\"",
+            false,
+            &visco("convolution"),
         ),
     ] {
         let sc2 = slab_scene_with(None, v0, b_n, friction, 0.0, extra);

@@ -7,7 +7,8 @@
 //! systems alike; the drivers of [`crate::driver`] take them and return typed outcomes, and
 //! [`crate::setup`] builds them from a scene without importing any driver.
 //!
-//! The coefficients an analysis supplies (ω², load factors) are values passed to the
+//! The coefficients an analysis supplies (ω², load factors, the step of a viscoelastic
+//! history) are values passed to the
 //! integrand ([`kernel::Coefficients`]), not flags written on the model.
 //!
 //! # Frame
@@ -19,6 +20,7 @@
 
 pub mod kernel;
 pub mod solid3d;
+pub mod steady_history3d;
 pub mod steady_visc3d;
 pub mod system;
 pub mod system3d;

@@ -207,6 +207,87 @@ impl Solid3D {
         Ok(())
     }
 
+    /// The points of cell `c`'s stiffness rule (the points of [`Self::history`], in order):
+    /// reference position X, weight w = w_q det J and ∇u from the full state `x` into `out`;
+    /// returns how many.
+    pub fn cell_point_gradients(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        out: &mut [([f64; 3], f64, Mat3)],
+    ) -> Result<usize, Inadmissible> {
+        if self.mesh.degree[c] == 1 {
+            self.cell_point_gradients_n::<8>(&self.q1, c, dofs, x, out)
+        } else {
+            self.cell_point_gradients_n::<27>(&self.q2, c, dofs, x, out)
+        }
+    }
+
+    fn cell_point_gradients_n<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        dofs: &DofMap,
+        x: &[f64],
+        out: &mut [([f64; 3], f64, Mat3)],
+    ) -> Result<usize, Inadmissible> {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts)?;
+        let cd = dofs.cell(c);
+        let mut u = [0.0; 81];
+        for (slot, &d) in u.iter_mut().zip(&cd[..3 * N]) {
+            *slot = x[d as usize];
+        }
+        for (o, pt) in out.iter_mut().zip(&pts[..np]) {
+            *o = (pt.x, pt.w, grad_u::<Mat3, 3, N>(&u[..3 * N], &pt.g));
+        }
+        Ok(np)
+    }
+
+    /// `Σ_q w P_q,iJ G_aJ` of cell `c` for a first Piola–Kirchhoff stress `p[q]` at each point
+    /// of its stiffness rule, handed to `add(dof, value)` for each of the cell's displacement
+    /// dofs (full numbering).
+    pub fn cell_divergence(
+        &self,
+        c: usize,
+        dofs: &DofMap,
+        p: &[Mat3],
+        add: impl FnMut(usize, f64),
+    ) -> Result<(), Inadmissible> {
+        if self.mesh.degree[c] == 1 {
+            self.cell_divergence_n::<8>(&self.q1, c, dofs, p, add)
+        } else {
+            self.cell_divergence_n::<27>(&self.q2, c, dofs, p, add)
+        }
+    }
+
+    fn cell_divergence_n<const N: usize>(
+        &self,
+        tab: &Table3<N>,
+        c: usize,
+        dofs: &DofMap,
+        p: &[Mat3],
+        mut add: impl FnMut(usize, f64),
+    ) -> Result<(), Inadmissible> {
+        let mut pts = [Point::<3, N>::default(); MAX_POINTS_3D];
+        let np = self.points(tab, c, &mut pts)?;
+        let cd = dofs.cell(c);
+        let mut r = [0.0; 81];
+        for (pt, pq) in pts[..np].iter().zip(p) {
+            for a in 0..N {
+                for i in 0..3 {
+                    let v: f64 = (0..3).map(|j| pq[(i, j)] * pt.g[a][j]).sum();
+                    r[3 * a + i] += v * pt.w;
+                }
+            }
+        }
+        for (&d, &v) in cd[..3 * N].iter().zip(&r[..3 * N]) {
+            add(d as usize, v);
+        }
+        Ok(())
+    }
+
     /// Make the material viscoelastic: the history of every point of the stiffness rules,
     /// at the undisturbed reference state.
     pub fn set_viscoelastic(&mut self, ve: Viscoelastic) {

@@ -19,6 +19,7 @@
 
 use super::kernel::{Coefficients, Inadmissible};
 use super::solid3d::Solid3D;
+use super::steady_history3d::SteadyHistory3D;
 use super::steady_visc3d::{SteadyViscosity3D, MAX_DAMPING_DOFS};
 use super::terms::Inertia;
 use crate::assembly::{Assembler, DofMap, CONSTRAINED, FIXED};
@@ -52,6 +53,9 @@ pub struct Solid3DSystem {
     /// The steady mode's strain-rate damping: the cells' ring stencils and the assembler
     /// block of their damping elements ([`Self::enable_steady_viscosity`]).
     steady_visc: Option<(SteadyViscosity3D, usize)>,
+    /// The steady mode's viscoelastic history along the rings of quadrature points
+    /// ([`Self::enable_steady_history`]).
+    steady_history: Option<SteadyHistory3D>,
 }
 
 /// The road under displacement control (H = `h_touch` − λ · `disp`) or load control (H the
@@ -170,6 +174,7 @@ impl Solid3DSystem {
             contact: None,
             strain_rate_damping: 0.0,
             steady_visc: None,
+            steady_history: None,
         }
     }
 
@@ -375,6 +380,20 @@ impl Solid3DSystem {
             self.rebuild_assembler();
         }
         Ok(())
+    }
+
+    /// The steady mode's viscoelastic history: the internal variables of the solid's
+    /// viscoelastic material integrated along the rings of quadrature points at every
+    /// evaluation ([`SteadyHistory3D`]), the ring coupling of the tangent applied matrix-free.
+    /// Fails when the material is elastic or the mesh's points form no rings about the axle.
+    pub fn enable_steady_history(&mut self) -> Result<(), String> {
+        self.steady_history = Some(SteadyHistory3D::new(&self.solid, &self.dofs)?);
+        Ok(())
+    }
+
+    /// The steady viscoelastic history, when enabled.
+    pub fn steady_history(&self) -> Option<&SteadyHistory3D> {
+        self.steady_history.as_ref()
     }
 
     /// The assembler of the cells and, with contact, of the facet elements: each facet's
@@ -645,6 +664,10 @@ impl Solid3DSystem {
         let bad = AtomicBool::new(false);
         let why = std::sync::Mutex::new(None);
         let x: &[f64] = dynamic.map_or(&self.x, |d| d.x);
+        let omega = self.contact.as_ref().and_then(|c| c.steady_omega);
+        if let (Some(sh), Some(omega), None) = (self.steady_history.as_mut(), omega, dynamic) {
+            sh.sync(&mut self.solid, &self.dofs, x, omega);
+        }
         let (solid, dofs, co) = (&self.solid, &self.dofs, self.coefficients);
         let eta = self.strain_rate_damping;
         self.asm.zero(with_matrix);
@@ -861,6 +884,15 @@ impl NonlinearSystem for Solid3DSystem {
     }
     fn restore_state(&mut self, buf: &[f64]) {
         self.x.copy_from_slice(buf);
+    }
+    fn has_tangent_correction(&self) -> bool {
+        self.steady_omega().is_some() && self.steady_history.is_some()
+    }
+    fn tangent_correction(&mut self, v: &[f64], out: &mut [f64]) {
+        let omega = self.steady_omega();
+        if let (Some(sh), Some(omega)) = (self.steady_history.as_mut(), omega) {
+            sh.apply_correction(&self.solid, &self.dofs, omega, v, out);
+        }
     }
 }
 

@@ -146,8 +146,6 @@ pub(super) struct Dimension3DContext<'a> {
     pub(super) doc: Option<&'a toml::Table>,
     /// `contact.quadrature` is Lobatto, with `contact.points`.
     pub(super) lobatto_points: Option<usize>,
-    /// `[material.viscoelastic]` is given.
-    pub(super) viscoelastic: bool,
 }
 
 /// What the three-dimensional transient mode does not run: torque control, load control and
@@ -295,13 +293,6 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
             "[[material]] (a material per mesh region) is not supported with mesh.dimension = 3 \
              yet; use a single [material]",
             "mesh",
-        ));
-    }
-    if cx.viscoelastic && cx.mode == Some(Mode::Steady) {
-        out.push(issue(
-            "material.viscoelastic",
-            "not supported in the steady mode with mesh.dimension = 3 yet (the transient mode \
-             carries the history in three dimensions)",
         ));
     }
     if let Some(points) = cx.lobatto_points {

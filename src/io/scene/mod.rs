@@ -421,7 +421,6 @@ impl Scene {
                 has_regions: !region_tables.is_empty(),
                 doc: Some(&doc),
                 lobatto_points: lobatto_points(contact.as_ref().and_then(|c| c.as_ref())),
-                viscoelastic: material.as_ref().is_some_and(|m| m.viscoelastic.is_some()),
             };
             validate_dimension(m, &cx, &mut out);
             if m.is_3d() && table_has(&doc, "output", "sinks") {
@@ -551,7 +550,6 @@ impl Scene {
                 has_regions: !self.regions.is_empty(),
                 doc: None,
                 lobatto_points: lobatto_points(self.contact.as_ref()),
-                viscoelastic: self.material.viscoelastic.is_some(),
             },
             &mut out,
         );
