@@ -7,7 +7,10 @@
 //! differences are those of the two discretizations on one mesh (velocities by time
 //! integration of the nodes against ω ∂θχ by ring differences); on 2 × 64 × 2 cells the
 //! vertical force differs by 0.57 % and the footprint pressure by 2.8 %, on 2 × 96 × 2 by
-//! 0.086 % and 1.6 %.
+//! 0.086 % and 1.6 %. The same targets on a viscoelastic wheel rolling straight
+//! (`scenarios/viscoelastic_rolling_3d.toml`: the quadrature-point history of the transient
+//! against the ring integration of the steady mode), where the hub's axle moment is the
+//! rolling resistance of the hysteresis.
 
 #[path = "common/tempdir.rs"]
 mod tempdir;
@@ -17,13 +20,13 @@ use tread::app::RunOptions;
 use tread::io::Scene;
 
 const SCENE: &str = include_str!("../scenarios/transient_cornering_3d.toml");
+const VISCO: &str = include_str!("../scenarios/viscoelastic_rolling_3d.toml");
 
-#[test]
-fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
+/// `tread compare` of the scene `text`, asserting the targets of the module docs.
+fn compare(text: &str, name: &str) -> tread::driver::results::Compare3DResults {
     let set = ["output.sinks=[\"summary\",\"csv\"]".to_string()];
-    let scene = Scene::from_toml_str(SCENE, "transient_cornering_3d", &set)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let dir = TestDir::new("compare3d", "cornering");
+    let scene = Scene::from_toml_str(text, name, &set).unwrap_or_else(|e| panic!("{e}"));
+    let dir = TestDir::new("compare3d", name);
     let out = tread::driver::compare3d::run(
         &scene,
         &RunOptions {
@@ -62,11 +65,6 @@ fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
             q.relative_to
         );
     }
-    // The cornering loads are there: a lateral force of a fifth of the load, an overturning
-    // moment from the camber.
-    let s = c.hub_loads_steady;
-    assert!(s.lateral_force.abs() > 0.1 * s.vertical_force.abs());
-    assert!(s.overturning_moment.abs() > 0.1 * s.vertical_force.abs());
     assert!(
         c.footprint_pressure_rel_l2 < 2e-2,
         "footprint pressure differs by {:.3e}",
@@ -79,4 +77,25 @@ fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
     );
     assert!(c.validated, "{}", c.verdict);
     assert!(c.speedup > 1.0);
+    c
+}
+
+#[test]
+fn steady_matches_transient_in_3d_with_slip_angle_and_camber() {
+    let c = compare(SCENE, "transient_cornering_3d");
+    // The cornering loads are there: a lateral force of a fifth of the load, an overturning
+    // moment from the camber.
+    let s = c.hub_loads_steady;
+    assert!(s.lateral_force.abs() > 0.1 * s.vertical_force.abs());
+    assert!(s.overturning_moment.abs() > 0.1 * s.vertical_force.abs());
+}
+
+#[test]
+fn steady_matches_transient_in_3d_viscoelastic() {
+    let c = compare(VISCO, "viscoelastic_rolling_3d");
+    // The hysteresis resists the rolling: an axle moment of a few percent of |F| Ro (the
+    // road's tangential force balances it).
+    let s = c.hub_loads_steady;
+    let fr = s.axle_moment.abs() / (s.vertical_force.abs() * 2.0);
+    assert!(fr > 0.02, "rolling resistance {fr:.3e}");
 }

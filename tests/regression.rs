@@ -141,6 +141,7 @@ scenes! {
     traction_3d: "traction_3d.toml" => "traction_3d.json";
     cornering_curve_3d: "cornering_curve_3d.toml" => "cornering_curve_3d.json";
     transient_cornering_3d: "transient_cornering_3d.toml" => "transient_cornering_3d.json";
+    viscoelastic_rolling_3d_steady: "viscoelastic_rolling_3d.toml", "--mode", "steady" => "viscoelastic_rolling_3d_steady.json";
     oden_hollow_cylinder: "oden_hollow_cylinder.toml" => "oden_hollow_cylinder.json";
     oden_hollow_cylinder_steady: "oden_hollow_cylinder.toml", "--mode", "steady" => "oden_hollow_cylinder_steady.json";
     oden_steady_sweep: "oden_steady_sweep.toml" => "oden_steady_sweep.json";

@@ -323,6 +323,10 @@ pub struct Solid3DResults {
     /// control found).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub v0: Option<f64>,
+    /// Steady mode with a multiplicative viscoelastic material: the power ∫ D dV its
+    /// overstress dissipates (with no other dissipation, the axle moment times ω).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub viscous_dissipation: Option<f64>,
     /// Steady mode with `motion.control` other than `speed`: what the control did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub control: Option<ControlReport>,

@@ -548,6 +548,10 @@ fn results_3d(
         slip_angle: matches!(scene.analysis.mode, Mode::Steady | Mode::Transient)
             .then(|| scene.road.as_ref().map_or(0.0, |r| r.slip_angle)),
         v0: rc.filter(|c| c.steady_omega.is_some()).map(|c| c.v0),
+        viscous_dissipation: sys
+            .steady_history()
+            .filter(|_| accepted)
+            .and_then(|h| h.dissipation(&sys.solid)),
         control: None,
         continuation: None,
         branch: None,

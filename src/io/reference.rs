@@ -222,6 +222,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("results.transient.hub_loads_passage_mean.axle_moment", "F·L", TR3, "passage mean, about e3"),
     k("results.road_velocity", "L/T", "steady, mesh.dimension = 3", "[V1, V3]: the road velocity in its plane"),
     k("results.slip_angle", "deg", "steady, mesh.dimension = 3", "slip angle α (`road.slip_angle`)"),
+    k("results.viscous_dissipation", "F·L/T", "steady, mesh.dimension = 3, multiplicative viscoelastic", "power dissipated by the viscoelastic overstress ∫ D dV; with no other dissipation it equals the hub's axle moment times ω"),
     k("results.penetration", "L", "static, steady", "final penetration DISP = Ro − H"),
     k("results.contact_facets_per_iteration", N, "static", "mean facets integrated per assembly"),
     k("results.contact_facets_total", N, "static", "facets on the outer surface"),

@@ -47,6 +47,8 @@ pub struct SteadyHistory3D {
     rot: Vec<(f64, f64)>,
     /// F = I + ∇u at each point at the last [`Self::sync`].
     f: Vec<Mat3>,
+    /// Quadrature weight w_q det J of each point.
+    w: Vec<f64>,
     /// Per-point cylindrical strains (or their variations): scratch.
     e: Vec<[f64; 6]>,
     /// Per-point Cartesian strain variations: scratch.
@@ -188,6 +190,7 @@ impl SteadyHistory3D {
             dtheta,
             rot,
             f: vec![Mat3::identity(); n_pts],
+            w: vec![0.0; n_pts],
             e: vec![[0.0; 6]; n_pts],
             de: vec![Mat3::zeros(); n_pts],
             xs: Vec::new(),
@@ -202,6 +205,21 @@ impl SteadyHistory3D {
     /// Number of rings.
     pub fn n_rings(&self) -> usize {
         self.rings.len()
+    }
+
+    /// Dissipation rate `∫ D dV` of the multiplicative model over the body at the state of the
+    /// last [`Self::sync`] (power, the scene's force × length / time; `None` for the
+    /// convolution model, which has no free energy). In steady rolling without other
+    /// dissipation it balances the power of the hub torque, `M3 ω`.
+    pub fn dissipation(&self, solid: &Solid3D) -> Option<f64> {
+        let ve = solid.viscoelastic?;
+        let ns = solid.history.n_state;
+        let mut d = 0.0;
+        for (i, (f, w)) in self.f.iter().zip(&self.w).enumerate() {
+            let h = f - Mat3::identity();
+            d += w * ve.dissipation_rate(&h, &solid.history.data[i * ns..(i + 1) * ns])?;
+        }
+        Some(d)
     }
 
     /// For each ring, Prony term and component, the periodic solution `X = L_i e` of the exact
@@ -263,6 +281,7 @@ impl SteadyHistory3D {
             for (q, b) in buf[..np].iter().enumerate() {
                 let i = o + q;
                 self.f[i] = Mat3::identity() + b.2;
+                self.w[i] = b.1;
                 let e = green_strain(&b.2);
                 e.sym_store(&mut solid.history.data[i * ns..i * ns + 6]);
                 self.e[i] = to_cylindrical(&e, self.rot[i]);
