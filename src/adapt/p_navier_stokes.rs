@@ -40,6 +40,7 @@
 //! coarse history projected from an inaccurate enriched one would carry the same error in both
 //! solutions, invisible to the estimate.)
 
+use super::marking::{dorfler_among, squared_total};
 use super::quadtree::Quadtree;
 use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::assembly::constraints::{ClosedConstraints, CondenseScratch, CondensedPattern};
@@ -821,7 +822,8 @@ pub fn degree_histogram(degrees: &[usize]) -> Vec<(usize, usize)> {
 pub enum PMarking {
     /// Mark every cell with η_K > τ (|K| / |Ω|)^{1/2}.
     Tolerance,
-    /// While η > τ, Dörfler marking with parameter θ of the squared indicators.
+    /// While η > τ, Dörfler marking with parameter θ of the squared indicators, among the
+    /// cells below the largest degree ([`super::marking::dorfler_among`]).
     Dorfler(f64),
 }
 
@@ -876,22 +878,10 @@ pub fn mark_cells(th: &PTaylorHood, eta: &[f64], params: &PAdaptParams) -> Vec<u
             .filter(|&k| can(k) && eta[k] > params.tol * (th.area(k) / total_area).sqrt())
             .collect(),
         PMarking::Dorfler(theta) => {
-            let total: f64 = eta.iter().map(|e| e * e).sum();
-            if total.sqrt() <= params.tol {
+            if squared_total(eta).sqrt() <= params.tol {
                 return Vec::new();
             }
-            let mut idx: Vec<usize> = (0..eta.len()).filter(|&k| can(k)).collect();
-            idx.sort_unstable_by(|&a, &b| eta[b].total_cmp(&eta[a]));
-            let mut acc = 0.0;
-            let mut out = Vec::new();
-            for k in idx {
-                if acc >= theta * total {
-                    break;
-                }
-                acc += eta[k] * eta[k];
-                out.push(k);
-            }
-            out
+            dorfler_among(eta, theta, (0..eta.len()).filter(|&k| can(k)))
         }
     }
 }

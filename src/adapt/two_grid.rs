@@ -16,14 +16,13 @@
 //! η / ‖u − u_h‖ tends to 1 − 2^{−(p+1)} (0.75 for Q1, 0.875 for Q2) in the asymptotic range.
 //!
 //! **Adaptation between steps.** After each step: Dörfler marking of η_K with parameter θ
-//! ([`super::driver::mark`]) for refinement (cells below `max_level`); leaves with
+//! ([`super::marking::mark`]) for refinement (cells below `max_level`); leaves with
 //! η_K² < `coarsen_fraction` · η² / N_cells and level > `min_level` are coarsened (four
 //! siblings at once, one-irregularity kept by [`Quadtree::coarsen`]); then u_h and u_f are
 //! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times, each
 //! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0.
 
-use super::driver::{mark, Marking};
-use super::estimate::Estimate;
+use super::marking::{coarsening_limit, CellEstimate, Marking};
 use super::quadtree::Quadtree;
 use super::space::{shape_second, shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::assembly::constraints::CondenseScratch;
@@ -531,8 +530,9 @@ pub fn run_observed(
             if two_grid {
                 let fs = space_at(&ftree, kernel, t + opts.dt)?;
                 let (xff, _) = step(&ftree, kernel, &fs, &xfn, t, opts.dt, opts.newton)?;
-                let e =
-                    Estimate::from_squares(difference_sq(&tree, &space_new, &x, &ftree, &fs, &xff));
+                let e = CellEstimate::from_squares(difference_sq(
+                    &tree, &space_new, &x, &ftree, &fs, &xff,
+                ));
                 rec.estimate = e.global;
                 xf = xff;
                 fspace_new = Some(fs);
@@ -602,18 +602,17 @@ pub fn run_observed(
 }
 
 /// Coarsen the leaves with small indicators, then refine the Dörfler-marked ones.
-fn adapt_mesh(tree: &mut Quadtree, space: &Space, est: &Estimate, opts: &TransientOptions) {
+fn adapt_mesh(tree: &mut Quadtree, space: &Space, est: &CellEstimate, opts: &TransientOptions) {
     let eta = &est.indicators;
-    let n = eta.len().max(1) as f64;
-    let total: f64 = eta.iter().map(|e| e * e).sum();
-    let refine: Vec<usize> = mark(est, opts.marking)
+    let limit = coarsening_limit(eta, opts.coarsen_fraction);
+    let refine: Vec<usize> = est
+        .mark(opts.marking)
         .into_iter()
         .filter(|&k| tree.cells[space.leaves[k] as usize].level < opts.max_level)
         .collect();
     let coarse: Vec<u32> = (0..eta.len())
         .filter(|&k| {
-            eta[k] * eta[k] < opts.coarsen_fraction * total / n
-                && tree.cells[space.leaves[k] as usize].level > opts.min_level
+            eta[k] * eta[k] < limit && tree.cells[space.leaves[k] as usize].level > opts.min_level
         })
         .map(|k| space.leaves[k])
         .collect();
