@@ -23,6 +23,7 @@ use super::quadtree::Quadtree;
 use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
 use nalgebra::DMatrix;
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// Refinement kind.
@@ -308,7 +309,9 @@ pub fn run(
     u_norm: f64,
     opts: &AdaptOptions,
 ) -> Result<Vec<StepRecord>, SpaceError> {
-    run_observed(tree, problem, u_norm, opts, &mut |_| {})
+    run_observed(tree, problem, u_norm, opts, &mut |_| {
+        ControlFlow::Continue(())
+    })
 }
 
 /// One pass of the loop as [`run_observed`] shows it: the record, the mesh, the space, the
@@ -319,15 +322,19 @@ pub struct StepView<'a> {
     pub space: &'a Space,
     pub x: &'a [f64],
     pub estimate: &'a CellEstimate,
+    /// Whether this is the last pass (the loop ends after it whatever `each` returns).
+    pub last: bool,
 }
 
 /// [`run`], calling `each` on every pass (the last one sees the final mesh and solution).
+/// When `each` returns [`ControlFlow::Break`] the loop stops after that pass (its mesh and
+/// solution are the last ones).
 pub fn run_observed(
     mut tree: Quadtree,
     problem: &dyn Exact,
     u_norm: f64,
     opts: &AdaptOptions,
-    each: &mut dyn FnMut(&StepView),
+    each: &mut dyn FnMut(&StepView) -> ControlFlow<()>,
 ) -> Result<Vec<StepRecord>, SpaceError> {
     for c in tree.leaves() {
         tree.cells[c as usize].degree = opts.degree;
@@ -438,23 +445,31 @@ pub fn run_observed(
         };
         if done {
             rec.t_total = clock.elapsed().as_secs_f64() - t_excluded;
-            each(&StepView {
+            // The last pass: nothing left to stop.
+            let _ = each(&StepView {
                 record: &rec,
                 tree: &tree,
                 space: &space,
                 x: &x,
                 estimate: &est,
+                last: true,
             });
             records.push(rec);
             break;
         }
-        each(&StepView {
+        let flow = each(&StepView {
             record: &rec,
             tree: &tree,
             space: &space,
             x: &x,
             estimate: &est,
+            last: false,
         });
+        if flow.is_break() {
+            rec.t_total = clock.elapsed().as_secs_f64() - t_excluded;
+            records.push(rec);
+            break;
+        }
         // 4. Refine.
         let t0 = Instant::now();
         let old_tree = tree.clone();

@@ -46,6 +46,7 @@ use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::assembly::constraints::{ClosedConstraints, CondenseScratch, CondensedPattern};
 use crate::element::hierarchical::{gauss_legendre, Basis1d, MAX_DEGREE};
 use crate::solver::linear::{LinearError, LinearKind, SparseSolver};
+use std::ops::ControlFlow;
 use std::rc::Rc;
 
 /// Largest velocity degree of a cell (the pressure has one less).
@@ -1008,6 +1009,18 @@ pub fn adapt_steady(
     problem: &SteadyProblem,
     params: &PAdaptParams,
 ) -> Result<(Vec<SweepReport>, Estimated), PnsError> {
+    adapt_steady_until(tree, degrees, problem, params, &|| false)
+}
+
+/// [`adapt_steady`], also ending after the sweep at which `stop()` is true (that sweep's
+/// report is then not `accepted` unless no cell was marked).
+pub fn adapt_steady_until(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &SteadyProblem,
+    params: &PAdaptParams,
+    stop: &dyn Fn() -> bool,
+) -> Result<(Vec<SweepReport>, Estimated), PnsError> {
     params.check()?;
     let mut d = degrees.to_vec();
     let mut reports = Vec::new();
@@ -1023,7 +1036,7 @@ pub fn adapt_steady(
             est.newton[0].iterations + est.newton[1].iterations,
         );
         let marked = mark_cells(&est.coarse.th, &est.indicators, params);
-        if marked.is_empty() || sweep + 1 >= params.max_sweeps {
+        if marked.is_empty() || sweep + 1 >= params.max_sweeps || stop() {
             rep.accepted = marked.is_empty();
             reports.push(rep);
             return Ok((reports, est));
@@ -1144,15 +1157,18 @@ pub fn run_transient(
     time: &TimeParams,
     params: &PAdaptParams,
 ) -> Result<Vec<SweepReport>, PnsError> {
-    run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {})
+    run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {
+        ControlFlow::Continue(())
+    })
 }
 
 /// What [`run_transient_observed`] calls on every accepted step: (report, solution, enriched
-/// solution, indicators).
-pub type StepObserver<'a> = &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]);
+/// solution, indicators); [`ControlFlow::Break`] stops the run after that step.
+pub type StepObserver<'a> =
+    &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]) -> ControlFlow<()>;
 
 /// [`run_transient`], calling `each(report, solution, enriched solution, indicators)` on every
-/// accepted step.
+/// accepted step (and stopping after the step where it returns [`ControlFlow::Break`]).
 pub fn run_transient_observed(
     tree: &Quadtree,
     degrees: &[usize],
@@ -1193,8 +1209,11 @@ pub fn run_transient_observed(
             let marked = mark_cells(&new.th, &eta, params);
             if marked.is_empty() || sweep + 1 >= params.max_sweeps {
                 rep.accepted = true;
-                each(&rep, &new, &new_fine, &eta);
+                let flow = each(&rep, &new, &new_fine, &eta);
                 reports.push(rep);
+                if flow.is_break() {
+                    return Ok(reports);
+                }
                 old = new;
                 old_fine = new_fine;
                 break;

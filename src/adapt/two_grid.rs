@@ -28,6 +28,7 @@ use super::space::{shape_second, shape_values, Space, SpaceError, MAX_LOCAL_SCAL
 use crate::assembly::constraints::CondenseScratch;
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
 use crate::solver::linear::{LinearError, LinearKind, SparseSolver};
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// Largest local vector of a kernel: 2 components of a Q2 cell.
@@ -453,7 +454,7 @@ pub fn run(
     t0: f64,
     opts: &TransientOptions,
 ) -> Result<TransientRun, TransientError> {
-    run_observed(kernel, tree0, t0, opts, &mut |_| {})
+    run_observed(kernel, tree0, t0, opts, &mut |_| ControlFlow::Continue(()))
 }
 
 /// One accepted step as [`run_observed`] shows it: its record, the mesh and space it was
@@ -467,13 +468,15 @@ pub struct StepView<'a> {
     pub indicators: Option<&'a [f64]>,
 }
 
-/// [`run`], calling `each` on every accepted step.
+/// [`run`], calling `each` on every accepted step. When `each` returns
+/// [`ControlFlow::Break`] the run stops after that step (the mesh adapted as after any step:
+/// [`TransientRun`] holds the state at the time of that step).
 pub fn run_observed(
     kernel: &dyn Kernel,
     tree0: &Quadtree,
     t0: f64,
     opts: &TransientOptions,
-    each: &mut dyn FnMut(&StepView),
+    each: &mut dyn FnMut(&StepView) -> ControlFlow<()>,
 ) -> Result<TransientRun, TransientError> {
     if !(opts.dt > 0.0 && opts.dt.is_finite()) {
         return Err(TransientError::Parameter(format!(
@@ -505,6 +508,7 @@ pub fn run_observed(
     };
     let mut steps = Vec::new();
     let mut t = t0;
+    let mut stop = false;
     for n in 0..opts.n_steps {
         let sweeps = if n == 0 && opts.adaptive {
             opts.initial_sweeps.max(1)
@@ -540,13 +544,14 @@ pub fn run_observed(
             }
             let last_sweep = sweep + 1 == sweeps;
             if last_sweep || !opts.adaptive {
-                each(&StepView {
+                stop = each(&StepView {
                     record: &rec,
                     tree: &tree,
                     space: &space_new,
                     x: &x,
                     indicators: est.as_ref().map(|e| e.indicators.as_slice()),
-                });
+                })
+                .is_break();
             }
             if !opts.adaptive {
                 steps.push(rec);
@@ -589,6 +594,9 @@ pub fn run_observed(
             }
         }
         t += opts.dt;
+        if stop {
+            break;
+        }
     }
     let _ = &space_old;
     let _ = &fspace_old;
