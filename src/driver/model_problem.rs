@@ -622,7 +622,7 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     let (u0, p0) = first.unwrap_or((f64::NAN, f64::NAN));
     let finite = |v: f64| v.is_finite().then_some(v);
     let res = CavityResults {
-        reynolds: reynolds,
+        reynolds,
         equations: th.n_eq(),
         cells: nc,
         recalculations: recalcs,
