@@ -438,6 +438,7 @@ fn load_model(path: &Path, set: &[String]) -> Option<Result<ModelScene, String>>
 /// Run a model-problem scene (`tread run` on a scene with `[problem]`).
 fn run_model(scene: ModelScene, out: Option<PathBuf>, quiet: bool) -> ExitCode {
     let started = std::time::Instant::now();
+    tread::io::record::install_interrupt_handler();
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&scene.name));
     if !quiet {
         eprintln!(

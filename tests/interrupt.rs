@@ -360,3 +360,66 @@ fn replay_into_a_full_disk_fails_cleanly() {
     assert_eq!(status.code(), Some(1), "{status}");
     assert!(leftovers.is_empty(), "left on the full disk: {leftovers:?}");
 }
+
+/// A model-problem run (the heat problem of scenarios/model_problems/heat.toml, 20 000 time
+/// steps: far longer than the wait below) stops at the next time step on SIGINT: exit 130,
+/// summary.json with `"error": "interrupted"` and `interrupted_at` the time reached, the
+/// results at that time, one row of steps.csv per step done, the solution written.
+#[test]
+fn sigint_stops_a_model_problem_at_a_time_step() {
+    let dir = tmpdir("model_problem");
+    let out = dir.join("out");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/model_problems/heat.toml"
+    );
+    let mut child = tread()
+        .args(["run", scene, "-q", "--out"])
+        .arg(&out)
+        .args(["--set", "problem.steps=20000", "--set", "problem.dt=0.0001"])
+        .args(["--set", "output.sinks=[\"summary\", \"csv\", \"vtu\"]"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The output folder exists once the run holds it (after the handler is installed); then
+    // let it take a few steps.
+    let t0 = Instant::now();
+    while !out.exists() {
+        if let Ok(Some(st)) = child.try_wait() {
+            panic!("the run ended ({st}) before it started");
+        }
+        assert!(t0.elapsed() < Duration::from_secs(60), "timeout");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-INT");
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["mode"], "model_problem");
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["error"], "interrupted");
+    let steps = s["steps"].as_u64().unwrap() as usize;
+    assert!((1..20000).contains(&steps), "stopped early: {steps} steps");
+    let t = s["interrupted_at"].as_f64().unwrap();
+    assert!(
+        (t - steps as f64 * 1e-4).abs() < 1e-9,
+        "t = {t}, {steps} steps"
+    );
+    // The results are those of the time reached.
+    assert!(
+        (s["results"]["t"].as_f64().unwrap() - t).abs() < 1e-12,
+        "{s}"
+    );
+    assert!(s["results"]["l2_error"].as_f64().unwrap() > 0.0, "{s}");
+    let (h, rows) = read_csv(&out.join("steps.csv"));
+    assert_eq!(rows.len(), steps);
+    let tc = column(&h, &rows, "t");
+    assert!((tc[steps - 1] - t).abs() < 1e-12);
+    assert!(out.join("solution.vtu").exists());
+}

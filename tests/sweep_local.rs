@@ -287,3 +287,122 @@ fn run_one_records_killed_on_sigterm_and_checks_its_index() {
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o).contains("--index 4 is out of range: the sweep `slow` has 4 runs"));
 }
+
+/// The L-shape model problem on a small budget (at most 1500 equations: a fraction of a second
+/// per run).
+const LSHAPE: &str = r#"
+[scene]
+name = "lshape_small"
+[problem]
+kind = "lshape"
+degree = 1
+estimator = "explicit"
+dorfler = 0.5
+max_dofs = 1500
+[output]
+sinks = ["summary"]
+"#;
+
+/// A sweep over a model-problem scene key (`problem.dorfler` of the L-shape): plan checks
+/// every run with the model-problem loader (a fraction out of range is named with its key and
+/// runs), the runs write the model problem's summary, the table has its `results` keys, and a
+/// run equals the bare `tread run` with the same override. The shipped example
+/// (scenarios/sweep_lshape_dorfler.toml) plans.
+#[test]
+fn sweep_over_a_model_problem_key() {
+    let d = TestDir::new("sweep", "model_problem");
+    std::fs::write(d.join("lshape.toml"), LSHAPE).unwrap();
+    let spec = d.join("spec.toml");
+    let body = |values: &str| {
+        format!(
+            "[sweep]\nname = \"dorfler\"\nscene = \"lshape.toml\"\n[[axis]]\nkey = \"problem.dorfler\"\nvalues = {values}\nunit = \"1\"\n[outputs]\nsinks = [\"summary\", \"csv\"]\n[units]\nenergy_error = \"1\"\n[[plot]]\nx = \"problem.dorfler\"\ny = [\"energy_error\"]\nfile = \"error.png\"\n"
+        )
+    };
+    std::fs::write(&spec, body("[0.3, 2.0, 3.0]")).unwrap();
+    let o = run(&["sweep", "plan", spec.to_str().unwrap()]);
+    let all = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{all}");
+    assert!(all.contains("key `problem.dorfler`"), "{all}");
+    assert!(all.contains("0001"), "{all}");
+    assert!(all.contains("0002"), "{all}");
+    assert!(!all.contains("0000 ("), "{all}");
+
+    std::fs::write(&spec, body("[0.3, 0.6]")).unwrap();
+    let root = d.join("out");
+    let o = run(&[
+        "--threads",
+        "1",
+        "-q",
+        "sweep",
+        "run",
+        spec.to_str().unwrap(),
+        "-j",
+        "2",
+        "--out",
+        root.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = read_table(&root);
+    assert_eq!(t.len(), 3, "{t:?}");
+    assert_eq!(column(&t, "state"), vec!["done", "done"]);
+    assert_eq!(column(&t, "problem.dorfler"), vec!["0.3", "0.6"]);
+    for key in [
+        "equations",
+        "energy_error",
+        "estimate",
+        "effectivity",
+        "rate",
+    ] {
+        let c = column(&t, key);
+        assert!(c.iter().all(|v| v.parse::<f64>().is_ok()), "{key}: {c:?}");
+    }
+    // Each run stopped at the budget: more equations than 1500 only on its last mesh.
+    let eq: Vec<f64> = column(&t, "equations")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(eq.iter().all(|&n| n > 1500.0), "{eq:?}");
+    assert!(root.join("runs/0001/steps.csv").exists());
+    assert!(root.join("plots/error.png").exists());
+    let s: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("runs/0001/summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(s["mode"], "model_problem");
+    assert_eq!(s["problem"]["dorfler"], 0.6);
+
+    let bare = d.join("bare");
+    let o = run(&[
+        "--threads",
+        "1",
+        "-q",
+        "run",
+        d.join("lshape.toml").to_str().unwrap(),
+        "--set",
+        "problem.dorfler=0.6",
+        "--set",
+        "output.sinks=[\"summary\", \"csv\"]",
+        "--out",
+        bare.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let results = |p: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(p).unwrap()).unwrap()
+            ["results"]
+            .clone()
+    };
+    assert_eq!(
+        results(&bare.join("summary.json")),
+        results(&root.join("runs/0001/summary.json"))
+    );
+
+    let shipped = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/sweep_lshape_dorfler.toml"
+    );
+    let o = run(&["sweep", "plan", shipped]);
+    assert!(o.status.success(), "{}", text(&o));
+    // 2 estimators × 6 fractions.
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("12 runs, every scene valid"), "{}", text(&o));
+}

@@ -2,7 +2,7 @@
 //! Poisson model problem on a quadtree, with h-, p- and hp-refinement.
 //!
 //! * [`mark`]: Dörfler bulk marking (the smallest set M with Σ_M η_K² ≥ θ Σ η_K²) or maximum
-//!   marking (η_K ≥ θ max η).
+//!   marking (η_K ≥ θ max η), shared with the other adapt loops ([`super::marking`]).
 //! * [`refine`]: h (split marked cells; the tree keeps the mesh one-irregular), p (raise the
 //!   degree of marked cells by one, up to `max_degree`), or hp (per marked cell: raise p where
 //!   the hierarchical coefficients of u_h decay, ‖∇u_p‖_K ≤ `hp_decay` ‖∇u_{p−1}‖_K with u_k the
@@ -14,51 +14,17 @@
 //! Every step is timed separately; the exact error is evaluated outside the timed steps.
 
 use super::estimate::{
-    Context, Equilibrated, Estimate, Estimator, ExplicitResidual, Interpolation, Recovery,
+    Context, Equilibrated, Estimator, ExplicitResidual, Interpolation, Recovery,
 };
+pub use super::marking::{mark, Marking};
+use super::marking::{CellEstimate, CellEstimator};
 use super::poisson::{assemble, energy_error_sq, solve_cg, solve_direct, Exact};
 use super::quadtree::Quadtree;
 use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
 use nalgebra::DMatrix;
+use std::ops::ControlFlow;
 use std::time::Instant;
-
-/// Marking strategy.
-#[derive(Clone, Copy, Debug)]
-pub enum Marking {
-    /// Dörfler bulk criterion with parameter θ ∈ (0, 1] on the squared indicators.
-    Dorfler(f64),
-    /// Mark η_K ≥ θ max η.
-    Maximum(f64),
-}
-
-/// Leaf indices to refine.
-pub fn mark(est: &Estimate, marking: Marking) -> Vec<usize> {
-    let eta = &est.indicators;
-    match marking {
-        Marking::Maximum(theta) => {
-            let m = eta.iter().copied().fold(0.0, f64::max);
-            (0..eta.len())
-                .filter(|&k| eta[k] >= theta * m && eta[k] > 0.0)
-                .collect()
-        }
-        Marking::Dorfler(theta) => {
-            let mut idx: Vec<usize> = (0..eta.len()).collect();
-            idx.sort_unstable_by(|&a, &b| eta[b].total_cmp(&eta[a]));
-            let total: f64 = eta.iter().map(|e| e * e).sum();
-            let mut acc = 0.0;
-            let mut out = Vec::new();
-            for k in idx {
-                if acc >= theta * total || eta[k] <= 0.0 {
-                    break;
-                }
-                acc += eta[k] * eta[k];
-                out.push(k);
-            }
-            out
-        }
-    }
-}
 
 /// Refinement kind.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,6 +41,17 @@ pub enum EstimatorKind {
     Equilibrated,
     Recovery,
     Interpolation,
+}
+
+/// The chosen estimator, itself an estimator of the quadtree's [`Context`].
+impl CellEstimator<Context<'_>> for EstimatorKind {
+    type Error = SpaceError;
+    fn name(&self) -> &'static str {
+        self.get().name()
+    }
+    fn estimate(&self, ctx: &Context) -> Result<CellEstimate, SpaceError> {
+        self.get().estimate(ctx)
+    }
 }
 
 impl EstimatorKind {
@@ -332,7 +309,9 @@ pub fn run(
     u_norm: f64,
     opts: &AdaptOptions,
 ) -> Result<Vec<StepRecord>, SpaceError> {
-    run_observed(tree, problem, u_norm, opts, &mut |_| {})
+    run_observed(tree, problem, u_norm, opts, &mut |_| {
+        ControlFlow::Continue(())
+    })
 }
 
 /// One pass of the loop as [`run_observed`] shows it: the record, the mesh, the space, the
@@ -342,16 +321,20 @@ pub struct StepView<'a> {
     pub tree: &'a Quadtree,
     pub space: &'a Space,
     pub x: &'a [f64],
-    pub estimate: &'a Estimate,
+    pub estimate: &'a CellEstimate,
+    /// Whether this is the last pass (the loop ends after it whatever `each` returns).
+    pub last: bool,
 }
 
 /// [`run`], calling `each` on every pass (the last one sees the final mesh and solution).
+/// When `each` returns [`ControlFlow::Break`] the loop stops after that pass (its mesh and
+/// solution are the last ones).
 pub fn run_observed(
     mut tree: Quadtree,
     problem: &dyn Exact,
     u_norm: f64,
     opts: &AdaptOptions,
-    each: &mut dyn FnMut(&StepView),
+    each: &mut dyn FnMut(&StepView) -> ControlFlow<()>,
 ) -> Result<Vec<StepRecord>, SpaceError> {
     for c in tree.leaves() {
         tree.cells[c as usize].degree = opts.degree;
@@ -398,10 +381,11 @@ pub fn run_observed(
         // 2. Estimate.
         let t0 = Instant::now();
         let est = if opts.uniform {
-            Estimate::from_squares(vec![1.0; space.leaves.len()])
+            CellEstimate::from_squares(vec![1.0; space.leaves.len()])
         } else {
-            opts.estimator.get().estimate(&ctx)?
-        };
+            opts.estimator.estimate(&ctx)?
+        }
+        .with_exact_error(error);
         let t_estimate = t0.elapsed().as_secs_f64();
         let all = if opts.all_estimators {
             let te = Instant::now();
@@ -433,7 +417,7 @@ pub fn run_observed(
         } else if opts.uniform {
             (0..space.leaves.len()).collect()
         } else {
-            mark(&est, opts.marking)
+            est.mark(opts.marking)
         };
         let t_mark = t0.elapsed().as_secs_f64();
         let mut rec = StepRecord {
@@ -461,23 +445,31 @@ pub fn run_observed(
         };
         if done {
             rec.t_total = clock.elapsed().as_secs_f64() - t_excluded;
-            each(&StepView {
+            // The last pass: nothing left to stop.
+            let _ = each(&StepView {
                 record: &rec,
                 tree: &tree,
                 space: &space,
                 x: &x,
                 estimate: &est,
+                last: true,
             });
             records.push(rec);
             break;
         }
-        each(&StepView {
+        let flow = each(&StepView {
             record: &rec,
             tree: &tree,
             space: &space,
             x: &x,
             estimate: &est,
+            last: false,
         });
+        if flow.is_break() {
+            rec.t_total = clock.elapsed().as_secs_f64() - t_excluded;
+            records.push(rec);
+            break;
+        }
         // 4. Refine.
         let t0 = Instant::now();
         let old_tree = tree.clone();

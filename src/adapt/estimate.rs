@@ -1,5 +1,7 @@
-//! A posteriori error estimators for −Δu = f behind one interface: an indicator η_K per leaf
-//! and the global estimate η = (Σ η_K²)^{1/2} of the energy error ‖∇(u − u_h)‖.
+//! A posteriori error estimators for −Δu = f behind one interface
+//! ([`super::marking::CellEstimator`] of a [`Context`]): an indicator η_K per leaf (in
+//! `space.leaves` order) and the global estimate η = (Σ η_K²)^{1/2} of the energy error
+//! ‖∇(u − u_h)‖ ([`CellEstimate`]).
 //!
 //! * [`ExplicitResidual`]: η_K² = (h_K/p_K)² ‖f + Δu_h‖²_K + ½ Σ_{F ⊂ ∂K, interior}
 //!   (h_F/p_F) ‖[∂_n u_h]‖²_F (unknown constant, taken as 1).
@@ -28,6 +30,7 @@
 //!
 //! All estimators vanish when u_h = u (no residual, no jump, exact recovery).
 
+use super::marking::{CellEstimate, CellEstimator};
 use super::quadtree::{Across, Quadtree, SIDES};
 use super::space::{shape_second, shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
@@ -42,28 +45,11 @@ pub struct Context<'a> {
     pub f: &'a (dyn Fn([f64; 2]) -> f64 + Sync),
 }
 
-/// Indicators per leaf (in `space.leaves` order) and the global estimate.
-#[derive(Clone, Debug)]
-pub struct Estimate {
-    pub indicators: Vec<f64>,
-    pub global: f64,
-}
+/// The estimators of this module behind the shared interface
+/// ([`CellEstimator`] of a [`Context`]), as one object type: `Box<dyn Estimator>`.
+pub trait Estimator: for<'a> CellEstimator<Context<'a>, Error = SpaceError> {}
 
-impl Estimate {
-    pub fn from_squares(sq: Vec<f64>) -> Self {
-        let global = sq.iter().sum::<f64>().sqrt();
-        Self {
-            indicators: sq.into_iter().map(|v| v.max(0.0).sqrt()).collect(),
-            global,
-        }
-    }
-}
-
-/// One estimator interface.
-pub trait Estimator {
-    fn name(&self) -> &'static str;
-    fn estimate(&self, ctx: &Context) -> Result<Estimate, SpaceError>;
-}
+impl<T: ?Sized + for<'a> CellEstimator<Context<'a>, Error = SpaceError>> Estimator for T {}
 
 /// A face between two leaves (or a leaf and the boundary): the side of `minus`, the normal
 /// pointing from `minus` to `plus`.
@@ -136,11 +122,12 @@ fn grad_at(ctx: &Context, k: usize, x: [f64; 2]) -> [f64; 2] {
 /// Explicit residual estimator.
 pub struct ExplicitResidual;
 
-impl Estimator for ExplicitResidual {
+impl CellEstimator<Context<'_>> for ExplicitResidual {
+    type Error = SpaceError;
     fn name(&self) -> &'static str {
         "explicit residual"
     }
-    fn estimate(&self, ctx: &Context) -> Result<Estimate, SpaceError> {
+    fn estimate(&self, ctx: &Context) -> Result<CellEstimate, SpaceError> {
         let (tree, space) = (ctx.tree, ctx.space);
         let nc = space.leaves.len();
         let mut sq = vec![0.0; nc];
@@ -182,7 +169,7 @@ impl Estimator for ExplicitResidual {
             sq[f.minus] += e;
             sq[plus] += e;
         }
-        Ok(Estimate::from_squares(sq))
+        Ok(CellEstimate::from_squares(sq))
     }
 }
 
@@ -230,11 +217,12 @@ fn local_matrices(basis: Basis1d, p: usize, q: usize) -> (DMatrix<f64>, DMatrix<
     (kqq, kqp)
 }
 
-impl Estimator for Equilibrated {
+impl CellEstimator<Context<'_>> for Equilibrated {
+    type Error = SpaceError;
     fn name(&self) -> &'static str {
         "equilibrated residual"
     }
-    fn estimate(&self, ctx: &Context) -> Result<Estimate, SpaceError> {
+    fn estimate(&self, ctx: &Context) -> Result<CellEstimate, SpaceError> {
         let (tree, space) = (ctx.tree, ctx.space);
         let nc = space.leaves.len();
         // First-order partition of unity with hanging-node constraints, no Dirichlet data.
@@ -507,7 +495,7 @@ impl Estimator for Equilibrated {
             full.rows_mut(1, rk.len() - 1).copy_from(&phi);
             sq[k] = full.dot(&(kqq * &full));
         }
-        Ok(Estimate::from_squares(sq))
+        Ok(CellEstimate::from_squares(sq))
     }
 }
 
@@ -718,11 +706,12 @@ pub fn recover_gradient(ctx: &Context) -> Result<Recovered, SpaceError> {
 /// Zienkiewicz–Zhu recovery estimator.
 pub struct Recovery;
 
-impl Estimator for Recovery {
+impl CellEstimator<Context<'_>> for Recovery {
+    type Error = SpaceError;
     fn name(&self) -> &'static str {
         "recovery (SPR)"
     }
-    fn estimate(&self, ctx: &Context) -> Result<Estimate, SpaceError> {
+    fn estimate(&self, ctx: &Context) -> Result<CellEstimate, SpaceError> {
         let rec = recover_gradient(ctx)?;
         let (tree, space) = (ctx.tree, ctx.space);
         let sq = (0..space.leaves.len())
@@ -747,7 +736,7 @@ impl Estimator for Recovery {
                 e
             })
             .collect();
-        Ok(Estimate::from_squares(sq))
+        Ok(CellEstimate::from_squares(sq))
     }
 }
 
@@ -777,11 +766,12 @@ pub fn interpolation_constant(p: usize) -> f64 {
         .sum()
 }
 
-impl Estimator for Interpolation {
+impl CellEstimator<Context<'_>> for Interpolation {
+    type Error = SpaceError;
     fn name(&self) -> &'static str {
         "interpolation (recovered derivatives)"
     }
-    fn estimate(&self, ctx: &Context) -> Result<Estimate, SpaceError> {
+    fn estimate(&self, ctx: &Context) -> Result<CellEstimate, SpaceError> {
         let rec = recover_gradient(ctx)?;
         let (tree, space) = (ctx.tree, ctx.space);
         let rp = rec.space.degree.first().copied().unwrap_or(1);
@@ -824,6 +814,6 @@ impl Estimator for Interpolation {
                 interpolation_constant(p) * h.powi(2 * p as i32) * s
             })
             .collect();
-        Ok(Estimate::from_squares(sq))
+        Ok(CellEstimate::from_squares(sq))
     }
 }

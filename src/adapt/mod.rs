@@ -3,7 +3,9 @@
 //! marking, refinement and solution transfer.
 //!
 //! The adapt loop is five named steps (see [`driver`]): **solve → estimate → mark → refine →
-//! transfer**.
+//! transfer**. [`marking`] holds what every adapt loop shares (the quadtree ones here and the
+//! solid's, [`crate::driver::adaptive`]): the per-cell estimate, the estimator interface and
+//! the marking.
 //!
 //! [`moving_mesh`] adapts by relocating the nodes of a fixed topology instead (r-adaptivity:
 //! solve → indicator → relocate → transfer), on the Navier–Stokes cavity with bilinear cells.
@@ -20,6 +22,7 @@ pub mod cavity_reference;
 pub mod convection;
 pub mod driver;
 pub mod estimate;
+pub mod marking;
 pub mod moving_mesh;
 pub mod navier_stokes;
 pub mod p_navier_stokes;

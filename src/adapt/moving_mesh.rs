@@ -284,6 +284,8 @@ fn transfer(th: &TaylorHood, x: &[f64], corners: &[CellCorners]) -> Vec<f64> {
 pub struct Recalculation {
     /// 0: the starting uniform mesh.
     pub index: usize,
+    /// Reynolds number of the solution (the last of the continuation, or the one it reached).
+    pub reynolds: f64,
     /// Smallest det J over the cells (corners and Gauss points).
     pub min_det_j: f64,
     /// Accepted relocation step λ (1 for the starting mesh).
@@ -303,19 +305,64 @@ pub fn moving_mesh_cavity(
     tol: f64,
     each: &mut dyn FnMut(&Recalculation, &TaylorHood, &[f64]),
 ) -> Result<(TaylorHood, Vec<f64>), MovingMeshError> {
+    let run = moving_mesh_cavity_until(
+        levels,
+        lid,
+        reynolds,
+        params,
+        recalculations,
+        tol,
+        &|| false,
+        each,
+    )?;
+    Ok((run.th, run.x))
+}
+
+/// What [`moving_mesh_cavity_until`] computed.
+pub struct CavityRun {
+    pub th: TaylorHood,
+    /// The last converged solution (full dofs).
+    pub x: Vec<f64>,
+    /// The Reynolds number of that solution (the last of the ladder unless stopped before).
+    pub reynolds: f64,
+    /// Whether `stop` ended the run early.
+    pub stopped: bool,
+}
+
+/// [`moving_mesh_cavity`], polling `stop()` after every Newton solve of the continuation and
+/// every recalculation: when it is true the run ends there (after `each` has seen the solution
+/// reached).
+#[allow(clippy::too_many_arguments)]
+pub fn moving_mesh_cavity_until(
+    levels: u32,
+    lid: CavityLid,
+    reynolds: &[f64],
+    params: &MonitorParams,
+    recalculations: usize,
+    tol: f64,
+    stop: &dyn Fn() -> bool,
+    each: &mut dyn FnMut(&Recalculation, &TaylorHood, &[f64]),
+) -> Result<CavityRun, MovingMeshError> {
     params.check()?;
     let tree = unit_square(levels);
     let mut th = TaylorHood::new(&tree, &|x, c| lid.g(x, c))?;
     let zero = |_: [f64; 2]| [0.0, 0.0];
     let mut y = vec![0.0; th.n_eq()];
     let mut its = 0;
-    for &re in reynolds {
-        its += solve_newton(&th, &mut y, 1.0 / re, &zero, tol, 30)?.iterations;
+    let mut re = 1.0;
+    let mut stopped = false;
+    for (i, &r) in reynolds.iter().enumerate() {
+        its += solve_newton(&th, &mut y, 1.0 / r, &zero, tol, 30)?.iterations;
+        re = r;
+        if i + 1 < reynolds.len() && stop() {
+            stopped = true;
+            break;
+        }
     }
-    let re = reynolds.last().copied().unwrap_or(1.0);
     let mut x = th.distribute(&y);
     let rec = Recalculation {
         index: 0,
+        reynolds: re,
         min_det_j: th.min_det_j(),
         step: 1.0,
         newton_iterations: its,
@@ -323,6 +370,10 @@ pub fn moving_mesh_cavity(
     each(&rec, &th, &x);
     let mut grid = VertexGrid::new(&th)?;
     for index in 1..=recalculations {
+        if stopped || stop() {
+            stopped = true;
+            break;
+        }
         let mk = cell_monitor(&th, &x, params);
         let area: f64 = th
             .corners
@@ -349,11 +400,17 @@ pub fn moving_mesh_cavity(
         x = th.distribute(&y);
         let rec = Recalculation {
             index,
+            reynolds: re,
             min_det_j: th.min_det_j(),
             step,
             newton_iterations: st.iterations,
         };
         each(&rec, &th, &x);
     }
-    Ok((th, x))
+    Ok(CavityRun {
+        th,
+        x,
+        reynolds: re,
+        stopped,
+    })
 }

@@ -40,11 +40,13 @@
 //! coarse history projected from an inaccurate enriched one would carry the same error in both
 //! solutions, invisible to the estimate.)
 
+use super::marking::{dorfler_among, squared_total};
 use super::quadtree::Quadtree;
 use super::space::{shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::assembly::constraints::{ClosedConstraints, CondenseScratch, CondensedPattern};
 use crate::element::hierarchical::{gauss_legendre, Basis1d, MAX_DEGREE};
 use crate::solver::linear::{LinearError, LinearKind, SparseSolver};
+use std::ops::ControlFlow;
 use std::rc::Rc;
 
 /// Largest velocity degree of a cell (the pressure has one less).
@@ -821,7 +823,8 @@ pub fn degree_histogram(degrees: &[usize]) -> Vec<(usize, usize)> {
 pub enum PMarking {
     /// Mark every cell with η_K > τ (|K| / |Ω|)^{1/2}.
     Tolerance,
-    /// While η > τ, Dörfler marking with parameter θ of the squared indicators.
+    /// While η > τ, Dörfler marking with parameter θ of the squared indicators, among the
+    /// cells below the largest degree ([`super::marking::dorfler_among`]).
     Dorfler(f64),
 }
 
@@ -876,22 +879,10 @@ pub fn mark_cells(th: &PTaylorHood, eta: &[f64], params: &PAdaptParams) -> Vec<u
             .filter(|&k| can(k) && eta[k] > params.tol * (th.area(k) / total_area).sqrt())
             .collect(),
         PMarking::Dorfler(theta) => {
-            let total: f64 = eta.iter().map(|e| e * e).sum();
-            if total.sqrt() <= params.tol {
+            if squared_total(eta).sqrt() <= params.tol {
                 return Vec::new();
             }
-            let mut idx: Vec<usize> = (0..eta.len()).filter(|&k| can(k)).collect();
-            idx.sort_unstable_by(|&a, &b| eta[b].total_cmp(&eta[a]));
-            let mut acc = 0.0;
-            let mut out = Vec::new();
-            for k in idx {
-                if acc >= theta * total {
-                    break;
-                }
-                acc += eta[k] * eta[k];
-                out.push(k);
-            }
-            out
+            dorfler_among(eta, theta, (0..eta.len()).filter(|&k| can(k)))
         }
     }
 }
@@ -1018,6 +1009,18 @@ pub fn adapt_steady(
     problem: &SteadyProblem,
     params: &PAdaptParams,
 ) -> Result<(Vec<SweepReport>, Estimated), PnsError> {
+    adapt_steady_until(tree, degrees, problem, params, &|| false)
+}
+
+/// [`adapt_steady`], also ending after the sweep at which `stop()` is true (that sweep's
+/// report is then not `accepted` unless no cell was marked).
+pub fn adapt_steady_until(
+    tree: &Quadtree,
+    degrees: &[usize],
+    problem: &SteadyProblem,
+    params: &PAdaptParams,
+    stop: &dyn Fn() -> bool,
+) -> Result<(Vec<SweepReport>, Estimated), PnsError> {
     params.check()?;
     let mut d = degrees.to_vec();
     let mut reports = Vec::new();
@@ -1033,7 +1036,7 @@ pub fn adapt_steady(
             est.newton[0].iterations + est.newton[1].iterations,
         );
         let marked = mark_cells(&est.coarse.th, &est.indicators, params);
-        if marked.is_empty() || sweep + 1 >= params.max_sweeps {
+        if marked.is_empty() || sweep + 1 >= params.max_sweeps || stop() {
             rep.accepted = marked.is_empty();
             reports.push(rep);
             return Ok((reports, est));
@@ -1154,15 +1157,18 @@ pub fn run_transient(
     time: &TimeParams,
     params: &PAdaptParams,
 ) -> Result<Vec<SweepReport>, PnsError> {
-    run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {})
+    run_transient_observed(tree, degrees, problem, time, params, &mut |_, _, _, _| {
+        ControlFlow::Continue(())
+    })
 }
 
 /// What [`run_transient_observed`] calls on every accepted step: (report, solution, enriched
-/// solution, indicators).
-pub type StepObserver<'a> = &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]);
+/// solution, indicators); [`ControlFlow::Break`] stops the run after that step.
+pub type StepObserver<'a> =
+    &'a mut dyn FnMut(&SweepReport, &Field, &Field, &[f64]) -> ControlFlow<()>;
 
 /// [`run_transient`], calling `each(report, solution, enriched solution, indicators)` on every
-/// accepted step.
+/// accepted step (and stopping after the step where it returns [`ControlFlow::Break`]).
 pub fn run_transient_observed(
     tree: &Quadtree,
     degrees: &[usize],
@@ -1203,8 +1209,11 @@ pub fn run_transient_observed(
             let marked = mark_cells(&new.th, &eta, params);
             if marked.is_empty() || sweep + 1 >= params.max_sweeps {
                 rep.accepted = true;
-                each(&rep, &new, &new_fine, &eta);
+                let flow = each(&rep, &new, &new_fine, &eta);
                 reports.push(rep);
+                if flow.is_break() {
+                    return Ok(reports);
+                }
                 old = new;
                 old_fine = new_fine;
                 break;

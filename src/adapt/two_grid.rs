@@ -16,19 +16,19 @@
 //! η / ‖u − u_h‖ tends to 1 − 2^{−(p+1)} (0.75 for Q1, 0.875 for Q2) in the asymptotic range.
 //!
 //! **Adaptation between steps.** After each step: Dörfler marking of η_K with parameter θ
-//! ([`super::driver::mark`]) for refinement (cells below `max_level`); leaves with
+//! ([`super::marking::mark`]) for refinement (cells below `max_level`); leaves with
 //! η_K² < `coarsen_fraction` · η² / N_cells and level > `min_level` are coarsened (four
 //! siblings at once, one-irregularity kept by [`Quadtree::coarsen`]); then u_h and u_f are
 //! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times, each
 //! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0.
 
-use super::driver::{mark, Marking};
-use super::estimate::Estimate;
+use super::marking::{coarsening_limit, CellEstimate, Marking};
 use super::quadtree::Quadtree;
 use super::space::{shape_second, shape_values, Space, SpaceError, MAX_LOCAL_SCALAR};
 use crate::assembly::constraints::CondenseScratch;
 use crate::element::hierarchical::{gauss_legendre, Basis1d};
 use crate::solver::linear::{LinearError, LinearKind, SparseSolver};
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 /// Largest local vector of a kernel: 2 components of a Q2 cell.
@@ -454,7 +454,7 @@ pub fn run(
     t0: f64,
     opts: &TransientOptions,
 ) -> Result<TransientRun, TransientError> {
-    run_observed(kernel, tree0, t0, opts, &mut |_| {})
+    run_observed(kernel, tree0, t0, opts, &mut |_| ControlFlow::Continue(()))
 }
 
 /// One accepted step as [`run_observed`] shows it: its record, the mesh and space it was
@@ -468,13 +468,15 @@ pub struct StepView<'a> {
     pub indicators: Option<&'a [f64]>,
 }
 
-/// [`run`], calling `each` on every accepted step.
+/// [`run`], calling `each` on every accepted step. When `each` returns
+/// [`ControlFlow::Break`] the run stops after that step (the mesh adapted as after any step:
+/// [`TransientRun`] holds the state at the time of that step).
 pub fn run_observed(
     kernel: &dyn Kernel,
     tree0: &Quadtree,
     t0: f64,
     opts: &TransientOptions,
-    each: &mut dyn FnMut(&StepView),
+    each: &mut dyn FnMut(&StepView) -> ControlFlow<()>,
 ) -> Result<TransientRun, TransientError> {
     if !(opts.dt > 0.0 && opts.dt.is_finite()) {
         return Err(TransientError::Parameter(format!(
@@ -506,6 +508,7 @@ pub fn run_observed(
     };
     let mut steps = Vec::new();
     let mut t = t0;
+    let mut stop = false;
     for n in 0..opts.n_steps {
         let sweeps = if n == 0 && opts.adaptive {
             opts.initial_sweeps.max(1)
@@ -531,8 +534,9 @@ pub fn run_observed(
             if two_grid {
                 let fs = space_at(&ftree, kernel, t + opts.dt)?;
                 let (xff, _) = step(&ftree, kernel, &fs, &xfn, t, opts.dt, opts.newton)?;
-                let e =
-                    Estimate::from_squares(difference_sq(&tree, &space_new, &x, &ftree, &fs, &xff));
+                let e = CellEstimate::from_squares(difference_sq(
+                    &tree, &space_new, &x, &ftree, &fs, &xff,
+                ));
                 rec.estimate = e.global;
                 xf = xff;
                 fspace_new = Some(fs);
@@ -540,13 +544,14 @@ pub fn run_observed(
             }
             let last_sweep = sweep + 1 == sweeps;
             if last_sweep || !opts.adaptive {
-                each(&StepView {
+                stop = each(&StepView {
                     record: &rec,
                     tree: &tree,
                     space: &space_new,
                     x: &x,
                     indicators: est.as_ref().map(|e| e.indicators.as_slice()),
-                });
+                })
+                .is_break();
             }
             if !opts.adaptive {
                 steps.push(rec);
@@ -589,6 +594,9 @@ pub fn run_observed(
             }
         }
         t += opts.dt;
+        if stop {
+            break;
+        }
     }
     let _ = &space_old;
     let _ = &fspace_old;
@@ -602,18 +610,17 @@ pub fn run_observed(
 }
 
 /// Coarsen the leaves with small indicators, then refine the Dörfler-marked ones.
-fn adapt_mesh(tree: &mut Quadtree, space: &Space, est: &Estimate, opts: &TransientOptions) {
+fn adapt_mesh(tree: &mut Quadtree, space: &Space, est: &CellEstimate, opts: &TransientOptions) {
     let eta = &est.indicators;
-    let n = eta.len().max(1) as f64;
-    let total: f64 = eta.iter().map(|e| e * e).sum();
-    let refine: Vec<usize> = mark(est, opts.marking)
+    let limit = coarsening_limit(eta, opts.coarsen_fraction);
+    let refine: Vec<usize> = est
+        .mark(opts.marking)
         .into_iter()
         .filter(|&k| tree.cells[space.leaves[k] as usize].level < opts.max_level)
         .collect();
     let coarse: Vec<u32> = (0..eta.len())
         .filter(|&k| {
-            eta[k] * eta[k] < opts.coarsen_fraction * total / n
-                && tree.cells[space.leaves[k] as usize].level > opts.min_level
+            eta[k] * eta[k] < limit && tree.cells[space.leaves[k] as usize].level > opts.min_level
         })
         .map(|k| space.leaves[k])
         .collect();

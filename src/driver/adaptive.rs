@@ -17,7 +17,7 @@
 //!    or the explicit residual with the contact traction as boundary data
 //!    ([`crate::physics::estimate`]).
 //! 3. **Mark** by Dörfler's bulk criterion: the fewest cells whose squared indicators make up
-//!    the fraction θ of the total.
+//!    the fraction θ of the total ([`crate::adapt::marking`], shared with the model problems).
 //! 4. **Refine** the marked cells into four, keeping the mesh one-irregular; with a coarsening
 //!    fraction c > 0, also **coarsen**: a family of four sibling cells, none of them marked,
 //!    merges back into its parent when the parent's predicted indicator is small,
@@ -38,6 +38,7 @@
 use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
 use super::steady_run;
+use crate::adapt::marking::{coarsening_limit, CellEstimate, CellEstimator, Marking};
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
@@ -45,6 +46,7 @@ use crate::io::scene::{Mode, Scene, SteadyHistoryChoice};
 use crate::mesh::locate::vector_at;
 use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
 use crate::model::system::SolidSystem;
+use crate::physics::estimate::SolidContext;
 use crate::physics::SolidModel;
 use crate::physics::{equilibrated, estimate};
 use crate::setup::{build_contact, build_material, AppError};
@@ -77,6 +79,29 @@ impl SolidEstimator {
             Self::Interpolation => "interpolation",
             Self::Explicit => "explicit",
             Self::Equilibrated => "equilibrated",
+        }
+    }
+}
+
+impl SolidEstimator {
+    /// Whether the estimator takes the contact tractions as boundary data.
+    pub fn uses_applied_tractions(self) -> bool {
+        matches!(self, Self::Explicit | Self::Equilibrated)
+    }
+}
+
+/// The chosen estimator, itself an estimator of the solid.
+impl CellEstimator<SolidContext<'_>> for SolidEstimator {
+    type Error = std::convert::Infallible;
+    fn name(&self) -> &'static str {
+        self.keyword()
+    }
+    fn estimate(&self, ctx: &SolidContext) -> Result<CellEstimate, Self::Error> {
+        match self {
+            Self::Recovery => estimate::Recovery.estimate(ctx),
+            Self::Interpolation => estimate::Interpolation.estimate(ctx),
+            Self::Explicit => estimate::ExplicitResidual.estimate(ctx),
+            Self::Equilibrated => equilibrated::Equilibrated.estimate(ctx),
         }
     }
 }
@@ -471,24 +496,20 @@ pub fn run(
         let ts = Instant::now();
         let iterations = problem.solve(scene, warm, &cold, out_dir)?;
         let sys = problem.sys();
-        let est = match opts.estimator {
-            SolidEstimator::Recovery => estimate::recovery(&sys.model, &sys.dofs, &sys.x),
-            SolidEstimator::Interpolation => estimate::interpolation(&sys.model, &sys.dofs, &sys.x),
-            SolidEstimator::Explicit => estimate::explicit_residual_with(
-                &sys.model,
-                &sys.dofs,
-                &sys.x,
-                &[],
-                sys.contact_tractions().as_ref(),
-            ),
-            SolidEstimator::Equilibrated => equilibrated::equilibrated(
-                &sys.model,
-                &sys.dofs,
-                &sys.x,
-                &[],
-                sys.contact_tractions().as_ref(),
-            ),
+        // The contact tractions are the boundary data of the residual estimators only.
+        let applied = opts
+            .estimator
+            .uses_applied_tractions()
+            .then(|| sys.contact_tractions())
+            .flatten();
+        let ctx = SolidContext {
+            model: &sys.model,
+            dofs: &sys.dofs,
+            x: &sys.x,
+            free: &[],
+            applied: applied.as_ref(),
         };
+        let Ok(est) = opts.estimator.estimate(&ctx);
         let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
         let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
         let rec = AdaptStep {
@@ -516,24 +537,13 @@ pub fn run(
             break;
         }
         // Mark (Dörfler) and refine.
-        let mut order: Vec<usize> = (0..est.indicators.len()).collect();
-        order.sort_by(|&a, &b| est.indicators[b].total_cmp(&est.indicators[a]));
-        let total: f64 = est.indicators.iter().map(|v| v * v).sum();
-        let mut acc = 0.0;
-        let mut marked = Vec::new();
-        for k in order {
-            if acc >= opts.fraction * total {
-                break;
-            }
-            acc += est.indicators[k] * est.indicators[k];
-            marked.push(k);
-        }
+        let marked = est.mark(Marking::Dorfler(opts.fraction));
         // Coarsening candidates, by leaf (indices change with the refinement): the children of
         // the families whose predicted parent indicator is small.
         let small = if opts.coarsen > 0.0 {
             let degree = forest.degrees().iter().copied().max().unwrap_or(1);
             let growth = f64::from(1u32 << (2 * u32::from(degree)));
-            let limit = opts.coarsen * total / est.indicators.len().max(1) as f64;
+            let limit = coarsening_limit(&est.indicators, opts.coarsen);
             coarsening_candidates(forest.leaves(), &est.indicators, &marked, growth, limit)
         } else {
             Default::default()

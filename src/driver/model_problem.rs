@@ -31,19 +31,28 @@
 //!   rate in the number of equations.
 //!
 //! A failed solve still writes `summary.json` (`converged = false`, `error`) and the rows of
-//! `steps.csv` reached, and returns [`AppError::Failed`] (exit status 1). Pictures and the
+//! `steps.csv` reached, and returns [`AppError::Failed`] (exit status 1).
+//!
+//! **Interrupts.** Ctrl-C (SIGTERM, SIGHUP: [`crate::io::record::interrupted`]) stops a run at
+//! the next step boundary: after the time step (heat, burgers, Taylor–Green), the adaptive pass
+//! (lshape, Kovasznay), the Newton solve of the Reynolds continuation or the mesh recalculation
+//! (cavity) in progress. Every output is then written for the last state computed (its
+//! `results` against the reference at that state: the time reached, the Reynolds number
+//! reached), `summary.json` says `converged = false`, `"error": "interrupted"` and
+//! `interrupted_at` (the time, the pass or the Reynolds number reached), and the run returns
+//! [`AppError::Interrupted`] (exit status 130). Pictures and the
 //! recording that cannot be written are warnings, listed in `incomplete_outputs`.
 
 use crate::adapt::burgers::{Burgers, ColeHopf};
 use crate::adapt::cavity_reference;
 use crate::adapt::convection::{ConvectionDiffusion, RotatingHill};
 use crate::adapt::driver::{self as adapt_loop, loglog_slope, AdaptOptions, Marking};
-use crate::adapt::moving_mesh::{cell_monitor, moving_mesh_cavity, MonitorParams};
+use crate::adapt::moving_mesh::{cell_monitor, moving_mesh_cavity_until, MonitorParams};
 use crate::adapt::navier_stokes::{
     bilinear, psi_min, stream_function, CavityLid, NsSolution, TaylorHood,
 };
 use crate::adapt::p_navier_stokes::{
-    adapt_steady, degree_histogram, exact_error, run_transient_observed, Field, PAdaptParams,
+    adapt_steady_until, degree_histogram, exact_error, run_transient_observed, Field, PAdaptParams,
     PMarking, SteadyProblem, SweepReport, TimeParams, TransientProblem,
 };
 use crate::adapt::poisson::{energy_error_sq, lshape_energy_sq, LShape};
@@ -56,6 +65,7 @@ use crate::driver::results::{
 };
 use crate::element::hierarchical::Basis1d;
 use crate::io::output::{ensure_dir, write_csv, write_json, OutputError};
+use crate::io::record::interrupted;
 use crate::io::record::quad::{self, PointField, QuadCells, Shading};
 use crate::io::scene::model_problem::{
     CavityMesh, CavitySpec, Flow, LEstimator, LRefinement, LShapeSpec, Lid, ModelScene, PnsSpec,
@@ -63,7 +73,9 @@ use crate::io::scene::model_problem::{
 };
 use crate::io::scene::Sink;
 use crate::setup::{AppError, RunOptions};
+use std::cell::Cell;
 use std::f64::consts::PI;
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
 
@@ -79,6 +91,9 @@ struct Done {
     newton_iterations: usize,
     results: ModelResults,
     headline: String,
+    /// Where an interrupt stopped the run (time, pass or Reynolds number; see the module
+    /// docs); `None` when it ran to its end.
+    interrupted_at: Option<f64>,
 }
 
 /// The final mesh and solution as the pictures and the VTU see them.
@@ -282,7 +297,9 @@ pub fn run(scene: &ModelScene, opts: &RunOptions) -> Result<RunOutcome, AppError
     };
     out.finish_recording();
     let wall = t0.elapsed().as_secs_f64();
+    let interrupted_at = r.as_ref().ok().and_then(|d| d.interrupted_at);
     let (converged, error) = match &r {
+        Ok(_) if interrupted_at.is_some() => (false, Some("interrupted".to_string())),
         Ok(_) => (true, None),
         Err(Failed::Output(e)) => (false, Some(e.to_string())),
         Err(Failed::Solve(f)) => (false, Some(f.message.clone())),
@@ -319,6 +336,7 @@ pub fn run(scene: &ModelScene, opts: &RunOptions) -> Result<RunOutcome, AppError
             problem,
             results,
             steps: table.rows.len(),
+            interrupted_at,
         })),
     );
     if scene.has(Sink::Csv) && !table.header.is_empty() {
@@ -341,6 +359,7 @@ pub fn run(scene: &ModelScene, opts: &RunOptions) -> Result<RunOutcome, AppError
     }
     write_json(&dir.join("summary.json"), &summary)?;
     match r {
+        Ok(_) if interrupted_at.is_some() => Err(AppError::Interrupted(dir.to_path_buf())),
         Ok(_) => Ok(RunOutcome {
             summary,
             typed,
@@ -425,8 +444,10 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     } else {
         0
     };
-    let reference = match lid {
-        CavityLid::Discontinuous => cavity_reference::table(s.reynolds),
+    // The reference tables of a Reynolds number (an interrupted continuation ends below the
+    // scene's).
+    let reference_at = |re: f64| match lid {
+        CavityLid::Discontinuous => cavity_reference::table(re),
         CavityLid::Regularised => None,
     };
     table.header = vec![
@@ -446,14 +467,18 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     let mut n_eq = 0;
     let mut first: Option<(f64, f64)> = None;
     let mut pass_error: Option<String> = None;
-    let run = moving_mesh_cavity(
+    let mut moved = 0;
+    let run = moving_mesh_cavity_until(
         s.levels,
         lid,
         &ladder,
         &params,
         recalcs,
         s.tolerance,
+        &interrupted,
         &mut |r, th, x| {
+            moved = r.index;
+            let reference = reference_at(r.reynolds);
             newton += r.newton_iterations;
             n_eq = th.n_eq();
             let sol = NsSolution { th, x: x.to_vec() };
@@ -513,10 +538,14 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
             }
         },
     );
-    let (th, x) = run.map_err(|e| solve_failed(e, n_eq, newton))?;
+    let run = run.map_err(|e| solve_failed(e, n_eq, newton))?;
     if let Some(e) = pass_error {
         return Err(solve_failed(e, n_eq, newton));
     }
+    let (th, x, reynolds) = (run.th, run.x, run.reynolds);
+    let interrupted_at = run.stopped.then_some(reynolds);
+    let reference = reference_at(reynolds);
+    let recalcs = moved;
     let sol = NsSolution { th: &th, x };
     let (space, psi) = stream_function(&sol).map_err(|e| solve_failed(e, n_eq, newton))?;
     let (at, pm) = psi_min(&th, &space, &psi);
@@ -543,7 +572,7 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     let psi_f = |k: usize, a: f64, b: f64, o: &mut [f64]| o[0] = psi_at(k, a, b);
     let title = format!(
         "cavity Re = {}, {} × {} cells{}",
-        s.reynolds,
+        reynolds,
         1 << s.levels,
         1 << s.levels,
         if recalcs > 0 {
@@ -593,7 +622,7 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     let (u0, p0) = first.unwrap_or((f64::NAN, f64::NAN));
     let finite = |v: f64| v.is_finite().then_some(v);
     let res = CavityResults {
-        reynolds: s.reynolds,
+        reynolds,
         equations: th.n_eq(),
         cells: nc,
         recalculations: recalcs,
@@ -610,7 +639,7 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     };
     let mut headline = format!(
         "cavity Re = {}: {} equations, psi_min = {pm:.6} at ({:.4}, {:.4})",
-        s.reynolds,
+        reynolds,
         th.n_eq(),
         at[0],
         at[1]
@@ -632,6 +661,7 @@ fn cavity(s: &CavitySpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
         newton_iterations: newton,
         results: ModelResults::Cavity(res),
         headline,
+        interrupted_at,
     })
 }
 
@@ -684,6 +714,7 @@ fn transient(
     let mut newton = 0;
     let mut n_eq = 0;
     let steps = s.steps;
+    let mut stopped = false;
     let run = two_grid::run_observed(kernel, tree0, 0.0, &o, &mut |v| {
         let r = v.record;
         let index = table.rows.len();
@@ -723,8 +754,14 @@ fn transient(
                 scalars: &scalars,
             });
         }
-        if index + 1 == steps {
+        stopped = index + 1 < steps && interrupted();
+        if index + 1 == steps || stopped {
             last = Some((v.tree.clone(), v.x.to_vec(), ind, r.t));
+        }
+        if stopped {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
         }
     });
     let run = run.map_err(|e| solve_failed(e, n_eq, newton))?;
@@ -810,6 +847,7 @@ fn transient(
         newton_iterations: newton,
         results: ModelResults::TwoGrid(res),
         headline,
+        interrupted_at: stopped.then_some(t),
     })
 }
 
@@ -932,6 +970,7 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
         max_sweeps: s.max_sweeps,
     };
     let zero = |_: [f64; 2], _: f64| [0.0, 0.0];
+    let stopped = Cell::new(false);
     let (reports, fin, t, exact_at): (Vec<SweepReport>, (Field, Vec<f64>), f64, Box<ExactAt>) =
         match s.flow {
             Flow::Kovasznay => {
@@ -948,8 +987,14 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
                     f: &zero,
                     exact: Some(&ex),
                 };
-                let (reps, est) = adapt_steady(&tree, &vec![s.degree; n], &problem, &params)
-                    .map_err(|e| solve_failed(e, 0, 0))?;
+                // Polled only while another sweep is due.
+                let stop = || {
+                    stopped.set(interrupted());
+                    stopped.get()
+                };
+                let (reps, est) =
+                    adapt_steady_until(&tree, &vec![s.degree; n], &problem, &params, &stop)
+                        .map_err(|e| solve_failed(e, 0, 0))?;
                 for r in &reps {
                     let i = table.rows.len();
                     table.rows.push(pns_row(r, i));
@@ -980,7 +1025,7 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
                     n_steps: s.steps.unwrap_or(5),
                     theta: 0.5,
                 };
-                let mut last: Option<(Field, Vec<f64>)> = None;
+                let mut last: Option<(Field, Vec<f64>, f64)> = None;
                 let mut step = 0;
                 let reps = run_transient_observed(
                     &tree,
@@ -993,7 +1038,13 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
                             pns_frame(out, step, Some(r.t), new, eta, r);
                         }
                         step += 1;
-                        last = Some((new.clone(), eta.to_vec()));
+                        last = Some((new.clone(), eta.to_vec(), r.t));
+                        if step < time.n_steps && interrupted() {
+                            stopped.set(true);
+                            ControlFlow::Break(())
+                        } else {
+                            ControlFlow::Continue(())
+                        }
                     },
                 )
                 .map_err(|e| solve_failed(e, 0, 0))?;
@@ -1001,8 +1052,14 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
                     let i = table.rows.len();
                     table.rows.push(pns_row(r, i));
                 }
-                let fin = last.ok_or_else(|| solve_failed("no time step was taken", 0, 0))?;
-                let t = time.dt * time.n_steps as f64;
+                let (field, eta, t_reached) =
+                    last.ok_or_else(|| solve_failed("no time step was taken", 0, 0))?;
+                let fin = (field, eta);
+                let t = if stopped.get() {
+                    t_reached
+                } else {
+                    time.dt * time.n_steps as f64
+                };
                 (reps, fin, t, Box::new(move |x| taylor_green(nu, x, t)))
             }
         };
@@ -1131,6 +1188,13 @@ fn p_navier_stokes(s: &PnsSpec, out: &mut Outputs, table: &mut Table) -> Result<
         newton_iterations: newton,
         results: ModelResults::PNavierStokes(res),
         headline,
+        interrupted_at: stopped.get().then(|| {
+            if s.flow == Flow::Kovasznay {
+                reports.len().saturating_sub(1) as f64
+            } else {
+                t
+            }
+        }),
     })
 }
 
@@ -1215,6 +1279,7 @@ fn lshape(s: &LShapeSpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
     let u_norm = lshape_energy_sq().sqrt();
     let mut last: Option<(Quadtree, Vec<f64>, Vec<f64>)> = None;
     let mut n_eq = 0;
+    let mut stopped = false;
     let recs = adapt_loop::run_observed(
         Quadtree::l_shape(0, s.degree),
         &LShape,
@@ -1259,6 +1324,12 @@ fn lshape(s: &LShapeSpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
                 });
             }
             last = Some((v.tree.clone(), v.x.to_vec(), v.estimate.indicators.clone()));
+            stopped = !v.last && interrupted();
+            if stopped {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
         },
     )
     .map_err(|e| solve_failed(e, n_eq, 0))?;
@@ -1353,5 +1424,6 @@ fn lshape(s: &LShapeSpec, out: &mut Outputs, table: &mut Table) -> Result<Done, 
         newton_iterations: 0,
         results: ModelResults::LShape(res),
         headline,
+        interrupted_at: stopped.then_some(fin.step as f64),
     })
 }

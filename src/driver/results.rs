@@ -1041,6 +1041,11 @@ pub struct ModelProblemSummary {
     pub results: Option<ModelResults>,
     /// Steps, passes or recalculations (rows of `steps.csv`).
     pub steps: usize,
+    /// Where an interrupt stopped the run: the time (heat, burgers, Taylor–Green), the
+    /// adaptive pass (lshape, Kovasznay) or the Reynolds number (cavity) reached; absent when
+    /// not interrupted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interrupted_at: Option<f64>,
 }
 
 /// `results` of one kind.

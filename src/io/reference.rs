@@ -417,6 +417,7 @@ pub static SUMMARY_KEYS: &[OutputKey] = &[
     k("kind", N, MP, "`problem.kind`: `cavity`, `heat`, `burgers`, `p_navier_stokes`, `lshape`"),
     k("problem", N, MP, "the resolved `[problem]` table (every key with its value, defaults filled)"),
     k("steps", N, MP, "rows of `steps.csv`: time steps, adaptive passes (every attempt of a p-adaptive time step) or mesh recalculations"),
+    k("interrupted_at", "T, – or –", "interrupted model problems", "where Ctrl-C (SIGTERM, SIGHUP) stopped the run: the time reached (heat, burgers, Taylor–Green), the last adaptive pass (lshape, Kovasznay) or the Reynolds number reached (cavity); absent otherwise"),
     k("results.equations", N, MP, "equations (unknowns) of the final solution"),
     k("results.cells", N, "model problems cavity, heat, burgers, lshape", "cells of the final mesh"),
     k("results.reynolds", N, MPC, "Reynolds number (ν = 1/Re, lid speed 1)"),

@@ -49,10 +49,11 @@
 //! overstress).
 
 use super::estimate::{
-    point_state, side_pairs, side_state, tangent, BoundaryTractions, PointState, SolidEstimate,
+    point_state, side_pairs, side_state, tangent, BoundaryTractions, PointState, SolidContext,
 };
 use super::solid::SolidModel;
 use super::streamline_upwind::{lagrange_with_derivative, reference_of};
+use crate::adapt::marking::{CellEstimate, CellEstimator};
 use crate::assembly::DofMap;
 use crate::element::quadrature::gauss_1d;
 use crate::math::{Mat2, Vec2};
@@ -258,6 +259,26 @@ fn lobatto(q: usize) -> Vec<f64> {
     }
 }
 
+/// The equilibrated residual estimator ([`equilibrated`]) behind the shared interface, with the
+/// context's free sets and applied tractions.
+pub struct Equilibrated;
+
+impl CellEstimator<SolidContext<'_>> for Equilibrated {
+    type Error = std::convert::Infallible;
+    fn name(&self) -> &'static str {
+        "equilibrated residual"
+    }
+    fn estimate(&self, ctx: &SolidContext) -> Result<CellEstimate, Self::Error> {
+        Ok(equilibrated(
+            ctx.model,
+            ctx.dofs,
+            ctx.x,
+            ctx.free,
+            ctx.applied,
+        ))
+    }
+}
+
 /// The equilibrated residual estimator (see the module docs). `free` names the traction-free
 /// facet sets; `applied` gives tractions on boundary facets (e.g. the road's contact); every
 /// other boundary side carries a displacement condition.
@@ -267,7 +288,7 @@ pub fn equilibrated(
     x: &[f64],
     free: &[&str],
     applied: Option<&BoundaryTractions>,
-) -> SolidEstimate {
+) -> CellEstimate {
     let mesh = &model.mesh;
     let nc = mesh.n_cells();
     let mut free_sides: HashSet<(u32, u8)> = HashSet::new();
@@ -599,7 +620,7 @@ pub fn equilibrated(
         .into_par_iter()
         .map(|c| local_problem(model, dofs, x, c, &sides, &sides_of_cell[c], &corr))
         .collect();
-    SolidEstimate::from_squares(sq)
+    CellEstimate::from_squares(sq)
 }
 
 /// η_K² of cell `c` from its local Neumann problem in vector Q_{p+2}.

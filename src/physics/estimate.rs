@@ -13,8 +13,10 @@
 //! ‖e‖_A cell by cell for a known exact gradient (manufactured or closed-form solutions): the
 //! reference the estimators' effectivity index η / ‖e‖_A is measured against.
 //!
-//! Both estimators return one indicator per cell and the global estimate η = (Σ η_K²)^{1/2}
-//! ([`SolidEstimate`]). Both vanish when u_h is exact: a homogeneous deformation (which Q1 and Q2
+//! The estimators return one indicator per cell and the global estimate η = (Σ η_K²)^{1/2}
+//! ([`CellEstimate`]); behind the interface shared with the model problems
+//! ([`crate::adapt::marking::CellEstimator`] of a [`SolidContext`]) they are [`Recovery`],
+//! [`Interpolation`], [`ExplicitResidual`] and [`super::equilibrated::Equilibrated`]. Both vanish when u_h is exact: a homogeneous deformation (which Q1 and Q2
 //! represent exactly) has no residual, no traction jump and is recovered exactly.
 //!
 //! * [`recovery`] (Zienkiewicz–Zhu): the displacement gradient H_h = ∇u_h is sampled at the
@@ -56,6 +58,7 @@
 
 use super::recovery::{recover_nodal, sampling_points, CellSamples, Stress4};
 use super::solid::{PressureMode, SolidModel};
+use crate::adapt::marking::{CellEstimate, CellEstimator};
 use crate::assembly::DofMap;
 use crate::element::quadrature::gauss_1d;
 use crate::material::invariants::dcof_df;
@@ -65,24 +68,63 @@ use crate::mesh::locate::shape_values;
 use crate::mesh::{Facet, Mesh};
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::convert::Infallible;
 
-/// Indicators per cell and the global estimate (square root of the sum of squares).
-#[derive(Clone, Debug, PartialEq)]
-pub struct SolidEstimate {
-    pub indicators: Vec<f64>,
-    pub global: f64,
+/// What the solid's estimators need: the model, the state (`dofs`, full vector `x`), the
+/// traction-free facet sets `free` and the tractions `applied` on boundary facets (the road's
+/// contact; used by the residual estimators only).
+#[derive(Clone, Copy)]
+pub struct SolidContext<'a> {
+    pub model: &'a SolidModel,
+    pub dofs: &'a DofMap,
+    pub x: &'a [f64],
+    pub free: &'a [&'a str],
+    pub applied: Option<&'a BoundaryTractions>,
 }
 
-impl SolidEstimate {
-    pub(super) fn from_squares(sq: Vec<f64>) -> Self {
-        let sq: Vec<f64> = sq
-            .into_iter()
-            .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
-            .collect();
-        Self {
-            global: sq.iter().sum::<f64>().sqrt(),
-            indicators: sq.into_iter().map(f64::sqrt).collect(),
-        }
+/// The Zienkiewicz–Zhu recovery estimator ([`recovery`]) behind the shared interface.
+pub struct Recovery;
+
+/// The interpolation estimator with recovered derivatives ([`interpolation`]).
+pub struct Interpolation;
+
+/// The explicit residual estimator with the context's free sets and applied tractions
+/// ([`explicit_residual_with`]).
+pub struct ExplicitResidual;
+
+impl CellEstimator<SolidContext<'_>> for Recovery {
+    type Error = Infallible;
+    fn name(&self) -> &'static str {
+        "recovery (ZZ)"
+    }
+    fn estimate(&self, ctx: &SolidContext) -> Result<CellEstimate, Infallible> {
+        Ok(recovery(ctx.model, ctx.dofs, ctx.x))
+    }
+}
+
+impl CellEstimator<SolidContext<'_>> for Interpolation {
+    type Error = Infallible;
+    fn name(&self) -> &'static str {
+        "interpolation (recovered derivatives)"
+    }
+    fn estimate(&self, ctx: &SolidContext) -> Result<CellEstimate, Infallible> {
+        Ok(interpolation(ctx.model, ctx.dofs, ctx.x))
+    }
+}
+
+impl CellEstimator<SolidContext<'_>> for ExplicitResidual {
+    type Error = Infallible;
+    fn name(&self) -> &'static str {
+        "explicit residual"
+    }
+    fn estimate(&self, ctx: &SolidContext) -> Result<CellEstimate, Infallible> {
+        Ok(explicit_residual_with(
+            ctx.model,
+            ctx.dofs,
+            ctx.x,
+            ctx.free,
+            ctx.applied,
+        ))
     }
 }
 
@@ -172,8 +214,8 @@ pub fn energy_error(
     dofs: &DofMap,
     x: &[f64],
     exact: &(dyn Fn(Vec2) -> Mat2 + Sync),
-) -> SolidEstimate {
-    SolidEstimate::from_squares(cell_energy(model, dofs, x, |_, _, _, s| {
+) -> CellEstimate {
+    CellEstimate::from_squares(cell_energy(model, dofs, x, |_, _, _, s| {
         Some(exact(s.x) - s.h)
     }))
 }
@@ -225,10 +267,10 @@ fn recovered_at(mesh: &Mesh, nodal: &[Stress4], c: usize, xi: f64, eta: f64) -> 
 }
 
 /// The Zienkiewicz–Zhu recovery estimator (see the module docs).
-pub fn recovery(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstimate {
+pub fn recovery(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> CellEstimate {
     let nodal = recover_gradient(model, dofs, x);
     let mesh = &model.mesh;
-    SolidEstimate::from_squares(cell_energy(model, dofs, x, |c, xi, eta, s| {
+    CellEstimate::from_squares(cell_energy(model, dofs, x, |c, xi, eta, s| {
         Some(recovered_at(mesh, &nodal, c, xi, eta) - s.h)
     }))
 }
@@ -324,7 +366,7 @@ pub fn explicit_residual(
     dofs: &DofMap,
     x: &[f64],
     free: &[&str],
-) -> SolidEstimate {
+) -> CellEstimate {
     explicit_residual_with(model, dofs, x, free, None)
 }
 
@@ -336,7 +378,7 @@ pub fn explicit_residual_with(
     x: &[f64],
     free: &[&str],
     applied: Option<&BoundaryTractions>,
-) -> SolidEstimate {
+) -> CellEstimate {
     let mesh = &model.mesh;
     let nc = mesh.n_cells();
     let mut free_sides: std::collections::HashSet<(u32, u8)> = Default::default();
@@ -429,7 +471,7 @@ pub fn explicit_residual_with(
             sq[c] += length / f64::from(mesh.degree[c]) * sum / mu[c];
         }
     }
-    SolidEstimate::from_squares(sq)
+    CellEstimate::from_squares(sq)
 }
 
 /// Strong residual Div P + b − ρ ω² ∂θθχ at (ξ, η) of cell `c` and the weight det(dX/dξ).
@@ -478,7 +520,7 @@ fn interior_residual(
 }
 
 /// The interpolation estimator with recovered derivatives (see the module docs).
-pub fn interpolation(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstimate {
+pub fn interpolation(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> CellEstimate {
     let nodal = recover_gradient(model, dofs, x);
     let mesh = &model.mesh;
     // g_d = ∂u/∂ξ_d = H* ∂X/∂ξ_d along reference direction d.
@@ -537,5 +579,5 @@ pub fn interpolation(model: &SolidModel, dofs: &DofMap, x: &[f64]) -> SolidEstim
             sum
         })
         .collect();
-    SolidEstimate::from_squares(sq)
+    CellEstimate::from_squares(sq)
 }

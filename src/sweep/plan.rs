@@ -1,10 +1,11 @@
 //! `tread sweep plan`: the table of runs, and the check of every run's scene before anything
 //! starts. Each run's scene is loaded by the scene loader itself ([`Scene::from_toml_str`] with
-//! the run's overrides, as `tread run --set` does), so a sweep accepts exactly what `tread run`
-//! accepts. All problems are reported at once; a problem shared by several runs (say, a bad
+//! the run's overrides, as `tread run --set` does; [`ModelScene::from_toml_str`] for a
+//! model-problem scene), so a sweep accepts exactly what `tread run` accepts. All problems are reported at once; a problem shared by several runs (say, a bad
 //! key in the base scene) is reported once with the list of runs.
 
 use super::spec::{cell_text, Spec};
+use crate::io::scene::model_problem::{is_model_problem, overrides_set_problem, ModelScene};
 use crate::io::Scene;
 use rayon::prelude::*;
 
@@ -24,8 +25,15 @@ pub fn check(spec: &Spec) -> Result<(), Vec<PlanError>> {
         .into_par_iter()
         .map(|i| {
             let ov = spec.overrides(&spec.run(i));
-            match Scene::from_toml_str(&spec.scene_text, &source, &ov) {
-                Ok(_) => Vec::new(),
+            // A model-problem scene (`[problem]`, or `--set problem.…`) goes to its own loader,
+            // as `tread run` sends it.
+            let loaded = if is_model_problem(&spec.scene_text) || overrides_set_problem(&ov) {
+                ModelScene::from_toml_str(&spec.scene_text, &source, &ov).map(|_| ())
+            } else {
+                Scene::from_toml_str(&spec.scene_text, &source, &ov).map(|_| ())
+            };
+            match loaded {
+                Ok(()) => Vec::new(),
                 Err(errs) => errs
                     .0
                     .into_iter()

@@ -54,7 +54,8 @@
 //! The runs are the Cartesian product of the axes (a zipped axis counts as one), the **last
 //! axis varying fastest**: run `i` has the mixed-radix digits of `i` in the axis lengths. Each
 //! run is the base scene with one `--set key=value` override per swept key (plus
-//! `output.sinks` from `[outputs] sinks`); the scene loader ([`crate::io::Scene`]) validates it
+//! `output.sinks` from `[outputs] sinks`); the scene loader ([`crate::io::Scene`], or
+//! [`crate::io::scene::model_problem::ModelScene`] for a scene with `[problem]`) validates it
 //! exactly as `tread run --set` does.
 //!
 //! Range values are rounded to 15 significant digits so that `0.1 + 2·0.1` reads `0.3`; the end
