@@ -560,6 +560,13 @@ fn rolling_controls_on_the_slab_match_the_2d_steady_mode() {
 /// A free-sided Hex8 wheel rolling at ω = 10 on the road at 19.9 in/s turned by the slip angle
 /// `alpha` (degrees), with the camber `camber` (degrees), tanh friction and damping.
 fn cornering_scene(alpha: f64, camber: f64) -> Scene {
+    cornering_scene_at(alpha, camber, 10.0, 0.04)
+}
+
+/// [`cornering_scene`] at the angular speed `omega` (the road speed 1.99 ω) and the
+/// penetration `disp`.
+fn cornering_scene_at(alpha: f64, camber: f64, omega: f64, disp: f64) -> Scene {
+    let v0 = 1.99 * omega;
     let text = format!(
         r#"
 [scene]
@@ -583,10 +590,10 @@ rho = 0.027
 [analysis]
 mode = "steady"
 [motion]
-omega = 10.0
+omega = {omega}
 [road]
-disp = 0.04
-v0 = 19.9
+disp = {disp}
+v0 = {v0}
 slip_angle = {alpha}
 camber = {camber}
 [contact]
@@ -608,26 +615,40 @@ linear = "lu"
     Scene::from_toml_str(&text, "cornering", &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Arc-length continuation in the slip angle and in the camber: every converged point of the
-/// path is the steady state of a direct solve at its parameter (the lateral force and the
-/// aligning moment to the solver tolerance), and the path reaches the target.
+/// Arc-length continuation in the slip angle, the camber, the angular speed (road speed
+/// proportional) and the penetration: every converged point of the path is the steady state of
+/// a direct solve at its parameter (the vertical and lateral forces and the aligning moment to
+/// the solver tolerance), and the path reaches the target.
 #[test]
-fn slip_angle_and_camber_continuation_points_are_steady_states() {
+fn continuation_points_are_steady_states() {
     use tread::driver::steady3d::{follow_path_3d, Path3DParameter};
     use tread::io::scene::{ContinuationParameter, ContinuationSpec};
-    for parameter in [
-        ContinuationParameter::SlipAngle,
-        ContinuationParameter::Camber,
+    for (parameter, target) in [
+        (ContinuationParameter::SlipAngle, 3.0),
+        (ContinuationParameter::Camber, 3.0),
+        (ContinuationParameter::Omega, 13.0),
+        (ContinuationParameter::Disp, 0.06),
     ] {
-        let sc = cornering_scene(0.0, 0.0);
+        // The ω and penetration paths at a slip angle of 2°: a lateral force to follow.
+        let at = |value: f64| match parameter {
+            ContinuationParameter::SlipAngle => cornering_scene(value, 0.0),
+            ContinuationParameter::Camber => cornering_scene(0.0, value),
+            ContinuationParameter::Omega => cornering_scene_at(2.0, 0.0, value, 0.04),
+            _ => cornering_scene_at(2.0, 0.0, 10.0, value),
+        };
+        let sc = match parameter {
+            ContinuationParameter::SlipAngle | ContinuationParameter::Camber => at(0.0),
+            ContinuationParameter::Omega => at(10.0),
+            _ => at(0.04),
+        };
         let mut sys = steady_3d(&sc, false);
         let cs = ContinuationSpec {
             parameter,
-            target: 3.0,
+            target,
             ds: 0.2,
             ..Default::default()
         };
-        let mut points: Vec<(f64, f64, f64)> = Vec::new();
+        let mut points: Vec<(f64, [f64; 3], f64)> = Vec::new();
         let mut on_point =
             |p: &tread::driver::steady3d::SteadyPath3D,
              b: &tread::solver::continuation::BranchPoint| {
@@ -636,55 +657,47 @@ fn slip_angle_and_camber_continuation_points_are_steady_states() {
                     c.surface.frame().components(c.totals.force),
                     c.surface.frame().components(c.totals.moment),
                 );
-                points.push((b.lambda, f[2], m[1]));
+                points.push((b.lambda, f, m[1]));
                 true
             };
-        let path = Path3DParameter::of(parameter, f64::NAN).expect("parameter");
+        let path = Path3DParameter::of(parameter, f64::NAN, &sys).expect("parameter");
         let (rep, res) = follow_path_3d(&sc, &cs, path, &mut sys, false, &mut on_point);
         res.unwrap_or_else(|e| panic!("{parameter} continuation: {e}"));
         let rep = rep.expect("report");
         eprintln!(
-            "{parameter}: {} points, {} corrector iterations: {:?}",
+            "{parameter}: {} points, {} corrector iterations",
             points.len(),
             rep.total_iterations,
-            points
         );
         let last = points.last().copied().expect("points");
+        let start = points[0].0;
         assert!(
-            last.0 >= 3.0 - 1e-9,
+            (last.0 - start) / (target - start) >= 1.0 - 1e-9,
             "{parameter}: target not reached: {}",
             last.0
         );
         assert!(points.len() >= 4);
         let fz = sys.contact.as_ref().expect("contact").totals.force[1].abs();
         // Two points of the path, each against a direct solve from the undeformed state.
-        for &(value, f3, m2) in [points[2], last].iter() {
-            let direct = steady_3d(
-                &match parameter {
-                    ContinuationParameter::SlipAngle => cornering_scene(value, 0.0),
-                    _ => cornering_scene(0.0, value),
-                },
-                false,
-            );
+        for &(value, f, m2) in [points[2], last].iter() {
+            let direct = steady_3d(&at(value), false);
             let c = direct.contact.as_ref().expect("contact");
-            let (f, m) = (
+            let (fd, md) = (
                 c.surface.frame().components(c.totals.force),
                 c.surface.frame().components(c.totals.moment),
             );
             eprintln!(
-                "{parameter} = {value:.6}: path F3 {f3:.10e} M2 {m2:.10e}; direct F3 {:.10e} M2 {:.10e}",
-                f[2], m[1]
+                "{parameter} = {value:.6}: path F2 {:.10e} F3 {:.10e} M2 {m2:.10e}; direct F2 {:.10e} F3 {:.10e} M2 {:.10e}",
+                f[1], f[2], fd[1], fd[2], md[1]
             );
-            assert!(f3 < 0.0, "{parameter}: lateral force {f3}");
+            assert!(f[2] < 0.0, "{parameter}: lateral force {}", f[2]);
+            for (a, b, what) in [(f[1], fd[1], "F2"), (f[2], fd[2], "F3")] {
+                assert!((a - b).abs() <= 1e-7 * fz, "{parameter}: {what} {a} vs {b}");
+            }
             assert!(
-                (f3 - f[2]).abs() <= 1e-7 * fz,
-                "{parameter}: F3 {f3} vs {}",
-                f[2]
-            );
-            assert!(
-                (m2 - m[1]).abs() <= 1e-7 * fz * RO,
+                (m2 - md[1]).abs() <= 1e-7 * fz * RO,
                 "{parameter}: M2 {m2} vs {}",
-                m[1]
+                md[1]
             );
         }
     }

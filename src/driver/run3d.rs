@@ -326,12 +326,13 @@ pub fn run(scene: &Scene, opts: &RunOptions) -> Result<RunOutcome, AppError> {
     let mut cont = None;
     if let (Ok(()), Some(cs)) = (&solve, &scene.continuation) {
         let v0_free = control.as_ref().map_or(f64::NAN, |c| c.v0_free);
-        let Some(parameter) = Path3DParameter::of(cs.parameter, v0_free) else {
+        let Some(parameter) = Path3DParameter::of(cs.parameter, v0_free, &sys) else {
             obs.finish();
             return Err(AppError::Unsupported(format!(
-                "continuation.parameter: \"{}\" does not run in the three-dimensional steady \
-                 mode (slip_angle, camber; creep after motion.control = \"creep\" or \"free_rolling\"; \
-                 load under load control)",
+                "continuation.parameter: \"{}\" does not apply to this three-dimensional steady \
+                 state (slip_angle, camber, omega at ω ≠ 0; creep after motion.control = \
+                 \"creep\" or \"free_rolling\"; load under load control, disp under \
+                 displacement control)",
                 cs.parameter
             )));
         };

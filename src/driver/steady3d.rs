@@ -102,20 +102,32 @@ pub enum Path3DParameter {
     Creep { v0_free: f64 },
     /// The hub load of load control (a total force).
     Load,
+    /// The angular speed ω (rad/s), with the road speed v0 = `v0_per_omega` ω (the creep and
+    /// the slip angle fixed), as the plane-strain continuation in ω.
+    Omega { v0_per_omega: f64 },
+    /// The penetration h_touch − H of displacement control (length).
+    Disp,
 }
 
 impl Path3DParameter {
-    /// The path parameter of `[continuation] parameter`; the creep needs the free-rolling
-    /// speed `v0_free` (from the creep or free-rolling control, else NaN). `None` for the
-    /// parameters the three-dimensional steady mode does not continue in (ω, the penetration)
-    /// and for the creep without a free-rolling speed.
-    pub fn of(p: ContinuationParameter, v0_free: f64) -> Option<Self> {
+    /// The path parameter of `[continuation] parameter` for the converged steady system
+    /// `sys`; the creep needs the free-rolling speed `v0_free` (from the creep or free-rolling
+    /// control, else NaN). `None` for the creep without a free-rolling speed, for the load
+    /// under displacement control, for the penetration under load control and for ω at rest.
+    pub fn of(p: ContinuationParameter, v0_free: f64, sys: &Solid3DSystem) -> Option<Self> {
+        let load_control = sys.contact.as_ref().is_some_and(|c| c.h_dof.is_some());
         match p {
             ContinuationParameter::SlipAngle => Some(Self::SlipAngle),
             ContinuationParameter::Camber => Some(Self::Camber),
             ContinuationParameter::Creep => v0_free.is_finite().then_some(Self::Creep { v0_free }),
-            ContinuationParameter::Load => Some(Self::Load),
-            ContinuationParameter::Omega | ContinuationParameter::Disp => None,
+            ContinuationParameter::Load => load_control.then_some(Self::Load),
+            ContinuationParameter::Omega => {
+                let omega = sys.steady_omega().filter(|w| *w != 0.0)?;
+                Some(Self::Omega {
+                    v0_per_omega: sys.road_speed() / omega,
+                })
+            }
+            ContinuationParameter::Disp => (!load_control).then_some(Self::Disp),
         }
     }
 }
@@ -143,6 +155,8 @@ impl ParametricSystem for SteadyPath3D<'_> {
                 .as_ref()
                 .and_then(|c| c.load)
                 .unwrap_or(0.0),
+            Path3DParameter::Omega { .. } => self.sys.steady_omega().unwrap_or(0.0),
+            Path3DParameter::Disp => self.sys.penetration().unwrap_or(0.0),
         }
     }
     fn set_parameter(&mut self, lambda: f64) {
@@ -158,6 +172,11 @@ impl ParametricSystem for SteadyPath3D<'_> {
                     c.load = Some(lambda);
                 }
             }
+            Path3DParameter::Omega { v0_per_omega } => {
+                self.sys.set_steady_omega(lambda);
+                self.sys.set_road_speed(v0_per_omega * lambda);
+            }
+            Path3DParameter::Disp => self.sys.set_penetration(lambda),
         }
     }
 }

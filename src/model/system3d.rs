@@ -447,6 +447,34 @@ impl Solid3DSystem {
         self.contact.as_ref().and_then(|c| c.steady_omega)
     }
 
+    /// Set the angular speed ω of steady rolling (rad/s about +x3): the θ-referential inertia
+    /// ω² and the contact's steady kinematics, the road velocity kept. No-op outside steady
+    /// rolling.
+    pub fn set_steady_omega(&mut self, omega: f64) {
+        let Some(rc) = self.contact.as_mut().filter(|c| c.steady_omega.is_some()) else {
+            return;
+        };
+        rc.steady_omega = Some(omega);
+        self.target.omega2 = omega * omega;
+        self.coefficients.omega2 = omega * omega;
+    }
+
+    /// The penetration h_touch − H of displacement control at the current load factor
+    /// (`None` without contact or under load control).
+    pub fn penetration(&self) -> Option<f64> {
+        let rc = self.contact.as_ref().filter(|c| c.h_dof.is_none())?;
+        Some(rc.h_touch - rc.surface.h)
+    }
+
+    /// Set the penetration of displacement control to `d` at the current load factor λ
+    /// (`road.disp` = d / λ, H = h_touch − d). No-op without contact or under load control.
+    pub fn set_penetration(&mut self, d: f64) {
+        if let Some(rc) = self.contact.as_mut().filter(|c| c.h_dof.is_none()) {
+            rc.disp = if rc.lambda != 0.0 { d / rc.lambda } else { d };
+            rc.surface.h = rc.h_touch - d;
+        }
+    }
+
     /// The road speed v0 of steady rolling (0 without contact).
     pub fn road_speed(&self) -> f64 {
         self.contact.as_ref().map_or(0.0, |c| c.v0)

@@ -354,8 +354,7 @@ pub(super) fn validate_dimension(m: &MeshSpec, cx: &Dimension3DContext, out: &mu
     }
 }
 
-/// What the three-dimensional steady mode does not take yet: continuation in ω or in the
-/// penetration.
+/// The three-dimensional steady mode's continuation names its parameter explicitly.
 fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let Some(doc) = doc else {
         return;
@@ -364,20 +363,11 @@ fn validate_steady_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
         .get("continuation")
         .and_then(|c| c.get("parameter"))
         .and_then(|v| v.as_str());
-    if let Some(p) = parameter.filter(|p| matches!(*p, "omega" | "disp")) {
-        out.push(issue(
-            "continuation.parameter",
-            format!(
-                "parameter \"{p}\" is not supported in the three-dimensional steady mode yet; \
-                 use \"slip_angle\", \"camber\", \"creep\" or \"load\""
-            ),
-        ));
-    }
     if doc.contains_key("continuation") && parameter.is_none() {
         out.push(issue(
             "continuation.parameter",
             "give the parameter explicitly in the three-dimensional steady mode: \"slip_angle\", \
-             \"camber\", \"creep\" or \"load\"",
+             \"camber\", \"creep\", \"load\", \"omega\" or \"disp\"",
         ));
     }
 }
