@@ -182,9 +182,20 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         uniform: usize,
         /// How marked cells are refined: "h" (split into four), "p" (degree 1 -> 2; start
-        /// from mesh.order = 1) or "hp" (degree-1 cells raised, degree-2 cells split).
+        /// from mesh.order = 1) or "hp" (degree-1 cells raised, degree-2 cells split); or "r"
+        /// (moving mesh: the annulus's cell boundaries moved toward the large indicators,
+        /// same cells and unknowns, --steps relocations).
         #[arg(long, default_value = "h")]
         refine: tread::driver::adaptive::Refinement,
+        /// --refine r: monitor amplitude α >= 0 (cell sizes vary by at most 1 + α).
+        #[arg(long, default_value_t = 4.0)]
+        monitor_alpha: f64,
+        /// --refine r: monitor root β >= 1 (larger spreads the refinement wider).
+        #[arg(long, default_value_t = 4.0)]
+        monitor_beta: f64,
+        /// --refine r: uniform part γ in [0, 1] of the monitor (1: no motion).
+        #[arg(long, default_value_t = 0.0)]
+        monitor_gamma: f64,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -801,6 +812,9 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
             coarsen,
             uniform,
             refine,
+            monitor_alpha,
+            monitor_beta,
+            monitor_gamma,
             set,
         }) => match load(&scene, &set).and_then(|s| refuse_3d(s, "adapt")) {
             Ok(s) => {
@@ -814,6 +828,12 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                     coarsen,
                     uniform,
                     refinement: refine,
+                    monitor: tread::adapt::moving_mesh::MonitorParams {
+                        alpha: monitor_alpha,
+                        beta: monitor_beta,
+                        gamma: monitor_gamma,
+                        ..Default::default()
+                    },
                 };
                 let dir = out.unwrap_or_else(|| {
                     app::default_out_dir(&s).with_file_name(format!("{}_adapt", s.scene.name))

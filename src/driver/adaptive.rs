@@ -39,6 +39,7 @@ use super::indentation::{self, IndentationResults};
 use super::steady::SteadyRolling;
 use super::steady_run;
 use crate::adapt::marking::{coarsening_limit, CellEstimate, CellEstimator, Marking};
+use crate::adapt::moving_mesh::MonitorParams;
 use crate::io::output::{ensure_dir, write_json, OutputError};
 use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
@@ -155,6 +156,9 @@ pub enum Refinement {
     P,
     /// Raise marked cells of degree 1 to 2, split marked cells of degree 2.
     Hp,
+    /// Move the annulus's cell boundaries toward the large indicators (moving mesh: same
+    /// cells and unknowns, [`super::relocation`]); no marking.
+    R,
 }
 
 impl Refinement {
@@ -163,6 +167,7 @@ impl Refinement {
             Self::H => "h",
             Self::P => "p",
             Self::Hp => "hp",
+            Self::R => "r",
         }
     }
 }
@@ -172,7 +177,7 @@ impl std::str::FromStr for Refinement {
     fn from_str(s: &str) -> Result<Self, String> {
         parse_keyword(
             "refinement",
-            &[Self::H, Self::P, Self::Hp],
+            &[Self::H, Self::P, Self::Hp, Self::R],
             Self::keyword,
             s,
         )
@@ -199,8 +204,11 @@ pub struct AdaptOptions {
     /// Uniform refinements of the scene's mesh before the first solve (which the coarsening
     /// may then undo where the error is small).
     pub uniform: usize,
-    /// How marked cells are refined: h, p (degree 1 → 2) or hp.
+    /// How marked cells are refined: h, p (degree 1 → 2) or hp; or r, the cell boundaries
+    /// moved instead.
     pub refinement: Refinement,
+    /// The monitor of `Refinement::R` (α, β, γ of [`super::relocation`]).
+    pub monitor: MonitorParams,
 }
 
 impl Default for AdaptOptions {
@@ -214,6 +222,7 @@ impl Default for AdaptOptions {
             coarsen: 0.0,
             uniform: 0,
             refinement: Refinement::H,
+            monitor: MonitorParams::default(),
         }
     }
 }
@@ -445,6 +454,9 @@ pub fn run(
             scene.analysis.mode
         )));
     }
+    if opts.refinement == Refinement::R {
+        return run_relocation(scene, opts, out_dir, on_step);
+    }
     let t0 = Instant::now();
     let mut forest = Forest::new(polar_root(scene)?)
         .map_err(|e| AppError::Unsupported(format!("tread adapt: {e}")))?;
@@ -553,7 +565,8 @@ pub fn run(
         // p: raise degree-1 cells; h: split; hp: raise the degree-1 cells, split the others.
         // Raising keeps the leaf indices, so the split uses the same ones.
         let (raise, split): (Vec<usize>, Vec<usize>) = match opts.refinement {
-            Refinement::H => (Vec::new(), marked.clone()),
+            // (`R` runs its own loop, `run_relocation`.)
+            Refinement::H | Refinement::R => (Vec::new(), marked.clone()),
             Refinement::P => (marked.clone(), Vec::new()),
             Refinement::Hp => marked.iter().partition(|&&k| forest.degrees()[k] == 1),
         };
@@ -597,6 +610,125 @@ pub fn run(
         // Friction makes the static solution depend on the load path (the stick anchors are
         // committed load step by load step): such a scene is solved by load stepping on every
         // mesh, not from the transferred state at the full load. A steady state has no path.
+        warm = match &problem {
+            Problem::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
+            Problem::Steady(_) => true,
+        };
+    }
+    Ok((problem.into_sys(), steps))
+}
+
+/// The moving-mesh loop (`--refine r`, [`super::relocation`]): solve on the scene's annulus
+/// (the exact polar map), estimate, move the cell boundaries, transfer the solution, solve
+/// again, `opts.steps` times; every mesh is one [`AdaptStep`] with the same cells and unknowns.
+fn run_relocation(
+    scene: &Scene,
+    opts: &AdaptOptions,
+    out_dir: &Path,
+    mut on_step: impl FnMut(&SolidSystem, &AdaptStep, &[f64]),
+) -> Result<(SolidSystem, Vec<AdaptStep>), AppError> {
+    let m = opts.monitor;
+    let valid = m.alpha >= 0.0
+        && m.alpha.is_finite()
+        && m.beta >= 1.0
+        && m.beta.is_finite()
+        && (0.0..=1.0).contains(&m.gamma);
+    if !valid {
+        return Err(AppError::Unsupported(format!(
+            "tread adapt --refine r: the monitor needs α ≥ 0, β ≥ 1 and γ in [0, 1], got α = {}, β = {}, γ = {}",
+            m.alpha, m.beta, m.gamma
+        )));
+    }
+    if opts.uniform > 0 || opts.coarsen > 0.0 {
+        return Err(AppError::Unsupported(
+            "tread adapt --refine r moves the scene's cells: --uniform and --coarsen do not apply"
+                .into(),
+        ));
+    }
+    let t0 = Instant::now();
+    let mut mesh = polar_root(scene)?;
+    let ms = &scene.mesh;
+    let spec = AnnulusSpec {
+        ri: scene.geometry.ri,
+        ro: scene.geometry.ro,
+        n_r: ms.n_r,
+        n_theta: ms.n_theta,
+        degree: ms.order,
+        grading_r: ms.grading_r,
+        grading_theta: ms.grading_theta,
+    };
+    let (mut rb, mut tb) = (
+        crate::mesh::annulus::radial_breaks(&spec),
+        crate::mesh::annulus::angular_breaks(&spec),
+    );
+    let mut problem = Problem::build(scene, mesh.clone())?;
+    let mut cold = problem.sys().x.clone();
+    let mut warm = false;
+    let mut steps = Vec::new();
+    for step in 0..=opts.steps {
+        let ts = Instant::now();
+        let iterations = problem.solve(scene, warm, &cold, out_dir)?;
+        let sys = problem.sys();
+        let applied = opts
+            .estimator
+            .uses_applied_tractions()
+            .then(|| sys.contact_tractions())
+            .flatten();
+        let ctx = SolidContext {
+            model: &sys.model,
+            dofs: &sys.dofs,
+            x: &sys.x,
+            free: &[],
+            applied: applied.as_ref(),
+        };
+        let Ok(est) = opts.estimator.estimate(&ctx);
+        let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
+        let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
+        let rec = AdaptStep {
+            step,
+            cells: mesh.n_cells(),
+            dofs: sys.n_dofs(),
+            hanging_nodes: 0,
+            max_level: 0,
+            degree2_cells: mesh.degree.iter().filter(|&&d| d == 2).count(),
+            coarsened: 0,
+            estimate: est.global,
+            relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
+            hub_force_x: r.hub_force_x,
+            hub_force_y: r.hub_force_y,
+            hub_torque: r.hub_torque,
+            penetration: r.penetration,
+            newton_iterations: iterations,
+            wall_step_s: ts.elapsed().as_secs_f64(),
+            wall_total_s: t0.elapsed().as_secs_f64(),
+        };
+        on_step(sys, &rec, &est.indicators);
+        let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
+        steps.push(rec);
+        if done {
+            break;
+        }
+        let sq: Vec<f64> = est.indicators.iter().map(|e| e * e).collect();
+        let (rb1, tb1, new_mesh) = super::relocation::relocate(&spec, &rb, &tb, &sq, &m);
+        let mut next_problem = Problem::build(scene, new_mesh.clone())?;
+        // Transfer: the old displacement field at the new nodes (located in the old cells),
+        // and the global unknowns.
+        let next = next_problem.sys_mut();
+        cold = next.x.clone();
+        let mut x = next.x.clone();
+        for k in 0..next.dofs.n_global.min(sys.dofs.n_global) {
+            x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
+        }
+        let found = crate::mesh::locate::locate_points(&mesh, &new_mesh.nodes);
+        for (node, &(c, xi, eta)) in found.iter().enumerate() {
+            let u = vector_at(&mesh, &sys.x, c, xi, eta);
+            x[2 * node] = u[0];
+            x[2 * node + 1] = u[1];
+        }
+        next.restore_state(&x);
+        problem = next_problem;
+        mesh = new_mesh;
+        (rb, tb) = (rb1, tb1);
         warm = match &problem {
             Problem::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
             Problem::Steady(_) => true,

@@ -36,6 +36,7 @@ pub mod frame;
 pub mod indentation;
 pub mod indentation3d;
 pub mod model_problem;
+pub mod relocation;
 pub mod resistance;
 pub mod results;
 pub mod run3d;

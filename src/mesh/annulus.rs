@@ -67,17 +67,28 @@ pub fn angular_breaks(spec: &AnnulusSpec) -> Vec<f64> {
 /// Build the structured annulus mesh. The spec must be valid (the scene validation checks
 /// Ri < Ro, n_r ≥ 1, n_theta ≥ 3, degree ∈ {1, 2}); invalid specs are clamped, never panic.
 pub fn annulus(spec: &AnnulusSpec) -> Mesh {
-    let p = spec.degree.clamp(1, 2);
-    let n_r = spec.n_r.max(1);
-    let n_theta = spec.n_theta.max(3);
     let spec = AnnulusSpec {
-        n_r,
-        n_theta,
-        degree: p,
+        n_r: spec.n_r.max(1),
+        n_theta: spec.n_theta.max(3),
+        degree: spec.degree.clamp(1, 2),
         ..spec.clone()
     };
-    let rb = radial_breaks(&spec);
-    let tb = angular_breaks(&spec);
+    annulus_with_breaks(&spec, &radial_breaks(&spec), &angular_breaks(&spec))
+}
+
+/// The annulus of `spec`'s degree with the cell boundaries at the radii `rb` (`n_r + 1`,
+/// increasing from Ri to Ro) and the angles `tb` (`n_theta + 1`, increasing, the last the
+/// first plus 2π): the meshes of a relocation of the cell boundaries (e.g. toward the contact
+/// patch), with the node rings kept. `spec.n_r` and `spec.n_theta` are taken from the lengths
+/// of the breaks.
+pub fn annulus_with_breaks(spec: &AnnulusSpec, rb: &[f64], tb: &[f64]) -> Mesh {
+    if rb.len() < 2 || tb.len() < 4 {
+        return annulus(spec);
+    }
+    let p = spec.degree.clamp(1, 2);
+    let n_r = rb.len().saturating_sub(1).max(1);
+    let n_theta = tb.len().saturating_sub(1).max(3);
+
     let rings = p * n_r + 1;
     let per_ring = p * n_theta;
     let mut nodes = Vec::with_capacity(rings * per_ring);

@@ -24,7 +24,7 @@ pub mod revolved;
 use crate::math::{Mat2, Vec2};
 use std::collections::BTreeMap;
 
-pub use annulus::{annulus, AnnulusSpec};
+pub use annulus::{annulus, annulus_with_breaks, AnnulusSpec};
 pub use refine::{Forest, NodeConstraint};
 
 /// Geometry map of a cell from the reference square [-1, 1]² to the reference configuration.
