@@ -372,6 +372,17 @@ impl Problem {
         }
     }
 
+    /// Whether the next mesh starts from the transferred state at the full load. Friction makes
+    /// the static solution depend on the load path (the stick anchors are committed load step
+    /// by load step): such a scene is solved by load stepping on every mesh. A steady state
+    /// has no path.
+    fn warm_starts(&self) -> bool {
+        match self {
+            Self::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
+            Self::Steady(_) => true,
+        }
+    }
+
     fn into_sys(self) -> SolidSystem {
         match self {
             Self::Static(s) => *s,
@@ -508,40 +519,16 @@ pub fn run(
         let ts = Instant::now();
         let iterations = problem.solve(scene, warm, &cold, out_dir)?;
         let sys = problem.sys();
-        // The contact tractions are the boundary data of the residual estimators only.
-        let applied = opts
-            .estimator
-            .uses_applied_tractions()
-            .then(|| sys.contact_tractions())
-            .flatten();
-        let ctx = SolidContext {
-            model: &sys.model,
-            dofs: &sys.dofs,
-            x: &sys.x,
-            free: &[],
-            applied: applied.as_ref(),
-        };
-        let Ok(est) = opts.estimator.estimate(&ctx);
-        let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
-        let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
-        let rec = AdaptStep {
-            step,
-            cells: mesh.n_cells(),
-            dofs: sys.n_dofs(),
+        let mut rec = AdaptStep {
             hanging_nodes: mesh.constraints.len(),
             max_level: forest.leaves().iter().map(|l| l.level).max().unwrap_or(0),
             degree2_cells: forest.degrees().iter().filter(|&&d| d == 2).count(),
             coarsened,
-            estimate: est.global,
-            relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
-            hub_force_x: r.hub_force_x,
-            hub_force_y: r.hub_force_y,
-            hub_torque: r.hub_torque,
-            penetration: r.penetration,
-            newton_iterations: iterations,
-            wall_step_s: ts.elapsed().as_secs_f64(),
-            wall_total_s: t0.elapsed().as_secs_f64(),
+            ..AdaptStep::of(step, mesh.n_cells(), iterations)
         };
+        let est = rec.estimate_on(scene, opts, sys);
+        rec.wall_step_s = ts.elapsed().as_secs_f64();
+        rec.wall_total_s = t0.elapsed().as_secs_f64();
         on_step(sys, &rec, &est.indicators);
         let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
         steps.push(rec);
@@ -607,13 +594,7 @@ pub fn run(
         next.restore_state(&x);
         problem = next_problem;
         mesh = new_mesh;
-        // Friction makes the static solution depend on the load path (the stick anchors are
-        // committed load step by load step): such a scene is solved by load stepping on every
-        // mesh, not from the transferred state at the full load. A steady state has no path.
-        warm = match &problem {
-            Problem::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
-            Problem::Steady(_) => true,
-        };
+        warm = problem.warm_starts();
     }
     Ok((problem.into_sys(), steps))
 }
@@ -669,39 +650,13 @@ fn run_relocation(
         let ts = Instant::now();
         let iterations = problem.solve(scene, warm, &cold, out_dir)?;
         let sys = problem.sys();
-        let applied = opts
-            .estimator
-            .uses_applied_tractions()
-            .then(|| sys.contact_tractions())
-            .flatten();
-        let ctx = SolidContext {
-            model: &sys.model,
-            dofs: &sys.dofs,
-            x: &sys.x,
-            free: &[],
-            applied: applied.as_ref(),
-        };
-        let Ok(est) = opts.estimator.estimate(&ctx);
-        let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
-        let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
-        let rec = AdaptStep {
-            step,
-            cells: mesh.n_cells(),
-            dofs: sys.n_dofs(),
-            hanging_nodes: 0,
-            max_level: 0,
+        let mut rec = AdaptStep {
             degree2_cells: mesh.degree.iter().filter(|&&d| d == 2).count(),
-            coarsened: 0,
-            estimate: est.global,
-            relative_estimate: if norm > 0.0 { est.global / norm } else { 0.0 },
-            hub_force_x: r.hub_force_x,
-            hub_force_y: r.hub_force_y,
-            hub_torque: r.hub_torque,
-            penetration: r.penetration,
-            newton_iterations: iterations,
-            wall_step_s: ts.elapsed().as_secs_f64(),
-            wall_total_s: t0.elapsed().as_secs_f64(),
+            ..AdaptStep::of(step, mesh.n_cells(), iterations)
         };
+        let est = rec.estimate_on(scene, opts, sys);
+        rec.wall_step_s = ts.elapsed().as_secs_f64();
+        rec.wall_total_s = t0.elapsed().as_secs_f64();
         on_step(sys, &rec, &est.indicators);
         let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
         steps.push(rec);
@@ -729,12 +684,68 @@ fn run_relocation(
         problem = next_problem;
         mesh = new_mesh;
         (rb, tb) = (rb1, tb1);
-        warm = match &problem {
-            Problem::Static(sys) => !sys.contact.as_ref().is_some_and(|c| c.friction.is_active()),
-            Problem::Steady(_) => true,
-        };
+        warm = problem.warm_starts();
     }
     Ok((problem.into_sys(), steps))
+}
+
+impl AdaptStep {
+    /// The row of mesh `step` with `cells` cells solved in `iterations` Newton iterations; the
+    /// mesh's other counts, the estimate, the loads and the times zero until filled in.
+    fn of(step: usize, cells: usize, iterations: usize) -> Self {
+        Self {
+            step,
+            cells,
+            dofs: 0,
+            hanging_nodes: 0,
+            max_level: 0,
+            degree2_cells: 0,
+            coarsened: 0,
+            estimate: 0.0,
+            relative_estimate: 0.0,
+            hub_force_x: 0.0,
+            hub_force_y: 0.0,
+            hub_torque: 0.0,
+            penetration: 0.0,
+            newton_iterations: iterations,
+            wall_step_s: 0.0,
+            wall_total_s: 0.0,
+        }
+    }
+
+    /// Estimate the error of the solved `sys` with `opts.estimator` (the contact tractions
+    /// are the boundary data of the residual estimators only) and fill in the row's
+    /// equations, estimate and loads; returns the estimate.
+    fn estimate_on(
+        &mut self,
+        scene: &Scene,
+        opts: &AdaptOptions,
+        sys: &SolidSystem,
+    ) -> CellEstimate {
+        let applied = opts
+            .estimator
+            .uses_applied_tractions()
+            .then(|| sys.contact_tractions())
+            .flatten();
+        let ctx = SolidContext {
+            model: &sys.model,
+            dofs: &sys.dofs,
+            x: &sys.x,
+            free: &[],
+            applied: applied.as_ref(),
+        };
+        let Ok(est) = opts.estimator.estimate(&ctx);
+        let norm = estimate::energy_norm(&sys.model, &sys.dofs, &sys.x);
+        let r: IndentationResults = indentation::results(sys, scene.geometry.ro);
+        self.dofs = sys.n_dofs();
+        self.estimate = est.global;
+        self.relative_estimate = if norm > 0.0 { est.global / norm } else { 0.0 };
+        self.hub_force_x = r.hub_force_x;
+        self.hub_force_y = r.hub_force_y;
+        self.hub_torque = r.hub_torque;
+        self.penetration = r.penetration;
+        est
+    }
 }
 
 /// The leaves of the families (four sibling leaves, none in `marked`) whose predicted parent
