@@ -48,6 +48,77 @@ pub fn periodic_affine(a: &[f64], c: &[f64], x: &mut [f64]) {
     }
 }
 
+/// Flow-order index `j` of a ring of `m` points: counter-clockwise for ω ≥ 0, clockwise
+/// otherwise. Returns (point position, spacing index from this point to the next in flow).
+#[inline]
+pub fn flow(j: usize, m: usize, forward: bool) -> (usize, usize) {
+    if forward {
+        (j, j)
+    } else {
+        // Position m−1−j; the next in flow is m−2−j (mod m), spacing dθ[m−2−j] (mod m).
+        (m - 1 - j, (2 * m - 2 - j) % m)
+    }
+}
+
+/// Scratch of [`sweep_ring`] (grown as needed).
+#[derive(Clone, Debug, Default)]
+pub struct RingScratch {
+    a: Vec<f64>,
+    phi: Vec<f64>,
+    c: Vec<f64>,
+    x: Vec<f64>,
+}
+
+/// The periodic solution `X = L_i e` of the exact step recurrence along one closed ring of
+/// points `pts` (counter-clockwise; `dtheta[k]` the angle from point k to k + 1, the last one
+/// wrapping to point 0) at angular speed `omega` (the flow runs clockwise for ω < 0), for each
+/// Prony term i of `ve` and each of the `n_comp` components of the per-point values
+/// `e(point, component)`, handed to `out(point, term, component, X)` (`point` the entry of
+/// `pts`).
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_ring(
+    pts: &[u32],
+    dtheta: &[f64],
+    ve: &Viscoelastic,
+    omega: f64,
+    n_comp: usize,
+    e: impl Fn(usize, usize) -> f64,
+    out: &mut impl FnMut(usize, usize, usize, f64),
+    s: &mut RingScratch,
+) {
+    let forward = omega >= 0.0;
+    let w = omega.abs();
+    let m = pts.len();
+    for v in [&mut s.a, &mut s.phi, &mut s.c, &mut s.x] {
+        v.resize(m, 0.0);
+    }
+    for (i, &(g, tau)) in ve.prony().iter().enumerate() {
+        for j in 0..m {
+            let (_, k) = flow(j, m, forward);
+            let (a, phi) = exp_weights(dtheta[k] / (w * tau));
+            s.a[j] = a;
+            s.phi[j] = phi;
+        }
+        for comp in 0..n_comp {
+            for j in 0..m {
+                let (k0, _) = flow(j, m, forward);
+                let (k1, _) = flow((j + 1) % m, m, forward);
+                let (e0, e1) = (e(pts[k0] as usize, comp), e(pts[k1] as usize, comp));
+                let (a, phi) = (s.a[j], s.phi[j]);
+                s.c[j] = match ve.model {
+                    ViscoModel::Convolution => g * phi * (e1 - e0),
+                    ViscoModel::Multiplicative => (phi - a) * e0 + (1.0 - phi) * e1,
+                };
+            }
+            periodic_affine(&s.a, &s.c, &mut s.x);
+            for j in 0..m {
+                let (k, _) = flow(j, m, forward);
+                out(pts[k] as usize, i, comp, s.x[j]);
+            }
+        }
+    }
+}
+
 /// `Kᵀ r` for the linear map `K: c ↦ x` of [`periodic_affine`]: the periodic solution of the
 /// adjoint recurrence `z_k = a_{k+1} z_{k+1} + r_{k+1}` (indices mod m), so that
 /// `Σ_k r_k x_k = Σ_k z_k c_k` for every `c`.

@@ -29,8 +29,8 @@
 
 use super::solid3d::{Solid3D, MAX_POINTS_3D};
 use crate::assembly::{DofMap, CONSTRAINED};
-use crate::material::viscoelastic::{exp_weights, green_strain, ViscoModel, Viscoelastic};
-use crate::material::viscoelastic_ring::periodic_affine;
+use crate::material::viscoelastic::{green_strain, ViscoModel, Viscoelastic};
+use crate::material::viscoelastic_ring::{sweep_ring, RingScratch};
 use crate::math::{Mat3, Tensor};
 
 /// Fewest points of a ring (fewer cannot be a closed streamline of a revolved mesh).
@@ -57,11 +57,8 @@ pub struct SteadyHistory3D {
     xs: Vec<f64>,
     /// Full-length scratch.
     full: Vec<f64>,
-    /// Ring scratch: a, φ, c, x.
-    a: Vec<f64>,
-    phi: Vec<f64>,
-    c: Vec<f64>,
-    x: Vec<f64>,
+    /// Ring scratch.
+    scratch: RingScratch,
 }
 
 /// Cylindrical components `Rᵀ A R` (R = [e_r e_θ e_3] at angle φ, `rot` = (cos φ, sin φ)) of a
@@ -81,17 +78,6 @@ fn from_cylindrical(p: &[f64], rot: (f64, f64)) -> Mat3 {
 
 fn rotation((c, s): (f64, f64)) -> Mat3 {
     Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
-}
-
-/// Flow-order index `j` of a ring of `m` points: counter-clockwise for ω ≥ 0, clockwise
-/// otherwise. Returns (point position, spacing index from this point to the next in flow).
-#[inline]
-fn flow(j: usize, m: usize, forward: bool) -> (usize, usize) {
-    if forward {
-        (j, j)
-    } else {
-        (m - 1 - j, (2 * m - 2 - j) % m)
-    }
 }
 
 impl SteadyHistory3D {
@@ -150,7 +136,6 @@ impl SteadyHistory3D {
             p[1].atan2(p[0]).rem_euclid(2.0 * std::f64::consts::PI)
         };
         let mut dtheta = Vec::with_capacity(rings.len());
-        let mut max_m = 0;
         for ring in rings.iter_mut() {
             let m = ring.len();
             if m < MIN_RING {
@@ -175,7 +160,6 @@ impl SteadyHistory3D {
                 }
                 d.push(t);
             }
-            max_m = max_m.max(m);
             dtheta.push(d);
         }
         let rot = pos
@@ -195,10 +179,7 @@ impl SteadyHistory3D {
             de: vec![Mat3::zeros(); n_pts],
             xs: Vec::new(),
             full: Vec::new(),
-            a: vec![0.0; max_m],
-            phi: vec![0.0; max_m],
-            c: vec![0.0; max_m],
-            x: vec![0.0; max_m],
+            scratch: RingScratch::default(),
         })
     }
 
@@ -226,40 +207,22 @@ impl SteadyHistory3D {
     /// step recurrence driven by the per-point cylindrical strains `self.e`, into `self.xs`
     /// (point-major, then term, then component).
     fn sweep(&mut self, ve: &Viscoelastic, omega: f64) {
-        let forward = omega >= 0.0;
-        let w = omega.abs();
         let nt = ve.prony().len();
         self.xs.resize(self.e.len() * 6 * nt, 0.0);
+        let (e, xs) = (&self.e, &mut self.xs);
+        let mut out =
+            |p: usize, term: usize, comp: usize, v: f64| xs[(p * nt + term) * 6 + comp] = v;
         for (pts, dth) in self.rings.iter().zip(&self.dtheta) {
-            let m = pts.len();
-            for (i, &(g, tau)) in ve.prony().iter().enumerate() {
-                for j in 0..m {
-                    let (_, s) = flow(j, m, forward);
-                    let (a, phi) = exp_weights(dth[s] / (w * tau));
-                    self.a[j] = a;
-                    self.phi[j] = phi;
-                }
-                for comp in 0..6 {
-                    for j in 0..m {
-                        let (k0, _) = flow(j, m, forward);
-                        let (k1, _) = flow((j + 1) % m, m, forward);
-                        let (e0, e1) = (
-                            self.e[pts[k0] as usize][comp],
-                            self.e[pts[k1] as usize][comp],
-                        );
-                        let (a, phi) = (self.a[j], self.phi[j]);
-                        self.c[j] = match ve.model {
-                            ViscoModel::Convolution => g * phi * (e1 - e0),
-                            ViscoModel::Multiplicative => (phi - a) * e0 + (1.0 - phi) * e1,
-                        };
-                    }
-                    periodic_affine(&self.a[..m], &self.c[..m], &mut self.x[..m]);
-                    for j in 0..m {
-                        let (k, _) = flow(j, m, forward);
-                        self.xs[(pts[k] as usize * nt + i) * 6 + comp] = self.x[j];
-                    }
-                }
-            }
+            sweep_ring(
+                pts,
+                dth,
+                ve,
+                omega,
+                6,
+                |p, c| e[p][c],
+                &mut out,
+                &mut self.scratch,
+            );
         }
     }
 

@@ -76,8 +76,8 @@
 use super::streamline_upwind::{UpwindError, UpwindTransport};
 use super::SolidModel;
 use crate::assembly::{DofMap, QpHistory, CONSTRAINED};
-use crate::material::viscoelastic::{exp_weights, green_strain, ViscoModel, Viscoelastic};
-use crate::material::viscoelastic_ring::periodic_affine;
+use crate::material::viscoelastic::{green_strain, ViscoModel, Viscoelastic};
+use crate::material::viscoelastic_ring::{sweep_ring, RingScratch};
 use crate::math::{Mat2, Vec2};
 
 /// How the steady internal variables are integrated along the streamlines.
@@ -158,11 +158,8 @@ struct Rings {
     dtheta: Vec<Vec<f64>>,
     /// Largest relative deviation of a ring's points from its first point's radius.
     radius_deviation: f64,
-    /// Ring scratch: a, φ, c, x.
-    a: Vec<f64>,
-    phi: Vec<f64>,
-    c: Vec<f64>,
-    x: Vec<f64>,
+    /// Ring scratch.
+    scratch: RingScratch,
 }
 
 /// The discretisation of the streamline ODE.
@@ -217,18 +214,6 @@ fn from_polar(p: [f64; 3], rot: (f64, f64)) -> [f64; 3] {
     to_polar(p, (rot.0, -rot.1))
 }
 
-/// Flow-order index `j` of a ring of `m` points: counter-clockwise for ω ≥ 0, clockwise
-/// otherwise. Returns (point position, spacing index from this point to the next in flow).
-#[inline]
-fn flow(j: usize, m: usize, forward: bool) -> (usize, usize) {
-    if forward {
-        (j, j)
-    } else {
-        // Position m−1−j; the next in flow is m−2−j (mod m), spacing dθ[m−2−j] (mod m).
-        (m - 1 - j, (2 * m - 2 - j) % m)
-    }
-}
-
 impl Rings {
     /// The rings of quadrature points of `model` (point positions `pos`), or why it has none.
     fn new(model: &SolidModel, pos: &[Vec2]) -> Result<Self, StreamlineError> {
@@ -250,7 +235,6 @@ impl Rings {
         let n_rings = QpHistory::n_rings(layout, q);
         let mut rings = Vec::with_capacity(n_rings);
         let mut dtheta = Vec::with_capacity(n_rings);
-        let mut max_m = 0;
         let mut dev = 0.0f64;
         for r in 0..n_rings {
             let pts: Vec<u32> = QpHistory::ring(layout, q, r)
@@ -280,7 +264,6 @@ impl Rings {
             if (total - 2.0 * std::f64::consts::PI).abs() > 1e-9 {
                 return Err(StreamlineError::NotACircle { ring: r });
             }
-            max_m = max_m.max(m);
             rings.push(pts);
             dtheta.push(d);
         }
@@ -288,20 +271,13 @@ impl Rings {
             rings,
             dtheta,
             radius_deviation: dev,
-            a: vec![0.0; max_m],
-            phi: vec![0.0; max_m],
-            c: vec![0.0; max_m],
-            x: vec![0.0; max_m],
+            scratch: RingScratch::default(),
         })
     }
 
     /// For each ring, Prony term and strain component, the periodic solution `X = L_i e` of
     /// the exact step recurrence driven by the per-point strains `e`, handed to
     /// `out(point, term, component, X)`.
-    #[allow(
-        clippy::needless_range_loop,
-        reason = "the strain component indexes the per-point strains of two ring points"
-    )]
     fn sweep(
         &mut self,
         e: &[[f64; 3]],
@@ -309,35 +285,17 @@ impl Rings {
         omega: f64,
         out: &mut impl FnMut(usize, usize, usize, f64),
     ) {
-        let forward = omega >= 0.0;
-        let w = omega.abs();
         for (pts, dth) in self.rings.iter().zip(&self.dtheta) {
-            let m = pts.len();
-            for (i, &(g, tau)) in ve.prony().iter().enumerate() {
-                for j in 0..m {
-                    let (_, s) = flow(j, m, forward);
-                    let (a, phi) = exp_weights(dth[s] / (w * tau));
-                    self.a[j] = a;
-                    self.phi[j] = phi;
-                }
-                for comp in 0..3 {
-                    for j in 0..m {
-                        let (k0, _) = flow(j, m, forward);
-                        let (k1, _) = flow((j + 1) % m, m, forward);
-                        let (e0, e1) = (e[pts[k0] as usize][comp], e[pts[k1] as usize][comp]);
-                        let (a, phi) = (self.a[j], self.phi[j]);
-                        self.c[j] = match ve.model {
-                            ViscoModel::Convolution => g * phi * (e1 - e0),
-                            ViscoModel::Multiplicative => (phi - a) * e0 + (1.0 - phi) * e1,
-                        };
-                    }
-                    periodic_affine(&self.a[..m], &self.c[..m], &mut self.x[..m]);
-                    for j in 0..m {
-                        let (k, _) = flow(j, m, forward);
-                        out(pts[k] as usize, i, comp, self.x[j]);
-                    }
-                }
-            }
+            sweep_ring(
+                pts,
+                dth,
+                ve,
+                omega,
+                3,
+                |p, c| e[p][c],
+                out,
+                &mut self.scratch,
+            );
         }
     }
 }
