@@ -225,7 +225,19 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
         attach_viscoelastic(scene, &mut model)?;
         return Ok(model);
     }
-    let mut mesh = annulus(&AnnulusSpec {
+    let mut mesh = annulus(&annulus_spec(scene));
+    // Isoparametric cells: nodes on the exact circles, rigid motions represented exactly
+    // (objectivity; see `Mesh::make_isoparametric`).
+    mesh.make_isoparametric();
+    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
+    attach_viscoelastic(scene, &mut model)?;
+    Ok(model)
+}
+
+/// The generated annulus of the scene's `[geometry]` and `[mesh]`.
+pub fn annulus_spec(scene: &Scene) -> AnnulusSpec {
+    let ms = &scene.mesh;
+    AnnulusSpec {
         ri: scene.geometry.ri,
         ro: scene.geometry.ro,
         n_r: ms.n_r,
@@ -233,13 +245,7 @@ pub fn build_model(scene: &Scene) -> Result<SolidModel, AppError> {
         degree: ms.order,
         grading_r: ms.grading_r,
         grading_theta: ms.grading_theta,
-    });
-    // Isoparametric cells: nodes on the exact circles, rigid motions represented exactly
-    // (objectivity; see `Mesh::make_isoparametric`).
-    mesh.make_isoparametric();
-    let mut model = SolidModel::new(mesh, material, scene.material.rho, pressure);
-    attach_viscoelastic(scene, &mut model)?;
-    Ok(model)
+    }
 }
 
 /// The scene's `[material.viscoelastic]` overstress on `model` (history at every quadrature

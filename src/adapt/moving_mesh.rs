@@ -47,7 +47,7 @@ pub enum MovingMeshError {
     Ns(#[from] NsError),
     #[error("node relocation needs a uniform mesh of squares (no hanging nodes)")]
     NotUniform,
-    #[error("bad monitor parameters: alpha = {alpha}, beta = {beta}, gamma = {gamma}")]
+    #[error("bad monitor parameters: need alpha >= 0, beta >= 1 and gamma in [0, 1], got alpha = {alpha}, beta = {beta}, gamma = {gamma}")]
     Parameters { alpha: f64, beta: f64, gamma: f64 },
     #[error("no relocation step keeps the mesh valid: min det J = {det:e} in cell {cell} after 30 halvings")]
     Tangled { cell: usize, det: f64 },
@@ -75,7 +75,8 @@ impl Default for MonitorParams {
 }
 
 impl MonitorParams {
-    fn check(&self) -> Result<(), MovingMeshError> {
+    /// α ≥ 0, β ≥ 1 (both finite) and γ ∈ [0, 1], or the error naming them.
+    pub fn check(&self) -> Result<(), MovingMeshError> {
         let ok = self.alpha >= 0.0
             && self.alpha.is_finite()
             && self.beta >= 1.0

@@ -45,7 +45,7 @@ use crate::io::record::vtu::vtu_bytes;
 use crate::io::scene::VtuFormat;
 use crate::io::scene::{Mode, Scene, SteadyHistoryChoice};
 use crate::mesh::locate::vector_at;
-use crate::mesh::{annulus, AnnulusSpec, Forest, Mesh};
+use crate::mesh::{annulus, Forest, Mesh};
 use crate::model::system::SolidSystem;
 use crate::physics::estimate::SolidContext;
 use crate::physics::SolidModel;
@@ -257,22 +257,13 @@ pub struct AdaptStep {
 
 /// The scene's annulus with the exact polar map (no `make_isoparametric`).
 pub fn polar_root(scene: &Scene) -> Result<Mesh, AppError> {
-    let ms = &scene.mesh;
-    if ms.file.is_some() {
+    if scene.mesh.file.is_some() {
         return Err(AppError::Unsupported(
             "tread adapt refines the generated annulus ([mesh] n_r, n_theta), not a mesh file"
                 .into(),
         ));
     }
-    Ok(annulus(&AnnulusSpec {
-        ri: scene.geometry.ri,
-        ro: scene.geometry.ro,
-        n_r: ms.n_r,
-        n_theta: ms.n_theta,
-        degree: ms.order,
-        grading_r: ms.grading_r,
-        grading_theta: ms.grading_theta,
-    }))
+    Ok(annulus(&crate::setup::annulus_spec(scene)))
 }
 
 /// The scene's static indentation system on `mesh`.
@@ -577,21 +568,12 @@ pub fn run(
         }
         // Transfer: the displacements, and the global unknowns (the road height under load
         // control).
-        let next = next_problem.sys_mut();
-        cold = next.x.clone();
-        let mut x = next.x.clone();
-        for k in 0..next.dofs.n_global.min(sys.dofs.n_global) {
-            x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
-        }
-        for (node, &(root, xi, eta)) in origin.iter().enumerate() {
-            if let Some((leaf, (a, b))) = old_forest.locate(root, xi, eta) {
-                let u = vector_at(&mesh, &sys.x, leaf, a, b);
-                x[2 * node] = u[0];
-                x[2 * node + 1] = u[1];
-            }
-        }
-        next.dofs.apply_constraints(&mut x);
-        next.restore_state(&x);
+        let at = origin.iter().map(|&(root, xi, eta)| {
+            old_forest
+                .locate(root, xi, eta)
+                .map(|(leaf, (a, b))| (leaf, a, b))
+        });
+        cold = transfer(sys, &mesh, next_problem.sys_mut(), at);
         problem = next_problem;
         mesh = new_mesh;
         warm = problem.warm_starts();
@@ -609,17 +591,8 @@ fn run_relocation(
     mut on_step: impl FnMut(&SolidSystem, &AdaptStep, &[f64]),
 ) -> Result<(SolidSystem, Vec<AdaptStep>), AppError> {
     let m = opts.monitor;
-    let valid = m.alpha >= 0.0
-        && m.alpha.is_finite()
-        && m.beta >= 1.0
-        && m.beta.is_finite()
-        && (0.0..=1.0).contains(&m.gamma);
-    if !valid {
-        return Err(AppError::Unsupported(format!(
-            "tread adapt --refine r: the monitor needs α ≥ 0, β ≥ 1 and γ in [0, 1], got α = {}, β = {}, γ = {}",
-            m.alpha, m.beta, m.gamma
-        )));
-    }
+    m.check()
+        .map_err(|e| AppError::Unsupported(format!("tread adapt --refine r: {e}")))?;
     if opts.uniform > 0 || opts.coarsen > 0.0 {
         return Err(AppError::Unsupported(
             "tread adapt --refine r moves the scene's cells: --uniform and --coarsen do not apply"
@@ -628,16 +601,7 @@ fn run_relocation(
     }
     let t0 = Instant::now();
     let mut mesh = polar_root(scene)?;
-    let ms = &scene.mesh;
-    let spec = AnnulusSpec {
-        ri: scene.geometry.ri,
-        ro: scene.geometry.ro,
-        n_r: ms.n_r,
-        n_theta: ms.n_theta,
-        degree: ms.order,
-        grading_r: ms.grading_r,
-        grading_theta: ms.grading_theta,
-    };
+    let spec = crate::setup::annulus_spec(scene);
     let (mut rb, mut tb) = (
         crate::mesh::annulus::radial_breaks(&spec),
         crate::mesh::annulus::angular_breaks(&spec),
@@ -668,25 +632,47 @@ fn run_relocation(
         let mut next_problem = Problem::build(scene, new_mesh.clone())?;
         // Transfer: the old displacement field at the new nodes (located in the old cells),
         // and the global unknowns.
-        let next = next_problem.sys_mut();
-        cold = next.x.clone();
-        let mut x = next.x.clone();
-        for k in 0..next.dofs.n_global.min(sys.dofs.n_global) {
-            x[next.dofs.global(k)] = sys.x[sys.dofs.global(k)];
-        }
         let found = crate::mesh::locate::locate_points(&mesh, &new_mesh.nodes);
-        for (node, &(c, xi, eta)) in found.iter().enumerate() {
-            let u = vector_at(&mesh, &sys.x, c, xi, eta);
-            x[2 * node] = u[0];
-            x[2 * node + 1] = u[1];
-        }
-        next.restore_state(&x);
+        cold = transfer(
+            sys,
+            &mesh,
+            next_problem.sys_mut(),
+            found.into_iter().map(Some),
+        );
         problem = next_problem;
         mesh = new_mesh;
         (rb, tb) = (rb1, tb1);
         warm = problem.warm_starts();
     }
     Ok((problem.into_sys(), steps))
+}
+
+/// Transfer the solved `old` (on `old_mesh`) to the newly built `next`: its global unknowns
+/// (the road height under load control), and at each new node the old displacement at the
+/// node's place `at[node]` (old cell and reference point; `None` keeps the built value); the
+/// constraints of hanging nodes are then applied. Returns `next`'s state as built (the cold
+/// start to fall back to).
+fn transfer(
+    old: &SolidSystem,
+    old_mesh: &Mesh,
+    next: &mut SolidSystem,
+    at: impl Iterator<Item = Option<(usize, f64, f64)>>,
+) -> Vec<f64> {
+    let cold = next.x.clone();
+    let mut x = next.x.clone();
+    for k in 0..next.dofs.n_global.min(old.dofs.n_global) {
+        x[next.dofs.global(k)] = old.x[old.dofs.global(k)];
+    }
+    for (node, place) in at.enumerate() {
+        if let Some((c, xi, eta)) = place {
+            let u = vector_at(old_mesh, &old.x, c, xi, eta);
+            x[2 * node] = u[0];
+            x[2 * node + 1] = u[1];
+        }
+    }
+    next.dofs.apply_constraints(&mut x);
+    next.restore_state(&x);
+    cold
 }
 
 impl AdaptStep {

@@ -80,7 +80,7 @@ pub struct Coefficients {
     pub body_load: f64,
     /// The step over which a viscoelastic history advances in this evaluation, from the
     /// committed state (0: the committed state itself, with the instantaneous response to a
-    /// change of strain; see [`overstress_cell`]).
+    /// change of strain; see [`CellOverstress`]).
     pub history_dt: f64,
 }
 
@@ -99,6 +99,21 @@ pub struct CellLaw<'a, M: ?Sized, const D: usize> {
     pub rho: f64,
     pub pressure: CellPressure<'a>,
     pub body_force: Option<&'a BodyForceD<D>>,
+    /// A viscoelastic overstress and the committed state of the cell's points (in the order
+    /// of the points, `n_state` values each), evaluated over the step
+    /// [`Coefficients::history_dt`].
+    pub overstress: Option<CellOverstress<'a>>,
+}
+
+/// The viscoelastic overstress of a cell ([`crate::material::viscoelastic`]): at each point the
+/// end-of-step overstress P_v = F S_v from the committed state `old` over the step
+/// [`Coefficients::history_dt`] (0: the committed state, with the instantaneous response to a
+/// change of strain), added to the stress, its algorithmic tangent ∂P_v/∂F to the material
+/// tangent. The state is read, never written: the caller commits it once a step has converged.
+#[derive(Clone, Copy)]
+pub struct CellOverstress<'a> {
+    pub law: &'a Viscoelastic,
+    pub old: &'a [f64],
 }
 
 /// Number of pressure coefficients per cell of the P1 basis in `D` dimensions.
@@ -228,7 +243,8 @@ where
     let rw2 = law.rho * co.omega2;
     // K_up (nu × 4), for the exact rows or the condensation.
     let mut kup = [[0.0f64; 4]; 81];
-    for pt in pts {
+    let mut new_state = [0.0; MAX_STATE_3D];
+    for (q, pt) in pts.iter().enumerate() {
         let h: T = grad_u::<T, D, N>(u, &pt.g);
         let jm1 = h.det_ipm1();
         if jm1 <= -1.0 || !jm1.is_finite() {
@@ -240,6 +256,18 @@ where
         } else {
             (law.material.stress(&h), T::tangent_zero())
         };
+        if let Some(ov) = law.overstress {
+            let ns = ov.law.n_state_of::<T>();
+            let old = &ov.old[q * ns..(q + 1) * ns];
+            let (pv, av) = ov
+                .law
+                .overstress(&h, old, co.history_dt, &mut new_state[..ns], with_k);
+            if !pv.frob().is_finite() {
+                return Err(Inadmissible::Inverted);
+            }
+            pk = pk + pv;
+            a = a + av;
+        }
         let f = T::eye() + h;
         let mut q = Vector4::zeros();
         let mut cof = T::zero();
@@ -481,71 +509,4 @@ pub fn viscous_cell_scaled<const D: usize, const N: usize>(
             }
         }
     }
-}
-
-/// The viscoelastic overstress of one cell ([`crate::material::viscoelastic`]), added to `r`
-/// (the first D·N rows) and, unless `k` is empty, to its algorithmic tangent `k` (row-major with
-/// row length `nd` ≥ D·N): at each point the end-of-step overstress P_v = F S_v of the
-/// committed state `old` (the cell's points in order, `n_state` values each) over a step `dt`
-/// (0: the committed state, with the instantaneous response to a change of strain), so
-/// r_ai += Σ_q w P_v,iJ G_aJ and K_ai,bk += Σ_q w G_aJ (∂P_v/∂F)_iJ,kL G_bL. The state is read,
-/// never written: the caller commits it once a step has converged.
-#[allow(clippy::needless_range_loop, clippy::too_many_arguments)]
-pub fn overstress_cell<T, const D: usize, const N: usize>(
-    pts: &[Point<D, N>],
-    u: &[f64],
-    ve: &Viscoelastic,
-    old: &[f64],
-    dt: f64,
-    nd: usize,
-    r: &mut [f64],
-    k: &mut [f64],
-) -> Result<(), Inadmissible>
-where
-    T: InvariantTensor,
-{
-    debug_assert_eq!(T::D, D);
-    let with_k = !k.is_empty();
-    let ns = ve.n_state_of::<T>();
-    let mut new = [0.0; MAX_STATE_3D];
-    for (q, pt) in pts.iter().enumerate() {
-        let h: T = grad_u::<T, D, N>(u, &pt.g);
-        let (p, a) = ve.overstress(&h, &old[q * ns..(q + 1) * ns], dt, &mut new[..ns], with_k);
-        if !p.frob().is_finite() {
-            return Err(Inadmissible::Inverted);
-        }
-        let w = pt.w;
-        for a_ in 0..N {
-            let ga = &pt.g[a_];
-            for i in 0..D {
-                let ri: f64 = (0..D).map(|j| p[(i, j)] * ga[j]).sum();
-                r[D * a_ + i] += ri * w;
-            }
-        }
-        if !with_k {
-            continue;
-        }
-        for a_ in 0..N {
-            let ga = &pt.g[a_];
-            for i in 0..D {
-                let row = (D * a_ + i) * nd;
-                let mut c = [[0.0; D]; D];
-                for kk in 0..D {
-                    for l in 0..D {
-                        let s: f64 = (0..D)
-                            .map(|j| ga[j] * a[(T::flat(i, j), T::flat(kk, l))])
-                            .sum();
-                        c[kk][l] = s * w;
-                    }
-                }
-                for b in 0..N {
-                    let gb = &pt.g[b];
-                    for kk in 0..D {
-                        k[row + D * b + kk] += (0..D).map(|l| c[kk][l] * gb[l]).sum::<f64>();
-                    }
-                }
-            }
-        }
-    }
-    Ok(())
 }

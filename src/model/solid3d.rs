@@ -8,8 +8,8 @@
 //! 3n + i); incompressible laws add the cell's four P1 pressures after them.
 
 use super::kernel::{
-    cell_energy, grad_u, n_pressure, overstress_cell, p1_basis, perturbed_pressure, pressure_frame,
-    solid_cell, BodyForceD, CellLaw, CellPressure, Coefficients, Inadmissible, Point,
+    cell_energy, grad_u, n_pressure, p1_basis, perturbed_pressure, pressure_frame, solid_cell,
+    BodyForceD, CellLaw, CellOverstress, CellPressure, Coefficients, Inadmissible, Point,
 };
 use crate::assembly::{CellTopology, DofMap, QpHistory};
 use crate::element::hex::{Hex27, Hex8, Lagrange3D, QuadRule3D};
@@ -198,13 +198,12 @@ impl Solid3D {
             rho: self.rho,
             pressure,
             body_force: self.body_force.as_deref(),
+            overstress: self.viscoelastic.as_ref().map(|ve| CellOverstress {
+                law: ve,
+                old: self.history.cell(c),
+            }),
         };
-        solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)?;
-        if let Some(ve) = &self.viscoelastic {
-            let (old, dt) = (self.history.cell(c), co.history_dt);
-            overstress_cell::<Mat3, 3, N>(&pts[..np], &u[..3 * N], ve, old, dt, r.len(), r, k)?;
-        }
-        Ok(())
+        solid_cell::<Mat3, Material, 3, N>(&pts[..np], &u[..3 * N], &law, co, r, k)
     }
 
     /// The points of cell `c`'s stiffness rule (the points of [`Self::history`], in order):

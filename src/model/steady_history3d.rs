@@ -18,7 +18,7 @@
 //! along each ring by the exact exponential recurrence and its closed-form periodic solution
 //! ([`crate::material::viscoelastic_ring::periodic_affine`]), and the internal variables are
 //! rotated back to Cartesian components for the kernels, which evaluate the overstress with
-//! Δt = 0 ([`super::kernel::overstress_cell`]).
+//! Δt = 0 ([`super::kernel::CellOverstress`]).
 //!
 //! **Tangent.** The kernels assemble the tangent with the state frozen (plus the instantaneous
 //! response of the convolution model). The rest, `δP = F δS` with
