@@ -839,6 +839,7 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                     app::default_out_dir(&s).with_file_name(format!("{}_adapt", s.scene.name))
                 });
                 let mut vtu_error = None;
+                tread::io::record::install_interrupt_handler();
                 let res = tread::io::output::ensure_dir(&dir)
                     .map_err(tread::app::AppError::from)
                     .and_then(|()| {
@@ -862,6 +863,14 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                         }
                     });
                 match res {
+                    Ok(steps) if tread::io::record::interrupted() => {
+                        eprintln!(
+                            "tread: interrupted: {} mesh(es) solved; {} holds them",
+                            steps.len(),
+                            dir.join("adapt.csv").display()
+                        );
+                        ExitCode::from(130)
+                    }
                     Ok(steps) => {
                         if !cli.quiet {
                             let what = if s.analysis.mode == tread::io::scene::Mode::Steady {

@@ -423,3 +423,99 @@ fn sigint_stops_a_model_problem_at_a_time_step() {
     assert!((tc[steps - 1] - t).abs() < 1e-12);
     assert!(out.join("solution.vtu").exists());
 }
+
+/// Wait until `path` exists (the child still running), at most a minute.
+fn wait_for(child: &mut Child, path: &Path) {
+    let t0 = Instant::now();
+    while !path.exists() {
+        if let Ok(Some(st)) = child.try_wait() {
+            panic!("the run ended ({st}) before {} appeared", path.display());
+        }
+        assert!(t0.elapsed() < Duration::from_secs(60), "timeout");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// The cavity's Newton continuation in Re and its moving-mesh recalculations (50, on 32 × 32
+/// cells: far longer than the wait below) stop at the next solve on SIGINT: exit 130,
+/// `"error": "interrupted"`, `interrupted_at` the Reynolds number reached, one row of steps.csv
+/// per solve done, and the solution of the last solve written.
+#[test]
+fn sigint_stops_the_cavity_between_solves() {
+    let dir = tmpdir("cavity");
+    let out = dir.join("out");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/model_problems/cavity.toml"
+    );
+    let mut child = tread()
+        .args(["run", scene, "-q", "--out"])
+        .arg(&out)
+        .args(["--set", "problem.levels=5", "--set", "problem.recalculations=50"])
+        .args(["--set", "output.sinks=[\"summary\", \"csv\", \"vtu\"]"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&mut child, &out);
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-INT");
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["error"], "interrupted");
+    let re = s["interrupted_at"].as_f64().unwrap();
+    assert!([100.0, 400.0, 1000.0].contains(&re), "interrupted_at {re}");
+    // Rows: one per solve (the continuation's and the recalculations'), fewer than the full run's.
+    let steps = s["steps"].as_u64().unwrap() as usize;
+    assert!((1..53).contains(&steps), "{steps} rows");
+    let (h, rows) = read_csv(&out.join("steps.csv"));
+    assert_eq!(rows.len(), steps);
+    let psi = column(&h, &rows, "psi_min");
+    assert!(psi.iter().all(|p| p.is_finite() && *p < 0.0), "{psi:?}");
+    assert!(out.join("solution.vtu").exists());
+}
+
+/// `tread adapt` stops at the next mesh on SIGINT: exit 130, adapt.csv with one row per mesh
+/// solved (as many as the adapt_NNN.vtu files written), fewer than asked for.
+#[test]
+fn sigint_stops_tread_adapt_between_meshes() {
+    let dir = tmpdir("adapt");
+    let out = dir.join("out");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/oden_hollow_cylinder.toml"
+    );
+    let mut child = tread()
+        .args(["adapt", scene, "-q", "--steps", "30", "--max-dofs", "10000000"])
+        .args(["--set", "analysis.mode=steady", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&mut child, &out.join("adapt_000.vtu"));
+    signal(&child, "-INT");
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let (h, rows) = read_csv(&out.join("adapt.csv"));
+    assert!((1..31).contains(&rows.len()), "{} rows", rows.len());
+    let vtus = std::fs::read_dir(&out)
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            let n = n.to_string_lossy();
+            n.starts_with("adapt_") && n.ends_with(".vtu")
+        })
+        .count();
+    assert_eq!(vtus, rows.len());
+    let est = column(&h, &rows, "relative_estimate");
+    assert!(est.iter().all(|e| e.is_finite() && *e > 0.0), "{est:?}");
+}

@@ -398,6 +398,27 @@ impl Problem {
     }
 }
 
+/// Solve the current mesh ([`Problem::solve`]); `None` when an interrupt (Ctrl-C) stopped the
+/// solve after at least one mesh was solved (`done`): the loop then ends with those meshes. An
+/// interrupt on the first mesh is the error [`AppError::Interrupted`].
+fn solve_unless_interrupted(
+    problem: &mut Problem,
+    scene: &Scene,
+    warm: bool,
+    cold: &[f64],
+    out_dir: &Path,
+    done: &[AdaptStep],
+) -> Result<Option<usize>, AppError> {
+    match problem.solve(scene, warm, cold, out_dir) {
+        Ok(n) => Ok(Some(n)),
+        Err(AppError::Solve(SolveError::Interrupted { .. }, dir)) if done.is_empty() => {
+            Err(AppError::Interrupted(dir))
+        }
+        Err(AppError::Solve(SolveError::Interrupted { .. }, _)) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
 /// Steady rolling on one mesh of the adaptive sequence: Newton at the full load from the
 /// current state when `warm` (else, or if that fails, the whole steady solve from `cold`), then
 /// the scene's rolling control.
@@ -431,6 +452,13 @@ fn solve_rolling(
 /// Run the adaptive loop on the scene (static indentation or steady rolling). `on_step` sees
 /// every solved mesh with its indicators; `out_dir` is where the caller writes (named in
 /// errors).
+///
+/// An interrupt (Ctrl-C: [`crate::io::record::interrupted`]) ends the loop at the next mesh
+/// boundary: after the mesh being estimated, or, when it comes during a solve after the first
+/// mesh, with the meshes solved before it (the returned system then holds the state
+/// transferred to the unsolved mesh). The steps returned are the solved meshes; the caller
+/// tells an interrupted run by `interrupted()`. An interrupt during the first mesh's solve is
+/// the error [`AppError::Interrupted`] (exit status 130).
 pub fn run(
     scene: &Scene,
     opts: &AdaptOptions,
@@ -508,7 +536,10 @@ pub fn run(
     let mut coarsened = 0;
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let iterations = problem.solve(scene, warm, &cold, out_dir)?;
+        let Some(iterations) = solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
+        else {
+            break;
+        };
         let sys = problem.sys();
         let mut rec = AdaptStep {
             hanging_nodes: mesh.constraints.len(),
@@ -521,7 +552,9 @@ pub fn run(
         rec.wall_step_s = ts.elapsed().as_secs_f64();
         rec.wall_total_s = t0.elapsed().as_secs_f64();
         on_step(sys, &rec, &est.indicators);
-        let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
+        let done = step == opts.steps
+            || rec.relative_estimate < opts.tolerance
+            || crate::io::record::interrupted();
         steps.push(rec);
         if done {
             break;
@@ -612,7 +645,10 @@ fn run_relocation(
     let mut steps = Vec::new();
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let iterations = problem.solve(scene, warm, &cold, out_dir)?;
+        let Some(iterations) = solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
+        else {
+            break;
+        };
         let sys = problem.sys();
         let mut rec = AdaptStep {
             degree2_cells: mesh.degree.iter().filter(|&&d| d == 2).count(),
@@ -622,7 +658,9 @@ fn run_relocation(
         rec.wall_step_s = ts.elapsed().as_secs_f64();
         rec.wall_total_s = t0.elapsed().as_secs_f64();
         on_step(sys, &rec, &est.indicators);
-        let done = step == opts.steps || rec.relative_estimate < opts.tolerance;
+        let done = step == opts.steps
+            || rec.relative_estimate < opts.tolerance
+            || crate::io::record::interrupted();
         steps.push(rec);
         if done {
             break;
