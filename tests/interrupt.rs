@@ -516,6 +516,10 @@ fn sigint_stops_tread_adapt_between_meshes() {
         })
         .count();
     assert_eq!(vtus, rows.len());
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("adapt.json")).unwrap()).unwrap();
+    assert_eq!(j["interrupted"], true);
+    assert_eq!(j["steps"].as_array().unwrap().len(), rows.len());
     let est = column(&h, &rows, "relative_estimate");
     assert!(est.iter().all(|e| e.is_finite() && *e > 0.0), "{est:?}");
 }

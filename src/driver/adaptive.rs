@@ -864,6 +864,8 @@ pub fn write(dir: &Path, opts: &AdaptOptions, steps: &[AdaptStep]) -> Result<(),
             "marking": "doerfler",
         },
         "steps": steps,
+        // Stopped by Ctrl-C: `steps` are the meshes solved before it.
+        "interrupted": crate::io::record::interrupted(),
     });
     write_json(&dir.join("adapt.json"), &json)
 }
