@@ -81,6 +81,31 @@ impl Problem {
         }
     }
 
+    /// The Burgers fronts four times steeper at the same speed: ν/4 and the wavenumbers ×4
+    /// (the same fronts at t = 0, a quarter of their width), steps of a quarter.
+    fn burgers_steep() -> Self {
+        let mut o = TransientOptions::new(2, 0.0025, 20);
+        o.adaptive = true;
+        o.min_level = 3;
+        o.max_level = 8;
+        Self {
+            kernel: Box::new(Burgers {
+                exact: ColeHopf {
+                    nu: 0.0025,
+                    terms: vec![(80f64.exp(), [-80.0, -80.0]), (40f64.exp(), [-100.0, 40.0])],
+                },
+            }),
+            origin: [0.0, 0.0],
+            side: 1.0,
+            degree: 2,
+            dt: 0.0025,
+            steps: 20,
+            start_level: 4,
+            uniform_levels: vec![4, 5, 6, 7],
+            adaptive: o,
+        }
+    }
+
     fn uniform(&self, level: u32, dt: f64, n: usize) -> Result<TransientRun, TransientError> {
         let tree = square(self.origin, self.side, level, self.degree);
         run(
@@ -122,6 +147,7 @@ fn main() -> Result<(), TransientError> {
     let mut p = match args.first().map(String::as_str) {
         None | Some("hill") => Problem::hill(),
         Some("burgers") => Problem::burgers(),
+        Some("burgers_steep") => Problem::burgers_steep(),
         Some(o) => {
             eprintln!("problem `{o}`: expected hill or burgers");
             std::process::exit(2);
@@ -157,6 +183,20 @@ fn main() -> Result<(), TransientError> {
         Some("adaptive") => {
             header();
             row("adaptive (test settings)", &p.adaptive(&p.adaptive)?);
+            return Ok(());
+        }
+        Some(o) if o.starts_with("adaptive:") => {
+            // adaptive:I:S: the test's settings with I initial sweeps and S step sweeps.
+            let k: Vec<Option<usize>> = o[9..].split(':').map(|v| v.parse().ok()).collect();
+            let (Some(Some(i)), Some(Some(sw)), 2) = (k.first(), k.get(1), k.len()) else {
+                eprintln!("only: adaptive:I:S expects two counts");
+                std::process::exit(2);
+            };
+            let mut a = p.adaptive.clone();
+            a.initial_sweeps = *i;
+            a.step_sweeps = *sw;
+            header();
+            row(&format!("adaptive, {i} initial, {sw} step sweeps"), &p.adaptive(&a)?);
             return Ok(());
         }
         Some(o) => {
@@ -221,6 +261,10 @@ fn main() -> Result<(), TransientError> {
     o.marking = Marking::Dorfler(0.9);
     o.initial_sweeps = 8;
     variants.push(("adaptive, Dorfler 0.9, 8 sweeps".to_string(), o));
+    let mut o = base.clone();
+    o.initial_sweeps = 8;
+    o.step_sweeps = 2;
+    variants.push(("adaptive, 8 initial, 2 step sweeps".to_string(), o));
     let mut history = None;
     for (label, o) in &variants {
         let r = p.adaptive(o)?;

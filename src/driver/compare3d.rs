@@ -80,8 +80,16 @@ pub fn field_difference_3d(sys: &Solid3DSystem, a: &[f64], b: &[f64]) -> (f64, f
 }
 
 /// The contact samples of the steady system with its displacements set to `u` (3 per node).
-fn samples_of(sys: &mut Solid3DSystem, u: &[f64]) -> Result<Vec<ContactSample3D>, AppError> {
+fn samples_of(
+    sys: &mut Solid3DSystem,
+    u: &[f64],
+    road_height: Option<f64>,
+) -> Result<Vec<ContactSample3D>, AppError> {
     sys.x[..u.len()].copy_from_slice(u);
+    // Under load control the road height is the run's own unknown.
+    if let (Some(ih), Some(h)) = (sys.contact.as_ref().and_then(|c| c.h_dof), road_height) {
+        sys.x[ih] = h;
+    }
     sys.contact_samples()
         .map_err(|e| AppError::Unsupported(format!("compare: contact samples: {e}")))
 }
@@ -236,13 +244,6 @@ pub fn run(
 ) -> Result<RunOutcome, AppError> {
     super::compare::check_time(scene)?;
     // What the 3D transient half does not run (a steady scene may have it).
-    if scene.road.as_ref().is_some_and(|r| r.load.is_some()) {
-        return Err(AppError::Unsupported(
-            "road.load: compare runs the three-dimensional transient mode, which presses the \
-             wheel in under displacement control; give road.disp instead"
-                .into(),
-        ));
-    }
     if scene.motion.control != Control::Speed {
         return Err(AppError::Unsupported(format!(
             "motion.control: compare runs the three-dimensional transient mode, which runs \
@@ -300,8 +301,8 @@ pub fn run(
     let mut sys = build_system_3d(&st_scene)?;
     sys.set_load(1.0);
     let (rel_l2, max_d, max_s) = field_difference_3d(&sys, u_t, u_s);
-    let fp_t = samples_of(&mut sys, u_t)?;
-    let fp_s = samples_of(&mut sys, u_s)?;
+    let fp_t = samples_of(&mut sys, u_t, tres.road_height)?;
+    let fp_s = samples_of(&mut sys, u_s, sres.road_height)?;
     let (fp_p, fp_tr) = footprint_difference(&fp_t, &fp_s);
     let units = Units::parse(&scene.scene.units);
     let quantities = judge_3d(

@@ -133,7 +133,10 @@ pub enum LuOrdering {
     /// restricted to each supernode ([`super::multifrontal`]): the factors have exactly the
     /// Cholesky structure of A + Aᵀ. A matrix that this pivoting cannot factorize (a zero
     /// pivot: saddle points with zero diagonal blocks, singular matrices) is handed to the
-    /// COLAMD LU for good. The default.
+    /// COLAMD LU, and the multifrontal LU is tried again on later factorizations (after 1, 2,
+    /// 4, … up to 32 of them while it keeps failing): a zero pivot of one moment (a load
+    /// control's road height before the road is touched) does not leave the rest of the run on
+    /// the COLAMD factors, which fill much more (a dense row makes AᵀA dense). The default.
     #[default]
     Symmetric,
 }
@@ -612,6 +615,18 @@ struct SymmetricState {
     det: Option<LbltDet>,
 }
 
+/// The multifrontal LU set aside while the COLAMD LU factorizes (after a factorization it
+/// could not do): it is tried again once `wait` more factorizations have gone by.
+struct Parked {
+    state: Box<SymmetricState>,
+    wait: u32,
+    /// The wait after the next failed retry (doubled each time, at most [`MAX_BACKOFF`]).
+    backoff: u32,
+}
+
+/// Longest wait, in factorizations, between two retries of a parked multifrontal LU.
+const MAX_BACKOFF: u32 = 32;
+
 impl Backend {
     /// Scratch for one numeric factorization and a one-column solve with `par`.
     fn scratch(&self, par: Par) -> StackReq {
@@ -664,6 +679,10 @@ pub struct SparseSolver {
     det: Option<(f64, f64)>,
     /// Number of negative eigenvalues of the last successful factorization, if known.
     neg_eigs: Option<usize>,
+    /// The multifrontal LU while the COLAMD LU stands in for it ([`LuOrdering::Symmetric`]).
+    parked: Option<Parked>,
+    /// The COLAMD LU's analysis, kept for the next stand-in once the multifrontal LU is back.
+    spare_lu: Option<Box<LuState>>,
 }
 
 fn validate_pattern(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<(), LinearError> {
@@ -886,6 +905,8 @@ impl SparseSolver {
             track_det: true,
             det: None,
             neg_eigs: None,
+            parked: None,
+            spare_lu: None,
         })
     }
 
@@ -974,6 +995,13 @@ impl SparseSolver {
         if values.iter().any(|v| !v.is_finite()) {
             self.status = Status::NonFinite;
             return Err(LinearError::NonFiniteMatrix);
+        }
+        if self.retry_parked(values) {
+            if self.track_det {
+                self.lu_determinant(values);
+            }
+            self.status = Status::Ready;
+            return Ok(());
         }
         let a = SparseColMatRef::new(self.pattern.as_ref(), values);
         let par = self.par;
@@ -1081,19 +1109,56 @@ impl SparseSolver {
         Ok(())
     }
 
-    /// Replace the multifrontal LU by faer's COLAMD LU (partial pivoting) for good, and
-    /// factorize with it.
-    fn fall_back_to_colamd(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        match LuState::new(&self.pattern, SupernodalThreshold::AUTO) {
-            Ok(st) => self.backend = Backend::Lu(Box::new(st)),
-            Err(e) => {
-                self.status = Status::Other(e.to_string());
-                return Err(e);
-            }
+    /// With a parked multifrontal LU whose wait is over: factorize `values` with it, and on
+    /// success make it the backend again (true). On failure, or while it waits, count the
+    /// wait down (false: the COLAMD LU factorizes).
+    fn retry_parked(&mut self, values: &[f64]) -> bool {
+        let Some(p) = self.parked.as_mut() else {
+            return false;
+        };
+        if p.wait > 0 {
+            p.wait -= 1;
+            return false;
         }
+        if p.state.lu.factorize(values, self.par).is_ok() && p.state.lu.perturbed() == 0 {
+            if let Some(p) = self.parked.take() {
+                if let Backend::Lu(lu) = std::mem::replace(&mut self.backend, Backend::Symmetric(p.state)) {
+                    self.spare_lu = Some(lu);
+                }
+            }
+            return true;
+        }
+        p.wait = p.backoff;
+        p.backoff = (2 * p.backoff).min(MAX_BACKOFF);
+        false
+    }
+
+    /// Hand the factorization to faer's COLAMD LU (partial pivoting), park the multifrontal
+    /// LU for a later retry ([`Self::retry_parked`]), and factorize.
+    fn fall_back_to_colamd(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        let lu = match self.spare_lu.take() {
+            Some(lu) => lu,
+            None => match LuState::new(&self.pattern, SupernodalThreshold::AUTO) {
+                Ok(st) => Box::new(st),
+                Err(e) => {
+                    self.status = Status::Other(e.to_string());
+                    return Err(e);
+                }
+            },
+        };
+        let old = std::mem::replace(&mut self.backend, Backend::Lu(lu));
         let req = self.backend.scratch(self.par);
         grow_scratch(&mut self.mem, &mut self.mem_req, req);
-        self.factorize(values)
+        let res = self.factorize(values);
+        // Parked after this factorization, so that the next one is its first retry.
+        if let Backend::Symmetric(state) = old {
+            self.parked = Some(Parked {
+                state,
+                wait: 0,
+                backoff: 1,
+            });
+        }
+        res
     }
 
     /// LBLᵀ determinant for symmetric values in LU mode (sets `self.det`, `self.neg_eigs`).
@@ -1990,5 +2055,74 @@ mod tests {
                 assert_eq!(s.negative_eigenvalues(), Some(nb));
             }
         }
+    }
+
+    /// A tridiagonal SPD block of `n` unknowns bordered by one more unknown coupled to the
+    /// middle one, with the diagonal `d` (0: nonsingular, a saddle point with one
+    /// constraint, but the multifrontal LU eliminates the border first, from a pivot outside
+    /// its supernode, and cannot factorize it).
+    fn bordered_chain(n: usize, d: f64) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; n + 1]; n + 1];
+        for i in 0..n {
+            a[i][i] = 4.0;
+            if i + 1 < n {
+                a[i][i + 1] = -1.0;
+                a[i + 1][i] = -1.2;
+            }
+        }
+        a[n][n / 2] = 1.0;
+        a[n / 2][n] = 1.0;
+        a[n][n] = d;
+        a
+    }
+
+    /// The COLAMD LU stands in for the multifrontal LU only while it must: a matrix the
+    /// multifrontal LU cannot factorize goes to COLAMD, the next factorizable one back to
+    /// the multifrontal LU; while it keeps failing, its retries back off (1, 2, 4, …).
+    #[test]
+    fn colamd_stands_in_for_the_multifrontal_lu_only_while_it_must() {
+        let bad = bordered_chain(40, 0.0);
+        let good = bordered_chain(40, 3.0);
+        let n = bad.len();
+        let th = (SupernodalThreshold::AUTO, LuOrdering::Symmetric);
+        let (mut s, vb) = solver(&bad, LinearKind::Lu, th);
+        let (_, vg) = solver(&good, LinearKind::Lu, th);
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+        let check = |s: &mut SparseSolver, a: &[Vec<f64>]| {
+            let (xd, _, _) = dense_solve(a, &b);
+            let mut x = b.clone();
+            s.solve_in_place(&mut x).unwrap();
+            assert!(max_diff(&x, &xd) < 1e-10, "{}", max_diff(&x, &xd));
+        };
+        s.factorize(&vg).unwrap();
+        assert_eq!(s.lu_ordering(), Some(LuOrdering::Symmetric));
+        check(&mut s, &good);
+        s.factorize(&vb).unwrap();
+        assert_eq!(s.lu_ordering(), Some(LuOrdering::Colamd), "the bad matrix did not fall back");
+        check(&mut s, &bad);
+        s.factorize(&vg).unwrap();
+        assert_eq!(s.lu_ordering(), Some(LuOrdering::Symmetric));
+        check(&mut s, &good);
+        // Failing again: the retries of the multifrontal LU come after 0, 1, 2, 4, … COLAMD
+        // factorizations; a good matrix at a waiting factorization stays on COLAMD.
+        s.factorize(&vb).unwrap();
+        let mut tried = Vec::new();
+        for k in 0..12 {
+            s.factorize(&vb).unwrap();
+            check(&mut s, &bad);
+            let p = s.parked.as_ref().unwrap();
+            tried.push((k, p.wait, p.backoff));
+        }
+        let waits: Vec<u32> = tried.iter().map(|t| t.1).collect();
+        assert_eq!(waits, [1, 0, 2, 1, 0, 4, 3, 2, 1, 0, 8, 7], "{tried:?}");
+        s.factorize(&vg).unwrap();
+        assert_eq!(s.lu_ordering(), Some(LuOrdering::Colamd));
+        check(&mut s, &good);
+        for _ in 0..7 {
+            s.factorize(&vg).unwrap();
+        }
+        assert_eq!(s.lu_ordering(), Some(LuOrdering::Symmetric));
+        check(&mut s, &good);
+        assert!(s.parked.is_none() && s.spare_lu.is_some());
     }
 }

@@ -148,8 +148,8 @@ pub(super) struct Dimension3DContext<'a> {
     pub(super) lobatto_points: Option<usize>,
 }
 
-/// What the three-dimensional transient mode does not run: torque control, load control and
-/// the integrators without a 3D scheme.
+/// What the three-dimensional transient mode does not run: torque control and the integrators
+/// without a 3D scheme.
 fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
     let get = |table: &str, key: &str| doc.and_then(|d| d.get(table)).and_then(|t| t.get(key));
     if let Some(c) = get("motion", "control").and_then(|v| v.as_str()) {
@@ -162,14 +162,6 @@ fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
                 ),
             ));
         }
-    }
-    if get("road", "load").is_some() {
-        out.push(issue(
-            "road.load",
-            "load control does not run in the three-dimensional transient mode yet (the road \
-             height's equation loses its stiffness when the first points leave the road); \
-             press the wheel in with road.disp",
-        ));
     }
     if let Some(name) = get("time", "integrator").and_then(|v| v.as_str()) {
         let known = crate::driver::transient::IntegratorName::ALL
