@@ -99,3 +99,29 @@ fn steady_matches_transient_in_3d_viscoelastic() {
     let fr = s.axle_moment.abs() / (s.vertical_force.abs() * 2.0);
     assert!(fr > 0.02, "rolling resistance {fr:.3e}");
 }
+
+/// Load control in both modes: the cornering wheel pressed by a given vertical hub load
+/// (10 lbf, about three quarters of what its 0.05 in penetration gives) instead of a
+/// penetration. The road height is an unknown of each mode (the transient's massless: its
+/// equation P(t) − ∫ t_n dA0 = 0 holds at every step). Same targets; the steady vertical force
+/// is the load to the Newton tolerance, the transient's passage mean within 0.1 %.
+#[test]
+fn steady_matches_transient_in_3d_under_load_control() {
+    let text: String = SCENE
+        .lines()
+        .map(|l| {
+            if l.starts_with("disp =") {
+                "load = 10.0".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(text.contains("load = 10.0") && !text.contains("\ndisp ="));
+    let c = compare(&text, "transient_cornering_3d_load");
+    let (t, s) = (c.hub_loads_transient, c.hub_loads_steady);
+    assert!((s.vertical_force - 10.0).abs() < 1e-6, "{}", s.vertical_force);
+    assert!((t.vertical_force - 10.0).abs() < 1e-2, "{}", t.vertical_force);
+    assert!(s.lateral_force.abs() > 0.1 * s.vertical_force.abs());
+}

@@ -3,8 +3,8 @@
 //! (`generalized_alpha`, `hht_alpha`, `central_difference`), until rolling is steady.
 //!
 //! * The hub turns about the axle x3 at ω(t) (ramped by `motion.ramp`), the road is pressed in
-//!   (`road.disp`, ramped by `road.ramp`; load control is refused by the scene validation) and
-//!   moves at v0(t) in its plane,
+//!   (`road.disp`, or under load control `road.load` with the road height a massless unknown;
+//!   either ramped by `road.ramp`) and moves at v0(t) in its plane,
 //!   turned by the slip angle α (`road.slip_angle`) from the start: the road velocity is
 //!   V = v0(t) (cos α, −sin α), so the lateral slip ramps in with the speed. The camber
 //!   (`road.camber`) tilts the road plane from the start, before the press-in.
