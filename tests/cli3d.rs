@@ -418,7 +418,6 @@ fn bad_three_dimensional_inputs_name_the_key() {
         &with("time.integrator=\"bdf\""),
         "time.integrator",
     );
-    bad("transient_load", &with("road.load=10.0"), "road.load");
     bad("mode", &["analysis.mode=\"stick_slip\""], "analysis.mode");
     bad("slip_static", &["road.slip_angle=2.0"], "road.slip_angle");
     bad("camber_range", &["road.camber=95.0"], "road.camber");
