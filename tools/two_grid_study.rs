@@ -185,20 +185,6 @@ fn main() -> Result<(), TransientError> {
             row("adaptive (test settings)", &p.adaptive(&p.adaptive)?);
             return Ok(());
         }
-        Some(o) if o.starts_with("adaptive:") => {
-            // adaptive:I:S: the test's settings with I initial sweeps and S step sweeps.
-            let k: Vec<Option<usize>> = o[9..].split(':').map(|v| v.parse().ok()).collect();
-            let (Some(Some(i)), Some(Some(sw)), 2) = (k.first(), k.get(1), k.len()) else {
-                eprintln!("only: adaptive:I:S expects two counts");
-                std::process::exit(2);
-            };
-            let mut a = p.adaptive.clone();
-            a.initial_sweeps = *i;
-            a.step_sweeps = *sw;
-            header();
-            row(&format!("adaptive, {i} initial, {sw} step sweeps"), &p.adaptive(&a)?);
-            return Ok(());
-        }
         Some(o) => {
             let Some(Ok(lev)) = o.strip_prefix("uniform:").map(|l| l.parse::<u32>()) else {
                 eprintln!("only: expected all, adaptive or uniform:L");
@@ -261,10 +247,6 @@ fn main() -> Result<(), TransientError> {
     o.marking = Marking::Dorfler(0.9);
     o.initial_sweeps = 8;
     variants.push(("adaptive, Dorfler 0.9, 8 sweeps".to_string(), o));
-    let mut o = base.clone();
-    o.initial_sweeps = 8;
-    o.step_sweeps = 2;
-    variants.push(("adaptive, 8 initial, 2 step sweeps".to_string(), o));
     let mut history = None;
     for (label, o) in &variants {
         let r = p.adaptive(o)?;

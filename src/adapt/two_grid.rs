@@ -20,10 +20,7 @@
 //! η_K² < `coarsen_fraction` · η² / N_cells and level > `min_level` are coarsened (four
 //! siblings at once, one-irregularity kept by [`Quadtree::coarsen`]); then u_h and u_f are
 //! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times, each
-//! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0; every
-//! later step is repeated `step_sweeps` times (default 1), each time from u^n carried onto the
-//! mesh adapted to the step's estimate, so that the step's own error is reduced before the
-//! solution advances.
+//! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0.
 
 use super::marking::{coarsening_limit, CellEstimate, Marking};
 use super::quadtree::Quadtree;
@@ -384,11 +381,6 @@ pub struct TransientOptions {
     pub min_level: u32,
     pub max_level: u32,
     pub initial_sweeps: usize,
-    /// Repetitions of every later step: after the step, the mesh is adapted to its estimate
-    /// and the step is computed again from u^n carried onto the adapted mesh, so that the
-    /// step's own error (a front that moved ahead of the refined band) is reduced before the
-    /// solution advances; 1: adapt between steps only.
-    pub step_sweeps: usize,
     pub newton: NewtonOptions,
 }
 
@@ -405,7 +397,6 @@ impl TransientOptions {
             min_level: 2,
             max_level: 8,
             initial_sweeps: 4,
-            step_sweeps: 1,
             newton: NewtonOptions::default(),
         }
     }
@@ -519,22 +510,11 @@ pub fn run_observed(
     let mut t = t0;
     let mut stop = false;
     for n in 0..opts.n_steps {
-        let sweeps = match (opts.adaptive, n) {
-            (false, _) => 1,
-            (true, 0) => opts.initial_sweeps.max(1),
-            (true, _) => opts.step_sweeps.max(1),
+        let sweeps = if n == 0 && opts.adaptive {
+            opts.initial_sweeps.max(1)
+        } else {
+            1
         };
-        // u^n on its meshes, for the repetitions of a later step.
-        let base = (n > 0 && sweeps > 1).then(|| {
-            (
-                tree.clone(),
-                space_old.clone(),
-                xn.clone(),
-                ftree.clone(),
-                fspace_old.clone(),
-                xfn.clone(),
-            )
-        });
         for sweep in 0..sweeps {
             let space_new = space_at(&tree, kernel, t + opts.dt)?;
             let (x, its) = step(&tree, kernel, &space_new, &xn, t, opts.dt, opts.newton)?;
@@ -602,22 +582,13 @@ pub fn run_observed(
                 space_old = s_new;
                 fspace_old = fs_new;
             } else {
-                // Redo the step on the new mesh: the first from the initial data interpolated
-                // there (not from the interpolant on the old mesh: that would keep the coarse
-                // mesh's interpolation error of u_0 for the whole run), a later one from u^n
-                // on its own meshes.
+                // Redo the first step on the new mesh from the initial data interpolated there
+                // (not from the interpolant on the old mesh: that would keep the coarse mesh's
+                // interpolation error of u_0 for the whole run).
                 let s_new = space_at(&tree, kernel, t)?;
                 let fs_new = space_at(&ftree, kernel, t)?;
-                match &base {
-                    None => {
-                        xn = interpolate(&tree, &s_new, &exact0)?;
-                        xfn = interpolate(&ftree, &fs_new, &exact0)?;
-                    }
-                    Some((bt, bs, bx, bft, bfs, bfx)) => {
-                        xn = interpolate(&tree, &s_new, &|p, c| value_at(bt, bs, bx, p, c))?;
-                        xfn = interpolate(&ftree, &fs_new, &|p, c| value_at(bft, bfs, bfx, p, c))?;
-                    }
-                }
+                xn = interpolate(&tree, &s_new, &exact0)?;
+                xfn = interpolate(&ftree, &fs_new, &exact0)?;
                 space_old = s_new;
                 fspace_old = fs_new;
             }
