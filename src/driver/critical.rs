@@ -537,13 +537,17 @@ impl SingularProbe {
     }
 }
 
-fn newton_for(st: &SteadyRolling, scene: &Scene, verbose: bool) -> Result<Newton, AppError> {
+/// Newton for the sweeps in ω, from the run's plan (`st.plan`, built once from the scene):
+/// its tolerance and line search, at least 25 iterations, and always the sparse LU in double
+/// precision, whose determinant's sign the sweeps read (the plan may hold a Cholesky or
+/// single-precision factors).
+fn newton_for(st: &SteadyRolling, verbose: bool) -> Result<Newton, AppError> {
+    let plan = st.plan.verbose(verbose);
     let opts = NewtonOptions {
-        tol: scene.solver.tolerance,
-        max_iterations: scene.solver.max_iterations.max(25),
-        line_search: scene.solver.line_search,
-        verbose,
-        ..Default::default()
+        max_iterations: plan.newton.max_iterations.max(25),
+        mixed_precision: false,
+        single_precision_preconditioner: false,
+        ..plan.newton
     };
     Newton::new(st, LinearKind::Lu, opts)
         .map_err(|e| AppError::Unsupported(format!("critical: {e}")))
@@ -620,7 +624,7 @@ pub fn run(scene: &Scene, opts: &CriticalOptions) -> Result<CriticalReport, AppE
         wall_time_s: 0.0,
     };
     if spinning {
-        spinning_critical(&scene, opts, &mut st, rg, &mut report)?;
+        spinning_critical(opts, &mut st, rg, &mut report)?;
         report.omega_covered = report.omega_max;
     } else {
         rolling_critical(&scene, opts, &mut st, &mut report)?;
@@ -630,7 +634,6 @@ pub fn run(scene: &Scene, opts: &CriticalOptions) -> Result<CriticalReport, AppE
 }
 
 fn spinning_critical(
-    scene: &Scene,
     opts: &CriticalOptions,
     st: &mut SteadyRolling,
     rg: Rings,
@@ -673,7 +676,7 @@ fn spinning_critical(
     st.set_omega(omega_max, 0.0);
     let f = st.sys.residual_norm().max(f64::MIN_POSITIVE);
     st.sys.set_reference_force(f);
-    let mut newton = newton_for(st, scene, opts.verbose)?;
+    let mut newton = newton_for(st, opts.verbose)?;
     let dw = omega_max / samples as f64;
     let mut states: Vec<Vec<f64>> = Vec::new();
     let mut omegas = Vec::new();
@@ -788,7 +791,7 @@ fn rolling_critical(
     let mut steps = StepReport::default();
     solve_steady(scene, st, opts.verbose, &mut steps, &mut rec)
         .map_err(|f| solve_err(f.error, "steady state at the scene's speed".into()))?;
-    let mut newton = newton_for(st, scene, opts.verbose)?;
+    let mut newton = newton_for(st, opts.verbose)?;
     let mut probe = SingularProbe::new(st)?;
     let w0 = st.omega();
     let samples = opts.samples.max(4);
