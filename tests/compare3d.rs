@@ -121,7 +121,15 @@ fn steady_matches_transient_in_3d_under_load_control() {
     assert!(text.contains("load = 10.0") && !text.contains("\ndisp ="));
     let c = compare(&text, "transient_cornering_3d_load");
     let (t, s) = (c.hub_loads_transient, c.hub_loads_steady);
-    assert!((s.vertical_force - 10.0).abs() < 1e-6, "{}", s.vertical_force);
-    assert!((t.vertical_force - 10.0).abs() < 1e-2, "{}", t.vertical_force);
+    assert!(
+        (s.vertical_force - 10.0).abs() < 1e-6,
+        "{}",
+        s.vertical_force
+    );
+    assert!(
+        (t.vertical_force - 10.0).abs() < 1e-2,
+        "{}",
+        t.vertical_force
+    );
     assert!(s.lateral_force.abs() > 0.1 * s.vertical_force.abs());
 }

@@ -12,8 +12,10 @@ use fixtures::*;
 
 use nalgebra::Matrix3;
 use tread::driver::transient::hht_alpha::hht_parameters;
-use tread::driver::transient::{GenAlpha, IntegratorName};
+use tread::driver::transient::registry::Integrate;
+use tread::driver::transient::GenAlpha;
 use tread::io::scene::Scene;
+use tread::solver::integrators::IntegratorName;
 
 /// Amplification matrix of (u, h v, h² a) for ü + ω² u = 0, Ω = ω h, of the step
 /// (1 − αm) a₁ + αm a₀ + Ω²/h² [(1 − αf) u₁ + αf u₀] = 0 with the Newmark relations.

@@ -451,7 +451,12 @@ fn sigint_stops_the_cavity_between_solves() {
     let mut child = tread()
         .args(["run", scene, "-q", "--out"])
         .arg(&out)
-        .args(["--set", "problem.levels=5", "--set", "problem.recalculations=50"])
+        .args([
+            "--set",
+            "problem.levels=5",
+            "--set",
+            "problem.recalculations=50",
+        ])
         .args(["--set", "output.sinks=[\"summary\", \"csv\", \"vtu\"]"])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
@@ -491,7 +496,15 @@ fn sigint_stops_tread_adapt_between_meshes() {
         "/scenarios/oden_hollow_cylinder.toml"
     );
     let mut child = tread()
-        .args(["adapt", scene, "-q", "--steps", "30", "--max-dofs", "10000000"])
+        .args([
+            "adapt",
+            scene,
+            "-q",
+            "--steps",
+            "30",
+            "--max-dofs",
+            "10000000",
+        ])
         .args(["--set", "analysis.mode=steady", "--out"])
         .arg(&out)
         .stdout(std::process::Stdio::null())

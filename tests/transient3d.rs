@@ -5,7 +5,8 @@
 //! strain-rate damping) and the Newton tangent of a 3D time step against central differences.
 
 use tread::driver::transient::body3d::contact_samples_3d;
-use tread::driver::transient::IntegratorName;
+use tread::driver::transient::registry::Integrate;
+use tread::solver::integrators::IntegratorName;
 #[path = "common/fixtures.rs"]
 mod fixtures;
 

@@ -536,7 +536,8 @@ pub fn run(
     let mut coarsened = 0;
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let Some(iterations) = solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
+        let Some(iterations) =
+            solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
         else {
             break;
         };
@@ -645,7 +646,8 @@ fn run_relocation(
     let mut steps = Vec::new();
     for step in 0..=opts.steps {
         let ts = Instant::now();
-        let Some(iterations) = solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
+        let Some(iterations) =
+            solve_unless_interrupted(&mut problem, scene, warm, &cold, out_dir, &steps)?
         else {
             break;
         };

@@ -23,6 +23,7 @@
 //! field of the last passage: node, X, u).
 
 use super::results::{HubLoads3D, Transient3DResults};
+use super::transient::registry::Integrate;
 use super::transient::{integrate, Kinematics, Transient, TransientReport};
 use crate::io::output::write_csv;
 use crate::io::scene::{MassKind, Scene};
@@ -89,7 +90,7 @@ pub fn integrate_3d(
         return Err(AppError::Unsupported(format!(
             "time.integrator: \"{}\" does not run in three dimensions (use {})",
             ts.integrator,
-            crate::driver::transient::IntegratorName::quoted_with(|i| i.scheme_3d(1.0).is_some())
+            crate::solver::integrators::IntegratorName::quoted_with(|i| i.three_d())
         )));
     };
     let mut sys = sys;

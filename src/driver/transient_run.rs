@@ -31,6 +31,7 @@ use super::results::{
 };
 use super::tables;
 use super::transient::ode_first_order::OdeTolerances;
+use super::transient::registry::Integrate;
 use super::transient::{Kinematics, Ramp, Scheme, Setup, TimeOptions, Transient, TransientReport};
 use crate::contact::ContactModel;
 use crate::driver::results::RunOutcome;

@@ -1122,7 +1122,9 @@ impl SparseSolver {
         }
         if p.state.lu.factorize(values, self.par).is_ok() && p.state.lu.perturbed() == 0 {
             if let Some(p) = self.parked.take() {
-                if let Backend::Lu(lu) = std::mem::replace(&mut self.backend, Backend::Symmetric(p.state)) {
+                if let Backend::Lu(lu) =
+                    std::mem::replace(&mut self.backend, Backend::Symmetric(p.state))
+                {
                     self.spare_lu = Some(lu);
                 }
             }
@@ -2098,7 +2100,11 @@ mod tests {
         assert_eq!(s.lu_ordering(), Some(LuOrdering::Symmetric));
         check(&mut s, &good);
         s.factorize(&vb).unwrap();
-        assert_eq!(s.lu_ordering(), Some(LuOrdering::Colamd), "the bad matrix did not fall back");
+        assert_eq!(
+            s.lu_ordering(),
+            Some(LuOrdering::Colamd),
+            "the bad matrix did not fall back"
+        );
         check(&mut s, &bad);
         s.factorize(&vg).unwrap();
         assert_eq!(s.lu_ordering(), Some(LuOrdering::Symmetric));

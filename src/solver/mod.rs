@@ -5,6 +5,7 @@
 //! observer of their own ([`observe::StepObserver`]); they depend on nothing above them.
 
 pub mod continuation;
+pub mod integrators;
 pub mod krylov;
 pub mod linear;
 pub mod multifrontal;

@@ -10,13 +10,6 @@ use crate::solver::SolveError;
 pub struct Bdf;
 
 impl IntegratorSpec for Bdf {
-    const NAME: &'static str = "bdf";
-    const ABOUT: &'static str =
-        "Variable-order BDF on the first-order form `y = (u, v)` (diffsol), \
-        with its own error control.";
-    const HISTORY: bool = true;
-    const BOUNDED_STEP: bool = false;
-
     fn integrate(
         tr: &mut Transient,
         setup: &Setup,

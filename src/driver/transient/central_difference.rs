@@ -14,11 +14,6 @@ impl IntegratorSpec for CentralDifference {
     fn scheme_3d(_rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
         Some(Scheme::central_difference())
     }
-    const NAME: &'static str = "central_difference";
-    const ABOUT: &'static str = "Explicit central difference with the lumped (HRZ) mass; the step \
-        is also bounded by a stable-step estimate.";
-    const LUMPED_ONLY: bool = true;
-    const HISTORY: bool = true;
 
     fn scheme(_rho_inf: f64) -> Scheme {
         Scheme::central_difference()

@@ -24,12 +24,6 @@ impl IntegratorSpec for GeneralizedAlpha {
     fn scheme_3d(rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
         Some(Scheme::generalized_alpha(GenAlpha::new(rho_inf)))
     }
-    const NAME: &'static str = "generalized_alpha";
-    const ABOUT: &'static str = "Generalized-α (Chung–Hulbert) on the second-order system, with \
-        spectral radius at infinity `rho_inf` (1 = trapezoidal / Newmark average acceleration). \
-        Implicit.";
-    const TORQUE_CONTROL: bool = true;
-    const HISTORY: bool = true;
 }
 
 /// The generalized-α step with the parameters it holds (also HHT-α's, [`super::hht_alpha`]).

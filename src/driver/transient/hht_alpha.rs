@@ -36,12 +36,6 @@ impl IntegratorSpec for HhtAlpha {
     fn scheme_3d(rho_inf: f64) -> Option<Scheme<crate::model::Solid3DSystem>> {
         Some(Scheme::generalized_alpha(hht_parameters(rho_inf)))
     }
-    const NAME: &'static str = "hht_alpha";
-    const ABOUT: &'static str = "Hilber–Hughes–Taylor α (the α-method of Abaqus/Standard), with \
-        spectral radius at infinity `rho_inf` in [0.5, 1]. Implicit.";
-    const TORQUE_CONTROL: bool = true;
-    const HISTORY: bool = true;
-    const RHO_INF_MIN: f64 = 0.5;
 
     fn scheme(rho_inf: f64) -> Scheme {
         Scheme::generalized_alpha(hht_parameters(rho_inf))

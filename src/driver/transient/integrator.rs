@@ -16,26 +16,9 @@ pub struct Setup {
     pub ode_tol: OdeTolerances,
 }
 
-/// A registered time integrator.
+/// A registered time integrator: what it does (its name and declarations are its row of
+/// [`crate::solver::integrators::IntegratorName`]).
 pub trait IntegratorSpec {
-    /// The scene keyword (`[time] integrator`).
-    const NAME: &'static str;
-    /// What it is, for the scene reference.
-    const ABOUT: &'static str;
-    /// Always uses the lumped mass (an explicit scheme); a scene's `mass = "consistent"` is then
-    /// an error.
-    const LUMPED_ONLY: bool = false;
-    /// Solves the hub angle as an unknown (torque control).
-    const TORQUE_CONTROL: bool = false;
-    /// Carries a quadrature-point history (viscoelastic materials).
-    const HISTORY: bool = false;
-    /// Smallest admissible `[time] rho_inf` (the spectral radius at infinity, at most 1; read
-    /// only by the integrators that have one).
-    const RHO_INF_MIN: f64 = 0.0;
-    /// Its steps never exceed `[time] dt_max` (adaptive steps) or `dt` (fixed steps); false
-    /// for an integrator that chooses its own steps without a maximum.
-    const BOUNDED_STEP: bool = true;
-
     /// The one-step scheme the [`Transient`] model is built with (its Newton system). By
     /// default generalized-α with `rho_inf`, which an integrator with its own loop (BDF, SDIRK)
     /// leaves unused.

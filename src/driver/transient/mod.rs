@@ -1530,5 +1530,4 @@ mod torque;
 pub use central_difference::CentralDifference;
 pub use generalized_alpha::GeneralizedAlpha;
 pub use integrator::{IntegratorSpec, Setup};
-pub use registry::IntegratorName;
 pub use state::State;

@@ -10,11 +10,6 @@ use crate::solver::SolveError;
 pub struct Sdirk;
 
 impl IntegratorSpec for Sdirk {
-    const NAME: &'static str = "sdirk";
-    const ABOUT: &'static str = "SDIRK on the first-order form `y = (u, v)` (diffsol), with its \
-        own error control.";
-    const HISTORY: bool = true;
-
     fn integrate(
         tr: &mut Transient,
         setup: &Setup,

@@ -5,6 +5,7 @@
 
 use super::analysis::Mode;
 use super::issue::{issue, issue_near, positive, table_has, Issue};
+use super::time::IntegratorName;
 use serde::{Deserialize, Serialize};
 
 keyword_enum! {
@@ -164,17 +165,13 @@ fn validate_transient_3d(doc: Option<&toml::Table>, out: &mut Vec<Issue>) {
         }
     }
     if let Some(name) = get("time", "integrator").and_then(|v| v.as_str()) {
-        let known = crate::driver::transient::IntegratorName::ALL
-            .iter()
-            .find(|i| i.as_str() == name);
-        if let Some(i) = known.filter(|i| i.scheme_3d(1.0).is_none()) {
+        let known = IntegratorName::ALL.iter().find(|i| i.as_str() == name);
+        if let Some(i) = known.filter(|i| !i.three_d()) {
             out.push(issue(
                 "time.integrator",
                 format!(
                     "\"{i}\" does not run in three dimensions (use {})",
-                    crate::driver::transient::IntegratorName::quoted_with(|i| i
-                        .scheme_3d(1.0)
-                        .is_some())
+                    IntegratorName::quoted_with(IntegratorName::three_d)
                 ),
             ));
         }

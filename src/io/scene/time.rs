@@ -6,9 +6,9 @@ use super::issue::{issue, positive, Issue};
 use super::mesh::MeshSpec;
 use serde::{Deserialize, Serialize};
 
-/// Time integrator of the `transient` mode (`[time] integrator`): the registered integrators
-/// ([`crate::driver::transient::registry`]).
-pub use crate::driver::transient::IntegratorName;
+/// Time integrator of the `transient` mode (`[time] integrator`): a name and what it declares
+/// ([`crate::solver::integrators`]).
+pub use crate::solver::integrators::IntegratorName;
 
 keyword_enum! {
     /// Mass matrix of the `transient` mode (`[time] mass`).
