@@ -369,29 +369,14 @@ fn replay_into_a_full_disk_fails_cleanly() {
 fn sigint_stops_a_model_problem_at_a_time_step() {
     let dir = tmpdir("model_problem");
     let out = dir.join("out");
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenarios/model_problems/heat.toml"
+    let mut child = start_model_problem(
+        "heat.toml",
+        &out,
+        &["problem.steps=20000", "problem.dt=0.0001"],
     );
-    let mut child = tread()
-        .args(["run", scene, "-q", "--out"])
-        .arg(&out)
-        .args(["--set", "problem.steps=20000", "--set", "problem.dt=0.0001"])
-        .args(["--set", "output.sinks=[\"summary\", \"csv\", \"vtu\"]"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
     // The output folder exists once the run holds it (after the handler is installed); then
     // let it take a few steps.
-    let t0 = Instant::now();
-    while !out.exists() {
-        if let Ok(Some(st)) = child.try_wait() {
-            panic!("the run ended ({st}) before it started");
-        }
-        assert!(t0.elapsed() < Duration::from_secs(60), "timeout");
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    wait_for(&mut child, &out);
     std::thread::sleep(Duration::from_millis(1500));
     signal(&child, "-INT");
     let o = child.wait_with_output().unwrap();
@@ -424,6 +409,24 @@ fn sigint_stops_a_model_problem_at_a_time_step() {
     assert!(out.join("solution.vtu").exists());
 }
 
+/// `tread run` of the model-problem scene `name` of scenarios/model_problems/ into `out`,
+/// with the summary, CSV and VTU sinks and the overrides `sets`.
+fn start_model_problem(name: &str, out: &Path, sets: &[&str]) -> Child {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios/model_problems")
+        .join(name);
+    let mut cmd = tread();
+    cmd.arg("run").arg(scene).args(["-q", "--out"]).arg(out);
+    let sinks = "output.sinks=[\"summary\", \"csv\", \"vtu\"]";
+    for s in sets.iter().copied().chain([sinks]) {
+        cmd.args(["--set", s]);
+    }
+    cmd.stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
 /// Wait until `path` exists (the child still running), at most a minute.
 fn wait_for(child: &mut Child, path: &Path) {
     let t0 = Instant::now();
@@ -444,24 +447,11 @@ fn wait_for(child: &mut Child, path: &Path) {
 fn sigint_stops_the_cavity_between_solves() {
     let dir = tmpdir("cavity");
     let out = dir.join("out");
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenarios/model_problems/cavity.toml"
+    let mut child = start_model_problem(
+        "cavity.toml",
+        &out,
+        &["problem.levels=5", "problem.recalculations=50"],
     );
-    let mut child = tread()
-        .args(["run", scene, "-q", "--out"])
-        .arg(&out)
-        .args([
-            "--set",
-            "problem.levels=5",
-            "--set",
-            "problem.recalculations=50",
-        ])
-        .args(["--set", "output.sinks=[\"summary\", \"csv\", \"vtu\"]"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
     wait_for(&mut child, &out);
     std::thread::sleep(Duration::from_millis(1500));
     signal(&child, "-INT");
