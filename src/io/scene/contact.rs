@@ -221,7 +221,7 @@ pub(super) fn validate_road(
         if !positive(l) {
             out.push(issue(
                 "road.load",
-                format!("load (force per unit thickness) must be > 0, got {l}"),
+                format!("load (the hub force: per unit thickness in plane strain, total in 3D) must be > 0, got {l}"),
             ));
         }
     }
