@@ -15,7 +15,8 @@
 //! outside the supernode, or a singular matrix) is replaced by that value with its sign and
 //! counted ([`SymmetricLu::perturbed`]), and so is a multiplier of L above [`GROWTH`] (a pivot
 //! small against its column outside the supernode); [`super::SparseSolver`] then hands the
-//! matrix to faer's partial-pivoting LU instead.
+//! matrix to faer's partial-pivoting LU instead, and tries this factorization again on later
+//! matrices.
 //!
 //! The analysis runs on the graph of the column pairs that A + Aᵀ cannot tell apart (a node's
 //! two displacement components: the same rows) when at least a quarter of the columns pair up,
