@@ -886,6 +886,19 @@ fn dispatch(cli: Cli, threads: usize) -> ExitCode {
                         ));
                         ExitCode::SUCCESS
                     }
+                    Err(tread::app::AppError::Interrupted(_)) => {
+                        // Before the first mesh was solved: an empty table that says so.
+                        let written = adaptive::write(&dir, &opts, &[]);
+                        eprintln!(
+                            "tread: interrupted before the first mesh was solved{}",
+                            match written {
+                                Ok(()) =>
+                                    format!(" ({} has no rows)", dir.join("adapt.csv").display()),
+                                Err(e) => format!("; {e}"),
+                            }
+                        );
+                        ExitCode::from(130)
+                    }
                     Err(e) => {
                         eprintln!("tread: error: {e}");
                         ExitCode::from(e.exit_code())
