@@ -369,26 +369,11 @@ fn replay_into_a_full_disk_fails_cleanly() {
 fn sigint_stops_a_model_problem_at_a_time_step() {
     let dir = tmpdir("model_problem");
     let out = dir.join("out");
-    let mut child = start_model_problem(
+    let s = interrupt_model_problem(
         "heat.toml",
         &out,
         &["problem.steps=20000", "problem.dt=0.0001"],
     );
-    // The output folder exists once the run holds it (after the handler is installed); then
-    // let it take a few steps.
-    wait_for(&mut child, &out);
-    std::thread::sleep(Duration::from_millis(1500));
-    signal(&child, "-INT");
-    let o = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(130), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(stderr.contains("interrupted"), "{stderr}");
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["mode"], "model_problem");
-    assert_eq!(s["converged"], false);
-    assert_eq!(s["error"], "interrupted");
     let steps = s["steps"].as_u64().unwrap() as usize;
     assert!((1..20000).contains(&steps), "stopped early: {steps} steps");
     let t = s["interrupted_at"].as_f64().unwrap();
@@ -427,6 +412,28 @@ fn start_model_problem(name: &str, out: &Path, sets: &[&str]) -> Child {
         .unwrap()
 }
 
+/// Start the model-problem run ([`start_model_problem`]), let it work 1.5 s once it holds its
+/// output folder (after the handler is installed), send SIGINT, and check that it stopped as
+/// an interrupted run does: exit 130, no panic, the message, and summary.json (returned) with
+/// `converged: false` and `"error": "interrupted"`.
+fn interrupt_model_problem(name: &str, out: &Path, sets: &[&str]) -> serde_json::Value {
+    let mut child = start_model_problem(name, out, sets);
+    wait_for(&mut child, out);
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-INT");
+    let o = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["mode"], "model_problem");
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["error"], "interrupted");
+    s
+}
+
 /// Wait until `path` exists (the child still running), at most a minute.
 fn wait_for(child: &mut Child, path: &Path) {
     let t0 = Instant::now();
@@ -447,22 +454,11 @@ fn wait_for(child: &mut Child, path: &Path) {
 fn sigint_stops_the_cavity_between_solves() {
     let dir = tmpdir("cavity");
     let out = dir.join("out");
-    let mut child = start_model_problem(
+    let s = interrupt_model_problem(
         "cavity.toml",
         &out,
         &["problem.levels=5", "problem.recalculations=50"],
     );
-    wait_for(&mut child, &out);
-    std::thread::sleep(Duration::from_millis(1500));
-    signal(&child, "-INT");
-    let o = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(130), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["converged"], false);
-    assert_eq!(s["error"], "interrupted");
     let re = s["interrupted_at"].as_f64().unwrap();
     assert!([100.0, 400.0, 1000.0].contains(&re), "interrupted_at {re}");
     // Rows: one per solve (the continuation's and the recalculations'), fewer than the full run's.

@@ -542,21 +542,14 @@ pub fn run(
             break;
         };
         let sys = problem.sys();
-        let mut rec = AdaptStep {
+        let rec = AdaptStep {
             hanging_nodes: mesh.constraints.len(),
             max_level: forest.leaves().iter().map(|l| l.level).max().unwrap_or(0),
             degree2_cells: forest.degrees().iter().filter(|&&d| d == 2).count(),
             coarsened,
             ..AdaptStep::of(step, mesh.n_cells(), iterations)
         };
-        let est = rec.estimate_on(scene, opts, sys);
-        rec.wall_step_s = ts.elapsed().as_secs_f64();
-        rec.wall_total_s = t0.elapsed().as_secs_f64();
-        on_step(sys, &rec, &est.indicators);
-        let done = step == opts.steps
-            || rec.relative_estimate < opts.tolerance
-            || crate::io::record::interrupted();
-        steps.push(rec);
+        let (est, done) = rec.record(scene, opts, sys, (ts, t0), &mut on_step, &mut steps);
         if done {
             break;
         }
@@ -652,18 +645,11 @@ fn run_relocation(
             break;
         };
         let sys = problem.sys();
-        let mut rec = AdaptStep {
+        let rec = AdaptStep {
             degree2_cells: mesh.degree.iter().filter(|&&d| d == 2).count(),
             ..AdaptStep::of(step, mesh.n_cells(), iterations)
         };
-        let est = rec.estimate_on(scene, opts, sys);
-        rec.wall_step_s = ts.elapsed().as_secs_f64();
-        rec.wall_total_s = t0.elapsed().as_secs_f64();
-        on_step(sys, &rec, &est.indicators);
-        let done = step == opts.steps
-            || rec.relative_estimate < opts.tolerance
-            || crate::io::record::interrupted();
-        steps.push(rec);
+        let (est, done) = rec.record(scene, opts, sys, (ts, t0), &mut on_step, &mut steps);
         if done {
             break;
         }
@@ -737,6 +723,30 @@ impl AdaptStep {
             wall_step_s: 0.0,
             wall_total_s: 0.0,
         }
+    }
+
+    /// The row of a solved mesh, finished: the estimate ([`Self::estimate_on`]), the wall
+    /// times since `ts` (this mesh) and `t0` (the run), `on_step`, and the row pushed to
+    /// `steps`. Returns the estimate and whether the loop ends here (the last step, the
+    /// tolerance reached, or an interrupt).
+    fn record(
+        mut self,
+        scene: &Scene,
+        opts: &AdaptOptions,
+        sys: &SolidSystem,
+        (ts, t0): (Instant, Instant),
+        on_step: &mut impl FnMut(&SolidSystem, &AdaptStep, &[f64]),
+        steps: &mut Vec<AdaptStep>,
+    ) -> (CellEstimate, bool) {
+        let est = self.estimate_on(scene, opts, sys);
+        self.wall_step_s = ts.elapsed().as_secs_f64();
+        self.wall_total_s = t0.elapsed().as_secs_f64();
+        on_step(sys, &self, &est.indicators);
+        let done = self.step == opts.steps
+            || self.relative_estimate < opts.tolerance
+            || crate::io::record::interrupted();
+        steps.push(self);
+        (est, done)
     }
 
     /// Estimate the error of the solved `sys` with `opts.estimator` (the contact tractions
